@@ -1,0 +1,26 @@
+# The two commands of the README: `make render` and `make test`.
+# Both install the Debian dependencies (scripts/install-deps.sh), configure and build.
+BUILD ?= build
+JOBS ?= $(shell nproc)
+SCENE ?= scenes/cornell/cornell.json
+OUT ?= out/cornell.exr
+
+.PHONY: deps configure build render test clean
+
+deps:
+	./scripts/install-deps.sh
+
+configure: deps
+	cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release
+
+build: configure
+	cmake --build $(BUILD) -j $(JOBS)
+
+render: build
+	$(BUILD)/bounce render $(SCENE) -o $(OUT) --stats
+
+test: build
+	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
+
+clean:
+	rm -rf $(BUILD) out

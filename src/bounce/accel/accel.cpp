@@ -1,0 +1,153 @@
+#include "bounce/accel/accel.h"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+
+namespace bounce {
+
+namespace {
+void embree_error(void*, RTCError code, const char* str) {
+    if (code == RTC_ERROR_NONE) return;
+    throw std::runtime_error(fmt::format("Embree error {}: {}", static_cast<int>(code), str ? str : ""));
+}
+
+RTCRayHit make_ray(const Vec3& o, const Vec3& d, float tnear, float tfar) {
+    RTCRayHit rh{};
+    rh.ray.org_x = o.x, rh.ray.org_y = o.y, rh.ray.org_z = o.z;
+    rh.ray.dir_x = d.x, rh.ray.dir_y = d.y, rh.ray.dir_z = d.z;
+    rh.ray.tnear = tnear;
+    rh.ray.tfar = tfar;
+    rh.ray.mask = 0xffffffffu;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    return rh;
+}
+}  // namespace
+
+Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes) {
+    scene_ = rtcNewScene(device);
+    rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+    rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
+    for (size_t id = 0; id < meshes.size(); ++id) {
+        const TriangleMesh& m = *meshes[id];
+        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+            g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m.positions.size()));
+        for (size_t i = 0; i < m.positions.size(); ++i) {
+            vb[3 * i] = m.positions[i].x, vb[3 * i + 1] = m.positions[i].y, vb[3 * i + 2] = m.positions[i].z;
+        }
+        auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+            g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), m.triangle_count()));
+        std::copy(m.indices.begin(), m.indices.end(), ib);
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(scene_, g, static_cast<unsigned>(id));
+        rtcReleaseGeometry(g);
+    }
+    rtcCommitScene(scene_);
+}
+
+Bvh::~Bvh() {
+    if (scene_) rtcReleaseScene(scene_);
+}
+
+Hit Bvh::intersect(const Vec3& o, const Vec3& d, float tnear, float tfar) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRayHit rh = make_ray(o, d, tnear, tfar);
+    rtcIntersect1(scene_, &ctx, &rh);
+    Hit h;
+    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+        h.t = rh.ray.tfar;
+        h.object = rh.hit.geomID;
+        h.prim = rh.hit.primID;
+        h.u = rh.hit.u;
+        h.v = rh.hit.v;
+    }
+    return h;
+}
+
+bool Bvh::occluded(const Vec3& o, const Vec3& d, float tnear, float tfar) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRay r = make_ray(o, d, tnear, tfar).ray;
+    rtcOccluded1(scene_, &ctx, &r);
+    return r.tfar < 0;  // Embree sets tfar to -inf on a hit
+}
+
+SceneAccel::SceneAccel(const Scene& scene) {
+    device_ = rtcNewDevice("threads=0");
+    if (!device_) throw std::runtime_error("cannot create Embree device");
+    rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
+    std::vector<const TriangleMesh*> coarse, fine;
+    bool any_fine = false;
+    for (const auto& o : scene.objects) {
+        coarse.push_back(&o.coarse);
+        fine.push_back(&o.visible());
+        any_fine |= o.has_fine();
+    }
+    coarse_ = std::make_unique<Bvh>(device_, coarse);
+    if (any_fine) fine_ = std::make_unique<Bvh>(device_, fine);
+
+    // Measure how far the fine surface strays from the coarse one: from each fine vertex,
+    // along its normal both ways, to the nearest coarse surface of the same object.
+    float diag = length(scene.bounds().diagonal());
+    for (size_t id = 0; id < scene.objects.size(); ++id) {
+        const Object& o = scene.objects[id];
+        if (!o.has_fine()) continue;
+        float reach = 0.05f * length(o.coarse.bounds().diagonal());
+        size_t step = std::max<size_t>(1, o.fine.positions.size() / 20000);
+        for (size_t i = 0; i < o.fine.positions.size(); i += step) {
+            Vec3 p = o.fine.positions[i];
+            Vec3 n = o.fine.normals.empty() ? Vec3(0, 0, 1) : o.fine.normals[i];
+            if (dot(n, n) == 0) continue;
+            Hit a = coarse_->intersect(p, n, 0, reach), b = coarse_->intersect(p, -n, 0, reach);
+            float d = std::min(a.object == id ? a.t : INFINITY, b.object == id ? b.t : INFINITY);
+            if (std::isfinite(d)) gap_ = std::max(gap_, d);
+        }
+    }
+    // Default distance: cover the measured gap for rays up to ~75 degrees off the normal.
+    ray_offset_ = scene.render.ray_offset >= 0 ? scene.render.ray_offset
+                                               : std::max(1e-4f * diag, 4.0f * gap_);
+}
+
+SceneAccel::~SceneAccel() {
+    fine_.reset();
+    coarse_.reset();
+    if (device_) rtcReleaseDevice(device_);
+}
+
+float SceneAccel::offset_start(const Vec3& p, const Vec3& d) const {
+    const float delta = ray_offset_;
+    const Vec3 o = p - d * delta;
+    // Coarse hits within [0, 2 delta] come in increasing t; keep the one nearest to p (t = delta).
+    float best = -1, tn = 0;
+    for (int i = 0; i < 8; ++i) {
+        Hit h = coarse_->intersect(o, d, tn, 2 * delta);
+        if (!h.valid()) break;
+        if (best < 0 || std::abs(h.t - delta) < std::abs(best - delta)) best = h.t;
+        if (h.t >= delta) break;  // later hits are farther from p
+        tn = std::nextafter(h.t, INFINITY) + 1e-6f * delta;
+    }
+    // Start just past the chosen crossing; with none, start at p itself.
+    return best >= 0 ? best + 1e-4f * delta : delta;
+}
+
+Hit SceneAccel::trace(const Vec3& p, const Vec3& d) const {
+    const float delta = ray_offset_;
+    float start = offset_start(p, d);
+    Hit h = coarse_->intersect(p - d * delta, d, start, INFINITY);
+    if (h.valid()) h.t = std::max(0.0f, h.t - delta);
+    return h;
+}
+
+bool SceneAccel::occluded(const Vec3& p, const Vec3& d, float dist) const {
+    const float delta = ray_offset_;
+    float start = offset_start(p, d);
+    // Stop short of the end point so the surface it lies on does not occlude it.
+    float end = std::isfinite(dist) ? delta + dist - std::max(delta, 1e-4f * dist) : INFINITY;
+    if (end <= start) return false;
+    return coarse_->occluded(p - d * delta, d, start, end);
+}
+
+}  // namespace bounce

@@ -1,0 +1,76 @@
+// Ray tracing: Embree BVHs over the coarse tessellation (all secondary rays) and the fine one
+// (primary visibility), and ray-origin offsetting between the two (TL04).
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "bounce/core/math.h"
+#include "bounce/scene/scene.h"
+
+namespace bounce {
+
+inline constexpr uint32_t kNoHit = 0xffffffffu;
+
+struct Hit {
+    float t = INFINITY;
+    uint32_t object = kNoHit;  ///< index into Scene::objects
+    uint32_t prim = 0;
+    float u = 0, v = 0;
+    bool valid() const { return object != kNoHit; }
+};
+
+/// One Embree scene over a list of meshes; the geometry id is the index in the list.
+class Bvh {
+public:
+    Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes);
+    ~Bvh();
+    Bvh(const Bvh&) = delete;
+    Bvh& operator=(const Bvh&) = delete;
+
+    Hit intersect(const Vec3& o, const Vec3& d, float tnear, float tfar) const;
+    bool occluded(const Vec3& o, const Vec3& d, float tnear, float tfar) const;
+
+private:
+    RTCScene scene_ = nullptr;
+};
+
+/// Everything rays need from a scene: both BVHs and the offset distance.
+class SceneAccel {
+public:
+    explicit SceneAccel(const Scene& scene);
+    ~SceneAccel();
+    SceneAccel(const SceneAccel&) = delete;
+    SceneAccel& operator=(const SceneAccel&) = delete;
+
+    const Bvh& coarse() const { return *coarse_; }
+    /// The BVH primary visibility traces (the coarse one when no object has a finer one).
+    const Bvh& fine() const { return fine_ ? *fine_ : *coarse_; }
+    bool has_fine() const { return fine_ != nullptr; }
+
+    /// Ray-origin offsetting distance delta in world units.
+    float ray_offset() const { return ray_offset_; }
+    /// Largest measured distance between a fine-tessellation vertex and its coarse surface.
+    float fine_coarse_gap() const { return gap_; }
+
+    /// Traces a secondary ray that leaves the fine surface at `p` along unit `d`: the origin
+    /// is moved to the coarse intersection closest to `p` within +-delta along the ray, and
+    /// the first coarse hit after that origin is returned (t measured from `p`).
+    Hit trace(const Vec3& p, const Vec3& d) const;
+    /// Visibility from `p` (on the fine surface) to the point `p + d * dist` (dist may be
+    /// INFINITY), with the same origin offsetting; the end point's own surface is excluded.
+    bool occluded(const Vec3& p, const Vec3& d, float dist) const;
+
+private:
+    /// Parameter along the ray from p - delta*d at which the traced ray starts.
+    float offset_start(const Vec3& p, const Vec3& d) const;
+
+    RTCDevice device_ = nullptr;
+    std::unique_ptr<Bvh> coarse_, fine_;
+    float ray_offset_ = 0, gap_ = 0;
+};
+
+}  // namespace bounce

@@ -1,0 +1,127 @@
+#include "bounce/core/image.h"
+
+#include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
+
+#include <filesystem>
+
+#include "bounce/core/atomic_file.h"
+#include "bounce/core/error.h"
+
+namespace bounce {
+
+Layer& Image::add_layer(const std::string& name, const std::vector<std::string>& channels) {
+    layers.push_back({name, channels, std::vector<float>(static_cast<size_t>(width) * height * channels.size(), 0.0f)});
+    return layers.back();
+}
+
+const Layer* Image::find(const std::string& name) const {
+    for (const auto& l : layers)
+        if (l.name == name) return &l;
+    return nullptr;
+}
+
+Layer* Image::find(const std::string& name) {
+    for (auto& l : layers)
+        if (l.name == name) return &l;
+    return nullptr;
+}
+
+void write_exr(const std::string& path, const Image& image) {
+    std::vector<std::string> names;
+    for (const auto& l : image.layers) names.insert(names.end(), l.channels.begin(), l.channels.end());
+    OIIO::ImageSpec spec(image.width, image.height, static_cast<int>(names.size()), OIIO::TypeDesc::FLOAT);
+    spec.x = image.x0, spec.y = image.y0;
+    spec.full_x = 0, spec.full_y = 0;
+    spec.full_width = image.full_width, spec.full_height = image.full_height;
+    spec.channelnames = names;
+    spec.alpha_channel = -1;
+    for (size_t i = 0; i < names.size(); ++i)
+        if (names[i] == "A") spec.alpha_channel = static_cast<int>(i);
+    spec.attribute("compression", "zip");
+    spec.attribute("Software", "bounce " BOUNCE_VERSION " (" BOUNCE_GIT_REV ")");
+    for (const auto& [k, v] : image.metadata) spec.attribute("bounce:" + k, v);
+    std::vector<float> pixels(static_cast<size_t>(image.width) * image.height * names.size());
+    size_t stride = names.size(), offset = 0;
+    for (const auto& l : image.layers) {
+        size_t nc = l.channels.size();
+        for (size_t p = 0; p < static_cast<size_t>(image.width) * image.height; ++p)
+            for (size_t c = 0; c < nc; ++c) pixels[p * stride + offset + c] = l.data[p * nc + c];
+        offset += nc;
+    }
+    write_atomically(path, [&](const std::string& tmp) {
+        auto out = OIIO::ImageOutput::create("openexr");
+        if (!out || !out->open(tmp, spec))
+            throw InputError(path, "", "cannot write image: " + (out ? out->geterror() : OIIO::geterror()));
+        if (!out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close())
+            throw InputError(path, "", "cannot write image: " + out->geterror());
+    });
+}
+
+Image read_exr(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path, "", "file not found");
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) throw InputError(path, "", "cannot read image: " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    if (spec.deep) throw InputError(path, "", "is a deep image; expected a flat image");
+    Image img;
+    img.x0 = spec.x, img.y0 = spec.y, img.width = spec.width, img.height = spec.height;
+    img.full_width = spec.full_width, img.full_height = spec.full_height;
+    std::vector<float> pixels(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data()))
+        throw InputError(path, "", "cannot read image: " + in->geterror());
+    for (const auto& p : spec.extra_attribs) {
+        std::string name = p.name().string();
+        if (name.rfind("bounce:", 0) == 0) img.metadata[name.substr(7)] = spec.get_string_attribute(name);
+    }
+    // Group channels by prefix ("direct.R" -> layer "direct"; R,G,B,A -> "beauty").
+    std::vector<std::pair<std::string, std::vector<int>>> groups;
+    for (int c = 0; c < spec.nchannels; ++c) {
+        const std::string& n = spec.channelnames[static_cast<size_t>(c)];
+        auto dot = n.rfind('.');
+        std::string layer = dot == std::string::npos ? (n == "Z" ? "depth" : "beauty") : n.substr(0, dot);
+        auto it = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == layer; });
+        if (it == groups.end()) groups.push_back({layer, {c}});
+        else it->second.push_back(c);
+    }
+    for (const auto& [name, idx] : groups) {
+        std::vector<std::string> chans;
+        for (int c : idx) chans.push_back(spec.channelnames[static_cast<size_t>(c)]);
+        Layer& l = img.add_layer(name, chans);
+        for (size_t p = 0; p < static_cast<size_t>(spec.width) * spec.height; ++p)
+            for (size_t k = 0; k < idx.size(); ++k)
+                l.data[p * idx.size() + k] = pixels[p * static_cast<size_t>(spec.nchannels) + static_cast<size_t>(idx[k])];
+    }
+    return img;
+}
+
+float srgb_encode(float x) {
+    x = std::clamp(x, 0.0f, 1.0f);
+    return x <= 0.0031308f ? 12.92f * x : 1.055f * std::pow(x, 1 / 2.4f) - 0.055f;
+}
+
+void write_png_rgb8(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb) {
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    write_atomically(path, [&](const std::string& tmp) {
+        auto out = OIIO::ImageOutput::create("png");
+        if (!out || !out->open(tmp, spec))
+            throw InputError(path, "", "cannot write image: " + (out ? out->geterror() : OIIO::geterror()));
+        if (!out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) || !out->close())
+            throw InputError(path, "", "cannot write image: " + out->geterror());
+    });
+}
+
+void write_png(const std::string& path, const Image& image, const std::string& layer, float exposure) {
+    const Layer* l = image.find(layer);
+    if (!l || l->channels.size() < 3) throw std::runtime_error("write_png: no RGB layer " + layer);
+    float scale = std::exp2(exposure);
+    std::vector<uint8_t> rgb(static_cast<size_t>(image.width) * image.height * 3);
+    size_t nc = l->channels.size();
+    for (size_t p = 0; p < static_cast<size_t>(image.width) * image.height; ++p)
+        for (size_t c = 0; c < 3; ++c)
+            rgb[3 * p + c] = static_cast<uint8_t>(std::lround(255.0f * srgb_encode(scale * l->data[p * nc + c])));
+    write_png_rgb8(path, image.width, image.height, rgb);
+}
+
+}  // namespace bounce

@@ -1,0 +1,53 @@
+// Multi-layer float images and their files: one OpenEXR with `layer.channel` names and
+// metadata, and a tone-mapped sRGB PNG for a quick look.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "bounce/core/math.h"
+
+namespace bounce {
+
+/// One named group of channels, e.g. "direct" with {"direct.R","direct.G","direct.B"}.
+struct Layer {
+    std::string name;
+    std::vector<std::string> channels;  ///< full EXR channel names
+    std::vector<float> data;            ///< interleaved, width*height*channels.size()
+};
+
+/// A window (the crop or the full frame) of a full-size image, with layers.
+struct Image {
+    int full_width = 0, full_height = 0;
+    int x0 = 0, y0 = 0, width = 0, height = 0;
+    std::vector<Layer> layers;
+    std::map<std::string, std::string> metadata;  ///< written as "bounce:<key>" attributes
+
+    /// Adds a zero-filled layer; returns it.
+    Layer& add_layer(const std::string& name, const std::vector<std::string>& channels);
+    const Layer* find(const std::string& name) const;
+    Layer* find(const std::string& name);
+    float* at(Layer& l, int x, int y) {
+        return &l.data[(static_cast<size_t>(y) * width + x) * l.channels.size()];
+    }
+    const float* at(const Layer& l, int x, int y) const {
+        return &l.data[(static_cast<size_t>(y) * width + x) * l.channels.size()];
+    }
+};
+
+/// Writes all layers to one OpenEXR (temporary name, then rename). The layer named "beauty"
+/// is written as the unprefixed R,G,B,A channels.
+void write_exr(const std::string& path, const Image& image);
+/// Reads an EXR written by write_exr (or any EXR: channels grouped by their prefix).
+Image read_exr(const std::string& path);
+/// Writes layer `layer` (3 channels) as an 8-bit sRGB PNG, clamped after `exposure` stops.
+void write_png(const std::string& path, const Image& image, const std::string& layer,
+               float exposure = 0.0f);
+/// Writes raw 8-bit RGB pixels as a PNG (used for false-colour and diagnostic images).
+void write_png_rgb8(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb);
+
+/// Linear to sRGB-encoded value in [0,1].
+float srgb_encode(float linear);
+
+}  // namespace bounce

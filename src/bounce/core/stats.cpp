@@ -1,0 +1,91 @@
+#include "bounce/core/stats.h"
+
+#include <fmt/format.h>
+#include <sys/resource.h>
+
+namespace bounce {
+
+Counters& Counters::operator+=(const Counters& o) {
+    camera_rays += o.camera_rays;
+    shadow_rays += o.shadow_rays;
+    gather_rays += o.gather_rays;
+    fragments_shaded += o.fragments_shaded;
+    return *this;
+}
+
+Counters Stats::total() const {
+    Counters t;
+    for (const auto& c : per_thread_) t += c;
+    return t;
+}
+
+void Stats::add_phase(const std::string& name, double seconds) {
+    for (auto& [n, s] : phases_)
+        if (n == name) {
+            s += seconds;
+            return;
+        }
+    phases_.emplace_back(name, seconds);
+}
+
+double Stats::phase(const std::string& name) const {
+    for (const auto& [n, s] : phases_)
+        if (n == name) return s;
+    return 0;
+}
+
+nlohmann::json Stats::to_json() const {
+    Counters t = total();
+    nlohmann::json j;
+    nlohmann::json phases = nlohmann::json::object();
+    double total_time = 0;
+    for (const auto& [n, s] : phases_) {
+        phases[n] = s;
+        total_time += s;
+    }
+    j["phases_s"] = phases;
+    j["total_s"] = total_time;
+    uint64_t rays = t.camera_rays + t.shadow_rays + t.gather_rays;
+    j["rays"] = {{"camera", t.camera_rays},
+                 {"shadow", t.shadow_rays},
+                 {"gather", t.gather_rays},
+                 {"total", rays}};
+    j["rays_per_s"] = total_time > 0 ? static_cast<double>(rays) / total_time : 0.0;
+    j["fragments_shaded"] = t.fragments_shaded;
+    j["peak_rss_bytes"] = peak_rss_bytes();
+    for (auto it = extra_.begin(); it != extra_.end(); ++it) j[it.key()] = it.value();
+    return j;
+}
+
+std::string Stats::to_text() const {
+    nlohmann::json j = to_json();
+    std::string s = "bounce statistics\n";
+    for (const auto& [n, t] : phases_) s += fmt::format("  {:<24} {:>10.3f} s\n", n, t);
+    s += fmt::format("  {:<24} {:>10.3f} s\n", "total", j["total_s"].get<double>());
+    s += fmt::format("  {:<24} {:>10}\n", "camera rays", j["rays"]["camera"].get<uint64_t>());
+    s += fmt::format("  {:<24} {:>10}\n", "shadow rays", j["rays"]["shadow"].get<uint64_t>());
+    s += fmt::format("  {:<24} {:>10}\n", "gather rays", j["rays"]["gather"].get<uint64_t>());
+    s += fmt::format("  {:<24} {:>10.3f} M/s\n", "rays/s", j["rays_per_s"].get<double>() * 1e-6);
+    for (auto it = extra_.begin(); it != extra_.end(); ++it)
+        s += fmt::format("  {:<24} {:>10}\n", it.key(), it.value().dump());
+    s += fmt::format("  {:<24} {:>10.1f} MiB\n", "peak memory",
+                     static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0));
+    return s;
+}
+
+double PhaseTimer::stop() {
+    double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    if (!stopped_) {
+        stats_.add_phase(name_, s);
+        stopped_ = true;
+    }
+    return s;
+}
+
+uint64_t peak_rss_bytes() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return static_cast<uint64_t>(u.ru_maxrss) * 1024u;
+}
+
+}  // namespace bounce

@@ -1,0 +1,87 @@
+// The deep buffer ("deep file"): primary visibility cached per pixel as a list of fragments.
+// Shading (direct now, gathering and the cache later) starts from it, so a frame can be
+// re-shaded without re-tracing primary visibility. Stored as an OpenEXR deep image.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "bounce/accel/accel.h"
+#include "bounce/core/math.h"
+#include "bounce/core/progress.h"
+#include "bounce/core/stats.h"
+#include "bounce/scene/scene.h"
+
+namespace bounce {
+
+/// One visible surface in a pixel: the jittered subsamples that hit the same surface, merged.
+/// Normals face the camera.
+struct Fragment {
+    Vec3 p;        ///< position (fine surface)
+    Vec3 n;        ///< shading normal
+    Vec3 ng;       ///< geometric normal
+    Vec3 p_base;   ///< un-displaced position (where cache records live); = p without displacement
+    Vec3 n_base;   ///< un-displaced (un-bumped) normal
+    Vec2 uv;
+    uint32_t material = 0;
+    uint32_t object = 0;
+    uint32_t prim = 0;     ///< fine-tessellation triangle of the first subsample
+    float depth = 0;       ///< distance from the camera
+    float weight = 0;      ///< fraction of the pixel's subsamples (coverage)
+    float footprint = 0;   ///< world-space width of one pixel at p (ray differentials)
+    bool operator==(const Fragment&) const = default;
+};
+
+/// Fragments of a window of the image (the crop, or the full frame).
+struct DeepBuffer {
+    int full_width = 0, full_height = 0;  ///< the whole image
+    int x0 = 0, y0 = 0, width = 0, height = 0;  ///< the window this buffer covers
+    int spp = 0;
+    uint64_t seed = 0;
+    uint64_t scene_fingerprint = 0;  ///< Scene::fingerprint({"camera", "objects"})
+    std::vector<uint32_t> offsets;   ///< width*height+1 prefix sums into fragments
+    std::vector<Fragment> fragments;
+
+    size_t pixel_count() const { return static_cast<size_t>(width) * height; }
+    /// Fragments of window pixel (x, y) (window coordinates).
+    std::span<const Fragment> pixel(int x, int y) const {
+        size_t i = static_cast<size_t>(y) * width + x;
+        return {fragments.data() + offsets[i], fragments.data() + offsets[i + 1]};
+    }
+    bool operator==(const DeepBuffer&) const = default;
+};
+
+/// The pinhole camera of a scene: rays through continuous full-image pixel coordinates.
+class CameraRays {
+public:
+    explicit CameraRays(const Camera& cam);
+    /// Unnormalised direction through pixel position (px, py) (0..width, 0..height, y down).
+    Vec3 direction(float px, float py) const;
+    Vec3 origin() const { return pos_; }
+    /// World-space width of one pixel at a hit at distance t along unit direction d on a
+    /// surface of normal n (from the ray differentials; grazing angles are capped).
+    float footprint(const Vec3& d, float t, const Vec3& n) const;
+
+private:
+    Vec3 pos_, forward_, right_, up_;
+    float scale_ = 1, aspect_ = 1;
+    int width_ = 1, height_ = 1;
+};
+
+/// Traces `spp` jittered subsamples per pixel against the fine tessellation and merges those
+/// that hit the same surface into fragments. Deterministic for a given seed, whatever the
+/// thread count or crop.
+DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats,
+                             ProgressSink* progress);
+
+/// Throws InputError (naming the camera) if no camera ray hits any geometry.
+void check_camera_sees_geometry(const Scene& scene, const SceneAccel& accel);
+
+/// Writes an OpenEXR deep scanline file (written to a temporary name and renamed).
+void write_deep(const std::string& path, const DeepBuffer& deep);
+/// Reads a deep file written by write_deep; InputError on anything malformed.
+DeepBuffer read_deep(const std::string& path);
+
+}  // namespace bounce

@@ -1,0 +1,139 @@
+#include "bounce/geometry/mesh.h"
+
+#include <map>
+#include <utility>
+
+namespace bounce {
+
+Bounds TriangleMesh::bounds() const {
+    Bounds b;
+    for (const auto& p : positions) b.extend(p);
+    return b;
+}
+
+void TriangleMesh::transform(const Transform& t) {
+    for (auto& p : positions) p = t.point(p);
+    for (auto& n : normals) n = t.normal(n);
+}
+
+void TriangleMesh::append(const TriangleMesh& o) {
+    auto base = static_cast<uint32_t>(positions.size());
+    // Keep optional attributes consistent: fill the side that lacks them.
+    if (normals.empty() != o.normals.empty()) {
+        if (normals.empty() && !positions.empty()) normals.assign(positions.size(), Vec3(0));
+    }
+    if (uvs.empty() != o.uvs.empty()) {
+        if (uvs.empty() && !positions.empty()) uvs.assign(positions.size(), Vec2{});
+    }
+    positions.insert(positions.end(), o.positions.begin(), o.positions.end());
+    if (!o.normals.empty()) normals.insert(normals.end(), o.normals.begin(), o.normals.end());
+    else if (!normals.empty()) normals.resize(positions.size(), Vec3(0));
+    if (!o.uvs.empty()) uvs.insert(uvs.end(), o.uvs.begin(), o.uvs.end());
+    else if (!uvs.empty()) uvs.resize(positions.size(), Vec2{});
+    for (uint32_t i : o.indices) indices.push_back(i + base);
+    face_materials.insert(face_materials.end(), o.face_materials.begin(), o.face_materials.end());
+}
+
+namespace {
+
+/// One 1-to-4 split; `project` maps each new vertex (e.g. onto a sphere).
+template <typename Project>
+TriangleMesh split_once(const TriangleMesh& m, Project project) {
+    TriangleMesh r;
+    r.positions = m.positions;
+    r.normals = m.normals;
+    r.uvs = m.uvs;
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> midpoints;
+    auto mid = [&](uint32_t a, uint32_t b) {
+        auto key = std::minmax(a, b);
+        auto it = midpoints.find(key);
+        if (it != midpoints.end()) return it->second;
+        auto idx = static_cast<uint32_t>(r.positions.size());
+        r.positions.push_back((r.positions[a] + r.positions[b]) * 0.5f);
+        if (!r.normals.empty()) r.normals.push_back(normalize(r.normals[a] + r.normals[b]));
+        if (!r.uvs.empty())
+            r.uvs.push_back({(r.uvs[a].x + r.uvs[b].x) * 0.5f, (r.uvs[a].y + r.uvs[b].y) * 0.5f});
+        project(r, idx);
+        midpoints.emplace(key, idx);
+        return idx;
+    };
+    for (size_t t = 0; t < m.triangle_count(); ++t) {
+        uint32_t a = m.indices[3 * t], b = m.indices[3 * t + 1], c = m.indices[3 * t + 2];
+        uint32_t ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
+        uint32_t tris[4][3] = {{a, ab, ca}, {ab, b, bc}, {ca, bc, c}, {ab, bc, ca}};
+        for (auto& tri : tris) {
+            r.indices.insert(r.indices.end(), {tri[0], tri[1], tri[2]});
+            r.face_materials.push_back(m.face_materials[t]);
+        }
+    }
+    return r;
+}
+
+}  // namespace
+
+TriangleMesh subdivide_linear(const TriangleMesh& mesh, int levels) {
+    TriangleMesh r = mesh;
+    for (int i = 0; i < levels; ++i) r = split_once(r, [](TriangleMesh&, uint32_t) {});
+    return r;
+}
+
+TriangleMesh make_icosphere(const Vec3& center, float radius, int level, uint32_t material) {
+    const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+    TriangleMesh m;
+    Vec3 v[12] = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                  {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    for (auto& p : v) {
+        m.normals.push_back(normalize(p));
+        m.positions.push_back(center + normalize(p) * radius);
+    }
+    m.indices = {0, 11, 5, 0, 5, 1,  0, 1, 7,  0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4,
+                 11, 10, 2, 10, 7, 6, 7, 1, 8, 3, 9, 4,  3, 4, 2,  3, 2, 6, 3, 6, 8,
+                 3, 8, 9,  4, 9, 5,  2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+    m.face_materials.assign(20, material);
+    auto onto_sphere = [&](TriangleMesh& r, uint32_t i) {
+        Vec3 n = normalize(r.positions[i] - center);
+        r.normals[i] = n;
+        r.positions[i] = center + n * radius;
+    };
+    for (int i = 0; i < level; ++i) m = split_once(m, onto_sphere);
+    return m;
+}
+
+TriangleMesh make_quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                       uint32_t material) {
+    TriangleMesh m;
+    m.positions = {a, b, c, d};
+    m.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    m.indices = {0, 1, 2, 0, 2, 3};
+    m.face_materials = {material, material};
+    return m;
+}
+
+}  // namespace bounce
+
+namespace bounce {
+
+SurfacePoint surface_point(const TriangleMesh& m, uint32_t prim, float u, float v) {
+    uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];
+    float w = 1 - u - v;
+    SurfacePoint sp;
+    const Vec3 &a = m.positions[i0], &b = m.positions[i1], &c = m.positions[i2];
+    sp.p = a * w + b * u + c * v;
+    sp.ng = normalize(cross(b - a, c - a));
+    sp.n = sp.ng;
+    if (!m.normals.empty()) {
+        Vec3 n = m.normals[i0] * w + m.normals[i1] * u + m.normals[i2] * v;
+        if (dot(n, n) > 1e-12f) {
+            sp.n = normalize(n);
+            if (dot(sp.n, sp.ng) < 0) sp.ng = -sp.ng;  // geometric normal follows the authored side
+        }
+    }
+    if (!m.uvs.empty()) {
+        const Vec2 &ta = m.uvs[i0], &tb = m.uvs[i1], &tc = m.uvs[i2];
+        sp.uv = {ta.x * w + tb.x * u + tc.x * v, ta.y * w + tb.y * u + tc.y * v};
+    }
+    sp.material = m.face_materials[prim];
+    return sp;
+}
+
+}  // namespace bounce

@@ -1,0 +1,57 @@
+// Triangle meshes and the tessellations bounce builds from them: the coarse one that secondary
+// rays trace and the fine one that primary visibility sees.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "bounce/core/math.h"
+
+namespace bounce {
+
+struct TriangleMesh {
+    std::vector<Vec3> positions;
+    std::vector<Vec3> normals;  ///< per vertex shading normals; empty = use geometric normals
+    std::vector<Vec2> uvs;      ///< per vertex; empty = none
+    std::vector<uint32_t> indices;         ///< 3 per triangle
+    std::vector<uint32_t> face_materials;  ///< per triangle index into Scene::materials
+
+    size_t triangle_count() const { return indices.size() / 3; }
+    Bounds bounds() const;
+    /// Applies a transform to positions and normals.
+    void transform(const Transform& t);
+    /// Appends another mesh (indices re-based).
+    void append(const TriangleMesh& other);
+};
+
+/// Splits every triangle into four at its edge midpoints, `levels` times. Positions stay on
+/// the input surface (linear), normals and uvs are interpolated.
+TriangleMesh subdivide_linear(const TriangleMesh& mesh, int levels);
+
+/// Icosahedron subdivided `level` times with vertices on the sphere; exact sphere normals.
+/// Level 0 has 20 triangles; each level multiplies by 4.
+TriangleMesh make_icosphere(const Vec3& center, float radius, int level, uint32_t material);
+
+/// A planar quad from four corners in order (two triangles), uvs (0,0) (1,0) (1,1) (0,1).
+TriangleMesh make_quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                       uint32_t material);
+
+}  // namespace bounce
+
+namespace bounce {
+
+/// A point on a triangle, with everything shading needs.
+struct SurfacePoint {
+    Vec3 p;
+    Vec3 n;   ///< shading normal (interpolated), unit
+    Vec3 ng;  ///< geometric normal, unit, same side as n
+    Vec2 uv;
+    uint32_t material = 0;
+};
+
+/// Evaluates triangle `prim` of `mesh` at barycentrics (u, v) (Embree's convention:
+/// p = (1-u-v) v0 + u v1 + v v2).
+SurfacePoint surface_point(const TriangleMesh& mesh, uint32_t prim, float u, float v);
+
+}  // namespace bounce

@@ -1,0 +1,165 @@
+#include "bounce/lighting/lighting.h"
+
+#include <OpenImageIO/texture.h>
+
+namespace bounce {
+
+Materials::Materials(const Scene& scene) : scene_(scene) {
+    bool any = false;
+    for (const auto& m : scene.materials) any |= !m.color_texture.empty();
+    if (any) {
+        textures_ = OIIO::TextureSystem::create(false);
+        textures_->attribute("max_memory_MB", 1024.0f);
+        textures_->attribute("automip", 1);
+    }
+}
+
+Materials::~Materials() {
+    if (textures_) OIIO::TextureSystem::destroy(textures_);
+}
+
+Color Materials::albedo(uint32_t material, const Vec2& uv) const {
+    const Material& m = scene_.materials[material];
+    if (m.color_texture.empty() || !textures_) return m.color;
+    OIIO::TextureOpt opt;
+    opt.swrap = opt.twrap = OIIO::TextureOpt::WrapPeriodic;
+    float rgb[3] = {1, 1, 1};
+    // Image rows run top-down; uv's v runs bottom-up.
+    if (!textures_->texture(OIIO::ustring(m.color_texture), opt, uv.x, 1 - uv.y, 0, 0, 0, 0, 3, rgb))
+        return m.color;
+    return m.color * Color(rgb[0], rgb[1], rgb[2]);
+}
+
+DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel)
+    : scene_(scene), accel_(accel), emitters_(scene.lights.size()) {
+    for (size_t i = 0; i < scene.lights.size(); ++i) {
+        const Light& l = scene.lights[i];
+        if (l.type != LightType::Mesh) continue;
+        Emitter& e = emitters_[i];
+        e.object = l.object;
+        const TriangleMesh& m = scene.objects[l.object].coarse;
+        for (uint32_t t = 0; t < m.triangle_count(); ++t) {
+            if (!scene.materials[m.face_materials[t]].is_emissive()) continue;
+            const Vec3& a = m.positions[m.indices[3 * t]];
+            float area = 0.5f * length(cross(m.positions[m.indices[3 * t + 1]] - a,
+                                             m.positions[m.indices[3 * t + 2]] - a));
+            if (area <= 0) continue;
+            e.area += area;
+            e.prims.push_back(t);
+            e.cdf.push_back(e.area);
+        }
+    }
+}
+
+Color DirectLighting::irradiance(const Vec3& p, const Vec3& n, const RandomStream& rng,
+                                 int samples, Counters& counters) const {
+    Color e(0);
+    for (size_t i = 0; i < scene_.lights.size(); ++i) e += sample_light(i, p, n, rng, samples, counters);
+    return e;
+}
+
+Color DirectLighting::background(const Vec3& dir) const {
+    Color c(0);
+    for (const auto& l : scene_.lights)
+        if (l.type == LightType::Sky) c += l.sky_map ? l.color * l.sky_map->lookup(dir, l.sky_rotation) : l.color;
+    return c;
+}
+
+Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n,
+                                   const RandomStream& rng, int samples, Counters& counters) const {
+    const Light& l = scene_.lights[index];
+    const auto dim = [&](uint32_t d) { return static_cast<uint32_t>(kDimLightSelect + 16 * index + d); };
+    switch (l.type) {
+        case LightType::Point:
+        case LightType::Spot: {
+            Vec3 to = l.position - p;
+            float r2 = dot(to, to), r = std::sqrt(r2);
+            Vec3 w = to / r;
+            float cos_x = dot(n, w);
+            if (cos_x <= 0 || r2 == 0) return Color(0);
+            float cone = 1;
+            if (l.type == LightType::Spot) {
+                float angle = std::acos(std::clamp(dot(-w, l.direction), -1.0f, 1.0f)) * 180.0f / kPi;
+                if (angle >= l.cone_angle + l.cone_falloff) return Color(0);
+                if (angle > l.cone_angle) {
+                    float s = 1 - (angle - l.cone_angle) / l.cone_falloff;
+                    cone = s * s * (3 - 2 * s);  // smoothstep edge
+                }
+            }
+            ++counters.shadow_rays;
+            if (accel_.occluded(p, w, r)) return Color(0);
+            return l.color * (cone * cos_x / r2);
+        }
+        case LightType::Distant: {
+            Vec3 w = -l.direction;
+            float cos_x = dot(n, w);
+            if (cos_x <= 0) return Color(0);
+            ++counters.shadow_rays;
+            return accel_.occluded(p, w, INFINITY) ? Color(0) : l.color * cos_x;
+        }
+        case LightType::Quad: {
+            Vec3 ln = cross(l.edge_u, l.edge_v);
+            float area = length(ln);
+            ln = ln / area;
+            Color e(0);
+            for (int s = 0; s < samples; ++s) {
+                Vec2 uv = stratified_2d(s, samples, rng.get(static_cast<uint64_t>(s), dim(1)),
+                                        rng.get(static_cast<uint64_t>(s), dim(2)));
+                Vec3 to = l.corner + l.edge_u * uv.x + l.edge_v * uv.y - p;
+                float r2 = dot(to, to), r = std::sqrt(r2);
+                Vec3 w = to / r;
+                float cos_x = dot(n, w), cos_l = -dot(ln, w);
+                if (cos_x <= 0 || cos_l <= 0) continue;
+                ++counters.shadow_rays;
+                if (accel_.occluded(p, w, r)) continue;
+                e += l.color * (cos_x * cos_l / r2);
+            }
+            return e * (area / static_cast<float>(samples));
+        }
+        case LightType::Sky: {
+            Frame f(n);
+            Color e(0);
+            for (int s = 0; s < samples; ++s) {
+                Vec2 uv = stratified_2d(s, samples, rng.get(static_cast<uint64_t>(s), dim(1)),
+                                        rng.get(static_cast<uint64_t>(s), dim(2)));
+                Vec3 w = f.to_world(cosine_hemisphere(uv.x, uv.y));
+                ++counters.shadow_rays;
+                if (accel_.occluded(p, w, INFINITY)) continue;
+                e += l.sky_map ? l.color * l.sky_map->lookup(w, l.sky_rotation) : l.color;
+            }
+            // Cosine-weighted estimator of the integral of L cos: pi * mean(L).
+            return e * (kPi / static_cast<float>(samples));
+        }
+        case LightType::Mesh: {
+            const Emitter& em = emitters_[index];
+            if (em.area <= 0) return Color(0);
+            const TriangleMesh& m = scene_.objects[em.object].coarse;
+            Color e(0);
+            for (int s = 0; s < samples; ++s) {
+                Vec2 uv = stratified_2d(s, samples, rng.get(static_cast<uint64_t>(s), dim(1)),
+                                        rng.get(static_cast<uint64_t>(s), dim(2)));
+                // First coordinate picks a triangle by area and is reused inside it, which keeps
+                // the stratification across the whole emitter.
+                float a = uv.x * em.area;
+                size_t k = static_cast<size_t>(std::upper_bound(em.cdf.begin(), em.cdf.end(), a) - em.cdf.begin());
+                k = std::min(k, em.prims.size() - 1);
+                float lo = k ? em.cdf[k - 1] : 0, hi = em.cdf[k];
+                float u1 = std::clamp((a - lo) / (hi - lo), 0.0f, 1.0f), u2 = uv.y;
+                float su = std::sqrt(u1), bu = 1 - su, bv = u2 * su;  // uniform on the triangle
+                SurfacePoint q = surface_point(m, em.prims[k], bu, bv);
+                Vec3 to = q.p - p;
+                float r2 = dot(to, to), r = std::sqrt(r2);
+                Vec3 w = to / r;
+                float cos_x = dot(n, w), cos_l = std::abs(dot(q.ng, w));  // emits from both sides
+                if (cos_x <= 0 || cos_l <= 0) continue;
+                ++counters.shadow_rays;
+                if (accel_.occluded(p, w, r)) continue;
+                e += scene_.materials[q.material].emission * (cos_x * cos_l / r2);
+            }
+            return e * (em.area / static_cast<float>(samples));
+        }
+    }
+    return Color(0);
+}
+
+}  // namespace bounce

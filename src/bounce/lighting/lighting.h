@@ -1,0 +1,69 @@
+// Direct lighting of diffuse surfaces with ray-traced shadows, and the material queries
+// (albedo, emission) shading needs. Area lights, emissive meshes and the sky are sampled with
+// stratified samples; every random number comes from a RandomStream.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "bounce/accel/accel.h"
+#include "bounce/core/random.h"
+#include "bounce/core/sampling.h"
+#include "bounce/core/stats.h"
+#include "bounce/scene/scene.h"
+
+#include <OpenImageIO/oiioversion.h>
+OIIO_NAMESPACE_BEGIN
+class TextureSystem;
+OIIO_NAMESPACE_END
+
+namespace bounce {
+
+/// Material evaluation: albedo (colour x texture) and emission at a surface point.
+class Materials {
+public:
+    explicit Materials(const Scene& scene);
+    ~Materials();
+    Materials(const Materials&) = delete;
+    Materials& operator=(const Materials&) = delete;
+
+    Color albedo(uint32_t material, const Vec2& uv) const;
+    Color emission(uint32_t material) const { return scene_.materials[material].emission; }
+
+private:
+    const Scene& scene_;
+    OIIO::TextureSystem* textures_ = nullptr;
+};
+
+/// Emissive triangles of one object, with an area CDF for sampling.
+struct Emitter {
+    uint32_t object = 0;
+    std::vector<uint32_t> prims;
+    std::vector<float> cdf;  ///< cumulative area, last = total
+    float area = 0;
+};
+
+/// Direct lighting over all of a scene's lights.
+class DirectLighting {
+public:
+    DirectLighting(const Scene& scene, const SceneAccel& accel);
+
+    /// Irradiance E arriving at `p` (on the fine surface) through the hemisphere of unit
+    /// normal `n`, with shadows. `samples` stratified samples per area light and for the sky.
+    /// Diffuse radiance leaving the point is albedo * E / pi.
+    Color irradiance(const Vec3& p, const Vec3& n, const RandomStream& rng, int samples,
+                     Counters& counters) const;
+
+    /// Radiance the camera sees where a primary ray escapes (the sky; black without one).
+    Color background(const Vec3& dir) const;
+
+private:
+    Color sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng,
+                       int samples, Counters& counters) const;
+
+    const Scene& scene_;
+    const SceneAccel& accel_;
+    std::vector<Emitter> emitters_;  ///< parallel to scene.lights (empty for non-mesh lights)
+};
+
+}  // namespace bounce

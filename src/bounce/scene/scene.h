@@ -1,0 +1,92 @@
+// The scene as plain data: camera, lights, materials, objects (with both tessellations) and
+// render settings. Loaded from a JSON scene file or a bare glTF file (scene_load.h); built
+// into ray-tracing structures later (accel/). Every parameter has one name, documented in
+// docs/scene-format.md, shared by the JSON file, `--set` and the stats.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "bounce/core/math.h"
+#include "bounce/geometry/mesh.h"
+
+namespace bounce {
+
+struct Camera {
+    Vec3 position{0, 0, 5};
+    Vec3 look_at{0, 0, 0};
+    Vec3 up{0, 1, 0};
+    float fov = 45.0f;  ///< vertical field of view, degrees
+    int width = 512, height = 512;
+};
+
+/// A float RGB lat-long image (the textured sky dome); +Y is up, u grows with azimuth.
+struct LatLongMap {
+    int width = 0, height = 0;
+    std::vector<float> rgb;  ///< width*height*3, row 0 at the zenith
+    Color lookup(const Vec3& dir, float rotation_deg) const;
+};
+
+enum class LightType { Point, Spot, Distant, Quad, Sky, Mesh };
+
+struct Light {
+    LightType type = LightType::Point;
+    Color color{1};            ///< point/spot: intensity (W/sr); distant: irradiance; quad/sky: radiance
+    Vec3 position{0};          ///< point, spot
+    Vec3 direction{0, -1, 0};  ///< spot: where it points; distant: direction light travels
+    float cone_angle = 30;     ///< spot: half-angle of full intensity, degrees
+    float cone_falloff = 5;    ///< spot: width of the smooth edge beyond cone_angle, degrees
+    Vec3 corner{0}, edge_u{1, 0, 0}, edge_v{0, 0, 1};  ///< quad; emits towards edge_u x edge_v
+    std::shared_ptr<const LatLongMap> sky_map;          ///< sky: optional texture (times color)
+    float sky_rotation = 0;                             ///< sky: rotation about +Y, degrees
+    uint32_t object = 0;  ///< mesh: the object whose emissive faces emit
+};
+
+struct Material {
+    std::string name;
+    Color color{0.7f};          ///< diffuse albedo (multiplied by the texture if any)
+    std::string color_texture;  ///< absolute path, empty = none
+    Color emission{0};          ///< emitted radiance; nonzero makes faces area lights
+    bool is_emissive() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }
+};
+
+struct Object {
+    std::string name;
+    TriangleMesh coarse;        ///< traced by all secondary rays
+    TriangleMesh fine;          ///< seen by primary visibility (empty = same as coarse)
+    bool has_fine() const { return !fine.indices.empty(); }
+    const TriangleMesh& visible() const { return has_fine() ? fine : coarse; }
+};
+
+struct RenderSettings {
+    int spp = 16;               ///< jittered subsamples per pixel (primary visibility)
+    uint64_t seed = 0;
+    int threads = 0;            ///< 0 = all cores
+    int light_samples = 16;     ///< stratified samples per area light / sky per fragment
+    float ray_offset = -1;      ///< ray-origin offsetting distance; < 0 = automatic
+    int tile_size = 32;
+    std::array<int, 4> crop{0, 0, 0, 0};  ///< x0,x1,y0,y1 (exclusive ends); all 0 = full frame
+    bool has_crop() const { return crop[1] > crop[0] || crop[3] > crop[2]; }
+};
+
+struct Scene {
+    std::string path;  ///< the file it came from
+    Camera camera;
+    std::vector<Light> lights;
+    std::vector<Material> materials;
+    std::vector<Object> objects;
+    RenderSettings render;
+    /// The effective scene description after overrides (for metadata and fingerprints).
+    nlohmann::json description;
+
+    Bounds bounds() const;
+    /// 64-bit hash of the named top-level parts of the effective description ("camera",
+    /// "objects" ...): the identity that deep and cache files are checked against.
+    uint64_t fingerprint(const std::vector<std::string>& parts) const;
+};
+
+}  // namespace bounce

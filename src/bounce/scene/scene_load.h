@@ -1,0 +1,29 @@
+// Loading a scene: a JSON scene file (docs/scene-format.md) or a bare glTF 2.0 file with its
+// camera and punctual lights. Bad input raises InputError naming the file and the JSON
+// pointer (or line:column) of the problem.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "bounce/scene/scene.h"
+
+namespace bounce {
+
+/// Loads `path` (.json, or .gltf/.glb/.obj/.ply rendered with defaults and the file's own
+/// camera and lights) and applies `overrides`, each "dotted.path=value" where value is JSON
+/// (a bare word is taken as a string): `camera.fov=45`, `lights.0.color=[1,1,1]`.
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+
+/// Same, from JSON text already in memory; `path` names it in errors and anchors relative
+/// file names.
+Scene load_scene_text(const std::string& text, const std::string& path,
+                      const std::vector<std::string>& overrides = {});
+
+/// Loads every triangle of a mesh file through Assimp, node transforms applied. Materials of
+/// the file are appended to `materials` (named "<prefix>/<name>") unless `override_material`
+/// is given, in which case every face uses it.
+TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
+                            std::vector<Material>& materials, int override_material);
+
+}  // namespace bounce
