@@ -26,7 +26,12 @@ private:
         std::string s = file;
         if (!place.empty()) s += ": " + place;
         if (!s.empty()) s += ": ";
-        return s + "error: " + message;
+        s += "error: " + message;
+        // One line, always: library messages (OpenImageIO, Assimp) may carry newlines.
+        for (char& c : s)
+            if (c == '\n' || c == '\r') c = ' ';
+        while (!s.empty() && s.back() == ' ') s.pop_back();
+        return s;
     }
     std::string file_, place_;
 };

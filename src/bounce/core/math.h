@@ -13,6 +13,7 @@ inline constexpr float kInvPi = 1.0f / kPi;
 
 struct Vec2 {
     float x = 0, y = 0;
+    constexpr bool operator==(const Vec2&) const = default;
 };
 
 struct Vec3 {

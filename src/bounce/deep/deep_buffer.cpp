@@ -267,13 +267,18 @@ DeepBuffer read_deep(const std::string& path) {
         throw InputError(path, "bounce:deep_version",
                          version < 0 ? "not a bounce deep file (no bounce:deep_version attribute)"
                                      : fmt::format("unsupported version {} (this bounce reads {})", version, kDeepVersion));
+    // OpenEXR stores channels sorted by name: find ours by name.
     const auto& chans = deep_channels();
-    if (spec.nchannels != static_cast<int>(chans.size()))
-        throw InputError(path, "channels", fmt::format("expected {} channels, found {}", chans.size(), spec.nchannels));
-    for (size_t c = 0; c < chans.size(); ++c)
-        if (spec.channelnames[c] != chans[c].name || spec.channelformat(static_cast<int>(c)) != chans[c].type)
-            throw InputError(path, "channel " + std::to_string(c),
-                             fmt::format("expected channel \"{}\", found \"{}\"", chans[c].name, spec.channelnames[c]));
+    std::vector<int> index(chans.size(), -1);
+    for (size_t c = 0; c < chans.size(); ++c) {
+        for (int k = 0; k < spec.nchannels; ++k)
+            if (spec.channelnames[static_cast<size_t>(k)] == chans[c].name) index[c] = k;
+        if (index[c] < 0) throw InputError(path, "channels", fmt::format("missing channel \"{}\"", chans[c].name));
+        if (spec.channelformat(index[c]) != chans[c].type)
+            throw InputError(path, fmt::format("channel {}", chans[c].name),
+                             fmt::format("expected type {}, found {}", chans[c].type.c_str(),
+                                         spec.channelformat(index[c]).c_str()));
+    }
     DeepBuffer deep;
     deep.x0 = spec.x, deep.y0 = spec.y, deep.width = spec.width, deep.height = spec.height;
     deep.full_width = spec.full_width, deep.full_height = spec.full_height;
@@ -303,15 +308,16 @@ DeepBuffer read_deep(const std::string& path) {
         auto pix = static_cast<int64_t>(i);
         for (uint32_t k = deep.offsets[i]; k < deep.offsets[i + 1]; ++k) {
             int s = static_cast<int>(k - deep.offsets[i]);
-            auto v = [&](int c) { return dd.deep_value(pix, c, s); };
+            auto v = [&](int c) { return dd.deep_value(pix, index[static_cast<size_t>(c)], s); };
+            auto id = [&](int c) { return dd.deep_value_uint(pix, index[static_cast<size_t>(c)], s); };
             Fragment& f = deep.fragments[k];
             f.depth = v(0), f.weight = v(1);
             f.p = {v(2), v(3), v(4)}, f.n = {v(5), v(6), v(7)}, f.ng = {v(8), v(9), v(10)};
             f.p_base = {v(11), v(12), v(13)}, f.n_base = {v(14), v(15), v(16)};
             f.uv = {v(17), v(18)};
-            f.material = dd.deep_value_uint(pix, 19, s);
-            f.object = dd.deep_value_uint(pix, 20, s);
-            f.prim = dd.deep_value_uint(pix, 21, s);
+            f.material = id(19);
+            f.object = id(20);
+            f.prim = id(21);
             f.footprint = v(22);
             if (!isfinite(f.p) || !isfinite(f.n) || !std::isfinite(f.weight) || f.weight < 0 || f.weight > 1)
                 throw InputError(path, fmt::format("pixel {} fragment {}", i, s), "non-finite or out-of-range values");

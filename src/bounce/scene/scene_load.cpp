@@ -6,7 +6,9 @@
 #include <fmt/format.h>
 
 #include <assimp/Importer.hpp>
+#include <cstring>
 #include <filesystem>
+#include <optional>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -187,6 +189,10 @@ json parse_json_text(const std::string& text, const std::string& path) {
         auto pos = msg.find(": ", msg.find("column"));
         if (pos != std::string::npos) msg = msg.substr(pos + 2);
         throw InputError(path, fmt::format("{}:{}", line, col), "malformed JSON: " + msg);
+    } catch (const json::exception& e) {  // e.g. a number that overflows a double
+        std::string msg = e.what();
+        auto pos = msg.find("] ");
+        throw InputError(path, "", "malformed JSON: " + (pos == std::string::npos ? msg : msg.substr(pos + 2)));
     }
 }
 
@@ -196,17 +202,19 @@ std::string apply_override(json& doc, const std::string& assignment) {
     if (eq == std::string::npos || eq == 0)
         throw InputError("command line", "--set " + assignment, "expected key=value");
     std::string key = assignment.substr(0, eq), text = assignment.substr(eq + 1);
-    json value;
-    try {
-        value = json::parse(text);
-    } catch (const json::parse_error&) {
-        value = text;  // a bare word is a string
-    }
     std::string ptr;
     std::stringstream ks(key);
     for (std::string part; std::getline(ks, part, '.');) {
         if (part.empty()) throw InputError("command line", "--set " + assignment, "empty path component");
         ptr += "/" + part;
+    }
+    json value;
+    try {
+        value = json::parse(text);
+    } catch (const json::parse_error&) {
+        value = text;  // a bare word is a string
+    } catch (const json::out_of_range&) {
+        throw InputError("command line", "--set " + ptr, "number is not finite: " + text);
     }
     json* node = &doc;
     std::stringstream ps(key);
@@ -323,6 +331,37 @@ const aiScene* import_file(Assimp::Importer& imp, const std::string& path) {
     return s;
 }
 
+struct GltfCamera {
+    float yfov = 0, aspect = 0;
+};
+
+/// The first perspective camera of a .gltf/.glb file, read from its JSON.
+std::optional<GltfCamera> gltf_camera(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    if (ext != ".gltf" && ext != ".glb") return std::nullopt;
+    std::ifstream in(path, std::ios::binary);
+    std::string text((std::istreambuf_iterator<char>(in)), {});
+    if (ext == ".glb") {  // 12-byte header, then the JSON chunk: length, type, data
+        if (text.size() < 20) return std::nullopt;
+        uint32_t len = 0;
+        std::memcpy(&len, text.data() + 12, 4);
+        if (20 + static_cast<size_t>(len) > text.size()) return std::nullopt;
+        text = text.substr(20, len);
+    }
+    json j = json::parse(text, nullptr, false);
+    if (j.is_discarded() || !j.contains("cameras") || !j["cameras"].is_array() || j["cameras"].empty())
+        return std::nullopt;
+    const json& c = j["cameras"][0];
+    if (!c.contains("perspective") || !c["perspective"].contains("yfov")) return std::nullopt;
+    const json& p = c["perspective"];
+    GltfCamera g;
+    g.yfov = p["yfov"].is_number() ? p["yfov"].get<float>() : 0;
+    g.aspect = p.contains("aspectRatio") && p["aspectRatio"].is_number() ? p["aspectRatio"].get<float>() : 0;
+    if (!(g.yfov > 0)) return std::nullopt;
+    return g;
+}
+
 /// Describes a bare mesh file as a JSON scene: the file's camera and punctual lights.
 json describe_mesh_file(const std::string& path) {
     Assimp::Importer imp;
@@ -334,13 +373,25 @@ json describe_mesh_file(const std::string& path) {
     const aiCamera* cam = s->mCameras[0];
     const aiNode* node = s->mRootNode->FindNode(cam->mName);
     Transform w = node ? to_transform(node_world(node)) : Transform{};
-    Vec3 pos = w.point(to_vec3(cam->mPosition));
-    Vec3 look = w.vector(to_vec3(cam->mLookAt));
-    Vec3 up = w.vector(to_vec3(cam->mUp));
     float aspect = cam->mAspect > 0 ? cam->mAspect : 1.0f;
-    // Assimp stores half the horizontal field of view.
-    float hfov = 2.0f * cam->mHorizontalFOV;
-    float vfov = 2.0f * std::atan(std::tan(hfov / 2.0f) / aspect) * 180.0f / kPi;
+    Vec3 pos, look, up;
+    float vfov;
+    if (auto gltf = gltf_camera(path)) {
+        // glTF: the camera looks down -Z of its node with +Y up. Assimp 5.2 also copies the
+        // node translation into mPosition and stores yfov*aspect as the "horizontal" fov, so
+        // take the pose from the node and the field of view from the file itself.
+        pos = w.point(Vec3(0));
+        look = w.vector({0, 0, -1});
+        up = w.vector({0, 1, 0});
+        vfov = gltf->yfov * 180.0f / kPi;
+        if (gltf->aspect > 0) aspect = gltf->aspect;
+    } else {
+        pos = w.point(to_vec3(cam->mPosition));
+        look = w.vector(to_vec3(cam->mLookAt));
+        up = w.vector(to_vec3(cam->mUp));
+        // Assimp documents mHorizontalFOV as half the horizontal angle.
+        vfov = 2.0f * std::atan(std::tan(cam->mHorizontalFOV) / aspect) * 180.0f / kPi;
+    }
     int width = 640, height = std::max(1, static_cast<int>(std::lround(640.0f / aspect)));
     doc["camera"] = {{"position", {pos.x, pos.y, pos.z}},
                      {"look_at", {pos.x + look.x, pos.y + look.y, pos.z + look.z}},
