@@ -10,6 +10,7 @@
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
 #include "bounce/core/image.h"
+#include "bounce/core/image_compare.h"
 #include "bounce/render/render.h"
 #include "bounce/scene/scene_load.h"
 
@@ -20,7 +21,9 @@ using namespace bounce;
 struct RenderArgs {
     std::string scene, output, res, crop, deep_in, deep_out, stats_json;
     std::vector<std::string> sets;
-    int threads = -1, spp = -1;
+    std::string gi, radiosity_textures;
+    int threads = -1, spp = -1, rays = -1;
+    bool ao = false;
     int64_t seed = -1;
     bool stats = false, quiet = false;
 };
@@ -43,6 +46,10 @@ std::vector<std::string> overrides_from(const RenderArgs& a) {
     if (a.threads >= 0) o.push_back("render.threads=" + std::to_string(a.threads));
     if (a.spp >= 0) o.push_back("render.spp=" + std::to_string(a.spp));
     if (a.seed >= 0) o.push_back("render.seed=" + std::to_string(a.seed));
+    if (!a.gi.empty()) o.push_back("render.gi=\"" + a.gi + "\"");
+    if (a.rays >= 0) o.push_back("render.rays=" + std::to_string(a.rays));
+    if (a.ao) o.push_back("render.ao=true");
+    if (!a.radiosity_textures.empty()) o.push_back("render.radiosity_textures=\"" + a.radiosity_textures + "\"");
     return o;
 }
 
@@ -73,6 +80,41 @@ int run_render(const RenderArgs& a) {
     return 0;
 }
 
+struct CompareArgs {
+    std::string test, reference, layer, diff;
+    bool json = false;
+};
+
+int run_compare(const CompareArgs& a) {
+    Image test = read_exr(a.test), ref = read_exr(a.reference);
+    std::vector<LayerError> errors = compare_images(test, ref, a.layer, a.test);
+    std::string diff_layer = a.layer.empty() ? (ref.find("indirect") ? "indirect" : "beauty") : a.layer;
+    std::string diff = a.diff;
+    if (diff.empty()) {
+        std::filesystem::path p = a.test;
+        diff = (p.parent_path() / (p.stem().string() + ".diff.png")).string();
+    }
+    double range = 0.1;
+    for (const auto& e : errors)
+        if (e.layer == diff_layer) range = std::max(1e-12, 0.1 * e.mean_ref);
+    if (ref.find(diff_layer) && ref.find(diff_layer)->channels.size() >= 1)
+        write_png_rgb8(diff, ref.width, ref.height, error_false_colour(test, ref, diff_layer, range));
+    if (a.json) {
+        nlohmann::json j = nlohmann::json::object();
+        for (const auto& e : errors)
+            j[e.layer] = {{"rmse", e.rmse}, {"rel_rmse", e.rel_rmse}, {"relmse", e.relmse},
+                          {"mean_abs", e.mean_abs}, {"max_abs", e.max_abs}, {"mean_ref", e.mean_ref}};
+        std::printf("%s\n", j.dump(2).c_str());
+    } else {
+        std::printf("%-12s %12s %10s %12s %12s %12s %12s\n", "layer", "rmse", "rel_rmse", "relmse", "mean_abs", "max_abs", "mean_ref");
+        for (const auto& e : errors)
+            std::printf("%-12s %12.6g %9.4f%% %12.6g %12.6g %12.6g %12.6g\n", e.layer.c_str(), e.rmse, 100 * e.rel_rmse,
+                        e.relmse, e.mean_abs, e.max_abs, e.mean_ref);
+        std::printf("difference image (%s, full scale = 10%% of the reference mean): %s\n", diff_layer.c_str(), diff.c_str());
+    }
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -89,12 +131,25 @@ int main(int argc, char** argv) {
     render->add_option("--spp", ra.spp, "subsamples per pixel (render.spp)");
     render->add_option("--seed", ra.seed, "random seed (render.seed)");
     render->add_option("--crop", ra.crop, "render only pixels x0,x1,y0,y1 (render.crop)");
+    render->add_option("--gi", ra.gi, "indirect light: none, brute or cache (render.gi)");
+    render->add_option("--rays", ra.rays, "gather rays per gather (render.rays)");
+    render->add_flag("--ao", ra.ao, "ambient occlusion only (render.ao)");
+    render->add_option("--radiosity-textures", ra.radiosity_textures,
+                       "folder of baked radiosity textures to reuse or fill (render.radiosity_textures)");
     render->add_option("--set", ra.sets, "override any scene value: key.path=value")->take_all();
     render->add_option("--deep-out", ra.deep_out, "write the deep buffer (OpenEXR deep)");
     render->add_option("--deep-in", ra.deep_in, "shade from a deep buffer instead of tracing visibility");
     render->add_flag("--stats", ra.stats, "print statistics");
     render->add_option("--stats-json", ra.stats_json, "write statistics as JSON");
     render->add_flag("-q,--quiet", ra.quiet, "no progress output");
+
+    CompareArgs ca;
+    CLI::App* compare = app.add_subcommand("compare", "error of a render against a reference, per layer");
+    compare->add_option("test", ca.test, "the render to judge (EXR)")->required();
+    compare->add_option("reference", ca.reference, "the reference (EXR)")->required();
+    compare->add_option("--layer", ca.layer, "only this layer (beauty, direct, indirect, ao, ...)");
+    compare->add_option("--diff", ca.diff, "false-colour difference PNG (default: TEST.diff.png)");
+    compare->add_flag("--json", ca.json, "print JSON");
 
     try {
         app.parse(argc, argv);
@@ -110,6 +165,7 @@ int main(int argc, char** argv) {
     }
     try {
         if (*render) return run_render(ra);
+        if (*compare) return run_compare(ca);
     } catch (const InputError& e) {
         std::fprintf(stderr, "bounce: %s\n", e.what());
         return 2;

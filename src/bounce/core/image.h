@@ -2,6 +2,7 @@
 // metadata, and a tone-mapped sRGB PNG for a quick look.
 #pragma once
 
+#include <deque>
 #include <map>
 #include <string>
 #include <vector>
@@ -21,7 +22,7 @@ struct Layer {
 struct Image {
     int full_width = 0, full_height = 0;
     int x0 = 0, y0 = 0, width = 0, height = 0;
-    std::vector<Layer> layers;
+    std::deque<Layer> layers;  ///< deque: add_layer never moves earlier layers
     std::map<std::string, std::string> metadata;  ///< written as "bounce:<key>" attributes
 
     /// Adds a zero-filled layer; returns it.

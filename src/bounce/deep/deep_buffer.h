@@ -11,6 +11,7 @@
 #include "bounce/accel/accel.h"
 #include "bounce/core/math.h"
 #include "bounce/core/progress.h"
+#include "bounce/core/random.h"
 #include "bounce/core/stats.h"
 #include "bounce/scene/scene.h"
 
@@ -52,6 +53,12 @@ struct DeepBuffer {
     }
     bool operator==(const DeepBuffer&) const = default;
 };
+
+/// The random stream of fragment `k` of full-image pixel (x, y): everything shading does at a
+/// fragment (light samples, gathers) draws from it, so results never depend on threads or crop.
+inline RandomStream fragment_stream(uint64_t seed, int x, int y, uint32_t k) {
+    return RandomStream(seed, static_cast<uint64_t>(y) * 65536u + static_cast<uint64_t>(x), 1u + k);
+}
 
 /// The pinhole camera of a scene: rays through continuous full-image pixel coordinates.
 class CameraRays {

@@ -52,9 +52,10 @@ DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel)
 }
 
 Color DirectLighting::irradiance(const Vec3& p, const Vec3& n, const RandomStream& rng,
-                                 int samples, Counters& counters) const {
+                                 int samples, Counters& counters, bool include_sky) const {
     Color e(0);
-    for (size_t i = 0; i < scene_.lights.size(); ++i) e += sample_light(i, p, n, rng, samples, counters);
+    for (size_t i = 0; i < scene_.lights.size(); ++i)
+        if (include_sky || scene_.lights[i].type != LightType::Sky) e += sample_light(i, p, n, rng, samples, counters);
     return e;
 }
 

@@ -51,8 +51,9 @@ public:
     /// Irradiance E arriving at `p` (on the fine surface) through the hemisphere of unit
     /// normal `n`, with shadows. `samples` stratified samples per area light and for the sky.
     /// Diffuse radiance leaving the point is albedo * E / pi.
+    /// `include_sky = false` leaves sky lights out (when the gather brings the sky instead).
     Color irradiance(const Vec3& p, const Vec3& n, const RandomStream& rng, int samples,
-                     Counters& counters) const;
+                     Counters& counters, bool include_sky = true) const;
 
     /// Radiance the camera sees where a primary ray escapes (the sky; black without one).
     Color background(const Vec3& dir) const;

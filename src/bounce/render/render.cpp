@@ -5,7 +5,9 @@
 
 #include "bounce/accel/accel.h"
 #include "bounce/core/error.h"
+#include "bounce/gather/gather.h"
 #include "bounce/lighting/lighting.h"
+#include "bounce/radiosity/radiosity.h"
 #include "bounce/shade/shade.h"
 
 namespace bounce {
@@ -20,6 +22,45 @@ void validate_deep_for_scene(const DeepBuffer& deep, const Scene& scene, const s
             throw InputError(path, fmt::format("fragment {}", i), "material or object id out of range for this scene");
     }
 }
+
+RadiositySettings radiosity_settings(const Scene& scene) {
+    RadiositySettings s;
+    s.texel_size = scene.render.radiosity_texel;
+    s.light_samples = scene.render.radiosity_light_samples;
+    return s;
+}
+
+namespace {
+
+/// Radiosity textures for the gather: loaded from the folder when they match the scene,
+/// otherwise baked (and saved there if a folder was named).
+std::unique_ptr<RadiosityTextures> radiosity_for(const Scene& scene, const Materials& materials,
+                                                 const DirectLighting& lighting, Stats& stats, ProgressSink* progress) {
+    const std::string& dir = scene.render.radiosity_textures;
+    RadiositySettings settings = radiosity_settings(scene);
+    auto rt = std::make_unique<RadiosityTextures>();
+    if (!dir.empty()) {
+        PhaseTimer t(stats, "radiosity load");
+        std::string why;
+        if (RadiosityTextures::load(dir, scene, settings, *rt, why)) {
+            stats.set("radiosity_reused", 1);
+            return rt;
+        }
+        if (progress) std::fprintf(stderr, "radiosity textures in %s not reused: %s; baking\n", dir.c_str(), why.c_str());
+    }
+    {
+        PhaseTimer t(stats, "radiosity bake");
+        *rt = RadiosityTextures::bake(scene, materials, lighting, settings, stats, progress);
+    }
+    if (!dir.empty()) {
+        PhaseTimer t(stats, "radiosity save");
+        rt->save(dir);
+    }
+    stats.set("radiosity_reused", 0);
+    return rt;
+}
+
+}  // namespace
 
 RenderResult render(const Scene& scene, const RenderRequest& request, Stats& stats, ProgressSink* progress) {
     int threads = scene.render.threads > 0 ? scene.render.threads : tbb::this_task_arena::max_concurrency();
@@ -48,16 +89,37 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         }
         Materials materials(scene);
         DirectLighting lighting(scene, *accel);
+        std::vector<Indirect> indirect;
+        const bool gi = scene.render.gi != "none" || scene.render.ao;
+        if (gi) {
+            GatherSettings gs = gather_settings(scene);
+            std::unique_ptr<RadiosityTextures> radiosity;
+            if (scene.render.radiosity && !gs.ao_only)
+                radiosity = radiosity_for(scene, materials, lighting, stats, progress);
+            Gatherer gatherer(scene, *accel, materials, lighting, radiosity.get(), gs);
+            uint64_t rays_before = stats.total().gather_rays;
+            PhaseTimer t(stats, "gather");
+            indirect = gather_every_fragment(scene, result.deep, gatherer, stats, progress);
+            double secs = t.stop();
+            uint64_t rays = stats.total().gather_rays - rays_before;
+            stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
+            stats.set("gathers", static_cast<double>(result.deep.fragments.size()));
+            stats.set("rays_per_gather", gatherer.grid().rays());
+        }
         {
             PhaseTimer t(stats, "shading");
-            result.image = shade(scene, result.deep, materials, lighting, stats, progress);
+            result.image = shade(scene, result.deep, materials, lighting, gi ? &indirect : nullptr, stats, progress);
         }
     });
     stats.set("pixels", static_cast<double>(result.deep.pixel_count()));
+    double mp = static_cast<double>(result.deep.pixel_count()) * 1e-6;
+    stats.set("gather_rays_per_pixel", static_cast<double>(stats.total().gather_rays) / (mp * 1e6));
     auto& md = result.image.metadata;
     md["scene"] = scene.path;
     md["seed"] = std::to_string(result.deep.seed);
     md["spp"] = std::to_string(result.deep.spp);
+    md["gi"] = scene.render.ao ? "ao" : scene.render.gi;
+    md["rays"] = std::to_string(scene.render.rays);
     md["light_samples"] = std::to_string(scene.render.light_samples);
     md["scene_fingerprint"] = fmt::format("{:016x}", result.deep.scene_fingerprint);
     md["render_time_s"] = fmt::format("{:.3f}", stats.to_json()["total_s"].get<double>());

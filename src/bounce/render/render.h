@@ -26,6 +26,10 @@ struct RenderResult {
 RenderResult render(const Scene& scene, const RenderRequest& request, Stats& stats,
                     ProgressSink* progress);
 
+struct RadiositySettings;
+/// The radiosity-texture settings a scene's render settings ask for.
+RadiositySettings radiosity_settings(const Scene& scene);
+
 /// Checks that a deep buffer belongs to `scene` and that its ids are in range.
 void validate_deep_for_scene(const DeepBuffer& deep, const Scene& scene, const std::string& path);
 

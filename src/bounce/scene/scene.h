@@ -71,6 +71,19 @@ struct RenderSettings {
     int tile_size = 32;
     std::array<int, 4> crop{0, 0, 0, 0};  ///< x0,x1,y0,y1 (exclusive ends); all 0 = full frame
     bool has_crop() const { return crop[1] > crop[0] || crop[3] > crop[2]; }
+
+    // Indirect light (docs/scene-format.md, "render").
+    std::string gi = "none";       ///< none | brute | cache
+    bool ao = false;               ///< ambient occlusion only
+    int rays = 512;                ///< gather rays per gather
+    float ao_distance = -1;        ///< < 0 = 10% of the scene diagonal; 0 = unlimited
+    float ao_falloff = 0;
+    int hit_light_samples = 1;     ///< shadow samples at gather hits without radiosity textures
+    float concave_angle = 80;      ///< degrees (TL04 distance filter)
+    bool radiosity = true;         ///< shade gather hits from baked radiosity textures
+    std::string radiosity_textures;  ///< folder to reuse/save them in; empty = bake in memory
+    float radiosity_texel = 0;     ///< lattice spacing, world units; 0 = diagonal / 128
+    int radiosity_light_samples = 16;
 };
 
 struct Scene {

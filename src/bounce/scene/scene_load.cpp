@@ -121,6 +121,12 @@ public:
         if (!v.is_string()) ctx_.fail(at(key), fmt::format("expected a string, got {}", type_name(v)));
         return v.get<std::string>();
     }
+    bool boolean(const std::string& key, bool def) const {
+        if (!has(key)) return def;
+        const json& v = raw(key);
+        if (!v.is_boolean()) ctx_.fail(at(key), fmt::format("expected true or false, got {}", type_name(v)));
+        return v.get<bool>();
+    }
     std::string choice(const std::string& key, const std::string& def,
                        const std::vector<std::string>& options) const {
         std::string s = string(key, def, def.empty());
@@ -561,7 +567,9 @@ Scene build_scene(json doc, const std::string& path, const std::vector<std::stri
     // Render settings.
     if (root.has("render")) {
         Reader r(root.raw("render"), "/render", ctx,
-                 {"spp", "seed", "threads", "light_samples", "ray_offset", "tile_size", "crop"});
+                 {"spp", "seed", "threads", "light_samples", "ray_offset", "tile_size", "crop", "gi", "ao",
+                  "rays", "ao_distance", "ao_falloff", "hit_light_samples", "concave_angle", "radiosity",
+                  "radiosity_textures", "radiosity_texel", "radiosity_light_samples"});
         RenderSettings& s = scene.render;
         s.spp = r.integer("spp", s.spp, 1, 4096);
         if (r.has("seed")) {
@@ -574,6 +582,20 @@ Scene build_scene(json doc, const std::string& path, const std::vector<std::stri
         s.light_samples = r.integer("light_samples", s.light_samples, 1, 65536);
         s.ray_offset = static_cast<float>(r.number("ray_offset", -1, 0));
         s.tile_size = r.integer("tile_size", s.tile_size, 1, 4096);
+        s.gi = r.choice("gi", s.gi, {"none", "brute", "cache"});
+        s.ao = r.boolean("ao", s.ao);
+        s.rays = r.integer("rays", s.rays, 1, 1 << 20);
+        s.ao_distance = static_cast<float>(r.number("ao_distance", s.ao_distance, 0));
+        s.ao_falloff = static_cast<float>(r.number("ao_falloff", s.ao_falloff, 0, 100));
+        s.hit_light_samples = r.integer("hit_light_samples", s.hit_light_samples, 1, 65536);
+        s.concave_angle = static_cast<float>(r.number("concave_angle", s.concave_angle, 0, 90));
+        s.radiosity = r.boolean("radiosity", s.radiosity);
+        s.radiosity_textures = r.string("radiosity_textures", s.radiosity_textures);
+        if (!s.radiosity_textures.empty() && fs::path(s.radiosity_textures).is_relative() &&
+            !ctx.cli_pointers.count("/render/radiosity_textures"))
+            s.radiosity_textures = (ctx.dir / s.radiosity_textures).string();
+        s.radiosity_texel = static_cast<float>(r.number("radiosity_texel", s.radiosity_texel, 0));
+        s.radiosity_light_samples = r.integer("radiosity_light_samples", s.radiosity_light_samples, 1, 65536);
         if (r.has("crop")) {
             const json& c = r.raw("crop");
             if (!c.is_array() || c.size() != 4) r.fail("crop", "expected [x0, x1, y0, y1]");

@@ -4,17 +4,18 @@
 
 namespace bounce {
 
-RandomStream fragment_stream(uint64_t seed, int x, int y, uint32_t k) {
-    return RandomStream(seed, static_cast<uint64_t>(y) * 65536u + static_cast<uint64_t>(x), 1u + k);
-}
-
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
-            const DirectLighting& lighting, Stats& stats, ProgressSink* sink) {
+            const DirectLighting& lighting, const std::vector<Indirect>* indirect, Stats& stats,
+            ProgressSink* sink) {
+    const bool ao_only = scene.render.ao && indirect;
     Image img;
     img.full_width = deep.full_width, img.full_height = deep.full_height;
     img.x0 = deep.x0, img.y0 = deep.y0, img.width = deep.width, img.height = deep.height;
     Layer& beauty = img.add_layer("beauty", {"R", "G", "B", "A"});
-    Layer& direct = img.add_layer("direct", {"direct.R", "direct.G", "direct.B"});
+    Layer* direct = ao_only ? nullptr : &img.add_layer("direct", {"direct.R", "direct.G", "direct.B"});
+    Layer* ind = indirect && !ao_only ? &img.add_layer("indirect", {"indirect.R", "indirect.G", "indirect.B"}) : nullptr;
+    Layer* ao = indirect ? &img.add_layer("ao", {"ao.Y"}) : nullptr;
+    Layer* bent = indirect ? &img.add_layer("bentnormal", {"bentnormal.X", "bentnormal.Y", "bentnormal.Z"}) : nullptr;
     Layer& albedo = img.add_layer("albedo", {"albedo.R", "albedo.G", "albedo.B"});
     Layer& normal = img.add_layer("N", {"N.X", "N.Y", "N.Z"});
     Layer& depth = img.add_layer("depth", {"Z"});
@@ -23,6 +24,11 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
     const int tiles_x = (deep.width + tile - 1) / tile, tiles_y = (deep.height + tile - 1) / tile;
     CameraRays camera(scene.camera);
     Progress progress(sink, "shading", static_cast<uint64_t>(tiles_x) * tiles_y);
+    auto put3 = [&](Layer* l, int x, int y, const Vec3& v) {
+        if (!l) return;
+        float* p = img.at(*l, x, y);
+        p[0] = v.x, p[1] = v.y, p[2] = v.z;
+    };
 
     tbb::parallel_for(0, tiles_x * tiles_y, [&](int t) {
         Counters& counters = stats.local();
@@ -30,25 +36,37 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
         for (int wy = ty0; wy < std::min(ty0 + tile, deep.height); ++wy)
             for (int wx = tx0; wx < std::min(tx0 + tile, deep.width); ++wx) {
                 int x = wx + deep.x0, y = wy + deep.y0;
-                Color b(0), d(0), a(0);
-                Vec3 n(0);
-                float cover = 0, z = INFINITY;
+                Color b(0), d(0), a(0), e_ind(0);
+                Vec3 n(0), bn(0);
+                float cover = 0, z = INFINITY, occl = 0;
                 auto frags = deep.pixel(wx, wy);
+                size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
                 for (uint32_t k = 0; k < frags.size(); ++k) {
                     const Fragment& f = frags[k];
                     Color alb = materials.albedo(f.material, f.uv);
-                    Color e = lighting.irradiance(f.p, f.n, fragment_stream(deep.seed, x, y, k),
-                                                  scene.render.light_samples, counters);
-                    Color radiance = materials.emission(f.material) + alb * e * kInvPi;
-                    d += radiance * f.weight;
+                    if (indirect) {
+                        const Indirect& in = (*indirect)[first + k];
+                        e_ind += in.irradiance * f.weight;
+                        occl += in.ao * f.weight;
+                        bn += in.bent_normal * f.weight;
+                        if (ao_only) b += Color(in.ao) * f.weight;
+                        else b += alb * in.irradiance * (kInvPi * f.weight);
+                    }
+                    if (!ao_only) {
+                        Color e = lighting.irradiance(f.p, f.n, fragment_stream(deep.seed, x, y, k),
+                                                      scene.render.light_samples, counters, indirect == nullptr);
+                        Color radiance = materials.emission(f.material) + alb * e * kInvPi;
+                        d += radiance * f.weight;
+                        b += radiance * f.weight;
+                    }
                     a += alb * f.weight;
                     n += f.n * f.weight;
                     cover += f.weight;
                     z = std::min(z, f.depth);
                     ++counters.fragments_shaded;
                 }
-                b = d;
-                if (cover < 1) {
+                if (cover < 1 && !ao_only) {
+                    // Escaping camera rays see the sky (in beauty and direct).
                     Color bg = lighting.background(normalize(camera.direction(static_cast<float>(x) + 0.5f,
                                                                               static_cast<float>(y) + 0.5f)));
                     b += bg * (1 - cover);
@@ -56,13 +74,12 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                 }
                 float* pb = img.at(beauty, wx, wy);
                 pb[0] = b.x, pb[1] = b.y, pb[2] = b.z, pb[3] = cover;
-                float* pd = img.at(direct, wx, wy);
-                pd[0] = d.x, pd[1] = d.y, pd[2] = d.z;
-                float* pa = img.at(albedo, wx, wy);
-                pa[0] = a.x, pa[1] = a.y, pa[2] = a.z;
-                Vec3 nn = cover > 0 ? normalize(n) : Vec3(0);
-                float* pn = img.at(normal, wx, wy);
-                pn[0] = nn.x, pn[1] = nn.y, pn[2] = nn.z;
+                put3(direct, wx, wy, d);
+                put3(ind, wx, wy, e_ind);
+                if (ao) *img.at(*ao, wx, wy) = occl;
+                put3(bent, wx, wy, dot(bn, bn) > 0 ? normalize(bn) : Vec3(0));
+                put3(&albedo, wx, wy, a);
+                put3(&normal, wx, wy, cover > 0 ? normalize(n) : Vec3(0));
                 *img.at(depth, wx, wy) = z;
             }
         progress.add();

@@ -1,0 +1,78 @@
+#include "bounce/core/image_compare.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "bounce/core/error.h"
+
+namespace bounce {
+
+std::vector<LayerError> compare_images(const Image& test, const Image& ref, const std::string& layer,
+                                       const std::string& test_path) {
+    if (test.width != ref.width || test.height != ref.height || test.x0 != ref.x0 || test.y0 != ref.y0)
+        throw InputError(test_path, "", fmt::format("image window {}x{}+{}+{} differs from the reference's {}x{}+{}+{}",
+                                                    test.width, test.height, test.x0, test.y0, ref.width, ref.height,
+                                                    ref.x0, ref.y0));
+    std::vector<LayerError> out;
+    for (const Layer& rl : ref.layers) {
+        if (!layer.empty() && rl.name != layer) continue;
+        const Layer* tl = test.find(rl.name);
+        if (!tl) {
+            if (!layer.empty()) throw InputError(test_path, "", "no layer \"" + rl.name + "\"");
+            continue;
+        }
+        if (tl->channels != rl.channels)
+            throw InputError(test_path, rl.name, "the layer's channels differ from the reference's");
+        LayerError e;
+        e.layer = rl.name;
+        double se = 0, sr = 0, sa = 0, rel = 0;
+        size_t n = 0;
+        // "A" (coverage) is geometry, not light: leave it out of the beauty error.
+        size_t nc = rl.channels.size();
+        for (size_t i = 0; i < rl.data.size(); ++i) {
+            if (rl.channels[i % nc] == "A") continue;
+            double a = tl->data[i], b = rl.data[i];
+            if (!std::isfinite(a) || !std::isfinite(b)) continue;  // e.g. depth of background
+            double d = a - b;
+            se += d * d;
+            sa += std::abs(d);
+            sr += std::abs(b);
+            rel += d * d / (b * b + 0.01);
+            e.max_abs = std::max(e.max_abs, std::abs(d));
+            ++n;
+        }
+        if (n) {
+            e.rmse = std::sqrt(se / static_cast<double>(n));
+            e.mean_abs = sa / static_cast<double>(n);
+            e.mean_ref = sr / static_cast<double>(n);
+            e.relmse = rel / static_cast<double>(n);
+            e.rel_rmse = e.mean_ref > 0 ? e.rmse / e.mean_ref : 0;
+        }
+        out.push_back(e);
+    }
+    if (!layer.empty() && out.empty()) throw InputError(test_path, "", "reference has no layer \"" + layer + "\"");
+    return out;
+}
+
+std::vector<uint8_t> error_false_colour(const Image& test, const Image& ref, const std::string& layer, double range) {
+    const Layer* rl = ref.find(layer);
+    const Layer* tl = test.find(layer);
+    std::vector<uint8_t> rgb(static_cast<size_t>(ref.width) * ref.height * 3, 0);
+    if (!rl || !tl) return rgb;
+    size_t nc = std::min<size_t>(3, rl->channels.size()), stride = rl->channels.size();
+    for (size_t p = 0; p < static_cast<size_t>(ref.width) * ref.height; ++p) {
+        double e = 0;
+        for (size_t c = 0; c < nc; ++c) e += std::abs(static_cast<double>(tl->data[p * stride + c]) - rl->data[p * stride + c]);
+        double x = std::isfinite(e) ? std::clamp(e / static_cast<double>(nc) / range, 0.0, 1.0) : 1.0;
+        // Piecewise ramp: black -> blue -> red -> yellow -> white.
+        double r = std::clamp(3 * x - 1, 0.0, 1.0), g = std::clamp(3 * x - 2, 0.0, 1.0) + std::clamp(4 * x - 3, 0.0, 1.0) * 0;
+        double b = x < 1.0 / 3 ? 3 * x : (x < 2.0 / 3 ? 2 - 3 * x : 3 * x - 2);
+        rgb[3 * p] = static_cast<uint8_t>(std::lround(255 * r));
+        rgb[3 * p + 1] = static_cast<uint8_t>(std::lround(255 * std::clamp(g, 0.0, 1.0)));
+        rgb[3 * p + 2] = static_cast<uint8_t>(std::lround(255 * std::clamp(b, 0.0, 1.0)));
+    }
+    return rgb;
+}
+
+}  // namespace bounce

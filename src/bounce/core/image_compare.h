@@ -1,0 +1,32 @@
+// Error between two renders, per layer: what `bounce compare` prints and the benchmarks use.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "bounce/core/image.h"
+
+namespace bounce {
+
+struct LayerError {
+    std::string layer;
+    double rmse = 0;      ///< sqrt(mean((a - b)^2)) over pixels and channels
+    double rel_rmse = 0;  ///< rmse / mean(|b|): the project's "relative RMSE"
+    double relmse = 0;    ///< mean((a - b)^2 / (b^2 + 0.01)) (rendering-literature relMSE)
+    double mean_abs = 0;  ///< mean |a - b|
+    double max_abs = 0;   ///< max |a - b|
+    double mean_ref = 0;  ///< mean(b)
+};
+
+/// Compares `test` against `reference`, layer by layer (only `layer` if non-empty). Both must
+/// cover the same window. Throws InputError (naming `test_path`) on mismatched sizes or a
+/// missing layer.
+std::vector<LayerError> compare_images(const Image& test, const Image& reference, const std::string& layer,
+                                       const std::string& test_path);
+
+/// False-colour map of the per-pixel error of `layer` (mean over channels of |a - b|), black
+/// at 0 through blue, red and yellow to white at `range`.
+std::vector<uint8_t> error_false_colour(const Image& test, const Image& reference, const std::string& layer,
+                                        double range);
+
+}  // namespace bounce

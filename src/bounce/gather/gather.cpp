@@ -1,0 +1,199 @@
+#include "bounce/gather/gather.h"
+
+#include <vector>
+
+#include "bounce/core/sampling.h"
+
+namespace bounce {
+
+GatherGrid gather_grid(int rays) {
+    GatherGrid g;
+    g.m = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(rays) / kPi))));
+    g.n = std::max(1, static_cast<int>(std::lround(static_cast<double>(rays) / g.m)));
+    return g;
+}
+
+Gatherer::Gatherer(const Scene& scene, const SceneAccel& accel, const Materials& materials,
+                   const DirectLighting& lighting, const RadiosityTextures* radiosity, GatherSettings settings)
+    : scene_(scene),
+      accel_(accel),
+      materials_(materials),
+      lighting_(lighting),
+      radiosity_(radiosity),
+      settings_(settings),
+      grid_(gather_grid(settings.rays)),
+      cos_concave_(std::cos(settings.concave_angle * kPi / 180.0f)) {}
+
+Color Gatherer::hit_radiance(const Hit& h, const Vec3& d, const RandomStream& rng, uint64_t ray,
+                             Counters& counters) const {
+    const TriangleMesh& mesh = scene_.objects[h.object].coarse;
+    SurfacePoint sp = surface_point(mesh, h.prim, h.u, h.v);
+    bool front = dot(sp.ng, d) < 0;
+    if (radiosity_) return radiosity_->object(h.object).lookup(h.prim, h.u, h.v, front);
+    Vec3 n = front ? sp.ng : -sp.ng;
+    Color albedo = materials_.albedo(sp.material, sp.uv);
+    RandomStream hit_rng(rng.bits(ray, kDimGather + 3), ray);
+    return albedo * lighting_.irradiance(sp.p, n, hit_rng, settings_.hit_light_samples, counters) * kInvPi;
+}
+
+GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters) const {
+    const int M = grid_.m, N = grid_.n, S = M * N;
+    // Per-cell radiance, distance and unoccluded weight, for the gradients.
+    thread_local std::vector<Color> L;
+    thread_local std::vector<float> R, U;
+    L.assign(static_cast<size_t>(S), Color(0));
+    R.assign(static_cast<size_t>(S), INFINITY);
+    U.assign(static_cast<size_t>(S), 1.0f);
+
+    const Frame frame(n);
+    GatherResult res;
+    res.rays = S;
+    Color sum_l(0);
+    Vec3 sum_u_dir(0);
+    std::array<Vec3, 3> sum_dir{};
+    double inv_r_sum = 0;
+    float sum_u = 0;
+    for (int j = 0; j < M; ++j)
+        for (int k = 0; k < N; ++k) {
+            const int c = j * N + k;
+            const auto s = static_cast<uint64_t>(c);
+            float sin2 = (static_cast<float>(j) + rng.get(s, kDimGather)) / static_cast<float>(M);
+            float phi = 2 * kPi * (static_cast<float>(k) + rng.get(s, kDimGather + 1)) / static_cast<float>(N);
+            float sin_t = std::sqrt(sin2), cos_t = std::sqrt(std::max(0.0f, 1 - sin2));
+            Vec3 local{sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t};
+            Vec3 d = frame.to_world(local);
+            ++counters.gather_rays;
+            Hit h = accel_.trace(p, d);
+            Color l(0);
+            float u = 1;
+            if (h.valid()) {
+                R[static_cast<size_t>(c)] = h.t;
+                inv_r_sum += 1.0 / std::max(h.t, 1e-20f);
+                if (settings_.ao_distance <= 0 || h.t < settings_.ao_distance)
+                    u = settings_.ao_falloff > 0 && settings_.ao_distance > 0
+                            ? 1 - std::pow(1 - h.t / settings_.ao_distance, settings_.ao_falloff)
+                            : 0;
+                // Distance for the record radius: leave out rays that are grazing both where
+                // they leave and where they land (slightly concave surfaces).
+                Vec3 ng = surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v).ng;
+                bool grazing = cos_t < cos_concave_ && std::abs(dot(ng, d)) < cos_concave_;
+                if (!grazing) res.min_distance = std::min(res.min_distance, h.t);
+                if (!settings_.ao_only) l = hit_radiance(h, d, rng, s, counters);
+            } else if (!settings_.ao_only) {
+                l = lighting_.background(d);
+            }
+            L[static_cast<size_t>(c)] = l;
+            U[static_cast<size_t>(c)] = u;
+            sum_l += l;
+            sum_u += u;
+            sum_u_dir += d * u;
+            for (int ch = 0; ch < 3; ++ch) sum_dir[static_cast<size_t>(ch)] += d * l[ch];
+        }
+    const float w = kPi / static_cast<float>(S);
+    res.irradiance = sum_l * w;
+    res.ao = sum_u / static_cast<float>(S);
+    res.bent_normal = dot(sum_u_dir, sum_u_dir) > 0 ? normalize(sum_u_dir) : n;
+    for (int ch = 0; ch < 3; ++ch) res.light_dir[static_cast<size_t>(ch)] = sum_dir[static_cast<size_t>(ch)] * w;
+    res.harmonic_distance = inv_r_sum > 0 ? static_cast<float>(S / inv_r_sum) : INFINITY;
+
+    // Rotational gradient (cell-centre angles): (pi/S) sum_k t(phi_k) sum_j tan(theta_j) L_jk.
+    // Translational gradient: Ward-Heckbert over cell boundaries with min distances
+    // (docs/gather.md has the derivation and the sign convention).
+    Vec3 gr[3] = {}, gt[3] = {};
+    Vec3 agr(0), agt(0);
+    const auto fM = static_cast<float>(M);
+    for (int k = 0; k < N; ++k) {
+        float phi_c = 2 * kPi * (static_cast<float>(k) + 0.5f) / static_cast<float>(N);
+        float phi_0 = 2 * kPi * static_cast<float>(k) / static_cast<float>(N);
+        Vec3 t_c = frame.to_world({-std::sin(phi_c), std::cos(phi_c), 0});
+        Vec3 u_c = frame.to_world({std::cos(phi_c), std::sin(phi_c), 0});
+        Vec3 t_0 = frame.to_world({-std::sin(phi_0), std::cos(phi_0), 0});
+        Color rot(0), radial(0), azim(0);
+        float arot = 0, aradial = 0, aazim = 0;
+        const int kprev = (k + N - 1) % N;
+        for (int j = 0; j < M; ++j) {
+            const auto c = static_cast<size_t>(j * N + k);
+            float sin_c = std::sqrt((static_cast<float>(j) + 0.5f) / fM);
+            float tan_c = sin_c / std::sqrt(std::max(1e-6f, 1 - sin_c * sin_c));
+            rot += L[c] * tan_c;
+            arot += U[c] * tan_c;
+            float sin_lo = std::sqrt(static_cast<float>(j) / fM), sin_hi = std::sqrt((static_cast<float>(j) + 1) / fM);
+            if (j >= 1) {  // boundary between rows j-1 and j moves radially
+                const auto cp = static_cast<size_t>((j - 1) * N + k);
+                float rmin = std::min(R[c], R[cp]);
+                if (std::isfinite(rmin)) {
+                    float coef = sin_lo * (1 - sin_lo * sin_lo) / rmin;
+                    radial += (L[c] - L[cp]) * coef;
+                    aradial += (U[c] - U[cp]) * coef;
+                }
+            }
+            // boundary between columns k-1 and k moves in azimuth
+            const auto cq = static_cast<size_t>(j * N + kprev);
+            float rmin = std::min(R[c], R[cq]);
+            if (std::isfinite(rmin)) {
+                float coef = (sin_hi - sin_lo) / rmin;
+                azim += (L[c] - L[cq]) * coef;
+                aazim += (U[c] - U[cq]) * coef;
+            }
+        }
+        const float dphi = 2 * kPi / static_cast<float>(N);
+        for (int ch = 0; ch < 3; ++ch) {
+            gr[ch] += t_c * rot[ch];
+            gt[ch] += u_c * (dphi * radial[ch]) + t_0 * azim[ch];
+        }
+        agr += t_c * arot;
+        agt += u_c * (dphi * aradial) + t_0 * aazim;
+    }
+    for (int ch = 0; ch < 3; ++ch) {
+        res.grad_rot[static_cast<size_t>(ch)] = gr[ch] * w;
+        res.grad_trans[static_cast<size_t>(ch)] = gt[ch];
+    }
+    // AO is a mean (1/S), not pi/S times a sum.
+    res.ao_grad_rot = agr / static_cast<float>(S);
+    res.ao_grad_trans = agt * kInvPi;
+    return res;
+}
+
+}  // namespace bounce
+
+#include <tbb/parallel_for.h>
+
+namespace bounce {
+
+GatherSettings gather_settings(const Scene& scene) {
+    const RenderSettings& r = scene.render;
+    GatherSettings g;
+    g.rays = r.rays;
+    g.ao_distance = r.ao_distance >= 0 ? r.ao_distance : 0.1f * length(scene.bounds().diagonal());
+    g.ao_falloff = r.ao_falloff;
+    g.hit_light_samples = r.hit_light_samples;
+    g.concave_angle = r.concave_angle;
+    g.ao_only = r.ao;
+    return g;
+}
+
+std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
+                                            Stats& stats, ProgressSink* sink) {
+    std::vector<Indirect> out(deep.fragments.size());
+    const int tile = scene.render.tile_size;
+    const int tiles_x = (deep.width + tile - 1) / tile, tiles_y = (deep.height + tile - 1) / tile;
+    Progress progress(sink, "gather", static_cast<uint64_t>(tiles_x) * tiles_y);
+    tbb::parallel_for(0, tiles_x * tiles_y, [&](int t) {
+        Counters& counters = stats.local();
+        int tx0 = (t % tiles_x) * tile, ty0 = (t / tiles_x) * tile;
+        for (int wy = ty0; wy < std::min(ty0 + tile, deep.height); ++wy)
+            for (int wx = tx0; wx < std::min(tx0 + tile, deep.width); ++wx) {
+                size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
+                auto frags = deep.pixel(wx, wy);
+                for (uint32_t k = 0; k < frags.size(); ++k) {
+                    const Fragment& f = frags[k];
+                    GatherResult g = gatherer.gather(f.p, f.n_base, fragment_stream(deep.seed, wx + deep.x0, wy + deep.y0, k), counters);
+                    out[first + k] = {g.irradiance, g.ao, g.bent_normal};
+                }
+            }
+        progress.add();
+    });
+    return out;
+}
+
+}  // namespace bounce

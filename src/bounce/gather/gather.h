@@ -1,0 +1,96 @@
+// The hemisphere gather: the one expensive operation that brute force runs at every fragment
+// and the irradiance cache runs only at its records. Cosine-stratified M x N grid (N ~ pi M),
+// one bounce: each hit is shaded with the direct light leaving it (radiosity textures or
+// shadow rays), escaped rays see the sky.
+#pragma once
+
+#include <array>
+
+#include "bounce/accel/accel.h"
+#include "bounce/core/random.h"
+#include "bounce/core/progress.h"
+#include "bounce/core/stats.h"
+#include "bounce/deep/deep_buffer.h"
+#include "bounce/lighting/lighting.h"
+#include "bounce/radiosity/radiosity.h"
+
+namespace bounce {
+
+struct GatherSettings {
+    int rays = 512;              ///< requested rays; the grid is M x N with M = round(sqrt(rays/pi))
+    float ao_distance = 0;       ///< occluders farther than this do not occlude (AO); <= 0 = unlimited
+    float ao_falloff = 0;        ///< occlusion of a hit at t: (1 - t/ao_distance)^falloff; 0 = hard
+    int hit_light_samples = 1;   ///< shadow-ray samples per area light at hits without radiosity textures
+    float concave_angle = 80;    ///< degrees: a ray more than this far from the normal at both ends
+                                 ///< does not count towards the minimum hit distance (TL04)
+    bool ao_only = false;        ///< skip shading hits (AO and bent normal only)
+};
+
+/// The stratification used for `rays`.
+struct GatherGrid {
+    int m = 1, n = 1;  ///< elevation and azimuth strata
+    int rays() const { return m * n; }
+};
+GatherGrid gather_grid(int rays);
+
+/// What a gather returns; gradients follow Ward-Heckbert (rotational) and Ward-Heckbert with
+/// Krivanek's occlusion-aware distances (translational), see docs/gather.md.
+struct GatherResult {
+    Color irradiance{0};                ///< E, one bounce plus the sky
+    float ao = 1;                       ///< cosine-weighted unoccluded fraction
+    Vec3 bent_normal{0, 0, 1};          ///< mean unoccluded direction (unit)
+    std::array<Vec3, 3> light_dir{};    ///< per channel c: (pi/S) sum L_c w (not normalised)
+    float harmonic_distance = INFINITY; ///< Ward's R: S / sum(1/r)
+    float min_distance = INFINITY;      ///< TL04's: min r over qualifying rays
+    std::array<Vec3, 3> grad_rot{};     ///< dE_c/d(rotation): E(n') ~ E + (n x n') . grad
+    std::array<Vec3, 3> grad_trans{};   ///< dE_c/dx
+    Vec3 ao_grad_rot{0}, ao_grad_trans{0};
+    int rays = 0;
+};
+
+/// Gathers at `p` (on the fine surface) over the hemisphere of unit normal `n`.
+class Gatherer {
+public:
+    /// `radiosity` may be null: hits are then shaded with shadow rays.
+    Gatherer(const Scene& scene, const SceneAccel& accel, const Materials& materials,
+             const DirectLighting& lighting, const RadiosityTextures* radiosity, GatherSettings settings);
+
+    GatherResult gather(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters) const;
+    const GatherSettings& settings() const { return settings_; }
+    GatherGrid grid() const { return grid_; }
+
+private:
+    /// Radiance leaving a hit towards the gather point (direction -d).
+    Color hit_radiance(const Hit& h, const Vec3& d, const RandomStream& rng, uint64_t ray, Counters& counters) const;
+
+    const Scene& scene_;
+    const SceneAccel& accel_;
+    const Materials& materials_;
+    const DirectLighting& lighting_;
+    const RadiosityTextures* radiosity_;
+    GatherSettings settings_;
+    GatherGrid grid_;
+    float cos_concave_;
+};
+
+}  // namespace bounce
+
+namespace bounce {
+
+/// Indirect light at one fragment, as the shading pass consumes it (from a gather or, later,
+/// interpolated from the irradiance cache).
+struct Indirect {
+    Color irradiance{0};
+    float ao = 1;
+    Vec3 bent_normal{0, 0, 1};
+};
+
+/// The gather settings a scene's render settings ask for (resolves the automatic AO distance).
+GatherSettings gather_settings(const Scene& scene);
+
+/// Brute force: gathers at every fragment of `deep` (tiles in parallel); the result is
+/// parallel to deep.fragments and independent of thread count.
+std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
+                                            Stats& stats, ProgressSink* progress);
+
+}  // namespace bounce

@@ -1,0 +1,227 @@
+#include "bounce/radiosity/radiosity.h"
+
+#include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <filesystem>
+
+#include "bounce/core/atomic_file.h"
+#include "bounce/core/error.h"
+#include "bounce/core/random.h"
+
+namespace bounce {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kRadiosityVersion = 1;
+
+/// Index of lattice point (i, j) (i + j <= n) in a triangle's block.
+inline uint32_t lattice_index(int i, int j, int n) {
+    return static_cast<uint32_t>(j * (n + 1) - j * (j - 1) / 2 + i);
+}
+
+inline uint32_t lattice_count(int n) { return static_cast<uint32_t>((n + 1) * (n + 2) / 2); }
+
+float effective_texel(const Scene& scene, const RadiositySettings& s) {
+    return s.texel_size > 0 ? s.texel_size : length(scene.bounds().diagonal()) / 128.0f;
+}
+
+std::string file_name(size_t id, const std::string& name) {
+    std::string safe;
+    for (char c : name) safe += std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' ? c : '_';
+    return fmt::format("radiosity.{:04}.{}.exr", id, safe);
+}
+
+}  // namespace
+
+int radiosity_level(float edge, float texel, int max_level) {
+    return std::clamp(static_cast<int>(std::ceil(edge / texel)), 1, max_level);
+}
+
+Color RadiosityMap::lookup(uint32_t prim, float u, float v, bool front_side) const {
+    const int n = level[prim];
+    const Color* vals = (front_side ? front.data() : back.data()) + offset[prim];
+    float fu = std::clamp(u, 0.0f, 1.0f) * static_cast<float>(n), fv = std::clamp(v, 0.0f, 1.0f) * static_cast<float>(n);
+    int i = std::min(static_cast<int>(fu), n - 1), j = std::min(static_cast<int>(fv), n - 1);
+    if (i + j > n - 1) {  // on the far edge of the triangle
+        int over = i + j - (n - 1);
+        (i >= over ? i : j) -= over;
+    }
+    float a = fu - static_cast<float>(i), b = fv - static_cast<float>(j);
+    if (a + b <= 1 || i + j >= n - 1) {  // lower sub-triangle (i,j) (i+1,j) (i,j+1)
+        return vals[lattice_index(i, j, n)] * (1 - a - b) + vals[lattice_index(i + 1, j, n)] * a +
+               vals[lattice_index(i, j + 1, n)] * b;
+    }
+    // upper sub-triangle (i+1,j+1) (i,j+1) (i+1,j)
+    return vals[lattice_index(i + 1, j + 1, n)] * (a + b - 1) + vals[lattice_index(i, j + 1, n)] * (1 - a) +
+           vals[lattice_index(i + 1, j, n)] * (1 - b);
+}
+
+uint64_t RadiosityTextures::fingerprint(const Scene& scene, const RadiositySettings& s) {
+    uint64_t h = scene.fingerprint({"objects", "materials", "lights"});
+    h = hash_combine(h, std::bit_cast<uint32_t>(effective_texel(scene, s)));
+    h = hash_combine(h, static_cast<uint64_t>(s.light_samples));
+    h = hash_combine(h, static_cast<uint64_t>(s.max_level));
+    return hash_combine(h, scene.render.seed);
+}
+
+size_t RadiosityTextures::lattice_points() const {
+    size_t n = 0;
+    for (const auto& m : maps_) n += m.front.size();
+    return n;
+}
+
+RadiosityTextures RadiosityTextures::bake(const Scene& scene, const Materials& materials,
+                                          const DirectLighting& lighting, const RadiositySettings& settings,
+                                          Stats& stats, ProgressSink* sink) {
+    RadiosityTextures rt;
+    rt.texel_size_ = effective_texel(scene, settings);
+    rt.fingerprint_ = fingerprint(scene, settings);
+    rt.maps_.resize(scene.objects.size());
+    size_t total_tris = 0;
+    for (size_t id = 0; id < scene.objects.size(); ++id) {
+        const TriangleMesh& m = scene.objects[id].coarse;
+        RadiosityMap& map = rt.maps_[id];
+        rt.names_.push_back(scene.objects[id].name);
+        map.level.resize(m.triangle_count());
+        map.offset.resize(m.triangle_count());
+        uint32_t off = 0;
+        for (size_t t = 0; t < m.triangle_count(); ++t) {
+            const Vec3 &a = m.positions[m.indices[3 * t]], &b = m.positions[m.indices[3 * t + 1]],
+                       &c = m.positions[m.indices[3 * t + 2]];
+            float edge = std::max({length(b - a), length(c - b), length(a - c)});
+            int n = radiosity_level(edge, rt.texel_size_, settings.max_level);
+            map.level[t] = static_cast<uint8_t>(n);
+            map.offset[t] = off;
+            off += lattice_count(n);
+        }
+        map.front.assign(off, Color(0));
+        map.back.assign(off, Color(0));
+        total_tris += m.triangle_count();
+    }
+    Progress progress(sink, "radiosity", total_tris);
+    for (size_t id = 0; id < scene.objects.size(); ++id) {
+        const TriangleMesh& m = scene.objects[id].coarse;
+        RadiosityMap& map = rt.maps_[id];
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, m.triangle_count(), 64), [&](const tbb::blocked_range<size_t>& r) {
+            Counters& counters = stats.local();
+            for (size_t t = r.begin(); t < r.end(); ++t) {
+                const int n = map.level[t];
+                for (int j = 0; j <= n; ++j)
+                    for (int i = 0; i + j <= n; ++i) {
+                        float u = static_cast<float>(i) / static_cast<float>(n), v = static_cast<float>(j) / static_cast<float>(n);
+                        SurfacePoint sp = surface_point(m, static_cast<uint32_t>(t), u, v);
+                        Color albedo = materials.albedo(sp.material, sp.uv) * kInvPi;
+                        uint32_t k = map.offset[t] + lattice_index(i, j, n);
+                        RandomStream rng(scene.render.seed, (static_cast<uint64_t>(id) << 40) | (static_cast<uint64_t>(t) << 12), k);
+                        // Geometric normal: the baked value must not depend on which side's
+                        // shading normal a hit happens to use.
+                        map.front[k] = albedo * lighting.irradiance(sp.p, sp.ng, rng, settings.light_samples, counters);
+                        map.back[k] = albedo * lighting.irradiance(sp.p, -sp.ng, RandomStream(scene.render.seed + 1, t, k),
+                                                                   settings.light_samples, counters);
+                    }
+            }
+            progress.add(r.size());
+        });
+    }
+    stats.set("radiosity_points", static_cast<double>(rt.lattice_points()));
+    return rt;
+}
+
+void RadiosityTextures::save(const std::string& dir) const {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) throw InputError(dir, "", "cannot create radiosity texture folder: " + ec.message());
+    for (size_t id = 0; id < maps_.size(); ++id) {
+        const RadiosityMap& m = maps_[id];
+        // Texels in lattice order, 1024 wide: RGB front, RGB back.
+        const int width = 1024;
+        size_t count = m.front.size();
+        int height = static_cast<int>((count + width - 1) / width);
+        OIIO::ImageSpec spec(width, std::max(1, height), 6, OIIO::TypeDesc::FLOAT);
+        spec.channelnames = {"front.R", "front.G", "front.B", "back.R", "back.G", "back.B"};
+        spec.attribute("compression", "zip");
+        spec.attribute("bounce:radiosity_version", kRadiosityVersion);
+        spec.attribute("bounce:fingerprint", fmt::format("{:016x}", fingerprint_));
+        spec.attribute("bounce:object", names_[id]);
+        spec.attribute("bounce:triangles", static_cast<int>(m.level.size()));
+        spec.attribute("bounce:points", static_cast<int>(count));
+        spec.attribute("bounce:texel_size", texel_size_);
+        std::vector<float> px(static_cast<size_t>(width) * std::max(1, height) * 6, 0.0f);
+        for (size_t k = 0; k < count; ++k)
+            for (int c = 0; c < 3; ++c) px[6 * k + c] = m.front[k][c], px[6 * k + 3 + c] = m.back[k][c];
+        std::string path = (fs::path(dir) / file_name(id, names_[id])).string();
+        write_atomically(path, [&](const std::string& tmp) {
+            auto out = OIIO::ImageOutput::create("openexr");
+            if (!out || !out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, px.data()) || !out->close())
+                throw InputError(path, "", "cannot write radiosity texture: " + (out ? out->geterror() : OIIO::geterror()));
+        });
+    }
+}
+
+bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const RadiositySettings& settings,
+                             RadiosityTextures& out, std::string& why) {
+    RadiosityTextures rt;
+    rt.texel_size_ = effective_texel(scene, settings);
+    rt.fingerprint_ = fingerprint(scene, settings);
+    for (size_t id = 0; id < scene.objects.size(); ++id) {
+        std::string path = (fs::path(dir) / file_name(id, scene.objects[id].name)).string();
+        std::error_code ec;
+        if (!fs::is_regular_file(path, ec)) {
+            why = "no texture for object \"" + scene.objects[id].name + "\"";
+            return false;
+        }
+        auto in = OIIO::ImageInput::open(path);
+        if (!in) throw InputError(path, "", "cannot read radiosity texture: " + OIIO::geterror());
+        const OIIO::ImageSpec& spec = in->spec();
+        if (spec.get_int_attribute("bounce:radiosity_version", -1) != kRadiosityVersion)
+            throw InputError(path, "bounce:radiosity_version", "not a radiosity texture of this bounce version");
+        if (spec.get_string_attribute("bounce:fingerprint") != fmt::format("{:016x}", rt.fingerprint_)) {
+            why = "textures were baked for other geometry, materials, lights or settings";
+            return false;
+        }
+        const TriangleMesh& mesh = scene.objects[id].coarse;
+        RadiosityMap map;
+        map.level.resize(mesh.triangle_count());
+        map.offset.resize(mesh.triangle_count());
+        uint32_t off = 0;
+        for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+            const Vec3 &a = mesh.positions[mesh.indices[3 * t]], &b = mesh.positions[mesh.indices[3 * t + 1]],
+                       &c = mesh.positions[mesh.indices[3 * t + 2]];
+            int n = radiosity_level(std::max({length(b - a), length(c - b), length(a - c)}), rt.texel_size_, settings.max_level);
+            map.level[t] = static_cast<uint8_t>(n);
+            map.offset[t] = off;
+            off += lattice_count(n);
+        }
+        if (spec.nchannels != 6 || spec.get_int_attribute("bounce:points", -1) != static_cast<int>(off) ||
+            static_cast<size_t>(spec.width) * spec.height < off)
+            throw InputError(path, "bounce:points", "texture size does not match the scene's triangles");
+        std::vector<float> px(static_cast<size_t>(spec.width) * spec.height * 6);
+        if (!in->read_image(0, 0, 0, 6, OIIO::TypeDesc::FLOAT, px.data()))
+            throw InputError(path, "", "cannot read radiosity texture: " + in->geterror());
+        // OpenEXR sorts channels by name: find ours.
+        int ch[6];
+        const char* names[6] = {"front.R", "front.G", "front.B", "back.R", "back.G", "back.B"};
+        for (int c = 0; c < 6; ++c) {
+            ch[c] = spec.channelindex(names[c]);
+            if (ch[c] < 0) throw InputError(path, "channels", std::string("missing channel ") + names[c]);
+        }
+        map.front.resize(off);
+        map.back.resize(off);
+        for (size_t k = 0; k < off; ++k) {
+            map.front[k] = {px[6 * k + ch[0]], px[6 * k + ch[1]], px[6 * k + ch[2]]};
+            map.back[k] = {px[6 * k + ch[3]], px[6 * k + ch[4]], px[6 * k + ch[5]]};
+            if (!isfinite(map.front[k]) || !isfinite(map.back[k]))
+                throw InputError(path, fmt::format("texel {}", k), "non-finite radiosity value");
+        }
+        rt.maps_.push_back(std::move(map));
+        rt.names_.push_back(scene.objects[id].name);
+    }
+    out = std::move(rt);
+    return true;
+}
+
+}  // namespace bounce

@@ -1,0 +1,231 @@
+// The hemisphere gather against closed forms: open plane, floor beside an infinite wall,
+// the inside of a uniformly lit sphere (white furnace), convergence rates, and radiosity
+// textures converging to shadow-ray shading.
+#include <gtest/gtest.h>
+
+#include "bounce/gather/gather.h"
+#include "bounce/radiosity/radiosity.h"
+#include "test_util.h"
+
+namespace bounce {
+namespace {
+
+using nlohmann::json;
+
+/// Everything a gather needs, built from one scene.
+struct Rig {
+    Scene scene;
+    SceneAccel accel;
+    Materials materials;
+    DirectLighting lighting;
+    std::unique_ptr<RadiosityTextures> radiosity;
+    Stats stats;
+    explicit Rig(Scene s, bool with_radiosity = false, RadiositySettings rs = {})
+        : scene(std::move(s)), accel(scene), materials(scene), lighting(scene, accel) {
+        if (with_radiosity)
+            radiosity = std::make_unique<RadiosityTextures>(
+                RadiosityTextures::bake(scene, materials, lighting, rs, stats, nullptr));
+    }
+    GatherResult gather(const Vec3& p, const Vec3& n, GatherSettings gs, uint64_t key = 7) {
+        Gatherer g(scene, accel, materials, lighting, radiosity.get(), gs);
+        Counters c;
+        return g.gather(p, n, RandomStream(1, key), c);
+    }
+};
+
+json floor_and_wall(float d) {
+    json j = test::base_scene();
+    const float big = 1e4f;
+    j["objects"].push_back({{"type", "quad"}, {"vertices", {{d, -big, -big}, {d, big, -big}, {d, big, big}, {d, -big, big}}}});
+    return j;
+}
+
+TEST(Gather, GridIsCosineStratifiedWithNAboutPiM) {
+    GatherGrid g = gather_grid(512);
+    EXPECT_EQ(g.m, 13);
+    EXPECT_EQ(g.n, 39);
+    EXPECT_EQ(gather_grid(1).rays(), 1);
+}
+
+TEST(Gather, OpenPlaneIsUnoccluded) {
+    Rig rig(test::scene_from(test::base_scene()));
+    GatherSettings gs;
+    gs.ao_distance = 0;  // unlimited
+    GatherResult r = rig.gather({0, 0, 0}, {0, 1, 0}, gs);
+    EXPECT_EQ(r.ao, 1.0f);
+    EXPECT_EQ(r.irradiance, Color(0));  // no lights, no sky
+    EXPECT_EQ(r.harmonic_distance, INFINITY);
+    // Cosine-weighted mean direction of the full hemisphere is the normal.
+    EXPECT_GT(r.bent_normal.y, 0.9995f);
+}
+
+/// Cosine-weighted directions project uniformly onto the unit disk (x, z) (y = normal): the
+/// AO beside a wall at x = d with occlusion distance D is 1 - (fraction of the disk with
+/// x > d/D). The bent normal is the mean of the unoccluded directions, by quadrature.
+struct WallClosedForm {
+    float ao;
+    Vec3 bent;
+};
+WallClosedForm wall_closed_form(float a) {
+    float ao = 1 - (std::acos(a) - a * std::sqrt(1 - a * a)) / kPi;
+    double sx = 0, sy = 0;
+    const int n = 2000;
+    for (int i = 0; i < n; ++i)
+        for (int k = 0; k < n; ++k) {
+            double x = -1 + 2 * (i + 0.5) / n, z = -1 + 2 * (k + 0.5) / n, r2 = x * x + z * z;
+            if (r2 >= 1 || x > a) continue;
+            sx += x, sy += std::sqrt(1 - r2);
+        }
+    return {ao, normalize(Vec3(static_cast<float>(sx), static_cast<float>(sy), 0))};
+}
+
+TEST(Gather, FloorBesideAnInfiniteWallMatchesTheClosedForm) {
+    const float d = 0.7f;
+    Rig rig(test::scene_from(floor_and_wall(d)));
+    for (float D : {0.0f, 2 * d, 1.25f * d}) {
+        GatherSettings gs;
+        gs.rays = 2048;
+        gs.ao_distance = D;
+        float a = D > 0 ? d / D : 0;
+        WallClosedForm cf = wall_closed_form(a);
+        double ao = 0;
+        Vec3 bent(0);
+        const int runs = 8;
+        for (int s = 0; s < runs; ++s) {
+            GatherResult r = rig.gather({0, 0, 0}, {0, 1, 0}, gs, static_cast<uint64_t>(s));
+            ao += r.ao / runs;
+            bent += r.bent_normal;
+        }
+        // Stratified: only cells on the occlusion boundary (~2 sqrt(S) of S) are uncertain,
+        // each by at most 1/S: the mean of 8 runs is well within 0.005.
+        EXPECT_NEAR(ao, cf.ao, 0.005) << "D = " << D;
+        bent = normalize(bent);
+        EXPECT_GT(dot(bent, cf.bent), std::cos(0.5f * kPi / 180)) << "D = " << D;  // within 0.5 degree
+    }
+}
+
+Scene lit_sphere_interior(float albedo, float intensity, int level) {
+    json j = test::base_scene();
+    j["materials"] = {{"m", {{"color", albedo}}}};
+    j["objects"] = {{{"type", "sphere"}, {"radius", 1.0}, {"subdivisions", level}, {"fine_subdivisions", 0}, {"material", "m"}}};
+    j["lights"] = {{{"type", "point"}, {"position", {0, 0, 0}}, {"color", intensity}}};
+    return test::scene_from(j);
+}
+
+TEST(Gather, InsideAUniformlyLitSphereOneBounceIsAlbedoTimesDirect) {
+    // A point light at the centre of a sphere of radius R gives every wall point E_d = I/R^2;
+    // the wall's radiance is rho E_d / pi everywhere, so the one-bounce irradiance at any wall
+    // point is pi * that = rho I / R^2. The hit distances from a wall point are 2R cos(theta):
+    // their harmonic mean over cosine-weighted directions is exactly R.
+    const float rho = 0.6f, I = 2.0f;
+    Scene s = lit_sphere_interior(rho, I, 5);
+    for (bool textures : {false, true}) {
+        RadiositySettings rs;
+        rs.texel_size = 0.02f;
+        Rig rig(lit_sphere_interior(rho, I, 5), textures, rs);
+        const TriangleMesh& m = rig.scene.objects[0].coarse;
+        GatherSettings gs;
+        gs.rays = 1024;
+        for (uint32_t t : {0u, 777u, 5000u}) {
+            SurfacePoint sp = surface_point(m, t, 0.3f, 0.3f);
+            Vec3 n = -normalize(sp.p);
+            GatherResult r = rig.gather(sp.p, n, gs, t);
+            // The level-5 icosphere's chords sit up to 0.1% inside the sphere: E_d varies by
+            // ~0.3%; tolerance 1%.
+            EXPECT_NEAR(r.irradiance.x, rho * I, 0.01f * rho * I) << (textures ? "textures" : "shadow rays");
+            // 1/r ~ 1/cos(theta) has infinite variance at the horizon: a finite grid usually
+            // under-counts that tail, so the harmonic mean comes out a few percent long.
+            EXPECT_NEAR(r.harmonic_distance, 1.0f, 0.08f);
+            EXPECT_EQ(r.ao, 0.0f);  // closed: every ray occluded (ao_distance unlimited below)
+            // Rays beyond 80 degrees at both ends are left out; facet normals of the coarse
+            // sphere differ from the true ones by up to ~2 degrees.
+            float lo = 2 * std::cos(82 * kPi / 180);
+            EXPECT_GE(r.min_distance, lo);
+            EXPECT_LE(r.min_distance, 2 * std::cos(75 * kPi / 180));
+        }
+    }
+    (void)s;
+}
+
+TEST(Gather, ErrorFallsAtLeastLikeOneOverSqrtN) {
+    // A floor point in the Cornell box: light arrives from walls, blocks and the lit floor.
+    Rig rig(load_scene(test::cornell_scene()), true);
+    Vec3 p{400, 0, 150}, n{0, 1, 0};
+    GatherSettings ref;
+    ref.rays = 65536;
+    Color exact = rig.gather(p, n, ref, 999).irradiance;
+    auto rms = [&](int rays) {
+        GatherSettings gs;
+        gs.rays = rays;
+        double e2 = 0;
+        const int runs = 48;
+        for (int s = 0; s < runs; ++s) {
+            double d = rig.gather(p, n, gs, static_cast<uint64_t>(s)).irradiance.y - exact.y;
+            e2 += d * d;
+        }
+        return std::sqrt(e2 / runs);
+    };
+    double e64 = rms(64), e256 = rms(256), e1024 = rms(1024);
+    EXPECT_GT(e64 / e256, 1.7);
+    EXPECT_GT(e256 / e1024, 1.7);
+    EXPECT_LT(e1024 / exact.y, 0.05);
+}
+
+TEST(Radiosity, TexturesConvergeToShadowRayShading) {
+    // A 4 x 4 floor under a point light: the baked radiosity, interpolated linearly on the
+    // lattice, approaches albedo E / pi like h^2 as the lattice spacing h halves.
+    json j = test::base_scene();
+    j["objects"] = test::floor_objects(2.0f);
+    j["materials"] = {{"m", {{"color", 0.5}}}};
+    j["objects"][0]["material"] = "m";
+    j["lights"] = {{{"type", "point"}, {"position", {0.3, 0.8, -0.2}}, {"color", 1}}};
+    Scene scene = test::scene_from(j);
+    double prev = 0;
+    for (float h : {0.4f, 0.2f, 0.1f, 0.05f}) {
+        RadiositySettings rs;
+        rs.texel_size = h;
+        rs.max_level = 255;
+        Rig rig(test::scene_from(j), true, rs);
+        const TriangleMesh& m = rig.scene.objects[0].coarse;
+        double err = 0;
+        int count = 0;
+        for (uint32_t t = 0; t < m.triangle_count(); ++t)
+            for (int i = 1; i < 20; ++i)
+                for (int k = 1; i + k < 20; ++k) {
+                    float u = static_cast<float>(i) / 20, v = static_cast<float>(k) / 20;
+                    SurfacePoint sp = surface_point(m, t, u, v);
+                    Counters c;
+                    Color exact = Color(0.5f) * rig.lighting.irradiance(sp.p, {0, 1, 0}, RandomStream(0, 0), 1, c) * kInvPi;
+                    bool front = sp.ng.y > 0;
+                    Color got = rig.radiosity->object(0).lookup(t, u, v, front);
+                    err += std::abs(got.x - exact.x);
+                    ++count;
+                }
+        err /= count;
+        if (prev > 0) {
+            EXPECT_LT(err, prev / 2.5) << "h = " << h;  // second order: ~4x per halving
+        }
+        prev = err;
+    }
+    EXPECT_LT(prev, 2e-4);
+}
+
+TEST(Radiosity, SaveAndLoadRoundTripAndRefuseOtherLights) {
+    test::TempDir d;
+    Scene s = load_scene(test::cornell_scene());
+    Rig rig(load_scene(test::cornell_scene()), true);
+    rig.radiosity->save(d.file("rt"));
+    RadiosityTextures back;
+    std::string why;
+    ASSERT_TRUE(RadiosityTextures::load(d.file("rt"), s, RadiositySettings{}, back, why)) << why;
+    for (uint32_t o = 0; o < s.objects.size(); ++o) {
+        EXPECT_TRUE(back.object(o).front == rig.radiosity->object(o).front);
+        EXPECT_TRUE(back.object(o).back == rig.radiosity->object(o).back);
+    }
+    Scene brighter = load_scene(test::cornell_scene(), {"materials.light.emission=[20,12,4]"});
+    EXPECT_FALSE(RadiosityTextures::load(d.file("rt"), brighter, RadiositySettings{}, back, why));
+    EXPECT_NE(why.find("baked for other"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace bounce
