@@ -67,7 +67,10 @@ int run_render(const RenderArgs& a) {
         png.replace_extension(".png");
         write_png(png.string(), r.image, "beauty");
     }
-    if (a.stats) std::printf("%s", stats.to_text().c_str());
+    if (a.stats) {
+        std::printf("%s", stats.to_text().c_str());
+        if (scene.render.gi != "none" || scene.render.ao) std::printf("\n%s", seed_table(stats.to_json()).c_str());
+    }
     if (!a.stats_json.empty()) {
         std::string text = stats.to_json().dump(2) + "\n";
         write_atomically(a.stats_json, [&](const std::string& tmp) {

@@ -66,11 +66,11 @@ std::vector<uint8_t> error_false_colour(const Image& test, const Image& ref, con
         for (size_t c = 0; c < nc; ++c) e += std::abs(static_cast<double>(tl->data[p * stride + c]) - rl->data[p * stride + c]);
         double x = std::isfinite(e) ? std::clamp(e / static_cast<double>(nc) / range, 0.0, 1.0) : 1.0;
         // Piecewise ramp: black -> blue -> red -> yellow -> white.
-        double r = std::clamp(3 * x - 1, 0.0, 1.0), g = std::clamp(3 * x - 2, 0.0, 1.0) + std::clamp(4 * x - 3, 0.0, 1.0) * 0;
+        double r = std::clamp(3 * x - 1, 0.0, 1.0), g = std::clamp(3 * x - 2, 0.0, 1.0);
         double b = x < 1.0 / 3 ? 3 * x : (x < 2.0 / 3 ? 2 - 3 * x : 3 * x - 2);
         rgb[3 * p] = static_cast<uint8_t>(std::lround(255 * r));
-        rgb[3 * p + 1] = static_cast<uint8_t>(std::lround(255 * std::clamp(g, 0.0, 1.0)));
-        rgb[3 * p + 2] = static_cast<uint8_t>(std::lround(255 * std::clamp(b, 0.0, 1.0)));
+        rgb[3 * p + 1] = static_cast<uint8_t>(std::lround(255 * g));
+        rgb[3 * p + 2] = static_cast<uint8_t>(std::lround(255 * b));
     }
     return rgb;
 }

@@ -187,7 +187,7 @@ std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer
                 auto frags = deep.pixel(wx, wy);
                 for (uint32_t k = 0; k < frags.size(); ++k) {
                     const Fragment& f = frags[k];
-                    GatherResult g = gatherer.gather(f.p, f.n_base, fragment_stream(deep.seed, wx + deep.x0, wy + deep.y0, k), counters);
+                    GatherResult g = gatherer.gather(f.p, f.n_base, fragment_stream(scene.render.seed, wx + deep.x0, wy + deep.y0, k), counters);
                     out[first + k] = {g.irradiance, g.ao, g.bent_normal};
                 }
             }

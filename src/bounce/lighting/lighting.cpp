@@ -151,7 +151,9 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n,
                 Vec3 to = q.p - p;
                 float r2 = dot(to, to), r = std::sqrt(r2);
                 Vec3 w = to / r;
-                float cos_x = dot(n, w), cos_l = std::abs(dot(q.ng, w));  // emits from both sides
+                // Emits from the front (counter-clockwise) side only, like a real panel: a
+                // two-sided emitter against a ceiling would light the ceiling behind it.
+                float cos_x = dot(n, w), cos_l = -dot(q.ng, w);
                 if (cos_x <= 0 || cos_l <= 0) continue;
                 ++counters.shadow_rays;
                 if (accel_.occluded(p, w, r)) continue;

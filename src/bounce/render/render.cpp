@@ -1,6 +1,8 @@
 #include "bounce/render/render.h"
 
 #include <fmt/format.h>
+
+#include <cmath>
 #include <tbb/task_arena.h>
 
 #include "bounce/accel/accel.h"
@@ -62,6 +64,23 @@ std::unique_ptr<RadiosityTextures> radiosity_for(const Scene& scene, const Mater
 
 }  // namespace
 
+std::string seed_table(const nlohmann::json& s) {
+    auto clock = [](double secs) { return fmt::format("{}:{:06.3f}", static_cast<int>(secs) / 60, std::fmod(secs, 60.0)); };
+    const auto& ph = s["phases_s"];
+    auto phase = [&](const char* n) { return ph.contains(n) ? ph[n].get<double>() : 0.0; };
+    double gathering = phase("gather") + phase("radiosity bake") + phase("radiosity load");
+    double shading = phase("shading");
+    double total = s["total_s"].get<double>();
+    double pixels = s.value("pixels", 0.0);
+    double rays = static_cast<double>(s["rays"]["gather"].get<uint64_t>());
+    std::string per_record = s.contains("records") ? fmt::format("{}", s.value("rays_per_gather", 0)) : "-";
+    std::string records = s.contains("records") ? fmt::format("{}", s["records"].get<double>()) : "-";
+    return fmt::format("| gathering | shading | total | rays/record | records | rays/MP |\n"
+                       "| {} | {} | {} | {} | {} | {:.1f} M |\n",
+                       clock(gathering), clock(shading), clock(total), per_record, records,
+                       pixels > 0 ? rays / pixels : 0.0);
+}
+
 RenderResult render(const Scene& scene, const RenderRequest& request, Stats& stats, ProgressSink* progress) {
     int threads = scene.render.threads > 0 ? scene.render.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
@@ -116,7 +135,8 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
     stats.set("gather_rays_per_pixel", static_cast<double>(stats.total().gather_rays) / (mp * 1e6));
     auto& md = result.image.metadata;
     md["scene"] = scene.path;
-    md["seed"] = std::to_string(result.deep.seed);
+    md["seed"] = std::to_string(scene.render.seed);
+    md["deep_seed"] = std::to_string(result.deep.seed);
     md["spp"] = std::to_string(result.deep.spp);
     md["gi"] = scene.render.ao ? "ao" : scene.render.gi;
     md["rays"] = std::to_string(scene.render.rays);

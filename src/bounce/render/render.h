@@ -4,6 +4,8 @@
 
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "bounce/core/image.h"
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
@@ -29,6 +31,10 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
 struct RadiositySettings;
 /// The radiosity-texture settings a scene's render settings ask for.
 RadiositySettings radiosity_settings(const Scene& scene);
+
+/// The seed's table (TL04 class notes): gathering, shading, total, rays per record, records,
+/// rays per megapixel (millions) — a header line and one row, from Stats::to_json().
+std::string seed_table(const nlohmann::json& stats);
 
 /// Checks that a deep buffer belongs to `scene` and that its ids are in range.
 void validate_deep_for_scene(const DeepBuffer& deep, const Scene& scene, const std::string& path);

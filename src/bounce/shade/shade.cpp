@@ -53,7 +53,7 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                         else b += alb * in.irradiance * (kInvPi * f.weight);
                     }
                     if (!ao_only) {
-                        Color e = lighting.irradiance(f.p, f.n, fragment_stream(deep.seed, x, y, k),
+                        Color e = lighting.irradiance(f.p, f.n, fragment_stream(scene.render.seed, x, y, k),
                                                       scene.render.light_samples, counters, indirect == nullptr);
                         Color radiance = materials.emission(f.material) + alb * e * kInvPi;
                         d += radiance * f.weight;
