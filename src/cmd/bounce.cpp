@@ -7,6 +7,8 @@
 #include <fstream>
 #include <regex>
 
+#include <fmt/format.h>
+
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
 #include "bounce/core/image.h"
@@ -21,7 +23,9 @@ using namespace bounce;
 struct RenderArgs {
     std::string scene, output, res, crop, deep_in, deep_out, stats_json;
     std::vector<std::string> sets;
-    std::string gi, radiosity_textures;
+    std::string gi, radiosity_textures, metric;
+    double min_spacing = -1, max_spacing = -1, max_angle = -1, gradient_limit = -1, quality = -1;
+    bool preview = false;
     int threads = -1, spp = -1, rays = -1;
     bool ao = false;
     int64_t seed = -1;
@@ -49,6 +53,16 @@ std::vector<std::string> overrides_from(const RenderArgs& a) {
     if (!a.gi.empty()) o.push_back("render.gi=\"" + a.gi + "\"");
     if (a.rays >= 0) o.push_back("render.rays=" + std::to_string(a.rays));
     if (a.ao) o.push_back("render.ao=true");
+    if (!a.metric.empty()) o.push_back("render.metric=\"" + a.metric + "\"");
+    auto num = [&](const char* key, double v) {
+        if (v >= 0) o.push_back(std::string("render.") + key + "=" + fmt::format("{}", v));
+    };
+    num("min_spacing", a.min_spacing);
+    num("max_spacing", a.max_spacing);
+    num("max_angle", a.max_angle);
+    num("gradient_limit", a.gradient_limit);
+    num("quality", a.quality);
+    if (a.preview) o.push_back("render.preview=true");
     if (!a.radiosity_textures.empty()) o.push_back("render.radiosity_textures=\"" + a.radiosity_textures + "\"");
     return o;
 }
@@ -59,12 +73,18 @@ int run_render(const RenderArgs& a) {
                                          : isatty(STDERR_FILENO) ? make_terminal_progress()
                                                                  : make_log_progress();
     Stats stats;
-    RenderResult r = render(scene, RenderRequest{a.deep_in, a.deep_out}, stats, sink.get());
+    RenderRequest request{a.deep_in, a.deep_out, {}};
+    std::filesystem::path png = a.output;
+    png.replace_extension(".png");
+    if (scene.render.preview)
+        request.preview = [&](const Image& img) {
+            write_exr(a.output, img);
+            write_png(png.string(), img, "beauty");
+        };
+    RenderResult r = render(scene, request, stats, sink.get());
     {
         PhaseTimer t(stats, "write images");
         write_exr(a.output, r.image);
-        std::filesystem::path png = a.output;
-        png.replace_extension(".png");
         write_png(png.string(), r.image, "beauty");
     }
     if (a.stats) {
@@ -137,6 +157,13 @@ int main(int argc, char** argv) {
     render->add_option("--gi", ra.gi, "indirect light: none, brute or cache (render.gi)");
     render->add_option("--rays", ra.rays, "gather rays per gather (render.rays)");
     render->add_flag("--ao", ra.ao, "ambient occlusion only (render.ao)");
+    render->add_option("--metric", ra.metric, "cache error metric: tl04 or ward (render.metric)");
+    render->add_option("--min-spacing", ra.min_spacing, "smallest record radius, pixels (render.min_spacing)");
+    render->add_option("--max-spacing", ra.max_spacing, "largest record radius, pixels (render.max_spacing)");
+    render->add_option("--max-angle", ra.max_angle, "normal deviation limit, degrees (render.max_angle)");
+    render->add_option("--gradient-limit", ra.gradient_limit, "Weber gradient limit tau (render.gradient_limit)");
+    render->add_option("--quality", ra.quality, "cache quality kappa, smaller = fewer records (render.quality)");
+    render->add_flag("--preview", ra.preview, "progressive gather-and-shade, the image rewritten after each sub-pass (render.preview)");
     render->add_option("--radiosity-textures", ra.radiosity_textures,
                        "folder of baked radiosity textures to reuse or fill (render.radiosity_textures)");
     render->add_option("--set", ra.sets, "override any scene value: key.path=value")->take_all();

@@ -40,6 +40,16 @@ float CameraRays::footprint(const Vec3& d, float t, const Vec3& n) const {
     return std::sqrt(length(cross(px, py)));
 }
 
+bool CameraRays::project(const Vec3& p, float& px, float& py) const {
+    Vec3 v = p - pos_;
+    float z = dot(v, forward_);
+    if (z <= 0) return false;
+    float sx = dot(v, right_) / z, sy = dot(v, up_) / z;
+    px = (sx / (aspect_ * scale_) + 1) * 0.5f * static_cast<float>(width_);
+    py = (1 - sy / scale_) * 0.5f * static_cast<float>(height_);
+    return true;
+}
+
 // ------------------------------------------------------------------------------------------
 // Visibility
 

@@ -3,9 +3,11 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include "bounce/accel/accel.h"
+#include "bounce/cache/passes.h"
 #include "bounce/core/error.h"
 #include "bounce/gather/gather.h"
 #include "bounce/lighting/lighting.h"
@@ -64,6 +66,70 @@ std::unique_ptr<RadiosityTextures> radiosity_for(const Scene& scene, const Mater
 
 }  // namespace
 
+void add_records_layer(Image& image, const Camera& camera, const std::vector<Vec3>& positions) {
+    const Layer* beauty = image.find("beauty");
+    Layer& l = image.add_layer("records", {"records.R", "records.G", "records.B"});
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x)
+            for (int c = 0; c < 3; ++c) image.at(l, x, y)[c] = 0.5f * std::min(1.0f, image.at(*beauty, x, y)[c]);
+    CameraRays rays(camera);
+    for (const Vec3& p : positions) {
+        float px, py;
+        if (!rays.project(p, px, py)) continue;
+        int cx = static_cast<int>(std::floor(px)) - image.x0, cy = static_cast<int>(std::floor(py)) - image.y0;
+        for (int y = cy - 1; y <= cy + 1; ++y)
+            for (int x = cx - 1; x <= cx + 1; ++x)
+                if (x >= 0 && y >= 0 && x < image.width && y < image.height)
+                    for (int c = 0; c < 3; ++c) image.at(l, x, y)[c] = 1.0f;
+    }
+}
+
+CacheSettings cache_settings(const Scene& scene) {
+    const RenderSettings& r = scene.render;
+    CacheSettings c;
+    c.metric = r.metric;
+    c.min_spacing = r.min_spacing;
+    c.max_spacing = r.max_spacing;
+    c.max_angle = r.max_angle;
+    c.gradient_limit = r.gradient_limit;
+    c.quality = r.quality;
+    c.min_weight = r.min_weight;
+    c.accuracy = r.accuracy;
+    c.gradients = r.gradients;
+    c.neighbour_clamp = r.neighbour_clamp;
+    return c;
+}
+
+namespace {
+
+/// Preview: each pixel takes the indirect light of the nearest pixel a finished sub-pass
+/// visited (looked up in the cache as it is now).
+std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceCache& cache, const SubPass& sp) {
+    std::vector<Indirect> out(deep.fragments.size());
+    tbb::parallel_for(0, deep.height, [&](int wy) {
+        for (int wx = 0; wx < deep.width; ++wx) {
+            int x = wx + deep.x0, y = wy + deep.y0;
+            // Lattice pixel of the current step if that class is done, else of the coarser one.
+            int sx = x - x % sp.step, sy = y - y % sp.step;
+            bool done = SubPass{sp.step * 2, 0, true}.contains(sx, sy) || sp.all ||
+                        (((sx / sp.step) & 1) | (((sy / sp.step) & 1) << 1)) <= sp.parity;
+            if (!done) sx = x - x % (2 * sp.step), sy = y - y % (2 * sp.step);
+            int lx = std::clamp(sx - deep.x0, 0, deep.width - 1), ly = std::clamp(sy - deep.y0, 0, deep.height - 1);
+            auto src = deep.pixel(lx, ly);
+            size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
+            auto frags = deep.pixel(wx, wy);
+            for (uint32_t k = 0; k < frags.size(); ++k) {
+                const Fragment& f = src.empty() ? frags[k] : src[std::min<size_t>(k, src.size() - 1)];
+                Interpolated in = cache.lookup(f.p_base, f.n_base);
+                out[first + k] = {in.E, in.ao, in.bent};
+            }
+        }
+    });
+    return out;
+}
+
+}  // namespace
+
 std::string seed_table(const nlohmann::json& s) {
     auto clock = [](double secs) { return fmt::format("{}:{:06.3f}", static_cast<int>(secs) / 60, std::fmod(secs, 60.0)); };
     const auto& ph = s["phases_s"];
@@ -110,6 +176,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         DirectLighting lighting(scene, *accel);
         std::vector<Indirect> indirect;
         const bool gi = scene.render.gi != "none" || scene.render.ao;
+        std::unique_ptr<IrradianceCache> cache;
         if (gi) {
             GatherSettings gs = gather_settings(scene);
             std::unique_ptr<RadiosityTextures> radiosity;
@@ -118,16 +185,36 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             Gatherer gatherer(scene, *accel, materials, lighting, radiosity.get(), gs);
             uint64_t rays_before = stats.total().gather_rays;
             PhaseTimer t(stats, "gather");
-            indirect = gather_every_fragment(scene, result.deep, gatherer, stats, progress);
+            if (scene.render.gi == "cache") {
+                cache = std::make_unique<IrradianceCache>(scene.bounds(), cache_settings(scene), gs.ao_only);
+                SubPassCallback after;
+                std::vector<Color> direct_e;
+                if (scene.render.preview && request.preview) {
+                    direct_e = fragment_direct_irradiance(scene, result.deep, lighting, false, stats);
+                    after = [&](const SubPass& sp, size_t, size_t) {
+                        std::vector<Indirect> ind = preview_indirect(result.deep, *cache, sp);
+                        request.preview(shade(scene, result.deep, materials, lighting, &ind, stats, nullptr, &direct_e));
+                    };
+                }
+                gathering_pass(scene, result.deep, gatherer, *cache, stats, progress, after);
+            } else {
+                indirect = gather_every_fragment(scene, result.deep, gatherer, stats, progress);
+                stats.set("gathers", static_cast<double>(result.deep.fragments.size()));
+                stats.set("rays_per_gather", gatherer.grid().rays());
+            }
             double secs = t.stop();
             uint64_t rays = stats.total().gather_rays - rays_before;
             stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
-            stats.set("gathers", static_cast<double>(result.deep.fragments.size()));
-            stats.set("rays_per_gather", gatherer.grid().rays());
         }
         {
             PhaseTimer t(stats, "shading");
+            if (cache) indirect = shading_pass(scene, result.deep, *cache, stats, progress);
             result.image = shade(scene, result.deep, materials, lighting, gi ? &indirect : nullptr, stats, progress);
+        }
+        if (cache) {
+            std::vector<Vec3> positions;
+            for (size_t i = 0; i < cache->size(); ++i) positions.push_back(cache->record(i).p);
+            add_records_layer(result.image, scene.camera, positions);
         }
     });
     stats.set("pixels", static_cast<double>(result.deep.pixel_count()));
@@ -140,6 +227,11 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
     md["spp"] = std::to_string(result.deep.spp);
     md["gi"] = scene.render.ao ? "ao" : scene.render.gi;
     md["rays"] = std::to_string(scene.render.rays);
+    if (scene.render.gi == "cache")
+        md["cache"] = fmt::format("metric={} min_spacing={} max_spacing={} max_angle={} gradient_limit={} quality={} min_weight={}",
+                                  scene.render.metric, scene.render.min_spacing, scene.render.max_spacing,
+                                  scene.render.max_angle, scene.render.gradient_limit, scene.render.quality,
+                                  scene.render.min_weight);
     md["light_samples"] = std::to_string(scene.render.light_samples);
     md["scene_fingerprint"] = fmt::format("{:016x}", result.deep.scene_fingerprint);
     md["render_time_s"] = fmt::format("{:.3f}", stats.to_json()["total_s"].get<double>());

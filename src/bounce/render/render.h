@@ -2,6 +2,7 @@
 // arena of the requested size, with statistics and progress. The CLI is a thin layer over it.
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -17,6 +18,9 @@ namespace bounce {
 struct RenderRequest {
     std::string deep_in;   ///< start from this deep file instead of tracing visibility
     std::string deep_out;  ///< write the deep buffer here
+    /// Preview mode (render.preview with gi cache): called with the whole image after every
+    /// sub-pass, pixelated first and finer after.
+    std::function<void(const Image&)> preview;
 };
 
 struct RenderResult {
@@ -29,8 +33,15 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
                     ProgressSink* progress);
 
 struct RadiositySettings;
+struct CacheSettings;
+/// The irradiance-cache settings a scene's render settings ask for.
+CacheSettings cache_settings(const Scene& scene);
 /// The radiosity-texture settings a scene's render settings ask for.
 RadiositySettings radiosity_settings(const Scene& scene);
+
+/// Adds a "records" layer: the beauty at half brightness with each record's position as a
+/// white 3x3 dot.
+void add_records_layer(Image& image, const Camera& camera, const std::vector<Vec3>& positions);
 
 /// The seed's table (TL04 class notes): gathering, shading, total, rays per record, records,
 /// rays per megapixel (millions) — a header line and one row, from Stats::to_json().

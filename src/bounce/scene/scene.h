@@ -84,6 +84,19 @@ struct RenderSettings {
     std::string radiosity_textures;  ///< folder to reuse/save them in; empty = bake in memory
     float radiosity_texel = 0;     ///< lattice spacing, world units; 0 = diagonal / 128
     int radiosity_light_samples = 16;
+
+    // Irradiance cache (docs/irradiance-cache.md).
+    std::string metric = "tl04";   ///< tl04 | ward
+    float min_spacing = 2;         ///< record radius bounds, pixels
+    float max_spacing = 24;
+    float max_angle = 10;          ///< degrees
+    float gradient_limit = 1;      ///< Weber tau; 0 = off
+    float quality = 1;             ///< kappa
+    float min_weight = 0.5f;
+    float accuracy = 0.2f;         ///< Ward's a
+    bool gradients = true;
+    bool neighbour_clamp = true;
+    bool preview = false;          ///< one progressive gather-and-shade pass
 };
 
 struct Scene {

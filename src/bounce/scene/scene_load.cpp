@@ -569,7 +569,9 @@ Scene build_scene(json doc, const std::string& path, const std::vector<std::stri
         Reader r(root.raw("render"), "/render", ctx,
                  {"spp", "seed", "threads", "light_samples", "ray_offset", "tile_size", "crop", "gi", "ao",
                   "rays", "ao_distance", "ao_falloff", "hit_light_samples", "concave_angle", "radiosity",
-                  "radiosity_textures", "radiosity_texel", "radiosity_light_samples"});
+                  "radiosity_textures", "radiosity_texel", "radiosity_light_samples", "metric", "min_spacing",
+                  "max_spacing", "max_angle", "gradient_limit", "quality", "min_weight", "accuracy", "gradients",
+                  "neighbour_clamp", "preview"});
         RenderSettings& s = scene.render;
         s.spp = r.integer("spp", s.spp, 1, 4096);
         if (r.has("seed")) {
@@ -596,6 +598,18 @@ Scene build_scene(json doc, const std::string& path, const std::vector<std::stri
             s.radiosity_textures = (ctx.dir / s.radiosity_textures).string();
         s.radiosity_texel = static_cast<float>(r.number("radiosity_texel", s.radiosity_texel, 0));
         s.radiosity_light_samples = r.integer("radiosity_light_samples", s.radiosity_light_samples, 1, 65536);
+        s.metric = r.choice("metric", s.metric, {"tl04", "ward"});
+        s.min_spacing = static_cast<float>(r.number("min_spacing", s.min_spacing, 0.1, 4096));
+        s.max_spacing = static_cast<float>(r.number("max_spacing", s.max_spacing, 0.1, 4096));
+        if (s.max_spacing < s.min_spacing) r.fail("max_spacing", "max_spacing is below min_spacing");
+        s.max_angle = static_cast<float>(r.number("max_angle", s.max_angle, 0.1, 90));
+        s.gradient_limit = static_cast<float>(r.number("gradient_limit", s.gradient_limit, 0, 1e6));
+        s.quality = static_cast<float>(r.number("quality", s.quality, 0.01, 100));
+        s.min_weight = static_cast<float>(r.number("min_weight", s.min_weight, 1e-6, 100));
+        s.accuracy = static_cast<float>(r.number("accuracy", s.accuracy, 1e-3, 10));
+        s.gradients = r.boolean("gradients", s.gradients);
+        s.neighbour_clamp = r.boolean("neighbour_clamp", s.neighbour_clamp);
+        s.preview = r.boolean("preview", s.preview);
         if (r.has("crop")) {
             const json& c = r.raw("crop");
             if (!c.is_array() || c.size() != 4) r.fail("crop", "expected [x0, x1, y0, y1]");

@@ -6,7 +6,7 @@ namespace bounce {
 
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
             const DirectLighting& lighting, const std::vector<Indirect>* indirect, Stats& stats,
-            ProgressSink* sink) {
+            ProgressSink* sink, const std::vector<Color>* direct_irradiance) {
     const bool ao_only = scene.render.ao && indirect;
     Image img;
     img.full_width = deep.full_width, img.full_height = deep.full_height;
@@ -53,8 +53,10 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                         else b += alb * in.irradiance * (kInvPi * f.weight);
                     }
                     if (!ao_only) {
-                        Color e = lighting.irradiance(f.p, f.n, fragment_stream(scene.render.seed, x, y, k),
-                                                      scene.render.light_samples, counters, indirect == nullptr);
+                        Color e = direct_irradiance
+                                      ? (*direct_irradiance)[first + k]
+                                      : lighting.irradiance(f.p, f.n, fragment_stream(scene.render.seed, x, y, k),
+                                                            scene.render.light_samples, counters, indirect == nullptr);
                         Color radiance = materials.emission(f.material) + alb * e * kInvPi;
                         d += radiance * f.weight;
                         b += radiance * f.weight;
@@ -85,6 +87,27 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
         progress.add();
     });
     return img;
+}
+
+}  // namespace bounce
+
+namespace bounce {
+
+std::vector<Color> fragment_direct_irradiance(const Scene& scene, const DeepBuffer& deep,
+                                              const DirectLighting& lighting, bool include_sky, Stats& stats) {
+    std::vector<Color> out(deep.fragments.size());
+    tbb::parallel_for(0, deep.height, [&](int wy) {
+        Counters& counters = stats.local();
+        for (int wx = 0; wx < deep.width; ++wx) {
+            size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
+            auto frags = deep.pixel(wx, wy);
+            for (uint32_t k = 0; k < frags.size(); ++k)
+                out[first + k] = lighting.irradiance(frags[k].p, frags[k].n,
+                                                     fragment_stream(scene.render.seed, wx + deep.x0, wy + deep.y0, k),
+                                                     scene.render.light_samples, counters, include_sky);
+        }
+    });
+    return out;
 }
 
 }  // namespace bounce

@@ -19,6 +19,12 @@ namespace bounce {
 /// result is independent of thread count and tile order.
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
             const DirectLighting& lighting, const std::vector<Indirect>* indirect, Stats& stats,
-            ProgressSink* progress);
+            ProgressSink* progress, const std::vector<Color>* direct_irradiance = nullptr);
+
+/// Direct irradiance at every fragment (what `shade` computes when not handed it): lets the
+/// progressive preview re-shade after each sub-pass without re-tracing shadow rays.
+std::vector<Color> fragment_direct_irradiance(const Scene& scene, const DeepBuffer& deep,
+                                              const DirectLighting& lighting, bool include_sky,
+                                              Stats& stats);
 
 }  // namespace bounce

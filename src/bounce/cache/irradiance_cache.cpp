@@ -1,0 +1,115 @@
+#include "bounce/cache/irradiance_cache.h"
+
+namespace bounce {
+
+IrradianceCache::IrradianceCache(const Bounds& scene_bounds, CacheSettings settings, bool ao_only)
+    : settings_(std::move(settings)), ao_only_(ao_only), octree_(scene_bounds) {}
+
+float IrradianceCache::weight_sum(const Vec3& p, const Vec3& n) const {
+    float sum = 0;
+    octree_.visit(p, [&](uint32_t id) { sum += record_weight(records_[id], p, n, settings_); });
+    return sum;
+}
+
+Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n) const {
+    Interpolated out;
+    out.ao = 0;
+    out.bent = Vec3(0);
+    Color e(0);
+    octree_.visit(p, [&](uint32_t id) {
+        const Record& r = records_[id];
+        float w = record_weight(r, p, n, settings_);
+        if (w <= 0) return;
+        Color ei = r.E;
+        float ai = r.ao;
+        if (settings_.gradients) {
+            Vec3 dp = p - r.p, rot = cross(r.n, n);
+            for (int c = 0; c < 3; ++c) {
+                auto k = static_cast<size_t>(c);
+                float v = r.E[c] + dot(dp, r.grad_t[k]) + dot(rot, r.grad_r[k]);
+                ei[c] = std::clamp(v, 0.0f, 4 * r.E[c]);  // extrapolation clamp [0, 4 E_i]
+            }
+            ai = std::clamp(r.ao + dot(dp, r.ao_grad_t) + dot(rot, r.ao_grad_r), 0.0f, 1.0f);
+        }
+        e += ei * w;
+        out.ao += ai * w;
+        out.bent += r.bent * w;
+        for (size_t c = 0; c < 3; ++c) out.dir[c] += r.dir[c] * w;
+        out.weight += w;
+        ++out.records;
+    });
+    if (out.weight > 0) {
+        float inv = 1 / out.weight;
+        out.E = e * inv;
+        out.ao *= inv;
+        for (auto& d : out.dir) d *= inv;
+        out.bent = dot(out.bent, out.bent) > 0 ? normalize(out.bent) : n;
+    } else {
+        out.ao = 1;
+        out.bent = n;
+    }
+    return out;
+}
+
+Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const Vec3& n, float footprint,
+                                    uint64_t key) const {
+    Record r;
+    r.p = p;
+    r.n = n;
+    r.E = g.irradiance;
+    r.ao = g.ao;
+    r.bent = g.bent_normal;
+    r.dir = g.light_dir;
+    r.grad_r = g.grad_rot;
+    r.grad_t = g.grad_trans;
+    r.ao_grad_r = g.ao_grad_rot;
+    r.ao_grad_t = g.ao_grad_trans;
+    r.footprint = footprint;
+    r.harmonic = g.harmonic_distance;
+    r.dmin = g.min_distance;
+    r.key = key;
+    r.rays = static_cast<uint32_t>(g.rays);
+    // TL04: half the minimum qualifying distance; Ward: the harmonic mean.
+    r.raw_radius = settings_.metric == "ward" ? g.harmonic_distance : 0.5f * g.min_distance;
+    const float rmin = settings_.min_spacing * footprint, rmax = settings_.max_spacing * footprint;
+    r.radius = std::clamp(r.raw_radius, rmin, rmax);
+    // Weber's law: the distance at which the gradient-extrapolated change reaches tau times
+    // the record's value (luminance, or AO), never below the minimum spacing.
+    if (settings_.gradient_limit > 0) {
+        float value, slope;
+        if (ao_only_) {
+            value = std::max(g.ao, 0.01f);
+            slope = length(g.ao_grad_trans);
+        } else {
+            Vec3 gy = g.grad_trans[0] * 0.2126f + g.grad_trans[1] * 0.7152f + g.grad_trans[2] * 0.0722f;
+            value = std::max(luminance(g.irradiance), std::max(luminance_floor_, 1e-12f));
+            slope = length(gy);
+        }
+        r.weber = slope > 0 ? std::max(settings_.gradient_limit * value / slope, rmin) : INFINITY;
+    }
+    return r;
+}
+
+uint32_t IrradianceCache::insert(Record r) {
+    if (settings_.neighbour_clamp && std::isfinite(r.raw_radius)) {
+        // R_new <= R_j + |p_new - p_j| over the records whose reach includes p_new, on the
+        // unclamped radii; then the screen-space clamps again.
+        float raw = r.raw_radius;
+        octree_.visit(r.p, [&](uint32_t id) {
+            const Record& o = records_[id];
+            float d = length(o.p - r.p);
+            if (d < o.support && dot(o.n, r.n) > 0) raw = std::min(raw, o.raw_radius + d);
+        });
+        r.raw_radius = raw;
+        r.radius = std::clamp(raw, settings_.min_spacing * r.footprint, settings_.max_spacing * r.footprint);
+    }
+    r.support = record_support(r, settings_);
+    auto id = static_cast<uint32_t>(records_.size());
+    records_.push_back(r);
+    octree_.insert(id, r.p, r.support);
+    return id;
+}
+
+size_t IrradianceCache::memory_bytes() const { return records_.size() * sizeof(Record) + octree_.memory_bytes(); }
+
+}  // namespace bounce

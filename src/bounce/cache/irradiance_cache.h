@@ -1,0 +1,61 @@
+// The irradiance cache: records in a spatial index, interpolation with gradients under the
+// combined, normalised error metrics, and record creation from a gather. Lookups are safe from
+// any number of threads while nobody inserts; the passes (passes.h) insert between sub-passes.
+#pragma once
+
+#include <deque>
+#include <memory>
+
+#include "bounce/cache/octree.h"
+#include "bounce/cache/record.h"
+#include "bounce/gather/gather.h"
+
+namespace bounce {
+
+/// What interpolation returns at a point.
+struct Interpolated {
+    Color E{0};
+    float ao = 1;
+    Vec3 bent{0, 0, 1};
+    std::array<Vec3, 3> dir{};
+    float weight = 0;  ///< sum of the weights (0 = no record applies)
+    int records = 0;   ///< how many records contributed
+};
+
+class IrradianceCache {
+public:
+    IrradianceCache(const Bounds& scene_bounds, CacheSettings settings, bool ao_only);
+
+    const CacheSettings& settings() const { return settings_; }
+    bool ao_only() const { return ao_only_; }
+    size_t size() const { return records_.size(); }
+    const Record& record(size_t i) const { return records_[i]; }
+
+    /// Interpolates at (p, n). The result's weight is 0 when no record applies.
+    Interpolated lookup(const Vec3& p, const Vec3& n) const;
+    /// Sum of record weights at (p, n) (cheaper than lookup).
+    float weight_sum(const Vec3& p, const Vec3& n) const;
+    /// True when a lookup at (p, n) would miss (weights sum below min_weight).
+    bool misses(const Vec3& p, const Vec3& n) const { return weight_sum(p, n) < settings_.min_weight; }
+
+    /// Turns a gather at (p, n) into a record: radius from the qualifying minimum distance
+    /// (TL04) or the harmonic mean (Ward) clamped to [min_spacing, max_spacing] pixels of
+    /// `footprint`, and the Weber distance of the gradient limit.
+    Record make_record(const GatherResult& g, const Vec3& p, const Vec3& n, float footprint, uint64_t key) const;
+    /// Inserts (not thread-safe); applies neighbour clamping first. Returns the record's index.
+    uint32_t insert(Record r);
+
+    size_t memory_bytes() const;
+    /// Floor under the record value in the Weber metric (E -> 0 in black surroundings would make
+    /// every gradient look infinite); the passes set it to 1e-3 of the first sub-pass's mean.
+    void set_luminance_floor(float f) { luminance_floor_ = f; }
+
+private:
+    CacheSettings settings_;
+    bool ao_only_;
+    std::deque<Record> records_;
+    RecordOctree octree_;
+    float luminance_floor_ = -1;  ///< Weber floor, fixed from the first record batch
+};
+
+}  // namespace bounce

@@ -1,0 +1,52 @@
+// Spatial index over cache records with their reach (pbrt-v2/Mitsuba style): a record is
+// stored in every node its support box overlaps, down to nodes about its size, so a lookup
+// only walks the single root-to-leaf path containing the query point. Built and grown between
+// sub-passes; any number of threads may read it while nobody inserts.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "bounce/core/math.h"
+
+namespace bounce {
+
+class RecordOctree {
+public:
+    explicit RecordOctree(const Bounds& bounds);
+    /// Adds record `id` whose weights vanish beyond `support` from `p`.
+    void insert(uint32_t id, const Vec3& p, float support);
+    /// Calls f(id) for every record whose support box contains p (a superset of the records
+    /// with nonzero weight at p).
+    template <typename F>
+    void visit(const Vec3& p, F&& f) const {
+        const Node* node = &root_;
+        Vec3 lo = bounds_.lo, hi = bounds_.hi;
+        while (node) {
+            for (uint32_t id : node->ids) f(id);
+            Vec3 mid = (lo + hi) * 0.5f;
+            int c = (p.x > mid.x ? 1 : 0) | (p.y > mid.y ? 2 : 0) | (p.z > mid.z ? 4 : 0);
+            if (!node->children) break;
+            lo = {c & 1 ? mid.x : lo.x, c & 2 ? mid.y : lo.y, c & 4 ? mid.z : lo.z};
+            hi = {c & 1 ? hi.x : mid.x, c & 2 ? hi.y : mid.y, c & 4 ? hi.z : mid.z};
+            node = &(*node->children)[static_cast<size_t>(c)];
+        }
+    }
+    size_t node_count() const { return nodes_; }
+    size_t memory_bytes() const;
+
+private:
+    struct Node {
+        std::vector<uint32_t> ids;
+        std::unique_ptr<std::array<Node, 8>> children;
+    };
+    void insert(Node& node, const Vec3& lo, const Vec3& hi, uint32_t id, const Vec3& blo, const Vec3& bhi,
+                float diag2, int depth);
+    Bounds bounds_;
+    Node root_;
+    size_t nodes_ = 1, refs_ = 0;
+};
+
+}  // namespace bounce

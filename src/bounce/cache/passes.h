@@ -1,0 +1,48 @@
+// The two passes of a final-quality cache render (TL04): a gathering pass that walks the image
+// in hierarchical-refinement sub-passes and creates records where lookups miss, then a shading
+// pass that only interpolates. Also the single progressive preview pass.
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include "bounce/cache/irradiance_cache.h"
+#include "bounce/core/progress.h"
+#include "bounce/core/stats.h"
+#include "bounce/deep/deep_buffer.h"
+#include "bounce/gather/gather.h"
+
+namespace bounce {
+
+/// One sub-pass of the gathering pass: pixels on a lattice of spacing `step` (full-image
+/// coordinates), in one of four parity classes.
+struct SubPass {
+    int step = 1;
+    int parity = 0;  ///< bit 0: x/step odd, bit 1: y/step odd; the first sub-pass takes all
+    bool all = false;
+    bool contains(int x, int y) const;
+};
+
+/// The sub-passes of a gathering pass: every `first_step` pixels, then the pixels between,
+/// halving the step down to 1 (each level in three parity classes, so that candidates within
+/// one sub-pass are 2 steps apart).
+std::vector<SubPass> subpass_schedule(int first_step);
+
+/// Called after each sub-pass with the fraction done (preview mode shows the image then).
+using SubPassCallback = std::function<void(const SubPass&, size_t index, size_t count)>;
+
+/// Gathering pass: creates records until every fragment of `deep` has a covered lookup.
+/// Within a sub-pass every lookup sees the cache as it was when the sub-pass began; new
+/// records are inserted in pixel order, dropping those the earlier ones already cover, so the
+/// cache does not depend on thread count or scheduling.
+void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
+                    IrradianceCache& cache, Stats& stats, ProgressSink* progress,
+                    const SubPassCallback& after_subpass = {});
+
+/// Shading pass: interpolates at every fragment, never creates a record. Misses (no record
+/// applies; the gathering pass makes them impossible) are counted in stats as
+/// "shading_misses" and left black, so a bug shows.
+std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
+                                   Stats& stats, ProgressSink* progress);
+
+}  // namespace bounce
