@@ -13,9 +13,14 @@ float IrradianceCache::weight_sum(const Vec3& p, const Vec3& n) const {
 
 Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n) const {
     Interpolated out;
-    out.ao = 0;
-    out.bent = Vec3(0);
-    Color e(0);
+    // Weighted mean of differences from the first contributing record's value: a constant
+    // field comes back bit-exact, not rounded by sum(w E) / sum(w).
+    bool first = true;
+    Color base(0);
+    float base_ao = 0;
+    double de[3] = {0, 0, 0}, dao = 0, wsum = 0;
+    Vec3 bent(0);
+    std::array<Vec3, 3> dir{};
     octree_.visit(p, [&](uint32_t id) {
         const Record& r = records_[id];
         float w = record_weight(r, p, n, settings_);
@@ -31,23 +36,24 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n) const {
             }
             ai = std::clamp(r.ao + dot(dp, r.ao_grad_t) + dot(rot, r.ao_grad_r), 0.0f, 1.0f);
         }
-        e += ei * w;
-        out.ao += ai * w;
-        out.bent += r.bent * w;
-        for (size_t c = 0; c < 3; ++c) out.dir[c] += r.dir[c] * w;
-        out.weight += w;
+        if (first) base = ei, base_ao = ai, first = false;
+        for (int c = 0; c < 3; ++c) de[c] += static_cast<double>(w) * (ei[c] - base[c]);
+        dao += static_cast<double>(w) * (ai - base_ao);
+        wsum += w;
+        bent += r.bent * w;
+        for (size_t c = 0; c < 3; ++c) dir[c] += r.dir[c] * w;
         ++out.records;
     });
-    if (out.weight > 0) {
-        float inv = 1 / out.weight;
-        out.E = e * inv;
-        out.ao *= inv;
-        for (auto& d : out.dir) d *= inv;
-        out.bent = dot(out.bent, out.bent) > 0 ? normalize(out.bent) : n;
-    } else {
-        out.ao = 1;
+    out.weight = static_cast<float>(wsum);
+    if (wsum <= 0) {
         out.bent = n;
+        return out;
     }
+    for (int c = 0; c < 3; ++c) out.E[c] = base[c] + static_cast<float>(de[c] / wsum);
+    out.ao = base_ao + static_cast<float>(dao / wsum);
+    auto inv = static_cast<float>(1 / wsum);
+    for (size_t c = 0; c < 3; ++c) out.dir[c] = dir[c] * inv;
+    out.bent = dot(bent, bent) > 0 ? normalize(bent) : n;
     return out;
 }
 
