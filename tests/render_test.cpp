@@ -21,6 +21,18 @@ RenderResult render_quiet(const Scene& s, const RenderRequest& req = {}) {
     return render(s, req, stats, nullptr);
 }
 
+RenderRequest writing_deep(const std::string& path) {
+    RenderRequest r;
+    r.deep_out = path;
+    return r;
+}
+
+RenderRequest reading_deep(const std::string& path) {
+    RenderRequest r;
+    r.deep_in = path;
+    return r;
+}
+
 void expect_same_layers(const Image& a, const Image& b) {
     ASSERT_EQ(a.layers.size(), b.layers.size());
     for (size_t i = 0; i < a.layers.size(); ++i) {
@@ -32,7 +44,7 @@ void expect_same_layers(const Image& a, const Image& b) {
 TEST(DeepBuffer, RoundTripIsBitExact) {
     test::TempDir dir;
     Scene s = small_cornell({"render.crop=[5,40,7,30]"});
-    RenderResult r = render_quiet(s, {"", dir.file("deep.exr"), {}});
+    RenderResult r = render_quiet(s, writing_deep(dir.file("deep.exr")));
     ASSERT_GT(r.deep.fragments.size(), 500u);
     DeepBuffer back = read_deep(dir.file("deep.exr"));
     EXPECT_EQ(back.x0, 5);
@@ -44,8 +56,8 @@ TEST(DeepBuffer, RoundTripIsBitExact) {
 TEST(DeepBuffer, ShadingFromLoadedDeepGivesTheSameImage) {
     test::TempDir dir;
     Scene s = small_cornell();
-    RenderResult direct = render_quiet(s, {"", dir.file("deep.exr"), {}});
-    RenderResult reshaded = render_quiet(s, {dir.file("deep.exr"), "", {}});
+    RenderResult direct = render_quiet(s, writing_deep(dir.file("deep.exr")));
+    RenderResult reshaded = render_quiet(s, reading_deep(dir.file("deep.exr")));
     expect_same_layers(direct.image, reshaded.image);
 }
 

@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "bounce/cache/cache_file.h"
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
 #include "bounce/core/image.h"
@@ -25,7 +26,9 @@ struct RenderArgs {
     std::vector<std::string> sets;
     std::string gi, radiosity_textures, metric;
     double min_spacing = -1, max_spacing = -1, max_angle = -1, gradient_limit = -1, quality = -1;
-    bool preview = false;
+    bool preview = false, regather = false, force = false;
+    std::string cache_in, cache_out, show = "beauty", frames;
+    int frame = 0;
     int threads = -1, spp = -1, rays = -1;
     bool ao = false;
     int64_t seed = -1;
@@ -67,25 +70,37 @@ std::vector<std::string> overrides_from(const RenderArgs& a) {
     return o;
 }
 
-int run_render(const RenderArgs& a) {
+int render_frame(const RenderArgs& a, int frame, const std::string& cache_in) {
     Scene scene = load_scene(a.scene, overrides_from(a));
+    const std::string output = expand_frame_pattern(a.output, frame);
     std::unique_ptr<ProgressSink> sink = a.quiet ? make_null_progress()
                                          : isatty(STDERR_FILENO) ? make_terminal_progress()
                                                                  : make_log_progress();
     Stats stats;
-    RenderRequest request{a.deep_in, a.deep_out, {}};
-    std::filesystem::path png = a.output;
+    RenderRequest request;
+    request.deep_in = expand_frame_pattern(a.deep_in, frame);
+    request.deep_out = expand_frame_pattern(a.deep_out, frame);
+    request.cache_in = cache_in;
+    request.cache_out = expand_frame_pattern(a.cache_out, frame);
+    request.regather = a.regather;
+    request.force = a.force;
+    request.frame = frame;
+    std::filesystem::path png = output;
     png.replace_extension(".png");
     if (scene.render.preview)
         request.preview = [&](const Image& img) {
-            write_exr(a.output, img);
+            write_exr(output, img);
             write_png(png.string(), img, "beauty");
         };
     RenderResult r = render(scene, request, stats, sink.get());
     {
         PhaseTimer t(stats, "write images");
-        write_exr(a.output, r.image);
-        write_png(png.string(), r.image, "beauty");
+        if (!r.image.find(a.show))
+            throw InputError("command line", "--show " + a.show,
+                             a.show == "records" ? "no records to show (render with --gi cache or give --cache-in)"
+                                                 : "the render has no layer \"" + a.show + "\"");
+        write_exr(output, r.image);
+        write_png(png.string(), r.image, a.show);
     }
     if (a.stats) {
         std::printf("%s", stats.to_text().c_str());
@@ -99,7 +114,22 @@ int run_render(const RenderArgs& a) {
             if (!out) throw InputError(a.stats_json, "", "cannot write stats file");
         });
     }
-    if (!a.quiet) std::fprintf(stderr, "wrote %s\n", a.output.c_str());
+    if (!a.quiet) std::fprintf(stderr, "wrote %s\n", output.c_str());
+    return 0;
+}
+
+int run_render(const RenderArgs& a) {
+    if (a.frames.empty()) return render_frame(a, a.frame, expand_frame_pattern(a.cache_in, a.frame));
+    std::smatch m;
+    if (!std::regex_match(a.frames, m, std::regex(R"((-?\d{1,6})-(-?\d{1,6}))")) || std::stoi(m[1]) > std::stoi(m[2]))
+        throw InputError("command line", "--frames " + a.frames, "expected FIRST-LAST, e.g. 1-24");
+    if (a.cache_out.find('#') == std::string::npos || a.output.find('#') == std::string::npos)
+        throw InputError("command line", "--frames", "-o and --cache-out need a #### frame pattern for a sequence");
+    // Each frame starts from the previous frame's cache: records are reused, new ones added.
+    for (int f = std::stoi(m[1]); f <= std::stoi(m[2]); ++f) {
+        std::string in = f == std::stoi(m[1]) ? expand_frame_pattern(a.cache_in, f) : expand_frame_pattern(a.cache_out, f - 1);
+        if (int rc = render_frame(a, f, in)) return rc;
+    }
     return 0;
 }
 
@@ -163,6 +193,13 @@ int main(int argc, char** argv) {
     render->add_option("--max-angle", ra.max_angle, "normal deviation limit, degrees (render.max_angle)");
     render->add_option("--gradient-limit", ra.gradient_limit, "Weber gradient limit tau (render.gradient_limit)");
     render->add_option("--quality", ra.quality, "cache quality kappa, smaller = fewer records (render.quality)");
+    render->add_option("--cache-in", ra.cache_in, "start from this irradiance cache file (#### = frame)");
+    render->add_option("--cache-out", ra.cache_out, "write the irradiance cache (#### = frame)");
+    render->add_flag("--regather", ra.regather, "flush the cache before gathering");
+    render->add_flag("--force", ra.force, "use a cache made for another scene or camera");
+    render->add_option("--frame", ra.frame, "frame number (expands #### in file names, stamps new records)");
+    render->add_option("--frames", ra.frames, "render frames FIRST-LAST, each reusing the previous frame's cache");
+    render->add_option("--show", ra.show, "layer written to the PNG: beauty (default), records, indirect, ao ...");
     render->add_flag("--preview", ra.preview, "progressive gather-and-shade, the image rewritten after each sub-pass (render.preview)");
     render->add_option("--radiosity-textures", ra.radiosity_textures,
                        "folder of baked radiosity textures to reuse or fill (render.radiosity_textures)");

@@ -3,7 +3,7 @@
 namespace bounce {
 
 IrradianceCache::IrradianceCache(const Bounds& scene_bounds, CacheSettings settings, bool ao_only)
-    : settings_(std::move(settings)), ao_only_(ao_only), octree_(scene_bounds) {}
+    : settings_(std::move(settings)), shading_settings_(settings_.for_shading()), ao_only_(ao_only), octree_(scene_bounds) {}
 
 float IrradianceCache::weight_sum(const Vec3& p, const Vec3& n) const {
     float sum = 0;
@@ -11,7 +11,8 @@ float IrradianceCache::weight_sum(const Vec3& p, const Vec3& n) const {
     return sum;
 }
 
-Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n) const {
+Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading) const {
+    const CacheSettings& s = shading ? shading_settings_ : settings_;
     Interpolated out;
     // Weighted mean of differences from the first contributing record's value: a constant
     // field comes back bit-exact, not rounded by sum(w E) / sum(w).
@@ -23,7 +24,7 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n) const {
     std::array<Vec3, 3> dir{};
     octree_.visit(p, [&](uint32_t id) {
         const Record& r = records_[id];
-        float w = record_weight(r, p, n, settings_);
+        float w = record_weight(r, p, n, s);
         if (w <= 0) return;
         Color ei = r.E;
         float ai = r.ao;
@@ -76,7 +77,7 @@ Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const 
     r.key = key;
     r.rays = static_cast<uint32_t>(g.rays);
     // TL04: half the minimum qualifying distance; Ward: the harmonic mean.
-    r.raw_radius = settings_.metric == "ward" ? g.harmonic_distance : 0.5f * g.min_distance;
+    r.raw_radius = settings_.metric == "ward" ? g.harmonic_distance : settings_.radius_scale * g.min_distance;
     const float rmin = settings_.min_spacing * footprint, rmax = settings_.max_spacing * footprint;
     r.radius = std::clamp(r.raw_radius, rmin, rmax);
     // Weber's law: the distance at which the gradient-extrapolated change reaches tau times
@@ -91,7 +92,17 @@ Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const 
             value = std::max(luminance(g.irradiance), std::max(luminance_floor_, 1e-12f));
             slope = length(gy);
         }
-        r.weber = slope > 0 ? std::max(settings_.gradient_limit * value / slope, rmin) : INFINITY;
+        float weber = slope > 0 ? settings_.gradient_limit * value / slope : INFINITY;
+        if (weber < rmin) {
+            // The limit would pack records closer than the minimum spacing (corners, where
+            // 1/r terms make gradients explode): keep the spacing and scale the translational
+            // gradient instead, so extrapolation over R_min changes the value by at most tau E.
+            float scale = weber / rmin;
+            for (auto& g3 : r.grad_t) g3 *= scale;
+            r.ao_grad_t *= scale;
+            weber = rmin;
+        }
+        r.weber = weber;
     }
     return r;
 }
@@ -109,11 +120,28 @@ uint32_t IrradianceCache::insert(Record r) {
         r.raw_radius = raw;
         r.radius = std::clamp(raw, settings_.min_spacing * r.footprint, settings_.max_spacing * r.footprint);
     }
-    r.support = record_support(r, settings_);
+    r.support = record_support(r, shading_settings_);
     auto id = static_cast<uint32_t>(records_.size());
     records_.push_back(r);
     octree_.insert(id, r.p, r.support);
     return id;
+}
+
+uint32_t IrradianceCache::insert_loaded(const Record& r) {
+    Record copy = r;
+    copy.support = record_support(copy, shading_settings_);
+    auto id = static_cast<uint32_t>(records_.size());
+    records_.push_back(copy);
+    octree_.insert(id, copy.p, copy.support);
+    return id;
+}
+
+CacheFile IrradianceCache::to_file(const CacheFileInfo& info) const {
+    CacheFile f;
+    f.info = info;
+    f.info.luminance_floor = luminance_floor_;
+    f.records.assign(records_.begin(), records_.end());
+    return f;
 }
 
 size_t IrradianceCache::memory_bytes() const { return records_.size() * sizeof(Record) + octree_.memory_bytes(); }

@@ -6,6 +6,7 @@
 #include <deque>
 #include <memory>
 
+#include "bounce/cache/cache_file.h"
 #include "bounce/cache/octree.h"
 #include "bounce/cache/record.h"
 #include "bounce/gather/gather.h"
@@ -31,8 +32,9 @@ public:
     size_t size() const { return records_.size(); }
     const Record& record(size_t i) const { return records_[i]; }
 
-    /// Interpolates at (p, n). The result's weight is 0 when no record applies.
-    Interpolated lookup(const Vec3& p, const Vec3& n) const;
+    /// Interpolates at (p, n). The result's weight is 0 when no record applies. `shading`
+    /// uses the shading pass's longer reach (CacheSettings::shading_reach).
+    Interpolated lookup(const Vec3& p, const Vec3& n, bool shading = false) const;
     /// Sum of record weights at (p, n) (cheaper than lookup).
     float weight_sum(const Vec3& p, const Vec3& n) const;
     /// True when a lookup at (p, n) would miss (weights sum below min_weight).
@@ -45,13 +47,19 @@ public:
     /// Inserts (not thread-safe); applies neighbour clamping first. Returns the record's index.
     uint32_t insert(Record r);
 
+    /// Inserts a record read from a file as it is (no clamping: its radius is final).
+    uint32_t insert_loaded(const Record& r);
+    /// Records and header information for a cache file.
+    CacheFile to_file(const CacheFileInfo& info) const;
+    float luminance_floor() const { return luminance_floor_; }
+
     size_t memory_bytes() const;
     /// Floor under the record value in the Weber metric (E -> 0 in black surroundings would make
     /// every gradient look infinite); the passes set it to 1e-3 of the first sub-pass's mean.
     void set_luminance_floor(float f) { luminance_floor_ = f; }
 
 private:
-    CacheSettings settings_;
+    CacheSettings settings_, shading_settings_;
     bool ao_only_;
     std::deque<Record> records_;
     RecordOctree octree_;

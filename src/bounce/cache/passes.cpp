@@ -41,7 +41,7 @@ uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k) {
 }  // namespace
 
 void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, IrradianceCache& cache,
-                    Stats& stats, ProgressSink* sink, const SubPassCallback& after_subpass) {
+                    Stats& stats, ProgressSink* sink, const SubPassCallback& after_subpass, int frame) {
     const auto schedule = subpass_schedule(static_cast<int>(cache.settings().max_spacing));
     Progress progress(sink, "gathering", schedule.size());
     size_t dropped = 0, gathered = 0;
@@ -74,13 +74,14 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
                 GatherResult g = gatherer.gather(f.p, f.n_base, fragment_stream(scene.render.seed, c.x + deep.x0, c.y + deep.y0, c.k),
                                                  counters);
                 records[i] = cache.make_record(g, f.p_base, f.n_base, f.footprint, c.key);
+                records[i].frame = frame;
             }
         });
         gathered += records.size();
 
         // 3. Insert in pixel order, dropping candidates the records inserted before them in
         //    this sub-pass already cover.
-        if (si == 0 && !records.empty()) {
+        if (cache.luminance_floor() < 0 && !records.empty()) {
             double mean = 0;
             for (const auto& r : records) mean += luminance(r.E);
             cache.set_luminance_floor(static_cast<float>(1e-3 * mean / static_cast<double>(records.size())));
@@ -97,10 +98,11 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
         if (after_subpass) after_subpass(sp, si, schedule.size());
     }
     stats.set("records", static_cast<double>(cache.size()));
+    stats.set("records_gathered", static_cast<double>(gathered - dropped));
     stats.set("record_gathers", static_cast<double>(gathered));
     stats.set("records_dropped", static_cast<double>(dropped));
     stats.set("subpasses", static_cast<double>(schedule.size()));
-    stats.set("rays_per_gather", gatherer.grid().rays());
+    stats.set("rays_per_gather", gathered ? static_cast<double>(stats.total().gather_rays) / static_cast<double>(gathered) : 0.0);
     stats.set("cache_bytes", static_cast<double>(cache.memory_bytes()));
 }
 
@@ -119,7 +121,7 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
                 auto frags = deep.pixel(wx, wy);
                 for (uint32_t k = 0; k < frags.size(); ++k) {
                     const Fragment& f = frags[k];
-                    Interpolated in = cache.lookup(f.p_base, f.n_base);
+                    Interpolated in = cache.lookup(f.p_base, f.n_base, true);
                     ++lookups.local();
                     if (in.weight <= 0) ++misses.local();
                     out[first + k] = {in.E, in.ao, in.bent};

@@ -37,7 +37,7 @@ using SubPassCallback = std::function<void(const SubPass&, size_t index, size_t 
 /// cache does not depend on thread count or scheduling.
 void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
                     IrradianceCache& cache, Stats& stats, ProgressSink* progress,
-                    const SubPassCallback& after_subpass = {});
+                    const SubPassCallback& after_subpass = {}, int frame = 0);
 
 /// Shading pass: interpolates at every fragment, never creates a record. Misses (no record
 /// applies; the gathering pass makes them impossible) are counted in stats as

@@ -21,6 +21,16 @@ struct CacheSettings {
     float accuracy = 0.2f;        ///< Ward's a
     bool gradients = true;        ///< extrapolate with gradients
     bool neighbour_clamp = true;  ///< R_new <= R_j + |p_new - p_j| (Krivanek et al. 2006)
+    float shading_reach = 1.0f;   ///< the shading pass lets records reach this much farther
+                                  ///< (kappa / reach; Mitsuba's relaxed final pass), >= 1
+    float radius_scale = 0.5f;    ///< R = radius_scale * d_min (TL04: 1/2)
+    /// The settings the shading pass interpolates with.
+    CacheSettings for_shading() const {
+        CacheSettings s = *this;
+        s.quality = quality / shading_reach;
+        s.accuracy = accuracy * shading_reach;
+        return s;
+    }
 };
 
 /// One cache record: a full gather's result at (p, n), with its reach.
@@ -40,6 +50,7 @@ struct Record {
     float support = 0;           ///< weights are zero beyond this distance (octree placement)
     uint64_t key = 0;            ///< creation key (pixel, fragment): deterministic order
     uint32_t rays = 0;
+    int32_t frame = 0;           ///< frame it was gathered in (sequences: reused vs new)
 };
 
 /// Normalised error terms of record `r` at (p, n); each reaches 1 exactly at its bound.

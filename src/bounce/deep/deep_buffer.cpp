@@ -37,7 +37,10 @@ float CameraRays::footprint(const Vec3& d, float t, const Vec3& n) const {
     nd = std::copysign(std::max(std::abs(nd), 0.05f * length(d)), nd);
     float tau = t / length(d);
     Vec3 px = (dx - d * (dot(n, dx) / nd)) * tau, py = (dy - d * (dot(n, dy) / nd)) * tau;
-    return std::sqrt(length(cross(px, py)));
+    // The pixel's narrowest world extent (parallelogram area over its longer side), not
+    // sqrt(area): on surfaces seen at grazing angles a record's reach in pixels along the
+    // foreshortened direction would otherwise be far beyond max_spacing.
+    return length(cross(px, py)) / std::max(length(px), length(py));
 }
 
 bool CameraRays::project(const Vec3& p, float& px, float& py) const {

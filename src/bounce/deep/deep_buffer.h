@@ -68,7 +68,8 @@ public:
     Vec3 direction(float px, float py) const;
     Vec3 origin() const { return pos_; }
     /// World-space width of one pixel at a hit at distance t along unit direction d on a
-    /// surface of normal n (from the ray differentials; grazing angles are capped).
+    /// surface of normal n: the narrowest extent of the pixel's projection (from the ray
+    /// differentials; grazing angles are capped).
     float footprint(const Vec3& d, float t, const Vec3& n) const;
     /// Full-image pixel position of world point p; false if p is behind the camera.
     bool project(const Vec3& p, float& px, float& py) const;

@@ -97,10 +97,43 @@ CacheSettings cache_settings(const Scene& scene) {
     c.accuracy = r.accuracy;
     c.gradients = r.gradients;
     c.neighbour_clamp = r.neighbour_clamp;
+    c.shading_reach = r.shading_reach;
+    c.radius_scale = r.radius_scale;
     return c;
 }
 
+CacheFileInfo cache_file_info(const Scene& scene, int frame) {
+    CacheFileInfo info;
+    info.scene_fingerprint = scene.fingerprint({"objects", "materials", "lights"});
+    info.camera_fingerprint = scene.fingerprint({"camera"});
+    const RenderSettings& r = scene.render;
+    info.parameters = {{"metric", r.metric},       {"min_spacing", r.min_spacing}, {"max_spacing", r.max_spacing},
+                       {"max_angle", r.max_angle}, {"gradient_limit", r.gradient_limit}, {"quality", r.quality},
+                       {"min_weight", r.min_weight}, {"accuracy", r.accuracy}, {"rays", r.rays},
+                       {"shading_reach", r.shading_reach}, {"radius_scale", r.radius_scale},
+                       {"ao", r.ao},               {"ao_distance", r.ao_distance}, {"seed", r.seed}};
+    info.frame = frame;
+    return info;
+}
+
 namespace {
+
+/// Loads `path` into `cache`, refusing a cache made for another scene or camera unless forced.
+size_t load_cache(const std::string& path, const Scene& scene, bool force, IrradianceCache& cache) {
+    CacheFile f = read_cache_file(path);
+    CacheFileInfo want = cache_file_info(scene, 0);
+    if (!force && f.info.scene_fingerprint != want.scene_fingerprint)
+        throw InputError(path, "scene_fingerprint",
+                         "cache was made for another scene (objects, materials or lights differ); --force uses it anyway");
+    if (!force && f.info.camera_fingerprint != want.camera_fingerprint)
+        throw InputError(path, "camera_fingerprint",
+                         "cache was made for another camera (its spacing is in that camera's pixels); --force uses it anyway");
+    if (!force && f.info.parameters.value("ao", false) != scene.render.ao)
+        throw InputError(path, "parameters/ao", scene.render.ao ? "cache holds irradiance, not AO" : "cache holds AO, not irradiance");
+    cache.set_luminance_floor(f.info.luminance_floor);
+    for (const Record& r : f.records) cache.insert_loaded(r);
+    return f.records.size();
+}
 
 /// Preview: each pixel takes the indirect light of the nearest pixel a finished sub-pass
 /// visited (looked up in the cache as it is now).
@@ -187,6 +220,10 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             PhaseTimer t(stats, "gather");
             if (scene.render.gi == "cache") {
                 cache = std::make_unique<IrradianceCache>(scene.bounds(), cache_settings(scene), gs.ao_only);
+                if (!request.cache_in.empty() && !request.regather) {
+                    PhaseTimer tl(stats, "cache read");
+                    result.records_loaded = load_cache(request.cache_in, scene, request.force, *cache);
+                }
                 SubPassCallback after;
                 std::vector<Color> direct_e;
                 if (scene.render.preview && request.preview) {
@@ -196,7 +233,10 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
                         request.preview(shade(scene, result.deep, materials, lighting, &ind, stats, nullptr, &direct_e));
                     };
                 }
-                gathering_pass(scene, result.deep, gatherer, *cache, stats, progress, after);
+                gathering_pass(scene, result.deep, gatherer, *cache, stats, progress, after, request.frame);
+                result.records_new = cache->size() - result.records_loaded;
+                stats.set("records_loaded", static_cast<double>(result.records_loaded));
+                stats.set("records_new", static_cast<double>(result.records_new));
             } else {
                 indirect = gather_every_fragment(scene, result.deep, gatherer, stats, progress);
                 stats.set("gathers", static_cast<double>(result.deep.fragments.size()));
@@ -210,6 +250,14 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             PhaseTimer t(stats, "shading");
             if (cache) indirect = shading_pass(scene, result.deep, *cache, stats, progress);
             result.image = shade(scene, result.deep, materials, lighting, gi ? &indirect : nullptr, stats, progress);
+        }
+        if (!cache && !request.cache_in.empty()) {  // --show records over a non-cache render
+            cache = std::make_unique<IrradianceCache>(scene.bounds(), cache_settings(scene), scene.render.ao);
+            result.records_loaded = load_cache(request.cache_in, scene, request.force, *cache);
+        }
+        if (cache && !request.cache_out.empty()) {
+            PhaseTimer tw(stats, "cache write");
+            write_cache_file(request.cache_out, cache->to_file(cache_file_info(scene, request.frame)));
         }
         if (cache) {
             std::vector<Vec3> positions;

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bounce/cache/cache_file.h"
 #include "bounce/core/image.h"
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
@@ -21,12 +22,21 @@ struct RenderRequest {
     /// Preview mode (render.preview with gi cache): called with the whole image after every
     /// sub-pass, pixelated first and finer after.
     std::function<void(const Image&)> preview;
+    std::string cache_in;   ///< start the irradiance cache from this file (gathers only where it misses)
+    std::string cache_out;  ///< write the irradiance cache here
+    bool regather = false;  ///< flush the cache before gathering (ignore cache_in's records)
+    bool force = false;     ///< accept a cache made for another scene or camera
+    int frame = 0;          ///< frame number stamped on new records (sequences)
 };
 
 struct RenderResult {
     Image image;
     DeepBuffer deep;
+    size_t records_loaded = 0, records_new = 0;
 };
+
+/// The header information a cache made for `scene` carries.
+CacheFileInfo cache_file_info(const Scene& scene, int frame);
 
 /// Renders `scene`. Throws InputError on bad input (deep file from another scene ...).
 RenderResult render(const Scene& scene, const RenderRequest& request, Stats& stats,

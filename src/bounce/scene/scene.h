@@ -96,6 +96,8 @@ struct RenderSettings {
     float accuracy = 0.2f;         ///< Ward's a
     bool gradients = true;
     bool neighbour_clamp = true;
+    float shading_reach = 1.0f;    ///< records reach this much farther in the shading pass
+    float radius_scale = 0.5f;     ///< R = radius_scale * d_min
     bool preview = false;          ///< one progressive gather-and-shade pass
 };
 

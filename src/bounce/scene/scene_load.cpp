@@ -571,7 +571,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<std::stri
                   "rays", "ao_distance", "ao_falloff", "hit_light_samples", "concave_angle", "radiosity",
                   "radiosity_textures", "radiosity_texel", "radiosity_light_samples", "metric", "min_spacing",
                   "max_spacing", "max_angle", "gradient_limit", "quality", "min_weight", "accuracy", "gradients",
-                  "neighbour_clamp", "preview"});
+                  "neighbour_clamp", "preview", "shading_reach", "radius_scale"});
         RenderSettings& s = scene.render;
         s.spp = r.integer("spp", s.spp, 1, 4096);
         if (r.has("seed")) {
@@ -610,6 +610,8 @@ Scene build_scene(json doc, const std::string& path, const std::vector<std::stri
         s.gradients = r.boolean("gradients", s.gradients);
         s.neighbour_clamp = r.boolean("neighbour_clamp", s.neighbour_clamp);
         s.preview = r.boolean("preview", s.preview);
+        s.shading_reach = static_cast<float>(r.number("shading_reach", s.shading_reach, 1, 10));
+        s.radius_scale = static_cast<float>(r.number("radius_scale", s.radius_scale, 0.01, 100));
         if (r.has("crop")) {
             const json& c = r.raw("crop");
             if (!c.is_array() || c.size() != 4) r.fail("crop", "expected [x0, x1, y0, y1]");

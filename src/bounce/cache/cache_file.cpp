@@ -1,0 +1,249 @@
+#include "bounce/cache/cache_file.h"
+
+#include <fmt/format.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "bounce/core/atomic_file.h"
+#include "bounce/core/error.h"
+
+namespace bounce {
+
+namespace {
+
+constexpr char kMagic[8] = {'B', 'O', 'U', 'N', 'C', 'E', 'I', 'C'};
+constexpr uint32_t kBlockRecords = 4096;
+constexpr uint32_t kMaxHeader = 1u << 20;
+
+/// Record fields in file order: name, type, count. Floats are IEEE-754 binary32 little-endian.
+struct Field {
+    const char* name;
+    const char* type;
+    int count;
+};
+const Field kFields[] = {
+    {"p", "f32", 3},         {"n", "f32", 3},         {"E", "f32", 3},          {"ao", "f32", 1},
+    {"bent", "f32", 3},      {"dir", "f32", 9},       {"grad_r", "f32", 9},     {"grad_t", "f32", 9},
+    {"ao_grad_r", "f32", 3}, {"ao_grad_t", "f32", 3}, {"radius", "f32", 1},     {"raw_radius", "f32", 1},
+    {"footprint", "f32", 1}, {"harmonic", "f32", 1},  {"dmin", "f32", 1},       {"weber", "f32", 1},
+    {"key", "u64", 1},       {"rays", "u32", 1},      {"frame", "i32", 1},
+};
+constexpr size_t kFloats = 3 + 3 + 3 + 1 + 3 + 9 + 9 + 9 + 3 + 3 + 6;
+constexpr size_t kRecordBytes = kFloats * 4 + 8 + 4 + 4;
+
+uint64_t fnv1a(const char* data, size_t n) {
+    uint64_t h = 0xcbf29ce484222325ULL;
+    for (size_t i = 0; i < n; ++i) h = (h ^ static_cast<uint8_t>(data[i])) * 0x100000001b3ULL;
+    return h;
+}
+
+template <typename T>
+void put(std::string& out, T v) {
+    char b[sizeof(T)];
+    std::memcpy(b, &v, sizeof(T));  // the project targets little-endian x86-64 / arm64
+    out.append(b, sizeof(T));
+}
+
+void put_vec(std::string& out, const Vec3& v) { put(out, v.x), put(out, v.y), put(out, v.z); }
+
+void write_record(std::string& out, const Record& r) {
+    put_vec(out, r.p), put_vec(out, r.n), put_vec(out, r.E), put(out, r.ao), put_vec(out, r.bent);
+    for (const auto& v : r.dir) put_vec(out, v);
+    for (const auto& v : r.grad_r) put_vec(out, v);
+    for (const auto& v : r.grad_t) put_vec(out, v);
+    put_vec(out, r.ao_grad_r), put_vec(out, r.ao_grad_t);
+    put(out, r.radius), put(out, r.raw_radius), put(out, r.footprint), put(out, r.harmonic), put(out, r.dmin),
+        put(out, r.weber);
+    put(out, r.key), put(out, r.rays), put(out, r.frame);
+}
+
+/// Sequential reader over the file's bytes with bounds checks.
+class Cursor {
+public:
+    Cursor(const std::string& b, const std::string& name) : b_(b), name_(name) {}
+    template <typename T>
+    T get(const char* what) {
+        need(sizeof(T), what);
+        T v;
+        std::memcpy(&v, b_.data() + pos_, sizeof(T));
+        pos_ += sizeof(T);
+        return v;
+    }
+    Vec3 vec(const char* what) {
+        float x = get<float>(what), y = get<float>(what), z = get<float>(what);
+        return {x, y, z};
+    }
+    std::string bytes(size_t n, const char* what) {
+        need(n, what);
+        std::string s = b_.substr(pos_, n);
+        pos_ += n;
+        return s;
+    }
+    size_t remaining() const { return b_.size() - pos_; }
+    size_t pos() const { return pos_; }
+    [[noreturn]] void fail(const std::string& msg) const { throw InputError(name_, fmt::format("byte {}", pos_), msg); }
+
+private:
+    void need(size_t n, const char* what) const {
+        if (n > remaining()) fail(fmt::format("file is truncated (reading {})", what));
+    }
+    const std::string& b_;
+    const std::string& name_;
+    size_t pos_ = 0;
+};
+
+Record read_record(Cursor& c) {
+    Record r;
+    r.p = c.vec("p"), r.n = c.vec("n"), r.E = c.vec("E"), r.ao = c.get<float>("ao"), r.bent = c.vec("bent");
+    for (auto& v : r.dir) v = c.vec("dir");
+    for (auto& v : r.grad_r) v = c.vec("grad_r");
+    for (auto& v : r.grad_t) v = c.vec("grad_t");
+    r.ao_grad_r = c.vec("ao_grad_r"), r.ao_grad_t = c.vec("ao_grad_t");
+    r.radius = c.get<float>("radius"), r.raw_radius = c.get<float>("raw_radius");
+    r.footprint = c.get<float>("footprint"), r.harmonic = c.get<float>("harmonic"), r.dmin = c.get<float>("dmin");
+    r.weber = c.get<float>("weber");
+    r.key = c.get<uint64_t>("key"), r.rays = c.get<uint32_t>("rays"), r.frame = c.get<int32_t>("frame");
+    return r;
+}
+
+bool record_ok(const Record& r) {
+    auto fin = [](const Vec3& v) { return isfinite(v); };
+    if (!fin(r.p) || !fin(r.n) || !fin(r.E) || !fin(r.bent) || !std::isfinite(r.ao)) return false;
+    for (int c = 0; c < 3; ++c)
+        if (!fin(r.dir[static_cast<size_t>(c)]) || !fin(r.grad_r[static_cast<size_t>(c)]) ||
+            !fin(r.grad_t[static_cast<size_t>(c)]) || r.E[c] < 0)
+            return false;
+    if (!fin(r.ao_grad_r) || !fin(r.ao_grad_t)) return false;
+    if (!(r.radius > 0) || !std::isfinite(r.radius) || !(r.footprint > 0) || !std::isfinite(r.footprint)) return false;
+    if (std::abs(length(r.n) - 1) > 1e-3f) return false;
+    return !(r.weber <= 0) && !std::isnan(r.weber);
+}
+
+}  // namespace
+
+nlohmann::json record_layout() {
+    nlohmann::json l = nlohmann::json::array();
+    for (const auto& f : kFields) l.push_back({{"name", f.name}, {"type", f.type}, {"count", f.count}});
+    return l;
+}
+
+std::string serialize_cache_file(const CacheFile& file) {
+    nlohmann::json h;
+    h["format"] = "bounce irradiance cache";
+    h["record_layout"] = record_layout();
+    h["record_bytes"] = kRecordBytes;
+    h["record_count"] = file.records.size();
+    h["block_records"] = kBlockRecords;
+    h["scene_fingerprint"] = fmt::format("{:016x}", file.info.scene_fingerprint);
+    h["camera_fingerprint"] = fmt::format("{:016x}", file.info.camera_fingerprint);
+    h["parameters"] = file.info.parameters;
+    h["luminance_floor"] = file.info.luminance_floor;
+    h["frame"] = file.info.frame;
+    h["software"] = "bounce " BOUNCE_VERSION " (" BOUNCE_GIT_REV ")";
+    std::string header = h.dump();
+    std::string out(kMagic, 8);
+    put(out, kCacheFileVersion);
+    put(out, static_cast<uint32_t>(header.size()));
+    out += header;
+    put(out, fnv1a(header.data(), header.size()));
+    for (size_t b = 0; b < file.records.size(); b += kBlockRecords) {
+        auto n = static_cast<uint32_t>(std::min<size_t>(kBlockRecords, file.records.size() - b));
+        std::string payload;
+        payload.reserve(n * kRecordBytes);
+        for (uint32_t i = 0; i < n; ++i) write_record(payload, file.records[b + i]);
+        put(out, n);
+        put(out, fnv1a(payload.data(), payload.size()));
+        out += payload;
+    }
+    return out;
+}
+
+void write_cache_file(const std::string& path, const CacheFile& file) {
+    std::string bytes = serialize_cache_file(file);
+    write_atomically(path, [&](const std::string& tmp) {
+        std::ofstream out(tmp, std::ios::binary);
+        out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+        out.flush();
+        if (!out) throw InputError(path, "", "cannot write cache file");
+    });
+}
+
+CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
+    Cursor c(bytes, name);
+    if (bytes.empty()) c.fail("empty file (not an irradiance cache)");
+    std::string magic = c.bytes(std::min<size_t>(8, bytes.size()), "magic");
+    if (magic.size() < 8 || std::memcmp(magic.data(), kMagic, 8) != 0) throw InputError(name, "byte 0", "not a bounce irradiance cache (bad magic)");
+    auto version = c.get<uint32_t>("version");
+    if (version != kCacheFileVersion)
+        throw InputError(name, "byte 8", fmt::format("unsupported cache version {} (this bounce reads version {})", version, kCacheFileVersion));
+    auto hlen = c.get<uint32_t>("header length");
+    if (hlen > kMaxHeader || hlen > c.remaining()) c.fail(fmt::format("header length {} is impossible for this file", hlen));
+    std::string header = c.bytes(hlen, "header");
+    auto hsum = c.get<uint64_t>("header checksum");
+    if (hsum != fnv1a(header.data(), header.size())) throw InputError(name, "header", "checksum mismatch (file is corrupt)");
+    nlohmann::json h = nlohmann::json::parse(header, nullptr, false);
+    if (h.is_discarded() || !h.is_object()) throw InputError(name, "header", "header is not valid JSON");
+    CacheFile f;
+    try {
+        if (h.at("record_layout") != record_layout() || h.at("record_bytes").get<uint64_t>() != kRecordBytes)
+            throw InputError(name, "header/record_layout", "record layout differs from this version's");
+        uint64_t count = h.at("record_count").get<uint64_t>();
+        // Every record needs kRecordBytes plus its share of block headers: bound the count by
+        // the bytes actually present before allocating anything.
+        if (count > c.remaining() / kRecordBytes)
+            throw InputError(name, "header/record_count", fmt::format("{} records cannot fit in the {} bytes that follow", count, c.remaining()));
+        f.info.scene_fingerprint = std::stoull(h.at("scene_fingerprint").get<std::string>(), nullptr, 16);
+        f.info.camera_fingerprint = std::stoull(h.at("camera_fingerprint").get<std::string>(), nullptr, 16);
+        f.info.parameters = h.at("parameters");
+        f.info.luminance_floor = h.at("luminance_floor").get<float>();
+        f.info.frame = h.at("frame").get<int>();
+        f.records.reserve(count);
+        while (f.records.size() < count) {
+            size_t block_at = c.pos();
+            auto n = c.get<uint32_t>("block size");
+            if (n == 0 || n > kBlockRecords || n > count - f.records.size())
+                throw InputError(name, fmt::format("byte {}", block_at), fmt::format("bad block size {}", n));
+            auto sum = c.get<uint64_t>("block checksum");
+            std::string payload = c.bytes(static_cast<size_t>(n) * kRecordBytes, "records");
+            if (sum != fnv1a(payload.data(), payload.size()))
+                throw InputError(name, fmt::format("block at byte {}", block_at), "checksum mismatch (file is corrupt)");
+            Cursor rc(payload, name);
+            for (uint32_t i = 0; i < n; ++i) {
+                Record r = read_record(rc);
+                if (!record_ok(r))
+                    throw InputError(name, fmt::format("record {}", f.records.size()), "non-finite or out-of-range values");
+                f.records.push_back(r);
+            }
+        }
+        if (c.remaining() != 0) c.fail(fmt::format("{} unexpected bytes after the last block", c.remaining()));
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(name, "header", std::string("missing or malformed field: ") + e.what());
+    } catch (const std::invalid_argument&) {
+        throw InputError(name, "header", "malformed fingerprint");
+    } catch (const std::out_of_range&) {
+        throw InputError(name, "header", "malformed fingerprint");
+    }
+    return f;
+}
+
+CacheFile read_cache_file(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path, "", "cache file not found");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path, "", "cannot open cache file");
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    return parse_cache_file(bytes, path);
+}
+
+std::string expand_frame_pattern(const std::string& pattern, int frame) {
+    auto start = pattern.find('#');
+    if (start == std::string::npos) return pattern;
+    auto end = pattern.find_first_not_of('#', start);
+    size_t width = (end == std::string::npos ? pattern.size() : end) - start;
+    return pattern.substr(0, start) + fmt::format("{:0{}}", frame, width) +
+           (end == std::string::npos ? "" : pattern.substr(end));
+}
+
+}  // namespace bounce

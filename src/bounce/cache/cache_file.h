@@ -1,0 +1,46 @@
+// Irradiance cache files (.bic): versioned, self-describing, checksummed per block, written
+// atomically. Format: docs/cache-format.md. Readers never trust a count before checking it
+// against the file size, so a hostile file cannot make them allocate without bound.
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "bounce/cache/record.h"
+
+namespace bounce {
+
+/// What a cache file holds besides its records.
+struct CacheFileInfo {
+    uint64_t scene_fingerprint = 0;   ///< Scene::fingerprint({"objects","materials","lights"})
+    uint64_t camera_fingerprint = 0;  ///< Scene::fingerprint({"camera"})
+    nlohmann::json parameters = nlohmann::json::object();  ///< the settings that made it
+    float luminance_floor = 0;
+    int frame = 0;
+};
+
+struct CacheFile {
+    CacheFileInfo info;
+    std::vector<Record> records;
+};
+
+inline constexpr uint32_t kCacheFileVersion = 1;
+
+/// Writes `file` to `path` (temporary name, then rename).
+void write_cache_file(const std::string& path, const CacheFile& file);
+/// Reads a cache file; InputError naming the file and the place on anything malformed.
+CacheFile read_cache_file(const std::string& path);
+/// Parses cache-file bytes (the fuzz target's entry); `name` is used in errors.
+CacheFile parse_cache_file(const std::string& bytes, const std::string& name);
+/// Serialises to bytes.
+std::string serialize_cache_file(const CacheFile& file);
+
+/// The record layout this version writes, as (name, type, count) triples for the header.
+nlohmann::json record_layout();
+
+/// Expands a frame pattern: each run of '#' becomes the zero-padded frame number.
+std::string expand_frame_pattern(const std::string& pattern, int frame);
+
+}  // namespace bounce

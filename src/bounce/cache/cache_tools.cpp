@@ -1,0 +1,236 @@
+#include "bounce/cache/cache_tools.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <regex>
+
+#include "bounce/cache/irradiance_cache.h"
+#include "bounce/core/atomic_file.h"
+#include "bounce/core/error.h"
+#include "bounce/core/image.h"
+
+namespace bounce {
+
+nlohmann::json cache_info(const CacheFile& f, size_t file_bytes) {
+    nlohmann::json j;
+    j["records"] = f.records.size();
+    j["frame"] = f.info.frame;
+    j["scene_fingerprint"] = fmt::format("{:016x}", f.info.scene_fingerprint);
+    j["camera_fingerprint"] = fmt::format("{:016x}", f.info.camera_fingerprint);
+    j["parameters"] = f.info.parameters;
+    Bounds b;
+    double rays = 0, mean_e = 0;
+    std::map<int, size_t> frames;
+    const std::vector<float> edges = {1, 2, 4, 8, 16, 32, 64};
+    std::vector<size_t> hist(edges.size() + 1, 0);
+    for (const Record& r : f.records) {
+        b.extend(r.p);
+        rays += r.rays;
+        mean_e += luminance(r.E);
+        ++frames[r.frame];
+        float px = r.radius / r.footprint;
+        size_t k = static_cast<size_t>(std::upper_bound(edges.begin(), edges.end(), px) - edges.begin());
+        ++hist[k];
+    }
+    if (!f.records.empty()) {
+        j["bounds"] = {{b.lo.x, b.lo.y, b.lo.z}, {b.hi.x, b.hi.y, b.hi.z}};
+        j["mean_rays_per_record"] = rays / static_cast<double>(f.records.size());
+        j["mean_irradiance_luminance"] = mean_e / static_cast<double>(f.records.size());
+    }
+    nlohmann::json h = nlohmann::json::array();
+    for (size_t k = 0; k < hist.size(); ++k) {
+        std::string label = k == 0 ? fmt::format("<{}", edges[0])
+                            : k == edges.size() ? fmt::format(">={}", edges.back())
+                                                : fmt::format("{}-{}", edges[k - 1], edges[k]);
+        h.push_back({{"pixels", label}, {"records", hist[k]}});
+    }
+    j["radius_pixels_histogram"] = h;
+    nlohmann::json fr = nlohmann::json::object();
+    for (const auto& [frame, n] : frames) fr[std::to_string(frame)] = n;
+    j["records_by_frame"] = fr;
+    j["file_bytes"] = file_bytes;
+    j["memory_bytes"] = f.records.size() * sizeof(Record);
+    return j;
+}
+
+std::string cache_info_text(const nlohmann::json& j, const std::string& path) {
+    std::string s = fmt::format("{}: {} records (frame {})\n", path, j["records"].get<size_t>(), j["frame"].get<int>());
+    if (j.contains("bounds"))
+        s += fmt::format("  bounds       {} .. {}\n", j["bounds"][0].dump(), j["bounds"][1].dump());
+    if (j.contains("mean_rays_per_record"))
+        s += fmt::format("  rays/record  {:.0f}\n  mean E (Y)   {:.4g}\n", j["mean_rays_per_record"].get<double>(),
+                         j["mean_irradiance_luminance"].get<double>());
+    s += fmt::format("  scene        {}  camera {}\n", j["scene_fingerprint"].get<std::string>(),
+                     j["camera_fingerprint"].get<std::string>());
+    s += "  parameters  ";
+    for (auto it = j["parameters"].begin(); it != j["parameters"].end(); ++it) s += " " + it.key() + "=" + it.value().dump();
+    s += "\n  radius in pixels:\n";
+    size_t most = 1;
+    for (const auto& h : j["radius_pixels_histogram"]) most = std::max(most, h["records"].get<size_t>());
+    for (const auto& h : j["radius_pixels_histogram"]) {
+        size_t n = h["records"].get<size_t>();
+        s += fmt::format("    {:>6} {:>8} {}\n", h["pixels"].get<std::string>(), n, std::string(40 * n / most, '#'));
+    }
+    s += "  records by frame:";
+    for (auto it = j["records_by_frame"].begin(); it != j["records_by_frame"].end(); ++it)
+        s += fmt::format(" {}:{}", it.key(), it.value().get<size_t>());
+    s += fmt::format("\n  memory       {:.2f} MiB in memory, {:.2f} MiB on disk\n",
+                     static_cast<double>(j["memory_bytes"].get<size_t>()) / 1048576.0,
+                     static_cast<double>(j["file_bytes"].get<size_t>()) / 1048576.0);
+    return s;
+}
+
+namespace {
+
+CacheSettings settings_from(const nlohmann::json& p) {
+    CacheSettings s;
+    s.metric = p.value("metric", s.metric);
+    s.max_angle = p.value("max_angle", s.max_angle);
+    s.gradient_limit = p.value("gradient_limit", s.gradient_limit);
+    s.quality = p.value("quality", s.quality);
+    s.min_weight = p.value("min_weight", s.min_weight);
+    s.accuracy = p.value("accuracy", s.accuracy);
+    return s;
+}
+
+std::string record_bytes(const Record& r) {
+    CacheFile one;
+    one.records = {r};
+    return serialize_cache_file(one);  // deterministic bytes: a canonical sort key
+}
+
+}  // namespace
+
+CacheFile merge_caches(const CacheFile& a, const CacheFile& b, const std::string& name_a, const std::string& name_b,
+                       bool force) {
+    if (!force && (a.info.scene_fingerprint != b.info.scene_fingerprint || a.info.camera_fingerprint != b.info.camera_fingerprint))
+        throw InputError(name_b, "fingerprint", "cache belongs to another scene or camera than " + name_a + " (--force merges anyway)");
+    struct Item {
+        std::string bytes;
+        const Record* r;
+        int source;
+    };
+    std::vector<Item> items;
+    for (const Record& r : a.records) items.push_back({record_bytes(r), &r, 0});
+    for (const Record& r : b.records) items.push_back({record_bytes(r), &r, 1});
+    std::stable_sort(items.begin(), items.end(), [](const Item& x, const Item& y) {
+        if (x.r->key != y.r->key) return x.r->key < y.r->key;
+        return x.bytes < y.bytes;
+    });
+    Bounds bounds;
+    for (const Item& it : items) bounds.extend(it.r->p);
+    CacheSettings s = settings_from(a.info.parameters);
+    // One index per source: a record is dropped only when the other source covers it.
+    IrradianceCache kept[2] = {IrradianceCache(bounds, s, false), IrradianceCache(bounds, s, false)};
+    CacheFile out;
+    out.info = a.info;
+    for (const Item& it : items) {
+        if (kept[1 - it.source].weight_sum(it.r->p, it.r->n) >= s.min_weight) continue;
+        kept[it.source].insert_loaded(*it.r);
+        out.records.push_back(*it.r);
+    }
+    return out;
+}
+
+namespace {
+
+struct WhereTerm {
+    std::string field, op;
+    double value;
+};
+
+WhereTerm parse_where(const std::string& term) {
+    static const std::regex re(R"(\s*([A-Za-z_]+(?:\.[A-Za-z])?)\s*(<=|>=|==|!=|<|>)\s*(-?[0-9.eE+-]+)\s*)");
+    static const std::vector<std::string> fields = {"p.x", "p.y", "p.z", "n.x", "n.y", "n.z", "E.r", "E.g", "E.b", "E.y",
+                                                    "ao", "radius", "pixels", "rays", "frame"};
+    std::smatch m;
+    if (!std::regex_match(term, m, re))
+        throw InputError("command line", "--where " + term, "expected FIELD OP NUMBER, e.g. \"radius<0.5\" or \"E.y>=0.1\"");
+    WhereTerm w{m[1], m[2], 0};
+    if (std::find(fields.begin(), fields.end(), w.field) == fields.end())
+        throw InputError("command line", "--where " + term,
+                         fmt::format("unknown field \"{}\" (valid: {})", w.field, fmt::join(fields, ", ")));
+    try {
+        w.value = std::stod(m[3]);
+    } catch (...) {
+        throw InputError("command line", "--where " + term, "bad number");
+    }
+    return w;
+}
+
+double field_value(const Record& r, const std::string& f) {
+    if (f == "p.x") return r.p.x;
+    if (f == "p.y") return r.p.y;
+    if (f == "p.z") return r.p.z;
+    if (f == "n.x") return r.n.x;
+    if (f == "n.y") return r.n.y;
+    if (f == "n.z") return r.n.z;
+    if (f == "E.r") return r.E.x;
+    if (f == "E.g") return r.E.y;
+    if (f == "E.b") return r.E.z;
+    if (f == "E.y") return luminance(r.E);
+    if (f == "ao") return r.ao;
+    if (f == "radius") return r.radius;
+    if (f == "pixels") return r.radius / r.footprint;
+    if (f == "rays") return r.rays;
+    return r.frame;
+}
+
+}  // namespace
+
+void check_where_term(const std::string& term) { parse_where(term); }
+
+bool RecordFilter::matches(const Record& r) const {
+    if (has_box && (r.p.x < box_lo.x || r.p.y < box_lo.y || r.p.z < box_lo.z || r.p.x > box_hi.x || r.p.y > box_hi.y ||
+                    r.p.z > box_hi.z))
+        return false;
+    if (has_sphere && length(r.p - center) > radius) return false;
+    for (const auto& t : where) {
+        WhereTerm w = parse_where(t);
+        double v = field_value(r, w.field);
+        bool ok = w.op == "<" ? v < w.value : w.op == "<=" ? v <= w.value : w.op == ">" ? v > w.value
+                : w.op == ">=" ? v >= w.value : w.op == "==" ? v == w.value : v != w.value;
+        if (!ok) return false;
+    }
+    return true;
+}
+
+CacheFile filter_cache(const CacheFile& in, const RecordFilter& filter, bool remove) {
+    CacheFile out;
+    out.info = in.info;
+    for (const Record& r : in.records)
+        if (filter.matches(r) != remove) out.records.push_back(r);
+    return out;
+}
+
+void export_ply(const CacheFile& f, const std::string& path) {
+    std::string header = fmt::format(
+        "ply\nformat binary_little_endian 1.0\ncomment bounce irradiance cache: {} records\nelement vertex {}\n"
+        "property float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+        "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty float irradiance_r\n"
+        "property float irradiance_g\nproperty float irradiance_b\nproperty float ao\nproperty float radius\nend_header\n",
+        f.records.size(), f.records.size());
+    // Colours: irradiance scaled so the 99th percentile luminance maps to white, sRGB-encoded.
+    std::vector<float> ys;
+    for (const Record& r : f.records) ys.push_back(luminance(r.E));
+    std::sort(ys.begin(), ys.end());
+    float top = ys.empty() ? 1.0f : std::max(1e-12f, ys[static_cast<size_t>(0.99 * static_cast<double>(ys.size() - 1))]);
+    std::string body;
+    auto putf = [&](float v) { body.append(reinterpret_cast<const char*>(&v), 4); };
+    for (const Record& r : f.records) {
+        putf(r.p.x), putf(r.p.y), putf(r.p.z), putf(r.n.x), putf(r.n.y), putf(r.n.z);
+        for (int c = 0; c < 3; ++c) body.push_back(static_cast<char>(std::lround(255 * srgb_encode(r.E[c] / top))));
+        putf(r.E.x), putf(r.E.y), putf(r.E.z), putf(r.ao), putf(r.radius);
+    }
+    write_atomically(path, [&](const std::string& tmp) {
+        std::ofstream out(tmp, std::ios::binary);
+        out << header << body;
+        if (!out) throw InputError(path, "", "cannot write PLY file");
+    });
+}
+
+}  // namespace bounce

@@ -1,0 +1,45 @@
+// What `bounce cache` does with cache files: inspect, merge without duplicates, filter by
+// region or value, export as a point cloud. Library calls; the CLI only parses options.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "bounce/cache/cache_file.h"
+
+namespace bounce {
+
+/// Counts, bounds, parameters, radius-in-pixels histogram, memory, records per frame.
+nlohmann::json cache_info(const CacheFile& file, size_t file_bytes);
+/// Human-readable form of cache_info.
+std::string cache_info_text(const nlohmann::json& info, const std::string& path);
+
+/// Union of two caches without duplicates, independent of argument order: records are taken
+/// in a canonical order, and one is dropped when records already kept from the *other* input
+/// cover it (weights sum >= min_weight under `a`'s settings). Merging a cache with itself
+/// gives it back. Throws InputError if the caches belong to different scenes or cameras.
+CacheFile merge_caches(const CacheFile& a, const CacheFile& b, const std::string& name_a,
+                       const std::string& name_b, bool force);
+
+/// A record predicate for `cache filter`.
+struct RecordFilter {
+    bool has_box = false, has_sphere = false;
+    Vec3 box_lo, box_hi, center;
+    float radius = 0;
+    /// "field op value" terms, all of which must hold: fields p.x p.y p.z n.x .. E.r E.g E.b
+    /// E.y (luminance) ao radius pixels (radius / footprint) rays frame; ops < <= > >= == !=.
+    std::vector<std::string> where;
+    bool matches(const Record& r) const;
+};
+/// Parses one --where term; throws InputError naming `term` on a bad one.
+void check_where_term(const std::string& term);
+
+/// Keeps the records matching `filter` (or removes them when `remove`).
+CacheFile filter_cache(const CacheFile& in, const RecordFilter& filter, bool remove);
+
+/// Writes a binary PLY point cloud: position, normal, tone-mapped irradiance colour, and the
+/// raw irradiance, AO and radius as extra properties (MeshLab, CloudCompare, Blender).
+void export_ply(const CacheFile& file, const std::string& path);
+
+}  // namespace bounce
