@@ -6,10 +6,12 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <sstream>
 
 #include <fmt/format.h>
 
 #include "bounce/cache/cache_file.h"
+#include "bounce/cache/cache_tools.h"
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
 #include "bounce/core/image.h"
@@ -168,6 +170,121 @@ int run_compare(const CompareArgs& a) {
     return 0;
 }
 
+struct CacheArgs {
+    std::vector<std::string> inputs;
+    std::string output, box, sphere;
+    std::vector<std::string> where;
+    bool json = false, remove = false, force = false;
+};
+
+std::vector<float> parse_floats(const std::string& text, size_t count, const std::string& flag) {
+    std::vector<float> v;
+    std::stringstream ss(text);
+    for (std::string part; std::getline(ss, part, ',');) {
+        try {
+            size_t used = 0;
+            v.push_back(std::stof(part, &used));
+            if (used != part.size()) throw std::invalid_argument(part);
+        } catch (...) {
+            throw InputError("command line", flag + " " + text, "\"" + part + "\" is not a number");
+        }
+    }
+    if (v.size() != count) throw InputError("command line", flag + " " + text, fmt::format("expected {} comma-separated numbers", count));
+    return v;
+}
+
+size_t file_size(const std::string& path) {
+    std::error_code ec;
+    auto n = std::filesystem::file_size(path, ec);
+    return ec ? 0 : static_cast<size_t>(n);
+}
+
+/// Files of a sequence pattern (cache.####.bic) that exist, in frame order.
+std::vector<std::pair<int, std::string>> sequence_files(const std::string& pattern) {
+    std::vector<std::pair<int, std::string>> out;
+    auto start = pattern.find('#');
+    auto end = pattern.find_first_not_of('#', start);
+    std::string prefix = pattern.substr(0, start), suffix = end == std::string::npos ? "" : pattern.substr(end);
+    std::filesystem::path dir = std::filesystem::path(pattern).parent_path();
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator(dir.empty() ? "." : dir, ec)) {
+        std::string p = dir.empty() ? e.path().filename().string() : e.path().string();
+        if (p.size() <= prefix.size() + suffix.size() || p.rfind(prefix, 0) != 0 ||
+            p.compare(p.size() - suffix.size(), suffix.size(), suffix) != 0)
+            continue;
+        std::string digits = p.substr(prefix.size(), p.size() - prefix.size() - suffix.size());
+        if (digits.empty() || !std::all_of(digits.begin(), digits.end(), ::isdigit)) continue;
+        out.emplace_back(std::stoi(digits), p);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+int run_cache_info(const CacheArgs& a) {
+    const std::string& path = a.inputs.at(0);
+    if (path.find('#') != std::string::npos) {
+        auto files = sequence_files(path);
+        if (files.empty()) throw InputError(path, "", "no files match this frame pattern");
+        nlohmann::json seq = nlohmann::json::array();
+        if (!a.json) std::printf("%-8s %10s %10s %10s\n", "frame", "records", "reused", "new");
+        for (const auto& [frame, file] : files) {
+            CacheFile f = read_cache_file(file);
+            size_t fresh = 0;
+            for (const Record& r : f.records) fresh += r.frame == frame;
+            seq.push_back({{"frame", frame}, {"file", file}, {"records", f.records.size()},
+                           {"reused", f.records.size() - fresh}, {"new", fresh}});
+            if (!a.json) std::printf("%-8d %10zu %10zu %10zu\n", frame, f.records.size(), f.records.size() - fresh, fresh);
+        }
+        if (a.json) std::printf("%s\n", seq.dump(2).c_str());
+        return 0;
+    }
+    CacheFile f = read_cache_file(path);
+    nlohmann::json info = cache_info(f, file_size(path));
+    std::printf("%s", a.json ? (info.dump(2) + "\n").c_str() : cache_info_text(info, path).c_str());
+    return 0;
+}
+
+int run_cache_merge(const CacheArgs& a) {
+    if (a.inputs.size() < 2) throw InputError("command line", "cache merge", "give at least two caches to merge");
+    CacheFile out = read_cache_file(a.inputs[0]);
+    for (size_t i = 1; i < a.inputs.size(); ++i) out = merge_caches(out, read_cache_file(a.inputs[i]), a.inputs[0], a.inputs[i], a.force);
+    write_cache_file(a.output, out);
+    std::fprintf(stderr, "%s: %zu records\n", a.output.c_str(), out.records.size());
+    return 0;
+}
+
+int run_cache_filter(const CacheArgs& a) {
+    RecordFilter filter;
+    if (!a.box.empty()) {
+        auto v = parse_floats(a.box, 6, "--box");
+        filter.has_box = true;
+        filter.box_lo = {std::min(v[0], v[3]), std::min(v[1], v[4]), std::min(v[2], v[5])};
+        filter.box_hi = {std::max(v[0], v[3]), std::max(v[1], v[4]), std::max(v[2], v[5])};
+    }
+    if (!a.sphere.empty()) {
+        auto v = parse_floats(a.sphere, 4, "--sphere");
+        filter.has_sphere = true;
+        filter.center = {v[0], v[1], v[2]};
+        filter.radius = v[3];
+    }
+    for (const auto& w : a.where) check_where_term(w);
+    filter.where = a.where;
+    if (!filter.has_box && !filter.has_sphere && filter.where.empty())
+        throw InputError("command line", "cache filter", "give --box, --sphere or --where");
+    CacheFile in = read_cache_file(a.inputs.at(0));
+    CacheFile out = filter_cache(in, filter, a.remove);
+    write_cache_file(a.output, out);
+    std::fprintf(stderr, "%s: kept %zu of %zu records\n", a.output.c_str(), out.records.size(), in.records.size());
+    return 0;
+}
+
+int run_cache_export(const CacheArgs& a) {
+    CacheFile f = read_cache_file(a.inputs.at(0));
+    export_ply(f, a.output);
+    std::fprintf(stderr, "%s: %zu points\n", a.output.c_str(), f.records.size());
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -218,6 +335,27 @@ int main(int argc, char** argv) {
     compare->add_option("--diff", ca.diff, "false-colour difference PNG (default: TEST.diff.png)");
     compare->add_flag("--json", ca.json, "print JSON");
 
+    CacheArgs ka;
+    CLI::App* cache = app.add_subcommand("cache", "inspect, merge, filter and export irradiance cache files");
+    cache->require_subcommand(1);
+    CLI::App* cinfo = cache->add_subcommand("info", "counts, bounds, parameters, radius histogram, memory (FILE or a #### sequence)");
+    cinfo->add_option("file", ka.inputs, "cache file, or a frame pattern like cache.####.bic")->required()->expected(1);
+    cinfo->add_flag("--json", ka.json, "print JSON");
+    CLI::App* cmerge = cache->add_subcommand("merge", "merge caches without duplicates");
+    cmerge->add_option("inputs", ka.inputs, "caches to merge")->required();
+    cmerge->add_option("-o,--output", ka.output, "merged cache")->required();
+    cmerge->add_flag("--force", ka.force, "merge caches of different scenes or cameras");
+    CLI::App* cfilter = cache->add_subcommand("filter", "keep (or --remove) records by region or value");
+    cfilter->add_option("input", ka.inputs, "cache file")->required()->expected(1);
+    cfilter->add_option("-o,--output", ka.output, "filtered cache")->required();
+    cfilter->add_option("--box", ka.box, "x0,y0,z0,x1,y1,z1: records inside the box");
+    cfilter->add_option("--sphere", ka.sphere, "cx,cy,cz,r: records inside the sphere");
+    cfilter->add_option("--where", ka.where, "FIELD OP NUMBER, e.g. \"pixels<2\" (repeatable, all must hold)");
+    cfilter->add_flag("--remove", ka.remove, "remove the matching records instead of keeping them");
+    CLI::App* cexport = cache->add_subcommand("export", "write a PLY point cloud (MeshLab, CloudCompare, Blender)");
+    cexport->add_option("input", ka.inputs, "cache file")->required()->expected(1);
+    cexport->add_option("-o,--output", ka.output, "PLY file")->required();
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {
@@ -233,6 +371,10 @@ int main(int argc, char** argv) {
     try {
         if (*render) return run_render(ra);
         if (*compare) return run_compare(ca);
+        if (*cinfo) return run_cache_info(ka);
+        if (*cmerge) return run_cache_merge(ka);
+        if (*cfilter) return run_cache_filter(ka);
+        if (*cexport) return run_cache_export(ka);
     } catch (const InputError& e) {
         std::fprintf(stderr, "bounce: %s\n", e.what());
         return 2;

@@ -1,0 +1,257 @@
+// Cache files and the cache tools: bit-exact round trips, duplicate-free and commutative
+// merges, exact box filters, reuse without new records, sequences, and every kind of bad file.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <set>
+
+#include "bounce/cache/cache_file.h"
+#include "bounce/cache/cache_tools.h"
+#include "bounce/core/error.h"
+#include "bounce/render/render.h"
+#include "test_util.h"
+
+namespace bounce {
+namespace {
+
+Record random_record(uint64_t i) {
+    RandomStream rng(11, i);
+    auto f = [&](uint32_t d) { return rng.get(0, d) * 2 - 1; };
+    Record r;
+    r.p = {f(0) * 5, f(1) * 5, f(2) * 5};
+    r.n = normalize(Vec3(f(3), f(4) + 2, f(5)));
+    r.E = {rng.get(0, 6), rng.get(0, 7), rng.get(0, 8)};
+    r.ao = rng.get(0, 9);
+    r.bent = normalize(Vec3(f(10), 1, f(11)));
+    for (uint32_t c = 0; c < 3; ++c) {
+        r.dir[c] = {f(12 + c), f(15 + c), f(18 + c)};
+        r.grad_r[c] = {f(21 + c), f(24 + c), f(27 + c)};
+        r.grad_t[c] = {f(30 + c), f(33 + c), f(36 + c)};
+    }
+    r.ao_grad_r = {f(40), f(41), f(42)};
+    r.ao_grad_t = {f(43), f(44), f(45)};
+    r.footprint = 0.01f + rng.get(0, 46) * 0.01f;
+    r.radius = r.footprint * (2 + 20 * rng.get(0, 47));
+    r.raw_radius = i % 3 ? r.radius : INFINITY;
+    r.harmonic = 1 + rng.get(0, 48);
+    r.dmin = i % 2 ? INFINITY : 0.5f;
+    r.weber = i % 4 ? INFINITY : 0.3f;
+    r.key = (i * 7919) << 8;
+    r.rays = 512;
+    r.frame = static_cast<int32_t>(i % 3);
+    return r;
+}
+
+CacheFile random_cache(size_t n, uint64_t salt = 0) {
+    CacheFile f;
+    f.info.scene_fingerprint = 0x1234;
+    f.info.camera_fingerprint = 0x5678;
+    f.info.parameters = {{"metric", "tl04"}, {"min_weight", 0.5}};
+    f.info.luminance_floor = 1e-3f;
+    for (size_t i = 0; i < n; ++i) f.records.push_back(random_record(i + salt));
+    return f;
+}
+
+bool same_bits(const Record& a, const Record& b) {
+    CacheFile x, y;
+    x.records = {a};
+    y.records = {b};
+    return serialize_cache_file(x) == serialize_cache_file(y);
+}
+
+TEST(CacheFile, RoundTripIsBitExactForEveryField) {
+    CacheFile f = random_cache(5000);  // more than one block
+    CacheFile back = parse_cache_file(serialize_cache_file(f), "mem");
+    ASSERT_EQ(back.records.size(), f.records.size());
+    EXPECT_EQ(back.info.scene_fingerprint, 0x1234u);
+    EXPECT_EQ(back.info.camera_fingerprint, 0x5678u);
+    EXPECT_EQ(back.info.parameters, f.info.parameters);
+    for (size_t i = 0; i < f.records.size(); ++i) {
+        const Record &a = f.records[i], &b = back.records[i];
+        ASSERT_EQ(std::memcmp(&a.p, &b.p, sizeof(Vec3)), 0);
+        ASSERT_TRUE(a.E == b.E && a.n == b.n && a.bent == b.bent && a.ao == b.ao);
+        ASSERT_TRUE(a.dir == b.dir && a.grad_r == b.grad_r && a.grad_t == b.grad_t);
+        ASSERT_TRUE(a.ao_grad_r == b.ao_grad_r && a.ao_grad_t == b.ao_grad_t);
+        ASSERT_TRUE(a.radius == b.radius && a.footprint == b.footprint && a.harmonic == b.harmonic);
+        ASSERT_EQ(std::isinf(a.raw_radius), std::isinf(b.raw_radius));
+        ASSERT_EQ(std::isinf(a.dmin), std::isinf(b.dmin));
+        ASSERT_TRUE(a.key == b.key && a.rays == b.rays && a.frame == b.frame);
+        ASSERT_TRUE(same_bits(a, b));
+    }
+}
+
+TEST(CacheTools, MergeWithItselfAddsNothing) {
+    CacheFile a = random_cache(300);
+    CacheFile m = merge_caches(a, a, "a", "a", false);
+    EXPECT_EQ(m.records.size(), a.records.size());
+}
+
+TEST(CacheTools, MergeIsCommutativeInContent) {
+    CacheFile a = random_cache(300, 0), b = random_cache(300, 150);  // half overlapping
+    auto content = [](const CacheFile& f) {
+        std::multiset<std::string> s;
+        for (const auto& r : f.records) {
+            CacheFile one;
+            one.records = {r};
+            s.insert(serialize_cache_file(one));
+        }
+        return s;
+    };
+    CacheFile ab = merge_caches(a, b, "a", "b", false), ba = merge_caches(b, a, "b", "a", false);
+    EXPECT_EQ(content(ab), content(ba));
+    EXPECT_LT(ab.records.size(), a.records.size() + b.records.size());  // the shared half is not doubled
+    EXPECT_GE(ab.records.size(), 450u);
+    CacheFile other = a;
+    other.info.camera_fingerprint = 1;
+    EXPECT_THROW(merge_caches(a, other, "a", "other", false), InputError);
+}
+
+TEST(CacheTools, BoxFilterKeepsExactlyTheRecordsInside) {
+    CacheFile a = random_cache(1000);
+    RecordFilter f;
+    f.has_box = true;
+    f.box_lo = {-1, -2, -3};
+    f.box_hi = {2, 1, 0.5f};
+    size_t inside = 0;
+    for (const auto& r : a.records)
+        inside += r.p.x >= -1 && r.p.x <= 2 && r.p.y >= -2 && r.p.y <= 1 && r.p.z >= -3 && r.p.z <= 0.5f;
+    CacheFile kept = filter_cache(a, f, false), removed = filter_cache(a, f, true);
+    EXPECT_EQ(kept.records.size(), inside);
+    EXPECT_EQ(removed.records.size(), a.records.size() - inside);
+    for (const auto& r : kept.records) EXPECT_TRUE(f.matches(r));
+    RecordFilter w;
+    w.where = {"frame==1", "E.g>0.5"};
+    for (const auto& r : filter_cache(a, w, false).records) EXPECT_TRUE(r.frame == 1 && r.E.y > 0.5f);
+    EXPECT_THROW(check_where_term("colour<3"), InputError);
+}
+
+TEST(CacheTools, PlyExportHasOnePointPerRecord) {
+    test::TempDir d;
+    CacheFile a = random_cache(10);
+    export_ply(a, d.file("c.ply"));
+    std::ifstream in(d.file("c.ply"), std::ios::binary);
+    std::string s((std::istreambuf_iterator<char>(in)), {});
+    auto end = s.find("end_header\n");
+    ASSERT_NE(end, std::string::npos);
+    EXPECT_NE(s.find("element vertex 10\n"), std::string::npos);
+    EXPECT_EQ(s.size() - (end + 11), 10u * (11 * 4 + 3));  // 11 floats + 3 colour bytes each
+}
+
+TEST(CacheFile, BadFilesAreRefusedCleanly) {
+    const std::string good = serialize_cache_file(random_cache(20));
+    auto refused = [](const std::string& bytes, const std::string& expect) {
+        try {
+            parse_cache_file(bytes, "bad.bic");
+            ADD_FAILURE() << "accepted: " << expect;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(expect), std::string::npos) << e.what();
+        }
+    };
+    refused("", "empty");
+    refused("not a cache at all", "bad magic");
+    std::string v2 = good;
+    v2[8] = 2;
+    refused(v2, "unsupported cache version 2");
+    // Every truncation is an error, never a crash.
+    for (size_t n = 1; n < good.size(); n += 7) EXPECT_THROW(parse_cache_file(good.substr(0, n), "t.bic"), InputError) << n;
+    // Every single flipped bit after the magic and version is caught (checksums, bounds).
+    int caught = 0, tried = 0;
+    for (size_t i = 12; i < good.size(); i += 5) {
+        std::string bad = good;
+        bad[i] = static_cast<char>(bad[i] ^ (1 << (i % 8)));
+        ++tried;
+        try {
+            parse_cache_file(bad, "flip.bic");
+        } catch (const InputError&) {
+            ++caught;
+        }
+    }
+    EXPECT_EQ(caught, tried);
+    // A header promising 10^15 records is refused before anything is allocated.
+    CacheFile empty = random_cache(0);
+    std::string huge = serialize_cache_file(empty);
+    auto pos = huge.find("\"record_count\":0");
+    ASSERT_NE(pos, std::string::npos);
+    std::string header_json = huge.substr(16, huge.size() - 16 - 8);
+    std::string bigger = header_json;
+    bigger.replace(bigger.find("\"record_count\":0"), 16, "\"record_count\":1000000000000000");
+    // Rebuild with a valid header checksum so only the count is wrong.
+    std::string rebuilt = huge.substr(0, 12);
+    uint32_t len = static_cast<uint32_t>(bigger.size());
+    rebuilt.append(reinterpret_cast<const char*>(&len), 4);
+    rebuilt += bigger;
+    uint64_t h = 0xcbf29ce484222325ULL;
+    for (unsigned char ch : bigger) h = (h ^ ch) * 0x100000001b3ULL;
+    rebuilt.append(reinterpret_cast<const char*>(&h), 8);
+    refused(rebuilt, "cannot fit");
+}
+
+RenderResult render_with(const std::vector<std::string>& extra, RenderRequest req, Stats& stats) {
+    std::vector<std::string> o = {"camera.resolution=[40,40]", "render.spp=1", "render.gi=\"cache\"", "render.rays=64"};
+    o.insert(o.end(), extra.begin(), extra.end());
+    return render(load_scene(test::cornell_scene(), o), req, stats, nullptr);
+}
+
+TEST(CacheReuse, OwnCacheCreatesNoRecordsAndTheSameImage) {
+    test::TempDir d;
+    RenderRequest first;
+    first.cache_out = d.file("c.bic");
+    Stats s1, s2, s3;
+    RenderResult a = render_with({}, first, s1);
+    RenderRequest again;
+    again.cache_in = d.file("c.bic");
+    RenderResult b = render_with({}, again, s2);
+    EXPECT_GT(a.records_new, 20u);
+    EXPECT_EQ(b.records_new, 0u);
+    EXPECT_EQ(b.records_loaded, a.records_new);
+    EXPECT_EQ(s2.total().gather_rays, 0u);
+    EXPECT_TRUE(a.image.find("indirect")->data == b.image.find("indirect")->data);
+    // --regather flushes: everything is gathered again.
+    again.regather = true;
+    RenderResult c = render_with({}, again, s3);
+    EXPECT_EQ(c.records_new, a.records_new);
+}
+
+TEST(CacheReuse, CacheForAnotherSceneOrCameraIsRefusedUnlessForced) {
+    test::TempDir d;
+    RenderRequest first;
+    first.cache_out = d.file("c.bic");
+    Stats s;
+    render_with({}, first, s);
+    RenderRequest reuse;
+    reuse.cache_in = d.file("c.bic");
+    EXPECT_THROW(render_with({"camera.fov=50"}, reuse, s), InputError);
+    EXPECT_THROW(render_with({"materials.light.emission=[1,1,1]"}, reuse, s), InputError);
+    reuse.force = true;
+    EXPECT_NO_THROW(render_with({"camera.fov=50"}, reuse, s));
+}
+
+TEST(CacheCli, SequencesReuseThePreviousFrameAndInfoPlaysThem) {
+    test::TempDir d;
+    std::string common = " --res 32x32 --spp 1 --gi cache --rays 32 -q";
+    ASSERT_EQ(test::run_bounce("render " + test::cornell_scene() + " -o " + d.file("f.####.exr") + " --cache-out " +
+                               d.file("c.####.bic") + " --frames 1-3" + common), 0);
+    std::string cmd = std::string(BOUNCE_BINARY) + " cache info '" + d.file("c.####.bic") + "' --json > " + d.file("seq.json");
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    std::ifstream in(d.file("seq.json"));
+    auto j = nlohmann::json::parse(in);
+    ASSERT_EQ(j.size(), 3u);
+    EXPECT_GT(j[0]["new"].get<int>(), 0);
+    EXPECT_EQ(j[1]["new"].get<int>(), 0);
+    EXPECT_EQ(j[2]["reused"], j[0]["records"]);
+    // Tools through the CLI, and bad files exit 2.
+    EXPECT_EQ(test::run_bounce("cache merge " + d.file("c.0001.bic") + " " + d.file("c.0002.bic") + " -o " + d.file("m.bic")), 0);
+    EXPECT_EQ(read_cache_file(d.file("m.bic")).records.size(), read_cache_file(d.file("c.0001.bic")).records.size());
+    EXPECT_EQ(test::run_bounce("cache filter " + d.file("m.bic") + " -o " + d.file("f.bic") + " --box 0,0,0,300,300,300"), 0);
+    EXPECT_EQ(test::run_bounce("cache export " + d.file("m.bic") + " -o " + d.file("m.ply")), 0);
+    std::string err;
+    d.write("junk.bic", "BOUNCEIC junk");
+    EXPECT_EQ(test::run_bounce("cache info " + d.file("junk.bic"), &err), 2);
+    EXPECT_NE(err.find("junk.bic"), std::string::npos);
+    EXPECT_EQ(test::run_bounce("cache filter " + d.file("m.bic") + " -o " + d.file("g.bic") + " --where 'colour<1'"), 2);
+    EXPECT_EQ(test::run_bounce("render " + test::cornell_scene() + " -o " + d.file("x.exr") + " --show records" + common +
+                               " --cache-in " + d.file("junk.bic")), 2);
+}
+
+}  // namespace
+}  // namespace bounce
