@@ -9,17 +9,21 @@ namespace bounce {
 
 bool SubPass::contains(int x, int y) const {
     if (x % step || y % step) return false;
-    if (all) return true;
     int px = (x / step) & 1, py = (y / step) & 1;
-    return (px | (py << 1)) == parity;
+    if (!all && (px | (py << 1)) != parity) return false;
+    // Quarter classes on the lattice of twice the spacing (for the first level, of the step).
+    int q = all ? step : 2 * step;
+    return (((x / q) & 1) | (((y / q) & 1) << 1)) == quarter;
 }
 
 std::vector<SubPass> subpass_schedule(int first_step) {
     int s = 1;
     while (s * 2 <= first_step) s *= 2;
-    std::vector<SubPass> out{{s, 0, true}};
+    std::vector<SubPass> out;
+    for (int q = 0; q < 4; ++q) out.push_back({s, 0, true, q});
     for (s /= 2; s >= 1; s /= 2)
-        for (int parity : {1, 2, 3}) out.push_back({s, parity, false});
+        for (int parity : {1, 2, 3})
+            for (int q = 0; q < 4; ++q) out.push_back({s, parity, false, q});
     return out;
 }
 

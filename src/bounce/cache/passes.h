@@ -15,17 +15,19 @@
 namespace bounce {
 
 /// One sub-pass of the gathering pass: pixels on a lattice of spacing `step` (full-image
-/// coordinates), in one of four parity classes.
+/// coordinates), in one of three parity classes (or all of them for the first level), and in
+/// one of four quarter classes of that, so candidates within a sub-pass are 4 steps apart
+/// (2 for the first level's) and a record made in it rarely covers another candidate of it.
 struct SubPass {
     int step = 1;
-    int parity = 0;  ///< bit 0: x/step odd, bit 1: y/step odd; the first sub-pass takes all
-    bool all = false;
+    int parity = 0;  ///< bit 0: x/step odd, bit 1: y/step odd
+    bool all = false;  ///< first level: every parity
+    int quarter = 0;   ///< bit 0: x/(2 step) odd, bit 1: y/(2 step) odd (x/step, y/step at the first level)
     bool contains(int x, int y) const;
 };
 
 /// The sub-passes of a gathering pass: every `first_step` pixels, then the pixels between,
-/// halving the step down to 1 (each level in three parity classes, so that candidates within
-/// one sub-pass are 2 steps apart).
+/// halving the step down to 1.
 std::vector<SubPass> subpass_schedule(int first_step);
 
 /// Called after each sub-pass with the fraction done (preview mode shows the image then).

@@ -135,25 +135,27 @@ size_t load_cache(const std::string& path, const Scene& scene, bool force, Irrad
     return f.records.size();
 }
 
-/// Preview: each pixel takes the indirect light of the nearest pixel a finished sub-pass
-/// visited (looked up in the cache as it is now).
-std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceCache& cache, const SubPass& sp) {
+/// Preview: each pixel takes the indirect light of the nearest pixel (on the lattices of the
+/// current step, then coarser ones) that a finished sub-pass visited.
+std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceCache& cache,
+                                       const std::vector<uint8_t>& visited, int step) {
     std::vector<Indirect> out(deep.fragments.size());
     tbb::parallel_for(0, deep.height, [&](int wy) {
         for (int wx = 0; wx < deep.width; ++wx) {
-            int x = wx + deep.x0, y = wy + deep.y0;
-            // Lattice pixel of the current step if that class is done, else of the coarser one.
-            int sx = x - x % sp.step, sy = y - y % sp.step;
-            bool done = SubPass{sp.step * 2, 0, true}.contains(sx, sy) || sp.all ||
-                        (((sx / sp.step) & 1) | (((sy / sp.step) & 1) << 1)) <= sp.parity;
-            if (!done) sx = x - x % (2 * sp.step), sy = y - y % (2 * sp.step);
-            int lx = std::clamp(sx - deep.x0, 0, deep.width - 1), ly = std::clamp(sy - deep.y0, 0, deep.height - 1);
+            int x = wx + deep.x0, y = wy + deep.y0, lx = wx, ly = wy;
+            for (int s = step; s <= (1 << 20); s *= 2) {
+                int cx = x - x % s - deep.x0, cy = y - y % s - deep.y0;
+                if (cx >= 0 && cy >= 0 && visited[static_cast<size_t>(cy) * deep.width + cx]) {
+                    lx = cx, ly = cy;
+                    break;
+                }
+            }
             auto src = deep.pixel(lx, ly);
             size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = src.empty() ? frags[k] : src[std::min<size_t>(k, src.size() - 1)];
-                Interpolated in = cache.lookup(f.p_base, f.n_base);
+                Interpolated in = cache.lookup(f.p_base, f.n_base, true);
                 out[first + k] = {in.E, in.ao, in.bent};
             }
         }
@@ -226,10 +228,16 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
                 }
                 SubPassCallback after;
                 std::vector<Color> direct_e;
+                std::vector<uint8_t> visited;
                 if (scene.render.preview && request.preview) {
                     direct_e = fragment_direct_irradiance(scene, result.deep, lighting, false, stats);
+                    visited.assign(result.deep.pixel_count(), 0);
                     after = [&](const SubPass& sp, size_t, size_t) {
-                        std::vector<Indirect> ind = preview_indirect(result.deep, *cache, sp);
+                        for (int wy = 0; wy < result.deep.height; ++wy)
+                            for (int wx = 0; wx < result.deep.width; ++wx)
+                                if (sp.contains(wx + result.deep.x0, wy + result.deep.y0))
+                                    visited[static_cast<size_t>(wy) * result.deep.width + wx] = 1;
+                        std::vector<Indirect> ind = preview_indirect(result.deep, *cache, visited, sp.step);
                         request.preview(shade(scene, result.deep, materials, lighting, &ind, stats, nullptr, &direct_e));
                     };
                 }
