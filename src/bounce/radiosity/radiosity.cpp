@@ -64,8 +64,7 @@ uint64_t RadiosityTextures::fingerprint(const Scene& scene, const RadiositySetti
     uint64_t h = scene.fingerprint({"objects", "materials", "lights"});
     h = hash_combine(h, std::bit_cast<uint32_t>(effective_texel(scene, s)));
     h = hash_combine(h, static_cast<uint64_t>(s.light_samples));
-    h = hash_combine(h, static_cast<uint64_t>(s.max_level));
-    return hash_combine(h, scene.render.seed);
+    return hash_combine(h, static_cast<uint64_t>(s.max_level));
 }
 
 size_t RadiosityTextures::lattice_points() const {
@@ -116,11 +115,13 @@ RadiosityTextures RadiosityTextures::bake(const Scene& scene, const Materials& m
                         SurfacePoint sp = surface_point(m, static_cast<uint32_t>(t), u, v);
                         Color albedo = materials.albedo(sp.material, sp.uv) * kInvPi;
                         uint32_t k = map.offset[t] + lattice_index(i, j, n);
-                        RandomStream rng(scene.render.seed, (static_cast<uint64_t>(id) << 40) | (static_cast<uint64_t>(t) << 12), k);
+                        // A fixed seed: the textures depend on the scene alone, so renders with
+                        // different seeds share (and may reuse) them.
+                        RandomStream rng(0, (static_cast<uint64_t>(id) << 40) | (static_cast<uint64_t>(t) << 12), k);
                         // Geometric normal: the baked value must not depend on which side's
                         // shading normal a hit happens to use.
                         map.front[k] = albedo * lighting.irradiance(sp.p, sp.ng, rng, settings.light_samples, counters);
-                        map.back[k] = albedo * lighting.irradiance(sp.p, -sp.ng, RandomStream(scene.render.seed + 1, t, k),
+                        map.back[k] = albedo * lighting.irradiance(sp.p, -sp.ng, RandomStream(1, (static_cast<uint64_t>(id) << 40) | t, k),
                                                                    settings.light_samples, counters);
                     }
             }
