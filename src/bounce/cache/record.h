@@ -13,7 +13,7 @@ namespace bounce {
 struct CacheSettings {
     std::string metric = "tl04";  ///< tl04 (normalised, bounded) | ward (1/x, accuracy a)
     float min_spacing = 2.0f;     ///< smallest record radius, pixels
-    float max_spacing = 24.0f;    ///< largest record radius, pixels
+    float max_spacing = 16.0f;    ///< largest record radius, pixels
     float max_angle = 10.0f;      ///< normal deviation at which the normal metric reaches 1, degrees
     float gradient_limit = 1.0f;  ///< Weber limit tau: extrapolated change / E at which it reaches 1; 0 = off
     float quality = 1.0f;         ///< kappa: every TL04 metric is scaled by it (smaller = fewer records)

@@ -88,7 +88,7 @@ struct RenderSettings {
     // Irradiance cache (docs/irradiance-cache.md).
     std::string metric = "tl04";   ///< tl04 | ward
     float min_spacing = 2;         ///< record radius bounds, pixels
-    float max_spacing = 24;
+    float max_spacing = 16;
     float max_angle = 10;          ///< degrees
     float gradient_limit = 1;      ///< Weber tau; 0 = off
     float quality = 1;             ///< kappa
