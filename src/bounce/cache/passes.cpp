@@ -113,25 +113,15 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
 std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
                                    Stats& stats, ProgressSink* sink) {
     std::vector<Indirect> out(deep.fragments.size());
-    const int tile = scene.render.tile_size;
-    const int tiles_x = (deep.width + tile - 1) / tile, tiles_y = (deep.height + tile - 1) / tile;
-    Progress progress(sink, "interpolate", static_cast<uint64_t>(tiles_x) * tiles_y);
     tbb::enumerable_thread_specific<uint64_t> misses(0), lookups(0);
-    tbb::parallel_for(0, tiles_x * tiles_y, [&](int t) {
-        int tx0 = (t % tiles_x) * tile, ty0 = (t / tiles_x) * tile;
-        for (int wy = ty0; wy < std::min(ty0 + tile, deep.height); ++wy)
-            for (int wx = tx0; wx < std::min(tx0 + tile, deep.width); ++wx) {
-                size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
-                auto frags = deep.pixel(wx, wy);
-                for (uint32_t k = 0; k < frags.size(); ++k) {
-                    const Fragment& f = frags[k];
-                    Interpolated in = cache.lookup(f.p_base, f.n_base, true);
-                    ++lookups.local();
-                    if (in.weight <= 0) ++misses.local();
-                    out[first + k] = {in.E, in.ao, in.bent};
-                }
-            }
-        progress.add();
+    for_each_pixel_in_tiles(deep, scene.render.tile_size, sink, "interpolate", [&](int wx, int wy, size_t first) {
+        auto frags = deep.pixel(wx, wy);
+        for (uint32_t k = 0; k < frags.size(); ++k) {
+            Interpolated in = cache.lookup(frags[k].p_base, frags[k].n_base, true);
+            ++lookups.local();
+            if (in.weight <= 0) ++misses.local();
+            out[first + k] = {in.E, in.ao, in.bent};
+        }
     });
     uint64_t m = 0, l = 0;
     for (auto v : misses) m += v;

@@ -3,6 +3,9 @@
 // re-shaded without re-tracing primary visibility. Stored as an OpenEXR deep image.
 #pragma once
 
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -53,6 +56,23 @@ struct DeepBuffer {
     }
     bool operator==(const DeepBuffer&) const = default;
 };
+
+/// Runs `pixel(wx, wy, first)` for every pixel of `deep` (window coordinates; `first` indexes
+/// the pixel's first fragment), tile by tile in parallel with TBB, reporting one progress unit
+/// per tile under `name`. Work order never affects results: each pixel writes its own slots.
+template <typename PixelFn>
+void for_each_pixel_in_tiles(const DeepBuffer& deep, int tile, ProgressSink* sink, const char* name,
+                             PixelFn&& pixel) {
+    const int tiles_x = (deep.width + tile - 1) / tile, tiles_y = (deep.height + tile - 1) / tile;
+    Progress progress(sink, name, static_cast<uint64_t>(tiles_x) * static_cast<uint64_t>(tiles_y));
+    tbb::parallel_for(0, tiles_x * tiles_y, [&](int t) {
+        const int tx0 = (t % tiles_x) * tile, ty0 = (t / tiles_x) * tile;
+        for (int wy = ty0; wy < std::min(ty0 + tile, deep.height); ++wy)
+            for (int wx = tx0; wx < std::min(tx0 + tile, deep.width); ++wx)
+                pixel(wx, wy, static_cast<size_t>(deep.offsets[static_cast<size_t>(wy) * deep.width + wx]));
+        progress.add();
+    });
+}
 
 /// The random stream of fragment `k` of full-image pixel (x, y): everything shading does at a
 /// fragment (light samples, gathers) draws from it, so results never depend on threads or crop.

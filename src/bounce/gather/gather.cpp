@@ -175,23 +175,14 @@ GatherSettings gather_settings(const Scene& scene) {
 std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
                                             Stats& stats, ProgressSink* sink) {
     std::vector<Indirect> out(deep.fragments.size());
-    const int tile = scene.render.tile_size;
-    const int tiles_x = (deep.width + tile - 1) / tile, tiles_y = (deep.height + tile - 1) / tile;
-    Progress progress(sink, "gather", static_cast<uint64_t>(tiles_x) * tiles_y);
-    tbb::parallel_for(0, tiles_x * tiles_y, [&](int t) {
+    for_each_pixel_in_tiles(deep, scene.render.tile_size, sink, "gather", [&](int wx, int wy, size_t first) {
         Counters& counters = stats.local();
-        int tx0 = (t % tiles_x) * tile, ty0 = (t / tiles_x) * tile;
-        for (int wy = ty0; wy < std::min(ty0 + tile, deep.height); ++wy)
-            for (int wx = tx0; wx < std::min(tx0 + tile, deep.width); ++wx) {
-                size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
-                auto frags = deep.pixel(wx, wy);
-                for (uint32_t k = 0; k < frags.size(); ++k) {
-                    const Fragment& f = frags[k];
-                    GatherResult g = gatherer.gather(f.p, f.n_base, fragment_stream(scene.render.seed, wx + deep.x0, wy + deep.y0, k), counters);
-                    out[first + k] = {g.irradiance, g.ao, g.bent_normal};
-                }
-            }
-        progress.add();
+        auto frags = deep.pixel(wx, wy);
+        for (uint32_t k = 0; k < frags.size(); ++k) {
+            GatherResult g = gatherer.gather(frags[k].p, frags[k].n_base,
+                                             fragment_stream(scene.render.seed, wx + deep.x0, wy + deep.y0, k), counters);
+            out[first + k] = {g.irradiance, g.ao, g.bent_normal};
+        }
     });
     return out;
 }

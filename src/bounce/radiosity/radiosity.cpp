@@ -35,6 +35,25 @@ std::string file_name(size_t id, const std::string& name) {
     return fmt::format("radiosity.{:04}.{}.exr", id, safe);
 }
 
+/// A map with every triangle's lattice level and offset set and zeroed values.
+RadiosityMap lay_out(const TriangleMesh& m, float texel, int max_level) {
+    RadiosityMap map;
+    map.level.resize(m.triangle_count());
+    map.offset.resize(m.triangle_count());
+    uint32_t off = 0;
+    for (size_t t = 0; t < m.triangle_count(); ++t) {
+        const Vec3 &a = m.positions[m.indices[3 * t]], &b = m.positions[m.indices[3 * t + 1]],
+                   &c = m.positions[m.indices[3 * t + 2]];
+        int n = radiosity_level(std::max({length(b - a), length(c - b), length(a - c)}), texel, max_level);
+        map.level[t] = static_cast<uint8_t>(n);
+        map.offset[t] = off;
+        off += lattice_count(n);
+    }
+    map.front.assign(off, Color(0));
+    map.back.assign(off, Color(0));
+    return map;
+}
+
 }  // namespace
 
 int radiosity_level(float edge, float texel, int max_level) {
@@ -82,24 +101,9 @@ RadiosityTextures RadiosityTextures::bake(const Scene& scene, const Materials& m
     rt.maps_.resize(scene.objects.size());
     size_t total_tris = 0;
     for (size_t id = 0; id < scene.objects.size(); ++id) {
-        const TriangleMesh& m = scene.objects[id].coarse;
-        RadiosityMap& map = rt.maps_[id];
+        rt.maps_[id] = lay_out(scene.objects[id].coarse, rt.texel_size_, settings.max_level);
         rt.names_.push_back(scene.objects[id].name);
-        map.level.resize(m.triangle_count());
-        map.offset.resize(m.triangle_count());
-        uint32_t off = 0;
-        for (size_t t = 0; t < m.triangle_count(); ++t) {
-            const Vec3 &a = m.positions[m.indices[3 * t]], &b = m.positions[m.indices[3 * t + 1]],
-                       &c = m.positions[m.indices[3 * t + 2]];
-            float edge = std::max({length(b - a), length(c - b), length(a - c)});
-            int n = radiosity_level(edge, rt.texel_size_, settings.max_level);
-            map.level[t] = static_cast<uint8_t>(n);
-            map.offset[t] = off;
-            off += lattice_count(n);
-        }
-        map.front.assign(off, Color(0));
-        map.back.assign(off, Color(0));
-        total_tris += m.triangle_count();
+        total_tris += scene.objects[id].coarse.triangle_count();
     }
     Progress progress(sink, "radiosity", total_tris);
     for (size_t id = 0; id < scene.objects.size(); ++id) {
@@ -184,19 +188,8 @@ bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const R
             why = "textures were baked for other geometry, materials, lights or settings";
             return false;
         }
-        const TriangleMesh& mesh = scene.objects[id].coarse;
-        RadiosityMap map;
-        map.level.resize(mesh.triangle_count());
-        map.offset.resize(mesh.triangle_count());
-        uint32_t off = 0;
-        for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-            const Vec3 &a = mesh.positions[mesh.indices[3 * t]], &b = mesh.positions[mesh.indices[3 * t + 1]],
-                       &c = mesh.positions[mesh.indices[3 * t + 2]];
-            int n = radiosity_level(std::max({length(b - a), length(c - b), length(a - c)}), rt.texel_size_, settings.max_level);
-            map.level[t] = static_cast<uint8_t>(n);
-            map.offset[t] = off;
-            off += lattice_count(n);
-        }
+        RadiosityMap map = lay_out(scene.objects[id].coarse, rt.texel_size_, settings.max_level);
+        const auto off = static_cast<uint32_t>(map.front.size());
         if (spec.nchannels != 6 || spec.get_int_attribute("bounce:points", -1) != static_cast<int>(off) ||
             static_cast<size_t>(spec.width) * spec.height < off)
             throw InputError(path, "bounce:points", "texture size does not match the scene's triangles");
@@ -210,8 +203,6 @@ bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const R
             ch[c] = spec.channelindex(names[c]);
             if (ch[c] < 0) throw InputError(path, "channels", std::string("missing channel ") + names[c]);
         }
-        map.front.resize(off);
-        map.back.resize(off);
         for (size_t k = 0; k < off; ++k) {
             map.front[k] = {px[6 * k + ch[0]], px[6 * k + ch[1]], px[6 * k + ch[2]]};
             map.back[k] = {px[6 * k + ch[3]], px[6 * k + ch[4]], px[6 * k + ch[5]]};

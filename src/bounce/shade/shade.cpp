@@ -12,80 +12,80 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
     img.full_width = deep.full_width, img.full_height = deep.full_height;
     img.x0 = deep.x0, img.y0 = deep.y0, img.width = deep.width, img.height = deep.height;
     Layer& beauty = img.add_layer("beauty", {"R", "G", "B", "A"});
-    Layer* direct = ao_only ? nullptr : &img.add_layer("direct", {"direct.R", "direct.G", "direct.B"});
-    Layer* ind = indirect && !ao_only ? &img.add_layer("indirect", {"indirect.R", "indirect.G", "indirect.B"}) : nullptr;
+    Layer* direct =
+        ao_only ? nullptr : &img.add_layer("direct", {"direct.R", "direct.G", "direct.B"});
+    Layer* ind = indirect && !ao_only
+                     ? &img.add_layer("indirect", {"indirect.R", "indirect.G", "indirect.B"})
+                     : nullptr;
     Layer* ao = indirect ? &img.add_layer("ao", {"ao.Y"}) : nullptr;
-    Layer* bent = indirect ? &img.add_layer("bentnormal", {"bentnormal.X", "bentnormal.Y", "bentnormal.Z"}) : nullptr;
+    Layer* bent =
+        indirect ? &img.add_layer("bentnormal", {"bentnormal.X", "bentnormal.Y", "bentnormal.Z"})
+                 : nullptr;
     Layer& albedo = img.add_layer("albedo", {"albedo.R", "albedo.G", "albedo.B"});
     Layer& normal = img.add_layer("N", {"N.X", "N.Y", "N.Z"});
     Layer& depth = img.add_layer("depth", {"Z"});
 
-    const int tile = scene.render.tile_size;
-    const int tiles_x = (deep.width + tile - 1) / tile, tiles_y = (deep.height + tile - 1) / tile;
     CameraRays camera(scene.camera);
-    Progress progress(sink, "shading", static_cast<uint64_t>(tiles_x) * tiles_y);
     auto put3 = [&](Layer* l, int x, int y, const Vec3& v) {
         if (!l) return;
         float* p = img.at(*l, x, y);
         p[0] = v.x, p[1] = v.y, p[2] = v.z;
     };
 
-    tbb::parallel_for(0, tiles_x * tiles_y, [&](int t) {
-        Counters& counters = stats.local();
-        int tx0 = (t % tiles_x) * tile, ty0 = (t / tiles_x) * tile;
-        for (int wy = ty0; wy < std::min(ty0 + tile, deep.height); ++wy)
-            for (int wx = tx0; wx < std::min(tx0 + tile, deep.width); ++wx) {
-                int x = wx + deep.x0, y = wy + deep.y0;
-                Color b(0), d(0), a(0), e_ind(0);
-                Vec3 n(0), bn(0);
-                float cover = 0, z = INFINITY, occl = 0;
-                auto frags = deep.pixel(wx, wy);
-                size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
-                for (uint32_t k = 0; k < frags.size(); ++k) {
-                    const Fragment& f = frags[k];
-                    Color alb = materials.albedo(f.material, f.uv);
-                    if (indirect) {
-                        const Indirect& in = (*indirect)[first + k];
-                        e_ind += in.irradiance * f.weight;
-                        occl += in.ao * f.weight;
-                        bn += in.bent_normal * f.weight;
-                        if (ao_only) b += Color(in.ao) * f.weight;
-                        else b += alb * in.irradiance * (kInvPi * f.weight);
-                    }
-                    if (!ao_only) {
-                        Color e = direct_irradiance
-                                      ? (*direct_irradiance)[first + k]
-                                      : lighting.irradiance(f.p, f.n, fragment_stream(scene.render.seed, x, y, k),
-                                                            scene.render.light_samples, counters, indirect == nullptr);
-                        Color radiance = materials.emission(f.material) + alb * e * kInvPi;
-                        d += radiance * f.weight;
-                        b += radiance * f.weight;
-                    }
-                    a += alb * f.weight;
-                    n += f.n * f.weight;
-                    cover += f.weight;
-                    z = std::min(z, f.depth);
-                    ++counters.fragments_shaded;
+    for_each_pixel_in_tiles(
+        deep, scene.render.tile_size, sink, "shading", [&](int wx, int wy, size_t first) {
+            Counters& counters = stats.local();
+            int x = wx + deep.x0, y = wy + deep.y0;
+            Color b(0), d(0), a(0), e_ind(0);
+            Vec3 n(0), bn(0);
+            float cover = 0, z = INFINITY, occl = 0;
+            auto frags = deep.pixel(wx, wy);
+            for (uint32_t k = 0; k < frags.size(); ++k) {
+                const Fragment& f = frags[k];
+                Color alb = materials.albedo(f.material, f.uv);
+                if (indirect) {
+                    const Indirect& in = (*indirect)[first + k];
+                    e_ind += in.irradiance * f.weight;
+                    occl += in.ao * f.weight;
+                    bn += in.bent_normal * f.weight;
+                    if (ao_only)
+                        b += Color(in.ao) * f.weight;
+                    else
+                        b += alb * in.irradiance * (kInvPi * f.weight);
                 }
-                if (cover < 1 && !ao_only) {
-                    // Escaping camera rays see the sky (in beauty and direct).
-                    Color bg = lighting.background(normalize(camera.direction(static_cast<float>(x) + 0.5f,
-                                                                              static_cast<float>(y) + 0.5f)));
-                    b += bg * (1 - cover);
-                    d += bg * (1 - cover);
+                if (!ao_only) {
+                    Color e = direct_irradiance
+                                  ? (*direct_irradiance)[first + k]
+                                  : lighting.irradiance(
+                                        f.p, f.n, fragment_stream(scene.render.seed, x, y, k),
+                                        scene.render.light_samples, counters, indirect == nullptr);
+                    Color radiance = materials.emission(f.material) + alb * e * kInvPi;
+                    d += radiance * f.weight;
+                    b += radiance * f.weight;
                 }
-                float* pb = img.at(beauty, wx, wy);
-                pb[0] = b.x, pb[1] = b.y, pb[2] = b.z, pb[3] = cover;
-                put3(direct, wx, wy, d);
-                put3(ind, wx, wy, e_ind);
-                if (ao) *img.at(*ao, wx, wy) = occl;
-                put3(bent, wx, wy, dot(bn, bn) > 0 ? normalize(bn) : Vec3(0));
-                put3(&albedo, wx, wy, a);
-                put3(&normal, wx, wy, cover > 0 ? normalize(n) : Vec3(0));
-                *img.at(depth, wx, wy) = z;
+                a += alb * f.weight;
+                n += f.n * f.weight;
+                cover += f.weight;
+                z = std::min(z, f.depth);
+                ++counters.fragments_shaded;
             }
-        progress.add();
-    });
+            if (cover < 1 && !ao_only) {
+                // Escaping camera rays see the sky (in beauty and direct).
+                Color bg = lighting.background(normalize(
+                    camera.direction(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f)));
+                b += bg * (1 - cover);
+                d += bg * (1 - cover);
+            }
+            float* pb = img.at(beauty, wx, wy);
+            pb[0] = b.x, pb[1] = b.y, pb[2] = b.z, pb[3] = cover;
+            put3(direct, wx, wy, d);
+            put3(ind, wx, wy, e_ind);
+            if (ao) *img.at(*ao, wx, wy) = occl;
+            put3(bent, wx, wy, dot(bn, bn) > 0 ? normalize(bn) : Vec3(0));
+            put3(&albedo, wx, wy, a);
+            put3(&normal, wx, wy, cover > 0 ? normalize(n) : Vec3(0));
+            *img.at(depth, wx, wy) = z;
+        });
     return img;
 }
 
@@ -94,7 +94,8 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
 namespace bounce {
 
 std::vector<Color> fragment_direct_irradiance(const Scene& scene, const DeepBuffer& deep,
-                                              const DirectLighting& lighting, bool include_sky, Stats& stats) {
+                                              const DirectLighting& lighting, bool include_sky,
+                                              Stats& stats) {
     std::vector<Color> out(deep.fragments.size());
     tbb::parallel_for(0, deep.height, [&](int wy) {
         Counters& counters = stats.local();
@@ -102,9 +103,10 @@ std::vector<Color> fragment_direct_irradiance(const Scene& scene, const DeepBuff
             size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k)
-                out[first + k] = lighting.irradiance(frags[k].p, frags[k].n,
-                                                     fragment_stream(scene.render.seed, wx + deep.x0, wy + deep.y0, k),
-                                                     scene.render.light_samples, counters, include_sky);
+                out[first + k] = lighting.irradiance(
+                    frags[k].p, frags[k].n,
+                    fragment_stream(scene.render.seed, wx + deep.x0, wy + deep.y0, k),
+                    scene.render.light_samples, counters, include_sky);
         }
     });
     return out;
