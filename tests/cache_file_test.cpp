@@ -255,3 +255,32 @@ TEST(CacheCli, SequencesReuseThePreviousFrameAndInfoPlaysThem) {
 
 }  // namespace
 }  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(CacheDeterminism, ImageAndCacheBytesDoNotDependOnThreadCount) {
+    test::TempDir d;
+    std::string image_bytes, cache_bytes;
+    for (int threads : {1, 2, 8}) {
+        RenderRequest req;
+        req.cache_out = d.file("c" + std::to_string(threads) + ".bic");
+        Stats s;
+        RenderResult r = render_with({"render.threads=" + std::to_string(threads), "render.tile_size=" + std::to_string(4 + threads)},
+                                     req, s);
+        std::ifstream in(req.cache_out, std::ios::binary);
+        std::string bytes((std::istreambuf_iterator<char>(in)), {});
+        const auto& ind = r.image.find("indirect")->data;
+        std::string img(reinterpret_cast<const char*>(ind.data()), ind.size() * sizeof(float));
+        if (threads == 1) {
+            image_bytes = img, cache_bytes = bytes;
+            ASSERT_GT(bytes.size(), 1000u);
+            continue;
+        }
+        EXPECT_EQ(img, image_bytes) << threads << " threads";
+        EXPECT_EQ(bytes, cache_bytes) << threads << " threads";
+    }
+}
+
+}  // namespace
+}  // namespace bounce
