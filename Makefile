@@ -17,7 +17,7 @@ build: configure
 	cmake --build $(BUILD) -j $(JOBS)
 
 render: build
-	$(BUILD)/bounce render $(SCENE) -o $(OUT) --stats
+	$(BUILD)/bounce render $(SCENE) -o $(OUT) --gi cache --rays 1024 --stats
 
 test: build
 	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
