@@ -129,7 +129,7 @@ CacheFile merge_caches(const CacheFile& a, const CacheFile& b, const std::string
     CacheFile out;
     out.info = a.info;
     for (const Item& it : items) {
-        if (kept[1 - it.source].weight_sum(it.r->p, it.r->n) >= s.min_weight) continue;
+        if (!kept[1 - it.source].misses(it.r->p, it.r->n)) continue;
         kept[it.source].insert_loaded(*it.r);
         out.records.push_back(*it.r);
     }

@@ -120,11 +120,7 @@ uint32_t IrradianceCache::insert(Record r) {
         r.raw_radius = raw;
         r.radius = std::clamp(raw, settings_.min_spacing * r.footprint, settings_.max_spacing * r.footprint);
     }
-    r.support = record_support(r, shading_settings_);
-    auto id = static_cast<uint32_t>(records_.size());
-    records_.push_back(r);
-    octree_.insert(id, r.p, r.support);
-    return id;
+    return insert_loaded(r);
 }
 
 uint32_t IrradianceCache::insert_loaded(const Record& r) {

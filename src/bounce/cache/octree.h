@@ -34,7 +34,6 @@ public:
             node = &(*node->children)[static_cast<size_t>(c)];
         }
     }
-    size_t node_count() const { return nodes_; }
     size_t memory_bytes() const;
 
 private:

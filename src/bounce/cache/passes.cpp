@@ -102,7 +102,6 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
         if (after_subpass) after_subpass(sp, si, schedule.size());
     }
     stats.set("records", static_cast<double>(cache.size()));
-    stats.set("records_gathered", static_cast<double>(gathered - dropped));
     stats.set("record_gathers", static_cast<double>(gathered));
     stats.set("records_dropped", static_cast<double>(dropped));
     stats.set("subpasses", static_cast<double>(schedule.size()));

@@ -43,11 +43,7 @@ private:
 enum Dim : uint32_t {
     kDimPixelX = 0,
     kDimPixelY = 1,
-    kDimPixelPermute = 2,
-    kDimLightSelect = 10,
-    kDimLightU = 11,
-    kDimLightV = 12,
-    kDimLightPermute = 13,
+    kDimLight = 10,  ///< light i uses kDimLight + 16 i + (1, 2)
     kDimGather = 100,
 };
 

@@ -28,12 +28,6 @@ void Stats::add_phase(const std::string& name, double seconds) {
     phases_.emplace_back(name, seconds);
 }
 
-double Stats::phase(const std::string& name) const {
-    for (const auto& [n, s] : phases_)
-        if (n == name) return s;
-    return 0;
-}
-
 nlohmann::json Stats::to_json() const {
     Counters t = total();
     nlohmann::json j;

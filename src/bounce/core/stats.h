@@ -29,7 +29,6 @@ public:
 
     /// Records the wall time of a named phase (phases keep their first-seen order).
     void add_phase(const std::string& name, double seconds);
-    double phase(const std::string& name) const;
     const std::vector<std::pair<std::string, double>>& phases() const { return phases_; }
 
     /// Extra named values (pixels, fragments, records ...) shown in the stats block.

@@ -69,7 +69,7 @@ Color DirectLighting::background(const Vec3& dir) const {
 Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n,
                                    const RandomStream& rng, int samples, Counters& counters) const {
     const Light& l = scene_.lights[index];
-    const auto dim = [&](uint32_t d) { return static_cast<uint32_t>(kDimLightSelect + 16 * index + d); };
+    const auto dim = [&](uint32_t d) { return static_cast<uint32_t>(kDimLight + 16 * index + d); };
     switch (l.type) {
         case LightType::Point:
         case LightType::Spot: {

@@ -274,8 +274,9 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         }
     });
     stats.set("pixels", static_cast<double>(result.deep.pixel_count()));
-    double mp = static_cast<double>(result.deep.pixel_count()) * 1e-6;
-    stats.set("gather_rays_per_pixel", static_cast<double>(stats.total().gather_rays) / (mp * 1e6));
+    if (result.deep.pixel_count() > 0)
+        stats.set("gather_rays_per_pixel", static_cast<double>(stats.total().gather_rays) /
+                                               static_cast<double>(result.deep.pixel_count()));
     auto& md = result.image.metadata;
     md["scene"] = scene.path;
     md["seed"] = std::to_string(scene.render.seed);
