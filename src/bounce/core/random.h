@@ -43,8 +43,8 @@ private:
 enum Dim : uint32_t {
     kDimPixelX = 0,
     kDimPixelY = 1,
-    kDimLight = 10,  ///< light i uses kDimLight + 16 i + (1, 2)
-    kDimGather = 100,
+    kDimLight = 10,  ///< light i uses kDimLight + 16 i + (1, 2): far below kDimGather for any light count
+    kDimGather = 1u << 30,  ///< the gather uses kDimGather + {0, 1, 3}
 };
 
 }  // namespace bounce
