@@ -80,10 +80,10 @@ void Progress::add(uint64_t n) {
     uint64_t done = done_.fetch_add(n) + n;
     if (!sink_) return;
     double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    if (t - last_report_ < 0.2 && done < total_) return;  // racy read is fine: only throttling
+    if (t - last_report_.load(std::memory_order_relaxed) < 0.2 && done < total_) return;
     std::unique_lock lock(mutex_, std::try_to_lock);
     if (!lock.owns_lock()) return;
-    last_report_ = t;
+    last_report_.store(t, std::memory_order_relaxed);
     sink_->update(name_, done, total_, t);
 }
 

@@ -42,7 +42,7 @@ private:
     std::atomic<uint64_t> done_{0};
     std::chrono::steady_clock::time_point start_;
     std::mutex mutex_;
-    double last_report_ = -1;
+    std::atomic<double> last_report_{-1};  ///< relaxed: only throttles reports
 };
 
 }  // namespace bounce
