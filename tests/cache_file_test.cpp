@@ -259,27 +259,57 @@ TEST(CacheCli, SequencesReuseThePreviousFrameAndInfoPlaysThem) {
 namespace bounce {
 namespace {
 
-TEST(CacheDeterminism, ImageAndCacheBytesDoNotDependOnThreadCount) {
+std::pair<std::string, std::string> image_and_cache_bytes(const std::vector<std::string>& settings, const std::string& file,
+                                                          Stats& s) {
+    RenderRequest req;
+    req.cache_out = file;
+    RenderResult r = render_with(settings, req, s);
+    std::ifstream in(file, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    const auto& ind = r.image.find("indirect")->data;
+    return {std::string(reinterpret_cast<const char*>(ind.data()), ind.size() * sizeof(float)), bytes};
+}
+
+// Shared mode: tile size and order are scheduling only. Per-thread mode: a tile's private
+// cache depends on the tile, so the tile size is fixed, but threads and order are not.
+TEST(CacheDeterminism, ImageAndCacheBytesDoNotDependOnThreadCountInEitherMode) {
     test::TempDir d;
-    std::string image_bytes, cache_bytes;
-    for (int threads : {1, 2, 8}) {
-        RenderRequest req;
-        req.cache_out = d.file("c" + std::to_string(threads) + ".bic");
-        Stats s;
-        RenderResult r = render_with({"render.threads=" + std::to_string(threads), "render.tile_size=" + std::to_string(4 + threads)},
-                                     req, s);
-        std::ifstream in(req.cache_out, std::ios::binary);
-        std::string bytes((std::istreambuf_iterator<char>(in)), {});
-        const auto& ind = r.image.find("indirect")->data;
-        std::string img(reinterpret_cast<const char*>(ind.data()), ind.size() * sizeof(float));
-        if (threads == 1) {
-            image_bytes = img, cache_bytes = bytes;
-            ASSERT_GT(bytes.size(), 1000u);
-            continue;
+    for (std::string mode : {"shared", "per-thread"}) {
+        std::pair<std::string, std::string> first;
+        for (int threads : {1, 2, 8}) {
+            std::vector<std::string> o = {"render.threads=" + std::to_string(threads), "render.cache_sharing=\"" + mode + "\"",
+                                          "render.tile_order=\"" + std::string(threads == 2 ? "spiral" : "rows") + "\""};
+            o.push_back("render.tile_size=" + std::to_string(mode == "shared" ? 4 + threads : 8));
+            Stats s;
+            auto got = image_and_cache_bytes(o, d.file(mode + std::to_string(threads) + ".bic"), s);
+            if (threads == 1) {
+                first = got;
+                ASSERT_GT(got.second.size(), 1000u);
+                continue;
+            }
+            EXPECT_EQ(got.first, first.first) << mode << ", " << threads << " threads";
+            EXPECT_EQ(got.second, first.second) << mode << ", " << threads << " threads";
         }
-        EXPECT_EQ(img, image_bytes) << threads << " threads";
-        EXPECT_EQ(bytes, cache_bytes) << threads << " threads";
     }
+}
+
+TEST(CacheSharing, PerThreadMergesNeverDuplicateARecordAndNeverMiss) {
+    test::TempDir d;
+    Stats shared, per_thread;
+    image_and_cache_bytes({"render.threads=2", "render.tile_size=8"}, d.file("s.bic"), shared);
+    image_and_cache_bytes({"render.threads=2", "render.tile_size=8", "render.cache_sharing=\"per-thread\""}, d.file("p.bic"),
+                          per_thread);
+    CacheFile f = read_cache_file(d.file("p.bic"));
+    std::set<uint64_t> keys;
+    for (const Record& r : f.records) EXPECT_TRUE(keys.insert(r.key).second) << "record " << r.key << " merged twice";
+    // Every gather of a per-thread render becomes a record (none is dropped); the shared
+    // cache drops the candidates its own sub-pass covered.
+    auto value = [](const Stats& s, const char* k) { return s.extra()[k].get<double>(); };
+    EXPECT_EQ(value(per_thread, "records"), value(per_thread, "record_gathers"));
+    EXPECT_EQ(value(per_thread, "records_dropped"), 0.0);
+    EXPECT_EQ(value(shared, "records") + value(shared, "records_dropped"), value(shared, "record_gathers"));
+    EXPECT_EQ(value(per_thread, "shading_misses"), 0.0);
+    EXPECT_EQ(static_cast<double>(f.records.size()), value(per_thread, "records"));
 }
 
 }  // namespace

@@ -26,12 +26,12 @@ using namespace bounce;
 struct RenderArgs {
     std::string scene, output, res, crop, deep_in, deep_out, stats_json;
     std::vector<std::string> sets;
-    std::string gi, radiosity_textures, metric;
+    std::string gi, radiosity_textures, metric, cache_sharing, tile_order;
     double min_spacing = -1, max_spacing = -1, max_angle = -1, gradient_limit = -1, quality = -1;
     bool preview = false, regather = false, force = false;
     std::string cache_in, cache_out, show = "beauty", frames;
     int frame = 0;
-    int threads = -1, spp = -1, rays = -1;
+    int threads = -1, spp = -1, rays = -1, tile_size = -1;
     bool ao = false;
     int64_t seed = -1;
     bool stats = false, quiet = false;
@@ -59,6 +59,9 @@ std::vector<std::string> overrides_from(const RenderArgs& a) {
     if (a.rays >= 0) o.push_back("render.rays=" + std::to_string(a.rays));
     if (a.ao) o.push_back("render.ao=true");
     if (!a.metric.empty()) o.push_back("render.metric=\"" + a.metric + "\"");
+    if (!a.cache_sharing.empty()) o.push_back("render.cache_sharing=\"" + a.cache_sharing + "\"");
+    if (!a.tile_order.empty()) o.push_back("render.tile_order=\"" + a.tile_order + "\"");
+    if (a.tile_size >= 0) o.push_back("render.tile_size=" + std::to_string(a.tile_size));
     auto num = [&](const char* key, double v) {
         if (v >= 0) o.push_back(std::string("render.") + key + "=" + fmt::format("{}", v));
     };
@@ -298,6 +301,11 @@ int main(int argc, char** argv) {
     render->add_option("-o,--output", ra.output, "output EXR (a PNG is written beside it)")->required();
     render->add_option("--res", ra.res, "resolution WIDTHxHEIGHT (camera.resolution)");
     render->add_option("--threads", ra.threads, "worker threads, 0 = all cores (render.threads)");
+    render->add_option("--tile-size", ra.tile_size, "tile (bucket) edge in pixels (render.tile_size)");
+    render->add_option("--tile-order", ra.tile_order, "order threads take tiles in: rows or spiral (render.tile_order)");
+    render->add_option("--cache-sharing", ra.cache_sharing,
+                       "threads share one cache or fill per-thread caches merged between sub-passes: "
+                       "shared or per-thread (render.cache_sharing)");
     render->add_option("--spp", ra.spp, "subsamples per pixel (render.spp)");
     render->add_option("--seed", ra.seed, "random seed (render.seed)");
     render->add_option("--crop", ra.crop, "render only pixels x0,x1,y0,y1 (render.crop)");

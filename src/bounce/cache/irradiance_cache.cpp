@@ -107,25 +107,27 @@ Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const 
     return r;
 }
 
+void IrradianceCache::clamp_to_neighbours(Record& r, std::span<const Record> extra) const {
+    if (!settings_.neighbour_clamp || !std::isfinite(r.raw_radius)) return;
+    float raw = r.raw_radius;
+    auto limit = [&](const Record& o) {
+        float d = length(o.p - r.p);
+        if (d < o.support && dot(o.n, r.n) > 0) raw = std::min(raw, o.raw_radius + d);
+    };
+    octree_.visit(r.p, [&](uint32_t id) { limit(records_[id]); });
+    for (const Record& o : extra) limit(o);
+    r.raw_radius = raw;
+    r.radius = std::clamp(raw, settings_.min_spacing * r.footprint, settings_.max_spacing * r.footprint);
+}
+
 uint32_t IrradianceCache::insert(Record r) {
-    if (settings_.neighbour_clamp && std::isfinite(r.raw_radius)) {
-        // R_new <= R_j + |p_new - p_j| over the records whose reach includes p_new, on the
-        // unclamped radii; then the screen-space clamps again.
-        float raw = r.raw_radius;
-        octree_.visit(r.p, [&](uint32_t id) {
-            const Record& o = records_[id];
-            float d = length(o.p - r.p);
-            if (d < o.support && dot(o.n, r.n) > 0) raw = std::min(raw, o.raw_radius + d);
-        });
-        r.raw_radius = raw;
-        r.radius = std::clamp(raw, settings_.min_spacing * r.footprint, settings_.max_spacing * r.footprint);
-    }
+    clamp_to_neighbours(r);
     return insert_loaded(r);
 }
 
 uint32_t IrradianceCache::insert_loaded(const Record& r) {
     Record copy = r;
-    copy.support = record_support(copy, shading_settings_);
+    copy.support = support(copy);
     auto id = static_cast<uint32_t>(records_.size());
     records_.push_back(copy);
     octree_.insert(id, copy.p, copy.support);

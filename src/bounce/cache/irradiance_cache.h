@@ -5,6 +5,8 @@
 
 #include <deque>
 #include <memory>
+#include <shared_mutex>
+#include <span>
 
 #include "bounce/cache/cache_file.h"
 #include "bounce/cache/octree.h"
@@ -44,7 +46,14 @@ public:
     /// (TL04) or the harmonic mean (Ward) clamped to [min_spacing, max_spacing] pixels of
     /// `footprint`, and the Weber distance of the gradient limit.
     Record make_record(const GatherResult& g, const Vec3& p, const Vec3& n, float footprint, uint64_t key) const;
-    /// Inserts (not thread-safe); applies neighbour clamping first. Returns the record's index.
+    /// Neighbour clamping (Krivanek et al. 2006): R_r <= R_j + |p_r - p_j| on the unclamped radii
+    /// over this cache's records and `extra` whose reach includes p_r; then the screen-space
+    /// clamps again. A no-op when the setting is off.
+    void clamp_to_neighbours(Record& r, std::span<const Record> extra = {}) const;
+    /// Distance beyond which `r` has no weight in any lookup of this cache (Record::support).
+    float support(const Record& r) const { return record_support(r, shading_settings_); }
+    /// Inserts (not thread-safe: hold mutex() exclusively while others may read); applies
+    /// neighbour clamping first. Returns the record's index.
     uint32_t insert(Record r);
 
     /// Inserts a record read from a file as it is (no clamping: its radius is final).
@@ -54,6 +63,9 @@ public:
     float luminance_floor() const { return luminance_floor_; }
 
     size_t memory_bytes() const;
+    /// The reader-writer lock of the cache's users (the passes): lookups hold it shared, inserts
+    /// exclusively. The cache itself does not take it, so one lock covers a whole tile.
+    std::shared_mutex& mutex() const { return *mutex_; }
     /// Floor under the record value in the Weber metric (E -> 0 in black surroundings would make
     /// every gradient look infinite); the passes set it to 1e-3 of the first sub-pass's mean.
     void set_luminance_floor(float f) { luminance_floor_ = f; }
@@ -64,6 +76,7 @@ private:
     std::deque<Record> records_;
     RecordOctree octree_;
     float luminance_floor_ = -1;  ///< Weber floor, fixed from the first record batch
+    std::unique_ptr<std::shared_mutex> mutex_ = std::make_unique<std::shared_mutex>();  // keeps the cache movable
 };
 
 }  // namespace bounce

@@ -1,9 +1,11 @@
 #include "bounce/cache/passes.h"
 
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <chrono>
+#include <mutex>
+#include <shared_mutex>
 
 namespace bounce {
 
@@ -29,17 +31,20 @@ std::vector<SubPass> subpass_schedule(int first_step) {
 
 namespace {
 
-struct Candidate {
-    uint64_t key;   ///< (pixel index in the full image) << 8 | fragment
-    int x, y;       ///< window coordinates
-    uint32_t frag;  ///< index into deep.fragments
-    uint32_t k;     ///< fragment index within the pixel
-};
-
 uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k) {
     uint64_t pix = static_cast<uint64_t>(wy + deep.y0) * static_cast<uint64_t>(deep.full_width) +
                    static_cast<uint64_t>(wx + deep.x0);
     return (pix << 8) | k;
+}
+
+/// Takes the cache's lock (shared or exclusive), adding the time waited to `counters`.
+template <typename Lock>
+Lock lock_cache(const IrradianceCache& cache, Counters& counters) {
+    auto t0 = std::chrono::steady_clock::now();
+    Lock lock(cache.mutex());
+    counters.lock_wait_ns += static_cast<uint64_t>(
+        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
+    return lock;
 }
 
 }  // namespace
@@ -47,44 +52,56 @@ uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k) {
 void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, IrradianceCache& cache,
                     Stats& stats, ProgressSink* sink, const SubPassCallback& after_subpass, int frame) {
     const auto schedule = subpass_schedule(static_cast<int>(cache.settings().max_spacing));
+    const bool per_tile = scene.render.cache_sharing == "per-thread";
+    const auto tiles = make_tiles(deep.width, deep.height, scene.render.tile_size, scene.render.tile_order);
+    const CacheSettings& cs = cache.settings();
     Progress progress(sink, "gathering", schedule.size());
+    std::vector<std::vector<Record>> made(tiles.size());  // this sub-pass's records, by Tile::index
     size_t dropped = 0, gathered = 0;
     for (size_t si = 0; si < schedule.size(); ++si) {
         const SubPass& sp = schedule[si];
-        // 1. Lookups against the cache as it is now (read-only, parallel over rows).
-        tbb::enumerable_thread_specific<std::vector<Candidate>> local;
-        tbb::parallel_for(0, deep.height, [&](int wy) {
-            auto& out = local.local();
-            for (int wx = 0; wx < deep.width; ++wx) {
-                if (!sp.contains(wx + deep.x0, wy + deep.y0)) continue;
-                size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
-                auto frags = deep.pixel(wx, wy);
-                for (uint32_t k = 0; k < frags.size(); ++k)
-                    if (cache.misses(frags[k].p_base, frags[k].n_base))
-                        out.push_back({candidate_key(deep, wx, wy, k), wx, wy, static_cast<uint32_t>(first + k), k});
-            }
-        });
-        std::vector<Candidate> misses;
-        for (auto& v : local) misses.insert(misses.end(), v.begin(), v.end());
-        std::sort(misses.begin(), misses.end(), [](const Candidate& a, const Candidate& b) { return a.key < b.key; });
-
-        // 2. Gathers at the misses (parallel, each from its own fragment's random stream).
-        std::vector<Record> records(misses.size());
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, misses.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+        // 1. Each tile judges its candidates against the cache as it was when the sub-pass
+        //    began (shared lock; nobody writes until step 2) and gathers at the misses. In
+        //    per-thread mode the tile's own new records count too: they live in the tile's
+        //    private cache, which belongs to the thread shading the tile.
+        for_each_tile(tiles, [&](const Tile& t) {
             Counters& counters = stats.local();
-            for (size_t i = r.begin(); i < r.end(); ++i) {
-                const Candidate& c = misses[i];
-                const Fragment& f = deep.fragments[c.frag];
-                GatherResult g = gatherer.gather(f.p, f.n_base, fragment_stream(scene.render.seed, c.x + deep.x0, c.y + deep.y0, c.k),
-                                                 counters);
-                records[i] = cache.make_record(g, f.p_base, f.n_base, f.footprint, c.key);
-                records[i].frame = frame;
-            }
+            auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache, counters);
+            std::vector<Record>& out = made[static_cast<size_t>(t.index)];
+            out.clear();
+            for (int wy = t.y0; wy < t.y1; ++wy)
+                for (int wx = t.x0; wx < t.x1; ++wx) {
+                    if (!sp.contains(wx + deep.x0, wy + deep.y0)) continue;
+                    auto frags = deep.pixel(wx, wy);
+                    for (uint32_t k = 0; k < frags.size(); ++k) {
+                        const Fragment& f = frags[k];
+                        float w = cache.weight_sum(f.p_base, f.n_base);
+                        if (per_tile)
+                            for (const Record& r : out) w += record_weight(r, f.p_base, f.n_base, cs);
+                        if (w >= cs.min_weight) continue;
+                        GatherResult g = gatherer.gather(
+                            f.p, f.n_base, fragment_stream(scene.render.seed, wx + deep.x0, wy + deep.y0, k), counters);
+                        Record r = cache.make_record(g, f.p_base, f.n_base, f.footprint, candidate_key(deep, wx, wy, k));
+                        r.frame = frame;
+                        if (per_tile) {
+                            cache.clamp_to_neighbours(r, out);
+                            r.support = cache.support(r);
+                        }
+                        out.push_back(r);
+                    }
+                }
         });
-        gathered += records.size();
 
-        // 3. Insert in pixel order, dropping candidates the records inserted before them in
-        //    this sub-pass already cover.
+        // 2. One writer merges, in an order that does not depend on scheduling. Shared: all
+        //    records by pixel, dropping those that records inserted before them in this
+        //    sub-pass already cover. Per-thread: the tile caches in tile order, all records
+        //    kept (each came from one tile's cache, so none is merged twice).
+        std::vector<Record> records;
+        for (auto& v : made) records.insert(records.end(), v.begin(), v.end());
+        gathered += records.size();
+        if (!per_tile)
+            std::sort(records.begin(), records.end(), [](const Record& a, const Record& b) { return a.key < b.key; });
+        auto lock = lock_cache<std::unique_lock<std::shared_mutex>>(cache, stats.local());
         if (cache.luminance_floor() < 0 && !records.empty()) {
             double mean = 0;
             for (const auto& r : records) mean += luminance(r.E);
@@ -92,12 +109,13 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
         }
         size_t before = cache.size();
         for (auto& r : records) {
-            if (cache.size() > before && !cache.misses(r.p, r.n)) {
+            if (!per_tile && cache.size() > before && !cache.misses(r.p, r.n)) {
                 ++dropped;
                 continue;
             }
             cache.insert(r);
         }
+        lock.unlock();
         progress.add();
         if (after_subpass) after_subpass(sp, si, schedule.size());
     }
@@ -113,6 +131,8 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
                                    Stats& stats, ProgressSink* sink) {
     std::vector<Indirect> out(deep.fragments.size());
     tbb::enumerable_thread_specific<uint64_t> misses(0), lookups(0);
+    // The pass holds the shared lock for its workers: no writer can interleave.
+    auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache, stats.local());
     for_each_pixel_in_tiles(deep, scene.render.tile_size, sink, "interpolate", [&](int wx, int wy, size_t first) {
         auto frags = deep.pixel(wx, wy);
         for (uint32_t k = 0; k < frags.size(); ++k) {
@@ -121,7 +141,7 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
             if (in.weight <= 0) ++misses.local();
             out[first + k] = {in.E, in.ao, in.bent};
         }
-    });
+    }, scene.render.tile_order);
     uint64_t m = 0, l = 0;
     for (auto v : misses) m += v;
     for (auto v : lookups) l += v;

@@ -10,6 +10,7 @@ Counters& Counters::operator+=(const Counters& o) {
     shadow_rays += o.shadow_rays;
     gather_rays += o.gather_rays;
     fragments_shaded += o.fragments_shaded;
+    lock_wait_ns += o.lock_wait_ns;
     return *this;
 }
 
@@ -46,6 +47,7 @@ nlohmann::json Stats::to_json() const {
                  {"total", rays}};
     j["rays_per_s"] = total_time > 0 ? static_cast<double>(rays) / total_time : 0.0;
     j["fragments_shaded"] = t.fragments_shaded;
+    j["lock_wait_s"] = static_cast<double>(t.lock_wait_ns) * 1e-9;
     j["peak_rss_bytes"] = peak_rss_bytes();
     for (auto it = extra_.begin(); it != extra_.end(); ++it) j[it.key()] = it.value();
     return j;
@@ -60,6 +62,7 @@ std::string Stats::to_text() const {
     s += fmt::format("  {:<24} {:>10}\n", "shadow rays", j["rays"]["shadow"].get<uint64_t>());
     s += fmt::format("  {:<24} {:>10}\n", "gather rays", j["rays"]["gather"].get<uint64_t>());
     s += fmt::format("  {:<24} {:>10.3f} M/s\n", "rays/s", j["rays_per_s"].get<double>() * 1e-6);
+    s += fmt::format("  {:<24} {:>10.6f} s\n", "cache lock wait", j["lock_wait_s"].get<double>());
     for (auto it = extra_.begin(); it != extra_.end(); ++it)
         s += fmt::format("  {:<24} {:>10}\n", it.key(), it.value().dump());
     s += fmt::format("  {:<24} {:>10.1f} MiB\n", "peak memory",

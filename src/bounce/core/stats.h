@@ -18,6 +18,7 @@ struct Counters {
     uint64_t shadow_rays = 0;
     uint64_t gather_rays = 0;
     uint64_t fragments_shaded = 0;
+    uint64_t lock_wait_ns = 0;  ///< time spent waiting for the cache's reader-writer lock
     Counters& operator+=(const Counters& o);
 };
 

@@ -3,11 +3,10 @@
 #include <OpenImageIO/deepdata.h>
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
-#include <tbb/blocked_range2d.h>
-#include <tbb/parallel_for.h>
 
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
+#include "bounce/core/parallel.h"
 #include "bounce/core/random.h"
 #include "bounce/core/sampling.h"
 
@@ -90,10 +89,10 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
     std::vector<std::vector<Fragment>> per_pixel(deep.pixel_count());
     Progress progress(sink, "visibility", static_cast<uint64_t>(deep.height));
 
-    tbb::parallel_for(tbb::blocked_range<int>(0, deep.height, 1), [&](const tbb::blocked_range<int>& rows) {
+    parallel_ranges(0, deep.height, 1, [&](int row0, int row1) {
         Counters& counters = stats.local();
         std::vector<Accum> groups;
-        for (int wy = rows.begin(); wy < rows.end(); ++wy) {
+        for (int wy = row0; wy < row1; ++wy) {
             for (int wx = 0; wx < deep.width; ++wx) {
                 int x = wx + deep.x0, y = wy + deep.y0;
                 RandomStream rng(rs.seed, static_cast<uint64_t>(y) * 65536u + static_cast<uint64_t>(x));

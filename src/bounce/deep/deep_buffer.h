@@ -3,7 +3,6 @@
 // re-shaded without re-tracing primary visibility. Stored as an OpenEXR deep image.
 #pragma once
 
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -16,6 +15,7 @@
 #include "bounce/core/progress.h"
 #include "bounce/core/random.h"
 #include "bounce/core/stats.h"
+#include "bounce/core/tiles.h"
 #include "bounce/scene/scene.h"
 
 namespace bounce {
@@ -62,13 +62,12 @@ struct DeepBuffer {
 /// per tile under `name`. Work order never affects results: each pixel writes its own slots.
 template <typename PixelFn>
 void for_each_pixel_in_tiles(const DeepBuffer& deep, int tile, ProgressSink* sink, const char* name,
-                             PixelFn&& pixel) {
-    const int tiles_x = (deep.width + tile - 1) / tile, tiles_y = (deep.height + tile - 1) / tile;
-    Progress progress(sink, name, static_cast<uint64_t>(tiles_x) * static_cast<uint64_t>(tiles_y));
-    tbb::parallel_for(0, tiles_x * tiles_y, [&](int t) {
-        const int tx0 = (t % tiles_x) * tile, ty0 = (t / tiles_x) * tile;
-        for (int wy = ty0; wy < std::min(ty0 + tile, deep.height); ++wy)
-            for (int wx = tx0; wx < std::min(tx0 + tile, deep.width); ++wx)
+                             PixelFn&& pixel, const std::string& order = "rows") {
+    const auto tiles = make_tiles(deep.width, deep.height, tile, order);
+    Progress progress(sink, name, tiles.size());
+    for_each_tile(tiles, [&](const Tile& t) {
+        for (int wy = t.y0; wy < t.y1; ++wy)
+            for (int wx = t.x0; wx < t.x1; ++wx)
                 pixel(wx, wy, static_cast<size_t>(deep.offsets[static_cast<size_t>(wy) * deep.width + wx]));
         progress.add();
     });

@@ -2,12 +2,12 @@
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
-#include <tbb/parallel_for.h>
 
 #include <filesystem>
 
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
+#include "bounce/core/parallel.h"
 #include "bounce/core/random.h"
 
 namespace bounce {
@@ -109,9 +109,9 @@ RadiosityTextures RadiosityTextures::bake(const Scene& scene, const Materials& m
     for (size_t id = 0; id < scene.objects.size(); ++id) {
         const TriangleMesh& m = scene.objects[id].coarse;
         RadiosityMap& map = rt.maps_[id];
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, m.triangle_count(), 64), [&](const tbb::blocked_range<size_t>& r) {
+        parallel_ranges(size_t{0}, m.triangle_count(), size_t{64}, [&](size_t lo, size_t hi) {
             Counters& counters = stats.local();
-            for (size_t t = r.begin(); t < r.end(); ++t) {
+            for (size_t t = lo; t < hi; ++t) {
                 const int n = map.level[t];
                 for (int j = 0; j <= n; ++j)
                     for (int i = 0; i + j <= n; ++i) {
@@ -129,7 +129,7 @@ RadiosityTextures RadiosityTextures::bake(const Scene& scene, const Materials& m
                                                                    settings.light_samples, counters);
                     }
             }
-            progress.add(r.size());
+            progress.add(hi - lo);
         });
     }
     stats.set("radiosity_points", static_cast<double>(rt.lattice_points()));

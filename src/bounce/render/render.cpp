@@ -3,12 +3,12 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include "bounce/accel/accel.h"
 #include "bounce/cache/passes.h"
 #include "bounce/core/error.h"
+#include "bounce/core/parallel.h"
 #include "bounce/gather/gather.h"
 #include "bounce/lighting/lighting.h"
 #include "bounce/radiosity/radiosity.h"
@@ -140,7 +140,7 @@ size_t load_cache(const std::string& path, const Scene& scene, bool force, Irrad
 std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceCache& cache,
                                        const std::vector<uint8_t>& visited, int step) {
     std::vector<Indirect> out(deep.fragments.size());
-    tbb::parallel_for(0, deep.height, [&](int wy) {
+    parallel_for_each_index(0, deep.height, [&](int wy) {
         for (int wx = 0; wx < deep.width; ++wx) {
             int x = wx + deep.x0, y = wy + deep.y0, lx = wx, ly = wy;
             for (int s = step; s <= (1 << 20); s *= 2) {

@@ -68,7 +68,9 @@ struct RenderSettings {
     int threads = 0;            ///< 0 = all cores
     int light_samples = 16;     ///< stratified samples per area light / sky per fragment
     float ray_offset = -1;      ///< ray-origin offsetting distance; < 0 = automatic
-    int tile_size = 32;
+    int tile_size = 32;                ///< tile (bucket) edge, pixels
+    std::string tile_order = "rows";   ///< rows | spiral: the order threads take tiles in
+    std::string cache_sharing = "shared";  ///< shared | per-thread (docs/parallel.md)
     std::array<int, 4> crop{0, 0, 0, 0};  ///< x0,x1,y0,y1 (exclusive ends); all 0 = full frame
     bool has_crop() const { return crop[1] > crop[0] || crop[3] > crop[2]; }
 

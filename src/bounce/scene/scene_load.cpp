@@ -571,7 +571,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<std::stri
                   "rays", "ao_distance", "ao_falloff", "hit_light_samples", "concave_angle", "radiosity",
                   "radiosity_textures", "radiosity_texel", "radiosity_light_samples", "metric", "min_spacing",
                   "max_spacing", "max_angle", "gradient_limit", "quality", "min_weight", "accuracy", "gradients",
-                  "neighbour_clamp", "preview", "shading_reach", "radius_scale"});
+                  "neighbour_clamp", "preview", "shading_reach", "radius_scale", "tile_order", "cache_sharing"});
         RenderSettings& s = scene.render;
         s.spp = r.integer("spp", s.spp, 1, 4096);
         if (r.has("seed")) {
@@ -584,6 +584,8 @@ Scene build_scene(json doc, const std::string& path, const std::vector<std::stri
         s.light_samples = r.integer("light_samples", s.light_samples, 1, 65536);
         s.ray_offset = static_cast<float>(r.number("ray_offset", -1, 0));
         s.tile_size = r.integer("tile_size", s.tile_size, 1, 4096);
+        s.tile_order = r.choice("tile_order", s.tile_order, {"rows", "spiral"});
+        s.cache_sharing = r.choice("cache_sharing", s.cache_sharing, {"shared", "per-thread"});
         s.gi = r.choice("gi", s.gi, {"none", "brute", "cache"});
         s.ao = r.boolean("ao", s.ao);
         s.rays = r.integer("rays", s.rays, 1, 1 << 20);

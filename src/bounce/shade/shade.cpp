@@ -1,6 +1,6 @@
 #include "bounce/shade/shade.h"
 
-#include <tbb/parallel_for.h>
+#include "bounce/core/parallel.h"
 
 namespace bounce {
 
@@ -97,7 +97,7 @@ std::vector<Color> fragment_direct_irradiance(const Scene& scene, const DeepBuff
                                               const DirectLighting& lighting, bool include_sky,
                                               Stats& stats) {
     std::vector<Color> out(deep.fragments.size());
-    tbb::parallel_for(0, deep.height, [&](int wy) {
+    parallel_for_each_index(0, deep.height, [&](int wy) {
         Counters& counters = stats.local();
         for (int wx = 0; wx < deep.width; ++wx) {
             size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
