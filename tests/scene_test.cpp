@@ -197,7 +197,8 @@ std::string write_gltf(const test::TempDir& d) {
                    {{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}, {"translation", {0, 0, 2}}}}},
         {"cameras", {{{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"aspectRatio", 1.5}, {"znear", 0.1}}}}}},
         {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}, {"material", 0}}}}}}},
-        {"materials", {{{"pbrMetallicRoughness", {{"baseColorFactor", {0.5, 0.6, 0.7, 1}}}}}}},
+        {"materials", {{{"pbrMetallicRoughness", {{"baseColorFactor", {0.5, 0.6, 0.7, 1}}, {"metallicFactor", 0.25},
+                                                    {"roughnessFactor", 0.3}}}}}},
         {"buffers", {{{"byteLength", 60}, {"uri", "data:application/octet-stream;base64," + base64(buf)}}}},
         {"bufferViews", {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 48}},
                          {{"buffer", 0}, {"byteOffset", 48}, {"byteLength", 12}}}},
@@ -221,8 +222,11 @@ TEST(SceneLoad, GltfWithCameraAndPunctualLights) {
     EXPECT_EQ(s.lights[0].color, Color(10, 5, 2.5f));  // colour x intensity
     ASSERT_EQ(s.objects.size(), 1u);
     EXPECT_EQ(s.objects[0].coarse.triangle_count(), 2u);
-    Color c = s.materials[s.objects[0].coarse.face_materials[0]].color;
-    EXPECT_NEAR(c.y, 0.6f, 1e-6f);
+    // Metallic-roughness: diffuse = base (1 - metallic), F0 = mix(0.04, base, metallic).
+    const Material& m = s.materials[s.objects[0].coarse.face_materials[0]];
+    EXPECT_NEAR(m.color.y, 0.6f * 0.75f, 1e-6f);
+    EXPECT_NEAR(m.specular.y, 0.04f * 0.75f + 0.6f * 0.25f, 1e-6f);
+    EXPECT_NEAR(m.roughness, 0.3f, 1e-6f);
 }
 
 TEST(SceneLoad, GltfWithoutCameraIsRefused) {

@@ -28,7 +28,7 @@ struct RenderArgs {
     std::vector<std::string> sets;
     std::string gi, radiosity_textures, metric, cache_sharing, tile_order;
     double min_spacing = -1, max_spacing = -1, max_angle = -1, gradient_limit = -1, quality = -1;
-    bool preview = false, regather = false, force = false;
+    bool preview = false, regather = false, force = false, light_per_channel = false;
     std::string cache_in, cache_out, show = "beauty", frames;
     int frame = 0;
     int threads = -1, spp = -1, rays = -1, tile_size = -1;
@@ -71,6 +71,7 @@ std::vector<std::string> overrides_from(const RenderArgs& a) {
     num("gradient_limit", a.gradient_limit);
     num("quality", a.quality);
     if (a.preview) o.push_back("render.preview=true");
+    if (a.light_per_channel) o.push_back("render.light_per_channel=true");
     if (!a.radiosity_textures.empty()) o.push_back("render.radiosity_textures=\"" + a.radiosity_textures + "\"");
     return o;
 }
@@ -325,6 +326,8 @@ int main(int argc, char** argv) {
     render->add_option("--frame", ra.frame, "frame number (expands #### in file names, stamps new records)");
     render->add_option("--frames", ra.frames, "render frames FIRST-LAST, each reusing the previous frame's cache");
     render->add_option("--show", ra.show, "layer written to the PNG: beauty (default), records, indirect, ao ...");
+    render->add_flag("--light-per-channel", ra.light_per_channel,
+                     "shade indirect light as one (radiance, direction) pair per RGB channel (render.light_per_channel)");
     render->add_flag("--preview", ra.preview, "progressive gather-and-shade, the image rewritten after each sub-pass (render.preview)");
     render->add_option("--radiosity-textures", ra.radiosity_textures,
                        "folder of baked radiosity textures to reuse or fill (render.radiosity_textures)");

@@ -139,7 +139,7 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
             Interpolated in = cache.lookup(frags[k].p_base, frags[k].n_base, true);
             ++lookups.local();
             if (in.weight <= 0) ++misses.local();
-            out[first + k] = {in.E, in.ao, in.bent};
+            out[first + k] = {in.E, in.ao, in.bent, in.dir};
         }
     }, scene.render.tile_order);
     uint64_t m = 0, l = 0;

@@ -181,7 +181,7 @@ std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer
         for (uint32_t k = 0; k < frags.size(); ++k) {
             GatherResult g = gatherer.gather(frags[k].p, frags[k].n_base,
                                              fragment_stream(scene.render.seed, wx + deep.x0, wy + deep.y0, k), counters);
-            out[first + k] = {g.irradiance, g.ao, g.bent_normal};
+            out[first + k] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
         }
     });
     return out;

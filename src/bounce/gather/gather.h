@@ -83,6 +83,7 @@ struct Indirect {
     Color irradiance{0};
     float ao = 1;
     Vec3 bent_normal{0, 0, 1};
+    std::array<Vec3, 3> light_dir{};  ///< per channel: mean incoming direction x radiance (GatherResult)
 };
 
 /// The gather settings a scene's render settings ask for (resolves the automatic AO distance).

@@ -1,6 +1,9 @@
 #include "bounce/geometry/mesh.h"
 
+#include <algorithm>
+#include <cmath>
 #include <map>
+#include <tuple>
 #include <utility>
 
 namespace bounce {
@@ -69,6 +72,44 @@ TriangleMesh split_once(const TriangleMesh& m, Project project) {
     return r;
 }
 
+/// Longitude-latitude uvs (u around y, v = 0 at the bottom pole). Vertices are split where a
+/// triangle crosses the seam (u jumps by 1) or touches a pole (u taken from the other two), so
+/// every triangle's uvs are continuous and tangents (bump mapping) are right.
+TriangleMesh with_spherical_uvs(const TriangleMesh& m, const Vec3& center) {
+    TriangleMesh r;
+    r.face_materials = m.face_materials;
+    std::map<std::tuple<uint32_t, float, float>, uint32_t> made;
+    for (size_t t = 0; t < m.triangle_count(); ++t) {
+        uint32_t id[3];
+        Vec2 uv[3];
+        bool pole[3];
+        for (int k = 0; k < 3; ++k) {
+            id[k] = m.indices[3 * t + static_cast<size_t>(k)];
+            Vec3 d = normalize(m.positions[id[k]] - center);
+            pole[k] = d.x * d.x + d.z * d.z < 1e-10f;
+            uv[k] = {pole[k] ? 0.0f : 0.5f + std::atan2(d.z, d.x) / (2 * kPi),
+                     1 - std::acos(std::clamp(d.y, -1.0f, 1.0f)) / kPi};
+        }
+        float umax = 0;
+        for (int k = 0; k < 3; ++k)
+            if (!pole[k]) umax = std::max(umax, uv[k].x);
+        for (int k = 0; k < 3; ++k)
+            if (!pole[k] && umax - uv[k].x > 0.5f) uv[k].x += 1;
+        for (int k = 0; k < 3; ++k)
+            if (pole[k]) uv[k].x = 0.5f * (uv[(k + 1) % 3].x + uv[(k + 2) % 3].x);
+        for (int k = 0; k < 3; ++k) {
+            auto [it, fresh] = made.try_emplace({id[k], uv[k].x, uv[k].y}, static_cast<uint32_t>(r.positions.size()));
+            if (fresh) {
+                r.positions.push_back(m.positions[id[k]]);
+                r.normals.push_back(m.normals[id[k]]);
+                r.uvs.push_back(uv[k]);
+            }
+            r.indices.push_back(it->second);
+        }
+    }
+    return r;
+}
+
 }  // namespace
 
 TriangleMesh subdivide_linear(const TriangleMesh& mesh, int levels) {
@@ -96,7 +137,7 @@ TriangleMesh make_icosphere(const Vec3& center, float radius, int level, uint32_
         r.positions[i] = center + n * radius;
     };
     for (int i = 0; i < level; ++i) m = split_once(m, onto_sphere);
-    return m;
+    return with_spherical_uvs(m, center);
 }
 
 TriangleMesh make_quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,

@@ -1,34 +1,6 @@
 #include "bounce/lighting/lighting.h"
 
-#include <OpenImageIO/texture.h>
-
 namespace bounce {
-
-Materials::Materials(const Scene& scene) : scene_(scene) {
-    bool any = false;
-    for (const auto& m : scene.materials) any |= !m.color_texture.empty();
-    if (any) {
-        textures_ = OIIO::TextureSystem::create(false);
-        textures_->attribute("max_memory_MB", 1024.0f);
-        textures_->attribute("automip", 1);
-    }
-}
-
-Materials::~Materials() {
-    if (textures_) OIIO::TextureSystem::destroy(textures_);
-}
-
-Color Materials::albedo(uint32_t material, const Vec2& uv) const {
-    const Material& m = scene_.materials[material];
-    if (m.color_texture.empty() || !textures_) return m.color;
-    OIIO::TextureOpt opt;
-    opt.swrap = opt.twrap = OIIO::TextureOpt::WrapPeriodic;
-    float rgb[3] = {1, 1, 1};
-    // Image rows run top-down; uv's v runs bottom-up.
-    if (!textures_->texture(OIIO::ustring(m.color_texture), opt, uv.x, 1 - uv.y, 0, 0, 0, 0, 3, rgb))
-        return m.color;
-    return m.color * Color(rgb[0], rgb[1], rgb[2]);
-}
 
 DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel)
     : scene_(scene), accel_(accel), emitters_(scene.lights.size()) {

@@ -1,6 +1,6 @@
-// Direct lighting of diffuse surfaces with ray-traced shadows, and the material queries
-// (albedo, emission) shading needs. Area lights, emissive meshes and the sky are sampled with
-// stratified samples; every random number comes from a RandomStream.
+// Direct lighting of diffuse surfaces with ray-traced shadows. Area lights, emissive meshes
+// and the sky are sampled with stratified samples; every random number comes from a
+// RandomStream. Materials (albedo, gloss, bump) are in materials.h.
 #pragma once
 
 #include <memory>
@@ -10,30 +10,10 @@
 #include "bounce/core/random.h"
 #include "bounce/core/sampling.h"
 #include "bounce/core/stats.h"
+#include "bounce/lighting/materials.h"
 #include "bounce/scene/scene.h"
 
-#include <OpenImageIO/oiioversion.h>
-OIIO_NAMESPACE_BEGIN
-class TextureSystem;
-OIIO_NAMESPACE_END
-
 namespace bounce {
-
-/// Material evaluation: albedo (colour x texture) and emission at a surface point.
-class Materials {
-public:
-    explicit Materials(const Scene& scene);
-    ~Materials();
-    Materials(const Materials&) = delete;
-    Materials& operator=(const Materials&) = delete;
-
-    Color albedo(uint32_t material, const Vec2& uv) const;
-    Color emission(uint32_t material) const { return scene_.materials[material].emission; }
-
-private:
-    const Scene& scene_;
-    OIIO::TextureSystem* textures_ = nullptr;
-};
 
 /// Emissive triangles of one object, with an area CDF for sampling.
 struct Emitter {

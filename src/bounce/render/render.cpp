@@ -104,7 +104,7 @@ CacheSettings cache_settings(const Scene& scene) {
 
 CacheFileInfo cache_file_info(const Scene& scene, int frame) {
     CacheFileInfo info;
-    info.scene_fingerprint = scene.fingerprint({"objects", "materials", "lights"});
+    info.scene_fingerprint = scene.fingerprint({"objects", "materials", "lights"}, true);
     info.camera_fingerprint = scene.fingerprint({"camera"});
     const RenderSettings& r = scene.render;
     info.parameters = {{"metric", r.metric},       {"min_spacing", r.min_spacing}, {"max_spacing", r.max_spacing},
@@ -156,7 +156,7 @@ std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceC
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = src.empty() ? frags[k] : src[std::min<size_t>(k, src.size() - 1)];
                 Interpolated in = cache.lookup(f.p_base, f.n_base, true);
-                out[first + k] = {in.E, in.ao, in.bent};
+                out[first + k] = {in.E, in.ao, in.bent, in.dir};
             }
         }
     });

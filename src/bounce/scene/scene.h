@@ -51,6 +51,13 @@ struct Material {
     Color color{0.7f};          ///< diffuse albedo (multiplied by the texture if any)
     std::string color_texture;  ///< absolute path, empty = none
     Color emission{0};          ///< emitted radiance; nonzero makes faces area lights
+    Color specular{0};          ///< GGX lobe's reflectance at normal incidence (F0); 0 = no lobe
+    float roughness = 0.5f;     ///< GGX roughness (alpha = roughness^2), in (0, 1]
+    std::string bump_texture;   ///< height map (texture units per uv unit x bump_strength)
+    std::string normal_texture; ///< tangent-space normal map (used when there is no bump map)
+    float bump_strength = 1.0f; ///< scales the bump height or the normal map's tilt; 0 = off
+    bool has_specular() const { return specular.x > 0 || specular.y > 0 || specular.z > 0; }
+    bool has_bump() const { return bump_strength != 0 && (!bump_texture.empty() || !normal_texture.empty()); }
     bool is_emissive() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }
 };
 
@@ -71,6 +78,7 @@ struct RenderSettings {
     int tile_size = 32;                ///< tile (bucket) edge, pixels
     std::string tile_order = "rows";   ///< rows | spiral: the order threads take tiles in
     std::string cache_sharing = "shared";  ///< shared | per-thread (docs/parallel.md)
+    bool light_per_channel = false;  ///< indirect light as three (radiance, direction) pairs, not one
     std::array<int, 4> crop{0, 0, 0, 0};  ///< x0,x1,y0,y1 (exclusive ends); all 0 = full frame
     bool has_crop() const { return crop[1] > crop[0] || crop[3] > crop[2]; }
 
@@ -116,7 +124,10 @@ struct Scene {
     Bounds bounds() const;
     /// 64-bit hash of the named top-level parts of the effective description ("camera",
     /// "objects" ...): the identity that deep and cache files are checked against.
-    uint64_t fingerprint(const std::vector<std::string>& parts) const;
+    /// `without_surface_shading` leaves out the material keys that only change how a surface
+    /// reflects light to the camera (specular, roughness, bump and normal maps): cached
+    /// irradiance does not depend on them.
+    uint64_t fingerprint(const std::vector<std::string>& parts, bool without_surface_shading = false) const;
 };
 
 }  // namespace bounce

@@ -448,6 +448,13 @@ Material read_material(const Reader& m, const std::string& name) {
         if (mat.color[i] > 1) m.fail("color", "albedo components must be <= 1 (energy conservation)");
     mat.color_texture = m.file("color_texture", false);
     mat.emission = m.color("emission", Color(0));
+    mat.specular = m.color("specular", Color(0));
+    for (int i = 0; i < 3; ++i)
+        if (mat.specular[i] > 1) m.fail("specular", "specular components must be <= 1");
+    mat.roughness = static_cast<float>(m.number("roughness", mat.roughness, 0.01, 1));
+    mat.bump_texture = m.file("bump_texture", false);
+    mat.normal_texture = m.file("normal_texture", false);
+    mat.bump_strength = static_cast<float>(m.number("bump_strength", mat.bump_strength, -1e3, 1e3));
     return mat;
 }
 
@@ -506,7 +513,9 @@ void read_object(const Reader& r, Scene& scene, size_t index) {
         if (mat >= 0) return static_cast<uint32_t>(mat);
         int d = material_index(scene, "default");
         if (d < 0) {
-            scene.materials.push_back(Material{"default", Color(0.7f), "", Color(0)});
+            Material m;
+            m.name = "default";
+            scene.materials.push_back(m);
             d = static_cast<int>(scene.materials.size() - 1);
         }
         return static_cast<uint32_t>(d);
@@ -571,7 +580,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<std::stri
                   "rays", "ao_distance", "ao_falloff", "hit_light_samples", "concave_angle", "radiosity",
                   "radiosity_textures", "radiosity_texel", "radiosity_light_samples", "metric", "min_spacing",
                   "max_spacing", "max_angle", "gradient_limit", "quality", "min_weight", "accuracy", "gradients",
-                  "neighbour_clamp", "preview", "shading_reach", "radius_scale", "tile_order", "cache_sharing"});
+                  "neighbour_clamp", "preview", "shading_reach", "radius_scale", "tile_order", "cache_sharing", "light_per_channel"});
         RenderSettings& s = scene.render;
         s.spp = r.integer("spp", s.spp, 1, 4096);
         if (r.has("seed")) {
@@ -586,6 +595,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<std::stri
         s.tile_size = r.integer("tile_size", s.tile_size, 1, 4096);
         s.tile_order = r.choice("tile_order", s.tile_order, {"rows", "spiral"});
         s.cache_sharing = r.choice("cache_sharing", s.cache_sharing, {"shared", "per-thread"});
+        s.light_per_channel = r.boolean("light_per_channel", s.light_per_channel);
         s.gi = r.choice("gi", s.gi, {"none", "brute", "cache"});
         s.ao = r.boolean("ao", s.ao);
         s.rays = r.integer("rays", s.rays, 1, 1 << 20);
@@ -661,7 +671,8 @@ Scene build_scene(json doc, const std::string& path, const std::vector<std::stri
         const json& mats = root.raw("materials");
         if (!mats.is_object()) root.fail("materials", "expected an object of named materials");
         for (auto it = mats.begin(); it != mats.end(); ++it) {
-            Reader m(it.value(), "/materials/" + it.key(), ctx, {"color", "color_texture", "emission"});
+            Reader m(it.value(), "/materials/" + it.key(), ctx, {"color", "color_texture", "emission", "specular", "roughness", "bump_texture",
+                                                                  "normal_texture", "bump_strength"});
             scene.materials.push_back(read_material(m, it.key()));
         }
     }
@@ -722,16 +733,37 @@ TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
             m.color = vmin(vmax(m.color, Color(0)), Color(1));
             aiColor3D ke;
             if (am->Get(AI_MATKEY_COLOR_EMISSIVE, ke) == AI_SUCCESS) m.emission = vmax(to_vec3(ke), Color(0));
-            aiString tex;
-            if (am->GetTexture(aiTextureType_BASE_COLOR, 0, &tex) == AI_SUCCESS ||
-                am->GetTexture(aiTextureType_DIFFUSE, 0, &tex) == AI_SUCCESS) {
-                fs::path t = fs::path(path).parent_path() / tex.C_Str();
-                std::error_code ec;
-                if (tex.C_Str()[0] != '*' && fs::is_regular_file(t, ec)) {
-                    m.color_texture = t.lexically_normal().string();
-                    m.color = Color(1);
-                }
+            // Glossy lobe: glTF metallic-roughness (F0 = mix(0.04, base, metallic), the diffuse
+            // part darkened by 1 - metallic), or MTL's Ks and Ns (Blinn-Phong exponent to GGX
+            // roughness: alpha = sqrt(2 / (Ns + 2))).
+            float metallic = 0, rough = 1, ns = 0;
+            aiColor3D ks;
+            if (am->Get(AI_MATKEY_ROUGHNESS_FACTOR, rough) == AI_SUCCESS) {
+                am->Get(AI_MATKEY_METALLIC_FACTOR, metallic);
+                metallic = std::clamp(metallic, 0.0f, 1.0f);
+                m.specular = Color(0.04f) * (1 - metallic) + m.color * metallic;
+                m.color = m.color * (1 - metallic);
+                m.roughness = std::clamp(rough, 0.01f, 1.0f);
+            } else if (am->Get(AI_MATKEY_COLOR_SPECULAR, ks) == AI_SUCCESS && (ks.r > 0 || ks.g > 0 || ks.b > 0)) {
+                m.specular = vmin(vmax(to_vec3(ks), Color(0)), Color(1));
+                if (am->Get(AI_MATKEY_SHININESS, ns) == AI_SUCCESS && ns > 0)
+                    m.roughness = std::clamp(std::sqrt(std::sqrt(2 / (ns + 2))), 0.01f, 1.0f);
             }
+            auto texture = [&](std::initializer_list<aiTextureType> types) -> std::string {
+                aiString tex;
+                for (aiTextureType type : types) {
+                    if (am->GetTexture(type, 0, &tex) != AI_SUCCESS || tex.C_Str()[0] == '*') continue;
+                    fs::path t = fs::path(path).parent_path() / tex.C_Str();
+                    std::error_code ec;
+                    if (fs::is_regular_file(t, ec)) return t.lexically_normal().string();
+                }
+                return "";
+            };
+            m.color_texture = texture({aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE});
+            if (!m.color_texture.empty()) m.color = Color(1 - metallic);
+            // Assimp files MTL's bump maps under HEIGHT, glTF's normalTexture under NORMALS.
+            m.bump_texture = texture({aiTextureType_HEIGHT, aiTextureType_DISPLACEMENT});
+            m.normal_texture = texture({aiTextureType_NORMALS});
             mat_map[i] = static_cast<uint32_t>(materials.size());
             materials.push_back(m);
         }
@@ -792,10 +824,16 @@ Bounds Scene::bounds() const {
     return b;
 }
 
-uint64_t Scene::fingerprint(const std::vector<std::string>& parts) const {
+uint64_t Scene::fingerprint(const std::vector<std::string>& parts, bool without_surface_shading) const {
     uint64_t h = 0x243f6a8885a308d3ULL;
     for (const auto& part : parts) {
-        std::string s = part + "=" + (description.contains(part) ? description[part].dump() : "");
+        json value = description.contains(part) ? description[part] : json();
+        if (without_surface_shading && part == "materials" && value.is_object())
+            for (auto& [name, m] : value.items())
+                if (m.is_object())
+                    for (const char* key : {"specular", "roughness", "bump_texture", "normal_texture", "bump_strength"})
+                        m.erase(key);
+        std::string s = part + "=" + (value.is_null() ? "" : value.dump());
         for (unsigned char c : s) h = hash_combine(h, c);
     }
     return h;

@@ -1,6 +1,7 @@
 #include "bounce/shade/shade.h"
 
 #include "bounce/core/parallel.h"
+#include "bounce/shade/brdf.h"
 
 namespace bounce {
 
@@ -42,7 +43,8 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = frags[k];
-                Color alb = materials.albedo(f.material, f.uv);
+                const SurfaceShading surf = materials.surface(f.material, f.object, f.prim, f.uv, f.n, f.footprint);
+                const Color& alb = surf.albedo;
                 if (indirect) {
                     const Indirect& in = (*indirect)[first + k];
                     e_ind += in.irradiance * f.weight;
@@ -51,13 +53,14 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                     if (ao_only)
                         b += Color(in.ao) * f.weight;
                     else
-                        b += alb * in.irradiance * (kInvPi * f.weight);
+                        b += indirect_radiance(in, f.n_base, surf, normalize(camera.origin() - f.p),
+                                               scene.render.light_per_channel) * f.weight;
                 }
                 if (!ao_only) {
                     Color e = direct_irradiance
                                   ? (*direct_irradiance)[first + k]
                                   : lighting.irradiance(
-                                        f.p, f.n, fragment_stream(scene.render.seed, x, y, k),
+                                        f.p, surf.normal, fragment_stream(scene.render.seed, x, y, k),
                                         scene.render.light_samples, counters, indirect == nullptr);
                     Color radiance = materials.emission(f.material) + alb * e * kInvPi;
                     d += radiance * f.weight;

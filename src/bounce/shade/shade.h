@@ -13,7 +13,10 @@
 namespace bounce {
 
 /// Layers: beauty (R,G,B,A), direct, albedo, N, depth (Z); with `indirect` also indirect
-/// (irradiance), ao (Y) and bentnormal. Beauty = emission + albedo (E_direct + E_indirect) / pi;
+/// (irradiance), ao (Y) and bentnormal. Beauty = emission + albedo E_direct / pi + the
+/// indirect light through the surface's BRDF with its bumped normal (brdf.h; for an un-bumped
+/// diffuse surface exactly albedo E_indirect / pi). Direct light is diffuse only, at the
+/// bumped normal;
 /// in AO-only mode (scene.render.ao) beauty is the AO. Sky lights are left out of the direct
 /// term when indirect light is given (the gather brings the sky). Tiles run in parallel; the
 /// result is independent of thread count and tile order.

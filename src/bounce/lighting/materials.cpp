@@ -1,0 +1,110 @@
+#include "bounce/lighting/materials.h"
+
+#include <OpenImageIO/texture.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace bounce {
+
+Materials::Materials(const Scene& scene) : scene_(scene) {
+    bool any = false;
+    for (const auto& m : scene.materials)
+        any |= !m.color_texture.empty() || !m.bump_texture.empty() || !m.normal_texture.empty();
+    if (any) {
+        textures_ = OIIO::TextureSystem::create(false);
+        textures_->attribute("max_memory_MB", 1024.0f);
+        textures_->attribute("automip", 1);
+    }
+}
+
+Materials::~Materials() {
+    if (textures_) OIIO::TextureSystem::destroy(textures_);
+}
+
+namespace {
+
+/// Texture lookup at uv with an axis-aligned filter of (du, dv) uv units; image rows run
+/// top-down while v runs bottom-up. Returns false when the file cannot be read.
+bool lookup(OIIO::TextureSystem* ts, const std::string& file, const Vec2& uv, float du, float dv, int channels,
+            float* out, float* d_ds = nullptr, float* d_dt = nullptr) {
+    OIIO::TextureOpt opt;
+    opt.swrap = opt.twrap = OIIO::TextureOpt::WrapPeriodic;
+    return ts->texture(OIIO::ustring(file), opt, uv.x, 1 - uv.y, du, 0, 0, dv, channels, out, d_ds, d_dt);
+}
+
+}  // namespace
+
+Color Materials::albedo(uint32_t material, const Vec2& uv) const {
+    const Material& m = scene_.materials[material];
+    if (m.color_texture.empty() || !textures_) return m.color;
+    float rgb[3] = {1, 1, 1};
+    if (!lookup(textures_, m.color_texture, uv, 0, 0, 3, rgb)) return m.color;
+    return m.color * Color(rgb[0], rgb[1], rgb[2]);
+}
+
+bool triangle_tangents(const TriangleMesh& mesh, uint32_t prim, Vec3& dpdu, Vec3& dpdv) {
+    if (mesh.uvs.empty()) return false;
+    const uint32_t i0 = mesh.indices[3 * prim], i1 = mesh.indices[3 * prim + 1], i2 = mesh.indices[3 * prim + 2];
+    const Vec3 e1 = mesh.positions[i1] - mesh.positions[i0], e2 = mesh.positions[i2] - mesh.positions[i0];
+    const Vec2 t1{mesh.uvs[i1].x - mesh.uvs[i0].x, mesh.uvs[i1].y - mesh.uvs[i0].y};
+    const Vec2 t2{mesh.uvs[i2].x - mesh.uvs[i0].x, mesh.uvs[i2].y - mesh.uvs[i0].y};
+    const float det = t1.x * t2.y - t1.y * t2.x;
+    if (std::abs(det) < 1e-12f) return false;
+    dpdu = (e1 * t2.y - e2 * t1.y) / det;
+    dpdv = (e2 * t1.x - e1 * t2.x) / det;
+    return true;
+}
+
+Vec3 bumped_normal(const Vec3& n, const Vec3& dpdu, const Vec3& dpdv, float dhdu, float dhdv) {
+    if (dhdu == 0 && dhdv == 0) return n;
+    // d(P + h n)/du x d(P + h n)/dv = (dpdu x dpdv) + dhdu (n x dpdv) - dhdv (n x dpdu) + O(h);
+    // divided by a = n.(dpdu x dpdv) it is n plus the tilt, whatever the uv orientation.
+    const float a = dot(n, cross(dpdu, dpdv));
+    if (std::abs(a) < 1e-20f) return n;
+    Vec3 b = n + (cross(n, dpdv) * dhdu - cross(n, dpdu) * dhdv) / a;
+    return dot(b, b) > 0 ? normalize(b) : n;
+}
+
+SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t prim, const Vec2& uv, const Vec3& n,
+                                  float footprint) const {
+    const Material& m = scene_.materials[material];
+    SurfaceShading s;
+    s.specular = m.specular;
+    s.roughness = m.roughness;
+    s.normal = n;
+    Vec3 dpdu, dpdv;
+    const bool tangents = triangle_tangents(scene_.objects[object].visible(), prim, dpdu, dpdv);
+    // Filter width in uv: the pixel's footprint over the length of the tangents.
+    float du = 0, dv = 0;
+    if (tangents) {
+        du = footprint / std::max(length(dpdu), 1e-20f);
+        dv = footprint / std::max(length(dpdv), 1e-20f);
+    }
+    s.albedo = m.color;
+    if (!m.color_texture.empty() && textures_) {
+        float rgb[3] = {1, 1, 1};
+        if (lookup(textures_, m.color_texture, uv, du, dv, 3, rgb)) s.albedo = m.color * Color(rgb[0], rgb[1], rgb[2]);
+    }
+    if (!m.has_bump() || !tangents || !textures_) return s;
+    if (!m.bump_texture.empty()) {
+        float h = 0, dh_ds = 0, dh_dt = 0;
+        if (lookup(textures_, m.bump_texture, uv, du, dv, 1, &h, &dh_ds, &dh_dt))
+            s.normal = bumped_normal(n, dpdu, dpdv, m.bump_strength * dh_ds, -m.bump_strength * dh_dt);  // t = 1 - v
+        return s;
+    }
+    float rgb[3] = {0.5f, 0.5f, 1};
+    if (!lookup(textures_, m.normal_texture, uv, du, dv, 3, rgb)) return s;
+    // Tangent frame from dP/du (Gram-Schmidt against n); the bitangent follows dP/dv's side.
+    Vec3 t = dpdu - n * dot(n, dpdu);
+    if (dot(t, t) <= 0) return s;
+    t = normalize(t);
+    Vec3 b = cross(n, t);
+    if (dot(b, dpdv) < 0) b = -b;
+    Vec3 local(m.bump_strength * (2 * rgb[0] - 1), m.bump_strength * (2 * rgb[1] - 1), 2 * rgb[2] - 1);
+    Vec3 nn = t * local.x + b * local.y + n * std::max(local.z, 0.0f);
+    if (dot(nn, nn) > 0) s.normal = normalize(nn);
+    return s;
+}
+
+}  // namespace bounce

@@ -1,0 +1,57 @@
+// Materials at a surface point: albedo (colour x texture), emission, the GGX glossy lobe and
+// the shading normal after bump or normal mapping. Textures go through OpenImageIO's
+// TextureSystem (mipmapped, filtered by the pixel's footprint at visible points).
+#pragma once
+
+#include <cstdint>
+
+#include "bounce/core/math.h"
+#include "bounce/scene/scene.h"
+
+#include <OpenImageIO/oiioversion.h>
+OIIO_NAMESPACE_BEGIN
+class TextureSystem;
+OIIO_NAMESPACE_END
+
+namespace bounce {
+
+/// A material evaluated where the camera sees it: everything a surface shader needs.
+struct SurfaceShading {
+    Color albedo{0};
+    Color specular{0};     ///< GGX F0 (0 = no glossy lobe)
+    float roughness = 1;
+    Vec3 normal{0, 0, 1};  ///< shading normal after bump / normal mapping (unit; = n without)
+};
+
+class Materials {
+public:
+    explicit Materials(const Scene& scene);
+    ~Materials();
+    Materials(const Materials&) = delete;
+    Materials& operator=(const Materials&) = delete;
+
+    /// Albedo at uv, unfiltered (secondary hits: gathers and radiosity textures).
+    Color albedo(uint32_t material, const Vec2& uv) const;
+    Color emission(uint32_t material) const { return scene_.materials[material].emission; }
+
+    /// The material at a visible point: triangle `prim` of object `object`'s visible mesh, at
+    /// `uv`, with interpolated normal `n` and pixel footprint `footprint` (world units; the
+    /// texture filter width). Bump maps displace by bump_strength x texture value (world
+    /// units); normal maps are tangent-space, tilted by bump_strength.
+    SurfaceShading surface(uint32_t material, uint32_t object, uint32_t prim, const Vec2& uv, const Vec3& n,
+                           float footprint) const;
+
+private:
+    const Scene& scene_;
+    OIIO::TextureSystem* textures_ = nullptr;
+};
+
+/// dP/du and dP/dv of triangle `prim` of `mesh` (from its positions and uvs); false when the
+/// mesh has no uvs or they are degenerate there.
+bool triangle_tangents(const TriangleMesh& mesh, uint32_t prim, Vec3& dpdu, Vec3& dpdv);
+
+/// Blinn's bump mapping: the normal of the surface P + h n, for height derivatives (dh/du,
+/// dh/dv) and tangents dP/du, dP/dv; n unchanged when both derivatives are 0.
+Vec3 bumped_normal(const Vec3& n, const Vec3& dpdu, const Vec3& dpdv, float dhdu, float dhdv);
+
+}  // namespace bounce
