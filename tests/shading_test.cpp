@@ -96,8 +96,8 @@ TEST(ShadingRender, BumpStrengthZeroIsTheUnbumpedImage) {
 }
 
 /// A black glossy floor under a white card lit from below, half of the card hidden from the
-/// floor by a black occluder: the floor's beauty is its glossy reflection of the cached light
-/// alone (no diffuse part, no direct highlights), so it shows where the light comes from.
+/// floor by a black occluder: the floor's beauty is its glossy reflection of the indirect light
+/// alone (no diffuse part, no direct light), so it shows where that light comes from.
 double highlight_centroid_x(float occluder_x0, float occluder_x1) {
     json j = {{"camera", {{"position", {0, 0.9, 3.0}}, {"look_at", {0, 0, 0}}, {"fov", 60}, {"resolution", {40, 30}}}},
               {"render", {{"spp", 1}, {"gi", "brute"}, {"rays", 256}, {"light_samples", 1}}},
@@ -108,7 +108,9 @@ double highlight_centroid_x(float occluder_x0, float occluder_x1) {
                            {{"type", "quad"}, {"material", "card"}, {"vertices", {{-4, 2, -4}, {4, 2, -4}, {4, 2, 4}, {-4, 2, 4}}}},
                            {{"type", "quad"}, {"material", "black"},
                             {"vertices", {{occluder_x0, 1.2, -4}, {occluder_x1, 1.2, -4}, {occluder_x1, 1.2, 4}, {occluder_x0, 1.2, 4}}}}}},
-              {"lights", {{{"type", "point"}, {"position", {0, 1.9, 0}}, {"color", 30.0}}}}};
+              // A spot pointing up: the floor gets no direct light, so no direct highlight.
+              {"lights", {{{"type", "spot"}, {"position", {0, 1.9, 0}}, {"direction", {0, 1, 0}}, {"cone_angle", 80},
+                           {"cone_falloff", 5}, {"color", 30.0}}}}};
     Stats stats;
     Image img = render(test::scene_from(j), {}, stats, nullptr).image;
     const Layer& b = *img.find("beauty");
@@ -125,8 +127,10 @@ double highlight_centroid_x(float occluder_x0, float occluder_x1) {
 
 TEST(ShadingRender, GlossyHighlightsMoveWithTheOccluder) {
     const double light_from_right = highlight_centroid_x(-4, 0), light_from_left = highlight_centroid_x(0, 4);
-    EXPECT_GT(light_from_right, 20 + 2);
-    EXPECT_LT(light_from_left, 20 - 2);
+    // Mirror images about the image centre (x = 19.5 of 40 pixels), each well off it.
+    EXPECT_GT(light_from_right, 19.5 + 1.5);
+    EXPECT_LT(light_from_left, 19.5 - 1.5);
+    EXPECT_NEAR(light_from_right - 19.5, 19.5 - light_from_left, 0.5);  // up to sampling noise
 }
 
 TEST(ShadingRender, GlossAndBumpsKeepACacheValidButAlbedoDoesNot) {

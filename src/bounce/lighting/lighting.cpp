@@ -24,10 +24,10 @@ DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel)
 }
 
 Color DirectLighting::irradiance(const Vec3& p, const Vec3& n, const RandomStream& rng,
-                                 int samples, Counters& counters, bool include_sky) const {
+                                 int samples, Counters& counters, bool include_sky, const LightSampleFn* each) const {
     Color e(0);
     for (size_t i = 0; i < scene_.lights.size(); ++i)
-        if (include_sky || scene_.lights[i].type != LightType::Sky) e += sample_light(i, p, n, rng, samples, counters);
+        if (include_sky || scene_.lights[i].type != LightType::Sky) e += sample_light(i, p, n, rng, samples, counters, each);
     return e;
 }
 
@@ -38,8 +38,8 @@ Color DirectLighting::background(const Vec3& dir) const {
     return c;
 }
 
-Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n,
-                                   const RandomStream& rng, int samples, Counters& counters) const {
+Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng,
+                                   int samples, Counters& counters, const LightSampleFn* each) const {
     const Light& l = scene_.lights[index];
     const auto dim = [&](uint32_t d) { return static_cast<uint32_t>(kDimLight + 16 * index + d); };
     switch (l.type) {
@@ -61,14 +61,18 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n,
             }
             ++counters.shadow_rays;
             if (accel_.occluded(p, w, r)) return Color(0);
-            return l.color * (cone * cos_x / r2);
+            Color e = l.color * (cone * cos_x / r2);
+            if (each) (*each)(w, e);
+            return e;
         }
         case LightType::Distant: {
             Vec3 w = -l.direction;
             float cos_x = dot(n, w);
             if (cos_x <= 0) return Color(0);
             ++counters.shadow_rays;
-            return accel_.occluded(p, w, INFINITY) ? Color(0) : l.color * cos_x;
+            if (accel_.occluded(p, w, INFINITY)) return Color(0);
+            if (each) (*each)(w, l.color * cos_x);
+            return l.color * cos_x;
         }
         case LightType::Quad: {
             Vec3 ln = cross(l.edge_u, l.edge_v);
@@ -86,6 +90,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n,
                 ++counters.shadow_rays;
                 if (accel_.occluded(p, w, r)) continue;
                 e += l.color * (cos_x * cos_l / r2);
+                if (each) (*each)(w, l.color * (cos_x * cos_l / r2 * area / static_cast<float>(samples)));
             }
             return e * (area / static_cast<float>(samples));
         }
@@ -98,7 +103,9 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n,
                 Vec3 w = f.to_world(cosine_hemisphere(uv.x, uv.y));
                 ++counters.shadow_rays;
                 if (accel_.occluded(p, w, INFINITY)) continue;
-                e += l.sky_map ? l.color * l.sky_map->lookup(w, l.sky_rotation) : l.color;
+                Color L = l.sky_map ? l.color * l.sky_map->lookup(w, l.sky_rotation) : l.color;
+                e += L;
+                if (each) (*each)(w, L * (kPi / static_cast<float>(samples)));
             }
             // Cosine-weighted estimator of the integral of L cos: pi * mean(L).
             return e * (kPi / static_cast<float>(samples));
@@ -130,6 +137,9 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n,
                 ++counters.shadow_rays;
                 if (accel_.occluded(p, w, r)) continue;
                 e += scene_.materials[q.material].emission * (cos_x * cos_l / r2);
+                if (each)
+                    (*each)(w, scene_.materials[q.material].emission *
+                                   (cos_x * cos_l / r2 * em.area / static_cast<float>(samples)));
             }
             return e * (em.area / static_cast<float>(samples));
         }

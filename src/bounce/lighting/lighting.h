@@ -3,6 +3,7 @@
 // RandomStream. Materials (albedo, gloss, bump) are in materials.h.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -23,6 +24,11 @@ struct Emitter {
     float area = 0;
 };
 
+/// Called for each unshadowed light sample with its direction (unit, from the point) and its
+/// share of the irradiance (the samples' shares sum to the returned E): lets glossy BRDFs
+/// reuse the samples the diffuse estimate draws.
+using LightSampleFn = std::function<void(const Vec3& w, const Color& e)>;
+
 /// Direct lighting over all of a scene's lights.
 class DirectLighting {
 public:
@@ -33,14 +39,14 @@ public:
     /// Diffuse radiance leaving the point is albedo * E / pi.
     /// `include_sky = false` leaves sky lights out (when the gather brings the sky instead).
     Color irradiance(const Vec3& p, const Vec3& n, const RandomStream& rng, int samples,
-                     Counters& counters, bool include_sky = true) const;
+                     Counters& counters, bool include_sky = true, const LightSampleFn* each = nullptr) const;
 
     /// Radiance the camera sees where a primary ray escapes (the sky; black without one).
     Color background(const Vec3& dir) const;
 
 private:
     Color sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng,
-                       int samples, Counters& counters) const;
+                       int samples, Counters& counters, const LightSampleFn* each) const;
 
     const Scene& scene_;
     const SceneAccel& accel_;

@@ -57,12 +57,19 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                                                scene.render.light_per_channel) * f.weight;
                 }
                 if (!ao_only) {
+                    // Glossy surfaces reflect the same light samples the diffuse estimate draws.
+                    Color gloss(0);
+                    const Vec3 wo = normalize(camera.origin() - f.p);
+                    const LightSampleFn glossy = [&](const Vec3& w, const Color& e) {
+                        gloss += ggx_specular(surf.normal, wo, w, surf.specular, surf.roughness) * e;
+                    };
                     Color e = direct_irradiance
                                   ? (*direct_irradiance)[first + k]
                                   : lighting.irradiance(
                                         f.p, surf.normal, fragment_stream(scene.render.seed, x, y, k),
-                                        scene.render.light_samples, counters, indirect == nullptr);
-                    Color radiance = materials.emission(f.material) + alb * e * kInvPi;
+                                        scene.render.light_samples, counters, indirect == nullptr,
+                                        surf.specular == Color(0) ? nullptr : &glossy);
+                    Color radiance = materials.emission(f.material) + alb * e * kInvPi + gloss;
                     d += radiance * f.weight;
                     b += radiance * f.weight;
                 }
