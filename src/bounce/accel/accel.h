@@ -58,11 +58,16 @@ public:
 
     /// Traces a secondary ray that leaves the fine surface at `p` along unit `d`: the origin
     /// is moved to the coarse intersection closest to `p` within +-delta along the ray, and
-    /// the first coarse hit after that origin is returned (t measured from `p`).
+    /// the first coarse hit after that origin is returned (t measured from `p`). Rays whose
+    /// first hit from p is beyond delta take one traversal; only the others probe.
     Hit trace(const Vec3& p, const Vec3& d) const;
     /// Visibility from `p` (on the fine surface) to the point `p + d * dist` (dist may be
     /// INFINITY), with the same origin offsetting; the end point's own surface is excluded.
     bool occluded(const Vec3& p, const Vec3& d, float dist) const;
+
+    /// Where the first, probe-free traversal from p starts: 1e-5 of p's largest coordinate
+    /// (at least 1e-7 of the scene diagonal), above float rounding, far below delta.
+    float self_epsilon(const Vec3& p) const;
 
 private:
     /// Parameter along the ray from p - delta*d at which the traced ray starts.
@@ -70,7 +75,7 @@ private:
 
     RTCDevice device_ = nullptr;
     std::unique_ptr<Bvh> coarse_, fine_;
-    float ray_offset_ = 0, gap_ = 0;
+    float ray_offset_ = 0, gap_ = 0, min_epsilon_ = 0;
 };
 
 }  // namespace bounce
