@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <chrono>
 #include <cmath>
 #include <tbb/task_arena.h>
 
@@ -256,7 +257,11 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         }
         {
             PhaseTimer t(stats, "shading");
-            if (cache) indirect = shading_pass(scene, result.deep, *cache, stats, progress);
+            if (cache) {
+                auto t0 = std::chrono::steady_clock::now();
+                indirect = shading_pass(scene, result.deep, *cache, stats, progress);
+                stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+            }
             result.image = shade(scene, result.deep, materials, lighting, gi ? &indirect : nullptr, stats, progress);
         }
         if (!cache && !request.cache_in.empty()) {  // --show records over a non-cache render
