@@ -7,8 +7,17 @@
 
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
+#include "bounce/core/parallel.h"
 
 namespace bounce {
+
+#ifdef BOUNCE_TSAN
+namespace {
+// OpenEXR compresses on its own (uninstrumented) worker pool; under ThreadSanitizer EXR files
+// are written and read on the calling thread so the pool's hand-offs are not reported.
+const bool exr_single_threaded = OIIO::attribute("exr_threads", -1);
+}  // namespace
+#endif
 
 Layer& Image::add_layer(const std::string& name, const std::vector<std::string>& channels) {
     layers.push_back({name, channels, std::vector<float>(static_cast<size_t>(width) * height * channels.size(), 0.0f)});

@@ -1,6 +1,7 @@
 #include "bounce/lighting/materials.h"
 
 #include <OpenImageIO/texture.h>
+#include <OpenImageIO/ustring.h>
 
 #include <algorithm>
 #include <cmath>
@@ -16,6 +17,9 @@ Materials::Materials(const Scene& scene) : scene_(scene) {
         textures_->attribute("max_memory_MB", 1024.0f);
         textures_->attribute("automip", 1);
     }
+    auto unique = [](const std::string& f) { return f.empty() ? nullptr : OIIO::ustring(f).c_str(); };
+    for (const auto& m : scene.materials)
+        names_.push_back({unique(m.color_texture), unique(m.bump_texture), unique(m.normal_texture)});
 }
 
 Materials::~Materials() {
@@ -26,11 +30,11 @@ namespace {
 
 /// Texture lookup at uv with an axis-aligned filter of (du, dv) uv units; image rows run
 /// top-down while v runs bottom-up. Returns false when the file cannot be read.
-bool lookup(OIIO::TextureSystem* ts, const std::string& file, const Vec2& uv, float du, float dv, int channels,
+bool lookup(OIIO::TextureSystem* ts, const char* file, const Vec2& uv, float du, float dv, int channels,
             float* out, float* d_ds = nullptr, float* d_dt = nullptr) {
     OIIO::TextureOpt opt;
     opt.swrap = opt.twrap = OIIO::TextureOpt::WrapPeriodic;
-    return ts->texture(OIIO::ustring(file), opt, uv.x, 1 - uv.y, du, 0, 0, dv, channels, out, d_ds, d_dt);
+    return ts->texture(OIIO::ustring::from_unique(file), opt, uv.x, 1 - uv.y, du, 0, 0, dv, channels, out, d_ds, d_dt);
 }
 
 }  // namespace
@@ -39,7 +43,7 @@ Color Materials::albedo(uint32_t material, const Vec2& uv) const {
     const Material& m = scene_.materials[material];
     if (m.color_texture.empty() || !textures_) return m.color;
     float rgb[3] = {1, 1, 1};
-    if (!lookup(textures_, m.color_texture, uv, 0, 0, 3, rgb)) return m.color;
+    if (!lookup(textures_, names_[material].color, uv, 0, 0, 3, rgb)) return m.color;
     return m.color * Color(rgb[0], rgb[1], rgb[2]);
 }
 
@@ -84,17 +88,17 @@ SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t p
     s.albedo = m.color;
     if (!m.color_texture.empty() && textures_) {
         float rgb[3] = {1, 1, 1};
-        if (lookup(textures_, m.color_texture, uv, du, dv, 3, rgb)) s.albedo = m.color * Color(rgb[0], rgb[1], rgb[2]);
+        if (lookup(textures_, names_[material].color, uv, du, dv, 3, rgb)) s.albedo = m.color * Color(rgb[0], rgb[1], rgb[2]);
     }
     if (!m.has_bump() || !tangents || !textures_) return s;
     if (!m.bump_texture.empty()) {
         float h = 0, dh_ds = 0, dh_dt = 0;
-        if (lookup(textures_, m.bump_texture, uv, du, dv, 1, &h, &dh_ds, &dh_dt))
+        if (lookup(textures_, names_[material].bump, uv, du, dv, 1, &h, &dh_ds, &dh_dt))
             s.normal = bumped_normal(n, dpdu, dpdv, m.bump_strength * dh_ds, -m.bump_strength * dh_dt);  // t = 1 - v
         return s;
     }
     float rgb[3] = {0.5f, 0.5f, 1};
-    if (!lookup(textures_, m.normal_texture, uv, du, dv, 3, rgb)) return s;
+    if (!lookup(textures_, names_[material].normal, uv, du, dv, 3, rgb)) return s;
     // Tangent frame from dP/du (Gram-Schmidt against n); the bitangent follows dP/dv's side.
     Vec3 t = dpdu - n * dot(n, dpdu);
     if (dot(t, t) <= 0) return s;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "bounce/core/math.h"
 #include "bounce/scene/scene.h"
@@ -42,8 +43,16 @@ public:
                            float footprint) const;
 
 private:
+    /// Texture file names as OpenImageIO unique strings (ustring::c_str()), made once here:
+    /// making them per lookup would take the global string table's lock every time.
+    struct TextureNames {
+        const char* color = nullptr;
+        const char* bump = nullptr;
+        const char* normal = nullptr;
+    };
     const Scene& scene_;
     OIIO::TextureSystem* textures_ = nullptr;
+    std::vector<TextureNames> names_;
 };
 
 /// dP/du and dP/dv of triangle `prim` of `mesh` (from its positions and uvs); false when the
