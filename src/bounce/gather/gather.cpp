@@ -75,9 +75,11 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
                             : 0;
                 // Distance for the record radius: leave out rays that are grazing both where
                 // they leave and where they land (slightly concave surfaces).
-                Vec3 ng = surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v).ng;
-                bool grazing = cos_t < cos_concave_ && std::abs(dot(ng, d)) < cos_concave_;
-                if (!grazing) res.min_distance = std::min(res.min_distance, h.t);
+                if (settings_.record_terms) {
+                    Vec3 ng = surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v).ng;
+                    bool grazing = cos_t < cos_concave_ && std::abs(dot(ng, d)) < cos_concave_;
+                    if (!grazing) res.min_distance = std::min(res.min_distance, h.t);
+                }
                 if (!settings_.ao_only) l = hit_radiance(h, d, rng, s, counters);
             } else if (!settings_.ao_only) {
                 l = lighting_.background(d);
@@ -95,6 +97,7 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
     res.bent_normal = dot(sum_u_dir, sum_u_dir) > 0 ? normalize(sum_u_dir) : n;
     for (int ch = 0; ch < 3; ++ch) res.light_dir[static_cast<size_t>(ch)] = sum_dir[static_cast<size_t>(ch)] * w;
     res.harmonic_distance = inv_r_sum > 0 ? static_cast<float>(S / inv_r_sum) : INFINITY;
+    if (!settings_.record_terms) return res;
 
     // Rotational gradient (cell-centre angles): (pi/S) sum_k t(phi_k) sum_j tan(theta_j) L_jk.
     // Translational gradient: Ward-Heckbert over cell boundaries with min distances

@@ -24,6 +24,8 @@ struct GatherSettings {
     float concave_angle = 80;    ///< degrees: a ray more than this far from the normal at both ends
                                  ///< does not count towards the minimum hit distance (TL04)
     bool ao_only = false;        ///< skip shading hits (AO and bent normal only)
+    bool record_terms = true;    ///< distances and gradients (what a cache record needs); brute
+                                 ///< force turns them off and gathers only E, AO and directions
 };
 
 /// The stratification used for `rays`.

@@ -215,6 +215,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         std::unique_ptr<IrradianceCache> cache;
         if (gi) {
             GatherSettings gs = gather_settings(scene);
+            gs.record_terms = scene.render.gi == "cache";  // brute force needs no gradients
             std::unique_ptr<RadiosityTextures> radiosity;
             if (scene.render.radiosity && !gs.ao_only)
                 radiosity = radiosity_for(scene, materials, lighting, stats, progress);
