@@ -1,5 +1,7 @@
 #include "bounce/shade/shade.h"
 
+#include <optional>
+
 #include "bounce/core/parallel.h"
 #include "bounce/shade/brdf.h"
 
@@ -45,6 +47,7 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                 const Fragment& f = frags[k];
                 const SurfaceShading surf = materials.surface(f.material, f.object, f.prim, f.uv, f.n, f.footprint);
                 const Color& alb = surf.albedo;
+                const Vec3 wo = normalize(camera.origin() - f.p);
                 if (indirect) {
                     const Indirect& in = (*indirect)[first + k];
                     e_ind += in.irradiance * f.weight;
@@ -53,22 +56,22 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                     if (ao_only)
                         b += Color(in.ao) * f.weight;
                     else
-                        b += indirect_radiance(in, f.n_base, surf, normalize(camera.origin() - f.p),
-                                               scene.render.light_per_channel) * f.weight;
+                        b += indirect_radiance(in, f.n_base, surf, wo, scene.render.light_per_channel) * f.weight;
                 }
                 if (!ao_only) {
                     // Glossy surfaces reflect the same light samples the diffuse estimate draws.
                     Color gloss(0);
-                    const Vec3 wo = normalize(camera.origin() - f.p);
-                    const LightSampleFn glossy = [&](const Vec3& w, const Color& e) {
-                        gloss += ggx_specular(surf.normal, wo, w, surf.specular, surf.roughness) * e;
-                    };
+                    std::optional<LightSampleFn> glossy;
+                    if (surf.specular != Color(0))
+                        glossy.emplace([&](const Vec3& w, const Color& e) {
+                            gloss += ggx_specular(surf.normal, wo, w, surf.specular, surf.roughness) * e;
+                        });
                     Color e = direct_irradiance
                                   ? (*direct_irradiance)[first + k]
                                   : lighting.irradiance(
                                         f.p, surf.normal, fragment_stream(scene.render.seed, x, y, k),
                                         scene.render.light_samples, counters, indirect == nullptr,
-                                        surf.specular == Color(0) ? nullptr : &glossy);
+                                        glossy ? &*glossy : nullptr);
                     Color radiance = materials.emission(f.material) + alb * e * kInvPi + gloss;
                     d += radiance * f.weight;
                     b += radiance * f.weight;
