@@ -117,5 +117,37 @@ TEST(RayOffset, ShadowRaysSeeTheFarSideOnly) {
     EXPECT_EQ(blocked_long, static_cast<int>((fine.triangle_count() + 10) / 11));
 }
 
+TEST(RayOffset, PacketTraceMatchesOneRayAtATime) {
+    // The gather traces its hemisphere in packets of 16 (trace_many); every ray must find the
+    // same surface at the same distance as trace() finds for it alone, including the rays that
+    // need the offset probe (from inside the sphere, where the coarse chords lie within delta).
+    Scene s = sphere_scene();
+    SceneAccel accel(s);
+    const TriangleMesh& fine = s.objects[0].fine;
+    int rays = 0, mismatches = 0;
+    for (uint32_t t = 0; t < fine.triangle_count(); t += 13) {
+        SurfacePoint sp = surface_point(fine, t, 0.25f, 0.25f);
+        for (float side : {-1.0f, 1.0f}) {
+            Frame f(normalize(sp.p) * side);
+            RandomStream rng(5, t);
+            std::vector<Vec3> dirs;
+            for (uint64_t k = 0; k < 37; ++k)  // not a multiple of 16: a partial last packet
+                dirs.push_back(f.to_world(cosine_hemisphere(rng.get(k, 0), rng.get(k, 1))));
+            std::vector<Hit> hits(dirs.size());
+            accel.trace_many(sp.p, dirs, hits);
+            for (size_t k = 0; k < dirs.size(); ++k) {
+                Hit one = accel.trace(sp.p, dirs[k]);
+                ++rays;
+                bool same = one.valid() == hits[k].valid() &&
+                            (!one.valid() || (one.object == hits[k].object && one.prim == hits[k].prim &&
+                                              std::abs(one.t - hits[k].t) <= 1e-5f * std::max(1.0f, one.t)));
+                mismatches += !same;
+            }
+        }
+    }
+    ASSERT_GT(rays, 2000);
+    EXPECT_EQ(mismatches, 0);
+}
+
 }  // namespace
 }  // namespace bounce

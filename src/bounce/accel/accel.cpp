@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace bounce {
@@ -65,6 +66,45 @@ Hit Bvh::intersect(const Vec3& o, const Vec3& d, float tnear, float tfar) const 
         h.v = rh.hit.v;
     }
     return h;
+}
+
+void Bvh::intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear, Hit* out) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    constexpr size_t K = 16;
+    for (size_t base = 0; base < count; base += K) {
+        const size_t n = std::min(K, count - base);
+        alignas(64) RTCRayHit16 rh;
+        alignas(64) int valid[K];
+        for (size_t i = 0; i < K; ++i) {
+            const bool on = i < n;
+            valid[i] = on ? -1 : 0;
+            const Vec3& di = d[base + (on ? i : 0)];
+            rh.ray.org_x[i] = o.x, rh.ray.org_y[i] = o.y, rh.ray.org_z[i] = o.z;
+            rh.ray.dir_x[i] = di.x, rh.ray.dir_y[i] = di.y, rh.ray.dir_z[i] = di.z;
+            rh.ray.tnear[i] = tnear;
+            rh.ray.tfar[i] = INFINITY;
+            rh.ray.time[i] = 0;
+            rh.ray.mask[i] = 0xffffffffu;
+            rh.ray.id[i] = static_cast<unsigned>(i);
+            rh.ray.flags[i] = 0;
+            rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+            rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect16(valid, scene_, &ctx, &rh);
+        for (size_t i = 0; i < n; ++i) {
+            Hit& h = out[base + i];
+            h = Hit{};
+            if (rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID) {
+                h.t = rh.ray.tfar[i];
+                h.object = rh.hit.geomID[i];
+                h.prim = rh.hit.primID[i];
+                h.u = rh.hit.u[i];
+                h.v = rh.hit.v[i];
+            }
+        }
+    }
 }
 
 bool Bvh::occluded(const Vec3& o, const Vec3& d, float tnear, float tfar) const {
@@ -152,6 +192,19 @@ Hit SceneAccel::trace(const Vec3& p, const Vec3& d) const {
     Hit h = coarse_->intersect(p - d * delta, d, start, INFINITY);
     if (h.valid()) h.t = std::max(0.0f, h.t - delta);
     return h;
+}
+
+void SceneAccel::trace_many(const Vec3& p, std::span<const Vec3> dirs, std::span<Hit> out) const {
+    coarse_->intersect_from(p, dirs.data(), dirs.size(), self_epsilon(p), out.data());
+    const float delta = ray_offset_;
+    for (size_t i = 0; i < dirs.size(); ++i) {
+        if (!out[i].valid() || out[i].t >= delta) continue;
+        // As in trace: only rays meeting something within delta of p pay for the probe.
+        float start = offset_start(p, dirs[i]);
+        Hit h = coarse_->intersect(p - dirs[i] * delta, dirs[i], start, INFINITY);
+        if (h.valid()) h.t = std::max(0.0f, h.t - delta);
+        out[i] = h;
+    }
 }
 
 bool SceneAccel::occluded(const Vec3& p, const Vec3& d, float dist) const {

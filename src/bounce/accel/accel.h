@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "bounce/core/math.h"
@@ -32,6 +33,9 @@ public:
     Bvh& operator=(const Bvh&) = delete;
 
     Hit intersect(const Vec3& o, const Vec3& d, float tnear, float tfar) const;
+    /// Closest hits of `count` rays sharing origin `o` (a gather's hemisphere), traced in
+    /// packets of 16: neighbouring strata are coherent enough for Embree's packet traversal.
+    void intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear, Hit* out) const;
     bool occluded(const Vec3& o, const Vec3& d, float tnear, float tfar) const;
 
 private:
@@ -61,6 +65,8 @@ public:
     /// the first coarse hit after that origin is returned (t measured from `p`). Rays whose
     /// first hit from p is beyond delta take one traversal; only the others probe.
     Hit trace(const Vec3& p, const Vec3& d) const;
+    /// `trace` for many directions from one point, in packets (the gather's path).
+    void trace_many(const Vec3& p, std::span<const Vec3> dirs, std::span<Hit> out) const;
     /// Visibility from `p` (on the fine surface) to the point `p + d * dist` (dist may be
     /// INFINITY), with the same origin offsetting; the end point's own surface is excluded.
     bool occluded(const Vec3& p, const Vec3& d, float dist) const;

@@ -24,10 +24,8 @@ Gatherer::Gatherer(const Scene& scene, const SceneAccel& accel, const Materials&
       grid_(gather_grid(settings.rays)),
       cos_concave_(std::cos(settings.concave_angle * kPi / 180.0f)) {}
 
-Color Gatherer::hit_radiance(const Hit& h, const Vec3& d, const RandomStream& rng, uint64_t ray,
+Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray,
                              Counters& counters) const {
-    const TriangleMesh& mesh = scene_.objects[h.object].coarse;
-    SurfacePoint sp = surface_point(mesh, h.prim, h.u, h.v);
     bool front = dot(sp.ng, d) < 0;
     if (radiosity_) return radiosity_->object(h.object).lookup(h.prim, h.u, h.v, front);
     Vec3 n = front ? sp.ng : -sp.ng;
@@ -40,57 +38,70 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
     const int M = grid_.m, N = grid_.n, S = M * N;
     // Per-cell radiance, distance and unoccluded weight, for the gradients.
     thread_local std::vector<Color> L;
-    thread_local std::vector<float> R, U;
+    thread_local std::vector<float> R, U, cos_theta;
+    thread_local std::vector<Vec3> D;
+    thread_local std::vector<Hit> hits;
     L.assign(static_cast<size_t>(S), Color(0));
     R.assign(static_cast<size_t>(S), INFINITY);
     U.assign(static_cast<size_t>(S), 1.0f);
+    D.resize(static_cast<size_t>(S));
+    cos_theta.resize(static_cast<size_t>(S));
+    hits.resize(static_cast<size_t>(S));
 
     const Frame frame(n);
     GatherResult res;
     res.rays = S;
+    // Directions first (stratified, cosine-weighted), then one packet trace of all of them:
+    // neighbouring cells of a row are coherent, so Embree traverses them together.
+    for (int j = 0; j < M; ++j)
+        for (int k = 0; k < N; ++k) {
+            const auto c = static_cast<size_t>(j * N + k);
+            float sin2 = (static_cast<float>(j) + rng.get(c, kDimGather)) / static_cast<float>(M);
+            float phi = 2 * kPi * (static_cast<float>(k) + rng.get(c, kDimGather + 1)) / static_cast<float>(N);
+            float sin_t = std::sqrt(sin2), cos_t = std::sqrt(std::max(0.0f, 1 - sin2));
+            cos_theta[c] = cos_t;
+            D[c] = frame.to_world({sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t});
+        }
+    accel_.trace_many(p, D, hits);
+    counters.gather_rays += static_cast<uint64_t>(S);
+
     Color sum_l(0);
     Vec3 sum_u_dir(0);
     std::array<Vec3, 3> sum_dir{};
     double inv_r_sum = 0;
     float sum_u = 0;
-    for (int j = 0; j < M; ++j)
-        for (int k = 0; k < N; ++k) {
-            const int c = j * N + k;
-            const auto s = static_cast<uint64_t>(c);
-            float sin2 = (static_cast<float>(j) + rng.get(s, kDimGather)) / static_cast<float>(M);
-            float phi = 2 * kPi * (static_cast<float>(k) + rng.get(s, kDimGather + 1)) / static_cast<float>(N);
-            float sin_t = std::sqrt(sin2), cos_t = std::sqrt(std::max(0.0f, 1 - sin2));
-            Vec3 local{sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t};
-            Vec3 d = frame.to_world(local);
-            ++counters.gather_rays;
-            Hit h = accel_.trace(p, d);
-            Color l(0);
-            float u = 1;
-            if (h.valid()) {
-                R[static_cast<size_t>(c)] = h.t;
-                inv_r_sum += 1.0 / std::max(h.t, 1e-20f);
-                if (settings_.ao_distance <= 0 || h.t < settings_.ao_distance)
-                    u = settings_.ao_falloff > 0 && settings_.ao_distance > 0
-                            ? 1 - std::pow(1 - h.t / settings_.ao_distance, settings_.ao_falloff)
-                            : 0;
-                // Distance for the record radius: leave out rays that are grazing both where
-                // they leave and where they land (slightly concave surfaces).
+    for (size_t c = 0; c < static_cast<size_t>(S); ++c) {
+        const Vec3& d = D[c];
+        const Hit& h = hits[c];
+        Color l(0);
+        float u = 1;
+        if (h.valid()) {
+            R[c] = h.t;
+            inv_r_sum += 1.0 / std::max(h.t, 1e-20f);
+            if (settings_.ao_distance <= 0 || h.t < settings_.ao_distance)
+                u = settings_.ao_falloff > 0 && settings_.ao_distance > 0
+                        ? 1 - std::pow(1 - h.t / settings_.ao_distance, settings_.ao_falloff)
+                        : 0;
+            // Distance for the record radius: leave out rays that are grazing both where
+            // they leave and where they land (slightly concave surfaces).
+            if (settings_.record_terms || !settings_.ao_only) {
+                const SurfacePoint sp = surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v);
                 if (settings_.record_terms) {
-                    Vec3 ng = surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v).ng;
-                    bool grazing = cos_t < cos_concave_ && std::abs(dot(ng, d)) < cos_concave_;
+                    bool grazing = cos_theta[c] < cos_concave_ && std::abs(dot(sp.ng, d)) < cos_concave_;
                     if (!grazing) res.min_distance = std::min(res.min_distance, h.t);
                 }
-                if (!settings_.ao_only) l = hit_radiance(h, d, rng, s, counters);
-            } else if (!settings_.ao_only) {
-                l = lighting_.background(d);
+                if (!settings_.ao_only) l = hit_radiance(h, sp, d, rng, c, counters);
             }
-            L[static_cast<size_t>(c)] = l;
-            U[static_cast<size_t>(c)] = u;
-            sum_l += l;
-            sum_u += u;
-            sum_u_dir += d * u;
-            for (int ch = 0; ch < 3; ++ch) sum_dir[static_cast<size_t>(ch)] += d * l[ch];
+        } else if (!settings_.ao_only) {
+            l = lighting_.background(d);
         }
+        L[c] = l;
+        U[c] = u;
+        sum_l += l;
+        sum_u += u;
+        sum_u_dir += d * u;
+        for (int ch = 0; ch < 3; ++ch) sum_dir[static_cast<size_t>(ch)] += d * l[ch];
+    }
     const float w = kPi / static_cast<float>(S);
     res.irradiance = sum_l * w;
     res.ao = sum_u / static_cast<float>(S);

@@ -63,7 +63,8 @@ public:
 
 private:
     /// Radiance leaving a hit towards the gather point (direction -d).
-    Color hit_radiance(const Hit& h, const Vec3& d, const RandomStream& rng, uint64_t ray, Counters& counters) const;
+    Color hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray,
+                       Counters& counters) const;
 
     const Scene& scene_;
     const SceneAccel& accel_;
