@@ -11,6 +11,12 @@ float IrradianceCache::weight_sum(const Vec3& p, const Vec3& n) const {
     return sum;
 }
 
+bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Record> extra) const {
+    float w = weight_sum(p, n);
+    for (const Record& r : extra) w += record_weight(r, p, n, settings_);
+    return w < settings_.min_weight;
+}
+
 Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading) const {
     const CacheSettings& s = shading ? shading_settings_ : settings_;
     Interpolated out;

@@ -39,8 +39,9 @@ public:
     Interpolated lookup(const Vec3& p, const Vec3& n, bool shading = false) const;
     /// Sum of record weights at (p, n) (cheaper than lookup).
     float weight_sum(const Vec3& p, const Vec3& n) const;
-    /// True when a lookup at (p, n) would miss (weights sum below min_weight).
-    bool misses(const Vec3& p, const Vec3& n) const { return weight_sum(p, n) < settings_.min_weight; }
+    /// True when a lookup at (p, n) would miss: the weights of this cache's records and of
+    /// `extra` (a tile's private records) sum below min_weight.
+    bool misses(const Vec3& p, const Vec3& n, std::span<const Record> extra = {}) const;
 
     /// Turns a gather at (p, n) into a record: radius from the qualifying minimum distance
     /// (TL04) or the harmonic mean (Ward) clamped to [min_spacing, max_spacing] pixels of

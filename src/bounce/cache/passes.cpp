@@ -54,7 +54,6 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
     const auto schedule = subpass_schedule(static_cast<int>(cache.settings().max_spacing));
     const bool per_tile = scene.render.cache_sharing == "per-thread";
     const auto tiles = make_tiles(deep.width, deep.height, scene.render.tile_size, scene.render.tile_order);
-    const CacheSettings& cs = cache.settings();
     Progress progress(sink, "gathering", schedule.size());
     std::vector<std::vector<Record>> made(tiles.size());  // this sub-pass's records, by Tile::index
     size_t dropped = 0, gathered = 0;
@@ -75,10 +74,8 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
                     auto frags = deep.pixel(wx, wy);
                     for (uint32_t k = 0; k < frags.size(); ++k) {
                         const Fragment& f = frags[k];
-                        float w = cache.weight_sum(f.p_base, f.n_base);
-                        if (per_tile)
-                            for (const Record& r : out) w += record_weight(r, f.p_base, f.n_base, cs);
-                        if (w >= cs.min_weight) continue;
+                        if (!cache.misses(f.p_base, f.n_base, per_tile ? std::span<const Record>(out)
+                                                                       : std::span<const Record>())) continue;
                         GatherResult g = gatherer.gather(
                             f.p, f.n_base, fragment_stream(scene.render.seed, wx + deep.x0, wy + deep.y0, k), counters);
                         Record r = cache.make_record(g, f.p_base, f.n_base, f.footprint, candidate_key(deep, wx, wy, k));
