@@ -111,17 +111,24 @@ private:
     }
 };
 
-constexpr int kRaysPerPoint = 256;
+constexpr int kRaysPerPoint = 2048;  // as HemisphereGather/2048: like for like
 
-/// The gather's directions at point i (cosine-distributed, stratified like the gather's grid).
+/// The gather's directions at point i, in the gather's own order (rows of its stratified
+/// elevation x azimuth grid, cosine-weighted): the raw baselines trace exactly what a gather
+/// of kRaysPerPoint rays traces.
 template <typename Fn>
 void for_each_gather_ray(const Fragment& f, uint64_t i, Fn&& fn) {
     const Frame frame(f.n_base);
+    const GatherGrid grid = gather_grid(kRaysPerPoint);
     RandomStream rng(11, i);
-    for (int s = 0; s < kRaysPerPoint; ++s) {
-        Vec2 u = stratified_2d(s, kRaysPerPoint, rng.get(static_cast<uint64_t>(s), 0), rng.get(static_cast<uint64_t>(s), 1));
-        fn(f.p, frame.to_world(cosine_hemisphere(u.x, u.y)));
-    }
+    for (int j = 0; j < grid.m; ++j)
+        for (int k = 0; k < grid.n; ++k) {
+            const auto c = static_cast<uint64_t>(j * grid.n + k);
+            float sin2 = (static_cast<float>(j) + rng.get(c, 0)) / static_cast<float>(grid.m);
+            float phi = 2 * kPi * (static_cast<float>(k) + rng.get(c, 1)) / static_cast<float>(grid.n);
+            float sin_t = std::sqrt(sin2), cos_t = std::sqrt(std::max(0.0f, 1 - sin2));
+            fn(f.p, frame.to_world({sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t}));
+        }
 }
 
 void BM_RaysRawEmbree(benchmark::State& state) {
@@ -134,27 +141,31 @@ void BM_RaysRawEmbree(benchmark::State& state) {
         ++i;
     }
     benchmark::DoNotOptimize(hits);
-    state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * kRaysPerPoint);
+    state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * gather_grid(kRaysPerPoint).rays());
 }
 BENCHMARK(BM_RaysRawEmbree)->Unit(benchmark::kMicrosecond);
 
-/// The same rays through rtcIntersect16 (what the gather does): the fastest Embree gets here.
+/// The same rays through rtcIntersect16 in the gather's packet order (what the gather does).
 void BM_RaysRawEmbreePackets(benchmark::State& state) {
     RayRig& rig = RayRig::get();
     const float eps = rig.accel->ray_offset();
-    std::vector<Vec3> dirs(kRaysPerPoint);
-    std::vector<Hit> out(kRaysPerPoint);
+    const GatherGrid grid = gather_grid(kRaysPerPoint);  // rounds: m * n rays, not exactly kRaysPerPoint
+    const auto n = static_cast<size_t>(grid.rays());
+    std::vector<Vec3> dirs(n), packed(n);
+    std::vector<Hit> out(n);
+    const std::vector<uint32_t> order = gather_packet_order(grid);
     uint64_t i = 0, hits = 0;
     for (auto _ : state) {
         const Fragment& f = rig.points[i % rig.points.size()];
         size_t k = 0;
         for_each_gather_ray(f, i, [&](const Vec3&, const Vec3& d) { dirs[k++] = d; });
-        rig.accel->coarse().intersect_from(f.p, dirs.data(), dirs.size(), eps, out.data());
+        for (size_t r = 0; r < order.size(); ++r) packed[r] = dirs[order[r]];  // the gather's packets
+        rig.accel->coarse().intersect_from(f.p, packed.data(), packed.size(), eps, out.data());
         for (const Hit& h : out) hits += h.valid();
         ++i;
     }
     benchmark::DoNotOptimize(hits);
-    state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * kRaysPerPoint);
+    state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * gather_grid(kRaysPerPoint).rays());
 }
 BENCHMARK(BM_RaysRawEmbreePackets)->Unit(benchmark::kMicrosecond);
 
@@ -167,7 +178,7 @@ void BM_RaysOffsetTrace(benchmark::State& state) {
         ++i;
     }
     benchmark::DoNotOptimize(hits);
-    state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * kRaysPerPoint);
+    state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * gather_grid(kRaysPerPoint).rays());
 }
 BENCHMARK(BM_RaysOffsetTrace)->Unit(benchmark::kMicrosecond);
 

@@ -13,6 +13,19 @@ GatherGrid gather_grid(int rays) {
     return g;
 }
 
+std::vector<uint32_t> gather_packet_order(const GatherGrid& grid) {
+    // Packets of 16 rays are traversed together; 4x4 blocks of neighbouring (elevation,
+    // azimuth) cells point in nearby directions, a row segment of 16 azimuths does not.
+    std::vector<uint32_t> order;
+    order.reserve(static_cast<size_t>(grid.rays()));
+    for (int j0 = 0; j0 < grid.m; j0 += 4)
+        for (int k0 = 0; k0 < grid.n; k0 += 4)
+            for (int j = j0; j < std::min(j0 + 4, grid.m); ++j)
+                for (int k = k0; k < std::min(k0 + 4, grid.n); ++k)
+                    order.push_back(static_cast<uint32_t>(j * grid.n + k));
+    return order;
+}
+
 Gatherer::Gatherer(const Scene& scene, const SceneAccel& accel, const Materials& materials,
                    const DirectLighting& lighting, const RadiosityTextures* radiosity, GatherSettings settings)
     : scene_(scene),
@@ -22,7 +35,8 @@ Gatherer::Gatherer(const Scene& scene, const SceneAccel& accel, const Materials&
       radiosity_(radiosity),
       settings_(settings),
       grid_(gather_grid(settings.rays)),
-      cos_concave_(std::cos(settings.concave_angle * kPi / 180.0f)) {}
+      cos_concave_(std::cos(settings.concave_angle * kPi / 180.0f)),
+      packet_order_(gather_packet_order(grid_)) {}
 
 Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray,
                              Counters& counters) const {
@@ -40,13 +54,16 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
     thread_local std::vector<Color> L;
     thread_local std::vector<float> R, U, cos_theta;
     thread_local std::vector<Vec3> D;
-    thread_local std::vector<Hit> hits;
+    thread_local std::vector<Hit> hits, packet_hits;
+    thread_local std::vector<Vec3> packet_dirs;
     L.assign(static_cast<size_t>(S), Color(0));
     R.assign(static_cast<size_t>(S), INFINITY);
     U.assign(static_cast<size_t>(S), 1.0f);
     D.resize(static_cast<size_t>(S));
     cos_theta.resize(static_cast<size_t>(S));
     hits.resize(static_cast<size_t>(S));
+    packet_dirs.resize(static_cast<size_t>(S));
+    packet_hits.resize(static_cast<size_t>(S));
 
     const Frame frame(n);
     GatherResult res;
@@ -62,7 +79,9 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
             cos_theta[c] = cos_t;
             D[c] = frame.to_world({sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t});
         }
-    accel_.trace_many(p, D, hits);
+    for (size_t i = 0; i < packet_order_.size(); ++i) packet_dirs[i] = D[packet_order_[i]];
+    accel_.trace_many(p, packet_dirs, packet_hits);
+    for (size_t i = 0; i < packet_order_.size(); ++i) hits[packet_order_[i]] = packet_hits[i];
     counters.gather_rays += static_cast<uint64_t>(S);
 
     Color sum_l(0);

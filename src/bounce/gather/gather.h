@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <vector>
 
 #include "bounce/accel/accel.h"
 #include "bounce/core/random.h"
@@ -34,6 +35,9 @@ struct GatherGrid {
     int rays() const { return m * n; }
 };
 GatherGrid gather_grid(int rays);
+/// The order in which a gather traces its grid's cells (index j * n + k): 4x4 blocks of
+/// neighbouring cells, so each packet of 16 rays points in nearby directions.
+std::vector<uint32_t> gather_packet_order(const GatherGrid& grid);
 
 /// What a gather returns; gradients follow Ward-Heckbert (rotational) and Ward-Heckbert with
 /// Krivanek's occlusion-aware distances (translational), see docs/gather.md.
@@ -74,6 +78,7 @@ private:
     GatherSettings settings_;
     GatherGrid grid_;
     float cos_concave_;
+    std::vector<uint32_t> packet_order_;  ///< grid cells in 4x4 blocks: coherent packets of 16
 };
 
 }  // namespace bounce
