@@ -112,6 +112,7 @@ private:
 };
 
 constexpr int kRaysPerPoint = 2048;  // as HemisphereGather/2048: like for like
+const int kRays = gather_grid(kRaysPerPoint).rays();  // the grid rounds: m * n rays
 
 /// The gather's directions at point i, in the gather's own order (rows of its stratified
 /// elevation x azimuth grid, cosine-weighted): the raw baselines trace exactly what a gather
@@ -124,10 +125,7 @@ void for_each_gather_ray(const Fragment& f, uint64_t i, Fn&& fn) {
     for (int j = 0; j < grid.m; ++j)
         for (int k = 0; k < grid.n; ++k) {
             const auto c = static_cast<uint64_t>(j * grid.n + k);
-            float sin2 = (static_cast<float>(j) + rng.get(c, 0)) / static_cast<float>(grid.m);
-            float phi = 2 * kPi * (static_cast<float>(k) + rng.get(c, 1)) / static_cast<float>(grid.n);
-            float sin_t = std::sqrt(sin2), cos_t = std::sqrt(std::max(0.0f, 1 - sin2));
-            fn(f.p, frame.to_world({sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t}));
+            fn(f.p, frame.to_world(gather_cell_direction(grid, j, k, rng.get(c, 0), rng.get(c, 1))));
         }
 }
 
@@ -141,7 +139,7 @@ void BM_RaysRawEmbree(benchmark::State& state) {
         ++i;
     }
     benchmark::DoNotOptimize(hits);
-    state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * gather_grid(kRaysPerPoint).rays());
+    state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * kRays);
 }
 BENCHMARK(BM_RaysRawEmbree)->Unit(benchmark::kMicrosecond);
 
@@ -149,8 +147,8 @@ BENCHMARK(BM_RaysRawEmbree)->Unit(benchmark::kMicrosecond);
 void BM_RaysRawEmbreePackets(benchmark::State& state) {
     RayRig& rig = RayRig::get();
     const float eps = rig.accel->ray_offset();
-    const GatherGrid grid = gather_grid(kRaysPerPoint);  // rounds: m * n rays, not exactly kRaysPerPoint
-    const auto n = static_cast<size_t>(grid.rays());
+    const GatherGrid grid = gather_grid(kRaysPerPoint);
+    const auto n = static_cast<size_t>(kRays);
     std::vector<Vec3> dirs(n), packed(n);
     std::vector<Hit> out(n);
     const std::vector<uint32_t> order = gather_packet_order(grid);
@@ -165,7 +163,7 @@ void BM_RaysRawEmbreePackets(benchmark::State& state) {
         ++i;
     }
     benchmark::DoNotOptimize(hits);
-    state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * gather_grid(kRaysPerPoint).rays());
+    state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * kRays);
 }
 BENCHMARK(BM_RaysRawEmbreePackets)->Unit(benchmark::kMicrosecond);
 
@@ -178,7 +176,7 @@ void BM_RaysOffsetTrace(benchmark::State& state) {
         ++i;
     }
     benchmark::DoNotOptimize(hits);
-    state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * gather_grid(kRaysPerPoint).rays());
+    state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * kRays);
 }
 BENCHMARK(BM_RaysOffsetTrace)->Unit(benchmark::kMicrosecond);
 

@@ -187,9 +187,12 @@ Hit SceneAccel::trace(const Vec3& p, const Vec3& d) const {
     // one traversal is enough. Only the others (a few %: contacts, interpenetrating or
     // fine-vs-coarse surfaces) pay for the probe.
     Hit first = coarse_->intersect(p, d, self_epsilon(p), INFINITY);
-    if (!first.valid() || first.t >= delta) return first;
-    float start = offset_start(p, d);
-    Hit h = coarse_->intersect(p - d * delta, d, start, INFINITY);
+    return !first.valid() || first.t >= delta ? first : probed_trace(p, d);
+}
+
+Hit SceneAccel::probed_trace(const Vec3& p, const Vec3& d) const {
+    const float delta = ray_offset_;
+    Hit h = coarse_->intersect(p - d * delta, d, offset_start(p, d), INFINITY);
     if (h.valid()) h.t = std::max(0.0f, h.t - delta);
     return h;
 }
@@ -197,14 +200,9 @@ Hit SceneAccel::trace(const Vec3& p, const Vec3& d) const {
 void SceneAccel::trace_many(const Vec3& p, std::span<const Vec3> dirs, std::span<Hit> out) const {
     coarse_->intersect_from(p, dirs.data(), dirs.size(), self_epsilon(p), out.data());
     const float delta = ray_offset_;
-    for (size_t i = 0; i < dirs.size(); ++i) {
-        if (!out[i].valid() || out[i].t >= delta) continue;
-        // As in trace: only rays meeting something within delta of p pay for the probe.
-        float start = offset_start(p, dirs[i]);
-        Hit h = coarse_->intersect(p - dirs[i] * delta, dirs[i], start, INFINITY);
-        if (h.valid()) h.t = std::max(0.0f, h.t - delta);
-        out[i] = h;
-    }
+    // As in trace: only rays meeting something within delta of p pay for the probe.
+    for (size_t i = 0; i < dirs.size(); ++i)
+        if (out[i].valid() && out[i].t < delta) out[i] = probed_trace(p, dirs[i]);
 }
 
 bool SceneAccel::occluded(const Vec3& p, const Vec3& d, float dist) const {

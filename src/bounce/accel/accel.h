@@ -78,6 +78,8 @@ public:
 private:
     /// Parameter along the ray from p - delta*d at which the traced ray starts.
     float offset_start(const Vec3& p, const Vec3& d) const;
+    /// The offset trace proper: from the coarse crossing nearest to p (t measured from p).
+    Hit probed_trace(const Vec3& p, const Vec3& d) const;
 
     RTCDevice device_ = nullptr;
     std::unique_ptr<Bvh> coarse_, fine_;

@@ -13,6 +13,13 @@ GatherGrid gather_grid(int rays) {
     return g;
 }
 
+Vec3 gather_cell_direction(const GatherGrid& grid, int j, int k, float u, float v) {
+    float sin2 = (static_cast<float>(j) + u) / static_cast<float>(grid.m);
+    float phi = 2 * kPi * (static_cast<float>(k) + v) / static_cast<float>(grid.n);
+    float sin_t = std::sqrt(sin2), cos_t = std::sqrt(std::max(0.0f, 1 - sin2));
+    return {sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t};
+}
+
 std::vector<uint32_t> gather_packet_order(const GatherGrid& grid) {
     // Packets of 16 rays are traversed together; 4x4 blocks of neighbouring (elevation,
     // azimuth) cells point in nearby directions, a row segment of 16 azimuths does not.
@@ -73,11 +80,9 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
     for (int j = 0; j < M; ++j)
         for (int k = 0; k < N; ++k) {
             const auto c = static_cast<size_t>(j * N + k);
-            float sin2 = (static_cast<float>(j) + rng.get(c, kDimGather)) / static_cast<float>(M);
-            float phi = 2 * kPi * (static_cast<float>(k) + rng.get(c, kDimGather + 1)) / static_cast<float>(N);
-            float sin_t = std::sqrt(sin2), cos_t = std::sqrt(std::max(0.0f, 1 - sin2));
-            cos_theta[c] = cos_t;
-            D[c] = frame.to_world({sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t});
+            const Vec3 local = gather_cell_direction(grid_, j, k, rng.get(c, kDimGather), rng.get(c, kDimGather + 1));
+            cos_theta[c] = local.z;
+            D[c] = frame.to_world(local);
         }
     for (size_t i = 0; i < packet_order_.size(); ++i) packet_dirs[i] = D[packet_order_[i]];
     accel_.trace_many(p, packet_dirs, packet_hits);

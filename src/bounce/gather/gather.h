@@ -35,6 +35,9 @@ struct GatherGrid {
     int rays() const { return m * n; }
 };
 GatherGrid gather_grid(int rays);
+/// The direction, in the gather point's frame (z = normal), of the ray of cell (j, k) with
+/// jitter (u, v) in [0,1)^2: cosine-weighted, sin^2(theta) stratified by j and phi by k.
+Vec3 gather_cell_direction(const GatherGrid& grid, int j, int k, float u, float v);
 /// The order in which a gather traces its grid's cells (index j * n + k): 4x4 blocks of
 /// neighbouring cells, so each packet of 16 rays points in nearby directions.
 std::vector<uint32_t> gather_packet_order(const GatherGrid& grid);
