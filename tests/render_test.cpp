@@ -1,6 +1,7 @@
 // Deep buffer round trips, shading from a loaded deep file, crop and thread-count invariance,
 // and the Cornell box's image statistics.
 #include <gtest/gtest.h>
+#include <fmt/format.h>
 #include <tbb/task_arena.h>
 
 #include "bounce/core/image.h"
@@ -76,6 +77,33 @@ TEST(DeepBuffer, FragmentsCoverPixelsAndMergeSubsamples) {
         }
     // Subsamples of one surface merge: far fewer fragments than subsamples.
     EXPECT_LT(r.deep.fragments.size(), 2 * r.deep.pixel_count());
+}
+
+TEST(DeepBuffer, FragmentsLieOnTheSurfaceAtARidge) {
+    // A roof ridge along z: two faces sloping 10 degrees down from x = 0 (normals 20 degrees
+    // apart, so subsamples on both merge). The centroid of a pixel straddling the ridge lies
+    // below both faces, where a gather would see only the underside; a fragment must not.
+    test::TempDir dir;
+    const float t = std::tan(10 * kPi / 180);
+    const std::string obj = dir.write("ridge.obj", fmt::format("v -10 {0} -10\nv -10 {0} 10\nv 0 0 10\nv 0 0 -10\n"
+                                                               "v 10 {0} -10\nv 10 {0} 10\n"
+                                                               "f 1 2 3\nf 1 3 4\nf 4 3 6\nf 4 6 5\n", -10 * t));
+    nlohmann::json j = test::base_scene();
+    j["objects"] = {{{"file", obj}}};
+    j["camera"]["position"] = {0.3, 10, 0.001};
+    j["camera"]["look_at"] = {0.3, 0, 0};  // the ridge crosses pixel centres, not a pixel boundary
+    j["render"] = {{"spp", 16}};
+    Scene s = test::scene_from(j);
+    RenderResult r = render_quiet(s);
+    int merged = 0;
+    for (int y = 0; y < r.deep.height; ++y)
+        for (int x = 0; x < r.deep.width; ++x)
+            for (const Fragment& f : r.deep.pixel(x, y)) {
+                ASSERT_NEAR(f.p.y, -std::abs(f.p.x) * t, 1e-4f) << "pixel " << x << "," << y;
+                // Faces' normals have |n.x| = sin(10 deg); a mean of both has less.
+                if (std::abs(f.ng.x) < 0.9f * std::sin(10 * kPi / 180)) ++merged;
+            }
+    EXPECT_GE(merged, 8) << "the ridge's pixels should merge subsamples of both faces";
 }
 
 TEST(DeepBuffer, FootprintIsPixelWidthOnAFrontalPlane) {

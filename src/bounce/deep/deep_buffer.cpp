@@ -59,6 +59,8 @@ namespace {
 
 struct Accum {
     Vec3 p, n, ng;
+    Vec3 p0, ng0;  ///< the first subsample's point and geometric normal: the group's plane
+    float off_plane = 0;  ///< largest distance of a merged subsample from that plane
     Vec2 uv;
     uint32_t material, object, prim;
     float depth, footprint;
@@ -92,11 +94,13 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
     parallel_ranges(0, deep.height, 1, [&](int row0, int row1) {
         Counters& counters = stats.local();
         std::vector<Accum> groups;
+        std::vector<std::pair<Vec3, size_t>> subsamples;  // (point, group) of this pixel
         for (int wy = row0; wy < row1; ++wy) {
             for (int wx = 0; wx < deep.width; ++wx) {
                 int x = wx + deep.x0, y = wy + deep.y0;
                 RandomStream rng(rs.seed, static_cast<uint64_t>(y) * 65536u + static_cast<uint64_t>(x));
                 groups.clear();
+                subsamples.clear();
                 for (int s = 0; s < spp; ++s) {
                     Vec2 j = stratified_2d(s, spp, rng.get(static_cast<uint64_t>(s), kDimPixelX),
                                              rng.get(static_cast<uint64_t>(s), kDimPixelY));
@@ -112,29 +116,46 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     if (dot(sp.n, dn) > 0) sp.n = normalize(sp.n - dn * (2 * dot(sp.n, dn)));
                     float fp = camera.footprint(d, h.t, sp.ng);
                     // Merge with a subsample of the same surface: same object and material,
-                    // similar orientation and depth (so silhouettes of one object stay apart).
+                    // similar orientation and depth (so silhouettes of one object stay apart),
+                    // and within a pixel's width of the group's plane (a step between parallel
+                    // faces is two surfaces, however close their depths).
                     Accum* g = nullptr;
-                    for (auto& a : groups)
+                    for (auto& a : groups) {
+                        const float off = std::abs(dot(sp.p - a.p0, a.ng0));
                         if (a.object == h.object && a.material == sp.material &&
                             dot(normalize(a.ng), sp.ng) > 0.9f &&
-                            std::abs(a.depth / static_cast<float>(a.count) - h.t) < 0.05f * h.t + 4 * fp) {
+                            std::abs(a.depth / static_cast<float>(a.count) - h.t) < 0.05f * h.t + 4 * fp && off < fp) {
                             g = &a;
+                            g->off_plane = std::max(g->off_plane, off / fp);
                             break;
                         }
+                    }
                     if (!g) {
-                        groups.push_back({Vec3(0), Vec3(0), Vec3(0), {}, sp.material, h.object, h.prim, 0, 0, 0});
+                        groups.push_back({Vec3(0), Vec3(0), Vec3(0), sp.p, sp.ng, 0, {}, sp.material, h.object, h.prim,
+                                          0, 0, 0});
                         g = &groups.back();
                     }
+                    subsamples.emplace_back(sp.p, static_cast<size_t>(g - groups.data()));
                     g->p += sp.p, g->n += sp.n, g->ng += sp.ng;
                     g->uv.x += sp.uv.x, g->uv.y += sp.uv.y;
                     g->depth += h.t, g->footprint += fp;
                     ++g->count;
                 }
                 auto& out = per_pixel[static_cast<size_t>(wy) * deep.width + wx];
-                for (const auto& a : groups) {
+                for (size_t gi = 0; gi < groups.size(); ++gi) {
+                    const Accum& a = groups[gi];
                     auto c = static_cast<float>(a.count);
                     Fragment f;
-                    f.p = a.p / c;
+                    // A planar group sits at its centroid. Otherwise the centroid can lie off
+                    // every surface (inside a convex ridge, between offset faces), where a
+                    // gather sees only the inside of the model: take the subsample nearest it.
+                    const Vec3 centroid = a.p / c;
+                    f.p = centroid;
+                    if (a.off_plane > 1e-3f) {
+                        float best = INFINITY;
+                        for (const auto& [q, group] : subsamples)
+                            if (group == gi && length(q - centroid) < best) best = length(q - centroid), f.p = q;
+                    }
                     f.n = normalize(a.n);
                     f.ng = normalize(a.ng);
                     f.p_base = f.p;
