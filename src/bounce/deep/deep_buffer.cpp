@@ -153,8 +153,10 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     f.p = centroid;
                     if (a.off_plane > 1e-3f) {
                         float best = INFINITY;
-                        for (const auto& [q, group] : subsamples)
-                            if (group == gi && length(q - centroid) < best) best = length(q - centroid), f.p = q;
+                        for (const auto& [q, group] : subsamples) {
+                            const float dist = length(q - centroid);
+                            if (group == gi && dist < best) best = dist, f.p = q;
+                        }
                     }
                     f.n = normalize(a.n);
                     f.ng = normalize(a.ng);
