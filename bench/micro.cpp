@@ -105,7 +105,7 @@ private:
         lighting = std::make_unique<DirectLighting>(scene, *accel);
         Stats stats;
         radiosity = std::make_unique<RadiosityTextures>(
-            RadiosityTextures::bake(scene, *materials, *lighting, radiosity_settings(scene), stats, nullptr));
+            RadiosityTextures::bake(scene, *materials, *lighting, scene.render.radiosity, stats, nullptr));
         DeepBuffer deep = render_visibility(scene, *accel, stats, nullptr);
         points = deep.fragments;
     }

@@ -186,18 +186,21 @@ TEST(CacheFile, BadFilesAreRefusedCleanly) {
     refused(rebuilt, "cannot fit");
 }
 
-RenderResult render_with(const std::vector<std::string>& extra, RenderRequest req, Stats& stats) {
-    std::vector<std::string> o = {"camera.resolution=[40,40]", "render.spp=1", "render.gi=\"cache\"", "render.rays=64"};
+/// Renders and, like a front end, writes the cache after the image.
+RenderResult render_with(const std::vector<std::string>& extra, RenderRequest req, Stats& stats,
+                         const std::string& cache_out = "") {
+    std::vector<Override> o = {"camera.resolution=[40,40]", "render.spp=1", "render.gi=\"cache\"", "render.rays=64"};
     o.insert(o.end(), extra.begin(), extra.end());
-    return render(load_scene(test::cornell_scene(), o), req, stats, nullptr);
+    RenderResult r = render(load_scene(test::cornell_scene(), o), req, stats, nullptr);
+    if (!cache_out.empty()) write_cache_file(cache_out, r.cache->to_file(r.cache_info));
+    return r;
 }
 
 TEST(CacheReuse, OwnCacheCreatesNoRecordsAndTheSameImage) {
     test::TempDir d;
     RenderRequest first;
-    first.cache_out = d.file("c.bic");
     Stats s1, s2, s3;
-    RenderResult a = render_with({}, first, s1);
+    RenderResult a = render_with({}, first, s1, d.file("c.bic"));
     RenderRequest again;
     again.cache_in = d.file("c.bic");
     RenderResult b = render_with({}, again, s2);
@@ -215,9 +218,8 @@ TEST(CacheReuse, OwnCacheCreatesNoRecordsAndTheSameImage) {
 TEST(CacheReuse, CacheForAnotherSceneOrCameraIsRefusedUnlessForced) {
     test::TempDir d;
     RenderRequest first;
-    first.cache_out = d.file("c.bic");
     Stats s;
-    render_with({}, first, s);
+    render_with({}, first, s, d.file("c.bic"));
     RenderRequest reuse;
     reuse.cache_in = d.file("c.bic");
     EXPECT_THROW(render_with({"camera.fov=50"}, reuse, s), InputError);
@@ -262,8 +264,7 @@ namespace {
 std::pair<std::string, std::string> image_and_cache_bytes(const std::vector<std::string>& settings, const std::string& file,
                                                           Stats& s) {
     RenderRequest req;
-    req.cache_out = file;
-    RenderResult r = render_with(settings, req, s);
+    RenderResult r = render_with(settings, req, s, file);
     std::ifstream in(file, std::ios::binary);
     std::string bytes((std::istreambuf_iterator<char>(in)), {});
     const auto& ind = r.image.find("indirect")->data;

@@ -118,7 +118,7 @@ TEST(CacheMetric, EachTermReachesOneExactlyAtItsBound) {
     EXPECT_FALSE(metric_terms(r, {0.5f, -0.05f, 0}, {0, 1, 0}, s).behind);
     EXPECT_EQ(record_weight(r, {0.5f, -0.2f, 0}, {0, 1, 0}, s), 0.0f);
     // Ward: weight 1 / (d/R + sqrt(1 - n.n_i)) accepted above 1/a.
-    s.metric = "ward";
+    s.metric = Metric::Ward;
     s.accuracy = 0.25f;
     EXPECT_FLOAT_EQ(record_weight(r, {0.4f, 0, 0}, {0, 1, 0}, s), 5.0f);
     EXPECT_EQ(record_weight(r, {0.51f, 0, 0}, {0, 1, 0}, s), 0.0f);
@@ -202,7 +202,7 @@ IrradianceCache build_cache(const Scene& s, Stats& stats, DeepBuffer* deep_out =
     Materials materials(s);
     DirectLighting lighting(s, accel);
     Gatherer gatherer(s, accel, materials, lighting, nullptr, gather_settings(s));
-    IrradianceCache cache(s.bounds(), cache_settings(s), false);
+    IrradianceCache cache(s.bounds(), s.render.cache, false);
     gathering_pass(s, deep, gatherer, cache, stats, nullptr);
     shading_pass(s, deep, cache, stats, nullptr);
     if (deep_out) *deep_out = std::move(deep);
@@ -229,7 +229,7 @@ TEST(CacheSpacing, StaysWithinThePixelBoundsOnAPlaneFacingTheCamera) {
 
 TEST(CachePasses, NoMissesInTheShadingPassAndDeterministicRecords) {
     for (std::string metric : {"tl04", "ward"}) {
-        std::vector<std::string> o = {"camera.resolution=[64,64]", "render.spp=2", "render.gi=\"cache\"", "render.rays=128",
+        std::vector<Override> o = {"camera.resolution=[64,64]", "render.spp=2", "render.gi=\"cache\"", "render.rays=128",
                                       "render.metric=\"" + metric + "\""};
         Stats s1, s2;
         auto one = o, two = o;
@@ -253,7 +253,7 @@ TEST(CachePasses, PreviewShowsEverySubPassAndEndsAtTheFinalImage) {
     req.preview = [&](const Image& img) { frames.push_back(img); };
     Stats stats;
     RenderResult r = render(s, req, stats, nullptr);
-    EXPECT_EQ(frames.size(), subpass_schedule(static_cast<int>(s.render.max_spacing)).size());
+    EXPECT_EQ(frames.size(), subpass_schedule(static_cast<int>(s.render.cache.max_spacing)).size());
     EXPECT_TRUE(frames.back().find("indirect")->data == r.image.find("indirect")->data);
     // The first frame is pixelated: neighbouring pixels share values in blocks.
     const Layer& first = *frames.front().find("indirect");
@@ -262,8 +262,8 @@ TEST(CachePasses, PreviewShowsEverySubPassAndEndsAtTheFinalImage) {
 
 TEST(CacheAccuracy, CornellCacheIsCloseToABruteForceReference) {
     // Same deep buffer; the reference uses 8x the rays of each record.
-    std::vector<std::string> common = {"camera.resolution=[64,64]", "render.spp=2", "render.seed=3"};
-    auto with = [&](std::vector<std::string> extra) {
+    std::vector<Override> common = {"camera.resolution=[64,64]", "render.spp=2", "render.seed=3"};
+    auto with = [&](std::vector<Override> extra) {
         extra.insert(extra.begin(), common.begin(), common.end());
         return load_scene(test::cornell_scene(), extra);
     };

@@ -23,7 +23,7 @@ TEST(Cli, RendersTheCornellBoxWithAllLayers) {
               0);
     Image img = read_exr(out);
     for (const char* layer : {"beauty", "direct", "albedo", "N", "depth"}) EXPECT_NE(img.find(layer), nullptr) << layer;
-    EXPECT_EQ(img.metadata["spp"], "2");
+    EXPECT_EQ(img.metadata["render.spp"], "2");
     EXPECT_TRUE(std::filesystem::exists(d.file("c.png")));
     auto stats = nlohmann::json::parse(read_file(d.file("stats.json")));
     EXPECT_EQ(stats["rays"]["camera"].get<int>(), 32 * 32 * 2);
@@ -48,7 +48,7 @@ TEST(Cli, BadInputExitsWithStatusTwoAndOneLine) {
     check("render " + test::cornell_scene() + out + " --res big", "--res big");
     check("render " + test::cornell_scene() + out + " --crop 1,2,3", "--crop");
     check("render " + test::cornell_scene() + out + " --crop 10,5,0,8", "/render/crop");
-    check("render " + test::cornell_scene() + out + " --set camera.fov=wide", "--set /camera/fov");
+    check("render " + test::cornell_scene() + out + " --set camera.fov=wide", "--set camera.fov=wide (/camera/fov)");
     check("render " + test::cornell_scene() + out + " --spp 0", "/render/spp");
     check("render " + test::cornell_scene() + out + " --threads abc", "--threads");
     std::string garbage = d.write("garbage.exr", "this is not an EXR file");

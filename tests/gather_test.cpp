@@ -121,7 +121,7 @@ TEST(Gather, InsideAUniformlyLitSphereOneBounceIsAlbedoTimesDirect) {
     Scene s = lit_sphere_interior(rho, I, 5);
     for (bool textures : {false, true}) {
         RadiositySettings rs;
-        rs.texel_size = 0.02f;
+        rs.texel = 0.02f;
         Rig rig(lit_sphere_interior(rho, I, 5), textures, rs);
         const TriangleMesh& m = rig.scene.objects[0].coarse;
         GatherSettings gs;
@@ -183,7 +183,7 @@ TEST(Radiosity, TexturesConvergeToShadowRayShading) {
     double prev = 0;
     for (float h : {0.4f, 0.2f, 0.1f, 0.05f}) {
         RadiositySettings rs;
-        rs.texel_size = h;
+        rs.texel = h;
         rs.max_level = 255;
         Rig rig(test::scene_from(j), true, rs);
         const TriangleMesh& m = rig.scene.objects[0].coarse;

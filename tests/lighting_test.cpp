@@ -17,7 +17,7 @@ Color irradiance_at(const Scene& scene, const Vec3& p, const Vec3& n, int sample
     SceneAccel accel(scene);
     DirectLighting lighting(scene, accel);
     Counters c;
-    return lighting.irradiance(p, n, RandomStream(scene.render.seed, key), samples, c);
+    return lighting.irradiance(p, n, RandomStream(scene.render.visibility.seed, key), samples, c);
 }
 
 TEST(DirectLighting, PointLightIsIntensityTimesCosineOverDistanceSquared) {

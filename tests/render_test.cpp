@@ -12,7 +12,7 @@ namespace bounce {
 namespace {
 
 Scene small_cornell(const std::vector<std::string>& extra = {}) {
-    std::vector<std::string> o = {"camera.resolution=[48,48]", "render.spp=4", "render.light_samples=4"};
+    std::vector<Override> o = {"camera.resolution=[48,48]", "render.spp=4", "render.light_samples=4"};
     o.insert(o.end(), extra.begin(), extra.end());
     return load_scene(test::cornell_scene(), o);
 }

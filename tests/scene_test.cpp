@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "bounce/core/error.h"
+#include "bounce/scene/mesh_import.h"
 #include "test_util.h"
 
 namespace bounce {
@@ -48,7 +49,7 @@ TEST(SceneLoad, OverridesSetAnyValueByPath) {
     Scene s = scene_from(j, {"camera.fov=60", "lights.0.color=[1,2,3]", "render.spp=7", "camera.resolution=[20,10]"});
     EXPECT_EQ(s.camera.fov, 60.0f);
     EXPECT_EQ(s.lights[0].color, Color(1, 2, 3));
-    EXPECT_EQ(s.render.spp, 7);
+    EXPECT_EQ(s.render.visibility.spp, 7);
     EXPECT_EQ(s.camera.width, 20);
     EXPECT_EQ(s.camera.height, 10);
 }

@@ -79,14 +79,16 @@ TEST(ShadingModel, SphereUvsAreContinuousOnEveryTriangle) {
 
 /// The showcase scene (bumped glossy sphere lit by bounce light only), small and quick.
 Scene showcase(const std::vector<std::string>& extra = {}) {
-    std::vector<std::string> o = {"camera.resolution=[48,48]", "render.spp=1", "render.rays=64", "render.threads=2"};
+    std::vector<Override> o = {"camera.resolution=[48,48]", "render.spp=1", "render.rays=64", "render.threads=2"};
     o.insert(o.end(), extra.begin(), extra.end());
     return load_scene(test::source_dir() + "/scenes/cornell/glossy-bump.json", o);
 }
 
-std::vector<float> beauty(const Scene& s, RenderRequest req = {}) {
+std::vector<float> beauty(const Scene& s, RenderRequest req = {}, const std::string& cache_out = "") {
     Stats stats;
-    return render(s, req, stats, nullptr).image.find("beauty")->data;
+    RenderResult r = render(s, req, stats, nullptr);
+    if (!cache_out.empty()) write_cache_file(cache_out, r.cache->to_file(r.cache_info));
+    return r.image.find("beauty")->data;
 }
 
 TEST(ShadingRender, BumpStrengthZeroIsTheUnbumpedImage) {
@@ -135,9 +137,7 @@ TEST(ShadingRender, GlossyHighlightsMoveWithTheOccluder) {
 
 TEST(ShadingRender, GlossAndBumpsKeepACacheValidButAlbedoDoesNot) {
     test::TempDir d;
-    RenderRequest first;
-    first.cache_out = d.file("c.bic");
-    beauty(showcase(), first);
+    beauty(showcase(), {}, d.file("c.bic"));
     RenderRequest reuse;
     reuse.cache_in = d.file("c.bic");
     EXPECT_NO_THROW(beauty(showcase({"materials.gold.roughness=0.8", "materials.gold.bump_strength=1"}), reuse));

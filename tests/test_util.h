@@ -65,7 +65,7 @@ inline nlohmann::json base_scene() {
             {"lights", nlohmann::json::array()}};
 }
 
-inline Scene scene_from(const nlohmann::json& j, const std::vector<std::string>& overrides = {}) {
+inline Scene scene_from(const nlohmann::json& j, const std::vector<Override>& overrides = {}) {
     return load_scene_text(j.dump(), "inline.json", overrides);
 }
 

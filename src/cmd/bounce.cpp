@@ -16,7 +16,10 @@
 #include "bounce/core/error.h"
 #include "bounce/core/image.h"
 #include "bounce/core/image_compare.h"
+#include "bounce/core/files.h"
+#include "bounce/render/frame.h"
 #include "bounce/render/render.h"
+#include "bounce/scene/params_cli.h"
 #include "bounce/scene/scene_load.h"
 
 namespace {
@@ -24,118 +27,92 @@ namespace {
 using namespace bounce;
 
 struct RenderArgs {
-    std::string scene, output, res, crop, deep_in, deep_out, stats_json;
+    FrameFiles files;
     std::vector<std::string> sets;
-    std::string gi, radiosity_textures, metric, cache_sharing, tile_order;
-    double min_spacing = -1, max_spacing = -1, max_angle = -1, gradient_limit = -1, quality = -1;
-    bool preview = false, regather = false, force = false, light_per_channel = false;
-    std::string cache_in, cache_out, show = "beauty", frames;
+    std::vector<Override> flags;  ///< from the parameter table's flags
+    bool regather = false, force = false, reuse_any = false;
+    std::string show = "beauty", frames;
     int frame = 0;
-    int threads = -1, spp = -1, rays = -1, tile_size = -1;
-    bool ao = false;
-    int64_t seed = -1;
     bool stats = false, quiet = false;
 };
 
-/// Turns the dedicated flags into `--set` assignments so that validation and error messages
-/// follow one path (and one name per parameter).
-std::vector<std::string> overrides_from(const RenderArgs& a) {
-    std::vector<std::string> o = a.sets;
-    if (!a.res.empty()) {
-        std::smatch m;
-        if (!std::regex_match(a.res, m, std::regex(R"((\d{1,6})x(\d{1,6}))")))
-            throw InputError("command line", "--res " + a.res, "expected WIDTHxHEIGHT, e.g. 640x480");
-        o.push_back("camera.resolution=[" + m[1].str() + "," + m[2].str() + "]");
-    }
-    if (!a.crop.empty()) {
-        if (!std::regex_match(a.crop, std::regex(R"(\d{1,6},\d{1,6},\d{1,6},\d{1,6})")))
-            throw InputError("command line", "--crop " + a.crop, "expected x0,x1,y0,y1 (pixels, ends exclusive)");
-        o.push_back("render.crop=[" + a.crop + "]");
-    }
-    if (a.threads >= 0) o.push_back("render.threads=" + std::to_string(a.threads));
-    if (a.spp >= 0) o.push_back("render.spp=" + std::to_string(a.spp));
-    if (a.seed >= 0) o.push_back("render.seed=" + std::to_string(a.seed));
-    if (!a.gi.empty()) o.push_back("render.gi=\"" + a.gi + "\"");
-    if (a.rays >= 0) o.push_back("render.rays=" + std::to_string(a.rays));
-    if (a.ao) o.push_back("render.ao=true");
-    if (!a.metric.empty()) o.push_back("render.metric=\"" + a.metric + "\"");
-    if (!a.cache_sharing.empty()) o.push_back("render.cache_sharing=\"" + a.cache_sharing + "\"");
-    if (!a.tile_order.empty()) o.push_back("render.tile_order=\"" + a.tile_order + "\"");
-    if (a.tile_size >= 0) o.push_back("render.tile_size=" + std::to_string(a.tile_size));
-    auto num = [&](const char* key, double v) {
-        if (v >= 0) o.push_back(std::string("render.") + key + "=" + fmt::format("{}", v));
-    };
-    num("min_spacing", a.min_spacing);
-    num("max_spacing", a.max_spacing);
-    num("max_angle", a.max_angle);
-    num("gradient_limit", a.gradient_limit);
-    num("quality", a.quality);
-    if (a.preview) o.push_back("render.preview=true");
-    if (a.light_per_channel) o.push_back("render.light_per_channel=true");
-    if (!a.radiosity_textures.empty()) o.push_back("render.radiosity_textures=\"" + a.radiosity_textures + "\"");
-    return o;
+Scene load_render_scene(const RenderArgs& a) {
+    std::vector<Override> o(a.sets.begin(), a.sets.end());
+    o.insert(o.end(), a.flags.begin(), a.flags.end());  // dedicated flags win over --set
+    Scene scene = load_scene(a.files.scene, o);
+    const bool cache = scene.render.indirect.gi == GiMode::Cache;
+    if (!cache && !a.files.cache_out.empty())
+        throw InputError("command line", "--cache-out " + a.files.cache_out, "only a --gi cache render makes a cache");
+    if (!cache && !a.files.cache_in.empty() && a.show != "records")
+        throw InputError("command line", "--cache-in " + a.files.cache_in,
+                         "only a --gi cache render (or --show records) uses a cache");
+    if (!a.files.base.empty() && !scene.render.visibility.has_crop())
+        throw InputError("command line", "--base " + a.files.base, "--base fills the pixels outside --crop; give a crop");
+    if (a.reuse_any && a.regather)
+        throw InputError("command line", "--cache-reuse-any", "cannot be combined with --regather");
+    return scene;
 }
 
-int render_frame(const RenderArgs& a, int frame, const std::string& cache_in) {
-    Scene scene = load_scene(a.scene, overrides_from(a));
-    const std::string output = expand_frame_pattern(a.output, frame);
+int render_frame(const RenderArgs& a, const FrameFiles& files, int frame) {
+    Scene scene = load_render_scene(a);
+    files.check();
     std::unique_ptr<ProgressSink> sink = a.quiet ? make_null_progress()
                                          : isatty(STDERR_FILENO) ? make_terminal_progress()
                                                                  : make_log_progress();
     Stats stats;
     RenderRequest request;
-    request.deep_in = expand_frame_pattern(a.deep_in, frame);
-    request.deep_out = expand_frame_pattern(a.deep_out, frame);
-    request.cache_in = cache_in;
-    request.cache_out = expand_frame_pattern(a.cache_out, frame);
+    request.deep_in = files.deep_in;
+    request.deep_out = files.deep_out;
+    request.cache_in = files.cache_in;
     request.regather = a.regather;
     request.force = a.force;
+    request.cache_reuse = a.reuse_any ? CacheReuse::Any : CacheReuse::Strict;
     request.frame = frame;
-    std::filesystem::path png = output;
-    png.replace_extension(".png");
-    if (scene.render.preview)
+    if (scene.render.parallel.preview)
         request.preview = [&](const Image& img) {
-            write_exr(output, img);
-            write_png(png.string(), img, "beauty");
+            write_exr(files.output, img);
+            write_png(files.png(), img, "beauty");
         };
     RenderResult r = render(scene, request, stats, sink.get());
     {
         PhaseTimer t(stats, "write images");
-        if (!r.image.find(a.show))
-            throw InputError("command line", "--show " + a.show,
-                             a.show == "records" ? "no records to show (render with --gi cache or give --cache-in)"
-                                                 : "the render has no layer \"" + a.show + "\"");
-        write_exr(output, r.image);
-        write_png(png.string(), r.image, a.show);
+        write_frame_outputs(r, files, a.show);
     }
+    if (stats.to_json().contains("cache_reused_with_other_settings") && !a.quiet)
+        std::fprintf(stderr, "bounce: %s: records reused although gathered with other settings (--cache-reuse-any)\n",
+                     files.cache_in.c_str());
     if (a.stats) {
         std::printf("%s", stats.to_text().c_str());
-        if (scene.render.gi != "none" || scene.render.ao) std::printf("\n%s", seed_table(stats.to_json()).c_str());
+        if (scene.render.indirect.any()) std::printf("\n%s", seed_table(stats.to_json()).c_str());
     }
-    if (!a.stats_json.empty()) {
+    if (!files.stats_json.empty()) {
         std::string text = stats.to_json().dump(2) + "\n";
-        write_atomically(a.stats_json, [&](const std::string& tmp) {
+        write_atomically(files.stats_json, [&](const std::string& tmp) {
             std::ofstream out(tmp);
             out << text;
-            if (!out) throw InputError(a.stats_json, "", "cannot write stats file");
+            if (!out) throw InputError(files.stats_json, "", "cannot write stats file");
         });
     }
-    if (!a.quiet) std::fprintf(stderr, "wrote %s\n", output.c_str());
+    if (!a.quiet) std::fprintf(stderr, "wrote %s\n", files.output.c_str());
     return 0;
 }
 
 int run_render(const RenderArgs& a) {
-    if (a.frames.empty()) return render_frame(a, a.frame, expand_frame_pattern(a.cache_in, a.frame));
-    std::smatch m;
-    if (!std::regex_match(a.frames, m, std::regex(R"((-?\d{1,6})-(-?\d{1,6}))")) || std::stoi(m[1]) > std::stoi(m[2]))
-        throw InputError("command line", "--frames " + a.frames, "expected FIRST-LAST, e.g. 1-24");
-    if (a.cache_out.find('#') == std::string::npos || a.output.find('#') == std::string::npos)
+    if (a.frames.empty()) return render_frame(a, expand_frame(a.files, a.frame), a.frame);
+    auto [first, last] = parse_frame_range(a.frames, "--frames " + a.frames);
+    if (a.files.cache_out.find('#') == std::string::npos || a.files.output.find('#') == std::string::npos)
         throw InputError("command line", "--frames", "-o and --cache-out need a #### frame pattern for a sequence");
-    // Each frame starts from the previous frame's cache: records are reused, new ones added.
-    for (int f = std::stoi(m[1]); f <= std::stoi(m[2]); ++f) {
-        std::string in = f == std::stoi(m[1]) ? expand_frame_pattern(a.cache_in, f) : expand_frame_pattern(a.cache_out, f - 1);
-        if (int rc = render_frame(a, f, in)) return rc;
-    }
+    for (int f = first; f <= last; ++f)
+        if (int rc = render_frame(a, sequence_frame(a.files, first, f), f)) return rc;
+    return 0;
+}
+
+int run_params(bool json, bool markdown) {
+    if (json) std::printf("%s\n", params_listing().dump(2).c_str());
+    else if (markdown) std::printf("%s", params_markdown().c_str());
+    else
+        for (const Param& p : scene_params())
+            std::printf("%-32s %-10s %-24s %s\n", p.key.c_str(), p.stage.c_str(), p.default_value().dump().c_str(), p.doc.c_str());
     return 0;
 }
 
@@ -298,45 +275,30 @@ int main(int argc, char** argv) {
 
     RenderArgs ra;
     CLI::App* render = app.add_subcommand("render", "render a scene to a multi-layer EXR and a PNG");
-    render->add_option("scene", ra.scene, "scene file (.json, or a glTF/OBJ/PLY with a camera)")->required();
-    render->add_option("-o,--output", ra.output, "output EXR (a PNG is written beside it)")->required();
-    render->add_option("--res", ra.res, "resolution WIDTHxHEIGHT (camera.resolution)");
-    render->add_option("--threads", ra.threads, "worker threads, 0 = all cores (render.threads)");
-    render->add_option("--tile-size", ra.tile_size, "tile (bucket) edge in pixels (render.tile_size)");
-    render->add_option("--tile-order", ra.tile_order, "order threads take tiles in: rows or spiral (render.tile_order)");
-    render->add_option("--cache-sharing", ra.cache_sharing,
-                       "threads share one cache or fill per-thread caches merged between sub-passes: "
-                       "shared or per-thread (render.cache_sharing)");
-    render->add_option("--spp", ra.spp, "subsamples per pixel (render.spp)");
-    render->add_option("--seed", ra.seed, "random seed (render.seed)");
-    render->add_option("--crop", ra.crop, "render only pixels x0,x1,y0,y1 (render.crop)");
-    render->add_option("--gi", ra.gi, "indirect light: none, brute or cache (render.gi)");
-    render->add_option("--rays", ra.rays, "gather rays per gather (render.rays)");
-    render->add_flag("--ao", ra.ao, "ambient occlusion only (render.ao)");
-    render->add_option("--metric", ra.metric, "cache error metric: tl04 or ward (render.metric)");
-    render->add_option("--min-spacing", ra.min_spacing, "smallest record radius, pixels (render.min_spacing)");
-    render->add_option("--max-spacing", ra.max_spacing, "largest record radius, pixels (render.max_spacing)");
-    render->add_option("--max-angle", ra.max_angle, "normal deviation limit, degrees (render.max_angle)");
-    render->add_option("--gradient-limit", ra.gradient_limit, "Weber gradient limit tau (render.gradient_limit)");
-    render->add_option("--quality", ra.quality, "cache quality kappa, smaller = fewer records (render.quality)");
-    render->add_option("--cache-in", ra.cache_in, "start from this irradiance cache file (#### = frame)");
-    render->add_option("--cache-out", ra.cache_out, "write the irradiance cache (#### = frame)");
-    render->add_flag("--regather", ra.regather, "flush the cache before gathering");
+    render->add_option("scene", ra.files.scene, "scene file (.json, or a glTF/OBJ/PLY with a camera)")->required();
+    render->add_option("-o,--output", ra.files.output, "output EXR (a PNG is written beside it; #### = frame)")->required();
+    add_param_flags(*render, scene_params(), ra.flags);
+    render->add_option("--cache-in", ra.files.cache_in, "start from this irradiance cache file (#### = frame)");
+    render->add_option("--cache-out", ra.files.cache_out, "write the irradiance cache (#### = frame)");
+    render->add_flag("--regather", ra.regather, "flush the cache before gathering (with --crop: only the crop's records)");
+    render->add_flag("--cache-reuse-any", ra.reuse_any,
+                     "keep a --cache-in gathered with other settings, gather only where it misses (the stats say so)");
     render->add_flag("--force", ra.force, "use a cache made for another scene or camera");
+    render->add_option("--base", ra.files.base, "with --crop: an earlier full-frame EXR to paste the crop over");
     render->add_option("--frame", ra.frame, "frame number (expands #### in file names, stamps new records)");
     render->add_option("--frames", ra.frames, "render frames FIRST-LAST, each reusing the previous frame's cache");
     render->add_option("--show", ra.show, "layer written to the PNG: beauty (default), records, indirect, ao ...");
-    render->add_flag("--light-per-channel", ra.light_per_channel,
-                     "shade indirect light as one (radiance, direction) pair per RGB channel (render.light_per_channel)");
-    render->add_flag("--preview", ra.preview, "progressive gather-and-shade, the image rewritten after each sub-pass (render.preview)");
-    render->add_option("--radiosity-textures", ra.radiosity_textures,
-                       "folder of baked radiosity textures to reuse or fill (render.radiosity_textures)");
     render->add_option("--set", ra.sets, "override any scene value: key.path=value")->take_all();
-    render->add_option("--deep-out", ra.deep_out, "write the deep buffer (OpenEXR deep)");
-    render->add_option("--deep-in", ra.deep_in, "shade from a deep buffer instead of tracing visibility");
+    render->add_option("--deep-out", ra.files.deep_out, "write the deep buffer (OpenEXR deep)");
+    render->add_option("--deep-in", ra.files.deep_in, "shade from a deep buffer instead of tracing visibility");
     render->add_flag("--stats", ra.stats, "print statistics");
-    render->add_option("--stats-json", ra.stats_json, "write statistics as JSON");
+    render->add_option("--stats-json", ra.files.stats_json, "write statistics as JSON");
     render->add_flag("-q,--quiet", ra.quiet, "no progress output");
+
+    bool params_json = false, params_markdown_flag = false;
+    CLI::App* params = app.add_subcommand("params", "list every scene parameter: key, stage, default, range, unit, doc");
+    params->add_flag("--json", params_json, "print JSON (the lighting tool's spreadsheet)");
+    params->add_flag("--markdown", params_markdown_flag, "print the Markdown table of docs/scene-format.md");
 
     CompareArgs ca;
     CLI::App* compare = app.add_subcommand("compare", "error of a render against a reference, per layer");
@@ -381,6 +343,7 @@ int main(int argc, char** argv) {
     }
     try {
         if (*render) return run_render(ra);
+        if (*params) return run_params(params_json, params_markdown_flag);
         if (*compare) return run_compare(ca);
         if (*cinfo) return run_cache_info(ka);
         if (*cmerge) return run_cache_merge(ka);
@@ -389,6 +352,9 @@ int main(int argc, char** argv) {
     } catch (const InputError& e) {
         std::fprintf(stderr, "bounce: %s\n", e.what());
         return 2;
+    } catch (const Cancelled&) {
+        std::fprintf(stderr, "bounce: cancelled\n");
+        return 130;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "bounce: internal error: %s\n", e.what());
         return 1;

@@ -147,7 +147,7 @@ SceneAccel::SceneAccel(const Scene& scene) {
         }
     }
     // Default distance: cover the measured gap for rays up to ~75 degrees off the normal.
-    ray_offset_ = scene.render.ray_offset >= 0 ? scene.render.ray_offset
+    ray_offset_ = scene.render.lighting.ray_offset >= 0 ? scene.render.lighting.ray_offset
                                                : std::max(1e-4f * diag, 4.0f * gap_);
     min_epsilon_ = 1e-7f * diag;
 }

@@ -8,6 +8,7 @@
 
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
+#include "bounce/core/files.h"
 
 namespace bounce {
 
@@ -108,17 +109,28 @@ Record read_record(Cursor& c) {
     return r;
 }
 
-bool record_ok(const Record& r) {
+/// Why a record read from a file cannot be used, or nullptr. Values are bounded so that every
+/// later sum, square and BVH bound still fits a float.
+const char* record_problem(const Record& r) {
     auto fin = [](const Vec3& v) { return isfinite(v); };
-    if (!fin(r.p) || !fin(r.n) || !fin(r.E) || !fin(r.bent) || !std::isfinite(r.ao)) return false;
-    for (int c = 0; c < 3; ++c)
-        if (!fin(r.dir[static_cast<size_t>(c)]) || !fin(r.grad_r[static_cast<size_t>(c)]) ||
-            !fin(r.grad_t[static_cast<size_t>(c)]) || r.E[c] < 0)
-            return false;
-    if (!fin(r.ao_grad_r) || !fin(r.ao_grad_t)) return false;
-    if (!(r.radius > 0) || !std::isfinite(r.radius) || !(r.footprint > 0) || !std::isfinite(r.footprint)) return false;
-    if (std::abs(length(r.n) - 1) > 1e-3f) return false;
-    return !(r.weber <= 0) && !std::isnan(r.weber);
+    auto within = [](const Vec3& v, float m) { return std::fabs(v.x) <= m && std::fabs(v.y) <= m && std::fabs(v.z) <= m; };
+    if (!fin(r.p) || !fin(r.n) || !fin(r.E) || !fin(r.bent) || !std::isfinite(r.ao)) return "non-finite values";
+    if (!within(r.p, kMaxCoordinate)) return "position beyond +-1e18";
+    for (int c = 0; c < 3; ++c) {
+        const auto i = static_cast<size_t>(c);
+        if (!fin(r.dir[i]) || !fin(r.grad_r[i]) || !fin(r.grad_t[i])) return "non-finite gradients or directions";
+        if (!within(r.dir[i], kMaxRadiometric) || !within(r.grad_r[i], kMaxRadiometric) || !within(r.grad_t[i], kMaxRadiometric))
+            return "gradients or directions beyond 1e20";
+        if (r.E[c] < 0 || r.E[c] > kMaxRadiometric) return "irradiance outside [0, 1e20]";
+    }
+    if (!fin(r.ao_grad_r) || !fin(r.ao_grad_t) || !within(r.ao_grad_r, kMaxRadiometric) || !within(r.ao_grad_t, kMaxRadiometric))
+        return "AO gradients non-finite or beyond 1e20";
+    if (r.ao < 0 || r.ao > 1) return "AO outside [0, 1]";
+    if (!(r.radius > 0) || !(r.radius <= kMaxCoordinate) || !(r.footprint > 0) || !(r.footprint <= kMaxCoordinate))
+        return "radius or footprint not in (0, 1e18]";
+    if (std::abs(length(r.n) - 1) > 1e-3f) return "normal is not unit length";
+    if (r.weber <= 0 || std::isnan(r.weber)) return "gradient-limit distance is not positive";
+    return nullptr;
 }
 
 }  // namespace
@@ -212,8 +224,8 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
             Cursor rc(payload, name);
             for (uint32_t i = 0; i < n; ++i) {
                 Record r = read_record(rc);
-                if (!record_ok(r))
-                    throw InputError(name, fmt::format("record {}", f.records.size()), "non-finite or out-of-range values");
+                if (const char* why = record_problem(r))
+                    throw InputError(name, fmt::format("record {}", f.records.size()), why);
                 f.records.push_back(r);
             }
         }
@@ -229,8 +241,7 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
 }
 
 CacheFile read_cache_file(const std::string& path) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path, "", "cache file not found");
+    check_input_file(path);
     std::ifstream in(path, std::ios::binary);
     if (!in) throw InputError(path, "", "cannot open cache file");
     std::string bytes((std::istreambuf_iterator<char>(in)), {});

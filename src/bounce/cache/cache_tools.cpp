@@ -11,6 +11,7 @@
 #include "bounce/cache/irradiance_cache.h"
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
+#include "bounce/scene/params.h"
 #include "bounce/core/image.h"
 
 namespace bounce {
@@ -86,15 +87,20 @@ std::string cache_info_text(const nlohmann::json& j, const std::string& path) {
 
 namespace {
 
-CacheSettings settings_from(const nlohmann::json& p) {
-    CacheSettings s;
-    s.metric = p.value("metric", s.metric);
-    s.max_angle = p.value("max_angle", s.max_angle);
-    s.gradient_limit = p.value("gradient_limit", s.gradient_limit);
-    s.quality = p.value("quality", s.quality);
-    s.min_weight = p.value("min_weight", s.min_weight);
-    s.accuracy = p.value("accuracy", s.accuracy);
-    return s;
+/// The cache settings a file's parameters name (through the parameter table); the defaults
+/// for parameters it does not record or records with values out of range.
+CacheSettings settings_from(const nlohmann::json& parameters) {
+    Scene scene;
+    for (const Param& p : scene_params()) {
+        if (!parameters.contains(p.key)) continue;
+        try {
+            p.set(scene, check_param(p, parameters[p.key], [](const std::string&, const std::string& msg) {
+                      throw std::invalid_argument(msg);
+                  }));
+        } catch (const std::invalid_argument&) {
+        }
+    }
+    return scene.render.cache;
 }
 
 std::string record_bytes(const Record& r) {
@@ -109,6 +115,10 @@ CacheFile merge_caches(const CacheFile& a, const CacheFile& b, const std::string
                        bool force) {
     if (!force && (a.info.scene_fingerprint != b.info.scene_fingerprint || a.info.camera_fingerprint != b.info.camera_fingerprint))
         throw InputError(name_b, "fingerprint", "cache belongs to another scene or camera than " + name_a + " (--force merges anyway)");
+    const bool ao_a = a.info.parameters.value("render.ao", false), ao_b = b.info.parameters.value("render.ao", false);
+    if (!force && ao_a != ao_b)
+        throw InputError(name_b, "parameters/render.ao", fmt::format("cache holds {} but {} holds {} (--force merges anyway)",
+                                                                      ao_b ? "AO" : "irradiance", name_a, ao_a ? "AO" : "irradiance"));
     struct Item {
         std::string bytes;
         const Record* r;

@@ -83,7 +83,7 @@ Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const 
     r.key = key;
     r.rays = static_cast<uint32_t>(g.rays);
     // TL04: half the minimum qualifying distance; Ward: the harmonic mean.
-    r.raw_radius = settings_.metric == "ward" ? g.harmonic_distance : settings_.radius_scale * g.min_distance;
+    r.raw_radius = settings_.metric == Metric::Ward ? g.harmonic_distance : settings_.radius_scale * g.min_distance;
     const float rmin = settings_.min_spacing * footprint, rmax = settings_.max_spacing * footprint;
     r.radius = std::clamp(r.raw_radius, rmin, rmax);
     // Weber's law: the distance at which the gradient-extrapolated change reaches tau times

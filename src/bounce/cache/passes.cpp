@@ -52,8 +52,8 @@ Lock lock_cache(const IrradianceCache& cache, Counters& counters) {
 void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, IrradianceCache& cache,
                     Stats& stats, ProgressSink* sink, const SubPassCallback& after_subpass, int frame) {
     const auto schedule = subpass_schedule(static_cast<int>(cache.settings().max_spacing));
-    const bool per_tile = scene.render.cache_sharing == "per-thread";
-    const auto tiles = make_tiles(deep.width, deep.height, scene.render.tile_size, scene.render.tile_order);
+    const bool per_tile = scene.render.parallel.cache_sharing == CacheSharing::PerThread;
+    const auto tiles = make_tiles(deep.width, deep.height, scene.render.parallel.tile_size, scene.render.parallel.tile_order);
     Progress progress(sink, "gathering", schedule.size());
     std::vector<std::vector<Record>> made(tiles.size());  // this sub-pass's records, by Tile::index
     size_t dropped = 0, gathered = 0;
@@ -77,7 +77,7 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
                         if (!cache.misses(f.p_base, f.n_base, per_tile ? std::span<const Record>(out)
                                                                        : std::span<const Record>())) continue;
                         GatherResult g = gatherer.gather(
-                            f.p, f.n_base, fragment_stream(scene.render.seed, wx + deep.x0, wy + deep.y0, k), counters);
+                            f.p, f.n_base, fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), counters);
                         Record r = cache.make_record(g, f.p_base, f.n_base, f.footprint, candidate_key(deep, wx, wy, k));
                         r.frame = frame;
                         if (per_tile) {
@@ -130,7 +130,7 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
     tbb::enumerable_thread_specific<uint64_t> misses(0), lookups(0);
     // The pass holds the shared lock for its workers: no writer can interleave.
     auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache, stats.local());
-    for_each_pixel_in_tiles(deep, scene.render.tile_size, sink, "interpolate", [&](int wx, int wy, size_t first) {
+    for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "interpolate", [&](int wx, int wy, size_t first) {
         auto frags = deep.pixel(wx, wy);
         for (uint32_t k = 0; k < frags.size(); ++k) {
             Interpolated in = cache.lookup(frags[k].p_base, frags[k].n_base, true);
@@ -138,12 +138,40 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
             if (in.weight <= 0) ++misses.local();
             out[first + k] = {in.E, in.ao, in.bent, in.dir};
         }
-    }, scene.render.tile_order);
+    }, scene.render.parallel.tile_order);
     uint64_t m = 0, l = 0;
     for (auto v : misses) m += v;
     for (auto v : lookups) l += v;
     stats.set("shading_misses", static_cast<double>(m));
     stats.set("lookups", static_cast<double>(l));
+    return out;
+}
+
+/// Preview: each pixel takes the indirect light of the nearest pixel (on the lattices of the
+/// current step, then coarser ones) that a finished sub-pass visited.
+std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceCache& cache,
+                                       const std::vector<uint8_t>& visited, int step) {
+    std::vector<Indirect> out(deep.fragments.size());
+    parallel_for_each_index(0, deep.height, [&](int wy) {
+        for (int wx = 0; wx < deep.width; ++wx) {
+            int x = wx + deep.x0, y = wy + deep.y0, lx = wx, ly = wy;
+            for (int s = step; s <= (1 << 20); s *= 2) {
+                int cx = x - x % s - deep.x0, cy = y - y % s - deep.y0;
+                if (cx >= 0 && cy >= 0 && visited[static_cast<size_t>(cy) * deep.width + cx]) {
+                    lx = cx, ly = cy;
+                    break;
+                }
+            }
+            auto src = deep.pixel(lx, ly);
+            size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
+            auto frags = deep.pixel(wx, wy);
+            for (uint32_t k = 0; k < frags.size(); ++k) {
+                const Fragment& f = src.empty() ? frags[k] : src[std::min<size_t>(k, src.size() - 1)];
+                Interpolated in = cache.lookup(f.p_base, f.n_base, true);
+                out[first + k] = {in.E, in.ao, in.bent, in.dir};
+            }
+        }
+    });
     return out;
 }
 

@@ -47,4 +47,10 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
 std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
                                    Stats& stats, ProgressSink* progress);
 
+/// Progressive preview after a sub-pass of step `step`: each fragment takes the interpolated
+/// light at the nearest pixel (on that step's lattice, then coarser ones) a finished sub-pass
+/// visited (`visited`, one flag per window pixel).
+std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceCache& cache,
+                                       const std::vector<uint8_t>& visited, int step);
+
 }  // namespace bounce

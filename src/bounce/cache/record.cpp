@@ -18,7 +18,7 @@ MetricTerms metric_terms(const Record& r, const Vec3& p, const Vec3& n, const Ca
 }
 
 float record_weight(const Record& r, const Vec3& p, const Vec3& n, const CacheSettings& s) {
-    if (s.metric == "ward") {
+    if (s.metric == Metric::Ward) {
         float ndot = dot(n, r.n);
         Vec3 d = p - r.p;
         if (ndot <= 0 || dot(d, n + r.n) * 0.5f < -0.05f * r.radius) return 0;
@@ -33,7 +33,7 @@ float record_weight(const Record& r, const Vec3& p, const Vec3& n, const CacheSe
 }
 
 float record_support(const Record& r, const CacheSettings& s) {
-    if (s.metric == "ward") return s.accuracy * r.radius;
+    if (s.metric == Metric::Ward) return s.accuracy * r.radius;
     return std::min(r.radius, r.weber) / s.quality;
 }
 

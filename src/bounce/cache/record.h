@@ -7,31 +7,9 @@
 #include <string>
 
 #include "bounce/core/math.h"
+#include "bounce/scene/settings.h"
 
 namespace bounce {
-
-struct CacheSettings {
-    std::string metric = "tl04";  ///< tl04 (normalised, bounded) | ward (1/x, accuracy a)
-    float min_spacing = 2.0f;     ///< smallest record radius, pixels
-    float max_spacing = 16.0f;    ///< largest record radius, pixels
-    float max_angle = 10.0f;      ///< normal deviation at which the normal metric reaches 1, degrees
-    float gradient_limit = 1.0f;  ///< Weber limit tau: extrapolated change / E at which it reaches 1; 0 = off
-    float quality = 1.0f;         ///< kappa: every TL04 metric is scaled by it (smaller = fewer records)
-    float min_weight = 0.5f;      ///< a lookup misses when the weights sum below this (TL04)
-    float accuracy = 0.2f;        ///< Ward's a
-    bool gradients = true;        ///< extrapolate with gradients
-    bool neighbour_clamp = true;  ///< R_new <= R_j + |p_new - p_j| (Krivanek et al. 2006)
-    float shading_reach = 1.0f;   ///< the shading pass lets records reach this much farther
-                                  ///< (kappa / reach; Mitsuba's relaxed final pass), >= 1
-    float radius_scale = 0.5f;    ///< R = radius_scale * d_min (TL04: 1/2)
-    /// The settings the shading pass interpolates with.
-    CacheSettings for_shading() const {
-        CacheSettings s = *this;
-        s.quality = quality / shading_reach;
-        s.accuracy = accuracy * shading_reach;
-        return s;
-    }
-};
 
 /// One cache record: a full gather's result at (p, n), with its reach.
 struct Record {

@@ -10,6 +10,12 @@ namespace bounce {
 
 inline constexpr float kPi = std::numbers::pi_v<float>;
 inline constexpr float kInvPi = 1.0f / kPi;
+/// Largest coordinate a scene, light or cache record may use: squared distances and BVH bounds
+/// of such values still fit a float (Embree aborts on infinite bounds).
+inline constexpr float kMaxCoordinate = 1e18f;
+/// Largest radiometric value (intensity, radiance, irradiance) accepted from any input: sums
+/// of many such values still fit a float.
+inline constexpr float kMaxRadiometric = 1e20f;
 
 struct Vec2 {
     float x = 0, y = 0;

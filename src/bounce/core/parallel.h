@@ -20,6 +20,8 @@
 #ifdef BOUNCE_TSAN
 #include <algorithm>
 #include <atomic>
+#include <exception>
+#include <mutex>
 #include <thread>
 #include <vector>
 #endif
@@ -33,14 +35,23 @@ void parallel_ranges(Index begin, Index end, Index grain, Fn&& fn, bool simple =
 #ifdef BOUNCE_TSAN
     (void)simple;
     std::atomic<Index> next{begin};
+    std::mutex failed_mutex;
+    std::exception_ptr failed;  // the first exception, rethrown after the join (as TBB does)
     auto worker = [&] {
-        for (Index lo = next.fetch_add(grain); lo < end; lo = next.fetch_add(grain))
-            fn(lo, std::min<Index>(end, lo + grain));
+        try {
+            for (Index lo = next.fetch_add(grain); lo < end; lo = next.fetch_add(grain))
+                fn(lo, std::min<Index>(end, lo + grain));
+        } catch (...) {
+            next.store(end);
+            std::lock_guard lock(failed_mutex);
+            if (!failed) failed = std::current_exception();
+        }
     };
     std::vector<std::thread> threads;
     for (int i = 1; i < tbb::this_task_arena::max_concurrency(); ++i) threads.emplace_back(worker);
     worker();
     for (auto& t : threads) t.join();
+    if (failed) std::rethrow_exception(failed);
 #else
     auto body = [&](const tbb::blocked_range<Index>& r) { fn(r.begin(), r.end()); };
     if (simple)

@@ -79,6 +79,7 @@ Progress::~Progress() {
 void Progress::add(uint64_t n) {
     uint64_t done = done_.fetch_add(n) + n;
     if (!sink_) return;
+    sink_->check_cancel();
     double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     if (t - last_report_.load(std::memory_order_relaxed) < 0.2 && done < total_) return;
     std::unique_lock lock(mutex_, std::try_to_lock);

@@ -5,11 +5,30 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <exception>
 #include <memory>
 #include <mutex>
 #include <string>
 
 namespace bounce {
+
+/// Thrown by a pass when its CancelToken is set; the render leaves no output behind.
+struct Cancelled : std::exception {
+    const char* what() const noexcept override { return "cancelled"; }
+};
+
+/// Set from any thread to stop a running render; passes check it per row, tile and gather.
+class CancelToken {
+public:
+    void cancel() { flag_.store(true, std::memory_order_relaxed); }
+    bool cancelled() const { return flag_.load(std::memory_order_relaxed); }
+    void check() const {
+        if (cancelled()) throw Cancelled();
+    }
+
+private:
+    std::atomic<bool> flag_{false};
+};
 
 class ProgressSink {
 public:
@@ -17,6 +36,11 @@ public:
     /// `done` of `total` units of phase `name`, `elapsed` seconds in. Called under a lock.
     virtual void update(const std::string& name, uint64_t done, uint64_t total, double elapsed) = 0;
     virtual void finish(const std::string& name, uint64_t total, double elapsed) = 0;
+    /// Checked by every pass as it goes; null = never cancelled.
+    const CancelToken* cancel = nullptr;
+    void check_cancel() const {
+        if (cancel) cancel->check();
+    }
 };
 
 /// A bar redrawn in place with elapsed | remaining (for terminals).

@@ -85,4 +85,21 @@ uint64_t peak_rss_bytes() {
     return static_cast<uint64_t>(u.ru_maxrss) * 1024u;
 }
 
+std::string seed_table(const nlohmann::json& s) {
+    auto clock = [](double secs) { return fmt::format("{}:{:06.3f}", static_cast<int>(secs) / 60, std::fmod(secs, 60.0)); };
+    const auto& ph = s["phases_s"];
+    auto phase = [&](const char* n) { return ph.contains(n) ? ph[n].get<double>() : 0.0; };
+    double gathering = phase("gather") + phase("radiosity bake") + phase("radiosity load");
+    double shading = phase("shading");
+    double total = s["total_s"].get<double>();
+    double pixels = s.value("pixels", 0.0);
+    double rays = static_cast<double>(s["rays"]["gather"].get<uint64_t>());
+    std::string per_record = s.contains("records") ? fmt::format("{}", s.value("rays_per_gather", 0)) : "-";
+    std::string records = s.contains("records") ? fmt::format("{}", s["records"].get<double>()) : "-";
+    return fmt::format("| gathering | shading | total | rays/record | records | rays/MP |\n"
+                       "| {} | {} | {} | {} | {} | {:.1f} M |\n",
+                       clock(gathering), clock(shading), clock(total), per_record, records,
+                       pixels > 0 ? rays / pixels : 0.0);
+}
+
 }  // namespace bounce

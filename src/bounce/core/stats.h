@@ -34,6 +34,7 @@ public:
 
     /// Extra named values (pixels, fragments, records ...) shown in the stats block.
     void set(const std::string& key, double value) { extra_[key] = value; }
+    void set(const std::string& key, nlohmann::json value) { extra_[key] = std::move(value); }
     const nlohmann::json& extra() const { return extra_; }
 
     nlohmann::json to_json() const;
@@ -62,6 +63,10 @@ private:
     std::chrono::steady_clock::time_point start_;
     bool stopped_ = false;
 };
+
+/// The seed's table (TL04 class notes): gathering, shading, total, rays per record, records,
+/// rays per megapixel (millions) — a header line and one row, from Stats::to_json().
+std::string seed_table(const nlohmann::json& stats);
 
 /// Peak resident set size of this process, in bytes.
 uint64_t peak_rss_bytes();

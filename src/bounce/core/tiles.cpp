@@ -5,7 +5,7 @@
 
 namespace bounce {
 
-std::vector<Tile> make_tiles(int width, int height, int size, const std::string& order) {
+std::vector<Tile> make_tiles(int width, int height, int size, TileOrder order) {
     size = std::max(size, 1);
     const int tx = (width + size - 1) / size, ty = (height + size - 1) / size;
     std::vector<Tile> tiles;
@@ -14,7 +14,7 @@ std::vector<Tile> make_tiles(int width, int height, int size, const std::string&
         for (int i = 0; i < tx; ++i)
             tiles.push_back({j * tx + i, i * size, j * size, std::min((i + 1) * size, width),
                              std::min((j + 1) * size, height)});
-    if (order == "spiral") {
+    if (order == TileOrder::Spiral) {
         // By distance of the tile centre from the image centre, ties in row-major order: a
         // square-ish spiral outwards without walking one.
         const double cx = 0.5 * width, cy = 0.5 * height;

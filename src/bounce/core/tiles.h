@@ -18,9 +18,12 @@ struct Tile {
     int x1 = 0, y1 = 0;      ///< one past the last
 };
 
-/// Tiles of `size` pixels covering a width x height window, listed in `order`: "rows"
-/// (row-major) or "spiral" (centre first, outwards: the subject usually shows first).
-std::vector<Tile> make_tiles(int width, int height, int size, const std::string& order = "rows");
+/// The order threads take tiles in: row-major, or centre first and outwards (the subject
+/// usually shows first). Never changes the image.
+enum class TileOrder : uint8_t { Rows, Spiral };
+
+/// Tiles of `size` pixels covering a width x height window, listed in `order`.
+std::vector<Tile> make_tiles(int width, int height, int size, TileOrder order = TileOrder::Rows);
 
 /// Calls fn(tile) for every tile, in parallel in the current task arena; each worker takes the
 /// next tile of the list when it is free (greedy load balancing).

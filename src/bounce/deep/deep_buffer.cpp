@@ -69,19 +69,39 @@ struct Accum {
 
 }  // namespace
 
-DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats,
-                             ProgressSink* sink) {
+DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* sink) {
+    return render_visibility(scene, accel, stats, sink, frame_window(scene));
+}
+
+std::array<int, 4> frame_window(const Scene& scene) {
+    const VisibilitySettings& v = scene.render.visibility;
+    return v.has_crop() ? v.crop : std::array<int, 4>{0, scene.camera.width, 0, scene.camera.height};
+}
+
+DeepBuffer sub_window(const DeepBuffer& deep, const std::array<int, 4>& w) {
+    if (w[0] == deep.x0 && w[2] == deep.y0 && w[1] - w[0] == deep.width && w[3] - w[2] == deep.height) return deep;
+    DeepBuffer out = deep;
+    out.x0 = w[0], out.y0 = w[2], out.width = w[1] - w[0], out.height = w[3] - w[2];
+    out.offsets.assign(1, 0);
+    out.fragments.clear();
+    for (int y = w[2]; y < w[3]; ++y)
+        for (int x = w[0]; x < w[1]; ++x) {
+            auto f = deep.pixel(x - deep.x0, y - deep.y0);
+            out.fragments.insert(out.fragments.end(), f.begin(), f.end());
+            out.offsets.push_back(static_cast<uint32_t>(out.fragments.size()));
+        }
+    return out;
+}
+
+DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* sink,
+                             const std::array<int, 4>& window) {
     const Camera& cam = scene.camera;
-    const RenderSettings& rs = scene.render;
+    const VisibilitySettings& rs = scene.render.visibility;
     DeepBuffer deep;
     deep.full_width = cam.width;
     deep.full_height = cam.height;
-    if (rs.has_crop()) {
-        deep.x0 = rs.crop[0], deep.y0 = rs.crop[2];
-        deep.width = rs.crop[1] - rs.crop[0], deep.height = rs.crop[3] - rs.crop[2];
-    } else {
-        deep.width = cam.width, deep.height = cam.height;
-    }
+    deep.x0 = window[0], deep.y0 = window[2];
+    deep.width = window[1] - window[0], deep.height = window[3] - window[2];
     deep.spp = rs.spp;
     deep.seed = rs.seed;
     deep.scene_fingerprint = scene.fingerprint({"camera", "objects"});

@@ -5,6 +5,7 @@
 
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -62,11 +63,11 @@ struct DeepBuffer {
 /// per tile under `name`. Work order never affects results: each pixel writes its own slots.
 template <typename PixelFn>
 void for_each_pixel_in_tiles(const DeepBuffer& deep, int tile, ProgressSink* sink, const char* name,
-                             PixelFn&& pixel, const std::string& order = "rows") {
+                             PixelFn&& pixel, TileOrder order = TileOrder::Rows) {
     const auto tiles = make_tiles(deep.width, deep.height, tile, order);
     Progress progress(sink, name, tiles.size());
     for_each_tile(tiles, [&](const Tile& t) {
-        for (int wy = t.y0; wy < t.y1; ++wy)
+        for (int wy = t.y0; wy < t.y1; ++wy, sink ? sink->check_cancel() : void())
             for (int wx = t.x0; wx < t.x1; ++wx)
                 pixel(wx, wy, static_cast<size_t>(deep.offsets[static_cast<size_t>(wy) * deep.width + wx]));
         progress.add();
@@ -104,6 +105,14 @@ private:
 /// thread count or crop.
 DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats,
                              ProgressSink* progress);
+/// Same, for window {x0, x1, y0, y1} (full-image pixels, ends exclusive).
+DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* progress,
+                             const std::array<int, 4>& window);
+
+/// The window a scene renders: its crop, or the full frame ({x0, x1, y0, y1}).
+std::array<int, 4> frame_window(const Scene& scene);
+/// The fragments of window `w` of `deep`, which must contain it.
+DeepBuffer sub_window(const DeepBuffer& deep, const std::array<int, 4>& w);
 
 /// Throws InputError (naming the camera) if no camera ray hits any geometry.
 void check_camera_sees_geometry(const Scene& scene, const SceneAccel& accel);

@@ -56,6 +56,7 @@ Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d
 }
 
 GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters) const {
+    if (settings_.cancel) settings_.cancel->check();
     const int M = grid_.m, N = grid_.n, S = M * N;
     // Per-cell radiance, distance and unoccluded weight, for the gradients.
     thread_local std::vector<Color> L;
@@ -108,15 +109,15 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
                         : 0;
             // Distance for the record radius: leave out rays that are grazing both where
             // they leave and where they land (slightly concave surfaces).
-            if (settings_.record_terms || !settings_.ao_only) {
+            if (settings_.record_terms || !settings_.ao) {
                 const SurfacePoint sp = surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v);
                 if (settings_.record_terms) {
                     bool grazing = cos_theta[c] < cos_concave_ && std::abs(dot(sp.ng, d)) < cos_concave_;
                     if (!grazing) res.min_distance = std::min(res.min_distance, h.t);
                 }
-                if (!settings_.ao_only) l = hit_radiance(h, sp, d, rng, c, counters);
+                if (!settings_.ao) l = hit_radiance(h, sp, d, rng, c, counters);
             }
-        } else if (!settings_.ao_only) {
+        } else if (!settings_.ao) {
             l = lighting_.background(d);
         }
         L[c] = l;
@@ -199,26 +200,22 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
 namespace bounce {
 
 GatherSettings gather_settings(const Scene& scene) {
-    const RenderSettings& r = scene.render;
+    const IndirectSettings& r = scene.render.indirect;
     GatherSettings g;
-    g.rays = r.rays;
+    static_cast<IndirectSettings&>(g) = r;
     g.ao_distance = r.ao_distance >= 0 ? r.ao_distance : 0.1f * length(scene.bounds().diagonal());
-    g.ao_falloff = r.ao_falloff;
-    g.hit_light_samples = r.hit_light_samples;
-    g.concave_angle = r.concave_angle;
-    g.ao_only = r.ao;
     return g;
 }
 
 std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
                                             Stats& stats, ProgressSink* sink) {
     std::vector<Indirect> out(deep.fragments.size());
-    for_each_pixel_in_tiles(deep, scene.render.tile_size, sink, "gather", [&](int wx, int wy, size_t first) {
+    for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "gather", [&](int wx, int wy, size_t first) {
         Counters& counters = stats.local();
         auto frags = deep.pixel(wx, wy);
         for (uint32_t k = 0; k < frags.size(); ++k) {
             GatherResult g = gatherer.gather(frags[k].p, frags[k].n_base,
-                                             fragment_stream(scene.render.seed, wx + deep.x0, wy + deep.y0, k), counters);
+                                             fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), counters);
             out[first + k] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
         }
     });

@@ -17,16 +17,12 @@
 
 namespace bounce {
 
-struct GatherSettings {
-    int rays = 512;              ///< requested rays; the grid is M x N with M = round(sqrt(rays/pi))
-    float ao_distance = 0;       ///< occluders farther than this do not occlude (AO); <= 0 = unlimited
-    float ao_falloff = 0;        ///< occlusion of a hit at t: (1 - t/ao_distance)^falloff; 0 = hard
-    int hit_light_samples = 1;   ///< shadow-ray samples per area light at hits without radiosity textures
-    float concave_angle = 80;    ///< degrees: a ray more than this far from the normal at both ends
-                                 ///< does not count towards the minimum hit distance (TL04)
-    bool ao_only = false;        ///< skip shading hits (AO and bent normal only)
+/// The scene's gather parameters (scene/settings.h) with `ao_distance` resolved (<= 0 =
+/// unlimited), plus what the caller decides per pass.
+struct GatherSettings : IndirectSettings {
     bool record_terms = true;    ///< distances and gradients (what a cache record needs); brute
                                  ///< force turns them off and gathers only E, AO and directions
+    const CancelToken* cancel = nullptr;  ///< checked once per gather
 };
 
 /// The stratification used for `rays`.

@@ -26,7 +26,7 @@ inline uint32_t lattice_index(int i, int j, int n) {
 inline uint32_t lattice_count(int n) { return static_cast<uint32_t>((n + 1) * (n + 2) / 2); }
 
 float effective_texel(const Scene& scene, const RadiositySettings& s) {
-    return s.texel_size > 0 ? s.texel_size : length(scene.bounds().diagonal()) / 128.0f;
+    return s.texel > 0 ? s.texel : length(scene.bounds().diagonal()) / 128.0f;
 }
 
 std::string file_name(size_t id, const std::string& name) {

@@ -20,12 +20,6 @@
 
 namespace bounce {
 
-struct RadiositySettings {
-    float texel_size = 0;  ///< world units between lattice points; <= 0 = scene diagonal / 128
-    int light_samples = 16;
-    int max_level = 32;    ///< cap on the per-triangle lattice level
-};
-
 /// Baked radiosity of one object's coarse triangles.
 struct RadiosityMap {
     std::vector<uint8_t> level;     ///< per triangle lattice level n (>= 1)

@@ -1,6 +1,8 @@
 #include "bounce/render/render.h"
 
 #include <fmt/format.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -13,6 +15,8 @@
 #include "bounce/gather/gather.h"
 #include "bounce/lighting/lighting.h"
 #include "bounce/radiosity/radiosity.h"
+#include "bounce/scene/params.h"
+#include "bounce/shade/layers.h"
 #include "bounce/shade/shade.h"
 
 namespace bounce {
@@ -28,166 +32,166 @@ void validate_deep_for_scene(const DeepBuffer& deep, const Scene& scene, const s
     }
 }
 
-RadiositySettings radiosity_settings(const Scene& scene) {
-    RadiositySettings s;
-    s.texel_size = scene.render.radiosity_texel;
-    s.light_samples = scene.render.radiosity_light_samples;
-    return s;
+int crop_margin(const Scene& scene) {
+    const CacheSettings& c = scene.render.cache;
+    return static_cast<int>(std::ceil(c.max_spacing * c.shading_reach)) + 1;
+}
+
+double estimate_render_bytes(const Scene& scene) {
+    auto w = frame_window(scene);
+    const double pixels = static_cast<double>(w[1] - w[0]) * (w[3] - w[2]);
+    // About 1.3 fragments per pixel (edges), the deep buffer's offsets, ~24 float channels of
+    // image layers, and per-fragment indirect light and direct radiance.
+    const double per_fragment = sizeof(Fragment) + sizeof(Indirect) + sizeof(Color);
+    return pixels * (1.3 * per_fragment + sizeof(uint32_t) + 24 * sizeof(float));
 }
 
 namespace {
+
+/// Memory this process may use: the smaller of the machine's physical memory and any address
+/// space limit.
+double available_bytes() {
+    double phys = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+    rlimit rl{};
+    if (getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY) phys = std::min(phys, static_cast<double>(rl.rlim_cur));
+    return phys;
+}
 
 /// Radiosity textures for the gather: loaded from the folder when they match the scene,
 /// otherwise baked (and saved there if a folder was named).
 std::unique_ptr<RadiosityTextures> radiosity_for(const Scene& scene, const Materials& materials,
                                                  const DirectLighting& lighting, Stats& stats, ProgressSink* progress) {
-    const std::string& dir = scene.render.radiosity_textures;
-    RadiositySettings settings = radiosity_settings(scene);
+    const RadiositySettings& settings = scene.render.radiosity;
     auto rt = std::make_unique<RadiosityTextures>();
-    if (!dir.empty()) {
+    if (!settings.folder.empty()) {
         PhaseTimer t(stats, "radiosity load");
         std::string why;
-        if (RadiosityTextures::load(dir, scene, settings, *rt, why)) {
+        if (RadiosityTextures::load(settings.folder, scene, settings, *rt, why)) {
             stats.set("radiosity_reused", 1);
             return rt;
         }
-        if (progress) std::fprintf(stderr, "radiosity textures in %s not reused: %s; baking\n", dir.c_str(), why.c_str());
+        if (progress)
+            std::fprintf(stderr, "radiosity textures in %s not reused: %s; baking\n", settings.folder.c_str(), why.c_str());
     }
     {
         PhaseTimer t(stats, "radiosity bake");
         *rt = RadiosityTextures::bake(scene, materials, lighting, settings, stats, progress);
     }
-    if (!dir.empty()) {
+    if (!settings.folder.empty()) {
         PhaseTimer t(stats, "radiosity save");
-        rt->save(dir);
+        rt->save(settings.folder);
     }
     stats.set("radiosity_reused", 0);
     return rt;
 }
 
+/// Forwards progress to the caller's sink (if any) and carries the request's cancel token.
+class CancellableSink : public ProgressSink {
+public:
+    CancellableSink(ProgressSink* inner, const CancelToken* token) : inner_(inner) { cancel = token; }
+    void update(const std::string& name, uint64_t done, uint64_t total, double elapsed) override {
+        if (inner_) inner_->update(name, done, total, elapsed);
+    }
+    void finish(const std::string& name, uint64_t total, double elapsed) override {
+        if (inner_) inner_->finish(name, total, elapsed);
+    }
+
+private:
+    ProgressSink* inner_;
+};
+
+std::array<int, 4> grow(const std::array<int, 4>& w, int m, const DeepBuffer& within) {
+    return {std::max(within.x0, w[0] - m), std::min(within.x0 + within.width, w[1] + m),
+            std::max(within.y0, w[2] - m), std::min(within.y0 + within.height, w[3] + m)};
+}
+
+/// The window of pixels the render gathers in (the crop and its margin) as a deep buffer.
+DeepBuffer gathered_window(const Scene& scene, const RenderRequest& request, const SceneAccel& accel, Stats& stats,
+                           ProgressSink* sink) {
+    const std::array<int, 4> crop = frame_window(scene);
+    const int margin = scene.render.visibility.has_crop() && scene.render.indirect.gi == GiMode::Cache ? crop_margin(scene) : 0;
+    if (!request.deep_in.empty()) {
+        DeepBuffer deep;
+        {
+            PhaseTimer t(stats, "read deep");
+            deep = read_deep(request.deep_in);
+        }
+        validate_deep_for_scene(deep, scene, request.deep_in);
+        if (crop[0] < deep.x0 || crop[2] < deep.y0 || crop[1] > deep.x0 + deep.width || crop[3] > deep.y0 + deep.height)
+            throw InputError(request.deep_in, "", fmt::format("the deep file covers pixels [{}, {}) x [{}, {}), not the crop",
+                                                              deep.x0, deep.x0 + deep.width, deep.y0, deep.y0 + deep.height));
+        return sub_window(deep, grow(crop, margin, deep));
+    }
+    check_camera_sees_geometry(scene, accel);
+    PhaseTimer t(stats, "visibility");
+    DeepBuffer frame;
+    frame.x0 = frame.y0 = 0, frame.width = scene.camera.width, frame.height = scene.camera.height;
+    return render_visibility(scene, accel, stats, sink, grow(crop, margin, frame));
+}
+
+/// Loads the request's cache file; with a crop and --regather, the records seen inside the
+/// crop are left out (they are gathered again).
+LoadedCache load_request_cache(const Scene& scene, const RenderRequest& request, IrradianceCache& cache) {
+    LoadedCache loaded;
+    if (request.cache_in.empty() || (request.regather && !scene.render.visibility.has_crop())) return loaded;
+    std::function<bool(const Record&)> keep;
+    if (request.regather) {
+        const auto crop = scene.render.visibility.crop;
+        keep = [crop, camera = CameraRays(scene.camera)](const Record& r) {
+            float px, py;
+            if (!camera.project(r.p, px, py)) return true;
+            return !(px >= static_cast<float>(crop[0]) && px < static_cast<float>(crop[1]) &&
+                     py >= static_cast<float>(crop[2]) && py < static_cast<float>(crop[3]));
+        };
+    }
+    return load_cache(request.cache_in, scene, request.force, request.cache_reuse, cache, keep);
+}
+
+void set_metadata(Image& image, const Scene& scene, const DeepBuffer& deep, Stats& stats) {
+    auto& md = image.metadata;
+    md["scene"] = scene.path;
+    const nlohmann::json params = param_values(scene, ~0u);
+    for (const auto& [key, value] : params.items()) md[key] = value.is_string() ? value.get<std::string>() : value.dump();
+    md["deep_seed"] = std::to_string(deep.seed);
+    md["deep_spp"] = std::to_string(deep.spp);
+    md["scene_fingerprint"] = fmt::format("{:016x}", deep.scene_fingerprint);
+    md["render_time_s"] = fmt::format("{:.3f}", stats.to_json()["total_s"].get<double>());
+}
+
 }  // namespace
 
-void add_records_layer(Image& image, const Camera& camera, const std::vector<Vec3>& positions) {
-    const Layer* beauty = image.find("beauty");
-    Layer& l = image.add_layer("records", {"records.R", "records.G", "records.B"});
-    for (int y = 0; y < image.height; ++y)
-        for (int x = 0; x < image.width; ++x)
-            for (int c = 0; c < 3; ++c) image.at(l, x, y)[c] = 0.5f * std::min(1.0f, image.at(*beauty, x, y)[c]);
-    CameraRays rays(camera);
-    for (const Vec3& p : positions) {
-        float px, py;
-        if (!rays.project(p, px, py)) continue;
-        int cx = static_cast<int>(std::floor(px)) - image.x0, cy = static_cast<int>(std::floor(py)) - image.y0;
-        for (int y = cy - 1; y <= cy + 1; ++y)
-            for (int x = cx - 1; x <= cx + 1; ++x)
-                if (x >= 0 && y >= 0 && x < image.width && y < image.height)
-                    for (int c = 0; c < 3; ++c) image.at(l, x, y)[c] = 1.0f;
+Image paste_over(const Image& base, const Image& window, const std::string& base_name) {
+    if (base.full_width != window.full_width || base.full_height != window.full_height || base.x0 != 0 || base.y0 != 0 ||
+        base.width != base.full_width || base.height != base.full_height)
+        throw InputError(base_name, "", fmt::format("base image is {}x{} (window {}x{} at {},{}); the render is a {}x{} frame",
+                                                    base.full_width, base.full_height, base.width, base.height, base.x0,
+                                                    base.y0, window.full_width, window.full_height));
+    Image out = base;
+    out.metadata = window.metadata;
+    for (const Layer& l : window.layers) {
+        Layer* dst = out.find(l.name);
+        if (!dst || dst->channels != l.channels)
+            throw InputError(base_name, l.name, "base image lacks this layer (render it with the same settings)");
+        const size_t nc = l.channels.size();
+        for (int y = 0; y < window.height; ++y)
+            std::copy_n(&l.data[static_cast<size_t>(y) * window.width * nc], static_cast<size_t>(window.width) * nc,
+                        &dst->data[((static_cast<size_t>(y + window.y0)) * out.width + window.x0) * nc]);
     }
-}
-
-CacheSettings cache_settings(const Scene& scene) {
-    const RenderSettings& r = scene.render;
-    CacheSettings c;
-    c.metric = r.metric;
-    c.min_spacing = r.min_spacing;
-    c.max_spacing = r.max_spacing;
-    c.max_angle = r.max_angle;
-    c.gradient_limit = r.gradient_limit;
-    c.quality = r.quality;
-    c.min_weight = r.min_weight;
-    c.accuracy = r.accuracy;
-    c.gradients = r.gradients;
-    c.neighbour_clamp = r.neighbour_clamp;
-    c.shading_reach = r.shading_reach;
-    c.radius_scale = r.radius_scale;
-    return c;
-}
-
-CacheFileInfo cache_file_info(const Scene& scene, int frame) {
-    CacheFileInfo info;
-    info.scene_fingerprint = scene.fingerprint({"objects", "materials", "lights"}, true);
-    info.camera_fingerprint = scene.fingerprint({"camera"});
-    const RenderSettings& r = scene.render;
-    info.parameters = {{"metric", r.metric},       {"min_spacing", r.min_spacing}, {"max_spacing", r.max_spacing},
-                       {"max_angle", r.max_angle}, {"gradient_limit", r.gradient_limit}, {"quality", r.quality},
-                       {"min_weight", r.min_weight}, {"accuracy", r.accuracy}, {"rays", r.rays},
-                       {"shading_reach", r.shading_reach}, {"radius_scale", r.radius_scale},
-                       {"ao", r.ao},               {"ao_distance", r.ao_distance}, {"seed", r.seed}};
-    info.frame = frame;
-    return info;
-}
-
-namespace {
-
-/// Loads `path` into `cache`, refusing a cache made for another scene or camera unless forced.
-size_t load_cache(const std::string& path, const Scene& scene, bool force, IrradianceCache& cache) {
-    CacheFile f = read_cache_file(path);
-    CacheFileInfo want = cache_file_info(scene, 0);
-    if (!force && f.info.scene_fingerprint != want.scene_fingerprint)
-        throw InputError(path, "scene_fingerprint",
-                         "cache was made for another scene (objects, materials or lights differ); --force uses it anyway");
-    if (!force && f.info.camera_fingerprint != want.camera_fingerprint)
-        throw InputError(path, "camera_fingerprint",
-                         "cache was made for another camera (its spacing is in that camera's pixels); --force uses it anyway");
-    if (!force && f.info.parameters.value("ao", false) != scene.render.ao)
-        throw InputError(path, "parameters/ao", scene.render.ao ? "cache holds irradiance, not AO" : "cache holds AO, not irradiance");
-    cache.set_luminance_floor(f.info.luminance_floor);
-    for (const Record& r : f.records) cache.insert_loaded(r);
-    return f.records.size();
-}
-
-/// Preview: each pixel takes the indirect light of the nearest pixel (on the lattices of the
-/// current step, then coarser ones) that a finished sub-pass visited.
-std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceCache& cache,
-                                       const std::vector<uint8_t>& visited, int step) {
-    std::vector<Indirect> out(deep.fragments.size());
-    parallel_for_each_index(0, deep.height, [&](int wy) {
-        for (int wx = 0; wx < deep.width; ++wx) {
-            int x = wx + deep.x0, y = wy + deep.y0, lx = wx, ly = wy;
-            for (int s = step; s <= (1 << 20); s *= 2) {
-                int cx = x - x % s - deep.x0, cy = y - y % s - deep.y0;
-                if (cx >= 0 && cy >= 0 && visited[static_cast<size_t>(cy) * deep.width + cx]) {
-                    lx = cx, ly = cy;
-                    break;
-                }
-            }
-            auto src = deep.pixel(lx, ly);
-            size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
-            auto frags = deep.pixel(wx, wy);
-            for (uint32_t k = 0; k < frags.size(); ++k) {
-                const Fragment& f = src.empty() ? frags[k] : src[std::min<size_t>(k, src.size() - 1)];
-                Interpolated in = cache.lookup(f.p_base, f.n_base, true);
-                out[first + k] = {in.E, in.ao, in.bent, in.dir};
-            }
-        }
-    });
     return out;
 }
 
-}  // namespace
-
-std::string seed_table(const nlohmann::json& s) {
-    auto clock = [](double secs) { return fmt::format("{}:{:06.3f}", static_cast<int>(secs) / 60, std::fmod(secs, 60.0)); };
-    const auto& ph = s["phases_s"];
-    auto phase = [&](const char* n) { return ph.contains(n) ? ph[n].get<double>() : 0.0; };
-    double gathering = phase("gather") + phase("radiosity bake") + phase("radiosity load");
-    double shading = phase("shading");
-    double total = s["total_s"].get<double>();
-    double pixels = s.value("pixels", 0.0);
-    double rays = static_cast<double>(s["rays"]["gather"].get<uint64_t>());
-    std::string per_record = s.contains("records") ? fmt::format("{}", s.value("rays_per_gather", 0)) : "-";
-    std::string records = s.contains("records") ? fmt::format("{}", s["records"].get<double>()) : "-";
-    return fmt::format("| gathering | shading | total | rays/record | records | rays/MP |\n"
-                       "| {} | {} | {} | {} | {} | {:.1f} M |\n",
-                       clock(gathering), clock(shading), clock(total), per_record, records,
-                       pixels > 0 ? rays / pixels : 0.0);
-}
-
 RenderResult render(const Scene& scene, const RenderRequest& request, Stats& stats, ProgressSink* progress) {
-    int threads = scene.render.threads > 0 ? scene.render.threads : tbb::this_task_arena::max_concurrency();
+    if (double need = estimate_render_bytes(scene), have = available_bytes(); need > 0.8 * have)
+        throw InputError(scene.path, "camera.resolution",
+                         fmt::format("a {}x{} frame needs about {:.1f} GiB; {:.1f} GiB are available (render a crop)",
+                                     scene.camera.width, scene.camera.height, need / 1073741824.0, have / 1073741824.0));
+    const int threads = scene.render.parallel.threads > 0 ? scene.render.parallel.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
     stats.set("threads", threads);
+    CancellableSink sink(progress, request.cancel);
+    ProgressSink* const ps = progress || request.cancel ? &sink : nullptr;
     RenderResult result;
+    const IndirectSettings& ind = scene.render.indirect;
     arena.execute([&] {
         std::unique_ptr<SceneAccel> accel;
         {
@@ -195,60 +199,55 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             accel = std::make_unique<SceneAccel>(scene);
         }
         stats.set("ray_offset", accel->ray_offset());
-        if (!request.deep_in.empty()) {
-            PhaseTimer t(stats, "read deep");
-            result.deep = read_deep(request.deep_in);
-            validate_deep_for_scene(result.deep, scene, request.deep_in);
-        } else {
-            check_camera_sees_geometry(scene, *accel);
-            PhaseTimer t(stats, "visibility");
-            result.deep = render_visibility(scene, *accel, stats, progress);
-        }
+        DeepBuffer gathered = gathered_window(scene, request, *accel, stats, ps);
         if (!request.deep_out.empty()) {
             PhaseTimer t(stats, "write deep");
-            write_deep(request.deep_out, result.deep);
+            write_deep(request.deep_out, gathered);
         }
+        result.deep = sub_window(gathered, frame_window(scene));
         Materials materials(scene);
         DirectLighting lighting(scene, *accel);
         std::vector<Indirect> indirect;
-        const bool gi = scene.render.gi != "none" || scene.render.ao;
-        std::unique_ptr<IrradianceCache> cache;
-        if (gi) {
+        if (ind.gi == GiMode::Cache || !request.cache_in.empty()) {
+            result.cache = std::make_unique<IrradianceCache>(scene.bounds(), scene.render.cache, ind.ao);
+            PhaseTimer tl(stats, "cache read");
+            LoadedCache loaded = load_request_cache(scene, request, *result.cache);
+            result.records_loaded = loaded.records;
+            if (!loaded.differences.empty()) stats.set("cache_reused_with_other_settings", nlohmann::json(loaded.differences));
+        }
+        result.cache_info = cache_file_info(scene, request.frame);
+        if (ind.any()) {
             GatherSettings gs = gather_settings(scene);
-            gs.record_terms = scene.render.gi == "cache";  // brute force needs no gradients
+            gs.record_terms = ind.gi == GiMode::Cache;  // brute force needs no gradients
+            gs.cancel = request.cancel;
             std::unique_ptr<RadiosityTextures> radiosity;
-            if (scene.render.radiosity && !gs.ao_only)
-                radiosity = radiosity_for(scene, materials, lighting, stats, progress);
+            if (scene.render.radiosity.enabled && !gs.ao) radiosity = radiosity_for(scene, materials, lighting, stats, ps);
             Gatherer gatherer(scene, *accel, materials, lighting, radiosity.get(), gs);
             uint64_t rays_before = stats.total().gather_rays;
             PhaseTimer t(stats, "gather");
-            if (scene.render.gi == "cache") {
-                cache = std::make_unique<IrradianceCache>(scene.bounds(), cache_settings(scene), gs.ao_only);
-                if (!request.cache_in.empty() && !request.regather) {
-                    PhaseTimer tl(stats, "cache read");
-                    result.records_loaded = load_cache(request.cache_in, scene, request.force, *cache);
-                }
+            if (ind.gi == GiMode::Cache) {
+                IrradianceCache& cache = *result.cache;
                 SubPassCallback after;
-                std::vector<Color> direct_e;
+                std::vector<Color> direct;
                 std::vector<uint8_t> visited;
-                if (scene.render.preview && request.preview) {
-                    direct_e = fragment_direct_irradiance(scene, result.deep, lighting, false, stats);
+                if (scene.render.parallel.preview && request.preview) {
+                    direct = fragment_direct_radiance(scene, result.deep, materials, lighting, false, stats);
                     visited.assign(result.deep.pixel_count(), 0);
                     after = [&](const SubPass& sp, size_t, size_t) {
-                        for (int wy = 0; wy < result.deep.height; ++wy)
-                            for (int wx = 0; wx < result.deep.width; ++wx)
-                                if (sp.contains(wx + result.deep.x0, wy + result.deep.y0))
-                                    visited[static_cast<size_t>(wy) * result.deep.width + wx] = 1;
-                        std::vector<Indirect> ind = preview_indirect(result.deep, *cache, visited, sp.step);
-                        request.preview(shade(scene, result.deep, materials, lighting, &ind, stats, nullptr, &direct_e));
+                        const DeepBuffer& d = result.deep;
+                        for (int wy = 0; wy < d.height; ++wy)
+                            for (int wx = 0; wx < d.width; ++wx)
+                                if (sp.contains(wx + d.x0, wy + d.y0)) visited[static_cast<size_t>(wy) * d.width + wx] = 1;
+                        std::vector<Indirect> pre = preview_indirect(d, cache, visited, sp.step);
+                        request.preview(shade(scene, d, materials, lighting, &pre, stats, nullptr, &direct));
                     };
                 }
-                gathering_pass(scene, result.deep, gatherer, *cache, stats, progress, after, request.frame);
-                result.records_new = cache->size() - result.records_loaded;
+                gathering_pass(scene, gathered, gatherer, cache, stats, ps, after, request.frame);
+                result.records_new = cache.size() - result.records_loaded;
                 stats.set("records_loaded", static_cast<double>(result.records_loaded));
                 stats.set("records_new", static_cast<double>(result.records_new));
             } else {
-                indirect = gather_every_fragment(scene, result.deep, gatherer, stats, progress);
+                indirect = gather_every_fragment(scene, result.deep, gatherer, stats, ps);
                 stats.set("gathers", static_cast<double>(result.deep.fragments.size()));
                 stats.set("rays_per_gather", gatherer.grid().rays());
             }
@@ -258,24 +257,16 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         }
         {
             PhaseTimer t(stats, "shading");
-            if (cache) {
+            if (ind.gi == GiMode::Cache) {
                 auto t0 = std::chrono::steady_clock::now();
-                indirect = shading_pass(scene, result.deep, *cache, stats, progress);
+                indirect = shading_pass(scene, result.deep, *result.cache, stats, ps);
                 stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
             }
-            result.image = shade(scene, result.deep, materials, lighting, gi ? &indirect : nullptr, stats, progress);
+            result.image = shade(scene, result.deep, materials, lighting, ind.any() ? &indirect : nullptr, stats, ps);
         }
-        if (!cache && !request.cache_in.empty()) {  // --show records over a non-cache render
-            cache = std::make_unique<IrradianceCache>(scene.bounds(), cache_settings(scene), scene.render.ao);
-            result.records_loaded = load_cache(request.cache_in, scene, request.force, *cache);
-        }
-        if (cache && !request.cache_out.empty()) {
-            PhaseTimer tw(stats, "cache write");
-            write_cache_file(request.cache_out, cache->to_file(cache_file_info(scene, request.frame)));
-        }
-        if (cache) {
+        if (result.cache) {
             std::vector<Vec3> positions;
-            for (size_t i = 0; i < cache->size(); ++i) positions.push_back(cache->record(i).p);
+            for (size_t i = 0; i < result.cache->size(); ++i) positions.push_back(result.cache->record(i).p);
             add_records_layer(result.image, scene.camera, positions);
         }
     });
@@ -283,21 +274,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
     if (result.deep.pixel_count() > 0)
         stats.set("gather_rays_per_pixel", static_cast<double>(stats.total().gather_rays) /
                                                static_cast<double>(result.deep.pixel_count()));
-    auto& md = result.image.metadata;
-    md["scene"] = scene.path;
-    md["seed"] = std::to_string(scene.render.seed);
-    md["deep_seed"] = std::to_string(result.deep.seed);
-    md["spp"] = std::to_string(result.deep.spp);
-    md["gi"] = scene.render.ao ? "ao" : scene.render.gi;
-    md["rays"] = std::to_string(scene.render.rays);
-    if (scene.render.gi == "cache")
-        md["cache"] = fmt::format("metric={} min_spacing={} max_spacing={} max_angle={} gradient_limit={} quality={} min_weight={}",
-                                  scene.render.metric, scene.render.min_spacing, scene.render.max_spacing,
-                                  scene.render.max_angle, scene.render.gradient_limit, scene.render.quality,
-                                  scene.render.min_weight);
-    md["light_samples"] = std::to_string(scene.render.light_samples);
-    md["scene_fingerprint"] = fmt::format("{:016x}", result.deep.scene_fingerprint);
-    md["render_time_s"] = fmt::format("{:.3f}", stats.to_json()["total_s"].get<double>());
+    set_metadata(result.image, scene, result.deep, stats);
     return result;
 }
 

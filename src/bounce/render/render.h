@@ -1,13 +1,15 @@
-// The render driver: visibility (or a loaded deep file), then the shading pass, on a TBB
-// arena of the requested size, with statistics and progress. The CLI is a thin layer over it.
+// The render driver: visibility (or a loaded deep file), the gathering pass, the shading pass,
+// on a TBB arena of the requested size, with statistics, progress and cancellation. Front ends
+// (the CLI, the lighting tool) are thin layers over it: they ask for a frame, a sub-viewport
+// (the scene's crop), a re-shade (cache_in) or a re-gather (regather), never run a pass.
 #pragma once
 
+#include <array>
 #include <functional>
+#include <memory>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
-#include "bounce/cache/cache_file.h"
+#include "bounce/cache/cache_identity.h"
 #include "bounce/core/image.h"
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
@@ -18,46 +20,45 @@ namespace bounce {
 
 struct RenderRequest {
     std::string deep_in;   ///< start from this deep file instead of tracing visibility
-    std::string deep_out;  ///< write the deep buffer here
+    std::string deep_out;  ///< write the deep buffer (of the gathered window) here
     /// Preview mode (render.preview with gi cache): called with the whole image after every
     /// sub-pass, pixelated first and finer after.
     std::function<void(const Image&)> preview;
     std::string cache_in;   ///< start the irradiance cache from this file (gathers only where it misses)
-    std::string cache_out;  ///< write the irradiance cache here
-    bool regather = false;  ///< flush the cache before gathering (ignore cache_in's records)
+    bool regather = false;  ///< flush the cache before gathering; with a crop and cache_in, only
+                            ///< the records seen inside the crop are flushed
     bool force = false;     ///< accept a cache made for another scene or camera
+    CacheReuse cache_reuse = CacheReuse::Strict;  ///< keep a cache made with other settings
     int frame = 0;          ///< frame number stamped on new records (sequences)
+    const CancelToken* cancel = nullptr;  ///< stops the render (throws Cancelled) when set
 };
 
 struct RenderResult {
-    Image image;
-    DeepBuffer deep;
+    Image image;   ///< the shaded window (the crop, or the full frame)
+    DeepBuffer deep;  ///< its fragments
+    std::unique_ptr<IrradianceCache> cache;  ///< gi cache, or a loaded cache_in
+    CacheFileInfo cache_info;                ///< the header a cache file of it carries
     size_t records_loaded = 0, records_new = 0;
 };
 
-/// The header information a cache made for `scene` carries.
-CacheFileInfo cache_file_info(const Scene& scene, int frame);
+/// Renders `scene`. Throws InputError on bad input (deep file from another scene ...) and
+/// Cancelled when the request's token is set. With a crop, the gathering pass covers the crop
+/// and a margin as wide as the largest record reach, so a crop's edges match a full render.
+RenderResult render(const Scene& scene, const RenderRequest& request, Stats& stats, ProgressSink* progress);
 
-/// Renders `scene`. Throws InputError on bad input (deep file from another scene ...).
-RenderResult render(const Scene& scene, const RenderRequest& request, Stats& stats,
-                    ProgressSink* progress);
+/// Pixels outside the crop a margin gathers in: records reach at most max_spacing pixels
+/// (times shading_reach in the shading pass).
+int crop_margin(const Scene& scene);
 
-struct RadiositySettings;
-struct CacheSettings;
-/// The irradiance-cache settings a scene's render settings ask for.
-CacheSettings cache_settings(const Scene& scene);
-/// The radiosity-texture settings a scene's render settings ask for.
-RadiositySettings radiosity_settings(const Scene& scene);
-
-/// Adds a "records" layer: the beauty at half brightness with each record's position as a
-/// white 3x3 dot.
-void add_records_layer(Image& image, const Camera& camera, const std::vector<Vec3>& positions);
-
-/// The seed's table (TL04 class notes): gathering, shading, total, rays per record, records,
-/// rays per megapixel (millions) — a header line and one row, from Stats::to_json().
-std::string seed_table(const nlohmann::json& stats);
+/// The full frame: `base` (an earlier render of the whole frame) with `window` pasted over it,
+/// layer by layer. InputError(base_name) if the base has another size or lacks a layer.
+Image paste_over(const Image& base, const Image& window, const std::string& base_name);
 
 /// Checks that a deep buffer belongs to `scene` and that its ids are in range.
 void validate_deep_for_scene(const DeepBuffer& deep, const Scene& scene, const std::string& path);
+
+/// Rough bytes a render of `scene` holds at once (deep buffer, image layers, per-fragment
+/// light); render() refuses a frame whose estimate exceeds the memory available.
+double estimate_render_bytes(const Scene& scene);
 
 }  // namespace bounce

@@ -13,6 +13,7 @@
 
 #include "bounce/core/math.h"
 #include "bounce/geometry/mesh.h"
+#include "bounce/scene/settings.h"
 
 namespace bounce {
 
@@ -67,48 +68,6 @@ struct Object {
     TriangleMesh fine;          ///< seen by primary visibility (empty = same as coarse)
     bool has_fine() const { return !fine.indices.empty(); }
     const TriangleMesh& visible() const { return has_fine() ? fine : coarse; }
-};
-
-struct RenderSettings {
-    int spp = 16;               ///< jittered subsamples per pixel (primary visibility)
-    uint64_t seed = 0;
-    int threads = 0;            ///< 0 = all cores
-    int light_samples = 16;     ///< stratified samples per area light / sky per fragment
-    float ray_offset = -1;      ///< ray-origin offsetting distance; < 0 = automatic
-    int tile_size = 32;                ///< tile (bucket) edge, pixels
-    std::string tile_order = "rows";   ///< rows | spiral: the order threads take tiles in
-    std::string cache_sharing = "shared";  ///< shared | per-thread (docs/parallel.md)
-    bool light_per_channel = false;  ///< indirect light as three (radiance, direction) pairs, not one
-    std::array<int, 4> crop{0, 0, 0, 0};  ///< x0,x1,y0,y1 (exclusive ends); all 0 = full frame
-    bool has_crop() const { return crop[1] > crop[0] || crop[3] > crop[2]; }
-
-    // Indirect light (docs/scene-format.md, "render").
-    std::string gi = "none";       ///< none | brute | cache
-    bool ao = false;               ///< ambient occlusion only
-    int rays = 512;                ///< gather rays per gather
-    float ao_distance = -1;        ///< < 0 = 10% of the scene diagonal; 0 = unlimited
-    float ao_falloff = 0;
-    int hit_light_samples = 1;     ///< shadow samples at gather hits without radiosity textures
-    float concave_angle = 80;      ///< degrees (TL04 distance filter)
-    bool radiosity = true;         ///< shade gather hits from baked radiosity textures
-    std::string radiosity_textures;  ///< folder to reuse/save them in; empty = bake in memory
-    float radiosity_texel = 0;     ///< lattice spacing, world units; 0 = diagonal / 128
-    int radiosity_light_samples = 16;
-
-    // Irradiance cache (docs/irradiance-cache.md).
-    std::string metric = "tl04";   ///< tl04 | ward
-    float min_spacing = 2;         ///< record radius bounds, pixels
-    float max_spacing = 16;
-    float max_angle = 10;          ///< degrees
-    float gradient_limit = 1;      ///< Weber tau; 0 = off
-    float quality = 1;             ///< kappa
-    float min_weight = 0.5f;
-    float accuracy = 0.2f;         ///< Ward's a
-    bool gradients = true;
-    bool neighbour_clamp = true;
-    float shading_reach = 1.0f;    ///< records reach this much farther in the shading pass
-    float radius_scale = 0.5f;     ///< R = radius_scale * d_min
-    bool preview = false;          ///< one progressive gather-and-shade pass
 };
 
 struct Scene {

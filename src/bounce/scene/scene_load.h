@@ -1,11 +1,14 @@
 // Loading a scene: a JSON scene file (docs/scene-format.md) or a bare glTF 2.0 file with its
 // camera and punctual lights. Bad input raises InputError naming the file and the JSON
-// pointer (or line:column) of the problem.
+// pointer (or line:column) of the problem. Camera and render settings are read through the
+// parameter table (params.h); JSON parsing and overrides are json_reader.h's, mesh files
+// mesh_import.h's.
 #pragma once
 
 #include <string>
 #include <vector>
 
+#include "bounce/scene/json_reader.h"
 #include "bounce/scene/scene.h"
 
 namespace bounce {
@@ -13,17 +16,10 @@ namespace bounce {
 /// Loads `path` (.json, or .gltf/.glb/.obj/.ply rendered with defaults and the file's own
 /// camera and lights) and applies `overrides`, each "dotted.path=value" where value is JSON
 /// (a bare word is taken as a string): `camera.fov=45`, `lights.0.color=[1,1,1]`.
-Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+Scene load_scene(const std::string& path, const std::vector<Override>& overrides = {});
 
 /// Same, from JSON text already in memory; `path` names it in errors and anchors relative
 /// file names.
-Scene load_scene_text(const std::string& text, const std::string& path,
-                      const std::vector<std::string>& overrides = {});
-
-/// Loads every triangle of a mesh file through Assimp, node transforms applied. Materials of
-/// the file are appended to `materials` (named "<prefix>/<name>") unless `override_material`
-/// is given, in which case every face uses it.
-TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
-                            std::vector<Material>& materials, int override_material);
+Scene load_scene_text(const std::string& text, const std::string& path, const std::vector<Override>& overrides = {});
 
 }  // namespace bounce

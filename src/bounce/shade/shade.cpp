@@ -7,10 +7,30 @@
 
 namespace bounce {
 
+namespace {
+
+/// Emission plus direct light reflected by the fragment's bumped, glossy surface towards wo.
+Color fragment_direct(const Scene& scene, const Materials& materials, const DirectLighting& lighting, const Fragment& f,
+                      const SurfaceShading& surf, const Vec3& wo, int x, int y, uint32_t k, bool include_sky,
+                      Counters& counters) {
+    // Glossy surfaces reflect the same light samples the diffuse estimate draws.
+    Color gloss(0);
+    std::optional<LightSampleFn> glossy;
+    if (surf.specular != Color(0))
+        glossy.emplace([&](const Vec3& w, const Color& e) {
+            gloss += ggx_specular(surf.normal, wo, w, surf.specular, surf.roughness) * e;
+        });
+    Color e = lighting.irradiance(f.p, surf.normal, fragment_stream(scene.render.visibility.seed, x, y, k),
+                                  scene.render.lighting.light_samples, counters, include_sky, glossy ? &*glossy : nullptr);
+    return materials.emission(f.material) + surf.albedo * e * kInvPi + gloss;
+}
+
+}  // namespace
+
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
             const DirectLighting& lighting, const std::vector<Indirect>* indirect, Stats& stats,
-            ProgressSink* sink, const std::vector<Color>* direct_irradiance) {
-    const bool ao_only = scene.render.ao && indirect;
+            ProgressSink* sink, const std::vector<Color>* direct_radiance) {
+    const bool ao_only = scene.render.indirect.ao && indirect;
     Image img;
     img.full_width = deep.full_width, img.full_height = deep.full_height;
     img.x0 = deep.x0, img.y0 = deep.y0, img.width = deep.width, img.height = deep.height;
@@ -36,7 +56,7 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
     };
 
     for_each_pixel_in_tiles(
-        deep, scene.render.tile_size, sink, "shading", [&](int wx, int wy, size_t first) {
+        deep, scene.render.parallel.tile_size, sink, "shading", [&](int wx, int wy, size_t first) {
             Counters& counters = stats.local();
             int x = wx + deep.x0, y = wy + deep.y0;
             Color b(0), d(0), a(0), e_ind(0);
@@ -56,23 +76,12 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                     if (ao_only)
                         b += Color(in.ao) * f.weight;
                     else
-                        b += indirect_radiance(in, f.n_base, surf, wo, scene.render.light_per_channel) * f.weight;
+                        b += indirect_radiance(in, f.n_base, surf, wo, scene.render.shading.light_per_channel) * f.weight;
                 }
                 if (!ao_only) {
-                    // Glossy surfaces reflect the same light samples the diffuse estimate draws.
-                    Color gloss(0);
-                    std::optional<LightSampleFn> glossy;
-                    if (surf.specular != Color(0))
-                        glossy.emplace([&](const Vec3& w, const Color& e) {
-                            gloss += ggx_specular(surf.normal, wo, w, surf.specular, surf.roughness) * e;
-                        });
-                    Color e = direct_irradiance
-                                  ? (*direct_irradiance)[first + k]
-                                  : lighting.irradiance(
-                                        f.p, surf.normal, fragment_stream(scene.render.seed, x, y, k),
-                                        scene.render.light_samples, counters, indirect == nullptr,
-                                        glossy ? &*glossy : nullptr);
-                    Color radiance = materials.emission(f.material) + alb * e * kInvPi + gloss;
+                    Color radiance = direct_radiance ? (*direct_radiance)[first + k]
+                                                     : fragment_direct(scene, materials, lighting, f, surf, wo, x, y, k,
+                                                                       indirect == nullptr, counters);
                     d += radiance * f.weight;
                     b += radiance * f.weight;
                 }
@@ -102,24 +111,21 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
     return img;
 }
 
-}  // namespace bounce
-
-namespace bounce {
-
-std::vector<Color> fragment_direct_irradiance(const Scene& scene, const DeepBuffer& deep,
-                                              const DirectLighting& lighting, bool include_sky,
-                                              Stats& stats) {
+std::vector<Color> fragment_direct_radiance(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
+                                            const DirectLighting& lighting, bool include_sky, Stats& stats) {
     std::vector<Color> out(deep.fragments.size());
+    CameraRays camera(scene.camera);
     parallel_for_each_index(0, deep.height, [&](int wy) {
         Counters& counters = stats.local();
         for (int wx = 0; wx < deep.width; ++wx) {
             size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
             auto frags = deep.pixel(wx, wy);
-            for (uint32_t k = 0; k < frags.size(); ++k)
-                out[first + k] = lighting.irradiance(
-                    frags[k].p, frags[k].n,
-                    fragment_stream(scene.render.seed, wx + deep.x0, wy + deep.y0, k),
-                    scene.render.light_samples, counters, include_sky);
+            for (uint32_t k = 0; k < frags.size(); ++k) {
+                const Fragment& f = frags[k];
+                const SurfaceShading surf = materials.surface(f.material, f.object, f.prim, f.uv, f.n, f.footprint);
+                out[first + k] = fragment_direct(scene, materials, lighting, f, surf, normalize(camera.origin() - f.p),
+                                                 wx + deep.x0, wy + deep.y0, k, include_sky, counters);
+            }
         }
     });
     return out;

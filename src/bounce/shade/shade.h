@@ -17,17 +17,17 @@ namespace bounce {
 /// indirect light through the surface's BRDF with its bumped normal (brdf.h; for an un-bumped
 /// diffuse surface exactly albedo E_indirect / pi). Direct light is diffuse only, at the
 /// bumped normal;
-/// in AO-only mode (scene.render.ao) beauty is the AO. Sky lights are left out of the direct
+/// in AO-only mode (scene.render.indirect.ao) beauty is the AO. Sky lights are left out of the direct
 /// term when indirect light is given (the gather brings the sky). Tiles run in parallel; the
 /// result is independent of thread count and tile order.
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
             const DirectLighting& lighting, const std::vector<Indirect>* indirect, Stats& stats,
-            ProgressSink* progress, const std::vector<Color>* direct_irradiance = nullptr);
+            ProgressSink* progress, const std::vector<Color>* direct_radiance = nullptr);
 
-/// Direct irradiance at every fragment (what `shade` computes when not handed it): lets the
-/// progressive preview re-shade after each sub-pass without re-tracing shadow rays.
-std::vector<Color> fragment_direct_irradiance(const Scene& scene, const DeepBuffer& deep,
-                                              const DirectLighting& lighting, bool include_sky,
-                                              Stats& stats);
+/// Emission plus direct light reflected towards the camera at every fragment, exactly as
+/// `shade` computes it (bumped normal, glossy lobe, same random numbers): the progressive
+/// preview re-shades after each sub-pass with it and so lights like the final image.
+std::vector<Color> fragment_direct_radiance(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
+                                            const DirectLighting& lighting, bool include_sky, Stats& stats);
 
 }  // namespace bounce

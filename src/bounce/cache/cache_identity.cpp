@@ -1,0 +1,49 @@
+#include "bounce/cache/cache_identity.h"
+
+#include <fmt/format.h>
+
+#include "bounce/core/error.h"
+#include "bounce/scene/params.h"
+
+namespace bounce {
+
+CacheFileInfo cache_file_info(const Scene& scene, int frame) {
+    CacheFileInfo info;
+    info.scene_fingerprint = scene.fingerprint({"objects", "materials", "lights"}, true);
+    info.camera_fingerprint = scene.fingerprint({"camera"});
+    info.parameters = param_values(scene, kCacheIdentity);
+    info.frame = frame;
+    return info;
+}
+
+LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, CacheReuse reuse, IrradianceCache& cache,
+                       const std::function<bool(const Record&)>& keep) {
+    CacheFile f = read_cache_file(path);
+    CacheFileInfo want = cache_file_info(scene, 0);
+    if (!force && f.info.scene_fingerprint != want.scene_fingerprint)
+        throw InputError(path, "scene_fingerprint",
+                         "cache was made for another scene (objects, materials or lights differ); --force uses it anyway");
+    if (!force && f.info.camera_fingerprint != want.camera_fingerprint)
+        throw InputError(path, "camera_fingerprint",
+                         "cache was made for another camera (its spacing is in that camera's pixels); --force uses it anyway");
+    // AO and irradiance records hold different quantities: never mixed, whatever the flags.
+    const std::string ao_key = "render.ao";
+    if (f.info.parameters.contains(ao_key) && f.info.parameters[ao_key] != want.parameters[ao_key])
+        throw InputError(path, "parameters/" + ao_key, scene.render.indirect.ao ? "cache holds irradiance, not AO" : "cache holds AO, not irradiance");
+    LoadedCache out;
+    out.differences = param_differences(f.info.parameters, want.parameters);
+    if (!out.differences.empty() && reuse == CacheReuse::Strict)
+        throw InputError(path, "parameters",
+                         fmt::format("cache was gathered with other settings ({}); --regather starts over, "
+                                     "--cache-reuse-any keeps its records",
+                                     fmt::join(out.differences, "; ")));
+    cache.set_luminance_floor(f.info.luminance_floor);
+    for (const Record& r : f.records)
+        if (!keep || keep(r)) {
+            cache.insert_loaded(r);
+            ++out.records;
+        }
+    return out;
+}
+
+}  // namespace bounce

@@ -1,0 +1,36 @@
+// Which scene and settings a cache file belongs to, and loading one into a cache with the
+// checks that keep a lighter from reusing records made for something else.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "bounce/cache/cache_file.h"
+#include "bounce/cache/irradiance_cache.h"
+#include "bounce/scene/scene.h"
+
+namespace bounce {
+
+/// The header a cache made for `scene` carries: scene and camera fingerprints and, as
+/// `parameters`, every parameter of the table whose identity includes the cache.
+CacheFileInfo cache_file_info(const Scene& scene, int frame);
+
+enum class CacheReuse {
+    Strict,  ///< refuse a cache whose record-changing settings differ
+    Any,     ///< keep its records whatever settings made them (gather only where they miss)
+};
+
+struct LoadedCache {
+    size_t records = 0;
+    std::vector<std::string> differences;  ///< "key: was -> now", for the settings that differ
+};
+
+/// Loads `path` into `cache`. Refuses (InputError, exit 2) a cache made for another scene or
+/// camera unless `force`, and one whose record-changing settings differ unless reuse is Any,
+/// naming each differing key with both values.
+/// Records for which `keep` is false are left out.
+LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, CacheReuse reuse, IrradianceCache& cache,
+                       const std::function<bool(const Record&)>& keep = {});
+
+}  // namespace bounce

@@ -1,0 +1,269 @@
+#include "bounce/scene/json_reader.h"
+
+#include <fmt/format.h>
+
+#include <cfloat>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "bounce/core/error.h"
+#include "bounce/core/files.h"
+
+namespace bounce {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+void JsonContext::fail(const std::string& ptr, const std::string& msg) const {
+    for (const auto& [p, origin] : cli_origins)
+        if (ptr == p || ptr.rfind(p + "/", 0) == 0) throw InputError("command line", origin + " (" + ptr + ")", msg);
+    throw InputError(file, ptr.empty() ? "/" : ptr, msg);
+}
+
+const char* json_type_name(const json& j) {
+    switch (j.type()) {
+        case json::value_t::object: return "an object";
+        case json::value_t::array: return "an array";
+        case json::value_t::string: return "a string";
+        case json::value_t::boolean: return "a boolean";
+        case json::value_t::null: return "null";
+        default: return "a number";
+    }
+}
+
+std::string read_text_file(const std::string& path) {
+    check_input_file(path);
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path, "", "cannot open file for reading");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    if (in.bad()) throw InputError(path, "", "error while reading file");
+    return ss.str();
+}
+
+namespace {
+
+/// The JSON pointer of the value being parsed, kept by the parser callback so that a key given
+/// twice can be named (the parser itself keeps the last one silently).
+struct KeyTracker {
+    struct Frame {
+        bool array;
+        std::string name;
+        std::set<std::string> keys;
+        size_t index = 0;
+    };
+    std::vector<Frame> stack;
+    std::string pending;
+    std::string duplicate;  ///< pointer of the first duplicate key
+
+    std::string pointer() const {
+        std::string p;
+        for (const auto& f : stack) p += f.name.empty() ? "" : "/" + f.name;
+        return p;
+    }
+    std::string child_name() {
+        if (stack.empty()) return "";
+        if (stack.back().array) return std::to_string(stack.back().index);
+        return pending;
+    }
+    bool operator()(int, json::parse_event_t e, json& parsed) {
+        switch (e) {
+            case json::parse_event_t::object_start:
+            case json::parse_event_t::array_start: {
+                std::string name = child_name();
+                stack.push_back({e == json::parse_event_t::array_start, name, {}, 0});
+                break;
+            }
+            case json::parse_event_t::key: {
+                pending = parsed.get<std::string>();
+                if (!stack.empty() && !stack.back().keys.insert(pending).second && duplicate.empty())
+                    duplicate = pointer() + "/" + pending;
+                break;
+            }
+            case json::parse_event_t::object_end:
+            case json::parse_event_t::array_end:
+                stack.pop_back();
+                if (!stack.empty() && stack.back().array) ++stack.back().index;
+                break;
+            case json::parse_event_t::value:
+                if (!stack.empty() && stack.back().array) ++stack.back().index;
+                break;
+        }
+        return true;
+    }
+};
+
+}  // namespace
+
+json parse_json_text(const std::string& text, const std::string& path) {
+    KeyTracker keys;
+    json doc;
+    try {
+        doc = json::parse(text, [&keys](int d, json::parse_event_t e, json& p) { return keys(d, e, p); });
+    } catch (const json::parse_error& e) {
+        size_t line = 1, col = 1;
+        for (size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
+            if (text[i] == '\n') ++line, col = 1;
+            else ++col;
+        }
+        std::string msg = e.what();
+        auto pos = msg.find(": ", msg.find("column"));
+        if (pos != std::string::npos) msg = msg.substr(pos + 2);
+        throw InputError(path, fmt::format("{}:{}", line, col), "malformed JSON: " + msg);
+    } catch (const json::exception& e) {  // e.g. a number that overflows a double
+        std::string msg = e.what();
+        auto pos = msg.find("] ");
+        throw InputError(path, "", "malformed JSON: " + (pos == std::string::npos ? msg : msg.substr(pos + 2)));
+    }
+    if (!keys.duplicate.empty()) throw InputError(path, keys.duplicate, "key given twice in one object");
+    return doc;
+}
+
+std::string apply_override(json& doc, const Override& o) {
+    const std::string& assignment = o.assignment;
+    auto fail = [&](const std::string& msg) -> void { throw InputError("command line", o.origin, msg); };
+    auto eq = assignment.find('=');
+    if (eq == std::string::npos || eq == 0) fail("expected key=value");
+    std::string key = assignment.substr(0, eq), text = assignment.substr(eq + 1);
+    std::vector<std::string> parts;
+    std::string ptr;
+    std::stringstream ks(key);
+    for (std::string part; std::getline(ks, part, '.');) {
+        if (part.empty()) fail("empty path component");
+        parts.push_back(part);
+        ptr += "/" + part;
+    }
+    if (key.back() == '.') fail("empty path component");
+    json value;
+    try {
+        value = json::parse(text);
+    } catch (const json::parse_error&) {
+        value = text;  // a bare word is a string
+    } catch (const json::out_of_range&) {
+        throw InputError("command line", o.origin + " (" + ptr + ")", "number is not finite: " + text);
+    }
+    json* node = &doc;
+    for (size_t i = 0; i < parts.size(); ++i) {
+        const std::string& part = parts[i];
+        if (node->is_array()) {
+            if (part.empty() || part.size() > 9 || !std::all_of(part.begin(), part.end(), ::isdigit))
+                fail("\"" + part + "\" is not an array index");
+            size_t idx = std::stoul(part);
+            if (idx >= node->size()) fail(fmt::format("index {} is out of range (array has {} items)", idx, node->size()));
+            node = &(*node)[idx];
+        } else {
+            if (node->is_null()) *node = json::object();
+            if (!node->is_object()) fail("\"" + part + "\" is inside a value that is not an object");
+            node = &(*node)[part];
+        }
+    }
+    *node = value;
+    return ptr;
+}
+
+JsonReader::JsonReader(const json& j, std::string ptr, const JsonContext& ctx, std::vector<std::string> allowed)
+    : j_(j), ptr_(std::move(ptr)), ctx_(ctx) {
+    if (!j_.is_object()) ctx_.fail(ptr_, fmt::format("expected an object, got {}", json_type_name(j_)));
+    for (auto it = j_.begin(); it != j_.end(); ++it) {
+        if (std::find(allowed.begin(), allowed.end(), it.key()) != allowed.end()) continue;
+        std::string hint = closest_match(it.key(), allowed);
+        ctx_.fail(at(it.key()), fmt::format("unknown key \"{}\"{}", it.key(),
+                                            hint.empty() ? fmt::format(" (valid keys: {})", fmt::join(allowed, ", "))
+                                                         : " (did you mean \"" + hint + "\"?)"));
+    }
+}
+
+float JsonReader::number(const std::string& key, float def, double lo, double hi, bool required) const {
+    if (!has(key)) {
+        if (required) fail("", fmt::format("missing required key \"{}\"", key));
+        return def;
+    }
+    return check_number(raw(key), at(key), lo, hi);
+}
+
+int JsonReader::integer(const std::string& key, int def, int lo, int hi) const {
+    if (!has(key)) return def;
+    const json& v = raw(key);
+    if (!v.is_number_integer()) ctx_.fail(at(key), fmt::format("expected an integer, got {}", json_type_name(v)));
+    if (v.is_number_unsigned() && v.get<uint64_t>() > static_cast<uint64_t>(hi))
+        ctx_.fail(at(key), fmt::format("{} is out of range [{}, {}]", v.get<uint64_t>(), lo, hi));
+    auto x = v.get<int64_t>();
+    if (x < lo || x > hi) ctx_.fail(at(key), fmt::format("{} is out of range [{}, {}]", x, lo, hi));
+    return static_cast<int>(x);
+}
+
+Vec3 JsonReader::vec3(const std::string& key, Vec3 def, bool required) const {
+    if (!has(key)) {
+        if (required) fail("", fmt::format("missing required key \"{}\"", key));
+        return def;
+    }
+    return to_vec3(raw(key), at(key));
+}
+
+Color JsonReader::color(const std::string& key, Color def) const {
+    if (!has(key)) return def;
+    const json& v = raw(key);
+    if (v.is_number()) return Color(check_number(v, at(key), 0, kMaxRadiometric));
+    if (!v.is_array() || v.size() != 3)
+        ctx_.fail(at(key), fmt::format("expected an array of 3 numbers or one number, got {}", json_type_name(v)));
+    Color c;
+    for (int i = 0; i < 3; ++i) {
+        std::string p = at(key) + "/" + std::to_string(i);
+        c[i] = check_number(v[static_cast<size_t>(i)], p, -kMaxRadiometric, kMaxRadiometric);
+        if (c[i] < 0) ctx_.fail(p, "colour components must be >= 0");
+    }
+    return c;
+}
+
+std::string JsonReader::string(const std::string& key, const std::string& def, bool required) const {
+    if (!has(key)) {
+        if (required) fail("", fmt::format("missing required key \"{}\"", key));
+        return def;
+    }
+    const json& v = raw(key);
+    if (!v.is_string()) ctx_.fail(at(key), fmt::format("expected a string, got {}", json_type_name(v)));
+    return v.get<std::string>();
+}
+
+bool JsonReader::boolean(const std::string& key, bool def) const {
+    if (!has(key)) return def;
+    const json& v = raw(key);
+    if (!v.is_boolean()) ctx_.fail(at(key), fmt::format("expected true or false, got {}", json_type_name(v)));
+    return v.get<bool>();
+}
+
+std::string JsonReader::choice(const std::string& key, const std::string& def, const std::vector<std::string>& options) const {
+    std::string s = string(key, def, def.empty());
+    if (std::find(options.begin(), options.end(), s) == options.end())
+        ctx_.fail(at(key), fmt::format("unknown value \"{}\" (valid: {})", s, fmt::join(options, ", ")));
+    return s;
+}
+
+std::string JsonReader::file(const std::string& key, bool required) const {
+    std::string s = string(key, "", required);
+    if (s.empty()) return s;
+    fs::path p = fs::path(s).is_absolute() ? fs::path(s) : ctx_.dir / s;
+    if (std::string why = not_a_regular_file(p.string()); !why.empty())
+        ctx_.fail(at(key), fmt::format("{}: \"{}\"", why, p.string()));
+    return p.lexically_normal().string();
+}
+
+float JsonReader::check_number(const json& v, const std::string& ptr, double lo, double hi) const {
+    if (!v.is_number()) ctx_.fail(ptr, fmt::format("expected a number, got {}", json_type_name(v)));
+    double x = v.get<double>();
+    if (!std::isfinite(x)) ctx_.fail(ptr, "number is not finite");
+    if (std::fabs(x) > FLT_MAX) ctx_.fail(ptr, fmt::format("{} does not fit a float", x));
+    if (x < lo || x > hi) ctx_.fail(ptr, fmt::format("{} is out of range [{}, {}]", x, lo, hi));
+    return static_cast<float>(x);
+}
+
+Vec3 JsonReader::to_vec3(const json& v, const std::string& ptr) const {
+    if (!v.is_array() || v.size() != 3) ctx_.fail(ptr, fmt::format("expected an array of 3 numbers, got {}", json_type_name(v)));
+    Vec3 r;
+    for (int i = 0; i < 3; ++i)
+        r[i] = check_number(v[static_cast<size_t>(i)], ptr + "/" + std::to_string(i), -kMaxCoordinate, kMaxCoordinate);
+    return r;
+}
+
+}  // namespace bounce

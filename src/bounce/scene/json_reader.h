@@ -1,0 +1,82 @@
+// Reading JSON scene text: parsing (line:column errors, duplicate keys refused), the `--set`
+// override engine, and a validating reader that names the JSON pointer of every bad value.
+// Values that came from the command line are blamed on the flag that gave them.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "bounce/core/math.h"
+
+namespace bounce {
+
+/// A command-line override: "dotted.path=value" (value is JSON; a bare word is a string) and
+/// how the user wrote it, for errors ("--set render.rays=-1", "--rays -1").
+struct Override {
+    std::string assignment;
+    std::string origin;
+    Override(std::string a) : assignment(std::move(a)), origin("--set " + assignment) {}  // NOLINT: implicit by design
+    Override(const char* a) : Override(std::string(a)) {}                                 // NOLINT
+    Override(std::string a, std::string o) : assignment(std::move(a)), origin(std::move(o)) {}
+};
+
+/// Where values come from: the file, its folder, and the pointers set on the command line.
+struct JsonContext {
+    std::string file;
+    std::filesystem::path dir;
+    std::map<std::string, std::string> cli_origins;  ///< JSON pointer -> how the user wrote it
+
+    /// Throws InputError at `ptr`, blaming the command line when an override set it.
+    [[noreturn]] void fail(const std::string& ptr, const std::string& msg) const;
+    bool from_command_line(const std::string& ptr) const { return cli_origins.count(ptr) > 0; }
+};
+
+/// The text of a regular file; "is a directory" / "not a regular file" (FIFOs, devices) are
+/// refused before opening, so nothing blocks.
+std::string read_text_file(const std::string& path);
+/// Parses JSON text; errors carry line:column; a key given twice in one object is an error.
+nlohmann::json parse_json_text(const std::string& text, const std::string& path);
+/// Applies an override to `doc`; returns the JSON pointer it set.
+std::string apply_override(nlohmann::json& doc, const Override& o);
+
+const char* json_type_name(const nlohmann::json& j);
+
+/// A JSON object whose keys must be among `allowed` (unknown keys fail with a suggestion).
+class JsonReader {
+public:
+    JsonReader(const nlohmann::json& j, std::string ptr, const JsonContext& ctx, std::vector<std::string> allowed);
+
+    std::string at(const std::string& key) const { return ptr_ + "/" + key; }
+    bool has(const std::string& key) const { return j_.contains(key); }
+    const nlohmann::json& raw(const std::string& key) const { return j_.at(key); }
+    [[noreturn]] void fail(const std::string& key, const std::string& msg) const { ctx_.fail(key.empty() ? ptr_ : at(key), msg); }
+    const JsonContext& ctx() const { return ctx_; }
+    const std::string& pointer() const { return ptr_; }
+
+    /// A number checked as the float it becomes: finite, representable, inside [lo, hi].
+    float number(const std::string& key, float def, double lo = -kMaxCoordinate, double hi = kMaxCoordinate,
+                 bool required = false) const;
+    int integer(const std::string& key, int def, int lo, int hi) const;
+    /// A point or vector: three floats within +-kMaxCoordinate.
+    Vec3 vec3(const std::string& key, Vec3 def, bool required = false) const;
+    /// A colour: [r,g,b] or one number for grey; components in [0, 1e20].
+    Color color(const std::string& key, Color def) const;
+    std::string string(const std::string& key, const std::string& def, bool required = false) const;
+    bool boolean(const std::string& key, bool def) const;
+    std::string choice(const std::string& key, const std::string& def, const std::vector<std::string>& options) const;
+    /// A file name, resolved against the scene's folder; must be a regular file.
+    std::string file(const std::string& key, bool required) const;
+
+    float check_number(const nlohmann::json& v, const std::string& ptr, double lo, double hi) const;
+    Vec3 to_vec3(const nlohmann::json& v, const std::string& ptr) const;
+
+private:
+    const nlohmann::json& j_;
+    std::string ptr_;
+    const JsonContext& ctx_;
+};
+
+}  // namespace bounce

@@ -1,0 +1,279 @@
+#include "bounce/scene/mesh_import.h"
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <fmt/format.h>
+
+#include <assimp/Importer.hpp>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <sstream>
+
+#include "bounce/core/error.h"
+
+namespace bounce {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+Vec3 to_vec3(const aiVector3D& v) { return {v.x, v.y, v.z}; }
+Vec3 to_vec3(const aiColor3D& v) { return {v.r, v.g, v.b}; }
+
+Transform to_transform(const aiMatrix4x4& a) {
+    Transform t;
+    const float* src = &a.a1;
+    for (int i = 0; i < 16; ++i) t.m[static_cast<size_t>(i)] = src[i];
+    return t;
+}
+
+aiMatrix4x4 node_world(const aiNode* n) {
+    aiMatrix4x4 m;
+    for (; n; n = n->mParent) m = n->mTransformation * m;
+    return m;
+}
+
+const unsigned kAssimpFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                              aiProcess_SortByPType | aiProcess_ValidateDataStructure;
+
+const aiScene* import_file(Assimp::Importer& imp, const std::string& path) {
+    imp.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    check_ply_counts(path);
+    const aiScene* s = imp.ReadFile(path, kAssimpFlags);
+    if (!s) throw InputError(path, "", std::string("cannot load mesh: ") + imp.GetErrorString());
+    return s;
+}
+
+struct GltfCamera {
+    float yfov = 0, aspect = 0;
+};
+
+/// The first perspective camera of a .gltf/.glb file, read from its JSON.
+std::optional<GltfCamera> gltf_camera(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    if (ext != ".gltf" && ext != ".glb") return std::nullopt;
+    std::ifstream in(path, std::ios::binary);
+    std::string text((std::istreambuf_iterator<char>(in)), {});
+    if (ext == ".glb") {  // 12-byte header, then the JSON chunk: length, type, data
+        if (text.size() < 20) return std::nullopt;
+        uint32_t len = 0;
+        std::memcpy(&len, text.data() + 12, 4);
+        if (20 + static_cast<size_t>(len) > text.size()) return std::nullopt;
+        text = text.substr(20, len);
+    }
+    json j = json::parse(text, nullptr, false);
+    if (j.is_discarded() || !j.contains("cameras") || !j["cameras"].is_array() || j["cameras"].empty())
+        return std::nullopt;
+    const json& c = j["cameras"][0];
+    if (!c.contains("perspective") || !c["perspective"].contains("yfov")) return std::nullopt;
+    const json& p = c["perspective"];
+    GltfCamera g;
+    g.yfov = p["yfov"].is_number() ? p["yfov"].get<float>() : 0;
+    g.aspect = p.contains("aspectRatio") && p["aspectRatio"].is_number() ? p["aspectRatio"].get<float>() : 0;
+    if (!(g.yfov > 0)) return std::nullopt;
+    return g;
+}
+
+}  // namespace
+
+json describe_mesh_file(const std::string& path) {
+    Assimp::Importer imp;
+    const aiScene* s = import_file(imp, path);
+    json doc;
+    doc["objects"] = json::array({{{"name", fs::path(path).stem().string()}, {"file", fs::path(path).filename().string()}}});
+    if (s->mNumCameras == 0)
+        throw InputError(path, "", "the file has no camera; write a JSON scene that names one (docs/scene-format.md)");
+    const aiCamera* cam = s->mCameras[0];
+    const aiNode* node = s->mRootNode->FindNode(cam->mName);
+    Transform w = node ? to_transform(node_world(node)) : Transform{};
+    float aspect = cam->mAspect > 0 ? cam->mAspect : 1.0f;
+    Vec3 pos, look, up;
+    float vfov;
+    if (auto gltf = gltf_camera(path)) {
+        // glTF: the camera looks down -Z of its node with +Y up. Assimp 5.2 also copies the
+        // node translation into mPosition and stores yfov*aspect as the "horizontal" fov, so
+        // take the pose from the node and the field of view from the file itself.
+        pos = w.point(Vec3(0));
+        look = w.vector({0, 0, -1});
+        up = w.vector({0, 1, 0});
+        vfov = gltf->yfov * 180.0f / kPi;
+        if (gltf->aspect > 0) aspect = gltf->aspect;
+    } else {
+        pos = w.point(to_vec3(cam->mPosition));
+        look = w.vector(to_vec3(cam->mLookAt));
+        up = w.vector(to_vec3(cam->mUp));
+        // Assimp documents mHorizontalFOV as half the horizontal angle.
+        vfov = 2.0f * std::atan(std::tan(cam->mHorizontalFOV) / aspect) * 180.0f / kPi;
+    }
+    int width = 640, height = std::max(1, static_cast<int>(std::lround(640.0f / aspect)));
+    doc["camera"] = {{"position", {pos.x, pos.y, pos.z}},
+                     {"look_at", {pos.x + look.x, pos.y + look.y, pos.z + look.z}},
+                     {"up", {up.x, up.y, up.z}},
+                     {"fov", vfov},
+                     {"resolution", {width, height}}};
+    json lights = json::array();
+    for (unsigned i = 0; i < s->mNumLights; ++i) {
+        const aiLight* l = s->mLights[i];
+        const aiNode* ln = s->mRootNode->FindNode(l->mName);
+        Transform lw = ln ? to_transform(node_world(ln)) : Transform{};
+        Vec3 p = lw.point(to_vec3(l->mPosition));
+        Vec3 d = normalize(lw.vector(to_vec3(l->mDirection)));
+        Vec3 c = to_vec3(l->mColorDiffuse);  // glTF: colour x intensity
+        json jl = {{"color", {c.x, c.y, c.z}}};
+        switch (l->mType) {
+            case aiLightSource_POINT:
+                jl["type"] = "point";
+                jl["position"] = {p.x, p.y, p.z};
+                break;
+            case aiLightSource_SPOT: {
+                jl["type"] = "spot";
+                jl["position"] = {p.x, p.y, p.z};
+                jl["direction"] = {d.x, d.y, d.z};
+                float inner = l->mAngleInnerCone * 180.0f / kPi, outer = l->mAngleOuterCone * 180.0f / kPi;
+                jl["cone_angle"] = std::min(inner, outer);
+                jl["cone_falloff"] = std::max(0.0f, outer - inner);
+                break;
+            }
+            case aiLightSource_DIRECTIONAL:
+                jl["type"] = "distant";
+                jl["direction"] = {d.x, d.y, d.z};
+                break;
+            default: continue;  // area/ambient lights of other formats are not punctual
+        }
+        lights.push_back(jl);
+    }
+    if (lights.empty()) lights.push_back({{"type", "sky"}, {"color", 1.0}});
+    doc["lights"] = lights;
+    return doc;
+}
+
+void check_ply_counts(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    if (ext != ".ply") return;
+    std::ifstream in(path, std::ios::binary);
+    std::string line;
+    bool ascii = false;
+    uint64_t declared = 0;
+    size_t header_lines = 0;
+    while (std::getline(in, line)) {
+        ++header_lines;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        std::istringstream ls(line);
+        std::string word;
+        ls >> word;
+        if (word == "format") {
+            ls >> word;
+            ascii = word == "ascii";
+        } else if (word == "element") {
+            std::string name;
+            uint64_t n = 0;
+            ls >> name >> n;
+            declared += n;
+        } else if (word == "end_header") {
+            break;
+        }
+        if (header_lines > 10000) return;
+    }
+    if (!ascii) return;
+    uint64_t body = 0;
+    while (std::getline(in, line))
+        if (line.find_first_not_of(" \t\r") != std::string::npos) ++body;
+    if (body < declared)
+        throw InputError(path, fmt::format("line {}", header_lines + body + 1),
+                         fmt::format("the header declares {} elements but the file holds {} lines of data", declared, body));
+}
+
+TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
+                            std::vector<Material>& materials, int override_material) {
+    Assimp::Importer imp;
+    const aiScene* s = import_file(imp, path);
+    std::vector<uint32_t> mat_map(s->mNumMaterials);
+    if (override_material < 0) {
+        for (unsigned i = 0; i < s->mNumMaterials; ++i) {
+            const aiMaterial* am = s->mMaterials[i];
+            Material m;
+            aiString name;
+            am->Get(AI_MATKEY_NAME, name);
+            m.name = prefix + "/" + (name.length ? name.C_Str() : std::to_string(i));
+            aiColor4D base;
+            aiColor3D diffuse;
+            if (am->Get(AI_MATKEY_BASE_COLOR, base) == AI_SUCCESS) m.color = {base.r, base.g, base.b};
+            else if (am->Get(AI_MATKEY_COLOR_DIFFUSE, diffuse) == AI_SUCCESS) m.color = to_vec3(diffuse);
+            m.color = vmin(vmax(m.color, Color(0)), Color(1));
+            aiColor3D ke;
+            if (am->Get(AI_MATKEY_COLOR_EMISSIVE, ke) == AI_SUCCESS) m.emission = vmax(to_vec3(ke), Color(0));
+            // Glossy lobe: glTF metallic-roughness (F0 = mix(0.04, base, metallic), the diffuse
+            // part darkened by 1 - metallic), or MTL's Ks and Ns (Blinn-Phong exponent to GGX
+            // roughness: alpha = sqrt(2 / (Ns + 2))).
+            float metallic = 0, rough = 1, ns = 0;
+            aiColor3D ks;
+            if (am->Get(AI_MATKEY_ROUGHNESS_FACTOR, rough) == AI_SUCCESS) {
+                am->Get(AI_MATKEY_METALLIC_FACTOR, metallic);
+                metallic = std::clamp(metallic, 0.0f, 1.0f);
+                m.specular = Color(0.04f) * (1 - metallic) + m.color * metallic;
+                m.color = m.color * (1 - metallic);
+                m.roughness = std::clamp(rough, 0.01f, 1.0f);
+            } else if (am->Get(AI_MATKEY_COLOR_SPECULAR, ks) == AI_SUCCESS && (ks.r > 0 || ks.g > 0 || ks.b > 0)) {
+                m.specular = vmin(vmax(to_vec3(ks), Color(0)), Color(1));
+                if (am->Get(AI_MATKEY_SHININESS, ns) == AI_SUCCESS && ns > 0)
+                    m.roughness = std::clamp(std::sqrt(std::sqrt(2 / (ns + 2))), 0.01f, 1.0f);
+            }
+            auto texture = [&](std::initializer_list<aiTextureType> types) -> std::string {
+                aiString tex;
+                for (aiTextureType type : types) {
+                    if (am->GetTexture(type, 0, &tex) != AI_SUCCESS || tex.C_Str()[0] == '*') continue;
+                    fs::path t = fs::path(path).parent_path() / tex.C_Str();
+                    std::error_code ec;
+                    if (fs::is_regular_file(t, ec)) return t.lexically_normal().string();
+                }
+                return "";
+            };
+            m.color_texture = texture({aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE});
+            if (!m.color_texture.empty()) m.color = Color(1 - metallic);
+            // Assimp files MTL's bump maps under HEIGHT, glTF's normalTexture under NORMALS.
+            m.bump_texture = texture({aiTextureType_HEIGHT, aiTextureType_DISPLACEMENT});
+            m.normal_texture = texture({aiTextureType_NORMALS});
+            mat_map[i] = static_cast<uint32_t>(materials.size());
+            materials.push_back(m);
+        }
+    }
+    TriangleMesh out;
+    // Walk the node tree so each mesh instance gets its node's transform.
+    std::vector<std::pair<const aiNode*, aiMatrix4x4>> stack{{s->mRootNode, s->mRootNode->mTransformation}};
+    while (!stack.empty()) {
+        auto [node, world] = stack.back();
+        stack.pop_back();
+        for (unsigned c = 0; c < node->mNumChildren; ++c)
+            stack.emplace_back(node->mChildren[c], world * node->mChildren[c]->mTransformation);
+        Transform t = to_transform(world);
+        for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+            const aiMesh* am = s->mMeshes[node->mMeshes[k]];
+            if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+            TriangleMesh m;
+            for (unsigned v = 0; v < am->mNumVertices; ++v) {
+                m.positions.push_back(t.point(to_vec3(am->mVertices[v])));
+                if (am->mNormals) m.normals.push_back(t.normal(to_vec3(am->mNormals[v])));
+                if (am->mTextureCoords[0])
+                    m.uvs.push_back({am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y});
+            }
+            uint32_t mat = override_material >= 0 ? static_cast<uint32_t>(override_material)
+                                                  : mat_map[am->mMaterialIndex];
+            for (unsigned f = 0; f < am->mNumFaces; ++f) {
+                const aiFace& face = am->mFaces[f];
+                if (face.mNumIndices != 3) continue;
+                m.indices.insert(m.indices.end(), {face.mIndices[0], face.mIndices[1], face.mIndices[2]});
+                m.face_materials.push_back(mat);
+            }
+            out.append(m);
+        }
+    }
+    if (out.triangle_count() == 0) throw InputError(path, "", "mesh has no triangles");
+    return out;
+}
+
+}  // namespace bounce

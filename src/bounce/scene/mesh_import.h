@@ -1,0 +1,27 @@
+// Mesh files through Assimp: every triangle of an OBJ/MTL, PLY, glTF 2.0 or other file with its
+// node transforms and materials, and a bare file's own camera and punctual lights described as
+// a JSON scene.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "bounce/scene/scene.h"
+
+namespace bounce {
+
+/// Loads every triangle of a mesh file through Assimp, node transforms applied. Materials of
+/// the file are appended to `materials` (named "<prefix>/<name>") unless `override_material`
+/// is given, in which case every face uses it.
+TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
+                            std::vector<Material>& materials, int override_material);
+
+/// Describes a bare mesh file as a JSON scene: the file's camera and punctual lights.
+nlohmann::json describe_mesh_file(const std::string& path);
+
+/// An ASCII PLY whose header declares more elements than its body holds is refused (Assimp
+/// would load the part that is there); binary files and other formats pass.
+void check_ply_counts(const std::string& path);
+
+}  // namespace bounce

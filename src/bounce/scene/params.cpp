@@ -1,0 +1,373 @@
+#include "bounce/scene/params.h"
+
+#include <fmt/format.h>
+
+#include <cfloat>
+#include <cmath>
+#include <type_traits>
+
+namespace bounce {
+
+using nlohmann::json;
+
+namespace {
+
+/// A row bound to one field of one stage's settings struct. The type follows the field's.
+template <class Group, class T>
+Param field(const char* key, const char* stage, Group RenderSettings::*group, T Group::*member) {
+    Param p;
+    p.key = std::string("render.") + key;
+    p.stage = stage;
+    if constexpr (std::is_same_v<T, int>) p.type = ParamType::Int;
+    else if constexpr (std::is_same_v<T, uint64_t>) p.type = ParamType::UInt64;
+    else if constexpr (std::is_same_v<T, float>) p.type = ParamType::Float;
+    else if constexpr (std::is_same_v<T, bool>) p.type = ParamType::Bool;
+    else if constexpr (std::is_same_v<T, std::string>) p.type = ParamType::Path;
+    else if constexpr (std::is_enum_v<T>) p.type = ParamType::Enum;
+    else {
+        p.type = ParamType::IntList;
+        p.count = std::tuple_size_v<T>;
+    }
+    p.get = [group, member](const Scene& s) -> json {
+        const T& v = s.render.*group.*member;
+        if constexpr (std::is_enum_v<T>) return static_cast<int>(v);  // named by Row::choices
+        else return v;
+    };
+    p.set = [group, member](Scene& s, const json& v) {
+        T& dst = s.render.*group.*member;
+        if constexpr (std::is_enum_v<T>) dst = static_cast<T>(v.get<int>());
+        else dst = v.get<T>();
+    };
+    return p;
+}
+
+/// Chained setters keep each row of the table on a few readable lines.
+struct Row {
+    Param p;
+    Row& range(double lo, double hi) { p.lo = lo, p.hi = hi; return *this; }
+    Row& unit(const char* u) { p.unit = u; return *this; }
+    Row& doc(const char* d) { p.doc = d; return *this; }
+    Row& id(unsigned mask) { p.identity = mask; return *this; }
+    /// The CLI flag: "--" and the key's name with dashes, unless given.
+    Row& flag(std::string f = "") {
+        if (f.empty()) {
+            f = "--" + p.name();
+            for (char& c : f) c = c == '_' ? '-' : c;
+        }
+        p.flag = f;
+        return *this;
+    }
+    Row& automatic(float sentinel) {  // a float whose sentinel value reads "auto"
+        p.type = ParamType::FloatAuto;
+        auto get = p.get;
+        auto set = p.set;
+        p.get = [get, sentinel](const Scene& s) -> json {
+            json v = get(s);
+            return v.get<float>() == sentinel ? json("auto") : v;
+        };
+        p.set = [set, sentinel](Scene& s, const json& v) { set(s, v.is_string() ? json(sentinel) : v); };
+        return *this;
+    }
+    Row& choices(std::vector<std::string> names) {
+        p.choices = names;
+        auto get = p.get;
+        auto set = p.set;
+        p.get = [get, names](const Scene& s) -> json { return names.at(get(s).get<size_t>()); };
+        p.set = [set, names](Scene& s, const json& v) {
+            auto it = std::find(names.begin(), names.end(), v.get<std::string>());
+            set(s, static_cast<int>(it - names.begin()));
+        };
+        return *this;
+    }
+};
+
+template <class Group, class T>
+Row row(const char* key, const char* stage, Group RenderSettings::*group, T Group::*member) {
+    return Row{field(key, stage, group, member)};
+}
+
+Row camera_vec3(const char* key, Vec3 Camera::*member, const char* doc, bool required) {
+    Param p;
+    p.key = std::string("camera.") + key;
+    p.stage = "camera";
+    p.type = ParamType::Vec3;
+    p.lo = -kMaxCoordinate, p.hi = kMaxCoordinate;
+    p.unit = "world";
+    p.doc = doc;
+    p.required = required;
+    p.identity = kDeepIdentity;  // caches check the camera's fingerprint
+    p.get = [member](const Scene& s) -> json {
+        const Vec3& v = s.camera.*member;
+        return json::array({v.x, v.y, v.z});
+    };
+    p.set = [member](Scene& s, const json& v) {
+        s.camera.*member = {v[0].get<float>(), v[1].get<float>(), v[2].get<float>()};
+    };
+    return Row{p};
+}
+
+ParamTable make_table() {
+    using R = RenderSettings;
+    const unsigned deep = kDeepIdentity, rad = kRadiosityIdentity, cache = kCacheIdentity;
+    std::vector<Row> rows;
+    // Camera.
+    rows.push_back(camera_vec3("position", &Camera::position, "where the camera is", true));
+    rows.push_back(camera_vec3("look_at", &Camera::look_at, "the point it looks at", true));
+    rows.push_back(camera_vec3("up", &Camera::up, "up direction; must not be parallel to the view", false));
+    {
+        Row r;
+        r.p.key = "camera.fov";
+        r.p.stage = "camera";
+        r.p.type = ParamType::Float;
+        r.p.get = [](const Scene& s) -> json { return s.camera.fov; };
+        r.p.set = [](Scene& s, const json& v) { s.camera.fov = v.get<float>(); };
+        rows.push_back(r.range(0.001, 179.999).unit("degrees").doc("vertical field of view").id(deep));
+    }
+    {
+        Row r;
+        r.p.key = "camera.resolution";
+        r.p.stage = "camera";
+        r.p.type = ParamType::IntList;
+        r.p.count = 2;
+        r.p.get = [](const Scene& s) -> json { return json::array({s.camera.width, s.camera.height}); };
+        r.p.set = [](Scene& s, const json& v) { s.camera.width = v[0].get<int>(), s.camera.height = v[1].get<int>(); };
+        rows.push_back(r.range(1, 65536).unit("pixels").doc("[width, height]; on the CLI WIDTHxHEIGHT").id(deep).flag("--res"));
+    }
+    // Primary visibility and the deep file.
+    rows.push_back(row("spp", "visibility", &R::visibility, &VisibilitySettings::spp).range(1, 4096).unit("samples")
+                       .doc("jittered subsamples per pixel (primary visibility)").id(deep).flag());
+    rows.push_back(row("seed", "visibility", &R::visibility, &VisibilitySettings::seed).range(0, 1.8446744073709552e19)
+                       .doc("random seed; every random number is a hash of (pixel, sample, dimension, seed)").id(deep | cache).flag());
+    rows.push_back(row("crop", "visibility", &R::visibility, &VisibilitySettings::crop).range(0, 65536).unit("pixels")
+                       .doc("[x0, x1, y0, y1], ends exclusive; all 0 = full frame; the EXR keeps the full display window").flag());
+    // Lighting.
+    rows.push_back(row("light_samples", "lighting", &R::lighting, &LightingSettings::light_samples).range(1, 65536).unit("samples")
+                       .doc("stratified samples per area light, emissive mesh and sky, per fragment").id(rad).flag());
+    rows.push_back(row("ray_offset", "lighting", &R::lighting, &LightingSettings::ray_offset).automatic(-1).range(0, kMaxCoordinate)
+                       .unit("world").doc("ray-origin offsetting distance; auto = 4x the fine/coarse gap, >= 1e-4 x scene diagonal")
+                       .id(rad | cache).flag());
+    // Radiosity textures.
+    rows.push_back(row("radiosity", "radiosity", &R::radiosity, &RadiositySettings::enabled)
+                       .doc("shade gather hits from baked radiosity textures instead of shadow rays").id(cache).flag());
+    rows.push_back(row("radiosity_textures", "radiosity", &R::radiosity, &RadiositySettings::folder)
+                       .doc("folder to reuse matching textures from, or to save new ones in; empty = bake in memory").flag());
+    rows.push_back(row("radiosity_texel", "radiosity", &R::radiosity, &RadiositySettings::texel).automatic(0).range(0, kMaxCoordinate)
+                       .unit("world").doc("lattice spacing on every triangle; auto = scene diagonal / 128").id(rad | cache).flag());
+    rows.push_back(row("radiosity_light_samples", "radiosity", &R::radiosity, &RadiositySettings::light_samples).range(1, 65536)
+                       .unit("samples").doc("light samples per lattice point when baking").id(rad | cache).flag());
+    // The gather.
+    rows.push_back(row("gi", "gather", &R::indirect, &IndirectSettings::gi).choices({"none", "brute", "cache"})
+                       .doc("indirect light: none (direct only), brute (gather at every fragment), cache (irradiance cache)").flag());
+    rows.push_back(row("ao", "gather", &R::indirect, &IndirectSettings::ao).doc("ambient occlusion only: the beauty is the AO").id(cache).flag());
+    rows.push_back(row("rays", "gather", &R::indirect, &IndirectSettings::rays).range(1, 1 << 20).unit("rays")
+                       .doc("rays per gather, an M x N cosine-stratified grid, M = round(sqrt(rays/pi))").id(cache).flag());
+    rows.push_back(row("ao_distance", "gather", &R::indirect, &IndirectSettings::ao_distance).automatic(-1).range(0, kMaxCoordinate)
+                       .unit("world").doc("occluders farther than this do not count; auto = 10 % of the scene diagonal; 0 = unlimited")
+                       .id(cache).flag());
+    rows.push_back(row("ao_falloff", "gather", &R::indirect, &IndirectSettings::ao_falloff).range(0, 100)
+                       .doc("occlusion of a hit at distance t is (1 - t/ao_distance)^falloff; 0 = full within the distance").id(cache).flag());
+    rows.push_back(row("hit_light_samples", "gather", &R::indirect, &IndirectSettings::hit_light_samples).range(1, 65536).unit("samples")
+                       .doc("light samples per area light at gather hits when radiosity textures are off").id(cache).flag());
+    rows.push_back(row("concave_angle", "gather", &R::indirect, &IndirectSettings::concave_angle).range(0, 90).unit("degrees")
+                       .doc("a gather ray this far from the normal at both ends does not shrink the record radius (TL04)").id(cache).flag());
+    // The irradiance cache.
+    rows.push_back(row("metric", "cache", &R::cache, &CacheSettings::metric).choices({"tl04", "ward"})
+                       .doc("record error metric: tl04 (normalised, bounded) or ward (1/x, accuracy a)").id(cache).flag());
+    rows.push_back(row("min_spacing", "cache", &R::cache, &CacheSettings::min_spacing).range(0.1, 4096).unit("pixels")
+                       .doc("smallest record radius").id(cache).flag());
+    rows.push_back(row("max_spacing", "cache", &R::cache, &CacheSettings::max_spacing).range(0.1, 4096).unit("pixels")
+                       .doc("largest record radius").id(cache).flag());
+    rows.push_back(row("max_angle", "cache", &R::cache, &CacheSettings::max_angle).range(0.1, 90).unit("degrees")
+                       .doc("normal deviation at which the normal metric reaches 1").id(cache).flag());
+    rows.push_back(row("gradient_limit", "cache", &R::cache, &CacheSettings::gradient_limit).range(0, 1e6)
+                       .doc("Weber limit tau: gradient-extrapolated change / E at which the metric reaches 1; 0 = off").id(cache).flag());
+    rows.push_back(row("quality", "cache", &R::cache, &CacheSettings::quality).range(0.01, 100)
+                       .doc("kappa: every TL04 metric is scaled by it; smaller = fewer records").id(cache).flag());
+    rows.push_back(row("min_weight", "cache", &R::cache, &CacheSettings::min_weight).range(1e-6, 100)
+                       .doc("a lookup misses when the weights sum below this (TL04)").id(cache).flag());
+    rows.push_back(row("accuracy", "cache", &R::cache, &CacheSettings::accuracy).range(1e-3, 10)
+                       .doc("Ward's a").id(cache).flag());
+    rows.push_back(row("gradients", "cache", &R::cache, &CacheSettings::gradients)
+                       .doc("extrapolate records with their gradients").id(cache).flag());
+    rows.push_back(row("neighbour_clamp", "cache", &R::cache, &CacheSettings::neighbour_clamp)
+                       .doc("R_new <= R_j + |p_new - p_j| (Krivanek et al. 2006)").id(cache).flag());
+    rows.push_back(row("radius_scale", "cache", &R::cache, &CacheSettings::radius_scale).range(0.01, 100)
+                       .doc("R = radius_scale x d_min (TL04: 1/2)").id(cache).flag());
+    rows.push_back(row("shading_reach", "cache", &R::cache, &CacheSettings::shading_reach).range(1, 10)
+                       .doc("the shading pass lets records reach this much farther (kappa / reach)").flag());
+    // Shading.
+    rows.push_back(row("light_per_channel", "shading", &R::shading, &ShadingSettings::light_per_channel)
+                       .doc("cached indirect light as three (radiance, direction) pairs, one per RGB channel").flag());
+    // Threads and tiles: never change the image (docs/parallel.md).
+    rows.push_back(row("threads", "parallel", &R::parallel, &ParallelSettings::threads).range(0, 4096).unit("threads")
+                       .doc("worker threads; 0 = all cores").flag());
+    rows.push_back(row("tile_size", "parallel", &R::parallel, &ParallelSettings::tile_size).range(1, 4096).unit("pixels")
+                       .doc("tile (bucket) edge").flag());
+    rows.push_back(row("tile_order", "parallel", &R::parallel, &ParallelSettings::tile_order).choices({"rows", "spiral"})
+                       .doc("order threads take tiles in (spiral: centre first)").flag());
+    rows.push_back(row("cache_sharing", "parallel", &R::parallel, &ParallelSettings::cache_sharing).choices({"shared", "per-thread"})
+                       .doc("one shared cache, or private caches per tile merged between sub-passes").flag());
+    rows.push_back(row("preview", "parallel", &R::parallel, &ParallelSettings::preview)
+                       .doc("progressive gather-and-shade: the image is rewritten after each sub-pass").flag());
+    ParamTable table;
+    for (auto& r : rows) {
+        // A switch that is on by default is turned off on the command line.
+        if (r.p.type == ParamType::Bool && !r.p.flag.empty() && r.p.default_value() == true) r.p.flag = "--no-" + r.p.flag.substr(2);
+        table.push_back(std::move(r.p));
+    }
+    return table;
+}
+
+std::string type_name(const Param& p) {
+    switch (p.type) {
+        case ParamType::Int: return "integer";
+        case ParamType::UInt64: return "unsigned integer";
+        case ParamType::Float: return "number";
+        case ParamType::FloatAuto: return "number or \"auto\"";
+        case ParamType::Bool: return "boolean";
+        case ParamType::Enum: return "enum";
+        case ParamType::Path: return "path";
+        case ParamType::Vec3: return "[x, y, z]";
+        case ParamType::IntList: return fmt::format("{} integers", p.count);
+    }
+    return "";
+}
+
+const char* json_kind(const json& j) {
+    switch (j.type()) {
+        case json::value_t::object: return "an object";
+        case json::value_t::array: return "an array";
+        case json::value_t::string: return "a string";
+        case json::value_t::boolean: return "a boolean";
+        case json::value_t::null: return "null";
+        default: return "a number";
+    }
+}
+
+/// A number checked as a float: finite, representable, inside [lo, hi].
+float check_float(const json& v, double lo, double hi, const std::string& sub, const ParamFail& fail) {
+    if (!v.is_number())
+        fail(sub, fmt::format("expected a number, got {}", v.is_string() ? "a string (" + v.dump() + ")" : json_kind(v)));
+    double x = v.get<double>();
+    if (!std::isfinite(x)) fail(sub, "number is not finite");
+    if (std::fabs(x) > FLT_MAX) fail(sub, fmt::format("{} does not fit a float", x));
+    auto f = static_cast<float>(x);
+    if (f < static_cast<float>(lo) || f > static_cast<float>(hi)) fail(sub, fmt::format("{} is out of range [{}, {}]", x, lo, hi));
+    return f;
+}
+
+int64_t check_int(const json& v, double lo, double hi, const std::string& sub, const ParamFail& fail) {
+    if (!v.is_number_integer()) fail(sub, fmt::format("expected an integer, got {}", v.is_number() ? fmt::format("{}", v.get<double>()) : json_kind(v)));
+    if (v.is_number_unsigned() && v.get<uint64_t>() > static_cast<uint64_t>(INT64_MAX)) fail(sub, "integer is out of range");
+    int64_t x = v.get<int64_t>();
+    if (static_cast<double>(x) < lo || static_cast<double>(x) > hi) fail(sub, fmt::format("{} is out of range [{}, {}]", x, lo, hi));
+    return x;
+}
+
+}  // namespace
+
+json Param::default_value() const { return get(Scene{}); }
+
+const ParamTable& scene_params() {
+    static const ParamTable table = make_table();
+    return table;
+}
+
+const Param* find_param(const ParamTable& table, const std::string& key) {
+    for (const Param& p : table)
+        if (p.key == key) return &p;
+    return nullptr;
+}
+
+json check_param(const Param& p, const json& v, const ParamFail& fail) {
+    switch (p.type) {
+        case ParamType::Int: return check_int(v, p.lo, p.hi, "", fail);
+        case ParamType::UInt64:
+            if (!v.is_number_unsigned() && !(v.is_number_integer() && v.get<int64_t>() >= 0))
+                fail("", fmt::format("expected a non-negative integer, got {}", v.is_number() ? v.dump() : json_kind(v)));
+            return v.get<uint64_t>();
+        case ParamType::FloatAuto:
+            if (v.is_string() && v.get<std::string>() == "auto") return v;
+            [[fallthrough]];
+        case ParamType::Float: return check_float(v, p.lo, p.hi, "", fail);
+        case ParamType::Bool:
+            if (!v.is_boolean()) fail("", fmt::format("expected true or false, got {}", json_kind(v)));
+            return v;
+        case ParamType::Enum:
+        case ParamType::Path: {
+            if (!v.is_string()) fail("", fmt::format("expected a string, got {}", json_kind(v)));
+            std::string s = v.get<std::string>();
+            if (p.type == ParamType::Enum && std::find(p.choices.begin(), p.choices.end(), s) == p.choices.end())
+                fail("", fmt::format("unknown value \"{}\" (valid: {})", s, fmt::join(p.choices, ", ")));
+            return v;
+        }
+        case ParamType::Vec3:
+        case ParamType::IntList: {
+            size_t n = p.type == ParamType::Vec3 ? 3 : p.count;
+            if (!v.is_array() || v.size() != n)
+                fail("", fmt::format("expected an array of {} {}, got {}", n, p.type == ParamType::Vec3 ? "numbers" : "integers", json_kind(v)));
+            json out = json::array();
+            for (size_t i = 0; i < n; ++i) {
+                std::string sub = "/" + std::to_string(i);
+                if (p.type == ParamType::Vec3) out.push_back(check_float(v[i], p.lo, p.hi, sub, fail));
+                else out.push_back(check_int(v[i], p.lo, p.hi, sub, fail));
+            }
+            return out;
+        }
+    }
+    return v;
+}
+
+json param_values(const Scene& scene, unsigned mask, const ParamTable& table) {
+    json out = json::object();
+    for (const Param& p : table)
+        if (mask == ~0u || (p.identity & mask)) out[p.key] = p.get(scene);
+    return out;
+}
+
+std::vector<std::string> param_differences(const json& was, const json& now) {
+    std::vector<std::string> out;
+    for (const auto& [key, value] : now.items()) {
+        if (!was.contains(key)) out.push_back(fmt::format("{}: (not recorded) -> {}", key, value.dump()));
+        else if (was[key] != value) out.push_back(fmt::format("{}: {} -> {}", key, was[key].dump(), value.dump()));
+    }
+    for (const auto& [key, value] : was.items())
+        if (!now.contains(key)) out.push_back(fmt::format("{}: {} -> (not a parameter)", key, value.dump()));
+    return out;
+}
+
+std::string identity_names(unsigned mask) {
+    std::vector<std::string> n;
+    if (mask & kDeepIdentity) n.push_back("deep");
+    if (mask & kRadiosityIdentity) n.push_back("radiosity");
+    if (mask & kCacheIdentity) n.push_back("cache");
+    return n.empty() ? "image" : fmt::format("{}", fmt::join(n, ","));
+}
+
+json params_listing(const ParamTable& table) {
+    json out = json::array();
+    for (const Param& p : table) {
+        json j = {{"key", p.key}, {"stage", p.stage}, {"type", type_name(p)}, {"default", p.default_value()},
+                  {"unit", p.unit}, {"doc", p.doc}, {"identity", identity_names(p.identity)}, {"flag", p.flag}};
+        if (p.type == ParamType::Enum) j["choices"] = p.choices;
+        if (p.lo != p.hi) j["range"] = {p.lo, p.hi};
+        if (p.required) j["required"] = true;
+        out.push_back(j);
+    }
+    return out;
+}
+
+std::string params_markdown(const ParamTable& table) {
+    std::string s = "| key | type | default | range | unit | invalidates | CLI | meaning |\n|---|---|---|---|---|---|---|---|\n";
+    for (const Param& p : table) {
+        std::string range = p.type == ParamType::Enum ? fmt::format("{}", fmt::join(p.choices, ", "))
+                            : p.lo != p.hi          ? fmt::format("{} .. {}", p.lo, p.hi)
+                                                    : "";
+        std::string def = p.required ? "required" : p.default_value().dump();
+        s += fmt::format("| `{}` | {} | `{}` | {} | {} | {} | {} | {} |\n", p.key, type_name(p), def, range, p.unit,
+                         identity_names(p.identity), p.flag.empty() ? "" : "`" + p.flag + "`", p.doc);
+    }
+    return s;
+}
+
+}  // namespace bounce

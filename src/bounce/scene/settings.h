@@ -1,0 +1,102 @@
+// The settings of every pipeline stage, as plain data. Each struct belongs to one stage and its
+// defaults are written here and nowhere else; the parameter table (params.h) names each field
+// once and derives from it the JSON keys, CLI flags, identities, metadata and the docs table.
+// They live beside the scene because the scene file carries them and every stage can see it.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include "bounce/core/tiles.h"
+
+namespace bounce {
+
+enum class GiMode : uint8_t { None, Brute, Cache };
+enum class Metric : uint8_t { TL04, Ward };
+enum class CacheSharing : uint8_t { Shared, PerThread };
+
+/// Primary visibility and the deep file.
+struct VisibilitySettings {
+    int spp = 16;          ///< jittered subsamples per pixel
+    uint64_t seed = 0;     ///< every random number is a hash of (pixel, sample, dimension, seed)
+    std::array<int, 4> crop{0, 0, 0, 0};  ///< x0,x1,y0,y1 (exclusive ends); all 0 = full frame
+    bool has_crop() const { return crop[1] > crop[0] || crop[3] > crop[2]; }
+};
+
+/// Direct lighting and ray tracing.
+struct LightingSettings {
+    int light_samples = 16;  ///< stratified samples per area light / sky per fragment
+    float ray_offset = -1;   ///< ray-origin offsetting distance; < 0 = automatic
+};
+
+/// Radiosity textures: direct light baked on every triangle for the gather's hits.
+struct RadiositySettings {
+    bool enabled = true;          ///< shade gather hits from baked textures
+    std::string folder;           ///< reuse/save them here; empty = bake in memory
+    float texel = 0;              ///< lattice spacing, world units; 0 = diagonal / 128
+    int light_samples = 16;       ///< light samples per lattice point
+    int max_level = 32;           ///< cap on the per-triangle lattice level (not a parameter)
+};
+
+/// The hemisphere gather and which indirect light the render computes.
+struct IndirectSettings {
+    GiMode gi = GiMode::None;
+    bool ao = false;              ///< ambient occlusion only
+    int rays = 512;               ///< rays per gather
+    float ao_distance = -1;       ///< < 0 = 10 % of the scene diagonal; 0 = unlimited
+    float ao_falloff = 0;
+    int hit_light_samples = 1;    ///< shadow samples at gather hits without radiosity textures
+    float concave_angle = 80;     ///< degrees (TL04 distance filter)
+    bool any() const { return gi != GiMode::None || ao; }
+};
+
+/// Where the irradiance cache makes records and how far they reach (docs/irradiance-cache.md).
+struct CacheSettings {
+    Metric metric = Metric::TL04; ///< tl04 (normalised, bounded) | ward (1/x, accuracy a)
+    float min_spacing = 2.0f;     ///< smallest record radius, pixels
+    float max_spacing = 16.0f;    ///< largest record radius, pixels
+    float max_angle = 10.0f;      ///< normal deviation at which the normal metric reaches 1, degrees
+    float gradient_limit = 1.0f;  ///< Weber limit tau; 0 = off
+    float quality = 1.0f;         ///< kappa: every TL04 metric is scaled by it
+    float min_weight = 0.5f;      ///< a lookup misses when the weights sum below this (TL04)
+    float accuracy = 0.2f;        ///< Ward's a
+    bool gradients = true;        ///< extrapolate with gradients
+    bool neighbour_clamp = true;  ///< R_new <= R_j + |p_new - p_j| (Krivanek et al. 2006)
+    float shading_reach = 1.0f;   ///< the shading pass lets records reach this much farther (>= 1)
+    float radius_scale = 0.5f;    ///< R = radius_scale * d_min (TL04: 1/2)
+    /// The settings the shading pass interpolates with.
+    CacheSettings for_shading() const {
+        CacheSettings s = *this;
+        s.quality = quality / shading_reach;
+        s.accuracy = accuracy * shading_reach;
+        return s;
+    }
+};
+
+/// How indirect light reaches the BRDF.
+struct ShadingSettings {
+    bool light_per_channel = false;  ///< three (radiance, direction) pairs, not one
+};
+
+/// Threads, tiles and progressive output.
+struct ParallelSettings {
+    int threads = 0;                              ///< 0 = all cores
+    int tile_size = 32;                           ///< tile (bucket) edge, pixels
+    TileOrder tile_order = TileOrder::Rows;       ///< the order threads take tiles in
+    CacheSharing cache_sharing = CacheSharing::Shared;
+    bool preview = false;                         ///< progressive gather-and-shade
+};
+
+/// Everything under the scene file's "render" object, one struct per stage.
+struct RenderSettings {
+    VisibilitySettings visibility;
+    LightingSettings lighting;
+    RadiositySettings radiosity;
+    IndirectSettings indirect;
+    CacheSettings cache;
+    ShadingSettings shading;
+    ParallelSettings parallel;
+};
+
+}  // namespace bounce
