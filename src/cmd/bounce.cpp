@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -122,6 +123,7 @@ struct CompareArgs {
 };
 
 int run_compare(const CompareArgs& a) {
+    if (!a.diff.empty()) check_output_file(a.diff, {a.test, a.reference});
     Image test = read_exr(a.test), ref = read_exr(a.reference);
     std::vector<LayerError> errors = compare_images(test, ref, a.layer, a.test);
     std::string diff_layer = a.layer.empty() ? (ref.find("indirect") ? "indirect" : "beauty") : a.layer;
@@ -138,14 +140,15 @@ int run_compare(const CompareArgs& a) {
     if (a.json) {
         nlohmann::json j = nlohmann::json::object();
         for (const auto& e : errors)
-            j[e.layer] = {{"rmse", e.rmse}, {"rel_rmse", e.rel_rmse}, {"relmse", e.relmse},
+            j[e.layer] = {{"rmse", e.rmse}, {"rel_rmse", std::isnan(e.rel_rmse) ? nlohmann::json() : nlohmann::json(e.rel_rmse)}, {"relmse", e.relmse},
                           {"mean_abs", e.mean_abs}, {"max_abs", e.max_abs}, {"mean_ref", e.mean_ref}};
         std::printf("%s\n", j.dump(2).c_str());
     } else {
         std::printf("%-12s %12s %10s %12s %12s %12s %12s\n", "layer", "rmse", "rel_rmse", "relmse", "mean_abs", "max_abs", "mean_ref");
         for (const auto& e : errors)
-            std::printf("%-12s %12.6g %9.4f%% %12.6g %12.6g %12.6g %12.6g\n", e.layer.c_str(), e.rmse, 100 * e.rel_rmse,
-                        e.relmse, e.mean_abs, e.max_abs, e.mean_ref);
+            std::printf("%-12s %12.6g %10s %12.6g %12.6g %12.6g %12.6g\n", e.layer.c_str(), e.rmse,
+                        std::isnan(e.rel_rmse) ? "n/a" : fmt::format("{:.4f}%", 100 * e.rel_rmse).c_str(), e.relmse, e.mean_abs,
+                        e.max_abs, e.mean_ref);
         std::printf("difference image (%s, full scale = 10%% of the reference mean): %s\n", diff_layer.c_str(), diff.c_str());
     }
     return 0;
@@ -171,6 +174,9 @@ std::vector<float> parse_floats(const std::string& text, size_t count, const std
         }
     }
     if (v.size() != count) throw InputError("command line", flag + " " + text, fmt::format("expected {} comma-separated numbers", count));
+    for (float x : v)
+        if (!std::isfinite(x) || std::fabs(x) > kMaxCoordinate)
+            throw InputError("command line", flag + " " + text, fmt::format("{} is not a finite coordinate within +-1e18", x));
     return v;
 }
 
@@ -226,6 +232,7 @@ int run_cache_info(const CacheArgs& a) {
 }
 
 int run_cache_merge(const CacheArgs& a) {
+    check_output_file(a.output, a.inputs);
     if (a.inputs.size() < 2) throw InputError("command line", "cache merge", "give at least two caches to merge");
     CacheFile out = read_cache_file(a.inputs[0]);
     for (size_t i = 1; i < a.inputs.size(); ++i) out = merge_caches(out, read_cache_file(a.inputs[i]), a.inputs[0], a.inputs[i], a.force);
@@ -235,6 +242,7 @@ int run_cache_merge(const CacheArgs& a) {
 }
 
 int run_cache_filter(const CacheArgs& a) {
+    check_output_file(a.output, a.inputs);
     RecordFilter filter;
     if (!a.box.empty()) {
         auto v = parse_floats(a.box, 6, "--box");
@@ -247,6 +255,7 @@ int run_cache_filter(const CacheArgs& a) {
         filter.has_sphere = true;
         filter.center = {v[0], v[1], v[2]};
         filter.radius = v[3];
+        if (!(filter.radius > 0)) throw InputError("command line", "--sphere " + a.sphere, "the radius must be > 0");
     }
     for (const auto& w : a.where) check_where_term(w);
     filter.where = a.where;
@@ -260,6 +269,7 @@ int run_cache_filter(const CacheArgs& a) {
 }
 
 int run_cache_export(const CacheArgs& a) {
+    check_output_file(a.output, a.inputs);
     CacheFile f = read_cache_file(a.inputs.at(0));
     export_ply(f, a.output);
     std::fprintf(stderr, "%s: %zu points\n", a.output.c_str(), f.records.size());
@@ -329,6 +339,16 @@ int main(int argc, char** argv) {
     cexport->add_option("input", ka.inputs, "cache file")->required()->expected(1);
     cexport->add_option("-o,--output", ka.output, "PLY file")->required();
 
+    if (argc > 1 && argv[1][0] != '-') {  // CLI11 would only say "A subcommand is required"
+        std::vector<std::string> names;
+        for (const CLI::App* sub : app.get_subcommands({})) names.push_back(sub->get_name());
+        if (std::find(names.begin(), names.end(), argv[1]) == names.end()) {
+            std::string hint = closest_match(argv[1], names);
+            std::fprintf(stderr, "bounce: command line: %s: error: unknown command%s (valid: %s)\n", argv[1],
+                         hint.empty() ? "" : (" (did you mean \"" + hint + "\"?)").c_str(), fmt::format("{}", fmt::join(names, ", ")).c_str());
+            return 2;
+        }
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -33,7 +33,13 @@ std::vector<LayerError> compare_images(const Image& test, const Image& ref, cons
         for (size_t i = 0; i < rl.data.size(); ++i) {
             if (rl.channels[i % nc] == "A") continue;
             double a = tl->data[i], b = rl.data[i];
-            if (!std::isfinite(a) || !std::isfinite(b)) continue;  // e.g. depth of background
+            if (!std::isfinite(b)) continue;  // e.g. depth of background
+            if (!std::isfinite(a)) {
+                size_t pixel = i / nc;
+                throw InputError(test_path, fmt::format("{} pixel {},{}", rl.name, pixel % static_cast<size_t>(test.width) + test.x0,
+                                                        pixel / static_cast<size_t>(test.width) + test.y0),
+                                 "not a finite value where the reference is finite");
+            }
             double d = a - b;
             se += d * d;
             sa += std::abs(d);
@@ -47,7 +53,8 @@ std::vector<LayerError> compare_images(const Image& test, const Image& ref, cons
             e.mean_abs = sa / static_cast<double>(n);
             e.mean_ref = sr / static_cast<double>(n);
             e.relmse = rel / static_cast<double>(n);
-            e.rel_rmse = e.mean_ref > 0 ? e.rmse / e.mean_ref : 0;
+            // Against an all-zero reference a relative error means nothing: NaN ("n/a").
+            e.rel_rmse = e.mean_ref > 0 ? e.rmse / e.mean_ref : std::nan("");
         }
         out.push_back(e);
     }

@@ -142,7 +142,7 @@ ParamTable make_table() {
                        .doc("[x0, x1, y0, y1], ends exclusive; all 0 = full frame; the EXR keeps the full display window").flag());
     // Lighting.
     rows.push_back(row("light_samples", "lighting", &R::lighting, &LightingSettings::light_samples).range(1, 65536).unit("samples")
-                       .doc("stratified samples per area light, emissive mesh and sky, per fragment").id(rad).flag());
+                       .doc("stratified samples per area light, emissive mesh and sky, per fragment").flag());
     rows.push_back(row("ray_offset", "lighting", &R::lighting, &LightingSettings::ray_offset).automatic(-1).range(0, kMaxCoordinate)
                        .unit("world").doc("ray-origin offsetting distance; auto = 4x the fine/coarse gap, >= 1e-4 x scene diagonal")
                        .id(rad | cache).flag());
@@ -361,7 +361,7 @@ std::string params_markdown(const ParamTable& table) {
     std::string s = "| key | type | default | range | unit | invalidates | CLI | meaning |\n|---|---|---|---|---|---|---|---|\n";
     for (const Param& p : table) {
         std::string range = p.type == ParamType::Enum ? fmt::format("{}", fmt::join(p.choices, ", "))
-                            : p.lo != p.hi          ? fmt::format("{} .. {}", p.lo, p.hi)
+                            : p.lo != p.hi          ? fmt::format("{:g} .. {:g}", p.lo, p.hi)
                                                     : "";
         std::string def = p.required ? "required" : p.default_value().dump();
         s += fmt::format("| `{}` | {} | `{}` | {} | {} | {} | {} | {} |\n", p.key, type_name(p), def, range, p.unit,
