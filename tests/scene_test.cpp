@@ -143,9 +143,8 @@ TEST(SceneLoad, EmptyAndMissingMeshes) {
 }
 
 TEST(SceneLoad, MeshFileMaterialsAndOverride) {
-    // The shared McGuire Cornell box OBJ+MTL, if present beside the project.
-    std::string obj = test::source_dir() + "/../shared/scenes/cornell_box/assimp_fixed/CornellBox-Original.obj";
-    if (!std::filesystem::exists(obj)) GTEST_SKIP() << "shared scenes not present";
+    // McGuire's Cornell box OBJ+MTL, shipped in tests/data.
+    std::string obj = test::source_dir() + "/tests/data/cornell_box/CornellBox-Original.obj";
     std::vector<Material> mats;
     TriangleMesh m = load_mesh_file(obj, "box", mats, -1);
     EXPECT_EQ(m.triangle_count(), 36u);

@@ -7,6 +7,7 @@
 
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
+#include "bounce/core/files.h"
 #include "bounce/core/parallel.h"
 
 namespace bounce {
@@ -68,8 +69,7 @@ void write_exr(const std::string& path, const Image& image) {
 }
 
 Image read_exr(const std::string& path) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path, "", "file not found");
+    check_input_file(path);
     auto in = OIIO::ImageInput::open(path);
     if (!in) throw InputError(path, "", "cannot read image: " + OIIO::geterror());
     const OIIO::ImageSpec& spec = in->spec();

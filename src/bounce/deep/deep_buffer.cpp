@@ -6,6 +6,7 @@
 
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
+#include "bounce/core/files.h"
 #include "bounce/core/parallel.h"
 #include "bounce/core/random.h"
 #include "bounce/core/sampling.h"
@@ -311,8 +312,7 @@ void write_deep(const std::string& path, const DeepBuffer& deep) {
 }
 
 DeepBuffer read_deep(const std::string& path) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path, "", "deep file not found");
+    check_input_file(path);
     auto in = OIIO::ImageInput::open(path);
     if (!in) throw InputError(path, "", "not a readable deep file: " + OIIO::geterror());
     const OIIO::ImageSpec& spec = in->spec();

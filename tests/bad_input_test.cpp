@@ -1,0 +1,150 @@
+// Hostile inputs that used to crash, hang, pass silently or destroy files: each now exits 2
+// with the file and the place, and leaves every file as it was.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "bounce/cache/cache_file.h"
+#include "bounce/core/error.h"
+#include "bounce/core/image.h"
+#include "test_util.h"
+
+namespace bounce {
+namespace {
+
+/// Runs bounce, expects exit 2 and every `parts` in its one-line message.
+void refused(const std::string& args, std::initializer_list<std::string> parts) {
+    std::string err;
+    EXPECT_EQ(test::run_bounce(args, &err), 2) << args << " -> " << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    for (const auto& p : parts) EXPECT_NE(err.find(p), std::string::npos) << args << " -> " << err << " lacks " << p;
+}
+
+std::string render_cmd(const std::string& scene, const std::string& out) { return "render " + scene + " -o " + out + " -q --res 16x16"; }
+
+TEST(BadInput, CoordinatesThatOverflowFloatAreRefusedAtLoad) {
+    test::TempDir d;
+    const std::string out = d.file("x.exr");
+    refused(render_cmd(test::cornell_scene(), out) + " --set camera.position.0=1e39", {"/camera/position/0", "does not fit a float"});
+    nlohmann::json j = test::base_scene();
+    j["objects"] = {{{"type", "quad"}, {"vertices", {{0, 0, 0}, {3e38, 0, 0}, {1, 0, 1}, {0, 0, 1}}}}};
+    d.write("quad.json", j.dump());
+    refused(render_cmd(d.file("quad.json"), out), {"quad.json", "/objects/0/vertices/1/0", "out of range"});
+    j = test::base_scene();
+    j["lights"] = {{{"type", "point"}, {"position", {1e39, 0, 0}}}};
+    d.write("light.json", j.dump());
+    refused(render_cmd(d.file("light.json"), out), {"light.json", "/lights/0/position/0"});
+    j = test::base_scene();
+    j["lights"] = {{{"type", "point"}, {"position", {0, 5, 0}}, {"color", 1e20}, {"intensity", 1e20}}};
+    d.write("bright.json", j.dump());
+    refused(render_cmd(d.file("bright.json"), out), {"bright.json", "/lights/0/intensity", "exceeds"});
+}
+
+TEST(BadInput, CacheRecordsBeyondFloatRangeAreRefusedAtRead) {
+    test::TempDir d;
+    ASSERT_EQ(test::run_bounce(render_cmd(test::cornell_scene(), d.file("a.exr")) + " --gi cache --rays 16 --cache-out " + d.file("c.bic")), 0);
+    for (int which = 0; which < 2; ++which) {
+        CacheFile f = read_cache_file(d.file("c.bic"));
+        if (which == 0) f.records[0].p.x = 3e38f;
+        else f.records[0].E.y = 3e38f;
+        // serialize_cache_file writes valid checksums: only the values are wrong.
+        std::string bytes = serialize_cache_file(f);
+        d.write("bad.bic", bytes);
+        refused("cache info " + d.file("bad.bic"), {"bad.bic", "record 0", which == 0 ? "position" : "irradiance"});
+        refused(render_cmd(test::cornell_scene(), d.file("b.exr")) + " --gi cache --rays 16 --cache-in " + d.file("bad.bic"),
+                {"bad.bic", "record 0"});
+    }
+}
+
+TEST(BadInput, FifosAndDirectoriesAreNamedNotOpened) {
+    test::TempDir d;
+    ASSERT_EQ(mkfifo(d.file("scene.json").c_str(), 0600), 0);
+    refused(render_cmd(d.file("scene.json"), d.file("x.exr")), {"scene.json", "not a regular file"});
+    std::filesystem::create_directory(d.file("adir.json"));
+    refused(render_cmd(d.file("adir.json"), d.file("x.exr")), {"adir.json", "is a directory"});
+    refused(render_cmd(test::cornell_scene(), d.file("y.exr")) + " --deep-in " + d.file("scene.json"), {"scene.json", "not a regular file"});
+}
+
+TEST(BadInput, NegativeAndNanFlagsExitTwo) {
+    test::TempDir d;
+    const std::string cmd = render_cmd(test::cornell_scene(), d.file("x.exr"));
+    refused(cmd + " --rays -1", {"--rays -1", "out of range"});
+    refused(cmd + " --threads -1", {"--threads -1", "out of range"});
+    refused(cmd + " --spp -1", {"--spp -1", "out of range"});
+    refused(cmd + " --seed -1", {"--seed -1", "non-negative"});
+    refused(cmd + " --min-spacing -1", {"--min-spacing -1", "out of range"});
+    refused(cmd + " --min-spacing nan", {"--min-spacing nan", "expected a number"});
+    refused(cmd + " --set objects.-1.name=x", {"\"-1\" is not an array index"});
+    refused(cmd + " --cache-out " + d.file("c.bic"), {"--cache-out", "--gi cache"});
+    refused(cmd + " --cache-in " + d.file("c.bic"), {"--cache-in", "--gi cache"});
+    refused("rendr x", {"unknown command", "did you mean \"render\""});
+}
+
+TEST(BadInput, SceneFilesThatLie) {
+    test::TempDir d;
+    d.write("dup.json", R"({"camera": {"position": [0, 1, 5], "look_at": [0, 0, 0]}, "objects": [], "objects": []})");
+    refused(render_cmd(d.file("dup.json"), d.file("x.exr")), {"dup.json", "/objects", "given twice"});
+    d.write("top.json", "[1, 2]");
+    refused(render_cmd(d.file("top.json"), d.file("x.exr")) + " --set camera.fov=40", {"top.json", "expected an object at the top"});
+    d.write("short.ply", "ply\nformat ascii 1.0\nelement vertex 100\nproperty float x\nproperty float y\nproperty float z\n"
+                         "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    nlohmann::json j = test::base_scene();
+    j["objects"] = {{{"file", "short.ply"}}};
+    d.write("ply.json", j.dump());
+    refused(render_cmd(d.file("ply.json"), d.file("x.exr")), {"/objects/0/file", "declares 101 elements", "4 lines"});
+}
+
+TEST(BadInput, CompareAndCacheToolsRefuseWhatTheyUsedToAccept) {
+    test::TempDir d;
+    ASSERT_EQ(test::run_bounce(render_cmd(test::cornell_scene(), d.file("a.exr")) + " --gi cache --rays 16 --cache-out " + d.file("gi.bic")), 0);
+    ASSERT_EQ(test::run_bounce(render_cmd(test::cornell_scene(), d.file("b.exr")) + " --gi cache --ao --rays 16 --cache-out " + d.file("ao.bic")), 0);
+    Image nan = read_exr(d.file("a.exr")), black = nan;
+    for (auto& l : nan.layers) std::fill(l.data.begin(), l.data.end(), std::nanf(""));
+    for (auto& l : black.layers) std::fill(l.data.begin(), l.data.end(), 0.0f);
+    write_exr(d.file("nan.exr"), nan);
+    write_exr(d.file("black.exr"), black);
+    refused("compare " + d.file("nan.exr") + " " + d.file("a.exr"), {"nan.exr", "not a finite value"});
+    std::string out;
+    std::string cmd = std::string(BOUNCE_BINARY) + " compare " + d.file("a.exr") + " " + d.file("black.exr") + " --layer indirect --json > " + d.file("c.json");
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    std::ifstream in(d.file("c.json"));
+    EXPECT_TRUE(nlohmann::json::parse(in)["indirect"]["rel_rmse"].is_null());  // not "0 %"
+    refused("compare " + d.file("a.exr") + " " + d.file("b.exr") + " --diff " + d.file("a.exr"), {"a.exr", "names an input"});
+    refused("cache merge " + d.file("gi.bic") + " " + d.file("ao.bic") + " -o " + d.file("m.bic"), {"ao.bic", "holds AO"});
+    refused("cache filter " + d.file("gi.bic") + " -o " + d.file("f.bic") + " --sphere nan,0,0,1", {"--sphere", "not a finite"});
+    refused("cache filter " + d.file("gi.bic") + " -o " + d.file("f.bic") + " --sphere 0,0,0,-1", {"--sphere", "radius must be > 0"});
+    refused("cache filter " + d.file("gi.bic") + " -o " + d.file("gi.bic") + " --sphere 0,0,0,1", {"gi.bic", "names an input"});
+}
+
+TEST(BadInput, OutputsThatWouldDestroySomethingAreRefusedBeforeRendering) {
+    test::TempDir d;
+    d.write("scene.json", test::base_scene().dump());
+    const std::string scene = d.file("scene.json");
+    const std::string before = test::base_scene().dump();
+    refused(render_cmd(scene, scene), {"-o", ".exr"});
+    refused(render_cmd(scene, d.file("x.png")), {"-o", ".exr"});
+    refused(render_cmd(scene, "/dev/null.exr") + " --deep-out /dev/null", {"/dev/null", "not a regular file"});
+    std::filesystem::create_directory(d.file("adir.exr"));
+    refused(render_cmd(scene, d.file("adir.exr")), {"adir.exr", "is a directory"});
+    std::filesystem::create_directory(d.file("sdir"));
+    refused(render_cmd(scene, d.file("y.exr")) + " --stats-json " + d.file("sdir"), {"sdir", "is a directory"});
+    EXPECT_FALSE(std::filesystem::exists(d.file("y.exr")));  // checked before rendering
+    refused(render_cmd(scene, d.file("z.exr")) + " --deep-out " + d.file("z.exr"), {"--deep-out", "same file"});
+    std::ifstream in(scene);
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), before);
+}
+
+TEST(BadInput, StaleTemporariesOfDeadRendersAreRemoved) {
+    test::TempDir d;
+    d.write("scene.json", test::base_scene().dump());
+    // PID 2^22 + 1 is above Linux's pid_max limit: no such process.
+    d.write("x.tmp4194305.exr", "half-written");
+    ASSERT_EQ(test::run_bounce(render_cmd(d.file("scene.json"), d.file("x.exr"))), 0);
+    EXPECT_FALSE(std::filesystem::exists(d.file("x.tmp4194305.exr")));
+    EXPECT_TRUE(std::filesystem::exists(d.file("x.exr")));
+}
+
+}  // namespace
+}  // namespace bounce
