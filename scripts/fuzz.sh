@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang (AddressSanitizer) and runs each for a bounded time
-# on a copy of its seed corpus. Usage: scripts/fuzz.sh [SECONDS_PER_TARGET]
+# on a copy of its seed corpus (render_fuzz renders 16x16 frames from fuzzed scenes and caches). Usage: scripts/fuzz.sh [SECONDS_PER_TARGET]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-30}
 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
   -DCMAKE_CXX_COMPILER=clang++ -DBOUNCE_FUZZ=ON -DBOUNCE_BUILD_TESTS=OFF -DBOUNCE_BUILD_BENCH=OFF >/dev/null
-cmake --build build-fuzz --target cache_reader_fuzz scene_parser_fuzz -j "$(nproc)"
-for target in cache_reader_fuzz:cache scene_parser_fuzz:scene; do
+cmake --build build-fuzz --target cache_reader_fuzz scene_parser_fuzz render_fuzz -j "$(nproc)"
+for target in cache_reader_fuzz:cache scene_parser_fuzz:scene render_fuzz:render; do
   name=${target%%:*}
   corpus=${target##*:}
   work=$(mktemp -d)

@@ -1,0 +1,168 @@
+// Deep file I/O: OpenEXR deep scanlines through OpenImageIO.
+#include <OpenImageIO/deepdata.h>
+#include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
+
+#include "bounce/core/atomic_file.h"
+#include "bounce/core/error.h"
+#include "bounce/core/files.h"
+#include "bounce/deep/deep_buffer.h"
+
+namespace bounce {
+
+namespace {
+
+constexpr int kDeepVersion = 1;
+
+struct Channel {
+    const char* name;
+    OIIO::TypeDesc type;
+};
+
+// Z and A first: the layout deep-aware compositors expect.
+const std::vector<Channel>& deep_channels() {
+    static const std::vector<Channel> ch = {
+        {"Z", OIIO::TypeDesc::FLOAT},       {"A", OIIO::TypeDesc::FLOAT},
+        {"P.X", OIIO::TypeDesc::FLOAT},     {"P.Y", OIIO::TypeDesc::FLOAT},     {"P.Z", OIIO::TypeDesc::FLOAT},
+        {"N.X", OIIO::TypeDesc::FLOAT},     {"N.Y", OIIO::TypeDesc::FLOAT},     {"N.Z", OIIO::TypeDesc::FLOAT},
+        {"Ng.X", OIIO::TypeDesc::FLOAT},    {"Ng.Y", OIIO::TypeDesc::FLOAT},    {"Ng.Z", OIIO::TypeDesc::FLOAT},
+        {"Pref.X", OIIO::TypeDesc::FLOAT},  {"Pref.Y", OIIO::TypeDesc::FLOAT},  {"Pref.Z", OIIO::TypeDesc::FLOAT},
+        {"Nref.X", OIIO::TypeDesc::FLOAT},  {"Nref.Y", OIIO::TypeDesc::FLOAT},  {"Nref.Z", OIIO::TypeDesc::FLOAT},
+        {"uv.U", OIIO::TypeDesc::FLOAT},    {"uv.V", OIIO::TypeDesc::FLOAT},
+        {"id.material", OIIO::TypeDesc::UINT}, {"id.object", OIIO::TypeDesc::UINT}, {"id.prim", OIIO::TypeDesc::UINT},
+        {"footprint", OIIO::TypeDesc::FLOAT},
+    };
+    return ch;
+}
+
+/// Float channel values of a fragment in deep_channels() order (ids handled separately).
+std::array<float, 23> float_values(const Fragment& f) {
+    return {f.depth, f.weight, f.p.x, f.p.y, f.p.z, f.n.x, f.n.y, f.n.z, f.ng.x, f.ng.y, f.ng.z,
+            f.p_base.x, f.p_base.y, f.p_base.z, f.n_base.x, f.n_base.y, f.n_base.z, f.uv.x, f.uv.y,
+            0, 0, 0, f.footprint};
+}
+
+}  // namespace
+
+void write_deep(const std::string& path, const DeepBuffer& deep) {
+    const auto& chans = deep_channels();
+    OIIO::ImageSpec spec(deep.width, deep.height, static_cast<int>(chans.size()), OIIO::TypeDesc::FLOAT);
+    spec.x = deep.x0, spec.y = deep.y0;
+    spec.full_x = 0, spec.full_y = 0;
+    spec.full_width = deep.full_width, spec.full_height = deep.full_height;
+    spec.deep = true;
+    spec.channelnames.clear();
+    spec.channelformats.clear();
+    for (const auto& c : chans) {
+        spec.channelnames.emplace_back(c.name);
+        spec.channelformats.push_back(c.type);
+    }
+    spec.z_channel = 0;
+    spec.alpha_channel = 1;
+    spec.attribute("compression", "zips");
+    spec.attribute("bounce:deep_version", kDeepVersion);
+    spec.attribute("bounce:spp", deep.spp);
+    spec.attribute("bounce:seed", fmt::format("{}", deep.seed));
+    spec.attribute("bounce:scene_fingerprint", fmt::format("{:016x}", deep.scene_fingerprint));
+    spec.attribute("Software", "bounce " BOUNCE_VERSION);
+
+    OIIO::DeepData dd;
+    dd.init(static_cast<int64_t>(deep.pixel_count()), static_cast<int>(chans.size()),
+            spec.channelformats, spec.channelnames);
+    for (size_t i = 0; i < deep.pixel_count(); ++i)
+        dd.set_samples(static_cast<int64_t>(i), static_cast<int>(deep.offsets[i + 1] - deep.offsets[i]));
+    for (size_t i = 0; i < deep.pixel_count(); ++i) {
+        for (uint32_t k = deep.offsets[i]; k < deep.offsets[i + 1]; ++k) {
+            const Fragment& f = deep.fragments[k];
+            auto vals = float_values(f);
+            int s = static_cast<int>(k - deep.offsets[i]);
+            auto pix = static_cast<int64_t>(i);
+            for (int c = 0; c < static_cast<int>(chans.size()); ++c) {
+                if (chans[static_cast<size_t>(c)].type == OIIO::TypeDesc::UINT) continue;
+                dd.set_deep_value(pix, c, s, vals[static_cast<size_t>(c)]);
+            }
+            dd.set_deep_value(pix, 19, s, f.material);
+            dd.set_deep_value(pix, 20, s, f.object);
+            dd.set_deep_value(pix, 21, s, f.prim);
+        }
+    }
+    write_atomically(path, [&](const std::string& tmp) {
+        auto out = OIIO::ImageOutput::create("openexr");
+        if (!out || !out->open(tmp, spec))
+            throw InputError(path, "", "cannot write deep file: " + (out ? out->geterror() : OIIO::geterror()));
+        if (!out->write_deep_image(dd)) throw InputError(path, "", "cannot write deep file: " + out->geterror());
+        if (!out->close()) throw InputError(path, "", "cannot write deep file: " + out->geterror());
+    });
+}
+
+DeepBuffer read_deep(const std::string& path) {
+    check_input_file(path);
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) throw InputError(path, "", "not a readable deep file: " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    if (!spec.deep) throw InputError(path, "", "not a deep image (expected an OpenEXR deep file from --deep-out)");
+    int version = spec.get_int_attribute("bounce:deep_version", -1);
+    if (version != kDeepVersion)
+        throw InputError(path, "bounce:deep_version",
+                         version < 0 ? "not a bounce deep file (no bounce:deep_version attribute)"
+                                     : fmt::format("unsupported version {} (this bounce reads {})", version, kDeepVersion));
+    // OpenEXR stores channels sorted by name: find ours by name.
+    const auto& chans = deep_channels();
+    std::vector<int> index(chans.size(), -1);
+    for (size_t c = 0; c < chans.size(); ++c) {
+        for (int k = 0; k < spec.nchannels; ++k)
+            if (spec.channelnames[static_cast<size_t>(k)] == chans[c].name) index[c] = k;
+        if (index[c] < 0) throw InputError(path, "channels", fmt::format("missing channel \"{}\"", chans[c].name));
+        if (spec.channelformat(index[c]) != chans[c].type)
+            throw InputError(path, fmt::format("channel {}", chans[c].name),
+                             fmt::format("expected type {}, found {}", chans[c].type.c_str(),
+                                         spec.channelformat(index[c]).c_str()));
+    }
+    DeepBuffer deep;
+    deep.x0 = spec.x, deep.y0 = spec.y, deep.width = spec.width, deep.height = spec.height;
+    deep.full_width = spec.full_width, deep.full_height = spec.full_height;
+    deep.spp = spec.get_int_attribute("bounce:spp", 0);
+    try {
+        deep.seed = std::stoull(spec.get_string_attribute("bounce:seed", "x"));
+        deep.scene_fingerprint = std::stoull(spec.get_string_attribute("bounce:scene_fingerprint", "x"), nullptr, 16);
+    } catch (const std::exception&) {
+        throw InputError(path, "header", "missing or malformed bounce:seed / bounce:scene_fingerprint");
+    }
+    if (deep.spp <= 0 || deep.width <= 0 || deep.height <= 0 || deep.x0 < 0 || deep.y0 < 0 ||
+        deep.x0 + deep.width > deep.full_width || deep.y0 + deep.height > deep.full_height)
+        throw InputError(path, "header", "inconsistent image window or sample count");
+    OIIO::DeepData dd;
+    if (!in->read_native_deep_image(0, 0, dd))
+        throw InputError(path, "", "cannot read deep data: " + in->geterror());
+    deep.offsets.resize(deep.pixel_count() + 1);
+    deep.offsets[0] = 0;
+    for (size_t i = 0; i < deep.pixel_count(); ++i) {
+        int n = dd.samples(static_cast<int64_t>(i));
+        if (n < 0 || n > deep.spp)
+            throw InputError(path, fmt::format("pixel {}", i), fmt::format("{} fragments exceed spp {}", n, deep.spp));
+        deep.offsets[i + 1] = deep.offsets[i] + static_cast<uint32_t>(n);
+    }
+    deep.fragments.resize(deep.offsets.back());
+    for (size_t i = 0; i < deep.pixel_count(); ++i) {
+        auto pix = static_cast<int64_t>(i);
+        for (uint32_t k = deep.offsets[i]; k < deep.offsets[i + 1]; ++k) {
+            int s = static_cast<int>(k - deep.offsets[i]);
+            auto v = [&](int c) { return dd.deep_value(pix, index[static_cast<size_t>(c)], s); };
+            auto id = [&](int c) { return dd.deep_value_uint(pix, index[static_cast<size_t>(c)], s); };
+            Fragment& f = deep.fragments[k];
+            f.depth = v(0), f.weight = v(1);
+            f.p = {v(2), v(3), v(4)}, f.n = {v(5), v(6), v(7)}, f.ng = {v(8), v(9), v(10)};
+            f.p_base = {v(11), v(12), v(13)}, f.n_base = {v(14), v(15), v(16)};
+            f.uv = {v(17), v(18)};
+            f.material = id(19);
+            f.object = id(20);
+            f.prim = id(21);
+            f.footprint = v(22);
+            if (!isfinite(f.p) || !isfinite(f.n) || !std::isfinite(f.weight) || f.weight < 0 || f.weight > 1)
+                throw InputError(path, fmt::format("pixel {} fragment {}", i, s), "non-finite or out-of-range values");
+        }
+    }
+    return deep;
+}
+
+}  // namespace bounce

@@ -1,0 +1,180 @@
+// Primary visibility: subsamples traced against the fine tessellation, merged into fragments.
+#include "bounce/deep/deep_buffer.h"
+
+#include <fmt/format.h>
+
+#include "bounce/core/error.h"
+#include "bounce/core/parallel.h"
+#include "bounce/core/random.h"
+#include "bounce/core/sampling.h"
+
+namespace bounce {
+
+namespace {
+
+struct Accum {
+    Vec3 p, n, ng;
+    Vec3 p0, ng0;  ///< the first subsample's point and geometric normal: the group's plane
+    float off_plane = 0;  ///< largest distance of a merged subsample from that plane
+    Vec2 uv;
+    uint32_t material, object, prim;
+    float depth, footprint;
+    int count;
+};
+
+}  // namespace
+
+DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* sink) {
+    return render_visibility(scene, accel, stats, sink, frame_window(scene));
+}
+
+std::array<int, 4> frame_window(const Scene& scene) {
+    const VisibilitySettings& v = scene.render.visibility;
+    return v.has_crop() ? v.crop : std::array<int, 4>{0, scene.camera.width, 0, scene.camera.height};
+}
+
+DeepBuffer sub_window(const DeepBuffer& deep, const std::array<int, 4>& w) {
+    if (w[0] == deep.x0 && w[2] == deep.y0 && w[1] - w[0] == deep.width && w[3] - w[2] == deep.height) return deep;
+    DeepBuffer out = deep;
+    out.x0 = w[0], out.y0 = w[2], out.width = w[1] - w[0], out.height = w[3] - w[2];
+    out.offsets.assign(1, 0);
+    out.fragments.clear();
+    for (int y = w[2]; y < w[3]; ++y)
+        for (int x = w[0]; x < w[1]; ++x) {
+            auto f = deep.pixel(x - deep.x0, y - deep.y0);
+            out.fragments.insert(out.fragments.end(), f.begin(), f.end());
+            out.offsets.push_back(static_cast<uint32_t>(out.fragments.size()));
+        }
+    return out;
+}
+
+DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* sink,
+                             const std::array<int, 4>& window) {
+    const Camera& cam = scene.camera;
+    const VisibilitySettings& rs = scene.render.visibility;
+    DeepBuffer deep;
+    deep.full_width = cam.width;
+    deep.full_height = cam.height;
+    deep.x0 = window[0], deep.y0 = window[2];
+    deep.width = window[1] - window[0], deep.height = window[3] - window[2];
+    deep.spp = rs.spp;
+    deep.seed = rs.seed;
+    deep.scene_fingerprint = scene.fingerprint({"camera", "objects"});
+
+    CameraRays camera(cam);
+    const int spp = rs.spp;
+    std::vector<std::vector<Fragment>> per_pixel(deep.pixel_count());
+    Progress progress(sink, "visibility", static_cast<uint64_t>(deep.height));
+
+    parallel_ranges(0, deep.height, 1, [&](int row0, int row1) {
+        Counters& counters = stats.local();
+        std::vector<Accum> groups;
+        std::vector<std::pair<Vec3, size_t>> subsamples;  // (point, group) of this pixel
+        for (int wy = row0; wy < row1; ++wy) {
+            for (int wx = 0; wx < deep.width; ++wx) {
+                int x = wx + deep.x0, y = wy + deep.y0;
+                RandomStream rng(rs.seed, static_cast<uint64_t>(y) * 65536u + static_cast<uint64_t>(x));
+                groups.clear();
+                subsamples.clear();
+                for (int s = 0; s < spp; ++s) {
+                    Vec2 j = stratified_2d(s, spp, rng.get(static_cast<uint64_t>(s), kDimPixelX),
+                                             rng.get(static_cast<uint64_t>(s), kDimPixelY));
+                    Vec3 d = camera.direction(static_cast<float>(x) + j.x, static_cast<float>(y) + j.y);
+                    Vec3 dn = normalize(d);
+                    ++counters.camera_rays;
+                    Hit h = accel.fine().intersect(camera.origin(), dn, 0, INFINITY);
+                    if (!h.valid()) continue;
+                    const Object& obj = scene.objects[h.object];
+                    SurfacePoint sp = surface_point(obj.visible(), h.prim, h.u, h.v);
+                    // Face the camera (all surfaces are two-sided).
+                    if (dot(sp.ng, dn) > 0) sp.ng = -sp.ng, sp.n = -sp.n;
+                    if (dot(sp.n, dn) > 0) sp.n = normalize(sp.n - dn * (2 * dot(sp.n, dn)));
+                    float fp = camera.footprint(d, h.t, sp.ng);
+                    // Merge with a subsample of the same surface: same object and material,
+                    // similar orientation and depth (so silhouettes of one object stay apart),
+                    // and within a pixel's width of the group's plane (a step between parallel
+                    // faces is two surfaces, however close their depths).
+                    Accum* g = nullptr;
+                    for (auto& a : groups) {
+                        const float off = std::abs(dot(sp.p - a.p0, a.ng0));
+                        if (a.object == h.object && a.material == sp.material &&
+                            dot(normalize(a.ng), sp.ng) > 0.9f &&
+                            std::abs(a.depth / static_cast<float>(a.count) - h.t) < 0.05f * h.t + 4 * fp && off < fp) {
+                            g = &a;
+                            g->off_plane = std::max(g->off_plane, off / fp);
+                            break;
+                        }
+                    }
+                    if (!g) {
+                        groups.push_back({Vec3(0), Vec3(0), Vec3(0), sp.p, sp.ng, 0, {}, sp.material, h.object, h.prim,
+                                          0, 0, 0});
+                        g = &groups.back();
+                    }
+                    subsamples.emplace_back(sp.p, static_cast<size_t>(g - groups.data()));
+                    g->p += sp.p, g->n += sp.n, g->ng += sp.ng;
+                    g->uv.x += sp.uv.x, g->uv.y += sp.uv.y;
+                    g->depth += h.t, g->footprint += fp;
+                    ++g->count;
+                }
+                auto& out = per_pixel[static_cast<size_t>(wy) * deep.width + wx];
+                for (size_t gi = 0; gi < groups.size(); ++gi) {
+                    const Accum& a = groups[gi];
+                    auto c = static_cast<float>(a.count);
+                    Fragment f;
+                    // A planar group sits at its centroid. Otherwise the centroid can lie off
+                    // every surface (inside a convex ridge, between offset faces), where a
+                    // gather sees only the inside of the model: take the subsample nearest it.
+                    const Vec3 centroid = a.p / c;
+                    f.p = centroid;
+                    if (a.off_plane > 1e-3f) {
+                        float best = INFINITY;
+                        for (const auto& [q, group] : subsamples) {
+                            const float dist = length(q - centroid);
+                            if (group == gi && dist < best) best = dist, f.p = q;
+                        }
+                    }
+                    f.n = normalize(a.n);
+                    f.ng = normalize(a.ng);
+                    f.p_base = f.p;
+                    f.n_base = f.n;
+                    f.uv = {a.uv.x / c, a.uv.y / c};
+                    f.material = a.material, f.object = a.object, f.prim = a.prim;
+                    f.depth = a.depth / c;
+                    f.weight = c / static_cast<float>(spp);
+                    f.footprint = a.footprint / c;
+                    out.push_back(f);
+                }
+                // Front to back, as deep compositing expects.
+                std::stable_sort(out.begin(), out.end(), [](const Fragment& a, const Fragment& b) { return a.depth < b.depth; });
+            }
+            progress.add();
+        }
+    });
+
+    deep.offsets.resize(deep.pixel_count() + 1);
+    deep.offsets[0] = 0;
+    for (size_t i = 0; i < per_pixel.size(); ++i)
+        deep.offsets[i + 1] = deep.offsets[i] + static_cast<uint32_t>(per_pixel[i].size());
+    deep.fragments.reserve(deep.offsets.back());
+    for (auto& v : per_pixel) deep.fragments.insert(deep.fragments.end(), v.begin(), v.end());
+    stats.set("fragments", static_cast<double>(deep.fragments.size()));
+    return deep;
+}
+
+void check_camera_sees_geometry(const Scene& scene, const SceneAccel& accel) {
+    CameraRays camera(scene.camera);
+    const int n = 48;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            float px = (static_cast<float>(i) + 0.5f) / n * static_cast<float>(scene.camera.width);
+            float py = (static_cast<float>(j) + 0.5f) / n * static_cast<float>(scene.camera.height);
+            if (accel.fine().intersect(camera.origin(), normalize(camera.direction(px, py)), 0, INFINITY).valid())
+                return;
+        }
+    const Vec3 &p = scene.camera.position, &l = scene.camera.look_at;
+    throw InputError(scene.path, "/camera",
+                     fmt::format("the camera at ({}, {}, {}) looking at ({}, {}, {}) sees no geometry", p.x, p.y,
+                                 p.z, l.x, l.y, l.z));
+}
+
+}  // namespace bounce
