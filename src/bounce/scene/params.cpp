@@ -6,6 +6,8 @@
 #include <cmath>
 #include <type_traits>
 
+#include "bounce/scene/json_reader.h"
+
 namespace bounce {
 
 using nlohmann::json;
@@ -233,21 +235,10 @@ std::string type_name(const Param& p) {
     return "";
 }
 
-const char* json_kind(const json& j) {
-    switch (j.type()) {
-        case json::value_t::object: return "an object";
-        case json::value_t::array: return "an array";
-        case json::value_t::string: return "a string";
-        case json::value_t::boolean: return "a boolean";
-        case json::value_t::null: return "null";
-        default: return "a number";
-    }
-}
-
 /// A number checked as a float: finite, representable, inside [lo, hi].
 float check_float(const json& v, double lo, double hi, const std::string& sub, const ParamFail& fail) {
     if (!v.is_number())
-        fail(sub, fmt::format("expected a number, got {}", v.is_string() ? "a string (" + v.dump() + ")" : json_kind(v)));
+        fail(sub, fmt::format("expected a number, got {}", v.is_string() ? "a string (" + v.dump() + ")" : json_type_name(v)));
     double x = v.get<double>();
     if (!std::isfinite(x)) fail(sub, "number is not finite");
     if (std::fabs(x) > FLT_MAX) fail(sub, fmt::format("{} does not fit a float", x));
@@ -257,7 +248,7 @@ float check_float(const json& v, double lo, double hi, const std::string& sub, c
 }
 
 int64_t check_int(const json& v, double lo, double hi, const std::string& sub, const ParamFail& fail) {
-    if (!v.is_number_integer()) fail(sub, fmt::format("expected an integer, got {}", v.is_number() ? fmt::format("{}", v.get<double>()) : json_kind(v)));
+    if (!v.is_number_integer()) fail(sub, fmt::format("expected an integer, got {}", v.is_number() ? fmt::format("{}", v.get<double>()) : json_type_name(v)));
     if (v.is_number_unsigned() && v.get<uint64_t>() > static_cast<uint64_t>(INT64_MAX)) fail(sub, "integer is out of range");
     int64_t x = v.get<int64_t>();
     if (static_cast<double>(x) < lo || static_cast<double>(x) > hi) fail(sub, fmt::format("{} is out of range [{}, {}]", x, lo, hi));
@@ -284,18 +275,18 @@ json check_param(const Param& p, const json& v, const ParamFail& fail) {
         case ParamType::Int: return check_int(v, p.lo, p.hi, "", fail);
         case ParamType::UInt64:
             if (!v.is_number_unsigned() && !(v.is_number_integer() && v.get<int64_t>() >= 0))
-                fail("", fmt::format("expected a non-negative integer, got {}", v.is_number() ? v.dump() : json_kind(v)));
+                fail("", fmt::format("expected a non-negative integer, got {}", v.is_number() ? v.dump() : json_type_name(v)));
             return v.get<uint64_t>();
         case ParamType::FloatAuto:
             if (v.is_string() && v.get<std::string>() == "auto") return v;
             [[fallthrough]];
         case ParamType::Float: return check_float(v, p.lo, p.hi, "", fail);
         case ParamType::Bool:
-            if (!v.is_boolean()) fail("", fmt::format("expected true or false, got {}", json_kind(v)));
+            if (!v.is_boolean()) fail("", fmt::format("expected true or false, got {}", json_type_name(v)));
             return v;
         case ParamType::Enum:
         case ParamType::Path: {
-            if (!v.is_string()) fail("", fmt::format("expected a string, got {}", json_kind(v)));
+            if (!v.is_string()) fail("", fmt::format("expected a string, got {}", json_type_name(v)));
             std::string s = v.get<std::string>();
             if (p.type == ParamType::Enum && std::find(p.choices.begin(), p.choices.end(), s) == p.choices.end())
                 fail("", fmt::format("unknown value \"{}\" (valid: {})", s, fmt::join(p.choices, ", ")));
@@ -305,7 +296,7 @@ json check_param(const Param& p, const json& v, const ParamFail& fail) {
         case ParamType::IntList: {
             size_t n = p.type == ParamType::Vec3 ? 3 : p.count;
             if (!v.is_array() || v.size() != n)
-                fail("", fmt::format("expected an array of {} {}, got {}", n, p.type == ParamType::Vec3 ? "numbers" : "integers", json_kind(v)));
+                fail("", fmt::format("expected an array of {} {}, got {}", n, p.type == ParamType::Vec3 ? "numbers" : "integers", json_type_name(v)));
             json out = json::array();
             for (size_t i = 0; i < n; ++i) {
                 std::string sub = "/" + std::to_string(i);
