@@ -117,6 +117,8 @@ DeepBuffer gathered_window(const Scene& scene, const RenderRequest& request, con
             deep = read_deep(request.deep_in);
         }
         validate_deep_for_scene(deep, scene, request.deep_in);
+        // Without a crop, a deep file of a window renders that window.
+        if (!scene.render.visibility.has_crop()) return deep;
         if (crop[0] < deep.x0 || crop[2] < deep.y0 || crop[1] > deep.x0 + deep.width || crop[3] > deep.y0 + deep.height)
             throw InputError(request.deep_in, "", fmt::format("the deep file covers pixels [{}, {}) x [{}, {}), not the crop",
                                                               deep.x0, deep.x0 + deep.width, deep.y0, deep.y0 + deep.height));
@@ -204,7 +206,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             PhaseTimer t(stats, "write deep");
             write_deep(request.deep_out, gathered);
         }
-        result.deep = sub_window(gathered, frame_window(scene));
+        result.deep = scene.render.visibility.has_crop() ? sub_window(gathered, frame_window(scene)) : gathered;
         Materials materials(scene);
         DirectLighting lighting(scene, *accel);
         std::vector<Indirect> indirect;

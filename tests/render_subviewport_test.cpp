@@ -64,6 +64,23 @@ TEST(SubViewport, CropReshadeFromDeepAndCacheEqualsTheFullRender) {
     for (const char* layer : {"beauty", "indirect", "ao", "direct"}) expect_window_equal(f.result.image, crop.image, layer);
 }
 
+TEST(SubViewport, ADeepFileOfAWindowRendersThatWindowWithoutACrop) {
+    test::TempDir d;
+    RenderRequest req;
+    req.deep_out = d.file("w.deep.exr");
+    Stats s;
+    RenderResult first = render(cornell({"render.crop=[4,20,8,30]", "render.gi=\"none\""}), req, s, nullptr);
+    RenderRequest again;
+    again.deep_in = d.file("w.deep.exr");
+    RenderResult second = render(cornell({"render.gi=\"none\""}), again, s, nullptr);
+    EXPECT_EQ(second.image.x0, 4);
+    EXPECT_EQ(second.image.width, 16);
+    EXPECT_EQ(second.image.height, 22);
+    EXPECT_TRUE(second.image.find("beauty")->data == first.image.find("beauty")->data);
+    // A crop outside the file's window is refused, naming the window it has.
+    EXPECT_THROW(render(cornell({"render.gi=\"none\"", "render.crop=[0,10,0,10]"}), again, s, nullptr), InputError);
+}
+
 TEST(SubViewport, CropRegatherKeepsTheRestAndAFullReshadeHasNoMisses) {
     FullFrame f;
     RenderRequest req;
