@@ -80,6 +80,9 @@ TEST(BadInput, NegativeAndNanFlagsExitTwo) {
     refused(cmd + " --cache-out " + d.file("c.bic"), {"--cache-out", "--gi cache"});
     refused(cmd + " --cache-in " + d.file("c.bic"), {"--cache-in", "--gi cache"});
     refused("rendr x", {"unknown command", "did you mean \"render\""});
+    // A frame that cannot fit is refused up front with the estimate, not with std::bad_alloc.
+    refused("render " + test::cornell_scene() + " -o " + d.file("big.exr") + " -q --res 60000x60000",
+            {"camera.resolution", "needs about", "GiB"});
 }
 
 TEST(BadInput, SceneFilesThatLie) {
