@@ -1,5 +1,7 @@
 #include "bounce/cache/irradiance_cache.h"
 
+#include <cmath>
+
 namespace bounce {
 
 IrradianceCache::IrradianceCache(const Bounds& scene_bounds, CacheSettings settings, bool ao_only)
@@ -25,7 +27,7 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading)
     bool first = true;
     Color base(0);
     float base_ao = 0;
-    double de[3] = {0, 0, 0}, dao = 0, wsum = 0;
+    double de[3] = {0, 0, 0}, dao = 0, wsum = 0, lsum = 0, l2sum = 0;
     Vec3 bent(0);
     std::array<Vec3, 3> dir{};
     octree_.visit(p, [&](uint32_t id) {
@@ -46,6 +48,9 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading)
         if (first) base = ei, base_ao = ai, first = false;
         for (int c = 0; c < 3; ++c) de[c] += static_cast<double>(w) * (ei[c] - base[c]);
         dao += static_cast<double>(w) * (ai - base_ao);
+        const double l = ao_only_ ? ai : luminance(ei);
+        lsum += w * l;
+        l2sum += w * l * l;
         wsum += w;
         bent += r.bent * w;
         for (size_t c = 0; c < 3; ++c) dir[c] += r.dir[c] * w;
@@ -58,6 +63,9 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading)
     }
     for (int c = 0; c < 3; ++c) out.E[c] = base[c] + static_cast<float>(de[c] / wsum);
     out.ao = base_ao + static_cast<float>(dao / wsum);
+    const double mean = lsum / wsum, var = std::max(0.0, l2sum / wsum - mean * mean);
+    const double floor = ao_only_ ? 1e-3 : std::max<double>(luminance_floor_, 1e-12);
+    out.spread = static_cast<float>(std::sqrt(var) / std::max(mean, floor));
     auto inv = static_cast<float>(1 / wsum);
     for (size_t c = 0; c < 3; ++c) out.dir[c] = dir[c] * inv;
     out.bent = dot(bent, bent) > 0 ? normalize(bent) : n;

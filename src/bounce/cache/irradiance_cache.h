@@ -23,6 +23,9 @@ struct Interpolated {
     std::array<Vec3, 3> dir{};
     float weight = 0;  ///< sum of the weights (0 = no record applies)
     int records = 0;   ///< how many records contributed
+    /// How much the contributing records disagree at this point: the weighted standard
+    /// deviation of their extrapolated luminance (AO in AO mode) over the weighted mean.
+    float spread = 0;
 };
 
 class IrradianceCache {

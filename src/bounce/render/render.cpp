@@ -210,6 +210,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         Materials materials(scene);
         DirectLighting lighting(scene, *accel);
         std::vector<Indirect> indirect;
+        Refinement refinement;
         if (ind.gi == GiMode::Cache || !request.cache_in.empty()) {
             result.cache = std::make_unique<IrradianceCache>(scene.bounds(), scene.render.cache, ind.ao);
             PhaseTimer tl(stats, "cache read");
@@ -245,6 +246,15 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
                     };
                 }
                 gathering_pass(scene, gathered, gatherer, cache, stats, ps, after, request.frame);
+                if (scene.render.cache.refine > 0) {
+                    // A refined fragment's gather feeds that fragment only: no gradients needed.
+                    GatherSettings own = gs;
+                    own.record_terms = false;
+                    if (scene.render.cache.refine_rays > 0) own.rays = scene.render.cache.refine_rays;
+                    Gatherer refiner(scene, *accel, materials, lighting, radiosity.get(), own);
+                    PhaseTimer tr(stats, "refine");
+                    refinement = refinement_pass(scene, result.deep, refiner, cache, stats, ps);
+                }
                 result.records_new = cache.size() - result.records_loaded;
                 stats.set("records_loaded", static_cast<double>(result.records_loaded));
                 stats.set("records_new", static_cast<double>(result.records_new));
@@ -261,7 +271,8 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             PhaseTimer t(stats, "shading");
             if (ind.gi == GiMode::Cache) {
                 auto t0 = std::chrono::steady_clock::now();
-                indirect = shading_pass(scene, result.deep, *result.cache, stats, ps);
+                indirect = shading_pass(scene, result.deep, *result.cache, stats, ps,
+                                        refinement.refined.empty() ? nullptr : &refinement);
                 stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
             }
             result.image = shade(scene, result.deep, materials, lighting, ind.any() ? &indirect : nullptr, stats, ps);
@@ -271,6 +282,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             for (size_t i = 0; i < result.cache->size(); ++i) positions.push_back(result.cache->record(i).p);
             add_records_layer(result.image, scene.camera, positions);
         }
+        if (refinement.count > 0) add_fragment_mask_layer(result.image, result.deep, refinement.refined, "refined");
     });
     stats.set("pixels", static_cast<double>(result.deep.pixel_count()));
     if (result.deep.pixel_count() > 0)

@@ -195,6 +195,11 @@ ParamTable make_table() {
                        .doc("R_new <= R_j + |p_new - p_j| (Krivanek et al. 2006)").id(cache).flag());
     rows.push_back(row("radius_scale", "cache", &R::cache, &CacheSettings::radius_scale).range(0.01, 100)
                        .doc("R = radius_scale x d_min (TL04: 1/2)").id(cache).flag());
+    rows.push_back(row("refine", "cache", &R::cache, &CacheSettings::refine).range(0, 100)
+                       .doc("per-fragment refinement: a fragment whose covering records' extrapolated values spread "
+                            "(weighted relative standard deviation) above this gets a gather of its own; 0 = off").flag());
+    rows.push_back(row("refine_rays", "cache", &R::cache, &CacheSettings::refine_rays).range(0, 1 << 20).unit("rays")
+                       .doc("rays of a refined fragment's own gather; 0 = render.rays").flag());
     rows.push_back(row("shading_reach", "cache", &R::cache, &CacheSettings::shading_reach).range(1, 10)
                        .doc("the shading pass lets records reach this much farther (kappa / reach)").flag());
     // Shading.

@@ -24,4 +24,17 @@ void add_records_layer(Image& image, const Camera& camera, const std::vector<Vec
     }
 }
 
+void add_fragment_mask_layer(Image& image, const DeepBuffer& deep, const std::vector<uint8_t>& flags, const std::string& name) {
+    Layer& l = image.add_layer(name, {name + ".Y"});
+    for (int y = 0; y < deep.height; ++y)
+        for (int x = 0; x < deep.width; ++x) {
+            size_t first = deep.offsets[static_cast<size_t>(y) * deep.width + x];
+            float cover = 0;
+            auto frags = deep.pixel(x, y);
+            for (size_t k = 0; k < frags.size(); ++k)
+                if (flags[first + k]) cover += frags[k].weight;
+            *image.at(l, x, y) = cover;
+        }
+}
+
 }  // namespace bounce

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "bounce/core/image.h"
+#include "bounce/deep/deep_buffer.h"
 #include "bounce/scene/scene.h"
 
 namespace bounce {
@@ -11,5 +12,9 @@ namespace bounce {
 /// Adds a "records" layer: the beauty at half brightness with each record's position as a
 /// white 3x3 dot.
 void add_records_layer(Image& image, const Camera& camera, const std::vector<Vec3>& positions);
+
+/// Adds a one-channel layer `name` (`name.Y`): per pixel, the coverage of its fragments whose
+/// flag is set (e.g. the fragments refined with gathers of their own).
+void add_fragment_mask_layer(Image& image, const DeepBuffer& deep, const std::vector<uint8_t>& flags, const std::string& name);
 
 }  // namespace bounce

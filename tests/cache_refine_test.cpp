@@ -1,0 +1,78 @@
+// Per-fragment refinement: fragments whose records disagree get gathers of their own.
+#include <gtest/gtest.h>
+
+#include "bounce/cache/irradiance_cache.h"
+#include "bounce/render/render.h"
+#include "bounce/scene/scene_load.h"
+#include "test_util.h"
+
+namespace bounce {
+namespace {
+
+Scene cornell(std::vector<Override> extra) {
+    std::vector<Override> o = {"camera.resolution=[40,40]", "render.spp=1", "render.rays=64", "render.light_samples=4"};
+    o.insert(o.end(), extra.begin(), extra.end());
+    return load_scene(test::cornell_scene(), o);
+}
+
+TEST(Refine, SpreadIsTheWeightedRelativeDeviationOfTheRecords) {
+    IrradianceCache cache(Bounds{Vec3(-10), Vec3(10)}, CacheSettings{}, false);
+    cache.set_luminance_floor(1e-6f);
+    auto record = [](float x, float e) {
+        Record r;
+        r.p = {x, 0, 0};
+        r.n = {0, 0, 1};
+        r.E = Color(e);
+        r.radius = r.raw_radius = 10;
+        r.footprint = 1;
+        r.support = 20;
+        return r;
+    };
+    cache.insert_loaded(record(-0.5f, 1.0f));
+    cache.insert_loaded(record(0.5f, 3.0f));
+    Interpolated in = cache.lookup({0, 0, 0}, {0, 0, 1});
+    // Equal weights at the midpoint; gradients are zero: values 1 and 3, mean 2, deviation 1.
+    ASSERT_EQ(in.records, 2);
+    EXPECT_NEAR(in.spread, 0.5f, 1e-5f);
+    EXPECT_NEAR(luminance(in.E), 2.0f, 1e-5f);
+}
+
+TEST(Refine, RefinedFragmentsCarryTheirOwnGatherExactly) {
+    Stats s1, s2;
+    RenderResult brute = render(cornell({"render.gi=\"brute\""}), {}, s1, nullptr);
+    // A threshold this low refines every fragment whose records differ at all.
+    RenderResult refined = render(cornell({"render.gi=\"cache\"", "render.refine=1e-9"}), {}, s2, nullptr);
+    const Layer* mask = refined.image.find("refined");
+    ASSERT_NE(mask, nullptr);
+    const Layer& a = *brute.image.find("indirect");
+    const Layer& b = *refined.image.find("indirect");
+    size_t same = 0, full = 0;
+    for (int i = 0; i < 40 * 40; ++i) {
+        if (mask->data[static_cast<size_t>(i)] != 1.0f || refined.deep.pixel(i % 40, i / 40).size() != 1) continue;
+        ++full;
+        same += a.data[3 * static_cast<size_t>(i)] == b.data[3 * static_cast<size_t>(i)];
+    }
+    EXPECT_GT(full, 800u);
+    EXPECT_EQ(same, full);
+    EXPECT_GT(s2.to_json()["refined_fragments"].get<double>(), 800.0);
+    EXPECT_EQ(s2.to_json()["shading_misses"].get<double>(), 0.0);
+}
+
+TEST(Refine, OffChangesNothingAndTheDecisionDoesNotDependOnThreads) {
+    Stats s0, s1, s2, s3;
+    RenderResult plain = render(cornell({"render.gi=\"cache\""}), {}, s0, nullptr);
+    RenderResult off = render(cornell({"render.gi=\"cache\"", "render.refine=0"}), {}, s1, nullptr);
+    EXPECT_TRUE(plain.image.find("beauty")->data == off.image.find("beauty")->data);
+    EXPECT_EQ(off.image.find("refined"), nullptr);
+    RenderResult one = render(cornell({"render.gi=\"cache\"", "render.refine=0.05", "render.threads=1"}), {}, s2, nullptr);
+    RenderResult two = render(cornell({"render.gi=\"cache\"", "render.refine=0.05", "render.threads=2"}), {}, s3, nullptr);
+    ASSERT_NE(one.image.find("refined"), nullptr);
+    EXPECT_TRUE(one.image.find("refined")->data == two.image.find("refined")->data);
+    EXPECT_TRUE(one.image.find("indirect")->data == two.image.find("indirect")->data);
+    const double n = s2.to_json()["refined_fragments"].get<double>();
+    EXPECT_GT(n, 0.0);
+    EXPECT_LT(n, 40.0 * 40.0);
+}
+
+}  // namespace
+}  // namespace bounce
