@@ -48,7 +48,7 @@ Gatherer::Gatherer(const Scene& scene, const SceneAccel& accel, const Materials&
 Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray,
                              Counters& counters) const {
     bool front = dot(sp.ng, d) < 0;
-    if (radiosity_) return radiosity_->object(h.object).lookup(h.prim, h.u, h.v, front);
+    if (radiosity_) return radiosity_->lookup(h.object, h.prim, h.u, h.v, front, counters);
     Vec3 n = front ? sp.ng : -sp.ng;
     Color albedo = materials_.albedo(sp.material, sp.uv);
     RandomStream hit_rng(rng.bits(ray, kDimGather + 3), ray);

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <filesystem>
+#include <thread>
 
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
@@ -16,7 +17,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr int kRadiosityVersion = 1;
+constexpr int kRadiosityVersion = 2;  // 2: per-side "baked" flags (lazy bakes)
 
 /// Index of lattice point (i, j) (i + j <= n) in a triangle's block.
 inline uint32_t lattice_index(int i, int j, int n) {
@@ -92,46 +93,110 @@ size_t RadiosityTextures::lattice_points() const {
     return n;
 }
 
-RadiosityTextures RadiosityTextures::bake(const Scene& scene, const Materials& materials,
-                                          const DirectLighting& lighting, const RadiositySettings& settings,
-                                          Stats& stats, ProgressSink* sink) {
+struct RadiosityTextures::Sources {
+    const Scene* scene;
+    const Materials* materials;
+    const DirectLighting* lighting;
+    RadiositySettings settings;
+};
+
+RadiosityTextures::RadiosityTextures() = default;
+RadiosityTextures::~RadiosityTextures() = default;
+RadiosityTextures::RadiosityTextures(RadiosityTextures&&) noexcept = default;
+RadiosityTextures& RadiosityTextures::operator=(RadiosityTextures&&) noexcept = default;
+
+RadiosityTextures RadiosityTextures::lazy(const Scene& scene, const Materials& materials, const DirectLighting& lighting,
+                                          const RadiositySettings& settings) {
     RadiosityTextures rt;
     rt.texel_size_ = effective_texel(scene, settings);
     rt.fingerprint_ = fingerprint(scene, settings);
-    rt.maps_.resize(scene.objects.size());
-    size_t total_tris = 0;
+    rt.sources_ = std::make_unique<Sources>(Sources{&scene, &materials, &lighting, settings});
     for (size_t id = 0; id < scene.objects.size(); ++id) {
-        rt.maps_[id] = lay_out(scene.objects[id].coarse, rt.texel_size_, settings.max_level);
+        rt.maps_.push_back(lay_out(scene.objects[id].coarse, rt.texel_size_, settings.max_level));
+        const size_t n = 2 * scene.objects[id].coarse.triangle_count();
+        rt.state_.push_back(std::make_unique<std::atomic<uint8_t>[]>(n));
+        for (size_t i = 0; i < n; ++i) rt.state_.back()[i].store(0, std::memory_order_relaxed);
         rt.names_.push_back(scene.objects[id].name);
-        total_tris += scene.objects[id].coarse.triangle_count();
     }
+    return rt;
+}
+
+void RadiosityTextures::bake_side(uint32_t id, uint32_t t, bool front, Counters& counters) const {
+    const Sources& src = *sources_;
+    const TriangleMesh& m = src.scene->objects[id].coarse;
+    RadiosityMap& map = maps_[id];
+    const int n = map.level[t];
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i + j <= n; ++i) {
+            float u = static_cast<float>(i) / static_cast<float>(n), v = static_cast<float>(j) / static_cast<float>(n);
+            SurfacePoint sp = surface_point(m, t, u, v);
+            Color albedo = src.materials->albedo(sp.material, sp.uv) * kInvPi;
+            uint32_t k = map.offset[t] + lattice_index(i, j, n);
+            // Random numbers keyed by (object, triangle, point): the textures depend on the
+            // scene alone (renders with other seeds share them) and not on the bake order.
+            // Geometric normal: the value must not depend on which side's shading normal a hit
+            // happens to use.
+            if (front) {
+                RandomStream rng(0, (static_cast<uint64_t>(id) << 40) | (static_cast<uint64_t>(t) << 12), k);
+                map.front[k] = albedo * src.lighting->irradiance(sp.p, sp.ng, rng, src.settings.light_samples, counters);
+            } else {
+                RandomStream rng(1, (static_cast<uint64_t>(id) << 40) | t, k);
+                map.back[k] = albedo * src.lighting->irradiance(sp.p, -sp.ng, rng, src.settings.light_samples, counters);
+            }
+        }
+}
+
+void RadiosityTextures::ensure_baked(uint32_t id, uint32_t tri, bool front, Counters& counters) const {
+    std::atomic<uint8_t>& st = state_[id][2 * tri + (front ? 0 : 1)];
+    if (st.load(std::memory_order_acquire) == 2) return;
+    uint8_t expected = 0;
+    if (st.compare_exchange_strong(expected, 1, std::memory_order_acq_rel)) {
+        bake_side(id, tri, front, counters);
+        st.store(2, std::memory_order_release);
+        return;
+    }
+    while (st.load(std::memory_order_acquire) != 2) std::this_thread::yield();  // another thread bakes it
+}
+
+Color RadiosityTextures::lookup(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters) const {
+    ensure_baked(id, prim, front, counters);
+    return maps_[id].lookup(prim, u, v, front);
+}
+
+size_t RadiosityTextures::baked_sides() const {
+    size_t n = 0;
+    for (size_t id = 0; id < state_.size(); ++id)
+        for (size_t i = 0; i < 2 * maps_[id].level.size(); ++i) n += state_[id][i].load(std::memory_order_relaxed) == 2;
+    return n;
+}
+
+size_t RadiosityTextures::sides() const {
+    size_t n = 0;
+    for (const auto& m : maps_) n += 2 * m.level.size();
+    return n;
+}
+
+void RadiosityTextures::bake_all(Stats& stats, ProgressSink* sink) {
+    size_t total_tris = 0;
+    for (const auto& m : maps_) total_tris += m.level.size();
     Progress progress(sink, "radiosity", total_tris);
-    for (size_t id = 0; id < scene.objects.size(); ++id) {
-        const TriangleMesh& m = scene.objects[id].coarse;
-        RadiosityMap& map = rt.maps_[id];
-        parallel_ranges(size_t{0}, m.triangle_count(), size_t{64}, [&](size_t lo, size_t hi) {
+    for (size_t id = 0; id < maps_.size(); ++id) {
+        parallel_ranges(size_t{0}, maps_[id].level.size(), size_t{64}, [&](size_t lo, size_t hi) {
             Counters& counters = stats.local();
             for (size_t t = lo; t < hi; ++t) {
-                const int n = map.level[t];
-                for (int j = 0; j <= n; ++j)
-                    for (int i = 0; i + j <= n; ++i) {
-                        float u = static_cast<float>(i) / static_cast<float>(n), v = static_cast<float>(j) / static_cast<float>(n);
-                        SurfacePoint sp = surface_point(m, static_cast<uint32_t>(t), u, v);
-                        Color albedo = materials.albedo(sp.material, sp.uv) * kInvPi;
-                        uint32_t k = map.offset[t] + lattice_index(i, j, n);
-                        // A fixed seed: the textures depend on the scene alone, so renders with
-                        // different seeds share (and may reuse) them.
-                        RandomStream rng(0, (static_cast<uint64_t>(id) << 40) | (static_cast<uint64_t>(t) << 12), k);
-                        // Geometric normal: the baked value must not depend on which side's
-                        // shading normal a hit happens to use.
-                        map.front[k] = albedo * lighting.irradiance(sp.p, sp.ng, rng, settings.light_samples, counters);
-                        map.back[k] = albedo * lighting.irradiance(sp.p, -sp.ng, RandomStream(1, (static_cast<uint64_t>(id) << 40) | t, k),
-                                                                   settings.light_samples, counters);
-                    }
+                ensure_baked(static_cast<uint32_t>(id), static_cast<uint32_t>(t), true, counters);
+                ensure_baked(static_cast<uint32_t>(id), static_cast<uint32_t>(t), false, counters);
             }
             progress.add(hi - lo);
         });
     }
+}
+
+RadiosityTextures RadiosityTextures::bake(const Scene& scene, const Materials& materials,
+                                          const DirectLighting& lighting, const RadiositySettings& settings,
+                                          Stats& stats, ProgressSink* sink) {
+    RadiosityTextures rt = lazy(scene, materials, lighting, settings);
+    rt.bake_all(stats, sink);
     stats.set("radiosity_points", static_cast<double>(rt.lattice_points()));
     return rt;
 }
@@ -142,12 +207,13 @@ void RadiosityTextures::save(const std::string& dir) const {
     if (ec) throw InputError(dir, "", "cannot create radiosity texture folder: " + ec.message());
     for (size_t id = 0; id < maps_.size(); ++id) {
         const RadiosityMap& m = maps_[id];
-        // Texels in lattice order, 1024 wide: RGB front, RGB back.
+        // Texels in lattice order, 1024 wide: RGB front, RGB back, and whether each side of
+        // the point's triangle is baked (A = 1) or left for whoever loads the file.
         const int width = 1024;
         size_t count = m.front.size();
         int height = static_cast<int>((count + width - 1) / width);
-        OIIO::ImageSpec spec(width, std::max(1, height), 6, OIIO::TypeDesc::FLOAT);
-        spec.channelnames = {"front.R", "front.G", "front.B", "back.R", "back.G", "back.B"};
+        OIIO::ImageSpec spec(width, std::max(1, height), 8, OIIO::TypeDesc::FLOAT);
+        spec.channelnames = {"front.R", "front.G", "front.B", "back.R", "back.G", "back.B", "front.A", "back.A"};
         spec.attribute("compression", "zip");
         spec.attribute("bounce:radiosity_version", kRadiosityVersion);
         spec.attribute("bounce:fingerprint", fmt::format("{:016x}", fingerprint_));
@@ -155,9 +221,15 @@ void RadiosityTextures::save(const std::string& dir) const {
         spec.attribute("bounce:triangles", static_cast<int>(m.level.size()));
         spec.attribute("bounce:points", static_cast<int>(count));
         spec.attribute("bounce:texel_size", texel_size_);
-        std::vector<float> px(static_cast<size_t>(width) * std::max(1, height) * 6, 0.0f);
-        for (size_t k = 0; k < count; ++k)
-            for (int c = 0; c < 3; ++c) px[6 * k + c] = m.front[k][c], px[6 * k + 3 + c] = m.back[k][c];
+        std::vector<float> px(static_cast<size_t>(width) * std::max(1, height) * 8, 0.0f);
+        for (size_t t = 0; t < m.level.size(); ++t) {
+            const bool f = state_[id][2 * t].load(std::memory_order_acquire) == 2;
+            const bool b = state_[id][2 * t + 1].load(std::memory_order_acquire) == 2;
+            for (uint32_t k = m.offset[t]; k < m.offset[t] + lattice_count(m.level[t]); ++k) {
+                for (int c = 0; c < 3; ++c) px[8 * k + c] = f ? m.front[k][c] : 0, px[8 * k + 3 + c] = b ? m.back[k][c] : 0;
+                px[8 * k + 6] = f, px[8 * k + 7] = b;
+            }
+        }
         std::string path = (fs::path(dir) / file_name(id, names_[id])).string();
         write_atomically(path, [&](const std::string& tmp) {
             auto out = OIIO::ImageOutput::create("openexr");
@@ -168,10 +240,9 @@ void RadiosityTextures::save(const std::string& dir) const {
 }
 
 bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const RadiositySettings& settings,
-                             RadiosityTextures& out, std::string& why) {
-    RadiosityTextures rt;
-    rt.texel_size_ = effective_texel(scene, settings);
-    rt.fingerprint_ = fingerprint(scene, settings);
+                             const Materials& materials, const DirectLighting& lighting, RadiosityTextures& out,
+                             std::string& why) {
+    RadiosityTextures rt = lazy(scene, materials, lighting, settings);
     for (size_t id = 0; id < scene.objects.size(); ++id) {
         std::string path = (fs::path(dir) / file_name(id, scene.objects[id].name)).string();
         std::error_code ec;
@@ -182,35 +253,40 @@ bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const R
         auto in = OIIO::ImageInput::open(path);
         if (!in) throw InputError(path, "", "cannot read radiosity texture: " + OIIO::geterror());
         const OIIO::ImageSpec& spec = in->spec();
-        if (spec.get_int_attribute("bounce:radiosity_version", -1) != kRadiosityVersion)
-            throw InputError(path, "bounce:radiosity_version", "not a radiosity texture of this bounce version");
+        if (spec.get_int_attribute("bounce:radiosity_version", -1) != kRadiosityVersion) {
+            why = "textures were written by another version of bounce";
+            return false;
+        }
         if (spec.get_string_attribute("bounce:fingerprint") != fmt::format("{:016x}", rt.fingerprint_)) {
             why = "textures were baked for other geometry, materials, lights or settings";
             return false;
         }
-        RadiosityMap map = lay_out(scene.objects[id].coarse, rt.texel_size_, settings.max_level);
+        RadiosityMap& map = rt.maps_[id];
         const auto off = static_cast<uint32_t>(map.front.size());
-        if (spec.nchannels != 6 || spec.get_int_attribute("bounce:points", -1) != static_cast<int>(off) ||
+        if (spec.nchannels != 8 || spec.get_int_attribute("bounce:points", -1) != static_cast<int>(off) ||
             static_cast<size_t>(spec.width) * spec.height < off)
             throw InputError(path, "bounce:points", "texture size does not match the scene's triangles");
-        std::vector<float> px(static_cast<size_t>(spec.width) * spec.height * 6);
-        if (!in->read_image(0, 0, 0, 6, OIIO::TypeDesc::FLOAT, px.data()))
+        std::vector<float> px(static_cast<size_t>(spec.width) * spec.height * 8);
+        if (!in->read_image(0, 0, 0, 8, OIIO::TypeDesc::FLOAT, px.data()))
             throw InputError(path, "", "cannot read radiosity texture: " + in->geterror());
         // OpenEXR sorts channels by name: find ours.
-        int ch[6];
-        const char* names[6] = {"front.R", "front.G", "front.B", "back.R", "back.G", "back.B"};
-        for (int c = 0; c < 6; ++c) {
+        int ch[8];
+        const char* names[8] = {"front.R", "front.G", "front.B", "back.R", "back.G", "back.B", "front.A", "back.A"};
+        for (int c = 0; c < 8; ++c) {
             ch[c] = spec.channelindex(names[c]);
             if (ch[c] < 0) throw InputError(path, "channels", std::string("missing channel ") + names[c]);
         }
         for (size_t k = 0; k < off; ++k) {
-            map.front[k] = {px[6 * k + ch[0]], px[6 * k + ch[1]], px[6 * k + ch[2]]};
-            map.back[k] = {px[6 * k + ch[3]], px[6 * k + ch[4]], px[6 * k + ch[5]]};
+            map.front[k] = {px[8 * k + ch[0]], px[8 * k + ch[1]], px[8 * k + ch[2]]};
+            map.back[k] = {px[8 * k + ch[3]], px[8 * k + ch[4]], px[8 * k + ch[5]]};
             if (!isfinite(map.front[k]) || !isfinite(map.back[k]))
                 throw InputError(path, fmt::format("texel {}", k), "non-finite radiosity value");
         }
-        rt.maps_.push_back(std::move(map));
-        rt.names_.push_back(scene.objects[id].name);
+        for (size_t t = 0; t < map.level.size(); ++t) {  // a side is baked when its first point says so
+            const size_t k = map.offset[t];
+            if (px[8 * k + ch[6]] == 1) rt.state_[id][2 * t].store(2, std::memory_order_relaxed);
+            if (px[8 * k + ch[7]] == 1) rt.state_[id][2 * t + 1].store(2, std::memory_order_relaxed);
+        }
     }
     out = std::move(rt);
     return true;

@@ -12,6 +12,9 @@
 #include <string>
 #include <vector>
 
+#include <atomic>
+#include <memory>
+
 #include "bounce/accel/accel.h"
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
@@ -30,28 +33,59 @@ struct RadiosityMap {
     Color lookup(uint32_t prim, float u, float v, bool front_side) const;
 };
 
+/// Radiosity textures of every object. A triangle side's lattice is baked on the first lookup
+/// that needs it (lazily), or all at once by bake_all(); its values depend only on the scene
+/// (random numbers keyed by object, triangle and lattice point), so images never depend on
+/// which thread baked what first.
 class RadiosityTextures {
 public:
-    /// Bakes every object's radiosity (in parallel over triangles).
+    RadiosityTextures();
+    ~RadiosityTextures();
+    RadiosityTextures(RadiosityTextures&&) noexcept;
+    RadiosityTextures& operator=(RadiosityTextures&&) noexcept;
+
+    /// Lays out every object's lattices; nothing is baked yet. `materials` and `lighting` must
+    /// outlive the textures' lookups.
+    static RadiosityTextures lazy(const Scene& scene, const Materials& materials, const DirectLighting& lighting,
+                                  const RadiositySettings& settings);
+    /// Lays out and bakes every lattice (in parallel over triangles).
     static RadiosityTextures bake(const Scene& scene, const Materials& materials,
                                   const DirectLighting& lighting, const RadiositySettings& settings,
                                   Stats& stats, ProgressSink* progress);
-    /// Writes one EXR per object into `dir` (created if needed), atomically.
+    /// Bakes every side not baked yet (needs the lazy sources).
+    void bake_all(Stats& stats, ProgressSink* progress);
+    /// Writes one EXR per object into `dir` (created if needed), atomically; sides not baked
+    /// are marked so and baked by whoever loads them.
     void save(const std::string& dir) const;
     /// Loads textures baked for exactly this scene, lights and settings; returns false (with
     /// `why`) if any file is missing or was baked for something else. Corrupt files throw.
+    /// Sides the files do not hold are baked lazily from `materials` and `lighting`.
     static bool load(const std::string& dir, const Scene& scene, const RadiositySettings& settings,
-                     RadiosityTextures& out, std::string& why);
+                     const Materials& materials, const DirectLighting& lighting, RadiosityTextures& out,
+                     std::string& why);
 
     /// Hash of what the bake depends on: geometry, materials, lights, settings.
     static uint64_t fingerprint(const Scene& scene, const RadiositySettings& settings);
 
+    /// Radiosity of object `id` at barycentrics (u, v) of triangle `prim`, on side `front`;
+    /// bakes that side first if needed (its shadow rays count in `counters`).
+    Color lookup(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters) const;
+    /// The baked map of object `id` (only the sides baked so far hold values).
     const RadiosityMap& object(uint32_t id) const { return maps_[id]; }
     size_t lattice_points() const;
+    /// Triangle sides baked so far, and in all.
+    size_t baked_sides() const;
+    size_t sides() const;
 
 private:
-    std::vector<RadiosityMap> maps_;
+    struct Sources;
+    void bake_side(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
+    void ensure_baked(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
+
+    mutable std::vector<RadiosityMap> maps_;  ///< values written once per side, under its state flag
+    std::vector<std::unique_ptr<std::atomic<uint8_t>[]>> state_;  ///< per object, 2 per triangle: 0 new, 1 baking, 2 baked
     std::vector<std::string> names_;
+    std::unique_ptr<Sources> sources_;
     uint64_t fingerprint_ = 0;
     float texel_size_ = 0;
 };

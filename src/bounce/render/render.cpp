@@ -58,7 +58,7 @@ double available_bytes() {
 }
 
 /// Radiosity textures for the gather: loaded from the folder when they match the scene,
-/// otherwise baked (and saved there if a folder was named).
+/// otherwise laid out to be baked lazily, triangle side by side, as gather rays hit them.
 std::unique_ptr<RadiosityTextures> radiosity_for(const Scene& scene, const Materials& materials,
                                                  const DirectLighting& lighting, Stats& stats, ProgressSink* progress) {
     const RadiositySettings& settings = scene.render.radiosity;
@@ -66,23 +66,26 @@ std::unique_ptr<RadiosityTextures> radiosity_for(const Scene& scene, const Mater
     if (!settings.folder.empty()) {
         PhaseTimer t(stats, "radiosity load");
         std::string why;
-        if (RadiosityTextures::load(settings.folder, scene, settings, *rt, why)) {
+        if (RadiosityTextures::load(settings.folder, scene, settings, materials, lighting, *rt, why)) {
             stats.set("radiosity_reused", 1);
             return rt;
         }
         if (progress)
             std::fprintf(stderr, "radiosity textures in %s not reused: %s; baking\n", settings.folder.c_str(), why.c_str());
     }
-    {
-        PhaseTimer t(stats, "radiosity bake");
-        *rt = RadiosityTextures::bake(scene, materials, lighting, settings, stats, progress);
-    }
-    if (!settings.folder.empty()) {
-        PhaseTimer t(stats, "radiosity save");
-        rt->save(settings.folder);
-    }
+    *rt = RadiosityTextures::lazy(scene, materials, lighting, settings);
     stats.set("radiosity_reused", 0);
     return rt;
+}
+
+/// Saves the textures when this render baked sides the folder did not hold.
+void save_radiosity(const RadiosityTextures& rt, size_t baked_before, const Scene& scene, Stats& stats) {
+    const size_t baked = rt.baked_sides();
+    stats.set("radiosity_sides_baked", static_cast<double>(baked - baked_before));
+    stats.set("radiosity_sides", static_cast<double>(rt.sides()));
+    if (scene.render.radiosity.folder.empty() || baked == baked_before) return;
+    PhaseTimer t(stats, "radiosity save");
+    rt.save(scene.render.radiosity.folder);
 }
 
 /// Forwards progress to the caller's sink (if any) and carries the request's cancel token.
@@ -225,6 +228,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             gs.cancel = request.cancel;
             std::unique_ptr<RadiosityTextures> radiosity;
             if (scene.render.radiosity.enabled && !gs.ao) radiosity = radiosity_for(scene, materials, lighting, stats, ps);
+            const size_t baked_before = radiosity ? radiosity->baked_sides() : 0;
             Gatherer gatherer(scene, *accel, materials, lighting, radiosity.get(), gs);
             uint64_t rays_before = stats.total().gather_rays;
             PhaseTimer t(stats, "gather");
@@ -264,6 +268,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
                 stats.set("rays_per_gather", gatherer.grid().rays());
             }
             double secs = t.stop();
+            if (radiosity) save_radiosity(*radiosity, baked_before, scene, stats);
             uint64_t rays = stats.total().gather_rays - rays_before;
             stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
         }
