@@ -19,6 +19,7 @@ struct Counters {
     uint64_t gather_rays = 0;
     uint64_t fragments_shaded = 0;
     uint64_t lock_wait_ns = 0;  ///< time spent waiting for the cache's reader-writer lock
+    uint64_t radiosity_bake_ns = 0;  ///< time spent baking radiosity texture sides (lazily, inside gathers)
     Counters& operator+=(const Counters& o);
 };
 

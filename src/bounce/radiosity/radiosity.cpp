@@ -3,6 +3,7 @@
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
+#include <chrono>
 #include <filesystem>
 #include <thread>
 
@@ -151,8 +152,11 @@ void RadiosityTextures::ensure_baked(uint32_t id, uint32_t tri, bool front, Coun
     if (st.load(std::memory_order_acquire) == 2) return;
     uint8_t expected = 0;
     if (st.compare_exchange_strong(expected, 1, std::memory_order_acq_rel)) {
+        const auto t0 = std::chrono::steady_clock::now();
         bake_side(id, tri, front, counters);
         st.store(2, std::memory_order_release);
+        counters.radiosity_bake_ns += static_cast<uint64_t>(
+            std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
         return;
     }
     while (st.load(std::memory_order_acquire) != 2) std::this_thread::yield();  // another thread bakes it
