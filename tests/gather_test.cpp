@@ -275,3 +275,47 @@ TEST(Radiosity, LazyBakesEqualTheEagerBakeInAnyOrderAndPartialSavesResume) {
 
 }  // namespace
 }  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(Gather, NoiseEstimateMatchesTheSpreadOfIndependentGathers) {
+    Rig rig(load_scene(test::cornell_scene()), true);
+    for (bool ao : {false, true}) {
+        GatherSettings gs;
+        gs.rays = 256;
+        gs.ao = ao;
+        gs.ao_distance = ao ? 200.0f : 0.0f;
+        Gatherer g(rig.scene, rig.accel, rig.materials, rig.lighting, rig.radiosity.get(), gs);
+        // A floor point near the tall block: light and occlusion vary across the hemisphere.
+        const Vec3 p{300, 0.5f, 300}, n{0, 1, 0};
+        double sum = 0, sum2 = 0, est = 0;
+        const int trials = 200;
+        Counters c;
+        for (int i = 0; i < trials; ++i) {
+            GatherResult r = g.gather(p, n, RandomStream(11, static_cast<uint64_t>(i)), c);
+            const double v = ao ? r.ao : luminance(r.irradiance);
+            sum += v;
+            sum2 += v * v;
+            est += r.rel_stderr;
+        }
+        const double mean = sum / trials, rel = std::sqrt(std::max(0.0, sum2 / trials - mean * mean)) / mean;
+        est /= trials;
+        EXPECT_GT(rel, 0.0) << ao;
+        // Adjacent-strata differences overestimate a little where the integrand has gradients.
+        EXPECT_GT(est, 0.5 * rel) << ao << " estimated " << est << " measured " << rel;
+        EXPECT_LT(est, 3.0 * rel) << ao << " estimated " << est << " measured " << rel;
+    }
+    // A constant sky over an open plane: no variance, none estimated.
+    nlohmann::json j = test::base_scene();
+    j["lights"] = {{{"type", "sky"}, {"color", 1.0}}};
+    Rig open(test::scene_from(j));
+    GatherSettings gs;
+    gs.rays = 64;
+    Gatherer g(open.scene, open.accel, open.materials, open.lighting, nullptr, gs);
+    Counters c;
+    EXPECT_EQ(g.gather({0, 0.01f, 0}, {0, 1, 0}, RandomStream(1, 2), c).rel_stderr, 0.0f);
+}
+
+}  // namespace
+}  // namespace bounce

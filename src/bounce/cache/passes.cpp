@@ -50,7 +50,8 @@ Lock lock_cache(const IrradianceCache& cache, Counters& counters) {
 }  // namespace
 
 void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, IrradianceCache& cache,
-                    Stats& stats, ProgressSink* sink, const SubPassCallback& after_subpass, int frame) {
+                    Stats& stats, ProgressSink* sink, const SubPassCallback& after_subpass, int frame, const Gatherer* first) {
+    tbb::enumerable_thread_specific<size_t> full_gathers(0);
     const auto schedule = subpass_schedule(static_cast<int>(cache.settings().max_spacing));
     const bool per_tile = scene.render.parallel.cache_sharing == CacheSharing::PerThread;
     const auto tiles = make_tiles(deep.width, deep.height, scene.render.parallel.tile_size, scene.render.parallel.tile_order);
@@ -76,8 +77,12 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
                         const Fragment& f = frags[k];
                         if (!cache.misses(f.p_base, f.n_base, per_tile ? std::span<const Record>(out)
                                                                        : std::span<const Record>())) continue;
-                        GatherResult g = gatherer.gather(
-                            f.p, f.n_base, fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), counters);
+                        const RandomStream rng = fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k);
+                        GatherResult g = first ? first->gather(f.p, f.n_base, rng, counters) : GatherResult{};
+                        if (!first || g.rel_stderr > cache.settings().ray_noise) {
+                            g = gatherer.gather(f.p, f.n_base, rng, counters);
+                            ++full_gathers.local();
+                        }
                         Record r = cache.make_record(g, f.p_base, f.n_base, f.footprint, candidate_key(deep, wx, wy, k));
                         r.frame = frame;
                         if (per_tile) {
@@ -118,6 +123,12 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
     }
     stats.set("records", static_cast<double>(cache.size()));
     stats.set("record_gathers", static_cast<double>(gathered));
+    if (first) {
+        size_t full = 0;
+        for (size_t n : full_gathers) full += n;
+        stats.set("record_gathers_full_rays", static_cast<double>(full));
+        stats.set("record_first_rays", static_cast<double>(first->grid().rays()));
+    }
     stats.set("records_dropped", static_cast<double>(dropped));
     stats.set("subpasses", static_cast<double>(schedule.size()));
     stats.set("rays_per_gather", gathered ? static_cast<double>(stats.total().gather_rays) / static_cast<double>(gathered) : 0.0);

@@ -37,9 +37,11 @@ using SubPassCallback = std::function<void(const SubPass&, size_t index, size_t 
 /// Within a sub-pass every lookup sees the cache as it was when the sub-pass began; new
 /// records are inserted in pixel order, dropping those the earlier ones already cover, so the
 /// cache does not depend on thread count or scheduling.
+/// With `first` (CacheSettings::min_rays), a record gathers with it first and with `gatherer`
+/// only when that estimate's relative standard error exceeds CacheSettings::ray_noise.
 void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
                     IrradianceCache& cache, Stats& stats, ProgressSink* progress,
-                    const SubPassCallback& after_subpass = {}, int frame = 0);
+                    const SubPassCallback& after_subpass = {}, int frame = 0, const Gatherer* first = nullptr);
 
 /// Per-fragment refinement (CacheSettings::refine): fragments where interpolation cannot be
 /// trusted, with the light of their own gathers. Such a gather is used by its fragment only;

@@ -133,6 +133,24 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
     res.bent_normal = dot(sum_u_dir, sum_u_dir) > 0 ? normalize(sum_u_dir) : n;
     for (int ch = 0; ch < 3; ++ch) res.light_dir[static_cast<size_t>(ch)] = sum_dir[static_cast<size_t>(ch)] * w;
     res.harmonic_distance = inv_r_sum > 0 ? static_cast<float>(S / inv_r_sum) : INFINITY;
+    {
+        double d2 = 0;
+        int pairs = 0;
+        for (int j = 0; j < M; ++j)
+            for (int k = 0; k + 1 < N; k += 2) {
+                const auto a = static_cast<size_t>(j * N + k), b = a + 1;
+                const double d = settings_.ao ? U[a] - U[b] : luminance(L[a]) - luminance(L[b]);
+                d2 += d * d;
+                ++pairs;
+            }
+        if (pairs > 0) {
+            // AO is a mean (1/S), irradiance pi/S times a sum; scale to all S/2 pairs.
+            const double scale = settings_.ao ? 1.0 / S : static_cast<double>(w);
+            const double var = scale * scale * d2 * (0.5 * S / pairs);
+            const double value = settings_.ao ? res.ao : luminance(res.irradiance);
+            res.rel_stderr = static_cast<float>(std::sqrt(var) / std::max(value, 1e-12));
+        }
+    }
     if (!settings_.record_terms) return res;
 
     // Rotational gradient (cell-centre angles): (pi/S) sum_k t(phi_k) sum_j tan(theta_j) L_jk.

@@ -51,6 +51,10 @@ struct GatherResult {
     std::array<Vec3, 3> grad_trans{};   ///< dE_c/dx
     Vec3 ao_grad_rot{0}, ao_grad_trans{0};
     int rays = 0;
+    /// Estimated relative standard error of the irradiance's luminance (AO in AO mode), from
+    /// the differences of azimuthally adjacent cells: each pair's squared difference estimates
+    /// the two strata's variance, Var(E) ~ (pi/S)^2 sum_pairs d^2.
+    float rel_stderr = 0;
 };
 
 /// Gathers at `p` (on the fine surface) over the hemisphere of unit normal `n`.

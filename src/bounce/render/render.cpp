@@ -249,7 +249,13 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
                         request.preview(shade(scene, d, materials, lighting, &pre, stats, nullptr, &direct));
                     };
                 }
-                gathering_pass(scene, gathered, gatherer, cache, stats, ps, after, request.frame);
+                std::unique_ptr<Gatherer> first;
+                if (scene.render.cache.min_rays > 0 && scene.render.cache.min_rays < gs.rays) {
+                    GatherSettings fs = gs;
+                    fs.rays = scene.render.cache.min_rays;
+                    first = std::make_unique<Gatherer>(scene, *accel, materials, lighting, radiosity.get(), fs);
+                }
+                gathering_pass(scene, gathered, gatherer, cache, stats, ps, after, request.frame, first.get());
                 if (scene.render.cache.refine > 0) {
                     // A refined fragment's gather feeds that fragment only: no gradients needed.
                     GatherSettings own = gs;

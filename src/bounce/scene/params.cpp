@@ -195,6 +195,12 @@ ParamTable make_table() {
                        .doc("R_new <= R_j + |p_new - p_j| (Krivanek et al. 2006)").id(cache).flag());
     rows.push_back(row("radius_scale", "cache", &R::cache, &CacheSettings::radius_scale).range(0.01, 100)
                        .doc("R = radius_scale x d_min (TL04: 1/2)").id(cache).flag());
+    rows.push_back(row("min_rays", "cache", &R::cache, &CacheSettings::min_rays).range(0, 1 << 20).unit("rays")
+                       .doc("adaptive records: a record first gathers this many rays and gathers render.rays only when "
+                            "that estimate is noisier than ray_noise; 0 = every record gathers render.rays").id(cache).flag());
+    rows.push_back(row("ray_noise", "cache", &R::cache, &CacheSettings::ray_noise).range(1e-4, 10)
+                       .doc("relative standard error (estimated from the gather's strata) at which a record's first "
+                            "gather is kept").id(cache).flag());
     rows.push_back(row("refine", "cache", &R::cache, &CacheSettings::refine).range(0, 100)
                        .doc("per-fragment refinement: a fragment whose covering records' extrapolated values spread "
                             "(weighted relative standard deviation) above this gets a gather of its own; 0 = off").flag());

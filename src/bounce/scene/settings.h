@@ -65,6 +65,8 @@ struct CacheSettings {
     bool neighbour_clamp = true;  ///< R_new <= R_j + |p_new - p_j| (Krivanek et al. 2006)
     float shading_reach = 1.0f;   ///< the shading pass lets records reach this much farther (>= 1)
     float radius_scale = 0.5f;    ///< R = radius_scale * d_min (TL04: 1/2)
+    int min_rays = 0;             ///< a record's first gather; more (render.rays) only if noisier than ray_noise; 0 = off
+    float ray_noise = 0.02f;      ///< relative standard error a record's first gather must reach to stop there
     float refine = 0;             ///< a fragment whose records disagree by more than this gets its own gather; 0 = off
     int refine_rays = 0;          ///< rays of such a gather; 0 = the gather's rays
     /// The settings the shading pass interpolates with.
