@@ -29,9 +29,9 @@ const Field kFields[] = {
     {"bent", "f32", 3},      {"dir", "f32", 9},       {"grad_r", "f32", 9},     {"grad_t", "f32", 9},
     {"ao_grad_r", "f32", 3}, {"ao_grad_t", "f32", 3}, {"radius", "f32", 1},     {"raw_radius", "f32", 1},
     {"footprint", "f32", 1}, {"harmonic", "f32", 1},  {"dmin", "f32", 1},       {"weber", "f32", 1},
-    {"key", "u64", 1},       {"rays", "u32", 1},      {"frame", "i32", 1},
+    {"radius_long", "f32", 1}, {"axis", "f32", 3},    {"key", "u64", 1},       {"rays", "u32", 1},      {"frame", "i32", 1},
 };
-constexpr size_t kFloats = 3 + 3 + 3 + 1 + 3 + 9 + 9 + 9 + 3 + 3 + 6;
+constexpr size_t kFloats = 3 + 3 + 3 + 1 + 3 + 9 + 9 + 9 + 3 + 3 + 6 + 4;
 constexpr size_t kRecordBytes = kFloats * 4 + 8 + 4 + 4;
 
 uint64_t fnv1a(const char* data, size_t n) {
@@ -57,6 +57,7 @@ void write_record(std::string& out, const Record& r) {
     put_vec(out, r.ao_grad_r), put_vec(out, r.ao_grad_t);
     put(out, r.radius), put(out, r.raw_radius), put(out, r.footprint), put(out, r.harmonic), put(out, r.dmin),
         put(out, r.weber);
+    put(out, r.radius_long), put_vec(out, r.axis);
     put(out, r.key), put(out, r.rays), put(out, r.frame);
 }
 
@@ -105,6 +106,7 @@ Record read_record(Cursor& c) {
     r.radius = c.get<float>("radius"), r.raw_radius = c.get<float>("raw_radius");
     r.footprint = c.get<float>("footprint"), r.harmonic = c.get<float>("harmonic"), r.dmin = c.get<float>("dmin");
     r.weber = c.get<float>("weber");
+    r.radius_long = c.get<float>("radius_long"), r.axis = c.vec("axis");
     r.key = c.get<uint64_t>("key"), r.rays = c.get<uint32_t>("rays"), r.frame = c.get<int32_t>("frame");
     return r;
 }
@@ -129,6 +131,9 @@ const char* record_problem(const Record& r) {
     if (!(r.radius > 0) || !(r.radius <= kMaxCoordinate) || !(r.footprint > 0) || !(r.footprint <= kMaxCoordinate))
         return "radius or footprint not in (0, 1e18]";
     if (std::abs(length(r.n) - 1) > 1e-3f) return "normal is not unit length";
+    if (!(r.radius_long == 0 || (r.radius_long >= r.radius && r.radius_long <= kMaxCoordinate)))
+        return "long radius is neither 0 nor in [radius, 1e18]";
+    if (!isfinite(r.axis) || (r.radius_long > 0 && std::abs(length(r.axis) - 1) > 1e-3f)) return "axis is not a unit vector";
     if (r.weber <= 0 || std::isnan(r.weber)) return "gradient-limit distance is not positive";
     return nullptr;
 }

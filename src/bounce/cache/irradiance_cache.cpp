@@ -94,6 +94,13 @@ Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const 
     r.raw_radius = settings_.metric == Metric::Ward ? g.harmonic_distance : settings_.radius_scale * g.min_distance;
     const float rmin = settings_.min_spacing * footprint, rmax = settings_.max_spacing * footprint;
     r.radius = std::clamp(r.raw_radius, rmin, rmax);
+    if (settings_.metric == Metric::Hessian) {
+        // Radii where the second-order change reaches hessian_error: e = lambda r^2 / 2.
+        auto radius_for = [&](float lambda) { return lambda > 0 ? std::sqrt(2 * settings_.hessian_error / lambda) : INFINITY; };
+        r.raw_radius = radius_for(g.hess_fast);
+        r.radius = std::clamp(r.raw_radius, rmin, rmax);
+        set_long_radius(r, radius_for(g.hess_slow), g.hess_axis);
+    }
     // Weber's law: the distance at which the gradient-extrapolated change reaches tau times
     // the record's value (luminance, or AO), never below the minimum spacing.
     if (settings_.gradient_limit > 0) {
@@ -132,6 +139,14 @@ void IrradianceCache::clamp_to_neighbours(Record& r, std::span<const Record> ext
     for (const Record& o : extra) limit(o);
     r.raw_radius = raw;
     r.radius = std::clamp(raw, settings_.min_spacing * r.footprint, settings_.max_spacing * r.footprint);
+    if (r.radius_long > 0) set_long_radius(r, r.radius_long, r.axis);
+}
+
+void IrradianceCache::set_long_radius(Record& r, float wanted, const Vec3& axis) const {
+    const float cap = std::min(settings_.max_anisotropy * r.radius, settings_.max_spacing * r.footprint);
+    r.radius_long = std::clamp(wanted, r.radius, std::max(r.radius, cap));
+    r.axis = r.radius_long > r.radius ? axis : Vec3(0);
+    if (r.radius_long <= r.radius) r.radius_long = 0;
 }
 
 uint32_t IrradianceCache::insert(Record r) {

@@ -54,6 +54,9 @@ public:
     /// over this cache's records and `extra` whose reach includes p_r; then the screen-space
     /// clamps again. A no-op when the setting is off.
     void clamp_to_neighbours(Record& r, std::span<const Record> extra = {}) const;
+    /// Hessian records: the long radius along `axis`, between the short radius and
+    /// max_anisotropy times it (and the maximum spacing); round (0) when it is not longer.
+    void set_long_radius(Record& r, float wanted, const Vec3& axis) const;
     /// Distance beyond which `r` has no weight in any lookup of this cache (Record::support).
     float support(const Record& r) const { return record_support(r, shading_settings_); }
     /// Inserts (not thread-safe: hold mutex() exclusively while others may read); applies

@@ -10,7 +10,13 @@ MetricTerms metric_terms(const Record& r, const Vec3& p, const Vec3& n, const Ca
     // Behind test (Ward, tolerance relative to the radius): p lies in front of the record's
     // tangent plane by more than 5% of R and so sees geometry the record did not.
     m.behind = ndot <= 0 || dot(d, n + r.n) * 0.5f < -0.05f * r.radius;
-    m.position = dist / r.radius;
+    if (r.radius_long > r.radius) {  // an ellipse: the long radius along the axis
+        const float along = dot(d, r.axis);
+        m.position = std::sqrt(std::max(0.0f, dist * dist - along * along) / (r.radius * r.radius) +
+                               along * along / (r.radius_long * r.radius_long));
+    } else {
+        m.position = dist / r.radius;
+    }
     float cos_max = std::cos(s.max_angle * kPi / 180.0f);
     m.normal = std::sqrt(std::max(0.0f, 1 - ndot)) / std::sqrt(1 - cos_max);
     m.gradient = std::isfinite(r.weber) ? dist / r.weber : 0.0f;
@@ -34,7 +40,7 @@ float record_weight(const Record& r, const Vec3& p, const Vec3& n, const CacheSe
 
 float record_support(const Record& r, const CacheSettings& s) {
     if (s.metric == Metric::Ward) return s.accuracy * r.radius;
-    return std::min(r.radius, r.weber) / s.quality;
+    return std::min(std::max(r.radius, r.radius_long), r.weber) / s.quality;
 }
 
 }  // namespace bounce

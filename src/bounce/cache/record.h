@@ -20,7 +20,9 @@ struct Record {
     std::array<Vec3, 3> dir{};   ///< per-channel light directions (unnormalised, see gather.h)
     std::array<Vec3, 3> grad_r{}, grad_t{};  ///< irradiance gradients per channel
     Vec3 ao_grad_r{0}, ao_grad_t{0};
-    float radius = 0;            ///< validity radius R_i (world), after all clamps
+    float radius = 0;            ///< validity radius R_i (world), after all clamps; hessian: the short one
+    float radius_long = 0;       ///< hessian: the radius along `axis` (>= radius); 0 = round
+    Vec3 axis{0};                ///< hessian: unit tangent direction of the long radius
     float raw_radius = 0;        ///< radius before the screen-space clamps (neighbour clamping)
     float footprint = 0;         ///< world width of a pixel at p
     float harmonic = 0, dmin = 0;  ///< gather distances (harmonic mean, qualifying minimum)

@@ -1,5 +1,7 @@
 #include "bounce/gather/gather.h"
 
+#include "bounce/gather/hessian.h"
+
 #include <vector>
 
 #include "bounce/core/sampling.h"
@@ -43,7 +45,8 @@ Gatherer::Gatherer(const Scene& scene, const SceneAccel& accel, const Materials&
       settings_(settings),
       grid_(gather_grid(settings.rays)),
       cos_concave_(std::cos(settings.concave_angle * kPi / 180.0f)),
-      packet_order_(gather_packet_order(grid_)) {}
+      packet_order_(gather_packet_order(grid_)),
+      far_(10 * std::max(1e-6f, length(scene.bounds().diagonal()))) {}
 
 Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray,
                              Counters& counters) const {
@@ -152,6 +155,31 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
         }
     }
     if (!settings_.record_terms) return res;
+    if (settings_.hessian) {
+        // Relative values (Radiance's normalisation: 0.99 of the mean plus 0.01, so that a dark
+        // hemisphere still has a geometric Hessian).
+        thread_local std::vector<Vec3> pts;
+        thread_local std::vector<double> vals;
+        thread_local std::vector<float> dist;
+        double total = 0;
+        for (size_t c = 0; c < static_cast<size_t>(S); ++c) total += settings_.ao ? U[c] : luminance(L[c]);
+        const double scale = total > 1e-20 ? 0.99 * S / total : 0.0, floor = total > 1e-20 ? 0.01 : 1.0;
+        // The mesh of every `stride`-th row and column, at most ~2048 vertices: its cost grows
+        // with the mesh, but a coarser mesh misses curvature (at 1024 rays a stride of 2 gave
+        // Sponza 9 % fewer records and 3.68 % error instead of 3.03 %).
+        const int stride = std::max(1, static_cast<int>(std::sqrt(S / 2048.0) + 0.999));
+        const int hm = (M + stride - 1) / stride, hn = N / stride;
+        pts.resize(static_cast<size_t>(hm * hn)), vals.resize(pts.size()), dist.resize(pts.size());
+        for (int j = 0; j < hm; ++j)
+            for (int k = 0; k < hn; ++k) {
+                const auto c = static_cast<size_t>(j * stride * N + k * stride), h = static_cast<size_t>(j * hn + k);
+                dist[h] = std::min(R[c], far_);
+                pts[h] = p + D[c] * dist[h];
+                vals[h] = (settings_.ao ? U[c] : luminance(L[c])) * scale + floor;
+            }
+        TangentHessian th = gather_hessian(p, n, hm, hn, pts, vals, dist);
+        res.hess_axis = th.axis, res.hess_slow = th.slow, res.hess_fast = th.fast;
+    }
 
     // Rotational gradient (cell-centre angles): (pi/S) sum_k t(phi_k) sum_j tan(theta_j) L_jk.
     // Translational gradient: Ward-Heckbert over cell boundaries with min distances

@@ -23,6 +23,7 @@ struct GatherSettings : IndirectSettings {
     bool record_terms = true;    ///< distances and gradients (what a cache record needs); brute
                                  ///< force turns them off and gathers only E, AO and directions
     const CancelToken* cancel = nullptr;  ///< checked once per gather
+    bool hessian = false;        ///< also the irradiance Hessian (record_terms only)
 };
 
 /// The stratification used for `rays`.
@@ -55,6 +56,9 @@ struct GatherResult {
     /// the differences of azimuthally adjacent cells: each pair's squared difference estimates
     /// the two strata's variance, Var(E) ~ (pi/S)^2 sum_pairs d^2.
     float rel_stderr = 0;
+    /// With GatherSettings::hessian: the tangent Hessian of relative irradiance (hessian.h).
+    Vec3 hess_axis{0};
+    float hess_slow = 0, hess_fast = 0;
 };
 
 /// Gathers at `p` (on the fine surface) over the hemisphere of unit normal `n`.
@@ -82,6 +86,7 @@ private:
     GatherGrid grid_;
     float cos_concave_;
     std::vector<uint32_t> packet_order_;  ///< grid cells in 4x4 blocks: coherent packets of 16
+    float far_;  ///< where a ray that leaves the scene is taken to end, for the Hessian's mesh
 };
 
 }  // namespace bounce

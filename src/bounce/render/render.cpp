@@ -225,6 +225,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         if (ind.any()) {
             GatherSettings gs = gather_settings(scene);
             gs.record_terms = ind.gi == GiMode::Cache;  // brute force needs no gradients
+            gs.hessian = gs.record_terms && scene.render.cache.metric == Metric::Hessian;
             gs.cancel = request.cancel;
             std::unique_ptr<RadiosityTextures> radiosity;
             if (scene.render.radiosity.enabled && !gs.ao) radiosity = radiosity_for(scene, materials, lighting, stats, ps);

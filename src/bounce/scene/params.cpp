@@ -173,8 +173,9 @@ ParamTable make_table() {
     rows.push_back(row("concave_angle", "gather", &R::indirect, &IndirectSettings::concave_angle).range(0, 90).unit("degrees")
                        .doc("a gather ray this far from the normal at both ends does not shrink the record radius (TL04)").id(cache).flag());
     // The irradiance cache.
-    rows.push_back(row("metric", "cache", &R::cache, &CacheSettings::metric).choices({"tl04", "ward"})
-                       .doc("record error metric: tl04 (normalised, bounded) or ward (1/x, accuracy a)").id(cache).flag());
+    rows.push_back(row("metric", "cache", &R::cache, &CacheSettings::metric).choices({"tl04", "ward", "hessian"})
+                       .doc("record error metric: tl04 (normalised, bounded), ward (1/x, accuracy a) or hessian "
+                            "(elliptical records sized by the gather's irradiance Hessian)").id(cache).flag());
     rows.push_back(row("min_spacing", "cache", &R::cache, &CacheSettings::min_spacing).range(0.1, 4096).unit("pixels")
                        .doc("smallest record radius").id(cache).flag());
     rows.push_back(row("max_spacing", "cache", &R::cache, &CacheSettings::max_spacing).range(0.1, 4096).unit("pixels")
@@ -195,6 +196,11 @@ ParamTable make_table() {
                        .doc("R_new <= R_j + |p_new - p_j| (Krivanek et al. 2006)").id(cache).flag());
     rows.push_back(row("radius_scale", "cache", &R::cache, &CacheSettings::radius_scale).range(0.01, 100)
                        .doc("R = radius_scale x d_min (TL04: 1/2)").id(cache).flag());
+    rows.push_back(row("hessian_error", "cache", &R::cache, &CacheSettings::hessian_error).range(1e-5, 10)
+                       .doc("hessian metric: relative second-order error at a record's edge; radii sqrt(2 e / |lambda|)")
+                       .id(cache).flag());
+    rows.push_back(row("max_anisotropy", "cache", &R::cache, &CacheSettings::max_anisotropy).range(1, 100)
+                       .doc("hessian metric: the long radius is at most this many times the short one").id(cache).flag());
     rows.push_back(row("min_rays", "cache", &R::cache, &CacheSettings::min_rays).range(0, 1 << 20).unit("rays")
                        .doc("adaptive records: a record first gathers this many rays and gathers render.rays only when "
                             "that estimate is noisier than ray_noise; 0 = every record gathers render.rays").id(cache).flag());

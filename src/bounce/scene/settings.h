@@ -13,7 +13,7 @@
 namespace bounce {
 
 enum class GiMode : uint8_t { None, Brute, Cache };
-enum class Metric : uint8_t { TL04, Ward };
+enum class Metric : uint8_t { TL04, Ward, Hessian };
 enum class CacheSharing : uint8_t { Shared, PerThread };
 
 /// Primary visibility and the deep file.
@@ -53,7 +53,7 @@ struct IndirectSettings {
 
 /// Where the irradiance cache makes records and how far they reach (docs/irradiance-cache.md).
 struct CacheSettings {
-    Metric metric = Metric::TL04; ///< tl04 (normalised, bounded) | ward (1/x, accuracy a)
+    Metric metric = Metric::TL04; ///< tl04 (normalised, bounded) | ward (1/x, accuracy a) | hessian (two radii)
     float min_spacing = 2.0f;     ///< smallest record radius, pixels
     float max_spacing = 16.0f;    ///< largest record radius, pixels
     float max_angle = 10.0f;      ///< normal deviation at which the normal metric reaches 1, degrees
@@ -65,6 +65,8 @@ struct CacheSettings {
     bool neighbour_clamp = true;  ///< R_new <= R_j + |p_new - p_j| (Krivanek et al. 2006)
     float shading_reach = 1.0f;   ///< the shading pass lets records reach this much farther (>= 1)
     float radius_scale = 0.5f;    ///< R = radius_scale * d_min (TL04: 1/2)
+    float hessian_error = 0.05f;  ///< hessian: relative second-order error allowed at a record's edge
+    float max_anisotropy = 4;     ///< hessian: long radius / short radius at most
     int min_rays = 0;             ///< a record's first gather; more (render.rays) only if noisier than ray_noise; 0 = off
     float ray_noise = 0.02f;      ///< relative standard error a record's first gather must reach to stop there
     float refine = 0;             ///< a fragment whose records disagree by more than this gets its own gather; 0 = off
