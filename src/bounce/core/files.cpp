@@ -4,7 +4,7 @@
 
 #include <cerrno>
 #include <filesystem>
-#include <regex>
+#include <algorithm>
 
 #include "bounce/core/error.h"
 

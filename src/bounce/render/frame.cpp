@@ -1,7 +1,5 @@
 #include "bounce/render/frame.h"
 
-#include <fmt/format.h>
-
 #include <filesystem>
 #include <regex>
 
