@@ -135,59 +135,42 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
     stats.set("cache_bytes", static_cast<double>(cache.memory_bytes()));
 }
 
-Refinement refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
-                           const IrradianceCache& cache, Stats& stats, ProgressSink* sink) {
-    Refinement out;
-    out.refined.assign(deep.fragments.size(), 0);
-    out.own.resize(deep.fragments.size());
-    const float threshold = cache.settings().refine;
-    if (threshold <= 0) return out;
-    tbb::enumerable_thread_specific<size_t> count(0);
-    auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache, stats.local());
-    for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "refine", [&](int wx, int wy, size_t first) {
-        Counters& counters = stats.local();
-        auto frags = deep.pixel(wx, wy);
-        for (uint32_t k = 0; k < frags.size(); ++k) {
-            const Fragment& f = frags[k];
-            Interpolated in = cache.lookup(f.p_base, f.n_base, true);
-            if (in.weight > 0 && in.spread <= threshold) continue;
-            GatherResult g = gatherer.gather(
-                f.p, f.n_base, fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), counters);
-            out.own[first + k] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
-            out.refined[first + k] = 1;
-            ++count.local();
-        }
-    }, scene.render.parallel.tile_order);
-    for (size_t c : count) out.count += c;
-    stats.set("refined_fragments", static_cast<double>(out.count));
-    stats.set("refine_rays_per_gather", static_cast<double>(gatherer.grid().rays()));
-    return out;
-}
-
 std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
-                                   Stats& stats, ProgressSink* sink, const Refinement* refinement) {
+                                   Stats& stats, ProgressSink* sink, const Gatherer* refiner, std::vector<uint8_t>* refined) {
     std::vector<Indirect> out(deep.fragments.size());
-    tbb::enumerable_thread_specific<uint64_t> misses(0), lookups(0);
+    const float threshold = refiner ? cache.settings().refine : 0.0f;
+    if (refined) refined->assign(deep.fragments.size(), 0);
+    tbb::enumerable_thread_specific<uint64_t> misses(0), lookups(0), own(0);
     // The pass holds the shared lock for its workers: no writer can interleave.
     auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache, stats.local());
     for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "interpolate", [&](int wx, int wy, size_t first) {
         auto frags = deep.pixel(wx, wy);
         for (uint32_t k = 0; k < frags.size(); ++k) {
-            if (refinement && refinement->refined[first + k]) {
-                out[first + k] = refinement->own[first + k];
+            const Fragment& f = frags[k];
+            Interpolated in = cache.lookup(f.p_base, f.n_base, true);
+            ++lookups.local();
+            if (threshold > 0 && (in.weight <= 0 || in.spread > threshold)) {
+                GatherResult g = refiner->gather(
+                    f.p, f.n_base, fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), stats.local());
+                out[first + k] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
+                if (refined) (*refined)[first + k] = 1;
+                ++own.local();
                 continue;
             }
-            Interpolated in = cache.lookup(frags[k].p_base, frags[k].n_base, true);
-            ++lookups.local();
             if (in.weight <= 0) ++misses.local();
             out[first + k] = {in.E, in.ao, in.bent, in.dir};
         }
     }, scene.render.parallel.tile_order);
-    uint64_t m = 0, l = 0;
+    uint64_t m = 0, l = 0, o = 0;
     for (auto v : misses) m += v;
     for (auto v : lookups) l += v;
+    for (auto v : own) o += v;
     stats.set("shading_misses", static_cast<double>(m));
     stats.set("lookups", static_cast<double>(l));
+    if (threshold > 0) {
+        stats.set("refined_fragments", static_cast<double>(o));
+        stats.set("refine_rays_per_gather", static_cast<double>(refiner->grid().rays()));
+    }
     return out;
 }
 

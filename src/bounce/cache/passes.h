@@ -43,28 +43,19 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
                     IrradianceCache& cache, Stats& stats, ProgressSink* progress,
                     const SubPassCallback& after_subpass = {}, int frame = 0, const Gatherer* first = nullptr);
 
-/// Per-fragment refinement (CacheSettings::refine): fragments where interpolation cannot be
-/// trusted, with the light of their own gathers. Such a gather is used by its fragment only;
-/// no record is made and no neighbour sees it.
-struct Refinement {
-    std::vector<uint8_t> refined;  ///< per fragment: 1 = gathered on its own
-    std::vector<Indirect> own;     ///< per fragment: its gather's light where refined
-    size_t count = 0;
-};
-
-/// Decides for every fragment of `deep`, against the finished cache, whether the records that
-/// cover it agree (the spread of their extrapolated values at the fragment, as the shading
-/// pass will interpolate them, is at most `refine`), and gathers with `gatherer` where they do
-/// not. The decision depends only on the cache and the fragment: deterministic at any thread
-/// count.
-Refinement refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
-                           const IrradianceCache& cache, Stats& stats, ProgressSink* progress);
-
-/// Shading pass: interpolates at every fragment (or takes a refined fragment's own light),
-/// never creates a record. Misses (no record applies; the gathering pass makes them
-/// impossible) are counted in stats as "shading_misses" and left black, so a bug shows.
+/// Shading pass: interpolates at every fragment, never creates a record. Misses (no record
+/// applies; the gathering pass makes them impossible) are counted in stats as
+/// "shading_misses" and left black, so a bug shows.
+///
+/// With `refiner` and CacheSettings::refine > 0 (per-fragment refinement): a fragment whose
+/// covering records disagree (the spread of their extrapolated values at the fragment exceeds
+/// `refine`) or that no record covers takes the light of its own gather with `refiner`
+/// instead; that gather feeds this fragment only (no record, no neighbour sees it). The
+/// decision depends only on the finished cache and the fragment: deterministic at any thread
+/// count. `refined`, if given, gets 1 per refined fragment.
 std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
-                                   Stats& stats, ProgressSink* progress, const Refinement* refinement = nullptr);
+                                   Stats& stats, ProgressSink* progress, const Gatherer* refiner = nullptr,
+                                   std::vector<uint8_t>* refined = nullptr);
 
 /// Progressive preview after a sub-pass of step `step`: each fragment takes the interpolated
 /// light at the nearest pixel (on that step's lattice, then coarser ones) a finished sub-pass

@@ -213,7 +213,10 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         Materials materials(scene);
         DirectLighting lighting(scene, *accel);
         std::vector<Indirect> indirect;
-        Refinement refinement;
+        std::unique_ptr<RadiosityTextures> radiosity;
+        std::unique_ptr<Gatherer> refiner;  // per-fragment refinement, in the shading pass
+        std::vector<uint8_t> refined;
+        size_t baked_before = 0;  // radiosity sides held before this render
         if (ind.gi == GiMode::Cache || !request.cache_in.empty()) {
             result.cache = std::make_unique<IrradianceCache>(scene.bounds(), scene.render.cache, ind.ao);
             PhaseTimer tl(stats, "cache read");
@@ -227,9 +230,8 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             gs.record_terms = ind.gi == GiMode::Cache;  // brute force needs no gradients
             gs.hessian = gs.record_terms && scene.render.cache.metric == Metric::Hessian;
             gs.cancel = request.cancel;
-            std::unique_ptr<RadiosityTextures> radiosity;
             if (scene.render.radiosity.enabled && !gs.ao) radiosity = radiosity_for(scene, materials, lighting, stats, ps);
-            const size_t baked_before = radiosity ? radiosity->baked_sides() : 0;
+            baked_before = radiosity ? radiosity->baked_sides() : 0;
             Gatherer gatherer(scene, *accel, materials, lighting, radiosity.get(), gs);
             uint64_t rays_before = stats.total().gather_rays;
             PhaseTimer t(stats, "gather");
@@ -262,9 +264,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
                     GatherSettings own = gs;
                     own.record_terms = false;
                     if (scene.render.cache.refine_rays > 0) own.rays = scene.render.cache.refine_rays;
-                    Gatherer refiner(scene, *accel, materials, lighting, radiosity.get(), own);
-                    PhaseTimer tr(stats, "refine");
-                    refinement = refinement_pass(scene, result.deep, refiner, cache, stats, ps);
+                    refiner = std::make_unique<Gatherer>(scene, *accel, materials, lighting, radiosity.get(), own);
                 }
                 result.records_new = cache.size() - result.records_loaded;
                 stats.set("records_loaded", static_cast<double>(result.records_loaded));
@@ -275,7 +275,6 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
                 stats.set("rays_per_gather", gatherer.grid().rays());
             }
             double secs = t.stop();
-            if (radiosity) save_radiosity(*radiosity, baked_before, scene, stats);
             uint64_t rays = stats.total().gather_rays - rays_before;
             stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
         }
@@ -283,8 +282,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             PhaseTimer t(stats, "shading");
             if (ind.gi == GiMode::Cache) {
                 auto t0 = std::chrono::steady_clock::now();
-                indirect = shading_pass(scene, result.deep, *result.cache, stats, ps,
-                                        refinement.refined.empty() ? nullptr : &refinement);
+                indirect = shading_pass(scene, result.deep, *result.cache, stats, ps, refiner.get(), &refined);
                 stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
             }
             result.image = shade(scene, result.deep, materials, lighting, ind.any() ? &indirect : nullptr, stats, ps);
@@ -294,7 +292,9 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             for (size_t i = 0; i < result.cache->size(); ++i) positions.push_back(result.cache->record(i).p);
             add_records_layer(result.image, scene.camera, positions);
         }
-        if (refinement.count > 0) add_fragment_mask_layer(result.image, result.deep, refinement.refined, "refined");
+        // After the shading pass: refined fragments' gathers may have baked sides too.
+        if (radiosity) save_radiosity(*radiosity, baked_before, scene, stats);
+        if (refiner) add_fragment_mask_layer(result.image, result.deep, refined, "refined");
     });
     stats.set("pixels", static_cast<double>(result.deep.pixel_count()));
     if (result.deep.pixel_count() > 0)
