@@ -34,6 +34,13 @@ struct FullFrame {
         result = render(cornell(), req, s, nullptr);
         write_cache_file(cache, result.cache->to_file(result.cache_info));
     }
+    /// A request that starts from this frame's deep file and cache.
+    RenderRequest reuse() const {
+        RenderRequest req;
+        req.deep_in = deep;
+        req.cache_in = cache;
+        return req;
+    }
 };
 
 /// Layer `name` of `full` at window pixel (x, y) of `crop` equals `crop`'s own.
@@ -51,9 +58,7 @@ void expect_window_equal(const Image& full, const Image& crop, const std::string
 
 TEST(SubViewport, CropReshadeFromDeepAndCacheEqualsTheFullRender) {
     FullFrame f;
-    RenderRequest req;
-    req.deep_in = f.deep;
-    req.cache_in = f.cache;
+    RenderRequest req = f.reuse();
     Stats s;
     RenderResult crop = render(cornell({"render.crop=[10,34,20,40]"}), req, s, nullptr);
     EXPECT_EQ(crop.image.width, 24);
@@ -83,9 +88,7 @@ TEST(SubViewport, ADeepFileOfAWindowRendersThatWindowWithoutACrop) {
 
 TEST(SubViewport, CropRegatherKeepsTheRestAndAFullReshadeHasNoMisses) {
     FullFrame f;
-    RenderRequest req;
-    req.deep_in = f.deep;
-    req.cache_in = f.cache;
+    RenderRequest req = f.reuse();
     req.regather = true;
     Stats s;
     RenderResult crop = render(cornell({"render.crop=[16,48,16,48]"}), req, s, nullptr);
@@ -106,9 +109,7 @@ TEST(SubViewport, BaseImageFillsThePixelsOutsideTheCrop) {
     FullFrame f;
     test::TempDir d;
     write_exr(d.file("base.exr"), f.result.image);
-    RenderRequest req;
-    req.deep_in = f.deep;
-    req.cache_in = f.cache;
+    RenderRequest req = f.reuse();
     Stats s;
     RenderResult crop = render(cornell({"render.crop=[8,20,8,30]", "render.light_samples=16"}), req, s, nullptr);
     Image whole = paste_over(read_exr(d.file("base.exr")), crop.image, "base.exr");
@@ -125,9 +126,7 @@ TEST(SubViewport, BaseImageFillsThePixelsOutsideTheCrop) {
 
 TEST(CacheIdentity, OtherRecordSettingsAreRefusedNamingEachKeyUnlessReusedOrRegathered) {
     FullFrame f;
-    RenderRequest req;
-    req.deep_in = f.deep;
-    req.cache_in = f.cache;
+    RenderRequest req = f.reuse();
     Stats s;
     try {
         render(cornell({"render.min_spacing=1", "render.rays=100"}), req, s, nullptr);

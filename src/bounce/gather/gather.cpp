@@ -136,7 +136,7 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
     res.bent_normal = dot(sum_u_dir, sum_u_dir) > 0 ? normalize(sum_u_dir) : n;
     for (int ch = 0; ch < 3; ++ch) res.light_dir[static_cast<size_t>(ch)] = sum_dir[static_cast<size_t>(ch)] * w;
     res.harmonic_distance = inv_r_sum > 0 ? static_cast<float>(S / inv_r_sum) : INFINITY;
-    {
+    if (settings_.record_terms) {  // only records use it (adaptive rays); brute force skips it
         double d2 = 0;
         int pairs = 0;
         for (int j = 0; j < M; ++j)

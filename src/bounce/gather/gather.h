@@ -52,7 +52,7 @@ struct GatherResult {
     std::array<Vec3, 3> grad_trans{};   ///< dE_c/dx
     Vec3 ao_grad_rot{0}, ao_grad_trans{0};
     int rays = 0;
-    /// Estimated relative standard error of the irradiance's luminance (AO in AO mode), from
+    /// With record_terms: estimated relative standard error of the irradiance's luminance (AO in AO mode), from
     /// the differences of azimuthally adjacent cells: each pair's squared difference estimates
     /// the two strata's variance, Var(E) ~ (pi/S)^2 sum_pairs d^2.
     float rel_stderr = 0;
