@@ -32,6 +32,25 @@ const char* json_type_name(const json& j) {
     }
 }
 
+float json_float(const json& v, double lo, double hi, const std::function<void(const std::string&)>& fail) {
+    if (!v.is_number())
+        fail(fmt::format("expected a number, got {}", v.is_string() ? "a string (" + v.dump() + ")" : json_type_name(v)));
+    const double x = v.get<double>();
+    if (!std::isfinite(x)) fail("number is not finite");
+    if (std::fabs(x) > FLT_MAX) fail(fmt::format("{} does not fit a float", x));
+    if (x < lo || x > hi) fail(fmt::format("{} is out of range [{}, {}]", x, lo, hi));
+    return static_cast<float>(x);
+}
+
+int64_t json_integer(const json& v, double lo, double hi, const std::function<void(const std::string&)>& fail) {
+    if (!v.is_number_integer())
+        fail(fmt::format("expected an integer, got {}", v.is_number() ? fmt::format("{}", v.get<double>()) : json_type_name(v)));
+    if (v.is_number_unsigned() && v.get<uint64_t>() > static_cast<uint64_t>(INT64_MAX)) fail("integer is out of range");
+    const int64_t x = v.get<int64_t>();
+    if (static_cast<double>(x) < lo || static_cast<double>(x) > hi) fail(fmt::format("{} is out of range [{}, {}]", x, lo, hi));
+    return x;
+}
+
 std::string read_text_file(const std::string& path) {
     check_input_file(path);
     std::ifstream in(path, std::ios::binary);
@@ -184,13 +203,7 @@ float JsonReader::number(const std::string& key, float def, double lo, double hi
 
 int JsonReader::integer(const std::string& key, int def, int lo, int hi) const {
     if (!has(key)) return def;
-    const json& v = raw(key);
-    if (!v.is_number_integer()) ctx_.fail(at(key), fmt::format("expected an integer, got {}", json_type_name(v)));
-    if (v.is_number_unsigned() && v.get<uint64_t>() > static_cast<uint64_t>(hi))
-        ctx_.fail(at(key), fmt::format("{} is out of range [{}, {}]", v.get<uint64_t>(), lo, hi));
-    auto x = v.get<int64_t>();
-    if (x < lo || x > hi) ctx_.fail(at(key), fmt::format("{} is out of range [{}, {}]", x, lo, hi));
-    return static_cast<int>(x);
+    return static_cast<int>(json_integer(raw(key), lo, hi, [&](const std::string& m) { ctx_.fail(at(key), m); }));
 }
 
 Vec3 JsonReader::vec3(const std::string& key, Vec3 def, bool required) const {
@@ -250,12 +263,7 @@ std::string JsonReader::file(const std::string& key, bool required) const {
 }
 
 float JsonReader::check_number(const json& v, const std::string& ptr, double lo, double hi) const {
-    if (!v.is_number()) ctx_.fail(ptr, fmt::format("expected a number, got {}", json_type_name(v)));
-    double x = v.get<double>();
-    if (!std::isfinite(x)) ctx_.fail(ptr, "number is not finite");
-    if (std::fabs(x) > FLT_MAX) ctx_.fail(ptr, fmt::format("{} does not fit a float", x));
-    if (x < lo || x > hi) ctx_.fail(ptr, fmt::format("{} is out of range [{}, {}]", x, lo, hi));
-    return static_cast<float>(x);
+    return json_float(v, lo, hi, [&](const std::string& m) { ctx_.fail(ptr, m); });
 }
 
 Vec3 JsonReader::to_vec3(const json& v, const std::string& ptr) const {

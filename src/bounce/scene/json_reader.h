@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -43,6 +44,12 @@ nlohmann::json parse_json_text(const std::string& text, const std::string& path)
 std::string apply_override(nlohmann::json& doc, const Override& o);
 
 const char* json_type_name(const nlohmann::json& j);
+
+/// `v` as the float it becomes: a finite number that fits a float, inside [lo, hi] (compared
+/// before rounding); otherwise calls `fail(message)`, which must throw.
+float json_float(const nlohmann::json& v, double lo, double hi, const std::function<void(const std::string&)>& fail);
+/// `v` as an integer inside [lo, hi]; otherwise calls `fail(message)`, which must throw.
+int64_t json_integer(const nlohmann::json& v, double lo, double hi, const std::function<void(const std::string&)>& fail);
 
 /// A JSON object whose keys must be among `allowed` (unknown keys fail with a suggestion).
 class JsonReader {

@@ -254,22 +254,11 @@ std::string type_name(const Param& p) {
 
 /// A number checked as a float: finite, representable, inside [lo, hi].
 float check_float(const json& v, double lo, double hi, const std::string& sub, const ParamFail& fail) {
-    if (!v.is_number())
-        fail(sub, fmt::format("expected a number, got {}", v.is_string() ? "a string (" + v.dump() + ")" : json_type_name(v)));
-    double x = v.get<double>();
-    if (!std::isfinite(x)) fail(sub, "number is not finite");
-    if (std::fabs(x) > FLT_MAX) fail(sub, fmt::format("{} does not fit a float", x));
-    auto f = static_cast<float>(x);
-    if (f < static_cast<float>(lo) || f > static_cast<float>(hi)) fail(sub, fmt::format("{} is out of range [{}, {}]", x, lo, hi));
-    return f;
+    return json_float(v, lo, hi, [&](const std::string& m) { fail(sub, m); });
 }
 
 int64_t check_int(const json& v, double lo, double hi, const std::string& sub, const ParamFail& fail) {
-    if (!v.is_number_integer()) fail(sub, fmt::format("expected an integer, got {}", v.is_number() ? fmt::format("{}", v.get<double>()) : json_type_name(v)));
-    if (v.is_number_unsigned() && v.get<uint64_t>() > static_cast<uint64_t>(INT64_MAX)) fail(sub, "integer is out of range");
-    int64_t x = v.get<int64_t>();
-    if (static_cast<double>(x) < lo || static_cast<double>(x) > hi) fail(sub, fmt::format("{} is out of range [{}, {}]", x, lo, hi));
-    return x;
+    return json_integer(v, lo, hi, [&](const std::string& m) { fail(sub, m); });
 }
 
 }  // namespace
