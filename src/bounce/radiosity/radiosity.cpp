@@ -31,6 +31,10 @@ float effective_texel(const Scene& scene, const RadiositySettings& s) {
     return s.texel > 0 ? s.texel : length(scene.bounds().diagonal()) / 128.0f;
 }
 
+int effective_light_samples(const Scene& scene, const RadiositySettings& s) {
+    return s.light_samples > 0 ? s.light_samples : scene.render.lighting.light_samples;
+}
+
 std::string file_name(size_t id, const std::string& name) {
     std::string safe;
     for (char c : name) safe += std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' ? c : '_';
@@ -84,7 +88,7 @@ Color RadiosityMap::lookup(uint32_t prim, float u, float v, bool front_side) con
 uint64_t RadiosityTextures::fingerprint(const Scene& scene, const RadiositySettings& s) {
     uint64_t h = scene.fingerprint({"objects", "materials", "lights"});
     h = hash_combine(h, std::bit_cast<uint32_t>(effective_texel(scene, s)));
-    h = hash_combine(h, static_cast<uint64_t>(s.light_samples));
+    h = hash_combine(h, static_cast<uint64_t>(effective_light_samples(scene, s)));
     return hash_combine(h, static_cast<uint64_t>(s.max_level));
 }
 
@@ -98,7 +102,7 @@ struct RadiosityTextures::Sources {
     const Scene* scene;
     const Materials* materials;
     const DirectLighting* lighting;
-    RadiositySettings settings;
+    int light_samples;  ///< resolved (never 0)
 };
 
 RadiosityTextures::RadiosityTextures() = default;
@@ -111,7 +115,7 @@ RadiosityTextures RadiosityTextures::lazy(const Scene& scene, const Materials& m
     RadiosityTextures rt;
     rt.texel_size_ = effective_texel(scene, settings);
     rt.fingerprint_ = fingerprint(scene, settings);
-    rt.sources_ = std::make_unique<Sources>(Sources{&scene, &materials, &lighting, settings});
+    rt.sources_ = std::make_unique<Sources>(Sources{&scene, &materials, &lighting, effective_light_samples(scene, settings)});
     for (size_t id = 0; id < scene.objects.size(); ++id) {
         rt.maps_.push_back(lay_out(scene.objects[id].coarse, rt.texel_size_, settings.max_level));
         const size_t n = 2 * scene.objects[id].coarse.triangle_count();
@@ -139,10 +143,10 @@ void RadiosityTextures::bake_side(uint32_t id, uint32_t t, bool front, Counters&
             // happens to use.
             if (front) {
                 RandomStream rng(0, (static_cast<uint64_t>(id) << 40) | (static_cast<uint64_t>(t) << 12), k);
-                map.front[k] = albedo * src.lighting->irradiance(sp.p, sp.ng, rng, src.settings.light_samples, counters);
+                map.front[k] = albedo * src.lighting->irradiance(sp.p, sp.ng, rng, src.light_samples, counters);
             } else {
                 RandomStream rng(1, (static_cast<uint64_t>(id) << 40) | t, k);
-                map.back[k] = albedo * src.lighting->irradiance(sp.p, -sp.ng, rng, src.settings.light_samples, counters);
+                map.back[k] = albedo * src.lighting->irradiance(sp.p, -sp.ng, rng, src.light_samples, counters);
             }
         }
 }

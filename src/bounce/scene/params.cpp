@@ -155,8 +155,8 @@ ParamTable make_table() {
                        .doc("folder to reuse matching textures from, or to save new ones in; empty = bake in memory").flag());
     rows.push_back(row("radiosity_texel", "radiosity", &R::radiosity, &RadiositySettings::texel).automatic(0).range(0, kMaxCoordinate)
                        .unit("world").doc("lattice spacing on every triangle; auto = scene diagonal / 128").id(rad | cache).flag());
-    rows.push_back(row("radiosity_light_samples", "radiosity", &R::radiosity, &RadiositySettings::light_samples).range(1, 65536)
-                       .unit("samples").doc("light samples per lattice point when baking").id(rad | cache).flag());
+    rows.push_back(row("radiosity_light_samples", "radiosity", &R::radiosity, &RadiositySettings::light_samples).automatic(0).range(0, 65536)
+                       .unit("samples").doc("light samples per lattice point when baking; auto = render.light_samples").id(rad | cache).flag());
     // The gather.
     rows.push_back(row("gi", "gather", &R::indirect, &IndirectSettings::gi).choices({"none", "brute", "cache"})
                        .doc("indirect light: none (direct only), brute (gather at every fragment), cache (irradiance cache)").flag());

@@ -35,7 +35,7 @@ struct RadiositySettings {
     bool enabled = true;          ///< shade gather hits from baked textures
     std::string folder;           ///< reuse/save them here; empty = bake in memory
     float texel = 0;              ///< lattice spacing, world units; 0 = diagonal / 128
-    int light_samples = 16;       ///< light samples per lattice point
+    int light_samples = 0;        ///< light samples per lattice point; 0 = LightingSettings's
     int max_level = 32;           ///< cap on the per-triangle lattice level (not a parameter)
 };
 
