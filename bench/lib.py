@@ -38,8 +38,10 @@ def run(args):
     return r.stdout
 
 
-def error(test, ref, layer):
-    j = json.loads(run(["compare", test, ref, "--layer", layer, "--json", "--diff", test.replace(".exr", ".diff.png")]))
+def error(test, ref, layer, diff=True):
+    """Relative RMSE of `layer` of `test` against `ref` (and a diff image beside `test`)."""
+    j = json.loads(run(["compare", test, ref, "--layer", layer, "--json"] +
+                       (["--diff", test.replace(".exr", ".diff.png")] if diff else [])))
     return j[layer]["rel_rmse"]
 
 
