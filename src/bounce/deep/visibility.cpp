@@ -20,6 +20,7 @@ struct Accum {
     uint32_t material, object, prim;
     float depth, footprint;
     int count;
+    Vec3 p_base{0}, n_base{0};  ///< sums over the subsamples of a displaced surface
 };
 
 }  // namespace
@@ -115,6 +116,10 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     g->uv.x += sp.uv.x, g->uv.y += sp.uv.y;
                     g->depth += h.t, g->footprint += fp;
                     ++g->count;
+                    if (obj.visible().displaced()) {
+                        auto [pb, nb] = base_point(obj.visible(), h.prim, h.u, h.v);
+                        g->p_base += pb, g->n_base += dot(nb, dn) > 0 ? -nb : nb;
+                    }
                 }
                 auto& out = per_pixel[static_cast<size_t>(wy) * deep.width + wx];
                 for (size_t gi = 0; gi < groups.size(); ++gi) {
@@ -135,8 +140,10 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     }
                     f.n = normalize(a.n);
                     f.ng = normalize(a.ng);
-                    f.p_base = f.p;
-                    f.n_base = f.n;
+                    // Cache records live on the un-displaced surface when there is one.
+                    const bool displaced = dot(a.n_base, a.n_base) > 0;
+                    f.p_base = displaced ? a.p_base / c : f.p;
+                    f.n_base = displaced ? normalize(a.n_base) : f.n;
                     f.uv = {a.uv.x / c, a.uv.y / c};
                     f.material = a.material, f.object = a.object, f.prim = a.prim;
                     f.depth = a.depth / c;

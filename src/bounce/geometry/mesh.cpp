@@ -17,6 +17,8 @@ Bounds TriangleMesh::bounds() const {
 void TriangleMesh::transform(const Transform& t) {
     for (auto& p : positions) p = t.point(p);
     for (auto& n : normals) n = t.normal(n);
+    for (auto& p : base_positions) p = t.point(p);
+    for (auto& n : base_normals) n = t.normal(n);
 }
 
 void TriangleMesh::append(const TriangleMesh& o) {
@@ -27,6 +29,18 @@ void TriangleMesh::append(const TriangleMesh& o) {
     }
     if (uvs.empty() != o.uvs.empty()) {
         if (uvs.empty() && !positions.empty()) uvs.assign(positions.size(), Vec2{});
+    }
+    // Base attributes: a displaced part keeps its own, an undisplaced one is its own base.
+    if (displaced() || o.displaced()) {
+        if (!displaced()) base_positions = positions, base_normals = normals_or_geometric();
+        if (o.displaced()) {
+            base_positions.insert(base_positions.end(), o.base_positions.begin(), o.base_positions.end());
+            base_normals.insert(base_normals.end(), o.base_normals.begin(), o.base_normals.end());
+        } else {
+            base_positions.insert(base_positions.end(), o.positions.begin(), o.positions.end());
+            const auto on = o.normals_or_geometric();
+            base_normals.insert(base_normals.end(), on.begin(), on.end());
+        }
     }
     positions.insert(positions.end(), o.positions.begin(), o.positions.end());
     if (!o.normals.empty()) normals.insert(normals.end(), o.normals.begin(), o.normals.end());
@@ -153,6 +167,28 @@ TriangleMesh make_quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
 }  // namespace bounce
 
 namespace bounce {
+
+std::vector<Vec3> TriangleMesh::normals_or_geometric() const {
+    if (!normals.empty()) return normals;
+    std::vector<Vec3> n(positions.size(), Vec3(0));
+    for (size_t t = 0; t < triangle_count(); ++t) {
+        const uint32_t *i = &indices[3 * t];
+        const Vec3 c = cross(positions[i[1]] - positions[i[0]], positions[i[2]] - positions[i[0]]);
+        for (int k = 0; k < 3; ++k) n[i[k]] += c;
+    }
+    for (auto& v : n)
+        if (dot(v, v) > 0) v = normalize(v);
+    return n;
+}
+
+std::pair<Vec3, Vec3> base_point(const TriangleMesh& m, uint32_t prim, float u, float v) {
+    const uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];
+    const float w = 1 - u - v;
+    const Vec3 p = m.base_positions[i0] * w + m.base_positions[i1] * u + m.base_positions[i2] * v;
+    Vec3 n = m.base_normals[i0] * w + m.base_normals[i1] * u + m.base_normals[i2] * v;
+    if (dot(n, n) < 1e-20f) n = cross(m.positions[i1] - m.positions[i0], m.positions[i2] - m.positions[i0]);
+    return {p, normalize(n)};
+}
 
 SurfacePoint surface_point(const TriangleMesh& m, uint32_t prim, float u, float v) {
     uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];

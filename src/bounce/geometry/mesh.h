@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bounce/core/math.h"
@@ -16,11 +17,18 @@ struct TriangleMesh {
     std::vector<Vec2> uvs;      ///< per vertex; empty = none
     std::vector<uint32_t> indices;         ///< 3 per triangle
     std::vector<uint32_t> face_materials;  ///< per triangle index into Scene::materials
+    /// Per vertex, the surface before displacement (the limit surface of a subdivision
+    /// surface): where cache records live. Empty = the mesh is not displaced.
+    std::vector<Vec3> base_positions;
+    std::vector<Vec3> base_normals;
+    bool displaced() const { return !base_positions.empty(); }
 
     size_t triangle_count() const { return indices.size() / 3; }
     Bounds bounds() const;
     /// Applies a transform to positions and normals.
     void transform(const Transform& t);
+    /// Per vertex normals: the authored ones, or the area-weighted face normals.
+    std::vector<Vec3> normals_or_geometric() const;
     /// Appends another mesh (indices re-based).
     void append(const TriangleMesh& other);
 };
@@ -53,5 +61,9 @@ struct SurfacePoint {
 /// Evaluates triangle `prim` of `mesh` at barycentrics (u, v) (Embree's convention:
 /// p = (1-u-v) v0 + u v1 + v v2).
 SurfacePoint surface_point(const TriangleMesh& mesh, uint32_t prim, float u, float v);
+
+/// The un-displaced position and (unit, not oriented) normal at barycentrics (u, v) of a
+/// displaced mesh's triangle `prim` (mesh.displaced() must hold).
+std::pair<Vec3, Vec3> base_point(const TriangleMesh& mesh, uint32_t prim, float u, float v);
 
 }  // namespace bounce

@@ -8,6 +8,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <array>
+#include <map>
 #include <optional>
 #include <sstream>
 
@@ -39,10 +41,10 @@ aiMatrix4x4 node_world(const aiNode* n) {
 const unsigned kAssimpFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                               aiProcess_SortByPType | aiProcess_ValidateDataStructure;
 
-const aiScene* import_file(Assimp::Importer& imp, const std::string& path) {
+const aiScene* import_file(Assimp::Importer& imp, const std::string& path, unsigned flags = kAssimpFlags) {
     imp.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     check_ply_counts(path);
-    const aiScene* s = imp.ReadFile(path, kAssimpFlags);
+    const aiScene* s = imp.ReadFile(path, flags);
     if (!s) throw InputError(path, "", std::string("cannot load mesh: ") + imp.GetErrorString());
     return s;
 }
@@ -188,10 +190,10 @@ void check_ply_counts(const std::string& path) {
                          fmt::format("the header declares {} elements but the file holds {} lines of data", declared, body));
 }
 
-TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
-                            std::vector<Material>& materials, int override_material) {
-    Assimp::Importer imp;
-    const aiScene* s = import_file(imp, path);
+/// The file's materials appended to `materials` (named "<prefix>/<name>"), or `override_material`
+/// for all: the scene index of each of the file's materials.
+std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path, const std::string& prefix,
+                                       std::vector<Material>& materials, int override_material) {
     std::vector<uint32_t> mat_map(s->mNumMaterials);
     if (override_material < 0) {
         for (unsigned i = 0; i < s->mNumMaterials; ++i) {
@@ -242,6 +244,16 @@ TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
             materials.push_back(m);
         }
     }
+    else
+        mat_map.assign(s->mNumMaterials, static_cast<uint32_t>(override_material));
+    return mat_map;
+}
+
+TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
+                            std::vector<Material>& materials, int override_material) {
+    Assimp::Importer imp;
+    const aiScene* s = import_file(imp, path, kAssimpFlags);
+    const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material);
     TriangleMesh out;
     // Walk the node tree so each mesh instance gets its node's transform.
     std::vector<std::pair<const aiNode*, aiMatrix4x4>> stack{{s->mRootNode, s->mRootNode->mTransformation}};
@@ -261,8 +273,7 @@ TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
                 if (am->mTextureCoords[0])
                     m.uvs.push_back({am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y});
             }
-            uint32_t mat = override_material >= 0 ? static_cast<uint32_t>(override_material)
-                                                  : mat_map[am->mMaterialIndex];
+            const uint32_t mat = mat_map[am->mMaterialIndex];
             for (unsigned f = 0; f < am->mNumFaces; ++f) {
                 const aiFace& face = am->mFaces[f];
                 if (face.mNumIndices != 3) continue;
@@ -274,6 +285,55 @@ TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
     }
     if (out.triangle_count() == 0) throw InputError(path, "", "mesh has no triangles");
     return out;
+}
+
+ControlMesh load_control_mesh(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
+                              int override_material, const Transform& transform) {
+    // Faces stay polygons; vertices are welded by position here (Assimp keeps uv seams apart,
+    // which would cut the subdivision surface) and uvs become face-varying values.
+    Assimp::Importer imp;
+    const aiScene* s = import_file(imp, path, aiProcess_SortByPType | aiProcess_ValidateDataStructure);
+    const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material);
+    ControlMesh c;
+    c.source = path;
+    std::map<std::array<float, 3>, int> vertex_of;
+    std::map<std::array<float, 2>, int> uv_of;
+    bool any_uv = false;
+    std::vector<std::pair<const aiNode*, aiMatrix4x4>> stack{{s->mRootNode, s->mRootNode->mTransformation}};
+    while (!stack.empty()) {
+        auto [node, world] = stack.back();
+        stack.pop_back();
+        for (unsigned k = 0; k < node->mNumChildren; ++k)
+            stack.emplace_back(node->mChildren[k], world * node->mChildren[k]->mTransformation);
+        const Transform t = to_transform(world);
+        for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+            const aiMesh* am = s->mMeshes[node->mMeshes[k]];
+            if (!(am->mPrimitiveTypes & aiPrimitiveType_POLYGON) && !(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+            any_uv |= am->mTextureCoords[0] != nullptr;
+            for (unsigned f = 0; f < am->mNumFaces; ++f) {
+                const aiFace& face = am->mFaces[f];
+                if (face.mNumIndices < 3) continue;
+                c.face_sizes.push_back(static_cast<int>(face.mNumIndices));
+                c.face_materials.push_back(mat_map[am->mMaterialIndex]);
+                for (unsigned i = 0; i < face.mNumIndices; ++i) {
+                    const unsigned v = face.mIndices[i];
+                    const Vec3 p = transform.point(t.point(to_vec3(am->mVertices[v])));
+                    auto [it, fresh] = vertex_of.emplace(std::array<float, 3>{p.x, p.y, p.z}, static_cast<int>(c.positions.size()));
+                    if (fresh) c.positions.push_back(p);
+                    c.face_vertices.push_back(it->second);
+                    const Vec2 uv = am->mTextureCoords[0] ? Vec2{am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y} : Vec2{};
+                    auto [ut, ufresh] = uv_of.emplace(std::array<float, 2>{uv.x, uv.y}, static_cast<int>(c.uvs.size()));
+                    if (ufresh) c.uvs.push_back(uv);
+                    c.face_uvs.push_back(ut->second);
+                }
+            }
+        }
+    }
+    if (!any_uv) c.uvs.clear(), c.face_uvs.clear();
+    if (c.face_count() == 0) throw InputError(path, "", "mesh has no polygons");
+    for (const Vec3& p : c.positions)
+        if (!isfinite(p)) throw InputError(path, "", "mesh has vertex positions that are not finite");
+    return c;
 }
 
 }  // namespace bounce

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "bounce/dice/subdivision.h"
 #include "bounce/scene/scene.h"
 
 namespace bounce {
@@ -16,6 +17,12 @@ namespace bounce {
 /// is given, in which case every face uses it.
 TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
                             std::vector<Material>& materials, int override_material);
+
+/// Loads a mesh file's polygons as a subdivision control mesh (faces not triangulated,
+/// vertices welded by position, uvs face-varying), node transforms and then `transform`
+/// applied; materials as load_mesh_file.
+ControlMesh load_control_mesh(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
+                              int override_material, const Transform& transform);
 
 /// Describes a bare mesh file as a JSON scene: the file's camera and punctual lights.
 nlohmann::json describe_mesh_file(const std::string& path);

@@ -142,6 +142,13 @@ ParamTable make_table() {
                        .doc("random seed; every random number is a hash of (pixel, sample, dimension, seed)").id(deep | cache).flag());
     rows.push_back(row("crop", "visibility", &R::visibility, &VisibilitySettings::crop).range(0, 65536).unit("pixels")
                        .doc("[x0, x1, y0, y1], ends exclusive; all 0 = full frame; the EXR keeps the full display window").flag());
+    // Dicing subdivision surfaces.
+    rows.push_back(row("shading_rate", "dicing", &R::dicing, &DicingSettings::shading_rate).range(0.05, 64).unit("pixels")
+                       .doc("micropolygon edge length on subdivision surfaces (90 % of control edges reach it)").id(deep | cache).flag());
+    rows.push_back(row("ray_level", "dicing", &R::dicing, &DicingSettings::ray_level).range(0, 6).unit("levels")
+                       .doc("subdivision level of the coarse tessellation that secondary rays trace").id(rad | cache).flag());
+    rows.push_back(row("max_level", "dicing", &R::dicing, &DicingSettings::max_level).range(1, 8).unit("levels")
+                       .doc("cap on the fine tessellation's subdivision level (each level: 4x the micropolygons)").id(deep | cache).flag());
     // Lighting.
     rows.push_back(row("light_samples", "lighting", &R::lighting, &LightingSettings::light_samples).range(1, 65536).unit("samples")
                        .doc("stratified samples per area light, emissive mesh and sky, per fragment").flag());
@@ -212,6 +219,10 @@ ParamTable make_table() {
                             "(weighted relative standard deviation) above this gets a gather of its own; 0 = off").flag());
     rows.push_back(row("refine_rays", "cache", &R::cache, &CacheSettings::refine_rays).range(0, 1 << 20).unit("rays")
                        .doc("rays of a refined fragment's own gather; 0 = render.rays").flag());
+    rows.push_back(row("displaced_records", "cache", &R::cache, &CacheSettings::displaced_records)
+                       .choices({"undisplaced", "displaced"})
+                       .doc("where records of displaced surfaces live: on the un-displaced surface (rays still leave the "
+                            "displaced one) or on the displaced one").id(cache).flag());
     rows.push_back(row("shading_reach", "cache", &R::cache, &CacheSettings::shading_reach).range(1, 10)
                        .doc("the shading pass lets records reach this much farther (kappa / reach)").flag());
     // Shading.

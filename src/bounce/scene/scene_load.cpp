@@ -9,6 +9,7 @@
 #include "bounce/core/files.h"
 #include "bounce/core/random.h"
 #include "bounce/scene/json_reader.h"
+#include "bounce/dice/displacement.h"
 #include "bounce/scene/mesh_import.h"
 #include "bounce/scene/params.h"
 
@@ -135,6 +136,57 @@ Light read_light(const JsonReader& r, const Scene& scene) {
     return l;
 }
 
+/// Pixels per world unit at p on the image plane of `cam` (0 behind it).
+float pixels_per_unit(const Camera& cam, const Vec3& p) {
+    const Vec3 forward = normalize(cam.look_at - cam.position);
+    const float z = dot(p - cam.position, forward);
+    if (!(z > 0)) return 0;
+    return static_cast<float>(cam.height) / (2 * z * std::tan(0.5f * cam.fov * kPi / 180.0f));
+}
+
+/// A mesh object with "subdivision": its control mesh diced into the fine tessellation (from
+/// the camera, render.dicing) and the coarse one (render.dicing.ray_level), both displaced
+/// when the object has a "displacement".
+void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object& obj) {
+    SubdivSurface surf;
+    surf.scheme = r.choice("subdivision", "none", {"none", "catmull-clark", "loop"}) == "loop" ? SubdivScheme::Loop
+                                                                                           : SubdivScheme::CatmullClark;
+    surf.boundary = r.choice("boundary", "edge-and-corner", {"edge-only", "edge-and-corner"}) == "edge-only"
+                        ? SubdivBoundary::EdgeOnly : SubdivBoundary::EdgeAndCorner;
+    if (r.has("fine_subdivisions")) r.fail("fine_subdivisions", "a subdivision surface is diced by render.dicing, not fine_subdivisions");
+    const std::string file = r.file("file", true);
+    try {
+        surf.control = load_control_mesh(file, obj.name, scene.materials, mat, read_transform(r));
+        check_control_mesh(surf.control, surf.scheme);
+    } catch (const InputError& e) {
+        r.fail("file", e.what());
+    }
+    if (r.has("displacement")) {
+        JsonReader d(r.raw("displacement"), r.at("displacement"), r.ctx(), {"map", "scale", "midpoint"});
+        if (!d.has("map")) d.fail("", "a displacement needs a \"map\"");
+        const std::string map = d.file("map", true);
+        surf.displacement.scale = d.number("scale", 0, -kMaxCoordinate, kMaxCoordinate, true);
+        surf.displacement.midpoint = d.number("midpoint", 0.5f, -1e3, 1e3);
+        try {
+            surf.displacement.map = std::make_shared<DisplacementMap>(map);
+        } catch (const InputError& e) {
+            d.fail("map", e.what());
+        }
+        if (surf.control.face_uvs.empty()) d.fail("map", "the control mesh has no uvs to look the map up with");
+    }
+    const DicingSettings& ds = scene.render.dicing;
+    const int ray_level = std::min(ds.ray_level, ds.max_level);
+    const int level = dicing_level(surf.control, [&](const Vec3& p) { return pixels_per_unit(scene.camera, p); },
+                                   ds.shading_rate, ray_level, ds.max_level);
+    try {
+        obj.coarse = dice(surf, ray_level);
+        if (level > ray_level) obj.fine = dice(surf, level);
+    } catch (const InputError& e) {
+        r.fail(e.what()[0] ? "displacement" : "file", e.what());
+    }
+    obj.dicing_level = level;
+}
+
 void read_object(const JsonReader& r, Scene& scene, size_t index) {
     Object obj;
     obj.name = r.string("name", fmt::format("object{}", index));
@@ -163,7 +215,9 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         return static_cast<uint32_t>(d);
     };
     int fine = 0;
-    if (type == "mesh") {
+    if (type == "mesh" && r.choice("subdivision", "none", {"none", "catmull-clark", "loop"}) != "none") {
+        read_subdivision_object(r, scene, mat, obj);
+    } else if (type == "mesh") {
         std::string file = r.file("file", true);
         fine = r.integer("fine_subdivisions", 0, 0, 6);
         try {
@@ -273,7 +327,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     for (size_t i = 0; i < objs.size(); ++i) {
         JsonReader o(objs[i], fmt::format("/objects/{}", i), ctx,
                      {"name", "type", "file", "material", "transform", "fine_subdivisions", "vertices", "center", "radius",
-                      "subdivisions"});
+                      "subdivisions", "subdivision", "boundary", "displacement"});
         read_object(o, scene, i);
     }
 

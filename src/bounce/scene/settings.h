@@ -15,6 +15,7 @@ namespace bounce {
 enum class GiMode : uint8_t { None, Brute, Cache };
 enum class Metric : uint8_t { TL04, Ward, Hessian };
 enum class CacheSharing : uint8_t { Shared, PerThread };
+enum class RecordSurface : uint8_t { Undisplaced, Displaced };
 
 /// Primary visibility and the deep file.
 struct VisibilitySettings {
@@ -22,6 +23,13 @@ struct VisibilitySettings {
     uint64_t seed = 0;     ///< every random number is a hash of (pixel, sample, dimension, seed)
     std::array<int, 4> crop{0, 0, 0, 0};  ///< x0,x1,y0,y1 (exclusive ends); all 0 = full frame
     bool has_crop() const { return crop[1] > crop[0] || crop[3] > crop[2]; }
+};
+
+/// Dicing subdivision surfaces into the two tessellations (dice/subdivision.h).
+struct DicingSettings {
+    float shading_rate = 1;  ///< pixels per micropolygon edge on the fine tessellation
+    int ray_level = 2;       ///< subdivision level of the coarse tessellation secondary rays trace
+    int max_level = 5;       ///< cap on the fine tessellation's level (memory: x4 per level)
 };
 
 /// Direct lighting and ray tracing.
@@ -71,6 +79,7 @@ struct CacheSettings {
     float ray_noise = 0.02f;      ///< relative standard error a record's first gather must reach to stop there
     float refine = 0;             ///< a fragment whose records disagree by more than this gets its own gather; 0 = off
     int refine_rays = 0;          ///< rays of such a gather; 0 = the gather's rays
+    RecordSurface displaced_records = RecordSurface::Undisplaced;  ///< where records of displaced surfaces live
     /// The settings the shading pass interpolates with.
     CacheSettings for_shading() const {
         CacheSettings s = *this;
@@ -97,6 +106,7 @@ struct ParallelSettings {
 /// Everything under the scene file's "render" object, one struct per stage.
 struct RenderSettings {
     VisibilitySettings visibility;
+    DicingSettings dicing;
     LightingSettings lighting;
     RadiositySettings radiosity;
     IndirectSettings indirect;

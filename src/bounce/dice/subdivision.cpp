@@ -1,0 +1,235 @@
+#include "bounce/dice/subdivision.h"
+
+#include <fmt/format.h>
+#include <opensubdiv/far/primvarRefiner.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <unordered_map>
+
+#include "bounce/core/error.h"
+#include "bounce/dice/displacement.h"
+
+namespace bounce {
+
+namespace {
+
+namespace Far = OpenSubdiv::Far;
+namespace Sdc = OpenSubdiv::Sdc;
+
+/// Primvar types for Far's refiners (Clear + AddWithWeight is all they need).
+struct P3 {
+    Vec3 v{0};
+    void Clear(void* = nullptr) { v = Vec3(0); }
+    void AddWithWeight(const P3& s, float w) { v += s.v * w; }
+};
+struct P2 {
+    Vec2 v{};
+    void Clear(void* = nullptr) { v = Vec2{}; }
+    void AddWithWeight(const P2& s, float w) { v.x += s.v.x * w, v.y += s.v.y * w; }
+};
+
+std::unique_ptr<Far::TopologyRefiner> make_refiner(const SubdivSurface& s) {
+    using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+    const ControlMesh& c = s.control;
+    Far::TopologyDescriptor desc;
+    desc.numVertices = static_cast<int>(c.positions.size());
+    desc.numFaces = static_cast<int>(c.face_count());
+    desc.numVertsPerFace = c.face_sizes.data();
+    desc.vertIndicesPerFace = c.face_vertices.data();
+    Far::TopologyDescriptor::FVarChannel uv;
+    if (!c.face_uvs.empty()) {
+        uv.numValues = static_cast<int>(c.uvs.size());
+        uv.valueIndices = c.face_uvs.data();
+        desc.numFVarChannels = 1;
+        desc.fvarChannels = &uv;
+    }
+    Sdc::Options options;
+    options.SetVtxBoundaryInterpolation(s.boundary == SubdivBoundary::EdgeOnly ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
+                                                                                : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+    // uvs stay smooth inside each uv chart and pinned at chart corners, as modelling tools do.
+    options.SetFVarLinearInterpolation(Sdc::Options::FVAR_LINEAR_ALL);
+    const Sdc::SchemeType type = s.scheme == SubdivScheme::Loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK;
+    std::unique_ptr<Far::TopologyRefiner> r(Factory::Create(desc, Factory::Options(type, options)));
+    if (!r) throw InputError(c.source, "", "OpenSubdiv cannot build a subdivision surface from this mesh");
+    return r;
+}
+
+}  // namespace
+
+void check_control_mesh(const ControlMesh& c, SubdivScheme scheme) {
+    const auto nv = static_cast<int>(c.positions.size());
+    if (c.face_count() == 0) throw InputError(c.source, "", "control mesh has no faces");
+    // Directed edge -> face that uses it; an undirected edge may appear once each way.
+    std::unordered_map<uint64_t, size_t> directed;
+    directed.reserve(c.face_vertices.size());
+    size_t corner = 0;
+    for (size_t f = 0; f < c.face_count(); ++f) {
+        const int n = c.face_sizes[f];
+        if (n < 3 || (scheme == SubdivScheme::Loop && n != 3))
+            throw InputError(c.source, fmt::format("face {}", f),
+                             scheme == SubdivScheme::Loop ? "Loop subdivision needs triangles" : "face has fewer than 3 corners");
+        for (int k = 0; k < n; ++k) {
+            const int a = c.face_vertices[corner + k], b = c.face_vertices[corner + (k + 1) % n];
+            if (a < 0 || a >= nv) throw InputError(c.source, fmt::format("face {}", f), "vertex index out of range");
+            if (a == b) throw InputError(c.source, fmt::format("face {}", f), "face repeats a vertex (degenerate)");
+            const uint64_t key = (static_cast<uint64_t>(a) << 32) | static_cast<uint32_t>(b);
+            auto [it, fresh] = directed.emplace(key, f);
+            if (!fresh)
+                throw InputError(c.source, fmt::format("face {}", f),
+                                 fmt::format("edge {}-{} is also used in the same direction by face {}: the mesh is "
+                                             "non-manifold or its faces disagree on orientation", a, b, it->second));
+        }
+        corner += static_cast<size_t>(n);
+    }
+}
+
+int dicing_level(const ControlMesh& c, const std::function<float(const Vec3&)>& pixels_per_unit, float shading_rate,
+                 int min_level, int max_level) {
+    std::vector<float> px;
+    size_t corner = 0;
+    for (size_t f = 0; f < c.face_count(); ++f) {
+        const int n = c.face_sizes[f];
+        for (int k = 0; k < n; ++k) {
+            const Vec3 &a = c.positions[static_cast<size_t>(c.face_vertices[corner + k])],
+                       &b = c.positions[static_cast<size_t>(c.face_vertices[corner + (k + 1) % n])];
+            const float s = pixels_per_unit((a + b) * 0.5f);
+            if (s > 0) px.push_back(length(b - a) * s);
+        }
+        corner += static_cast<size_t>(n);
+    }
+    if (px.empty()) return min_level;
+    auto at = px.begin() + static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(px.size() - 1));
+    std::nth_element(px.begin(), at, px.end());
+    const float levels = std::log2(std::max(*at / shading_rate, 1.0f));
+    return std::clamp(static_cast<int>(std::ceil(levels)), min_level, max_level);
+}
+
+TriangleMesh dice(const SubdivSurface& s, int level) {
+    const ControlMesh& c = s.control;
+    check_control_mesh(c, s.scheme);
+    auto refiner = make_refiner(s);
+    Far::TopologyRefiner::UniformOptions uo(level);
+    uo.fullTopologyInLastLevel = true;  // the limit masks need the last level's edges
+    refiner->RefineUniform(uo);
+    const Far::PrimvarRefiner primvar(*refiner);
+
+    // Positions (and uvs) level by level, then the last level's points pushed to the limit.
+    std::vector<P3> pts(c.positions.size());
+    for (size_t i = 0; i < pts.size(); ++i) pts[i].v = c.positions[i];
+    const bool has_uv = !c.face_uvs.empty();
+    std::vector<P2> uvs(c.uvs.size());
+    for (size_t i = 0; i < uvs.size(); ++i) uvs[i].v = c.uvs[i];
+    for (int l = 1; l <= level; ++l) {
+        std::vector<P3> next(static_cast<size_t>(refiner->GetLevel(l).GetNumVertices()));
+        primvar.Interpolate(l, pts, next);
+        pts.swap(next);
+        if (has_uv) {
+            std::vector<P2> nuv(static_cast<size_t>(refiner->GetLevel(l).GetNumFVarValues(0)));
+            primvar.InterpolateFaceVarying(l, uvs, nuv, 0);
+            uvs.swap(nuv);
+        }
+    }
+    const Far::TopologyLevel& last = refiner->GetLevel(level);
+    const auto nv = static_cast<size_t>(last.GetNumVertices());
+    std::vector<P3> limit(nv), du(nv), dv(nv);
+    primvar.Limit(pts, limit, du, dv);
+
+    // Face normals of the limit mesh orient the limit tangents' cross product (and stand in
+    // where it degenerates).
+    const int nf = last.GetNumFaces();
+    auto face_normal = [&](const Far::ConstIndexArray& fv, const auto& pos) {
+        Vec3 n(0);
+        for (int k = 0; k < fv.size(); ++k) n += cross(pos(fv[k]), pos(fv[(k + 1) % fv.size()]));
+        return n;  // twice the area, along the normal (Newell)
+    };
+    std::vector<Vec3> around(nv, Vec3(0));
+    for (int f = 0; f < nf; ++f) {
+        const auto fv = last.GetFaceVertices(f);
+        const Vec3 n = face_normal(fv, [&](int i) { return limit[static_cast<size_t>(i)].v; });
+        for (int k = 0; k < fv.size(); ++k) around[static_cast<size_t>(fv[k])] += n;
+    }
+    TriangleMesh m;
+    m.base_positions.resize(nv);
+    m.base_normals.resize(nv);
+    for (size_t i = 0; i < nv; ++i) {
+        Vec3 n = cross(du[i].v, dv[i].v);
+        const float len = length(n);
+        if (!(len > 1e-12f * (dot(du[i].v, du[i].v) + dot(dv[i].v, dv[i].v))))
+            n = around[i];
+        else if (dot(n, around[i]) < 0)
+            n = -n;
+        m.base_positions[i] = limit[i].v;
+        m.base_normals[i] = dot(n, n) > 0 ? normalize(n) : Vec3(0, 0, 1);
+    }
+
+    // Displace each topological vertex once (uv seams share the displaced point: no cracks).
+    m.positions = m.base_positions;
+    if (s.displacement.active()) {
+        std::vector<uint8_t> done(nv, 0);
+        for (int f = 0; f < nf; ++f) {
+            const auto fv = last.GetFaceVertices(f);
+            const auto fuv = has_uv ? last.GetFaceFVarValues(f, 0) : Far::ConstIndexArray();
+            for (int k = 0; k < fv.size(); ++k) {
+                const auto i = static_cast<size_t>(fv[k]);
+                if (done[i]) continue;
+                done[i] = 1;
+                const Vec2 uv = has_uv ? uvs[static_cast<size_t>(fuv[k])].v : Vec2{};
+                const float h = s.displacement.map->height(uv) - s.displacement.midpoint;
+                m.positions[i] = m.base_positions[i] + m.base_normals[i] * (s.displacement.scale * h);
+            }
+        }
+        std::vector<Vec3> dn(nv, Vec3(0));
+        for (int f = 0; f < nf; ++f) {
+            const auto fv = last.GetFaceVertices(f);
+            const Vec3 n = face_normal(fv, [&](int i) { return m.positions[static_cast<size_t>(i)]; });
+            for (int k = 0; k < fv.size(); ++k) dn[static_cast<size_t>(fv[k])] += n;
+        }
+        for (size_t i = 0; i < nv; ++i) dn[i] = dot(dn[i], dn[i]) > 0 ? normalize(dn[i]) : m.base_normals[i];
+        m.normals = std::move(dn);
+    } else {
+        m.normals = m.base_normals;
+    }
+
+    // Materials: each diced face inherits its control face's.
+    std::vector<uint32_t> mat(c.face_materials.begin(), c.face_materials.end());
+    if (mat.size() != c.face_count()) mat.assign(c.face_count(), 0);
+    for (int l = 1; l <= level; ++l) {
+        const Far::TopologyLevel& tl = refiner->GetLevel(l);
+        std::vector<uint32_t> child(static_cast<size_t>(tl.GetNumFaces()));
+        for (int f = 0; f < tl.GetNumFaces(); ++f) child[static_cast<size_t>(f)] = mat[static_cast<size_t>(tl.GetFaceParentFace(f))];
+        mat.swap(child);
+    }
+
+    // Output vertices: one per (vertex, uv value) pair; positions repeat across uv seams.
+    std::vector<Vec3> pos = std::move(m.positions), nrm = std::move(m.normals), bp = std::move(m.base_positions),
+                      bn = std::move(m.base_normals);
+    m = TriangleMesh{};
+    std::unordered_map<uint64_t, uint32_t> out_index;
+    auto vertex = [&](int v, int t) {
+        const uint64_t key = (static_cast<uint64_t>(static_cast<uint32_t>(v)) << 32) | static_cast<uint32_t>(t);
+        auto [it, fresh] = out_index.emplace(key, static_cast<uint32_t>(m.positions.size()));
+        if (fresh) {
+            const auto i = static_cast<size_t>(v);
+            m.positions.push_back(pos[i]), m.normals.push_back(nrm[i]);
+            m.base_positions.push_back(bp[i]), m.base_normals.push_back(bn[i]);
+            if (has_uv) m.uvs.push_back(uvs[static_cast<size_t>(t)].v);
+        }
+        return it->second;
+    };
+    for (int f = 0; f < nf; ++f) {
+        const auto fv = last.GetFaceVertices(f);
+        const auto fuv = has_uv ? last.GetFaceFVarValues(f, 0) : Far::ConstIndexArray();
+        uint32_t idx[4];
+        for (int k = 0; k < fv.size() && k < 4; ++k) idx[k] = vertex(fv[k], has_uv ? fuv[k] : 0);
+        for (int k = 1; k + 1 < fv.size() && k < 3; ++k) {  // a fan: one triangle, or two per quad
+            m.indices.insert(m.indices.end(), {idx[0], idx[k], idx[k + 1]});
+            m.face_materials.push_back(mat[static_cast<size_t>(f)]);
+        }
+    }
+    return m;
+}
+
+}  // namespace bounce
