@@ -31,6 +31,15 @@ std::vector<SubPass> subpass_schedule(int first_step) {
 
 namespace {
 
+/// Where a fragment's records live and the hemisphere its gathers use: the un-displaced
+/// surface by default (rays still leave from the displaced point f.p), or the displaced one.
+struct Site {
+    Vec3 p, n;
+};
+Site record_site(const Fragment& f, RecordSurface where) {
+    return where == RecordSurface::Displaced ? Site{f.p, f.n} : Site{f.p_base, f.n_base};
+}
+
 uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k) {
     uint64_t pix = static_cast<uint64_t>(wy + deep.y0) * static_cast<uint64_t>(deep.full_width) +
                    static_cast<uint64_t>(wx + deep.x0);
@@ -51,6 +60,7 @@ Lock lock_cache(const IrradianceCache& cache, Counters& counters) {
 
 void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, IrradianceCache& cache,
                     Stats& stats, ProgressSink* sink, const SubPassCallback& after_subpass, int frame, const Gatherer* first) {
+    const RecordSurface where = cache.settings().displaced_records;
     tbb::enumerable_thread_specific<size_t> full_gathers(0);
     const auto schedule = subpass_schedule(static_cast<int>(cache.settings().max_spacing));
     const bool per_tile = scene.render.parallel.cache_sharing == CacheSharing::PerThread;
@@ -75,15 +85,16 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
                     auto frags = deep.pixel(wx, wy);
                     for (uint32_t k = 0; k < frags.size(); ++k) {
                         const Fragment& f = frags[k];
-                        if (!cache.misses(f.p_base, f.n_base, per_tile ? std::span<const Record>(out)
+                        const Site site = record_site(f, where);
+                        if (!cache.misses(site.p, site.n, per_tile ? std::span<const Record>(out)
                                                                        : std::span<const Record>())) continue;
                         const RandomStream rng = fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k);
-                        GatherResult g = first ? first->gather(f.p, f.n_base, rng, counters) : GatherResult{};
+                        GatherResult g = first ? first->gather(f.p, site.n, rng, counters) : GatherResult{};
                         if (!first || g.rel_stderr > cache.settings().ray_noise) {
-                            g = gatherer.gather(f.p, f.n_base, rng, counters);
+                            g = gatherer.gather(f.p, site.n, rng, counters);
                             ++full_gathers.local();
                         }
-                        Record r = cache.make_record(g, f.p_base, f.n_base, f.footprint, candidate_key(deep, wx, wy, k));
+                        Record r = cache.make_record(g, site.p, site.n, f.footprint, candidate_key(deep, wx, wy, k));
                         r.frame = frame;
                         if (per_tile) {
                             cache.clamp_to_neighbours(r, out);
@@ -137,6 +148,7 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
 
 std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
                                    Stats& stats, ProgressSink* sink, const Gatherer* refiner, std::vector<uint8_t>* refined) {
+    const RecordSurface where = cache.settings().displaced_records;
     std::vector<Indirect> out(deep.fragments.size());
     const float threshold = refiner ? cache.settings().refine : 0.0f;
     if (refined) refined->assign(deep.fragments.size(), 0);
@@ -147,11 +159,12 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
         auto frags = deep.pixel(wx, wy);
         for (uint32_t k = 0; k < frags.size(); ++k) {
             const Fragment& f = frags[k];
-            Interpolated in = cache.lookup(f.p_base, f.n_base, true);
+            const Site site = record_site(f, where);
+            Interpolated in = cache.lookup(site.p, site.n, true);
             ++lookups.local();
             if (threshold > 0 && (in.weight <= 0 || in.spread > threshold)) {
                 GatherResult g = refiner->gather(
-                    f.p, f.n_base, fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), stats.local());
+                    f.p, site.n, fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), stats.local());
                 out[first + k] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
                 if (refined) (*refined)[first + k] = 1;
                 ++own.local();
@@ -194,7 +207,8 @@ std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceC
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = src.empty() ? frags[k] : src[std::min<size_t>(k, src.size() - 1)];
-                Interpolated in = cache.lookup(f.p_base, f.n_base, true);
+                const Site site = record_site(f, cache.settings().displaced_records);
+                Interpolated in = cache.lookup(site.p, site.n, true);
                 out[first + k] = {in.E, in.ao, in.bent, in.dir};
             }
         }

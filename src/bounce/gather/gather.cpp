@@ -260,7 +260,9 @@ std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer
         Counters& counters = stats.local();
         auto frags = deep.pixel(wx, wy);
         for (uint32_t k = 0; k < frags.size(); ++k) {
-            GatherResult g = gatherer.gather(frags[k].p, frags[k].n_base,
+            // The true surface: the displaced point and normal (the cache's un-displaced
+            // hemisphere is its approximation, measured against this).
+            GatherResult g = gatherer.gather(frags[k].p, frags[k].n,
                                              fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), counters);
             out[first + k] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
         }
