@@ -11,6 +11,7 @@ SCENES = {
     "sponza": os.path.join(ROOT, "bench", "scenes", "sponza.json"),
     "sibenik": os.path.join(ROOT, "bench", "scenes", "sibenik.json"),
     "bunny": os.path.join(ROOT, "bench", "scenes", "bunny.json"),
+    "ogre": os.path.join(ROOT, "bench", "scenes", "ogre.json"),
 }
 
 
