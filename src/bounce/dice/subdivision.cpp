@@ -101,10 +101,12 @@ int dicing_level(const ControlMesh& c, const std::function<float(const Vec3&)>& 
         corner += static_cast<size_t>(n);
     }
     if (px.empty()) return min_level;
-    auto at = px.begin() + static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(px.size() - 1));
+    // The median edge, rounded in log2: diced edges of 0.7-1.4 x shading_rate, about two
+    // micropolygons per pixel at rate 1 (the 90th percentile with a ceiling gave 38 on the ogre).
+    auto at = px.begin() + static_cast<std::ptrdiff_t>(px.size() / 2);
     std::nth_element(px.begin(), at, px.end());
     const float levels = std::log2(std::max(*at / shading_rate, 1.0f));
-    return std::clamp(static_cast<int>(std::ceil(levels)), min_level, max_level);
+    return std::clamp(static_cast<int>(std::lround(levels)), min_level, max_level);
 }
 
 TriangleMesh dice(const SubdivSurface& s, int level) {

@@ -60,7 +60,7 @@ void check_control_mesh(const ControlMesh& control, SubdivScheme scheme);
 TriangleMesh dice(const SubdivSurface& surface, int level);
 
 /// The refinement level at which the fine tessellation's edges are about `shading_rate`
-/// pixels: log2 of the 90th percentile of the control edges' projected lengths
+/// pixels: log2 of the median of the control edges' projected lengths, rounded
 /// (`pixels_per_unit(p)`: pixels per world unit at p, 0 behind the camera), in [min, max].
 int dicing_level(const ControlMesh& control, const std::function<float(const Vec3&)>& pixels_per_unit,
                  float shading_rate, int min_level, int max_level);

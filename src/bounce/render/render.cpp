@@ -79,6 +79,24 @@ std::unique_ptr<RadiosityTextures> radiosity_for(const Scene& scene, const Mater
 }
 
 /// Saves the textures when this render baked sides the folder did not hold.
+/// The scene loader's dicing of subdivision surfaces, as a phase with its sizes.
+void report_dicing(const Scene& scene, Stats& stats) {
+    double seconds = 0, micropolygons = 0, ray_triangles = 0;
+    int level = 0;
+    for (const Object& o : scene.objects) {
+        if (o.dicing_level == 0) continue;
+        seconds += o.dicing_seconds;
+        micropolygons += static_cast<double>(o.visible().triangle_count());
+        ray_triangles += static_cast<double>(o.coarse.triangle_count());
+        level = std::max(level, o.dicing_level);
+    }
+    if (level == 0) return;
+    stats.add_phase("dicing", seconds);
+    stats.set("dicing_level", level);
+    stats.set("micropolygons", micropolygons);
+    stats.set("ray_triangles", ray_triangles);
+}
+
 void save_radiosity(const RadiosityTextures& rt, size_t baked_before, const Scene& scene, Stats& stats) {
     const size_t baked = rt.baked_sides();
     stats.set("radiosity_sides_baked", static_cast<double>(baked - baked_before));
@@ -193,6 +211,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
     const int threads = scene.render.parallel.threads > 0 ? scene.render.parallel.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
     stats.set("threads", threads);
+    report_dicing(scene, stats);
     CancellableSink sink(progress, request.cancel);
     ProgressSink* const ps = progress || request.cancel ? &sink : nullptr;
     RenderResult result;

@@ -144,7 +144,7 @@ ParamTable make_table() {
                        .doc("[x0, x1, y0, y1], ends exclusive; all 0 = full frame; the EXR keeps the full display window").flag());
     // Dicing subdivision surfaces.
     rows.push_back(row("shading_rate", "dicing", &R::dicing, &DicingSettings::shading_rate).range(0.05, 64).unit("pixels")
-                       .doc("micropolygon edge length on subdivision surfaces (90 % of control edges reach it)").id(deep | cache).flag());
+                       .doc("micropolygon edge length on subdivision surfaces (the median diced edge, within a factor 1.4)").id(deep | cache).flag());
     rows.push_back(row("ray_level", "dicing", &R::dicing, &DicingSettings::ray_level).range(0, 6).unit("levels")
                        .doc("subdivision level of the coarse tessellation that secondary rays trace").id(rad | cache).flag());
     rows.push_back(row("max_level", "dicing", &R::dicing, &DicingSettings::max_level).range(1, 8).unit("levels")

@@ -67,6 +67,7 @@ struct Object {
     TriangleMesh coarse;        ///< traced by all secondary rays
     TriangleMesh fine;          ///< seen by primary visibility (empty = same as coarse)
     int dicing_level = 0;       ///< subdivision surfaces: the fine tessellation's level (0 = not one)
+    double dicing_seconds = 0;  ///< time the loader spent dicing it
     bool has_fine() const { return !fine.indices.empty(); }
     const TriangleMesh& visible() const { return has_fine() ? fine : coarse; }
 };

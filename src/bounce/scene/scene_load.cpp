@@ -3,6 +3,7 @@
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
+#include <chrono>
 #include <filesystem>
 
 #include "bounce/core/error.h"
@@ -178,6 +179,7 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
     const int ray_level = std::min(ds.ray_level, ds.max_level);
     const int level = dicing_level(surf.control, [&](const Vec3& p) { return pixels_per_unit(scene.camera, p); },
                                    ds.shading_rate, ray_level, ds.max_level);
+    const auto t0 = std::chrono::steady_clock::now();
     try {
         obj.coarse = dice(surf, ray_level);
         if (level > ray_level) obj.fine = dice(surf, level);
@@ -185,6 +187,7 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
         r.fail(e.what()[0] ? "displacement" : "file", e.what());
     }
     obj.dicing_level = level;
+    obj.dicing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 void read_object(const JsonReader& r, Scene& scene, size_t index) {
