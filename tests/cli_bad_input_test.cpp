@@ -1,5 +1,6 @@
 // Hostile inputs that used to crash, hang, pass silently or destroy files: each now exits 2
 // with the file and the place, and leaves every file as it was.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -83,6 +84,31 @@ TEST(BadInput, NegativeAndNanFlagsExitTwo) {
     // A frame that cannot fit is refused up front with the estimate, not with std::bad_alloc.
     refused("render " + test::cornell_scene() + " -o " + d.file("big.exr") + " -q --res 60000x60000",
             {"camera.resolution", "needs about", "GiB"});
+}
+
+TEST(BadInput, SubdivisionSurfacesThatCannotBeDiced) {
+    test::TempDir d;
+    std::string obj;  // a 45 x 45 grid of quads
+    for (int j = 0; j <= 45; ++j)
+        for (int i = 0; i <= 45; ++i) obj += fmt::format("v {} {} 0\nvt {} {}\n", i, j, i / 45.0, j / 45.0);
+    for (int j = 0; j < 45; ++j)
+        for (int i = 0; i < 45; ++i) {
+            const int a = j * 46 + i + 1;
+            obj += fmt::format("f {0}/{0} {1}/{1} {2}/{2} {3}/{3}\n", a, a + 1, a + 47, a + 46);
+        }
+    d.write("grid.obj", obj);
+    nlohmann::json j = test::base_scene();
+    j["objects"] = {{{"file", "grid.obj"}, {"subdivision", "catmull-clark"}, {"displacement", {{"map", "nowhere.png"}, {"scale", 0.1}}}}};
+    d.write("nomap.json", j.dump());
+    refused(render_cmd(d.file("nomap.json"), d.file("x.exr")), {"nomap.json", "/objects/0/displacement/map", "nowhere.png"});
+    j["objects"][0]["displacement"] = {{"map", "grid.obj"}, {"scale", 1e39}};
+    d.write("huge.json", j.dump());
+    refused(render_cmd(d.file("huge.json"), d.file("x.exr")), {"huge.json", "/objects/0/displacement/scale"});
+    j["objects"][0].erase("displacement");
+    j["camera"]["resolution"] = {2048, 2048};
+    d.write("dense.json", j.dump());
+    refused("render " + d.file("dense.json") + " -o " + d.file("x.exr") + " -q --max-level 8 --shading-rate 0.05",
+            {"dense.json", "/objects/0", "micropolygons", "render.shading_rate"});
 }
 
 TEST(BadInput, SceneFilesThatLie) {

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 
 #include "bounce/core/error.h"
@@ -137,6 +138,9 @@ Light read_light(const JsonReader& r, const Scene& scene) {
     return l;
 }
 
+/// Most micropolygons one object may be diced into (~150 bytes each with its BVH).
+constexpr double kMaxMicropolygons = 1e8;
+
 /// Pixels per world unit at p on the image plane of `cam` (0 behind it).
 float pixels_per_unit(const Camera& cam, const Vec3& p) {
     const Vec3 forward = normalize(cam.look_at - cam.position);
@@ -179,6 +183,14 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
     const int ray_level = std::min(ds.ray_level, ds.max_level);
     const int level = dicing_level(surf.control, [&](const Vec3& p) { return pixels_per_unit(scene.camera, p); },
                                    ds.shading_rate, ray_level, ds.max_level);
+    // Refuse a dicing that cannot fit before allocating it (each level multiplies by 4).
+    const double corners = static_cast<double>(surf.control.face_vertices.size());
+    const double micropolygons = (surf.scheme == SubdivScheme::Loop ? corners / 3 * 4 : corners * 2) *
+                                 std::pow(4.0, std::max(level, ray_level) - 1);
+    if (micropolygons > kMaxMicropolygons)
+        r.fail("", fmt::format("dicing {} at level {} gives {:.3g} micropolygons (about {:.0f} GiB); the limit is {:.0e}: raise "
+                               "render.shading_rate or lower render.max_level / render.ray_level",
+                               obj.name, std::max(level, ray_level), micropolygons, micropolygons * 150 / (1 << 30), kMaxMicropolygons));
     const auto t0 = std::chrono::steady_clock::now();
     try {
         obj.coarse = dice(surf, ray_level);
