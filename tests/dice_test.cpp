@@ -12,6 +12,7 @@
 #include "bounce/deep/deep_buffer.h"
 #include "bounce/dice/displacement.h"
 #include "bounce/dice/subdivision.h"
+#include "bounce/gather/ao_bake.h"
 #include "bounce/render/render.h"
 #include "test_util.h"
 
@@ -219,6 +220,61 @@ TEST(Dice, BadSubdivisionInputIsRefusedWithFileAndPlace) {
     expect_error({{"file", "quads.obj"}, {"subdivision", "catmull-clark"}, {"displacement", {{"map", "quads.obj"}, {"scale", 1e39}}}},
                  {"/objects/0/displacement/scale"});
     expect_error({{"file", "quads.obj"}, {"subdivision", "bspline"}}, {"/objects/0/subdivision", "catmull-clark"});
+}
+
+}  // namespace
+}  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(BakeAo, UnderAParallelCeilingTheOpenFractionIsTheAnalyticOne) {
+    // A point h below an infinite ceiling sees it within distance D for cos(theta) > h / D; a
+    // cosine-weighted direction has cos^2 uniform, so the open fraction is (h / D)^2.
+    test::TempDir dir;
+    nlohmann::json j = test::base_scene();
+    const std::string scene = displaced_grid_scene(dir, 0.0f);
+    j = nlohmann::json::parse(std::ifstream(scene));
+    j["objects"][0].erase("displacement");
+    j["objects"].push_back({{"type", "quad"}, {"vertices", {{-20, -20, 0.5}, {20, -20, 0.5}, {20, 20, 0.5}, {-20, 20, 0.5}}}});
+    dir.write("ceiling.json", j.dump());
+    Scene s = load_scene(dir.file("ceiling.json"));
+    SceneAccel accel(s);
+    Stats stats;
+    AoBakeSettings bs;
+    bs.resolution = 32;
+    bs.rays = 256;
+    bs.distance = 1;
+    const std::vector<float> ao = bake_ao(s, accel, 0, bs, stats, nullptr);
+    double sum = 0, n = 0;
+    for (int y = 2; y < 30; ++y)  // inside the left uv chart (u < 0.5), away from its borders
+        for (int x = 2; x < 14; ++x) sum += ao[static_cast<size_t>(y) * 32 + x], ++n;
+    EXPECT_NEAR(sum / n, 0.25, 0.005);
+    bs.distance = 0.4f;  // shorter than h: nothing occludes
+    for (float v : bake_ao(s, accel, 0, bs, stats, nullptr)) ASSERT_EQ(v, 1.0f);
+}
+
+TEST(BakeAo, TheMaterialsOcclusionScalesIndirectLightAndAo) {
+    test::TempDir dir;
+    const std::string scene = displaced_grid_scene(dir, 0.05f);
+    write_map(dir, "half.exr", 4, 4, [](float, float) { return 0.5f; });
+    nlohmann::json j = nlohmann::json::parse(std::ifstream(scene));
+    j["materials"] = {{"skin", nlohmann::json::object()}};
+    j["objects"][0]["material"] = "skin";
+    dir.write("plain.json", j.dump());
+    j["materials"]["skin"]["ao_texture"] = "half.exr";
+    dir.write("baked.json", j.dump());
+    const std::vector<Override> gi = {"render.gi=\"brute\"", "render.rays=16"};
+    Stats s1, s2;
+    RenderResult plain = render(load_scene(dir.file("plain.json"), gi), RenderRequest{}, s1, nullptr);
+    RenderResult baked = render(load_scene(dir.file("baked.json"), gi), RenderRequest{}, s2, nullptr);
+    const Layer *a = plain.image.find("indirect"), *b = baked.image.find("indirect");
+    ASSERT_TRUE(a && b);
+    double ratio = 0, n = 0;
+    for (size_t i = 0; i < a->data.size(); ++i)
+        if (a->data[i] > 0) ratio += b->data[i] / a->data[i], ++n;
+    ASSERT_GT(n, 1000);
+    EXPECT_NEAR(ratio / n, 0.5, 1e-5);
 }
 
 }  // namespace

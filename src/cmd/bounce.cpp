@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
 #include "bounce/cache/cache_file.h"
@@ -17,6 +18,7 @@
 #include "bounce/core/image.h"
 #include "bounce/core/image_compare.h"
 #include "bounce/core/files.h"
+#include "bounce/gather/ao_bake.h"
 #include "bounce/render/frame.h"
 #include "bounce/render/render.h"
 #include "bounce/scene/params_cli.h"
@@ -113,6 +115,54 @@ int run_params(bool json, bool markdown) {
     else
         for (const Param& p : scene_params())
             std::printf("%-32s %-10s %-24s %s\n", p.key.c_str(), p.stage.c_str(), p.default_value().dump().c_str(), p.doc.c_str());
+    return 0;
+}
+
+struct BakeAoArgs {
+    std::string scene, object, output;
+    int resolution = 1024, rays = 256;
+    float distance = 0;
+};
+
+/// `bounce bake-ao`: an object's occlusion by its own fine detail, in its uv space (EXR, one
+/// channel), for a material's ao_texture.
+int run_bake_ao(const BakeAoArgs& a) {
+    check_input_file(a.scene);
+    check_output_file(a.output, {a.scene});
+    if (!a.output.ends_with(".exr")) throw InputError("command line", "-o " + a.output, "the occlusion map is an OpenEXR file (.exr)");
+    Scene scene = load_scene(a.scene);
+    std::vector<std::string> names;
+    uint32_t id = 0;
+    for (; id < scene.objects.size() && scene.objects[id].name != a.object; ++id) names.push_back(scene.objects[id].name);
+    if (id == scene.objects.size()) {
+        for (const Object& o : scene.objects) names.push_back(o.name);
+        const std::string hint = closest_match(a.object, names);
+        throw InputError("command line", "--object " + a.object,
+                         "no such object" + (hint.empty() ? std::string() : " (did you mean \"" + hint + "\"?)"));
+    }
+    AoBakeSettings bs;
+    bs.resolution = a.resolution;
+    bs.rays = a.rays;
+    // By default only occluders within a few displacement heights: the cache sees the rest.
+    bs.distance = a.distance > 0 ? a.distance : 4 * scene.objects[id].displacement_bound;
+    if (!(bs.distance > 0))
+        throw InputError("command line", "--distance", "object " + a.object + " is not displaced: give the occlusion distance");
+    SceneAccel accel(scene);
+    Stats stats;
+    const std::unique_ptr<ProgressSink> progress = isatty(STDERR_FILENO) ? make_terminal_progress() : make_log_progress();
+    const std::vector<float> ao = bake_ao(scene, accel, id, bs, stats, progress.get());
+    write_atomically(a.output, [&](const std::string& tmp) {
+        auto out = OIIO::ImageOutput::create(tmp);
+        OIIO::ImageSpec spec(bs.resolution, bs.resolution, 1, OIIO::TypeDesc::HALF);
+        spec.channelnames = {"Y"};
+        spec.attribute("compression", "zip");
+        spec.attribute("bounce:ao_distance", bs.distance);
+        spec.attribute("bounce:ao_rays", bs.rays);
+        if (!out || !out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, ao.data()) || !out->close())
+            throw std::runtime_error("cannot write " + a.output + ": " + OIIO::geterror());
+    });
+    std::fprintf(stderr, "wrote %s (%dx%d, %d rays per texel, distance %g)\n", a.output.c_str(), bs.resolution, bs.resolution, bs.rays,
+                 static_cast<double>(bs.distance));
     return 0;
 }
 
@@ -309,6 +359,16 @@ int main(int argc, char** argv) {
     params->add_flag("--json", params_json, "print JSON (the lighting tool's spreadsheet)");
     params->add_flag("--markdown", params_markdown_flag, "print the Markdown table of docs/scene-format.md");
 
+    BakeAoArgs ba;
+    CLI::App* bake = app.add_subcommand("bake-ao", "bake an object's occlusion by its fine (displaced) detail into its uv space");
+    bake->add_option("scene", ba.scene, "scene file")->required();
+    bake->add_option("--object", ba.object, "the object's name")->required();
+    bake->add_option("-o,--output", ba.output, "occlusion map (EXR) for a material's ao_texture")->required();
+    bake->add_option("--res", ba.resolution, "texels per side")->check(CLI::Range(1, 16384));
+    bake->add_option("--rays", ba.rays, "rays per texel")->check(CLI::Range(1, 1 << 20));
+    bake->add_option("--distance", ba.distance, "occluders beyond this do not count; default 4x the displacement bound")
+        ->check(CLI::Range(0.0, 1e18));
+
     CompareArgs ca;
     CLI::App* compare = app.add_subcommand("compare", "error of a render against a reference, per layer");
     compare->add_option("test", ca.test, "the render to judge (EXR)")->required();
@@ -364,6 +424,7 @@ int main(int argc, char** argv) {
         if (*render) return run_render(ra);
         if (*params) return run_params(params_json, params_markdown_flag);
         if (*compare) return run_compare(ca);
+        if (*bake) return run_bake_ao(ba);
         if (*cinfo) return run_cache_info(ka);
         if (*cmerge) return run_cache_merge(ka);
         if (*cfilter) return run_cache_filter(ka);

@@ -11,7 +11,7 @@ namespace bounce {
 Materials::Materials(const Scene& scene) : scene_(scene) {
     bool any = false;
     for (const auto& m : scene.materials)
-        any |= !m.color_texture.empty() || !m.bump_texture.empty() || !m.normal_texture.empty();
+        any |= !m.color_texture.empty() || !m.bump_texture.empty() || !m.normal_texture.empty() || !m.ao_texture.empty();
     if (any) {
         textures_ = OIIO::TextureSystem::create(false);
         textures_->attribute("max_memory_MB", 1024.0f);
@@ -19,7 +19,7 @@ Materials::Materials(const Scene& scene) : scene_(scene) {
     }
     auto unique = [](const std::string& f) { return f.empty() ? nullptr : OIIO::ustring(f).c_str(); };
     for (const auto& m : scene.materials)
-        names_.push_back({unique(m.color_texture), unique(m.bump_texture), unique(m.normal_texture)});
+        names_.push_back({unique(m.color_texture), unique(m.bump_texture), unique(m.normal_texture), unique(m.ao_texture)});
 }
 
 Materials::~Materials() {
@@ -89,6 +89,10 @@ SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t p
     if (!m.color_texture.empty() && textures_) {
         float rgb[3] = {1, 1, 1};
         if (lookup(textures_, names_[material].color, uv, du, dv, 3, rgb)) s.albedo = m.color * Color(rgb[0], rgb[1], rgb[2]);
+    }
+    if (!m.ao_texture.empty() && textures_) {
+        float ao = 1;
+        if (lookup(textures_, names_[material].ao, uv, du, dv, 1, &ao)) s.occlusion = std::clamp(ao, 0.0f, 1.0f);
     }
     if (!m.has_bump() || !tangents || !textures_) return s;
     if (!m.bump_texture.empty()) {

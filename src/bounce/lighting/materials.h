@@ -22,6 +22,7 @@ struct SurfaceShading {
     Color specular{0};     ///< GGX F0 (0 = no glossy lobe)
     float roughness = 1;
     Vec3 normal{0, 0, 1};  ///< shading normal after bump / normal mapping (unit; = n without)
+    float occlusion = 1;   ///< the material's baked AO (ao_texture), multiplying indirect light and AO
 };
 
 class Materials {
@@ -49,6 +50,7 @@ private:
         const char* color = nullptr;
         const char* bump = nullptr;
         const char* normal = nullptr;
+        const char* ao = nullptr;
     };
     const Scene& scene_;
     OIIO::TextureSystem* textures_ = nullptr;

@@ -57,6 +57,7 @@ struct Material {
     std::string bump_texture;   ///< height map (texture units per uv unit x bump_strength)
     std::string normal_texture; ///< tangent-space normal map (used when there is no bump map)
     float bump_strength = 1.0f; ///< scales the bump height or the normal map's tilt; 0 = off
+    std::string ao_texture;     ///< baked occlusion (bounce bake-ao) multiplying the indirect light and AO
     bool has_specular() const { return specular.x > 0 || specular.y > 0 || specular.z > 0; }
     bool has_bump() const { return bump_strength != 0 && (!bump_texture.empty() || !normal_texture.empty()); }
     bool is_emissive() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }
@@ -68,6 +69,7 @@ struct Object {
     TriangleMesh fine;          ///< seen by primary visibility (empty = same as coarse)
     int dicing_level = 0;       ///< subdivision surfaces: the fine tessellation's level (0 = not one)
     double dicing_seconds = 0;  ///< time the loader spent dicing it
+    float displacement_bound = 0;  ///< largest distance displacement moves a point (0 = none)
     bool has_fine() const { return !fine.indices.empty(); }
     const TriangleMesh& visible() const { return has_fine() ? fine : coarse; }
 };

@@ -96,6 +96,7 @@ Material read_material(const JsonReader& m, const std::string& name) {
         if (mat.specular[i] > 1) m.fail("specular", "specular components must be <= 1");
     mat.roughness = static_cast<float>(m.number("roughness", mat.roughness, 0.01, 1));
     mat.bump_texture = m.file("bump_texture", false);
+    mat.ao_texture = m.file("ao_texture", false);
     mat.normal_texture = m.file("normal_texture", false);
     mat.bump_strength = static_cast<float>(m.number("bump_strength", mat.bump_strength, -1e3, 1e3));
     return mat;
@@ -199,6 +200,9 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
         r.fail(e.what()[0] ? "displacement" : "file", e.what());
     }
     obj.dicing_level = level;
+    if (surf.displacement.active())
+        obj.displacement_bound = std::abs(surf.displacement.scale) *
+                                 std::max(std::abs(surf.displacement.midpoint), std::abs(1 - surf.displacement.midpoint));
     obj.dicing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -330,7 +334,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
         if (!mats.is_object()) root.fail("materials", "expected an object of named materials");
         for (auto it = mats.begin(); it != mats.end(); ++it) {
             JsonReader m(it.value(), "/materials/" + it.key(), ctx, {"color", "color_texture", "emission", "specular", "roughness",
-                                                                     "bump_texture", "normal_texture", "bump_strength"});
+                                                                     "bump_texture", "normal_texture", "bump_strength", "ao_texture"});
             scene.materials.push_back(read_material(m, it.key()));
         }
     }
@@ -397,7 +401,7 @@ uint64_t Scene::fingerprint(const std::vector<std::string>& parts, bool without_
         if (without_surface_shading && part == "materials" && value.is_object())
             for (auto& [name, m] : value.items())
                 if (m.is_object())
-                    for (const char* key : {"specular", "roughness", "bump_texture", "normal_texture", "bump_strength"})
+                    for (const char* key : {"specular", "roughness", "bump_texture", "normal_texture", "bump_strength", "ao_texture"})
                         m.erase(key);
         std::string s = part + "=" + (value.is_null() ? "" : value.dump());
         for (unsigned char c : s) h = hash_combine(h, c);

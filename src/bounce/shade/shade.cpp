@@ -74,14 +74,14 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                 const Vec3 wo = normalize(camera.origin() - f.p);
                 if (indirect) {
                     const Indirect& in = (*indirect)[first + k];
-                    e_ind += in.irradiance * f.weight;
-                    occl += in.ao * f.weight;
+                    const float w = f.weight * surf.occlusion;  // baked AO of detail the gather cannot see
+                    e_ind += in.irradiance * w;
+                    occl += in.ao * w;
                     bn += in.bent_normal * f.weight;
                     if (ao_only)
-                        b += Color(in.ao) * f.weight;
+                        b += Color(in.ao) * w;
                     else
-                        b += indirect_radiance(in, on_base ? f.n_base : f.n, surf, wo, scene.render.shading.light_per_channel) *
-                             f.weight;
+                        b += indirect_radiance(in, on_base ? f.n_base : f.n, surf, wo, scene.render.shading.light_per_channel) * w;
                 }
                 if (!ao_only) {
                     Color radiance = direct_radiance ? (*direct_radiance)[first + k]
