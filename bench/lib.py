@@ -70,16 +70,21 @@ def corrected(err, ref_err):
 
 
 def loglog_time_at(points, err):
-    """Time at error `err` on a curve of (time, error) points, interpolated in log-log."""
+    """Time at error `err` on a curve of (time, error) points, interpolated in log-log. Only
+    segments where the lower error took longer count: a noisy series whose error rises with
+    time (Hessian radii shrinking with more rays) says nothing about the time at an error, and
+    extrapolating along it gave absurd speed-ups."""
     pts = sorted(points, key=lambda p: p[1])  # by error
+    ok = lambda a, b: b[1] > a[1] and a[0] > b[0]
     for (t0, e0), (t1, e1) in zip(pts, pts[1:]):
-        if e0 <= err <= e1 and e1 > e0:
+        if e0 <= err <= e1 and ok((t0, e0), (t1, e1)):
             f = (math.log(err) - math.log(e0)) / (math.log(e1) - math.log(e0))
             return math.exp(math.log(t0) + f * (math.log(t1) - math.log(t0)))
-    # Outside the curve: extrapolate along its nearest segment (and say so).
-    if len(pts) >= 2 and (err < pts[0][1] or err > pts[-1][1]):
+    # Just outside the curve (within 25 % of its error range): extrapolate along its nearest
+    # segment, and say so. Farther out a stalling curve would promise what it never reaches.
+    if len(pts) >= 2 and (0.8 * pts[0][1] <= err < pts[0][1] or pts[-1][1] < err <= 1.25 * pts[-1][1]):
         (t0, e0), (t1, e1) = (pts[0], pts[1]) if err < pts[0][1] else (pts[-2], pts[-1])
-        if e1 > e0 and t0 != t1:
+        if ok((t0, e0), (t1, e1)):
             slope = (math.log(t1) - math.log(t0)) / (math.log(e1) - math.log(e0))
             return math.exp(math.log(t0) + slope * (math.log(err) - math.log(e0))), "extrapolated"
     return None
