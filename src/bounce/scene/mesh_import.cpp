@@ -5,10 +5,10 @@
 #include <fmt/format.h>
 
 #include <assimp/Importer.hpp>
+#include <array>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <array>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -47,6 +47,20 @@ const aiScene* import_file(Assimp::Importer& imp, const std::string& path, unsig
     const aiScene* s = imp.ReadFile(path, flags);
     if (!s) throw InputError(path, "", std::string("cannot load mesh: ") + imp.GetErrorString());
     return s;
+}
+
+/// Calls fn(mesh, world transform) for every mesh instance of the node tree.
+template <typename Fn>
+void for_each_mesh_instance(const aiScene* s, Fn&& fn) {
+    std::vector<std::pair<const aiNode*, aiMatrix4x4>> stack{{s->mRootNode, s->mRootNode->mTransformation}};
+    while (!stack.empty()) {
+        auto [node, world] = stack.back();
+        stack.pop_back();
+        for (unsigned c = 0; c < node->mNumChildren; ++c)
+            stack.emplace_back(node->mChildren[c], world * node->mChildren[c]->mTransformation);
+        const Transform t = to_transform(world);
+        for (unsigned k = 0; k < node->mNumMeshes; ++k) fn(s->mMeshes[node->mMeshes[k]], t);
+    }
 }
 
 struct GltfCamera {
@@ -255,34 +269,23 @@ TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
     const aiScene* s = import_file(imp, path, kAssimpFlags);
     const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material);
     TriangleMesh out;
-    // Walk the node tree so each mesh instance gets its node's transform.
-    std::vector<std::pair<const aiNode*, aiMatrix4x4>> stack{{s->mRootNode, s->mRootNode->mTransformation}};
-    while (!stack.empty()) {
-        auto [node, world] = stack.back();
-        stack.pop_back();
-        for (unsigned c = 0; c < node->mNumChildren; ++c)
-            stack.emplace_back(node->mChildren[c], world * node->mChildren[c]->mTransformation);
-        Transform t = to_transform(world);
-        for (unsigned k = 0; k < node->mNumMeshes; ++k) {
-            const aiMesh* am = s->mMeshes[node->mMeshes[k]];
-            if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
-            TriangleMesh m;
-            for (unsigned v = 0; v < am->mNumVertices; ++v) {
-                m.positions.push_back(t.point(to_vec3(am->mVertices[v])));
-                if (am->mNormals) m.normals.push_back(t.normal(to_vec3(am->mNormals[v])));
-                if (am->mTextureCoords[0])
-                    m.uvs.push_back({am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y});
-            }
-            const uint32_t mat = mat_map[am->mMaterialIndex];
-            for (unsigned f = 0; f < am->mNumFaces; ++f) {
-                const aiFace& face = am->mFaces[f];
-                if (face.mNumIndices != 3) continue;
-                m.indices.insert(m.indices.end(), {face.mIndices[0], face.mIndices[1], face.mIndices[2]});
-                m.face_materials.push_back(mat);
-            }
-            out.append(m);
+    for_each_mesh_instance(s, [&](const aiMesh* am, const Transform& t) {
+        if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) return;
+        TriangleMesh m;
+        for (unsigned v = 0; v < am->mNumVertices; ++v) {
+            m.positions.push_back(t.point(to_vec3(am->mVertices[v])));
+            if (am->mNormals) m.normals.push_back(t.normal(to_vec3(am->mNormals[v])));
+            if (am->mTextureCoords[0]) m.uvs.push_back({am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y});
         }
-    }
+        const uint32_t mat = mat_map[am->mMaterialIndex];
+        for (unsigned f = 0; f < am->mNumFaces; ++f) {
+            const aiFace& face = am->mFaces[f];
+            if (face.mNumIndices != 3) continue;
+            m.indices.insert(m.indices.end(), {face.mIndices[0], face.mIndices[1], face.mIndices[2]});
+            m.face_materials.push_back(mat);
+        }
+        out.append(m);
+    });
     if (out.triangle_count() == 0) throw InputError(path, "", "mesh has no triangles");
     return out;
 }
@@ -299,36 +302,27 @@ ControlMesh load_control_mesh(const std::string& path, const std::string& prefix
     std::map<std::array<float, 3>, int> vertex_of;
     std::map<std::array<float, 2>, int> uv_of;
     bool any_uv = false;
-    std::vector<std::pair<const aiNode*, aiMatrix4x4>> stack{{s->mRootNode, s->mRootNode->mTransformation}};
-    while (!stack.empty()) {
-        auto [node, world] = stack.back();
-        stack.pop_back();
-        for (unsigned k = 0; k < node->mNumChildren; ++k)
-            stack.emplace_back(node->mChildren[k], world * node->mChildren[k]->mTransformation);
-        const Transform t = to_transform(world);
-        for (unsigned k = 0; k < node->mNumMeshes; ++k) {
-            const aiMesh* am = s->mMeshes[node->mMeshes[k]];
-            if (!(am->mPrimitiveTypes & aiPrimitiveType_POLYGON) && !(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
-            any_uv |= am->mTextureCoords[0] != nullptr;
-            for (unsigned f = 0; f < am->mNumFaces; ++f) {
-                const aiFace& face = am->mFaces[f];
-                if (face.mNumIndices < 3) continue;
-                c.face_sizes.push_back(static_cast<int>(face.mNumIndices));
-                c.face_materials.push_back(mat_map[am->mMaterialIndex]);
-                for (unsigned i = 0; i < face.mNumIndices; ++i) {
-                    const unsigned v = face.mIndices[i];
-                    const Vec3 p = transform.point(t.point(to_vec3(am->mVertices[v])));
-                    auto [it, fresh] = vertex_of.emplace(std::array<float, 3>{p.x, p.y, p.z}, static_cast<int>(c.positions.size()));
-                    if (fresh) c.positions.push_back(p);
-                    c.face_vertices.push_back(it->second);
-                    const Vec2 uv = am->mTextureCoords[0] ? Vec2{am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y} : Vec2{};
-                    auto [ut, ufresh] = uv_of.emplace(std::array<float, 2>{uv.x, uv.y}, static_cast<int>(c.uvs.size()));
-                    if (ufresh) c.uvs.push_back(uv);
-                    c.face_uvs.push_back(ut->second);
-                }
+    for_each_mesh_instance(s, [&](const aiMesh* am, const Transform& t) {
+        if (!(am->mPrimitiveTypes & (aiPrimitiveType_POLYGON | aiPrimitiveType_TRIANGLE))) return;
+        any_uv |= am->mTextureCoords[0] != nullptr;
+        for (unsigned f = 0; f < am->mNumFaces; ++f) {
+            const aiFace& face = am->mFaces[f];
+            if (face.mNumIndices < 3) continue;
+            c.face_sizes.push_back(static_cast<int>(face.mNumIndices));
+            c.face_materials.push_back(mat_map[am->mMaterialIndex]);
+            for (unsigned i = 0; i < face.mNumIndices; ++i) {
+                const unsigned v = face.mIndices[i];
+                const Vec3 p = transform.point(t.point(to_vec3(am->mVertices[v])));
+                auto [it, fresh] = vertex_of.emplace(std::array<float, 3>{p.x, p.y, p.z}, static_cast<int>(c.positions.size()));
+                if (fresh) c.positions.push_back(p);
+                c.face_vertices.push_back(it->second);
+                const Vec2 uv = am->mTextureCoords[0] ? Vec2{am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y} : Vec2{};
+                auto [ut, ufresh] = uv_of.emplace(std::array<float, 2>{uv.x, uv.y}, static_cast<int>(c.uvs.size()));
+                if (ufresh) c.uvs.push_back(uv);
+                c.face_uvs.push_back(ut->second);
             }
         }
-    }
+    });
     if (!any_uv) c.uvs.clear(), c.face_uvs.clear();
     if (c.face_count() == 0) throw InputError(path, "", "mesh has no polygons");
     for (const Vec3& p : c.positions)
