@@ -279,3 +279,29 @@ TEST(BakeAo, TheMaterialsOcclusionScalesIndirectLightAndAo) {
 
 }  // namespace
 }  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(Dice, GathersOnFoldedDisplacementStayFinite) {
+    // Steep random displacement folds the surface over its un-displaced normal: gathers about
+    // Nref from P then hit the surface at distance 0 (the ogre's lips did), which once made
+    // the translational gradient 0 * inf.
+    test::TempDir dir;
+    const std::string scene = displaced_grid_scene(dir, 0.6f);
+    for (const char* where : {"\"undisplaced\"", "\"displaced\""}) {
+        Stats stats;
+        RenderResult r = render(load_scene(scene, {"render.gi=\"cache\"", "render.rays=64", std::string("render.displaced_records=") + where}),
+                                RenderRequest{}, stats, nullptr);
+        for (size_t i = 0; i < r.cache->size(); ++i) {
+            const Record& rec = r.cache->record(i);
+            for (int c = 0; c < 3; ++c) ASSERT_TRUE(isfinite(rec.grad_t[static_cast<size_t>(c)]) && isfinite(rec.grad_r[static_cast<size_t>(c)]));
+            ASSERT_TRUE(isfinite(rec.E));
+        }
+        for (const Layer& l : r.image.layers)
+            for (float v : l.data) ASSERT_TRUE(std::isfinite(v)) << l.name << " " << where;
+    }
+}
+
+}  // namespace
+}  // namespace bounce

@@ -206,7 +206,7 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
             if (j >= 1) {  // boundary between rows j-1 and j moves radially
                 const auto cp = static_cast<size_t>((j - 1) * N + k);
                 float rmin = std::min(R[c], R[cp]);
-                if (std::isfinite(rmin)) {
+                if (std::isfinite(rmin) && rmin > 0) {  // a hit at 0 (a fold of a displaced surface) moves nothing
                     float coef = sin_lo * (1 - sin_lo * sin_lo) / rmin;
                     radial += (L[c] - L[cp]) * coef;
                     aradial += (U[c] - U[cp]) * coef;
@@ -215,7 +215,7 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
             // boundary between columns k-1 and k moves in azimuth
             const auto cq = static_cast<size_t>(j * N + kprev);
             float rmin = std::min(R[c], R[cq]);
-            if (std::isfinite(rmin)) {
+            if (std::isfinite(rmin) && rmin > 0) {
                 float coef = (sin_hi - sin_lo) / rmin;
                 azim += (L[c] - L[cq]) * coef;
                 aazim += (U[c] - U[cq]) * coef;
