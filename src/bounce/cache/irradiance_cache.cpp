@@ -19,7 +19,7 @@ bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Recor
     return w < settings_.min_weight;
 }
 
-Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading) const {
+Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading, const Vec3* at_p, const Vec3* at_n) const {
     const CacheSettings& s = shading ? shading_settings_ : settings_;
     Interpolated out;
     // Weighted mean of differences from the first contributing record's value: a constant
@@ -37,7 +37,7 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading)
         Color ei = r.E;
         float ai = r.ao;
         if (settings_.gradients) {
-            Vec3 dp = p - r.p, rot = cross(r.n, n);
+            const Vec3 dp = (at_p ? *at_p : p) - r.p, rot = cross(r.n, at_n ? *at_n : n);
             for (int c = 0; c < 3; ++c) {
                 auto k = static_cast<size_t>(c);
                 float v = r.E[c] + dot(dp, r.grad_t[k]) + dot(rot, r.grad_r[k]);

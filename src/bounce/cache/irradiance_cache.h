@@ -39,7 +39,11 @@ public:
 
     /// Interpolates at (p, n). The result's weight is 0 when no record applies. `shading`
     /// uses the shading pass's longer reach (CacheSettings::shading_reach).
-    Interpolated lookup(const Vec3& p, const Vec3& n, bool shading = false) const;
+    /// `at_p`, `at_n` (default p, n): where the gradients extrapolate each record's value to,
+    /// when records are looked up on another surface (the displaced point and normal of a
+    /// fragment whose records live on the un-displaced surface).
+    Interpolated lookup(const Vec3& p, const Vec3& n, bool shading = false, const Vec3* at_p = nullptr,
+                        const Vec3* at_n = nullptr) const;
     /// Sum of record weights at (p, n) (cheaper than lookup).
     float weight_sum(const Vec3& p, const Vec3& n) const;
     /// True when a lookup at (p, n) would miss: the weights of this cache's records and of

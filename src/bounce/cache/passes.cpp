@@ -160,7 +160,7 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
         for (uint32_t k = 0; k < frags.size(); ++k) {
             const Fragment& f = frags[k];
             const Site site = record_site(f, where);
-            Interpolated in = cache.lookup(site.p, site.n, true);
+            Interpolated in = cache.lookup(site.p, site.n, true, &f.p, &f.n);  // extrapolated to the displaced surface
             ++lookups.local();
             if (threshold > 0 && (in.weight <= 0 || in.spread > threshold)) {
                 GatherResult g = refiner->gather(
@@ -208,7 +208,7 @@ std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceC
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = src.empty() ? frags[k] : src[std::min<size_t>(k, src.size() - 1)];
                 const Site site = record_site(f, cache.settings().displaced_records);
-                Interpolated in = cache.lookup(site.p, site.n, true);
+                Interpolated in = cache.lookup(site.p, site.n, true, &f.p, &f.n);  // extrapolated to the displaced surface
                 out[first + k] = {in.E, in.ao, in.bent, in.dir};
             }
         }

@@ -86,7 +86,7 @@ Color RadiosityMap::lookup(uint32_t prim, float u, float v, bool front_side) con
 }
 
 uint64_t RadiosityTextures::fingerprint(const Scene& scene, const RadiositySettings& s) {
-    uint64_t h = scene.fingerprint({"objects", "materials", "lights"});
+    uint64_t h = scene.fingerprint({"objects", "materials", "lights"}, true);  // gloss, bumps, baked AO: not in the bake
     h = hash_combine(h, std::bit_cast<uint32_t>(effective_texel(scene, s)));
     h = hash_combine(h, static_cast<uint64_t>(effective_light_samples(scene, s)));
     return hash_combine(h, static_cast<uint64_t>(s.max_level));

@@ -59,10 +59,6 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
         deep, scene.render.parallel.tile_size, sink, "shading", [&](int wx, int wy, size_t first) {
             Counters& counters = stats.local();
             int x = wx + deep.x0, y = wy + deep.y0;
-            // The normal the indirect light was gathered about: the un-displaced one for cache
-            // records kept there, the surface's own for brute force (docs/displacement.md).
-            const bool on_base = scene.render.indirect.gi == GiMode::Cache &&
-                                 scene.render.cache.displaced_records == RecordSurface::Undisplaced;
             Color b(0), d(0), a(0), e_ind(0);
             Vec3 n(0), bn(0);
             float cover = 0, z = INFINITY, occl = 0;
@@ -81,7 +77,7 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                     if (ao_only)
                         b += Color(in.ao) * w;
                     else
-                        b += indirect_radiance(in, on_base ? f.n_base : f.n, surf, wo, scene.render.shading.light_per_channel) * w;
+                        b += indirect_radiance(in, f.n, surf, wo, scene.render.shading.light_per_channel) * w;
                 }
                 if (!ao_only) {
                     Color radiance = direct_radiance ? (*direct_radiance)[first + k]
