@@ -305,3 +305,57 @@ TEST(Dice, GathersOnFoldedDisplacementStayFinite) {
 
 }  // namespace
 }  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(Dice, RayOffsettingKeepsADisplacedSurfaceFreeOfSelfHits) {
+    // Seen from inside, a cube cage's limit surface pushed out by a constant displacement is a
+    // concave, nearly spherical wall (radius ~1.2, tighter near the cage's corners). Within an
+    // AO distance of 0.1 it hides only rays a few degrees from its tangent plane: measured AO
+    // >= 0.94 (a few grazing hits near the corners). Rays leave the fine (level >= 3)
+    // surface but trace the coarse (level 1) one, whose chords lie in front of the fine surface
+    // seen from inside: without the offsetting most rays would hit them at once.
+    test::TempDir dir;
+    std::string obj;
+    for (int k = 0; k < 8; ++k) obj += fmt::format("v {} {} {}\n", k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1);
+    obj += "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
+    for (const char* f : {"1/1 3/2 4/3 2/4", "5/1 6/2 8/3 7/4", "1/1 2/2 6/3 5/4", "3/1 7/2 8/3 4/4", "1/1 5/2 7/3 3/4", "2/1 4/2 8/3 6/4"})
+        obj += std::string("f ") + f + "\n";
+    dir.write("cube.obj", obj);
+    write_map(dir, "one.exr", 4, 4, [](float, float) { return 1.0f; });
+    nlohmann::json j = {{"camera", {{"position", {0, 0, 0}}, {"look_at", {0.3, 0.2, 1}}, {"fov", 60}, {"resolution", {48, 48}}}},
+                        {"render", {{"spp", 1}, {"ray_level", 1}, {"shading_rate", 0.25}}},
+                        {"lights", {{{"type", "sky"}, {"color", 1}}}},
+                        {"objects", {{{"file", "cube.obj"}, {"subdivision", "catmull-clark"},
+                                      {"displacement", {{"map", "one.exr"}, {"scale", 0.2}, {"midpoint", 0}}}}}}};
+    const std::string scene = dir.write("convex.json", j.dump());
+    // Occluded fragments (AO below 1) among fully covered pixels, and how many were covered.
+    auto self_hits = [&](const std::vector<Override>& extra) {
+        std::vector<Override> o = {"render.gi=\"brute\"", "render.ao=true", "render.rays=64", "render.ao_distance=0.1"};
+        o.insert(o.end(), extra.begin(), extra.end());
+        Scene s = load_scene(scene, o);
+        EXPECT_GT(s.objects[0].dicing_level, 2);
+        Stats stats;
+        RenderResult r = render(s, RenderRequest{}, stats, nullptr);
+        const Layer* ao = r.image.find("ao");
+        size_t covered = 0, occluded = 0;
+        for (size_t i = 0; i < r.deep.pixel_count(); ++i) {
+            float cover = 0;
+            for (const Fragment& f : r.deep.pixel(static_cast<int>(i % 48), static_cast<int>(i / 48))) cover += f.weight;
+            if (cover < 1) continue;
+            ++covered;
+            occluded += ao->data[i] < 0.9f;
+        }
+        return std::pair{occluded, covered};
+    };
+    auto [occluded, covered] = self_hits({});
+    EXPECT_EQ(covered, 48u * 48u);
+    EXPECT_EQ(occluded, 0u) << "of " << covered;
+    // The control: without the offset the same gathers hit the coarse surface (measured: 1 459
+    // of 2 304 fragments under 0.9, mean AO 0.71).
+    EXPECT_GT(self_hits({"render.ray_offset=0"}).first, covered / 2);
+}
+
+}  // namespace
+}  // namespace bounce
