@@ -359,3 +359,24 @@ TEST(Dice, RayOffsettingKeepsADisplacedSurfaceFreeOfSelfHits) {
 
 }  // namespace
 }  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(Dice, TheShippedDisplacedSceneRendersThroughTheCache) {
+    Scene s = load_scene(test::source_dir() + "/scenes/displaced/displaced.json",
+                         {"camera.resolution=[96,64]", "render.gi=\"cache\"", "render.rays=64"});
+    ASSERT_GT(s.objects[0].dicing_level, s.render.dicing.ray_level);
+    ASSERT_GT(s.objects[1].dicing_level, 0);
+    Stats stats;
+    RenderResult r = render(s, RenderRequest{}, stats, nullptr);
+    EXPECT_GT(r.cache->size(), 50u);
+    for (const char* name : {"indirect", "ao", "direct"})
+        for (float v : r.image.find(name)->data) ASSERT_TRUE(std::isfinite(v)) << name;
+    size_t apart = 0;  // fragments on the displaced objects keep their un-displaced surface
+    for (const Fragment& f : r.deep.fragments) apart += f.object < 2 && length(f.p - f.p_base) > 1e-4f;
+    EXPECT_GT(apart, 500u);
+}
+
+}  // namespace
+}  // namespace bounce

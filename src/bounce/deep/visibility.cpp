@@ -21,6 +21,8 @@ struct Accum {
     float depth, footprint;
     int count;
     Vec3 p_base{0}, n_base{0};  ///< sums over the subsamples of a displaced surface
+    Vec3 n_base0{0};            ///< the first subsample's (oriented) un-displaced normal
+    int based = 0;              ///< subsamples that carried an un-displaced surface
 };
 
 }  // namespace
@@ -118,7 +120,13 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     ++g->count;
                     if (obj.visible().displaced()) {
                         auto [pb, nb] = base_point(obj.visible(), h.prim, h.u, h.v);
-                        g->p_base += pb, g->n_base += dot(nb, dn) > 0 ? -nb : nb;
+                        // On the side of the displaced normal seen: at a silhouette a bump can face
+                        // the camera where the smooth surface under it does not, and flipping Nref
+                        // towards the camera there turned the records' hemisphere inside the
+                        // model (black blotches on a displaced ball's outline).
+                        const Vec3 o = dot(nb, sp.n) < 0 ? -nb : nb;
+                        if (g->based++ == 0) g->n_base0 = o;
+                        g->p_base += pb, g->n_base += o;
                     }
                 }
                 auto& out = per_pixel[static_cast<size_t>(wy) * deep.width + wx];
@@ -141,9 +149,9 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     f.n = normalize(a.n);
                     f.ng = normalize(a.ng);
                     // Cache records live on the un-displaced surface when there is one.
-                    const bool displaced = dot(a.n_base, a.n_base) > 0;
-                    f.p_base = displaced ? a.p_base / c : f.p;
-                    f.n_base = displaced ? normalize(a.n_base) : f.n;
+                    // (Across a fold the subsamples' orientations can cancel: keep the first's.)
+                    f.p_base = a.based ? a.p_base / static_cast<float>(a.based) : f.p;
+                    f.n_base = !a.based ? f.n : dot(a.n_base, a.n_base) > 1e-12f ? normalize(a.n_base) : a.n_base0;
                     f.uv = {a.uv.x / c, a.uv.y / c};
                     f.material = a.material, f.object = a.object, f.prim = a.prim;
                     f.depth = a.depth / c;
