@@ -139,23 +139,23 @@ TriangleMesh dice(const SubdivSurface& s, int level) {
     std::vector<P3> limit(nv), du(nv), dv(nv);
     primvar.Limit(pts, limit, du, dv);
 
-    // Face normals of the limit mesh orient the limit tangents' cross product (and stand in
-    // where it degenerates).
+    // Per vertex, the sum of its faces' normals (Newell: twice the area, along the normal),
+    // for vertex positions `pos`.
     const int nf = last.GetNumFaces();
-    auto face_normal = [&](const Far::ConstIndexArray& fv, const auto& pos) {
-        Vec3 n(0);
-        for (int k = 0; k < fv.size(); ++k) n += cross(pos(fv[k]), pos(fv[(k + 1) % fv.size()]));
-        return n;  // twice the area, along the normal (Newell)
+    auto normal_sums = [&](const auto& pos) {
+        std::vector<Vec3> sums(nv, Vec3(0));
+        for (int f = 0; f < nf; ++f) {
+            const auto fv = last.GetFaceVertices(f);
+            Vec3 n(0);
+            for (int k = 0; k < fv.size(); ++k) n += cross(pos(fv[k]), pos(fv[(k + 1) % fv.size()]));
+            for (int k = 0; k < fv.size(); ++k) sums[static_cast<size_t>(fv[k])] += n;
+        }
+        return sums;
     };
-    std::vector<Vec3> around(nv, Vec3(0));
-    for (int f = 0; f < nf; ++f) {
-        const auto fv = last.GetFaceVertices(f);
-        const Vec3 n = face_normal(fv, [&](int i) { return limit[static_cast<size_t>(i)].v; });
-        for (int k = 0; k < fv.size(); ++k) around[static_cast<size_t>(fv[k])] += n;
-    }
-    TriangleMesh m;
-    m.base_positions.resize(nv);
-    m.base_normals.resize(nv);
+    // The limit mesh's face normals orient the limit tangents' cross product (and stand in
+    // where it degenerates).
+    const std::vector<Vec3> around = normal_sums([&](int i) { return limit[static_cast<size_t>(i)].v; });
+    std::vector<Vec3> bp(nv), bn(nv);  // per topological vertex: the un-displaced surface
     for (size_t i = 0; i < nv; ++i) {
         Vec3 n = cross(du[i].v, dv[i].v);
         const float len = length(n);
@@ -163,12 +163,12 @@ TriangleMesh dice(const SubdivSurface& s, int level) {
             n = around[i];
         else if (dot(n, around[i]) < 0)
             n = -n;
-        m.base_positions[i] = limit[i].v;
-        m.base_normals[i] = dot(n, n) > 0 ? normalize(n) : Vec3(0, 0, 1);
+        bp[i] = limit[i].v;
+        bn[i] = dot(n, n) > 0 ? normalize(n) : Vec3(0, 0, 1);
     }
 
     // Displace each topological vertex once (uv seams share the displaced point: no cracks).
-    m.positions = m.base_positions;
+    std::vector<Vec3> pos = bp, nrm = bn;  // per topological vertex: the displaced surface
     if (s.displacement.active()) {
         std::vector<uint8_t> done(nv, 0);
         for (int f = 0; f < nf; ++f) {
@@ -180,19 +180,11 @@ TriangleMesh dice(const SubdivSurface& s, int level) {
                 done[i] = 1;
                 const Vec2 uv = has_uv ? uvs[static_cast<size_t>(fuv[k])].v : Vec2{};
                 const float h = s.displacement.map->height(uv) - s.displacement.midpoint;
-                m.positions[i] = m.base_positions[i] + m.base_normals[i] * (s.displacement.scale * h);
+                pos[i] = bp[i] + bn[i] * (s.displacement.scale * h);
             }
         }
-        std::vector<Vec3> dn(nv, Vec3(0));
-        for (int f = 0; f < nf; ++f) {
-            const auto fv = last.GetFaceVertices(f);
-            const Vec3 n = face_normal(fv, [&](int i) { return m.positions[static_cast<size_t>(i)]; });
-            for (int k = 0; k < fv.size(); ++k) dn[static_cast<size_t>(fv[k])] += n;
-        }
-        for (size_t i = 0; i < nv; ++i) dn[i] = dot(dn[i], dn[i]) > 0 ? normalize(dn[i]) : m.base_normals[i];
-        m.normals = std::move(dn);
-    } else {
-        m.normals = m.base_normals;
+        nrm = normal_sums([&](int i) { return pos[static_cast<size_t>(i)]; });
+        for (size_t i = 0; i < nv; ++i) nrm[i] = dot(nrm[i], nrm[i]) > 0 ? normalize(nrm[i]) : bn[i];
     }
 
     // Materials: each diced face inherits its control face's.
@@ -206,9 +198,7 @@ TriangleMesh dice(const SubdivSurface& s, int level) {
     }
 
     // Output vertices: one per (vertex, uv value) pair; positions repeat across uv seams.
-    std::vector<Vec3> pos = std::move(m.positions), nrm = std::move(m.normals), bp = std::move(m.base_positions),
-                      bn = std::move(m.base_normals);
-    m = TriangleMesh{};
+    TriangleMesh m;
     std::unordered_map<uint64_t, uint32_t> out_index;
     auto vertex = [&](int v, int t) {
         const uint64_t key = (static_cast<uint64_t>(static_cast<uint32_t>(v)) << 32) | static_cast<uint32_t>(t);
