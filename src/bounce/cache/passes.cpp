@@ -40,6 +40,12 @@ Site record_site(const Fragment& f, RecordSurface where) {
     return where == RecordSurface::Displaced ? Site{f.p, f.n} : Site{f.p_base, f.n_base};
 }
 
+/// The shading-pass interpolation at a fragment: weights at its record site, each record's
+/// value extrapolated with its gradients to the fragment's own (displaced) point and normal.
+Interpolated interpolate_at(const IrradianceCache& cache, const Fragment& f, const Site& site) {
+    return cache.lookup(site.p, site.n, true, &f.p, &f.n);
+}
+
 uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k) {
     uint64_t pix = static_cast<uint64_t>(wy + deep.y0) * static_cast<uint64_t>(deep.full_width) +
                    static_cast<uint64_t>(wx + deep.x0);
@@ -160,7 +166,7 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
         for (uint32_t k = 0; k < frags.size(); ++k) {
             const Fragment& f = frags[k];
             const Site site = record_site(f, where);
-            Interpolated in = cache.lookup(site.p, site.n, true, &f.p, &f.n);  // extrapolated to the displaced surface
+            Interpolated in = interpolate_at(cache, f, site);
             ++lookups.local();
             if (threshold > 0 && (in.weight <= 0 || in.spread > threshold)) {
                 GatherResult g = refiner->gather(
@@ -207,8 +213,7 @@ std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceC
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = src.empty() ? frags[k] : src[std::min<size_t>(k, src.size() - 1)];
-                const Site site = record_site(f, cache.settings().displaced_records);
-                Interpolated in = cache.lookup(site.p, site.n, true, &f.p, &f.n);  // extrapolated to the displaced surface
+                Interpolated in = interpolate_at(cache, f, record_site(f, cache.settings().displaced_records));
                 out[first + k] = {in.E, in.ao, in.bent, in.dir};
             }
         }

@@ -78,7 +78,6 @@ std::unique_ptr<RadiosityTextures> radiosity_for(const Scene& scene, const Mater
     return rt;
 }
 
-/// Saves the textures when this render baked sides the folder did not hold.
 /// The scene loader's dicing of subdivision surfaces, as a phase with its sizes.
 void report_dicing(const Scene& scene, Stats& stats) {
     double seconds = 0, micropolygons = 0, ray_triangles = 0;
@@ -97,6 +96,7 @@ void report_dicing(const Scene& scene, Stats& stats) {
     stats.set("ray_triangles", ray_triangles);
 }
 
+/// Saves the textures when this render baked sides the folder did not hold.
 void save_radiosity(const RadiosityTextures& rt, size_t baked_before, const Scene& scene, Stats& stats) {
     const size_t baked = rt.baked_sides();
     stats.set("radiosity_sides_baked", static_cast<double>(baked - baked_before));
