@@ -196,8 +196,9 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
     try {
         obj.coarse = dice(surf, ray_level);
         if (level > ray_level) obj.fine = dice(surf, level);
-    } catch (const InputError& e) {
-        r.fail(e.what()[0] ? "displacement" : "file", e.what());
+    } catch (const InputError& e) {  // a map that cannot be read after all, or OpenSubdiv refusing the mesh
+        const bool map = surf.displacement.map && e.file() == surf.displacement.map->path();
+        r.fail(map ? "displacement/map" : "file", e.what());
     }
     obj.dicing_level = level;
     if (surf.displacement.active())
