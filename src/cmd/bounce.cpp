@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -55,12 +56,16 @@ Scene load_render_scene(const RenderArgs& a) {
     return scene;
 }
 
+/// Progress on stderr: a bar on a terminal, log lines otherwise, nothing with -q.
+std::unique_ptr<ProgressSink> make_progress(bool quiet) {
+    if (quiet) return make_null_progress();
+    return isatty(STDERR_FILENO) ? make_terminal_progress() : make_log_progress();
+}
+
 int render_frame(const RenderArgs& a, const FrameFiles& files, int frame) {
     Scene scene = load_render_scene(a);
     files.check();
-    std::unique_ptr<ProgressSink> sink = a.quiet ? make_null_progress()
-                                         : isatty(STDERR_FILENO) ? make_terminal_progress()
-                                                                 : make_log_progress();
+    std::unique_ptr<ProgressSink> sink = make_progress(a.quiet);
     Stats stats;
     RenderRequest request;
     request.deep_in = files.deep_in;
@@ -131,10 +136,10 @@ int run_bake_ao(const BakeAoArgs& a) {
     check_output_file(a.output, {a.scene});
     if (!a.output.ends_with(".exr")) throw InputError("command line", "-o " + a.output, "the occlusion map is an OpenEXR file (.exr)");
     Scene scene = load_scene(a.scene);
-    std::vector<std::string> names;
-    uint32_t id = 0;
-    for (; id < scene.objects.size() && scene.objects[id].name != a.object; ++id) names.push_back(scene.objects[id].name);
-    if (id == scene.objects.size()) {
+    const auto it = std::find_if(scene.objects.begin(), scene.objects.end(), [&](const Object& o) { return o.name == a.object; });
+    const auto id = static_cast<uint32_t>(it - scene.objects.begin());
+    if (it == scene.objects.end()) {
+        std::vector<std::string> names;
         for (const Object& o : scene.objects) names.push_back(o.name);
         const std::string hint = closest_match(a.object, names);
         throw InputError("command line", "--object " + a.object,
@@ -149,7 +154,7 @@ int run_bake_ao(const BakeAoArgs& a) {
         throw InputError("command line", "--distance", "object " + a.object + " is not displaced: give the occlusion distance");
     SceneAccel accel(scene);
     Stats stats;
-    const std::unique_ptr<ProgressSink> progress = isatty(STDERR_FILENO) ? make_terminal_progress() : make_log_progress();
+    const std::unique_ptr<ProgressSink> progress = make_progress(false);
     const std::vector<float> ao = bake_ao(scene, accel, id, bs, stats, progress.get());
     write_atomically(a.output, [&](const std::string& tmp) {
         auto out = OIIO::ImageOutput::create(tmp);
