@@ -153,10 +153,9 @@ float pixels_per_unit(const Camera& cam, const Vec3& p) {
 /// A mesh object with "subdivision": its control mesh diced into the fine tessellation (from
 /// the camera, render.dicing) and the coarse one (render.dicing.ray_level), both displaced
 /// when the object has a "displacement".
-void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object& obj) {
+void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object& obj, SubdivScheme scheme) {
     SubdivSurface surf;
-    surf.scheme = r.choice("subdivision", "none", {"none", "catmull-clark", "loop"}) == "loop" ? SubdivScheme::Loop
-                                                                                           : SubdivScheme::CatmullClark;
+    surf.scheme = scheme;
     surf.boundary = r.choice("boundary", "edge-and-corner", {"edge-only", "edge-and-corner"}) == "edge-only"
                         ? SubdivBoundary::EdgeOnly : SubdivBoundary::EdgeAndCorner;
     if (r.has("fine_subdivisions")) r.fail("fine_subdivisions", "a subdivision surface is diced by render.dicing, not fine_subdivisions");
@@ -235,8 +234,9 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         return static_cast<uint32_t>(d);
     };
     int fine = 0;
-    if (type == "mesh" && r.choice("subdivision", "none", {"none", "catmull-clark", "loop"}) != "none") {
-        read_subdivision_object(r, scene, mat, obj);
+    const std::string subdivision = r.choice("subdivision", "none", {"none", "catmull-clark", "loop"});
+    if (type == "mesh" && subdivision != "none") {
+        read_subdivision_object(r, scene, mat, obj, subdivision == "loop" ? SubdivScheme::Loop : SubdivScheme::CatmullClark);
     } else if (type == "mesh") {
         std::string file = r.file("file", true);
         fine = r.integer("fine_subdivisions", 0, 0, 6);
