@@ -2,9 +2,9 @@
 
 #include <signal.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <filesystem>
-#include <algorithm>
 
 #include "bounce/core/error.h"
 

@@ -257,9 +257,9 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
             mat_map[i] = static_cast<uint32_t>(materials.size());
             materials.push_back(m);
         }
-    }
-    else
+    } else {
         mat_map.assign(s->mNumMaterials, static_cast<uint32_t>(override_material));
+    }
     return mat_map;
 }
 
