@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <stdexcept>
 #include <tuple>
 #include <utility>
 
@@ -30,18 +31,8 @@ void TriangleMesh::append(const TriangleMesh& o) {
     if (uvs.empty() != o.uvs.empty()) {
         if (uvs.empty() && !positions.empty()) uvs.assign(positions.size(), Vec2{});
     }
-    // Base attributes: a displaced part keeps its own, an undisplaced one is its own base.
-    if (displaced() || o.displaced()) {
-        if (!displaced()) base_positions = positions, base_normals = normals_or_geometric();
-        if (o.displaced()) {
-            base_positions.insert(base_positions.end(), o.base_positions.begin(), o.base_positions.end());
-            base_normals.insert(base_normals.end(), o.base_normals.begin(), o.base_normals.end());
-        } else {
-            base_positions.insert(base_positions.end(), o.positions.begin(), o.positions.end());
-            const auto on = o.normals_or_geometric();
-            base_normals.insert(base_normals.end(), on.begin(), on.end());
-        }
-    }
+    // Dicing makes each displaced object's mesh whole; nothing appends to one.
+    if (displaced() || o.displaced()) throw std::logic_error("TriangleMesh::append: displaced meshes are not appended");
     positions.insert(positions.end(), o.positions.begin(), o.positions.end());
     if (!o.normals.empty()) normals.insert(normals.end(), o.normals.begin(), o.normals.end());
     else if (!normals.empty()) normals.resize(positions.size(), Vec3(0));
@@ -167,19 +158,6 @@ TriangleMesh make_quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
 }  // namespace bounce
 
 namespace bounce {
-
-std::vector<Vec3> TriangleMesh::normals_or_geometric() const {
-    if (!normals.empty()) return normals;
-    std::vector<Vec3> n(positions.size(), Vec3(0));
-    for (size_t t = 0; t < triangle_count(); ++t) {
-        const uint32_t *i = &indices[3 * t];
-        const Vec3 c = cross(positions[i[1]] - positions[i[0]], positions[i[2]] - positions[i[0]]);
-        for (int k = 0; k < 3; ++k) n[i[k]] += c;
-    }
-    for (auto& v : n)
-        if (dot(v, v) > 0) v = normalize(v);
-    return n;
-}
 
 std::pair<Vec3, Vec3> base_point(const TriangleMesh& m, uint32_t prim, float u, float v) {
     const uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];

@@ -27,9 +27,7 @@ struct TriangleMesh {
     Bounds bounds() const;
     /// Applies a transform to positions and normals.
     void transform(const Transform& t);
-    /// Per vertex normals: the authored ones, or the area-weighted face normals.
-    std::vector<Vec3> normals_or_geometric() const;
-    /// Appends another mesh (indices re-based).
+    /// Appends another mesh (indices re-based); neither may be displaced.
     void append(const TriangleMesh& other);
 };
 
