@@ -52,6 +52,25 @@ CacheFile random_cache(size_t n, uint64_t salt = 0) {
     return f;
 }
 
+/// `file` (serialised, no records after the header) with `from` replaced by `to` in its header
+/// and the header checksum made valid again, so only that edit is wrong.
+std::string with_header_edit(const std::string& file, const std::string& from, const std::string& to) {
+    uint32_t old_len;
+    std::memcpy(&old_len, file.data() + 12, 4);
+    std::string header = file.substr(16, old_len);
+    const auto at = header.find(from);
+    if (at == std::string::npos) throw std::logic_error("no " + from + " in the header");
+    header.replace(at, from.size(), to);
+    std::string out = file.substr(0, 12);
+    const auto len = static_cast<uint32_t>(header.size());
+    out.append(reinterpret_cast<const char*>(&len), 4);
+    out += header;
+    uint64_t h = 0xcbf29ce484222325ULL;  // FNV-1a 64, as the format says
+    for (unsigned char ch : header) h = (h ^ ch) * 0x100000001b3ULL;
+    out.append(reinterpret_cast<const char*>(&h), 8);
+    return out + file.substr(16 + old_len + 8);  // the blocks, unchanged
+}
+
 bool same_bits(const Record& a, const Record& b) {
     CacheFile x, y;
     x.records = {a};
@@ -82,8 +101,24 @@ TEST(CacheFile, RoundTripIsBitExactForEveryField) {
 
 TEST(CacheTools, MergeWithItselfAddsNothing) {
     CacheFile a = random_cache(300);
+    for (uint64_t i = 0; i < 40; ++i) a.fragment_records.push_back(random_record(5000 + i));
     CacheFile m = merge_caches(a, a, "a", "a", false);
     EXPECT_EQ(m.records.size(), a.records.size());
+    EXPECT_EQ(m.fragment_records.size(), 40u);
+}
+
+TEST(CacheTools, MergeKeepsOneFragmentRecordPerKeyWhateverTheOrder) {
+    CacheFile a = random_cache(0), b = random_cache(0);
+    for (uint64_t i = 0; i < 30; ++i) a.fragment_records.push_back(random_record(7000 + i));
+    for (uint64_t i = 20; i < 50; ++i) b.fragment_records.push_back(random_record(7000 + i));
+    b.fragment_records[0].E = Color(0.25f);  // the same fragment (key), gathered again: another value
+    CacheFile ab = merge_caches(a, b, "a", "b", false), ba = merge_caches(b, a, "b", "a", false);
+    ASSERT_EQ(ab.fragment_records.size(), 50u);
+    EXPECT_EQ(serialize_cache_file(ab), serialize_cache_file(ba));
+    RecordFilter inside;
+    inside.where = {"frame==1"};
+    for (const Record& r : filter_cache(ab, inside, false).fragment_records) EXPECT_EQ(r.frame, 1);
+    EXPECT_EQ(filter_cache(ab, inside, false).fragment_records.size() + filter_cache(ab, inside, true).fragment_records.size(), 50u);
 }
 
 TEST(CacheTools, MergeIsCommutativeInContent) {
@@ -137,6 +172,27 @@ TEST(CacheTools, PlyExportHasOnePointPerRecord) {
     EXPECT_EQ(s.size() - (end + 11), 10u * (11 * 4 + 3));  // 11 floats + 3 colour bytes each
 }
 
+TEST(CacheFile, FragmentRecordsRoundTripAfterTheSharedOnes) {
+    CacheFile f = random_cache(3000);
+    for (uint64_t i = 0; i < 2000; ++i) f.fragment_records.push_back(random_record(10000 + i));  // blocks mix both
+    const std::string bytes = serialize_cache_file(f);
+    CacheFile back = parse_cache_file(bytes, "mem");
+    ASSERT_EQ(back.records.size(), 3000u);
+    ASSERT_EQ(back.fragment_records.size(), 2000u);
+    for (size_t i = 0; i < 3000; ++i) ASSERT_TRUE(same_bits(f.records[i], back.records[i])) << i;
+    for (size_t i = 0; i < 2000; ++i) ASSERT_TRUE(same_bits(f.fragment_records[i], back.fragment_records[i])) << i;
+    // Moving the split between the two kinds is caught as a count the bytes cannot hold or leave over.
+    EXPECT_THROW(parse_cache_file(with_header_edit(bytes, "\"fragment_record_count\":2000", "\"fragment_record_count\":2001"), "m"),
+                 InputError);
+    EXPECT_THROW(parse_cache_file(with_header_edit(bytes, "\"fragment_record_count\":2000", "\"fragment_record_count\":-1"), "m"),
+                 InputError);
+    // A file written before fragment records existed (no such key) reads as having none.
+    const std::string old = with_header_edit(serialize_cache_file(random_cache(7)), "\"fragment_record_count\":0,", "");
+    CacheFile o = parse_cache_file(old, "old.bic");
+    EXPECT_EQ(o.records.size(), 7u);
+    EXPECT_TRUE(o.fragment_records.empty());
+}
+
 TEST(CacheFile, BadFilesAreRefusedCleanly) {
     const std::string good = serialize_cache_file(random_cache(20));
     auto refused = [](const std::string& bytes, const std::string& expect) {
@@ -172,18 +228,7 @@ TEST(CacheFile, BadFilesAreRefusedCleanly) {
     std::string huge = serialize_cache_file(empty);
     auto pos = huge.find("\"record_count\":0");
     ASSERT_NE(pos, std::string::npos);
-    std::string header_json = huge.substr(16, huge.size() - 16 - 8);
-    std::string bigger = header_json;
-    bigger.replace(bigger.find("\"record_count\":0"), 16, "\"record_count\":1000000000000000");
-    // Rebuild with a valid header checksum so only the count is wrong.
-    std::string rebuilt = huge.substr(0, 12);
-    uint32_t len = static_cast<uint32_t>(bigger.size());
-    rebuilt.append(reinterpret_cast<const char*>(&len), 4);
-    rebuilt += bigger;
-    uint64_t h = 0xcbf29ce484222325ULL;
-    for (unsigned char ch : bigger) h = (h ^ ch) * 0x100000001b3ULL;
-    rebuilt.append(reinterpret_cast<const char*>(&h), 8);
-    refused(rebuilt, "cannot fit");
+    refused(with_header_edit(huge, "\"record_count\":0", "\"record_count\":1000000000000000"), "cannot fit");
 }
 
 /// Renders and, like a front end, writes the cache after the image.

@@ -1,6 +1,9 @@
 // Per-fragment refinement: fragments whose records disagree get gathers of their own.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
+#include "bounce/cache/cache_file.h"
 #include "bounce/cache/irradiance_cache.h"
 #include "bounce/render/render.h"
 #include "bounce/scene/scene_load.h"
@@ -58,12 +61,11 @@ TEST(Refine, RefinedFragmentsCarryTheirOwnGatherExactly) {
     EXPECT_EQ(s2.to_json()["shading_misses"].get<double>(), 0.0);
 }
 
-TEST(Refine, OffChangesNothingAndTheDecisionDoesNotDependOnThreads) {
-    Stats s0, s1, s2, s3;
-    RenderResult plain = render(cornell({"render.gi=\"cache\""}), {}, s0, nullptr);
+TEST(Refine, OffMakesNoFragmentRecordsAndTheDecisionDoesNotDependOnThreads) {
+    Stats s1, s2, s3;
     RenderResult off = render(cornell({"render.gi=\"cache\"", "render.refine=0"}), {}, s1, nullptr);
-    EXPECT_TRUE(plain.image.find("beauty")->data == off.image.find("beauty")->data);
     EXPECT_EQ(off.image.find("refined"), nullptr);
+    EXPECT_EQ(off.cache->fragment_record_count(), 0u);
     RenderResult one = render(cornell({"render.gi=\"cache\"", "render.refine=0.05", "render.threads=1"}), {}, s2, nullptr);
     RenderResult two = render(cornell({"render.gi=\"cache\"", "render.refine=0.05", "render.threads=2"}), {}, s3, nullptr);
     ASSERT_NE(one.image.find("refined"), nullptr);
@@ -72,6 +74,49 @@ TEST(Refine, OffChangesNothingAndTheDecisionDoesNotDependOnThreads) {
     const double n = s2.to_json()["refined_fragments"].get<double>();
     EXPECT_GT(n, 0.0);
     EXPECT_LT(n, 40.0 * 40.0);
+    EXPECT_EQ(one.cache->fragment_record_count(), static_cast<size_t>(n));
+    // Unrefined fragments see only the shared records: the same light as without refinement.
+    const Layer &mask = *one.image.find("refined"), &a = *one.image.find("indirect"), &b = *off.image.find("indirect");
+    size_t differ = 0;
+    for (size_t i = 0; i < mask.data.size(); ++i)
+        if (mask.data[i] == 0.0f) differ += a.data[3 * i] != b.data[3 * i];
+    EXPECT_EQ(differ, 0u);
+}
+
+TEST(Refine, RefinedFragmentsAreStoredInTheCacheAndAReshadeGathersNothing) {
+    test::TempDir d;
+    Stats s1, s2;
+    const Scene scene = cornell({"render.gi=\"cache\"", "render.refine=0.05"});
+    RenderResult first = render(scene, {}, s1, nullptr);
+    write_cache_file(d.file("c.bic"), first.cache->to_file(first.cache_info));
+    const double made = s1.to_json()["refined_fragments"].get<double>();
+    ASSERT_GT(made, 0.0);
+    EXPECT_EQ(read_cache_file(d.file("c.bic")).fragment_records.size(), static_cast<size_t>(made));
+    RenderRequest again;
+    again.cache_in = d.file("c.bic");
+    RenderResult second = render(scene, again, s2, nullptr);
+    EXPECT_EQ(s2.total().gather_rays, 0u);
+    EXPECT_EQ(s2.to_json()["refined_fragments"].get<double>(), 0.0);
+    EXPECT_EQ(s2.to_json()["fragment_records_used"].get<double>(), made);
+    EXPECT_TRUE(first.image.find("indirect")->data == second.image.find("indirect")->data);
+    EXPECT_TRUE(first.image.find("refined")->data == second.image.find("refined")->data);
+}
+
+TEST(Refine, AFragmentRecordServesOnlyItsKeyAtItsExactPoint) {
+    IrradianceCache cache(Bounds{Vec3(-10), Vec3(10)}, CacheSettings{}, false);
+    Record r;
+    r.p = {1, 2, 3};
+    r.E = Color(5);
+    r.key = 77;
+    cache.insert_fragment_record(r);
+    r.E = Color(9);
+    cache.insert_fragment_record(r);  // the same key again: the first stays
+    ASSERT_NE(cache.fragment_record(77, {1, 2, 3}), nullptr);
+    EXPECT_EQ(cache.fragment_record(77, {1, 2, 3})->E, Color(5));
+    EXPECT_EQ(cache.fragment_record(77, {1, 2, std::nextafter(3.0f, 4.0f)}), nullptr);  // another deep buffer's fragment
+    EXPECT_EQ(cache.fragment_record(78, {1, 2, 3}), nullptr);
+    EXPECT_EQ(cache.size(), 0u);  // no lookup can find it
+    EXPECT_EQ(cache.lookup({1, 2, 3}, {0, 0, 1}).weight, 0.0f);
 }
 
 }  // namespace

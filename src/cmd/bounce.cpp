@@ -291,7 +291,7 @@ int run_cache_merge(const CacheArgs& a) {
     CacheFile out = read_cache_file(a.inputs[0]);
     for (size_t i = 1; i < a.inputs.size(); ++i) out = merge_caches(out, read_cache_file(a.inputs[i]), a.inputs[0], a.inputs[i], a.force);
     write_cache_file(a.output, out);
-    std::fprintf(stderr, "%s: %zu records\n", a.output.c_str(), out.records.size());
+    std::fprintf(stderr, "%s: %zu records, %zu fragment records\n", a.output.c_str(), out.records.size(), out.fragment_records.size());
     return 0;
 }
 
@@ -318,7 +318,8 @@ int run_cache_filter(const CacheArgs& a) {
     CacheFile in = read_cache_file(a.inputs.at(0));
     CacheFile out = filter_cache(in, filter, a.remove);
     write_cache_file(a.output, out);
-    std::fprintf(stderr, "%s: kept %zu of %zu records\n", a.output.c_str(), out.records.size(), in.records.size());
+    std::fprintf(stderr, "%s: kept %zu of %zu records, %zu of %zu fragment records\n", a.output.c_str(), out.records.size(),
+                 in.records.size(), out.fragment_records.size(), in.fragment_records.size());
     return 0;
 }
 

@@ -152,6 +152,7 @@ std::string serialize_cache_file(const CacheFile& file) {
     h["record_layout"] = record_layout();
     h["record_bytes"] = kRecordBytes;
     h["record_count"] = file.records.size();
+    h["fragment_record_count"] = file.fragment_records.size();
     h["block_records"] = kBlockRecords;
     h["scene_fingerprint"] = fmt::format("{:016x}", file.info.scene_fingerprint);
     h["camera_fingerprint"] = fmt::format("{:016x}", file.info.camera_fingerprint);
@@ -165,11 +166,15 @@ std::string serialize_cache_file(const CacheFile& file) {
     put(out, static_cast<uint32_t>(header.size()));
     out += header;
     put(out, fnv1a(header.data(), header.size()));
-    for (size_t b = 0; b < file.records.size(); b += kBlockRecords) {
-        auto n = static_cast<uint32_t>(std::min<size_t>(kBlockRecords, file.records.size() - b));
+    const size_t total = file.records.size() + file.fragment_records.size();
+    auto at = [&](size_t i) -> const Record& {
+        return i < file.records.size() ? file.records[i] : file.fragment_records[i - file.records.size()];
+    };
+    for (size_t b = 0; b < total; b += kBlockRecords) {
+        auto n = static_cast<uint32_t>(std::min<size_t>(kBlockRecords, total - b));
         std::string payload;
         payload.reserve(n * kRecordBytes);
-        for (uint32_t i = 0; i < n; ++i) write_record(payload, file.records[b + i]);
+        for (uint32_t i = 0; i < n; ++i) write_record(payload, at(b + i));
         put(out, n);
         put(out, fnv1a(payload.data(), payload.size()));
         out += payload;
@@ -206,11 +211,16 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
     try {
         if (h.at("record_layout") != record_layout() || h.at("record_bytes").get<uint64_t>() != kRecordBytes)
             throw InputError(name, "header/record_layout", "record layout differs from this version's");
-        uint64_t count = h.at("record_count").get<uint64_t>();
+        const uint64_t shared = h.at("record_count").get<uint64_t>();
+        // Absent in files written before per-fragment records were stored.
+        const uint64_t own = h.value("fragment_record_count", uint64_t{0});
         // Every record needs kRecordBytes plus its share of block headers: bound the count by
         // the bytes actually present before allocating anything.
-        if (count > c.remaining() / kRecordBytes)
-            throw InputError(name, "header/record_count", fmt::format("{} records cannot fit in the {} bytes that follow", count, c.remaining()));
+        const uint64_t room = c.remaining() / kRecordBytes;
+        if (shared > room || own > room - shared)
+            throw InputError(name, own ? "header/fragment_record_count" : "header/record_count",
+                             fmt::format("{} + {} records cannot fit in the {} bytes that follow", shared, own, c.remaining()));
+        const uint64_t count = shared + own;
         f.info.scene_fingerprint = std::stoull(h.at("scene_fingerprint").get<std::string>(), nullptr, 16);
         f.info.camera_fingerprint = std::stoull(h.at("camera_fingerprint").get<std::string>(), nullptr, 16);
         f.info.parameters = h.at("parameters");
@@ -235,6 +245,8 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
             }
         }
         if (c.remaining() != 0) c.fail(fmt::format("{} unexpected bytes after the last block", c.remaining()));
+        f.fragment_records.assign(f.records.begin() + static_cast<std::ptrdiff_t>(shared), f.records.end());
+        f.records.resize(shared);
     } catch (const nlohmann::json::exception& e) {
         throw InputError(name, "header", std::string("missing or malformed field: ") + e.what());
     } catch (const std::invalid_argument&) {

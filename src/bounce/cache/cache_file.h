@@ -24,6 +24,9 @@ struct CacheFileInfo {
 struct CacheFile {
     CacheFileInfo info;
     std::vector<Record> records;
+    /// Per-fragment refinement's records: each belongs to one fragment (Record::key, at
+    /// exactly Record::p) and no lookup sees it. Stored after `records`.
+    std::vector<Record> fragment_records;
 };
 
 inline constexpr uint32_t kCacheFileVersion = 1;

@@ -43,6 +43,11 @@ LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, 
             cache.insert_loaded(r);
             ++out.records;
         }
+    for (const Record& r : f.fragment_records)
+        if (!keep || keep(r)) {
+            cache.insert_fragment_record(r);
+            ++out.fragment_records;
+        }
     return out;
 }
 

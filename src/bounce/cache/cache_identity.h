@@ -23,6 +23,7 @@ enum class CacheReuse {
 
 struct LoadedCache {
     size_t records = 0;
+    size_t fragment_records = 0;  ///< per-fragment refinement's records
     std::vector<std::string> differences;  ///< "key: was -> now", for the settings that differ
 };
 

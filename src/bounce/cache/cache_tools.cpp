@@ -19,6 +19,7 @@ namespace bounce {
 nlohmann::json cache_info(const CacheFile& f, size_t file_bytes) {
     nlohmann::json j;
     j["records"] = f.records.size();
+    j["fragment_records"] = f.fragment_records.size();
     j["frame"] = f.info.frame;
     j["scene_fingerprint"] = fmt::format("{:016x}", f.info.scene_fingerprint);
     j["camera_fingerprint"] = fmt::format("{:016x}", f.info.camera_fingerprint);
@@ -54,12 +55,13 @@ nlohmann::json cache_info(const CacheFile& f, size_t file_bytes) {
     for (const auto& [frame, n] : frames) fr[std::to_string(frame)] = n;
     j["records_by_frame"] = fr;
     j["file_bytes"] = file_bytes;
-    j["memory_bytes"] = f.records.size() * sizeof(Record);
+    j["memory_bytes"] = (f.records.size() + f.fragment_records.size()) * sizeof(Record);
     return j;
 }
 
 std::string cache_info_text(const nlohmann::json& j, const std::string& path) {
-    std::string s = fmt::format("{}: {} records (frame {})\n", path, j["records"].get<size_t>(), j["frame"].get<int>());
+    std::string s = fmt::format("{}: {} records, {} fragment records (frame {})\n", path, j["records"].get<size_t>(),
+                                j["fragment_records"].get<size_t>(), j["frame"].get<int>());
     if (j.contains("bounds"))
         s += fmt::format("  bounds       {} .. {}\n", j["bounds"][0].dump(), j["bounds"][1].dump());
     if (j.contains("mean_rays_per_record"))
@@ -143,6 +145,16 @@ CacheFile merge_caches(const CacheFile& a, const CacheFile& b, const std::string
         kept[it.source].insert_loaded(*it.r);
         out.records.push_back(*it.r);
     }
+    // Fragment records: one per fragment key; of two for the same key, the one with the
+    // smaller bytes, so the merge is commutative.
+    std::map<uint64_t, std::pair<std::string, const Record*>> own;
+    for (const auto* list : {&a.fragment_records, &b.fragment_records})
+        for (const Record& r : *list) {
+            std::string bytes = record_bytes(r);
+            auto [it, fresh] = own.try_emplace(r.key, bytes, &r);
+            if (!fresh && bytes < it->second.first) it->second = {std::move(bytes), &r};
+        }
+    for (const auto& [key, kept_one] : own) out.fragment_records.push_back(*kept_one.second);
     return out;
 }
 
@@ -214,6 +226,8 @@ CacheFile filter_cache(const CacheFile& in, const RecordFilter& filter, bool rem
     out.info = in.info;
     for (const Record& r : in.records)
         if (filter.matches(r) != remove) out.records.push_back(r);
+    for (const Record& r : in.fragment_records)
+        if (filter.matches(r) != remove) out.fragment_records.push_back(r);
     return out;
 }
 

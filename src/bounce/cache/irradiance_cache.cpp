@@ -163,14 +163,29 @@ uint32_t IrradianceCache::insert_loaded(const Record& r) {
     return id;
 }
 
+void IrradianceCache::insert_fragment_record(const Record& r) {
+    if (fragment_index_.emplace(r.key, static_cast<uint32_t>(fragment_records_.size())).second) fragment_records_.push_back(r);
+}
+
+const Record* IrradianceCache::fragment_record(uint64_t key, const Vec3& p) const {
+    auto it = fragment_index_.find(key);
+    if (it == fragment_index_.end()) return nullptr;
+    const Record& r = fragment_records_[it->second];
+    return r.p.x == p.x && r.p.y == p.y && r.p.z == p.z ? &r : nullptr;
+}
+
 CacheFile IrradianceCache::to_file(const CacheFileInfo& info) const {
     CacheFile f;
     f.info = info;
     f.info.luminance_floor = luminance_floor_;
     f.records.assign(records_.begin(), records_.end());
+    f.fragment_records.assign(fragment_records_.begin(), fragment_records_.end());
     return f;
 }
 
-size_t IrradianceCache::memory_bytes() const { return records_.size() * sizeof(Record) + octree_.memory_bytes(); }
+size_t IrradianceCache::memory_bytes() const {
+    return (records_.size() + fragment_records_.size()) * sizeof(Record) + octree_.memory_bytes() +
+           fragment_index_.size() * (sizeof(uint64_t) + sizeof(uint32_t) + 2 * sizeof(void*));
+}
 
 }  // namespace bounce

@@ -7,6 +7,7 @@
 #include <memory>
 #include <shared_mutex>
 #include <span>
+#include <unordered_map>
 
 #include "bounce/cache/cache_file.h"
 #include "bounce/cache/octree.h"
@@ -69,6 +70,15 @@ public:
 
     /// Inserts a record read from a file as it is (no clamping: its radius is final).
     uint32_t insert_loaded(const Record& r);
+
+    /// Per-fragment refinement's records: one fragment's own gather (Record::key names the
+    /// fragment, Record::p is its point), outside the spatial index, so no lookup uses it.
+    /// Inserting a key twice keeps the first.
+    void insert_fragment_record(const Record& r);
+    /// The record of the fragment with creation key `key` whose point is exactly `p` (a
+    /// record kept from another deep buffer does not match), or nullptr.
+    const Record* fragment_record(uint64_t key, const Vec3& p) const;
+    size_t fragment_record_count() const { return fragment_records_.size(); }
     /// Records and header information for a cache file.
     CacheFile to_file(const CacheFileInfo& info) const;
     float luminance_floor() const { return luminance_floor_; }
@@ -85,6 +95,8 @@ private:
     CacheSettings settings_, shading_settings_;
     bool ao_only_;
     std::deque<Record> records_;
+    std::deque<Record> fragment_records_;
+    std::unordered_map<uint64_t, uint32_t> fragment_index_;  ///< key -> fragment_records_ index
     RecordOctree octree_;
     float luminance_floor_ = -1;  ///< Weber floor, fixed from the first record batch
     std::unique_ptr<std::shared_mutex> mutex_ = std::make_unique<std::shared_mutex>();  // keeps the cache movable

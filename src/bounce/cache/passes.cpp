@@ -52,6 +52,22 @@ uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k) {
     return (pix << 8) | k;
 }
 
+enum class Source { Records, Own, Missed };
+
+/// The light at fragment k of window pixel (wx, wy): its own record if per-fragment
+/// refinement gave it one, else the interpolation.
+Indirect indirect_at(const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k, Source& src) {
+    const Fragment& f = deep.pixel(wx, wy)[k];
+    if (cache.fragment_record_count() > 0)
+        if (const Record* r = cache.fragment_record(candidate_key(deep, wx, wy, k), f.p)) {
+            src = Source::Own;
+            return {r->E, r->ao, r->bent, r->dir};
+        }
+    Interpolated in = interpolate_at(cache, f, record_site(f, cache.settings().displaced_records));
+    src = in.weight > 0 ? Source::Records : Source::Missed;
+    return {in.E, in.ao, in.bent, in.dir};
+}
+
 /// Takes the cache's lock (shared or exclusive), adding the time waited to `counters`.
 template <typename Lock>
 Lock lock_cache(const IrradianceCache& cache, Counters& counters) {
@@ -152,11 +168,50 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
     stats.set("cache_bytes", static_cast<double>(cache.memory_bytes()));
 }
 
-std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
-                                   Stats& stats, ProgressSink* sink, const Gatherer* refiner, std::vector<uint8_t>* refined) {
+size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,
+                       Stats& stats, ProgressSink* sink, int frame) {
     const RecordSurface where = cache.settings().displaced_records;
+    const float threshold = cache.settings().refine;
+    tbb::enumerable_thread_specific<std::vector<Record>> made;
+    {
+        // Lookups only: nobody inserts until every fragment is judged, so the decision sees the
+        // finished cache whatever the thread count.
+        auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache, stats.local());
+        for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "refining", [&](int wx, int wy, size_t) {
+            auto frags = deep.pixel(wx, wy);
+            for (uint32_t k = 0; k < frags.size(); ++k) {
+                const Fragment& f = frags[k];
+                const uint64_t key = candidate_key(deep, wx, wy, k);
+                if (cache.fragment_record(key, f.p)) continue;  // refined by an earlier render
+                const Interpolated in = interpolate_at(cache, f, record_site(f, where));
+                if (in.weight > 0 && in.spread <= threshold) continue;
+                // Gathered about the fragment's own (displaced) point and normal, as brute force does.
+                const GatherResult g = refiner.gather(
+                    f.p, f.n, fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), stats.local());
+                Record r;
+                r.p = f.p, r.n = f.n, r.E = g.irradiance, r.ao = g.ao, r.bent = g.bent_normal, r.dir = g.light_dir;
+                // Never used for reach; positive so the record is a valid one in a cache file.
+                r.footprint = f.footprint > 0 ? f.footprint : 1e-6f;
+                r.radius = r.raw_radius = r.footprint;
+                r.harmonic = g.harmonic_distance, r.dmin = g.min_distance;
+                r.key = key, r.rays = static_cast<uint32_t>(g.rays), r.frame = frame;
+                made.local().push_back(r);
+            }
+        }, scene.render.parallel.tile_order);
+    }
+    std::vector<Record> records;
+    for (auto& v : made) records.insert(records.end(), v.begin(), v.end());
+    std::sort(records.begin(), records.end(), [](const Record& a, const Record& b) { return a.key < b.key; });
+    auto lock = lock_cache<std::unique_lock<std::shared_mutex>>(cache, stats.local());
+    for (const Record& r : records) cache.insert_fragment_record(r);
+    stats.set("refined_fragments", static_cast<double>(records.size()));
+    stats.set("refine_rays_per_gather", static_cast<double>(refiner.grid().rays()));
+    return records.size();
+}
+
+std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
+                                   Stats& stats, ProgressSink* sink, std::vector<uint8_t>* refined) {
     std::vector<Indirect> out(deep.fragments.size());
-    const float threshold = refiner ? cache.settings().refine : 0.0f;
     if (refined) refined->assign(deep.fragments.size(), 0);
     tbb::enumerable_thread_specific<uint64_t> misses(0), lookups(0), own(0);
     // The pass holds the shared lock for its workers: no writer can interleave.
@@ -164,20 +219,14 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
     for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "interpolate", [&](int wx, int wy, size_t first) {
         auto frags = deep.pixel(wx, wy);
         for (uint32_t k = 0; k < frags.size(); ++k) {
-            const Fragment& f = frags[k];
-            const Site site = record_site(f, where);
-            Interpolated in = interpolate_at(cache, f, site);
+            Source src;
+            out[first + k] = indirect_at(cache, deep, wx, wy, k, src);
             ++lookups.local();
-            if (threshold > 0 && (in.weight <= 0 || in.spread > threshold)) {
-                GatherResult g = refiner->gather(
-                    f.p, site.n, fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), stats.local());
-                out[first + k] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
-                if (refined) (*refined)[first + k] = 1;
+            if (src == Source::Own) {
                 ++own.local();
-                continue;
+                if (refined) (*refined)[first + k] = 1;
             }
-            if (in.weight <= 0) ++misses.local();
-            out[first + k] = {in.E, in.ao, in.bent, in.dir};
+            misses.local() += src == Source::Missed;
         }
     }, scene.render.parallel.tile_order);
     uint64_t m = 0, l = 0, o = 0;
@@ -186,10 +235,7 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
     for (auto v : own) o += v;
     stats.set("shading_misses", static_cast<double>(m));
     stats.set("lookups", static_cast<double>(l));
-    if (threshold > 0) {
-        stats.set("refined_fragments", static_cast<double>(o));
-        stats.set("refine_rays_per_gather", static_cast<double>(refiner->grid().rays()));
-    }
+    stats.set("fragment_records_used", static_cast<double>(o));
     return out;
 }
 
@@ -209,13 +255,12 @@ std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceC
                 }
             }
             auto src = deep.pixel(lx, ly);
+            if (src.empty()) lx = wx, ly = wy;
             size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
             auto frags = deep.pixel(wx, wy);
-            for (uint32_t k = 0; k < frags.size(); ++k) {
-                const Fragment& f = src.empty() ? frags[k] : src[std::min<size_t>(k, src.size() - 1)];
-                Interpolated in = interpolate_at(cache, f, record_site(f, cache.settings().displaced_records));
-                out[first + k] = {in.E, in.ao, in.bent, in.dir};
-            }
+            const auto n = static_cast<uint32_t>(deep.pixel(lx, ly).size());
+            Source unused;
+            for (uint32_t k = 0; k < frags.size(); ++k) out[first + k] = indirect_at(cache, deep, lx, ly, std::min(k, n - 1), unused);
         }
     });
     return out;

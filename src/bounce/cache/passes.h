@@ -43,23 +43,26 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
                     IrradianceCache& cache, Stats& stats, ProgressSink* progress,
                     const SubPassCallback& after_subpass = {}, int frame = 0, const Gatherer* first = nullptr);
 
-/// Shading pass: interpolates at every fragment, never creates a record. Misses (no record
-/// applies; the gathering pass makes them impossible) are counted in stats as
-/// "shading_misses" and left black, so a bug shows.
-///
-/// With `refiner` and CacheSettings::refine > 0 (per-fragment refinement): a fragment whose
-/// covering records disagree (the spread of their extrapolated values at the fragment exceeds
-/// `refine`) or that no record covers takes the light of its own gather with `refiner`
-/// instead; that gather feeds this fragment only (no record, no neighbour sees it). The
-/// decision depends only on the finished cache and the fragment: deterministic at any thread
-/// count. `refined`, if given, gets 1 per refined fragment.
+/// Per-fragment refinement (CacheSettings::refine > 0), after the gathering pass: a fragment
+/// whose covering records disagree (the spread of their extrapolated values at the fragment
+/// exceeds `refine`) or that no record covers gets a gather of its own with `refiner`, stored
+/// as a fragment record (IrradianceCache::insert_fragment_record) that no other fragment
+/// uses. Fragments that already have one (a loaded cache) are skipped. Every fragment is
+/// judged against the finished cache and the records are inserted in key order afterwards:
+/// deterministic at any thread count. Returns how many were made.
+size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,
+                       Stats& stats, ProgressSink* progress, int frame = 0);
+
+/// Shading pass: never creates a record. A fragment takes its fragment record if it has one
+/// (`refined`, if given, gets 1 there), else the interpolation. Misses (no record applies;
+/// the gathering pass makes them impossible) are counted in stats as "shading_misses" and
+/// left black, so a bug shows.
 std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
-                                   Stats& stats, ProgressSink* progress, const Gatherer* refiner = nullptr,
-                                   std::vector<uint8_t>* refined = nullptr);
+                                   Stats& stats, ProgressSink* progress, std::vector<uint8_t>* refined = nullptr);
 
 /// Progressive preview after a sub-pass of step `step`: each fragment takes the interpolated
 /// light at the nearest pixel (on that step's lattice, then coarser ones) a finished sub-pass
-/// visited (`visited`, one flag per window pixel).
+/// visited (`visited`, one flag per window pixel); a fragment record counts for its own pixel.
 std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceCache& cache,
                                        const std::vector<uint8_t>& visited, int step);
 

@@ -233,7 +233,6 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         DirectLighting lighting(scene, *accel);
         std::vector<Indirect> indirect;
         std::unique_ptr<RadiosityTextures> radiosity;
-        std::unique_ptr<Gatherer> refiner;  // per-fragment refinement, in the shading pass
         std::vector<uint8_t> refined;
         size_t baked_before = 0;  // radiosity sides held before this render
         if (ind.gi == GiMode::Cache || !request.cache_in.empty()) {
@@ -281,9 +280,14 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
                 if (scene.render.cache.refine > 0) {
                     // A refined fragment's gather feeds that fragment only: no gradients needed.
                     GatherSettings own = gs;
-                    own.record_terms = false;
+                    own.record_terms = own.hessian = false;
                     if (scene.render.cache.refine_rays > 0) own.rays = scene.render.cache.refine_rays;
-                    refiner = std::make_unique<Gatherer>(scene, *accel, materials, lighting, radiosity.get(), own);
+                    Gatherer refiner(scene, *accel, materials, lighting, radiosity.get(), own);
+                    // Over the frame's window only: the margin's fragments are never shaded.
+                    if (refinement_pass(scene, result.deep, refiner, cache, stats, ps, request.frame) > 0 && after) {
+                        const auto schedule = subpass_schedule(1);
+                        after(schedule.back(), schedule.size() - 1, schedule.size());
+                    }
                 }
                 result.records_new = cache.size() - result.records_loaded;
                 stats.set("records_loaded", static_cast<double>(result.records_loaded));
@@ -301,7 +305,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             PhaseTimer t(stats, "shading");
             if (ind.gi == GiMode::Cache) {
                 auto t0 = std::chrono::steady_clock::now();
-                indirect = shading_pass(scene, result.deep, *result.cache, stats, ps, refiner.get(), &refined);
+                indirect = shading_pass(scene, result.deep, *result.cache, stats, ps, &refined);
                 stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
             }
             result.image = shade(scene, result.deep, materials, lighting, ind.any() ? &indirect : nullptr, stats, ps);
@@ -313,7 +317,8 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         }
         // After the shading pass: refined fragments' gathers may have baked sides too.
         if (radiosity) save_radiosity(*radiosity, baked_before, scene, stats);
-        if (refiner) add_fragment_mask_layer(result.image, result.deep, refined, "refined");
+        if (result.cache && (scene.render.cache.refine > 0 || result.cache->fragment_record_count() > 0))
+            add_fragment_mask_layer(result.image, result.deep, refined, "refined");
     });
     stats.set("pixels", static_cast<double>(result.deep.pixel_count()));
     if (result.deep.pixel_count() > 0)

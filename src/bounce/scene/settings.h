@@ -77,7 +77,7 @@ struct CacheSettings {
     float max_anisotropy = 4;     ///< hessian: long radius / short radius at most
     int min_rays = 0;             ///< a record's first gather; more (render.rays) only if noisier than ray_noise; 0 = off
     float ray_noise = 0.02f;      ///< relative standard error a record's first gather must reach to stop there
-    float refine = 0;             ///< a fragment whose records disagree by more than this gets its own gather; 0 = off
+    float refine = 0.1f;          ///< a fragment whose records disagree by more than this gets its own gather; 0 = off
     int refine_rays = 0;          ///< rays of such a gather; 0 = the gather's rays
     RecordSurface displaced_records = RecordSurface::Undisplaced;  ///< where records of displaced surfaces live
     /// The settings the shading pass interpolates with.
