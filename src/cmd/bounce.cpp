@@ -24,6 +24,7 @@
 #include "bounce/render/render.h"
 #include "bounce/scene/params_cli.h"
 #include "bounce/scene/scene_load.h"
+#include "light.h"
 
 namespace {
 
@@ -375,6 +376,17 @@ int main(int argc, char** argv) {
     bake->add_option("--distance", ba.distance, "occluders beyond this do not count; default 4x the displacement bound")
         ->check(CLI::Range(0.0, 1e18));
 
+    LightArgs la;
+    CLI::App* light = app.add_subcommand("light", "the lighting tool: a local web page to edit, re-gather and re-shade");
+    light->add_option("scene", la.scene, "scene file")->required();
+    light->add_option("--port", la.port, "port (0 = any free one)")->check(CLI::Range(0, 65535));
+    light->add_option("--bind", la.bind, "loopback address to listen on (127.0.0.1, ::1, localhost)");
+    light->add_option("--out", la.out_dir, "folder for the session's deep file, cache and saved files");
+    light->add_option("--deep-in", la.deep_in, "start from this deep file");
+    light->add_option("--cache-in", la.cache_in, "start from this irradiance cache");
+    light->add_option("--threads", la.threads, "render threads (0 = all)")->check(CLI::Range(0, 4096));
+    light->add_option("--set", la.sets, "start with this edit: key.path=value (render.gi defaults to cache)")->take_all();
+
     CompareArgs ca;
     CLI::App* compare = app.add_subcommand("compare", "error of a render against a reference, per layer");
     compare->add_option("test", ca.test, "the render to judge (EXR)")->required();
@@ -431,6 +443,7 @@ int main(int argc, char** argv) {
         if (*params) return run_params(params_json, params_markdown_flag);
         if (*compare) return run_compare(ca);
         if (*bake) return run_bake_ao(ba);
+        if (*light) return run_light(la);
         if (*cinfo) return run_cache_info(ka);
         if (*cmerge) return run_cache_merge(ka);
         if (*cfilter) return run_cache_filter(ka);

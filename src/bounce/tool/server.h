@@ -1,0 +1,46 @@
+// The lighting tool's web front end: a loopback-only HTTP server (cpp-httplib) with a JSON API
+// over LightingSession and the page's static files (web/, three.js from node_modules).
+// docs/lighting-tool.md lists the API.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+
+#include "bounce/tool/session.h"
+
+namespace httplib {
+class Server;
+}
+
+namespace bounce {
+
+struct ServerOptions {
+    std::string host = "127.0.0.1";  ///< only loopback addresses are accepted
+    int port = 0;                    ///< 0 = any free port
+    std::string web_dir;             ///< the page (index.html, app.js, style.css)
+    std::string three_dir;           ///< node_modules/three (served as /vendor/three)
+    size_t max_body = 4u << 20;      ///< larger request bodies are refused (413)
+};
+
+class LightingServer {
+public:
+    /// InputError (exit 2) when the host is not a loopback address.
+    LightingServer(LightingSession& session, ServerOptions options);
+    ~LightingServer();
+    /// Binds; returns the port. InputError when it cannot.
+    int bind();
+    void listen();  ///< serves until stop()
+    void stop();
+
+private:
+    void routes();
+    LightingSession& session_;
+    ServerOptions options_;
+    std::unique_ptr<httplib::Server> http_;
+};
+
+/// True for 127.0.0.1 (any 127/8), ::1 and localhost.
+bool is_loopback_host(const std::string& host);
+
+}  // namespace bounce

@@ -1,0 +1,408 @@
+#include "bounce/tool/session.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+#include "bounce/cache/cache_file.h"
+#include "bounce/core/atomic_file.h"
+#include "bounce/core/error.h"
+#include "bounce/core/files.h"
+#include "bounce/core/stats.h"
+#include "bounce/render/render.h"
+#include "bounce/scene/params.h"
+#include "bounce/scene/scene_load.h"
+
+namespace bounce {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+SessionAction parse_session_action(const std::string& name) {
+    if (name == "reshade") return SessionAction::Reshade;
+    if (name == "regather") return SessionAction::Regather;
+    if (name == "rasterize") return SessionAction::Rasterize;
+    throw InputError("request", "action", fmt::format("'{}' is not reshade, regather or rasterize", name));
+}
+
+const char* session_action_name(SessionAction a) {
+    return a == SessionAction::Reshade ? "reshade" : a == SessionAction::Regather ? "regather" : "rasterize";
+}
+
+namespace {
+
+/// The least action that shows a change of a parameter with identity `identity`.
+SessionAction needs_for(unsigned identity) {
+    if (identity & kDeepIdentity) return SessionAction::Rasterize;
+    if (identity & (kCacheIdentity | kRadiosityIdentity)) return SessionAction::Regather;
+    return SessionAction::Reshade;
+}
+
+/// Light and material fields the spreadsheet edits: numbers, booleans and [x, y, z].
+bool editable(const json& v) {
+    if (v.is_number() || v.is_boolean()) return true;
+    return v.is_array() && v.size() == 3 && std::all_of(v.begin(), v.end(), [](const json& e) { return e.is_number(); });
+}
+
+/// Light and material rows of the effective scene description.
+void add_scene_rows(const json& description, json& rows) {
+    auto row = [&](const std::string& key, const std::string& stage, const json& value, const std::string& doc) {
+        rows.push_back({{"key", key}, {"stage", stage}, {"value", value}, {"default", nullptr}, {"unit", ""},
+                        {"range", nullptr}, {"doc", doc}, {"needs", "reshade"}});
+    };
+    if (description.contains("lights") && description["lights"].is_array())
+        for (size_t i = 0; i < description["lights"].size(); ++i) {
+            const json& l = description["lights"][i];
+            if (!l.is_object()) continue;
+            for (const auto& [k, v] : l.items())
+                if (editable(v)) row(fmt::format("lights.{}.{}", i, k), "light", v, fmt::format("{} light {}", l.value("type", "?"), i));
+        }
+    if (description.contains("materials") && description["materials"].is_object())
+        for (const auto& [name, m] : description["materials"].items()) {
+            if (!m.is_object()) continue;
+            for (const auto& [k, v] : m.items())
+                if (editable(v)) row(fmt::format("materials.{}.{}", name, k), "material", v, "material " + name);
+        }
+}
+
+void tone_map(const Image& image, const Layer& l, float exposure, std::string& out) {
+    const size_t nc = l.channels.size(), n = static_cast<size_t>(image.width) * static_cast<size_t>(image.height);
+    out.resize(4 * n);
+    const float scale = std::exp2(exposure);
+    const bool signed_values = l.name.find("normal") != std::string::npos;  // [-1, 1] directions
+    for (size_t i = 0; i < n; ++i)
+        for (size_t c = 0; c < 4; ++c) {
+            float v = 1;
+            if (c < 3) {
+                const float x = l.data[i * nc + std::min(c, nc - 1)];
+                v = signed_values ? 0.5f * x + 0.5f : srgb_encode(std::clamp(x * scale, 0.0f, 1.0f));
+            }
+            out[4 * i + c] = static_cast<char>(static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255)));
+        }
+}
+
+}  // namespace
+
+class LightingSession::Sink : public ProgressSink {
+public:
+    explicit Sink(LightingSession& s) : s_(s) {}
+    void update(const std::string& name, uint64_t done, uint64_t total, double) override {
+        std::lock_guard lock(s_.mutex_);
+        s_.phase_ = name, s_.done_ = done, s_.total_ = total;
+    }
+    void finish(const std::string& name, uint64_t total, double) override {
+        std::lock_guard lock(s_.mutex_);
+        s_.phase_ = name, s_.done_ = total, s_.total_ = total;
+    }
+
+private:
+    LightingSession& s_;
+};
+
+LightingSession::LightingSession(SessionOptions options) : options_(std::move(options)) {
+    scene_ = load_scene(options_.scene);
+    scene_dir_ = fs::weakly_canonical(fs::absolute(options_.scene)).parent_path();
+    std::error_code ec;
+    fs::create_directories(options_.out_dir, ec);
+    if (ec || !fs::is_directory(options_.out_dir))
+        throw InputError(options_.out_dir, "", "cannot create the output folder (" + ec.message() + ")");
+    out_dir_ = fs::canonical(options_.out_dir);
+    deep_path_ = out_dir_ / "session.deep.exr";
+    cache_path_ = out_dir_ / "session.bic";
+    // Start from the given files: copies, so the lighter's originals are never overwritten.
+    auto copy_in = [&](const std::string& from, const fs::path& to) {
+        if (from.empty()) return;
+        check_input_file(from);
+        if (fs::weakly_canonical(from) != to) fs::copy_file(from, to, fs::copy_options::overwrite_existing);
+    };
+    for (const std::string& s : options_.sets) {
+        const auto eq = s.find('=');
+        if (eq == std::string::npos) throw InputError("command line", "--set " + s, "expected key=value");
+        const std::string text = s.substr(eq + 1);
+        json v = json::parse(text, nullptr, false);
+        edit(s.substr(0, eq), v.is_discarded() ? json(text) : v);
+    }
+    if (options_.default_to_cache && scene_.render.indirect.gi == GiMode::None && !scene_.render.indirect.ao) edit("render.gi", "cache");
+    pending_ = -1;  // nothing rendered yet: the first render is a new deep file anyway
+    copy_in(options_.deep_in, deep_path_);
+    copy_in(options_.cache_in, cache_path_);
+    if (!options_.cache_in.empty()) read_cache_file(cache_path_.string());  // refuse a bad cache now
+}
+
+LightingSession::~LightingSession() {
+    stop();
+    if (worker_.joinable()) worker_.join();
+}
+
+std::vector<Override> LightingSession::overrides_locked() const {
+    std::vector<Override> out;
+    for (const auto& key : edit_order_) out.emplace_back(key + "=" + edits_.at(key).dump(), "edit of " + key);
+    return out;
+}
+
+json LightingSession::params() const {
+    std::lock_guard lock(mutex_);
+    json rows = json::array();
+    const json values = param_values(scene_, ~0u);
+    for (json row : params_listing()) {
+        const std::string key = row["key"];
+        const Param* p = find_param(scene_params(), key);
+        row["value"] = values.contains(key) ? values[key] : json(nullptr);
+        row["needs"] = session_action_name(needs_for(p ? p->identity : kImageOnly));
+        rows.push_back(std::move(row));
+    }
+    add_scene_rows(scene_.description, rows);
+    return rows;
+}
+
+json LightingSession::edit(const std::string& key, const json& value) {
+    if (key.empty() || key.size() > 256) throw InputError("request", "key", "a parameter key of 1..256 characters is required");
+    std::lock_guard lock(mutex_);
+    std::vector<Override> o = overrides_locked();
+    o.emplace_back(key + "=" + value.dump(), "edit of " + key);
+    Scene s = load_scene(options_.scene, o);  // throws with the file and place on a bad value
+    if (!edits_.count(key)) edit_order_.push_back(key);
+    edits_[key] = value;
+    scene_ = std::move(s);
+    const Param* p = find_param(scene_params(), key);
+    // Lights and materials: a re-shade shows them (the bounce light follows on a re-gather).
+    const SessionAction needs = needs_for(p ? p->identity : kImageOnly);
+    pending_ = std::max(pending_, static_cast<int>(needs));
+    return {{"key", key}, {"value", value}, {"needs", session_action_name(needs)}};
+}
+
+SessionAction LightingSession::pending() const {
+    std::lock_guard lock(mutex_);
+    return static_cast<SessionAction>(std::max(pending_, 0));
+}
+
+void LightingSession::start(SessionAction action, std::optional<std::array<int, 4>> crop) {
+    stop();
+    if (worker_.joinable()) worker_.join();
+    std::lock_guard lock(mutex_);
+    if (crop) {
+        const auto& c = *crop;
+        if (c[0] < 0 || c[2] < 0 || c[1] > scene_.camera.width || c[3] > scene_.camera.height || c[0] >= c[1] || c[2] >= c[3])
+            throw InputError("request", "crop", fmt::format("[{}, {}, {}, {}] is not a rectangle inside the {}x{} frame", c[0], c[1],
+                                                            c[2], c[3], scene_.camera.width, scene_.camera.height));
+        if (image_.width != scene_.camera.width || image_.height != scene_.camera.height || !fs::exists(deep_path_))
+            throw InputError("request", "crop", "render the whole frame once before a sub-viewport");
+        if (action == SessionAction::Rasterize) throw InputError("request", "crop", "a new deep file is always the whole frame");
+    }
+    cancel_ = std::make_unique<CancelToken>();
+    running_ = true;
+    state_ = "running", message_.clear(), action_ = session_action_name(action);
+    phase_.clear(), done_ = total_ = 0;
+    worker_ = std::thread([this, action, crop] { run(action, crop); });
+}
+
+void LightingSession::stop() {
+    std::unique_lock lock(mutex_);
+    if (cancel_) cancel_->cancel();
+    idle_.wait(lock, [&] { return !running_; });
+}
+
+void LightingSession::wait() {
+    std::unique_lock lock(mutex_);
+    idle_.wait(lock, [&] { return !running_; });
+}
+
+void LightingSession::run(SessionAction action, std::optional<std::array<int, 4>> crop) {
+    Sink sink(*this);
+    Stats stats;
+    std::string state = "done", message;
+    try {
+        Scene scene;
+        RenderRequest req;
+        {
+            std::lock_guard lock(mutex_);
+            std::vector<Override> o = overrides_locked();
+            if (crop) o.emplace_back(fmt::format("render.crop=[{},{},{},{}]", (*crop)[0], (*crop)[1], (*crop)[2], (*crop)[3]));
+            if (options_.threads > 0) o.emplace_back(fmt::format("render.threads={}", options_.threads));
+            scene = load_scene(options_.scene, o);
+            req.cancel = cancel_.get();
+        }
+        const bool cached = scene.render.indirect.gi == GiMode::Cache;
+        if (action == SessionAction::Rasterize || !fs::exists(deep_path_))
+            req.deep_out = deep_path_.string();
+        else
+            req.deep_in = deep_path_.string();
+        if (cached && action != SessionAction::Rasterize && fs::exists(cache_path_)) {
+            // The session knows its cache's history: lights and materials may have changed
+            // since it was gathered (a re-shade keeps its bounce light on purpose).
+            req.cache_in = cache_path_.string();
+            req.force = true;
+            req.cache_reuse = CacheReuse::Any;
+            req.regather = action == SessionAction::Regather;
+        }
+        if (cached && action != SessionAction::Reshade && scene.render.parallel.preview)
+            req.preview = [&](const Image& img) {
+                std::lock_guard lock(mutex_);
+                image_ = crop ? paste_over(image_, img, "session image") : img;
+                ++version_;
+            };
+        RenderResult r = render(scene, req, stats, &sink);
+        if (cached && r.cache && (r.records_new > 0 || action != SessionAction::Reshade ||
+                                  stats.to_json().value("refined_fragments", 0.0) > 0))
+            write_cache_file(cache_path_.string(), r.cache->to_file(r.cache_info));
+        std::lock_guard lock(mutex_);
+        image_ = crop ? paste_over(image_, r.image, "session image") : std::move(r.image);
+        ++version_;
+        if (!crop) pending_ = -1;
+    } catch (const Cancelled&) {
+        state = "cancelled";
+    } catch (const std::exception& e) {
+        state = "failed", message = e.what();  // the previous image and cache stay
+    }
+    std::lock_guard lock(mutex_);
+    stats_ = stats.to_json();
+    state_ = state, message_ = message;
+    running_ = false;
+    idle_.notify_all();
+}
+
+json LightingSession::status() const {
+    std::lock_guard lock(mutex_);
+    json layers = json::array();
+    for (const Layer& l : image_.layers) layers.push_back(l.name);
+    return {{"state", state_},
+            {"action", action_},
+            {"message", message_},
+            {"progress", {{"phase", phase_}, {"done", done_}, {"total", total_}}},
+            {"stats", stats_},
+            {"image", {{"version", version_}, {"width", image_.width}, {"height", image_.height}, {"layers", layers}}},
+            {"pending", pending_ < 0 ? json(nullptr) : json(session_action_name(static_cast<SessionAction>(pending_)))},
+            {"scene", options_.scene}};
+}
+
+LightingSession::Pixels LightingSession::pixels(const std::string& layer, float exposure) const {
+    if (!std::isfinite(exposure) || std::abs(exposure) > 64) throw InputError("request", "exposure", "must be a number in [-64, 64]");
+    std::lock_guard lock(mutex_);
+    if (image_.layers.empty()) throw InputError("request", "image", "nothing rendered yet");
+    const Layer* l = image_.find(layer);
+    if (!l || l->channels.empty()) throw InputError("request", "layer", fmt::format("the image has no layer '{}'", layer));
+    Pixels p;
+    tone_map(image_, *l, exposure, p.rgba);
+    p.width = image_.width, p.height = image_.height, p.version = version_;
+    return p;
+}
+
+fs::path LightingSession::confined(const std::string& name, const std::string& what) const {
+    if (name.empty() || name.size() > 1024 || name.find('\0') != std::string::npos)
+        throw InputError("request", what, "a file name of 1..1024 characters is required");
+    const fs::path p(name);
+    if (p.is_absolute()) throw InputError("request", what, fmt::format("'{}' is absolute; give a name inside the scene or output folder", name));
+    for (const auto& part : p)
+        if (part == "..") throw InputError("request", what, fmt::format("'{}' climbs out with '..'", name));
+    for (const fs::path& base : {out_dir_, scene_dir_}) {
+        const fs::path full = fs::weakly_canonical(base / p);  // resolves symlinks that exist
+        const auto rel = full.lexically_relative(base);
+        if (!rel.empty() && *rel.begin() != ".." && (fs::exists(full) || base == out_dir_)) return full;
+    }
+    throw InputError("request", what, fmt::format("'{}' is not inside the scene or output folder", name));
+}
+
+json LightingSession::records(const std::string& file, size_t limit) const {
+    const fs::path path = file.empty() ? cache_path_ : confined(file, "file");
+    CacheFile f = read_cache_file(path.string());
+    const size_t n = std::min(limit, f.records.size());
+    json p = json::array(), r = json::array(), e = json::array(), ao = json::array();
+    // An even subset when the cache holds more than the view asked for.
+    for (size_t k = 0; k < n; ++k) {
+        const Record& rec = f.records[k * f.records.size() / std::max<size_t>(n, 1)];
+        for (float v : {rec.p.x, rec.p.y, rec.p.z}) p.push_back(v);
+        r.push_back(rec.radius);
+        for (float v : {rec.E.x, rec.E.y, rec.E.z}) e.push_back(v);
+        ao.push_back(rec.ao);
+    }
+    return {{"file", path.filename().string()}, {"count", f.records.size()}, {"fragment_records", f.fragment_records.size()},
+            {"shown", n}, {"frame", f.info.frame}, {"p", p}, {"r", r}, {"E", e}, {"ao", ao}};
+}
+
+json LightingSession::cache_files() const {
+    json out = json::array();
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(out_dir_, ec))
+        if (e.is_regular_file() && e.path().extension() == ".bic") out.push_back(e.path().filename().string());
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+json LightingSession::scene_view(size_t max_triangles) const {
+    std::lock_guard lock(mutex_);
+    const json values = param_values(scene_, ~0u);
+    json cam = {{"position", values["camera.position"]}, {"look_at", values["camera.look_at"]}, {"up", values["camera.up"]},
+                {"fov", scene_.camera.fov}, {"width", scene_.camera.width}, {"height", scene_.camera.height}};
+    json lights = json::array();
+    for (size_t i = 0; i < scene_.lights.size(); ++i) {
+        const Light& l = scene_.lights[i];
+        json j = {{"index", i}};
+        if (l.type == LightType::Quad) {
+            const Vec3 c = l.corner + (l.edge_u + l.edge_v) * 0.5f;
+            j["position"] = {c.x, c.y, c.z}, j["key"] = fmt::format("lights.{}.corner", i);
+            j["offset"] = {c.x - l.corner.x, c.y - l.corner.y, c.z - l.corner.z};
+        } else if (l.type == LightType::Point || l.type == LightType::Spot) {
+            j["position"] = {l.position.x, l.position.y, l.position.z}, j["key"] = fmt::format("lights.{}.position", i);
+        }
+        lights.push_back(j);
+    }
+    size_t total = 0;
+    for (const Object& o : scene_.objects) total += o.coarse.triangle_count();
+    const size_t stride = std::max<size_t>(1, (total + max_triangles - 1) / std::max<size_t>(max_triangles, 1));
+    json tris = json::array();
+    size_t t = 0;
+    for (const Object& o : scene_.objects)
+        for (size_t i = 0; i < o.coarse.triangle_count(); ++i, ++t) {
+            if (t % stride) continue;
+            for (int k = 0; k < 3; ++k) {
+                const Vec3& v = o.coarse.positions[o.coarse.indices[3 * i + static_cast<size_t>(k)]];
+                for (float x : {v.x, v.y, v.z}) tris.push_back(x);
+            }
+        }
+    const Bounds b = scene_.bounds();
+    return {{"camera", cam}, {"lights", lights}, {"triangles", tris}, {"triangles_total", total},
+            {"bounds", {{b.lo.x, b.lo.y, b.lo.z}, {b.hi.x, b.hi.y, b.hi.z}}}};
+}
+
+std::string LightingSession::save_scene(const std::string& name) const {
+    // Beside the original: its mesh and texture paths are relative to that folder.
+    if (name.empty() || name.size() > 255 || fs::path(name).filename() != name || name == "." || name == "..")
+        throw InputError("request", "name", "a plain file name is required (the scene is saved beside the original)");
+    const fs::path target = fs::weakly_canonical(scene_dir_ / name);
+    if (target.parent_path() != scene_dir_) throw InputError("request", "name", "a symlink that leads out of the scene's folder");
+    if (target.extension() != ".json") throw InputError("request", "name", "a scene file name ends in .json");
+    if (fs::weakly_canonical(options_.scene) == target) throw InputError("request", "name", "would overwrite the original scene");
+    json doc = parse_json_text(read_text_file(options_.scene), options_.scene);
+    {
+        std::lock_guard lock(mutex_);
+        for (const Override& o : overrides_locked()) apply_override(doc, o);
+    }
+    const std::string text = doc.dump(2) + "\n";
+    write_atomically(target, [&](const std::string& tmp) {
+        std::ofstream out(tmp);
+        out << text;
+        if (!out.flush()) throw InputError(target.string(), "", "cannot write the scene");
+    });
+    return target.filename().string();
+}
+
+std::string LightingSession::save_cache(const std::string& name) const {
+    const fs::path target = confined(name, "name");
+    if (target.extension() != ".bic") throw InputError("request", "name", "a cache file name ends in .bic");
+    if (!fs::exists(cache_path_)) throw InputError("request", "cache", "there is no cache yet (gather first)");
+    if (target == cache_path_) return target.filename().string();
+    CacheFile f = read_cache_file(cache_path_.string());
+    write_cache_file(target.string(), f);
+    return target.filename().string();
+}
+
+void LightingSession::load_cache(const std::string& file) {
+    const fs::path from = confined(file, "file");
+    CacheFile f = read_cache_file(from.string());  // refuses a bad file before anything changes
+    stop();
+    write_cache_file(cache_path_.string(), f);
+}
+
+}  // namespace bounce

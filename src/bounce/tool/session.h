@@ -1,0 +1,128 @@
+// The lighting tool's engine side: one scene with the lighter's edits, its deep file and
+// irradiance cache in the output folder, and one render at a time on a worker thread that a
+// new request cancels. The web server (server.h) is a thin front end over this, as the CLI is
+// over render.h; tests drive it directly.
+#pragma once
+
+#include <array>
+#include <condition_variable>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "bounce/core/image.h"
+#include "bounce/core/progress.h"
+#include "bounce/scene/json_reader.h"
+#include "bounce/scene/scene.h"
+
+namespace bounce {
+
+struct SessionOptions {
+    std::string scene;     ///< scene file
+    std::string out_dir;   ///< where the session's deep file, cache and saved files go
+    std::string deep_in;   ///< start from this deep file (copied in as the session's)
+    std::string cache_in;  ///< start from this cache file (copied in as the session's)
+    int threads = 0;       ///< render threads; 0 = all
+    /// Edits applied at the start ("key=value", value JSON or a bare word), as the CLI's --set.
+    std::vector<std::string> sets;
+    /// When the scene renders no indirect light (render.gi none, no AO), start with the cache:
+    /// bounce light is what the tool is for.
+    bool default_to_cache = true;
+};
+
+/// What a render request does, least work first.
+enum class SessionAction {
+    Reshade,    ///< deep file and cache reused: shading (and gathers only where records miss)
+    Regather,   ///< deep file reused, records flushed (inside the crop, if one is given)
+    Rasterize,  ///< new deep file, new cache
+};
+SessionAction parse_session_action(const std::string& name);  ///< InputError on another name
+const char* session_action_name(SessionAction a);
+
+class LightingSession {
+public:
+    /// Loads the scene (InputError on bad input); creates out_dir.
+    explicit LightingSession(SessionOptions options);
+    ~LightingSession();  ///< cancels and joins a running render
+    LightingSession(const LightingSession&) = delete;
+    LightingSession& operator=(const LightingSession&) = delete;
+
+    /// One row per parameter (the parameter table's camera and render rows, then every numeric
+    /// field of every light and material): key, value, default, unit, range, doc, and `needs`,
+    /// the least action that shows a change of it.
+    nlohmann::json params() const;
+    /// Sets `key` to `value` with the scene loader's validation (InputError, one line, on a bad
+    /// key or value: nothing changes). Returns {key, value, needs}.
+    nlohmann::json edit(const std::string& key, const nlohmann::json& value);
+    /// The least action that shows every edit since the last finished render.
+    SessionAction pending() const;
+
+    /// Starts a render on the worker, cancelling a running one first. `crop` (full-frame pixel
+    /// coordinates x0, x1, y0, y1) limits a re-shade or re-gather to a sub-viewport, pasted
+    /// over the last full image.
+    void start(SessionAction action, std::optional<std::array<int, 4>> crop = std::nullopt);
+    void stop();  ///< cancels the running render (returns once it has stopped)
+    void wait();  ///< until no render runs
+
+    /// {state, action, message, progress {phase, done, total}, stats, image {version, width,
+    /// height, layers}, records, pending}.
+    nlohmann::json status() const;
+    /// The current image's `layer` as 8-bit sRGB RGBA after `exposure` stops (data, width,
+    /// height); InputError when there is no image or no such layer.
+    struct Pixels {
+        std::string rgba;
+        int width = 0, height = 0;
+        uint64_t version = 0;
+    };
+    Pixels pixels(const std::string& layer, float exposure) const;
+    /// Records of a cache file (the session's when `file` is empty; else a path confined to
+    /// the allowed folders): {file, count, frame, p, r, E, ao} as flat arrays, at most `limit`.
+    nlohmann::json records(const std::string& file, size_t limit) const;
+    /// Cache files in the allowed folders (for the 3D view's frame slider).
+    nlohmann::json cache_files() const;
+    /// What the 3D view draws: camera, lights (with their parameter keys), and at most
+    /// `max_triangles` triangles of the ray-traced tessellation.
+    nlohmann::json scene_view(size_t max_triangles) const;
+
+    /// Writes the scene with every edit applied, atomically, into the scene's folder.
+    std::string save_scene(const std::string& name) const;
+    std::string save_cache(const std::string& name) const;  ///< copies the session's cache to out_dir/name
+    void load_cache(const std::string& file);                 ///< makes `file` the session's cache
+
+    /// `name` resolved inside the scene's folder or the output folder; InputError (naming
+    /// `what`) for absolute paths, "..", or a symlink that leads out.
+    std::filesystem::path confined(const std::string& name, const std::string& what) const;
+
+    const std::filesystem::path& deep_path() const { return deep_path_; }
+    const std::filesystem::path& cache_path() const { return cache_path_; }
+
+private:
+    class Sink;
+    void run(SessionAction action, std::optional<std::array<int, 4>> crop);
+    std::vector<Override> overrides_locked() const;
+
+    SessionOptions options_;
+    std::filesystem::path scene_dir_, out_dir_, deep_path_, cache_path_;
+    mutable std::mutex mutex_;
+    std::condition_variable idle_;
+    std::map<std::string, nlohmann::json> edits_;  ///< key -> value, in the order of the table
+    std::vector<std::string> edit_order_;
+    Scene scene_;  ///< with every edit
+    int pending_ = -1;  ///< SessionAction, or -1 = nothing to show
+    // Worker state.
+    std::thread worker_;
+    std::unique_ptr<CancelToken> cancel_;
+    bool running_ = false;
+    std::string state_ = "idle", message_, action_;
+    std::string phase_;
+    uint64_t done_ = 0, total_ = 0;
+    nlohmann::json stats_ = nlohmann::json::object();
+    Image image_;          ///< the last full frame (a sub-viewport render is pasted over it)
+    uint64_t version_ = 0;
+};
+
+}  // namespace bounce

@@ -1,0 +1,18 @@
+// `bounce light`: the lighting tool's command (docs/lighting-tool.md).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace bounce {
+
+struct LightArgs {
+    std::string scene, out_dir = "out/light", deep_in, cache_in, bind = "127.0.0.1";
+    int port = 8080, threads = 0;
+    std::vector<std::string> sets;
+};
+
+/// Starts the session and the server; prints the URL; serves until interrupted.
+int run_light(const LightArgs& a);
+
+}  // namespace bounce

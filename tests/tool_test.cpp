@@ -1,0 +1,235 @@
+// The lighting tool: the session's edit / re-shade / re-gather / sub-viewport / cancel contract,
+// and the HTTP API's validation (in-process client on a loopback port).
+#include <httplib.h>
+
+#include <fstream>
+#include <thread>
+
+#include "bounce/cache/cache_file.h"
+#include "bounce/core/error.h"
+#include "bounce/gather/gather.h"
+#include "bounce/scene/params.h"
+#include "bounce/tool/server.h"
+#include "test_util.h"
+
+namespace bounce {
+namespace {
+
+using nlohmann::json;
+
+/// A copy of the Cornell box in `d` (saved scenes land beside it) and an output folder.
+SessionOptions small_session(const test::TempDir& d) {
+    std::filesystem::create_directories(d.path() / "scene");
+    for (const auto& e : std::filesystem::directory_iterator(test::source_dir() + "/scenes/cornell"))
+        std::filesystem::copy_file(e.path(), d.path() / "scene" / e.path().filename());
+    SessionOptions o;
+    o.scene = (d.path() / "scene" / "cornell.json").string();
+    o.out_dir = d.file("out");
+    o.threads = 2;
+    o.sets = {"camera.resolution=[48,40]", "render.spp=1", "render.rays=64", "render.light_samples=2"};
+    return o;
+}
+
+std::string bytes_of(const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), {}};
+}
+
+void render_and_wait(LightingSession& s, SessionAction a, std::optional<std::array<int, 4>> crop = std::nullopt) {
+    s.start(a, crop);
+    s.wait();
+    ASSERT_EQ(s.status()["state"], "done") << s.status()["message"];
+}
+
+TEST(LightingTool, ParamsListTheTableAndTheScenesMaterials) {
+    test::TempDir d;
+    LightingSession s(small_session(d));
+    const json rows = s.params();
+    size_t table = 0;
+    json rays, emission;
+    for (const json& r : rows) {
+        table += find_param(scene_params(), r["key"]) != nullptr;
+        if (r["key"] == "render.rays") rays = r;
+        if (r["key"] == "materials.light.emission") emission = r;
+    }
+    EXPECT_EQ(table, scene_params().size());
+    EXPECT_EQ(rays["value"], 64);
+    EXPECT_EQ(rays["default"], IndirectSettings{}.rays);
+    EXPECT_EQ(rays["needs"], "regather");
+    EXPECT_EQ(emission["value"], json({17, 12, 4}));
+    EXPECT_EQ(emission["needs"], "reshade");
+    // The tool starts with the cache when the scene renders no indirect light.
+    for (const json& r : rows)
+        if (r["key"] == "render.gi") {
+            EXPECT_EQ(r["value"], "cache");
+        }
+}
+
+TEST(LightingTool, ALightEditReshadesWithoutNewRecordsOrVisibility) {
+    test::TempDir d;
+    LightingSession s(small_session(d));
+    render_and_wait(s, SessionAction::Rasterize);
+    const std::string cache = bytes_of(s.cache_path());
+    const auto before = s.pixels("beauty", 0);
+    EXPECT_EQ(s.edit("materials.light.emission", {34, 24, 8})["needs"], "reshade");
+    EXPECT_EQ(s.pending(), SessionAction::Reshade);
+    render_and_wait(s, SessionAction::Reshade);
+    const json st = s.status()["stats"];
+    EXPECT_EQ(st["records_new"], 0.0);
+    EXPECT_EQ(st["rays"]["gather"], 0);
+    EXPECT_EQ(st["rays"]["camera"], 0);
+    EXPECT_FALSE(st["phases_s"].contains("visibility"));
+    EXPECT_NE(s.pixels("beauty", 0).rgba, before.rgba);
+    EXPECT_EQ(bytes_of(s.cache_path()), cache);  // the cache is untouched
+}
+
+TEST(LightingTool, RegatherReplacesTheRecords) {
+    test::TempDir d;
+    LightingSession s(small_session(d));
+    render_and_wait(s, SessionAction::Rasterize);
+    EXPECT_EQ(s.edit("render.rays", 100)["needs"], "regather");
+    render_and_wait(s, SessionAction::Regather);
+    const CacheFile f = read_cache_file(s.cache_path().string());
+    ASSERT_GT(f.records.size(), 10u);
+    size_t old = 0;
+    for (const Record& r : f.records) old += r.rays != static_cast<uint32_t>(gather_grid(100).rays());
+    EXPECT_EQ(old, 0u);
+    EXPECT_EQ(s.status()["stats"]["records_new"].get<double>(), static_cast<double>(f.records.size()));
+}
+
+TEST(LightingTool, SubViewportReshadeChangesOnlyItsRectangleAndEqualsAFullReshade) {
+    test::TempDir d1, d2;
+    LightingSession s(small_session(d1)), full(small_session(d2));
+    render_and_wait(s, SessionAction::Rasterize);
+    render_and_wait(full, SessionAction::Rasterize);
+    const auto before = s.pixels("beauty", 0);
+    for (LightingSession* x : {&s, &full}) x->edit("materials.light.emission", {8, 6, 2});
+    const std::array<int, 4> crop = {10, 30, 5, 25};
+    render_and_wait(s, SessionAction::Reshade, crop);
+    render_and_wait(full, SessionAction::Reshade);
+    const auto a = s.pixels("beauty", 0), b = full.pixels("beauty", 0);
+    ASSERT_EQ(a.width, 48);
+    size_t inside_differs = 0, outside_changed = 0, inside_changed = 0;
+    for (int y = 0; y < 40; ++y)
+        for (int x = 0; x < 48; ++x) {
+            const size_t i = 4 * (static_cast<size_t>(y) * 48 + static_cast<size_t>(x));
+            const bool in = x >= crop[0] && x < crop[1] && y >= crop[2] && y < crop[3];
+            const bool changed = a.rgba.compare(i, 4, before.rgba, i, 4) != 0;
+            if (in) {
+                inside_differs += a.rgba.compare(i, 4, b.rgba, i, 4) != 0;
+                inside_changed += changed;
+            } else {
+                outside_changed += changed;
+            }
+        }
+    EXPECT_EQ(outside_changed, 0u);
+    EXPECT_EQ(inside_differs, 0u);
+    EXPECT_GT(inside_changed, 300u);
+    EXPECT_THROW(s.start(SessionAction::Reshade, std::array<int, 4>{0, 49, 0, 10}), InputError);
+}
+
+TEST(LightingTool, ANewRequestCancelsTheRunningOneAndAFailureKeepsTheImage) {
+    test::TempDir d;
+    SessionOptions o = small_session(d);
+    LightingSession s(o);
+    render_and_wait(s, SessionAction::Rasterize);
+    const std::string cache = bytes_of(s.cache_path());
+    const uint64_t version = s.status()["image"]["version"];
+    s.edit("render.rays", 60000);
+    s.edit("render.preview", false);
+    s.start(SessionAction::Regather);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    s.stop();
+    EXPECT_EQ(s.status()["state"], "cancelled");
+    EXPECT_EQ(s.status()["image"]["version"], version);
+    EXPECT_EQ(bytes_of(s.cache_path()), cache);
+    // A render that fails (its cache file was damaged) leaves the image and reports why.
+    EXPECT_THROW(s.edit("render.rays", -1), InputError);
+    std::ofstream(s.cache_path(), std::ios::binary) << "not a cache";
+    s.start(SessionAction::Reshade);
+    s.wait();
+    EXPECT_EQ(s.status()["state"], "failed");
+    EXPECT_NE(s.status()["message"].get<std::string>().find("session.bic"), std::string::npos);
+    EXPECT_EQ(s.status()["image"]["version"], version);
+}
+
+/// A server on a free loopback port, serving in the background.
+struct Served {
+    test::TempDir dir;
+    LightingSession session{small_session(dir)};
+    LightingServer server{session, ServerOptions{}};
+    int port = server.bind();
+    std::thread thread{[this] { server.listen(); }};
+    httplib::Client client{"127.0.0.1", port};
+    ~Served() {
+        server.stop();
+        thread.join();
+    }
+};
+
+TEST(LightingToolHttp, BadRequestsGetAStatusAndAMessage) {
+    Served s;
+    auto post = [&](const std::string& path, const std::string& body) { return s.client.Post(path, body, "application/json"); };
+    auto r = post("/api/edit", R"({"key": "render.rays", "value": 1e39})");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400);
+    EXPECT_NE(json::parse(r->body)["error"].get<std::string>().find("render.rays"), std::string::npos);
+    r = post("/api/edit", R"({"key": "render.rays", "value": )");
+    EXPECT_EQ(r->status, 400);
+    EXPECT_NE(r->body.find("byte"), std::string::npos);
+    EXPECT_EQ(post("/api/edit", "[1, 2]")->status, 400);
+    EXPECT_EQ(post("/api/render", R"({"action": "explode"})")->status, 400);
+    EXPECT_EQ(post("/api/render", R"({"action": "reshade", "crop": [0, 10, 0, 10]})")->status, 400);  // nothing rendered yet
+    EXPECT_EQ(post("/api/render", R"({"action": "reshade", "crop": [0, "a", 0, 10]})")->status, 400);
+    for (const char* name : {"../secret.bic", "/etc/passwd", "a/../../b.bic"})
+        EXPECT_EQ(s.client.Get("/api/records", httplib::Params{{"file", name}}, httplib::Headers{})->status, 400) << name;
+    EXPECT_EQ(post("/api/save-scene", R"({"name": "../escape.json"})")->status, 400);
+    EXPECT_EQ(s.client.Get("/api/image?layer=beauty&exposure=nan")->status, 400);
+    EXPECT_EQ(s.client.Get("/api/scene?max_triangles=-4")->status, 400);
+    EXPECT_EQ(post("/api/edit", std::string(5u << 20, ' '))->status, 413);
+    EXPECT_EQ(s.client.Get("/api/nothing")->status, 404);
+    // Still serving after all of that.
+    r = s.client.Get("/api/status");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200);
+    EXPECT_EQ(json::parse(r->body)["state"], "idle");
+}
+
+TEST(LightingToolHttp, AnEditAndARenderThroughTheApi) {
+    Served s;
+    auto r = s.client.Post("/api/render", R"({"action": "rasterize"})", "application/json");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 202);
+    s.session.wait();
+    r = s.client.Get("/api/image?layer=indirect&exposure=1");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200);
+    EXPECT_EQ(r->get_header_value("X-Width"), "48");
+    EXPECT_EQ(r->body.size(), 48u * 40u * 4u);
+    const json rec = json::parse(s.client.Get("/api/records")->body);
+    EXPECT_EQ(rec["count"].get<size_t>(), read_cache_file(s.session.cache_path().string()).records.size());
+    EXPECT_EQ(rec["p"].size(), 3 * rec["shown"].get<size_t>());
+    const json view = json::parse(s.client.Get("/api/scene?max_triangles=10")->body);
+    EXPECT_LE(view["triangles"].size(), 9u * 12u);
+    EXPECT_EQ(view["camera"]["width"], 48);
+    r = s.client.Post("/api/save-scene", R"({"name": "edited-by-test.json"})", "application/json");
+    ASSERT_EQ(r->status, 200) << r->body;
+    const Scene back = load_scene(s.dir.file("scene/edited-by-test.json"));
+    EXPECT_EQ(back.render.indirect.rays, 64);
+    EXPECT_EQ(back.camera.width, 48);
+}
+
+TEST(LightingToolHttp, OnlyLoopbackAddressesAreServed) {
+    test::TempDir d;
+    LightingSession session(small_session(d));
+    ServerOptions o;
+    o.host = "0.0.0.0";
+    EXPECT_THROW(LightingServer(session, o), InputError);
+    EXPECT_TRUE(is_loopback_host("127.0.0.1"));
+    EXPECT_TRUE(is_loopback_host("::1"));
+    EXPECT_FALSE(is_loopback_host("127.0.0.1.evil.com"));
+    EXPECT_FALSE(is_loopback_host("10.0.0.1"));
+}
+
+}  // namespace
+}  // namespace bounce

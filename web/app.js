@@ -1,0 +1,291 @@
+// The lighting tool's page: spreadsheet, render window and 3D view over the JSON API of
+// src/bounce/tool/server.cpp (docs/lighting-tool.md).
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { TransformControls } from 'three/addons/controls/TransformControls.js';
+
+const $ = (id) => document.getElementById(id);
+const state = { version: -1, crop: null, layer: 'beauty', running: false, edited: new Set(), imageFetches: 0 };
+window.bounce = state;  // for the browser test
+
+function showError(msg) { $('error').textContent = msg || ''; }
+
+async function api(path, body) {
+  const opts = body === undefined ? {} : { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) };
+  const res = await fetch(path, opts);
+  const type = res.headers.get('Content-Type') || '';
+  const data = type.includes('json') ? await res.json() : await res.arrayBuffer();
+  if (!res.ok) throw new Error(data.error || `${path}: ${res.status}`);
+  return { data, res };
+}
+
+// ---- spreadsheet ----
+function shown(v) { return v === null || v === undefined ? '' : typeof v === 'string' ? v : JSON.stringify(v); }
+function parsed(text) { try { return JSON.parse(text); } catch { return text; } }
+
+async function loadParams() {
+  const { data: rows } = await api('/api/params');
+  const body = $('sheet').tBodies[0];
+  body.innerHTML = '';
+  for (const r of rows) {
+    const tr = document.createElement('tr');
+    tr.dataset.key = r.key;
+    if (state.edited.has(r.key)) tr.classList.add('edited');
+    const range = Array.isArray(r.range) ? `${+r.range[0].toPrecision(3)} .. ${+r.range[1].toPrecision(3)}` : '';
+    tr.innerHTML = `<td title="${r.doc || ''}"></td><td><input></td><td></td><td>${r.unit || ''}</td><td>${range}</td><td>${r.needs}</td>`;
+    tr.cells[0].textContent = r.key;
+    tr.cells[2].textContent = shown(r.default);
+    const input = tr.querySelector('input');
+    input.value = shown(r.value);
+    input.setAttribute('aria-label', r.key);
+    input.addEventListener('change', () => edit(r.key, input, tr));
+    body.appendChild(tr);
+  }
+  filterRows();
+}
+
+async function edit(key, input, tr) {
+  try {
+    const { data } = await api('/api/edit', { key, value: parsed(input.value) });
+    input.classList.remove('bad');
+    tr.classList.add('edited');
+    state.edited.add(key);
+    showError('');
+    await refreshStatus();
+    return data;
+  } catch (e) {
+    input.classList.add('bad');
+    showError(e.message);
+  }
+}
+
+function filterRows() {
+  const f = $('filter').value.toLowerCase();
+  for (const tr of $('sheet').tBodies[0].rows) tr.style.display = tr.dataset.key.toLowerCase().includes(f) ? '' : 'none';
+}
+
+// ---- render window ----
+async function render(action) {
+  try {
+    const body = action ? { action } : {};
+    if (state.crop && $('region-mode').checked) body.crop = state.crop;
+    await api('/api/render', body);
+    showError('');
+    state.running = true;
+    poll();
+  } catch (e) { showError(e.message); }
+}
+
+async function fetchImage() {
+  const layer = $('layer').value, exposure = $('exposure').value;
+  try {
+    const { data, res } = await api(`/api/image?layer=${encodeURIComponent(layer)}&exposure=${exposure}`);
+    const w = +res.headers.get('X-Width'), h = +res.headers.get('X-Height');
+    const canvas = $('image');
+    canvas.width = w; canvas.height = h;
+    canvas.getContext('2d').putImageData(new ImageData(new Uint8ClampedArray(data), w, h), 0, 0);
+    state.version = +res.headers.get('X-Version');
+    state.imageFetches++;
+  } catch (e) { if (!e.message.includes('nothing rendered')) showError(e.message); }
+}
+
+const STAT_KEYS = [['phases_s', 'visibility', 's'], ['phases_s', 'gather', 's'], ['phases_s', 'shading', 's'], ['records', null, ''],
+  ['records_new', null, ''], ['refined_fragments', null, ''], ['rays_per_gather', null, 'rays/record'], ['gather_rays_per_pixel', null, 'rays/pixel'],
+  ['shading_misses', null, ''], ['total_s', null, 's']];
+
+function showStats(stats) {
+  const body = $('stats').tBodies[0];
+  body.innerHTML = '';
+  for (const [k, sub, unit] of STAT_KEYS) {
+    let v = stats[k];
+    if (sub) v = v ? v[sub] : undefined;
+    if (v === undefined) v = sub ? 0 : undefined;
+    if (v === undefined) continue;
+    const tr = body.insertRow();
+    tr.insertCell().textContent = sub ? `${sub} time` : k.replaceAll('_', ' ');
+    tr.insertCell().textContent = `${typeof v === 'number' ? +v.toPrecision(4) : v} ${unit}`;
+    tr.dataset.stat = sub || k;
+  }
+}
+
+async function refreshStatus() {
+  const { data: s } = await api('/api/status');
+  $('pending').textContent = s.pending ? `pending: ${s.pending}` : '';
+  const p = s.progress;
+  $('bar').style.width = p.total ? `${100 * p.done / p.total}%` : s.state === 'done' ? '100%' : '0';
+  $('progress-text').textContent = `${s.state}${s.action ? ' (' + s.action + ')' : ''}${p.phase ? ': ' + p.phase : ''}${s.message ? ' — ' + s.message : ''}`;
+  if (s.state === 'failed') showError(s.message);
+  const sel = $('layer');
+  if (s.image.layers.length && sel.options.length !== s.image.layers.length) {
+    const cur = sel.value;
+    sel.innerHTML = s.image.layers.map((l) => `<option>${l}</option>`).join('');
+    sel.value = s.image.layers.includes(cur) ? cur : 'beauty';
+  }
+  if (s.image.version !== state.version) await fetchImage();
+  if (s.state !== 'running') {
+    if (state.running) { showStats(s.stats); loadRecords(); loadCacheFiles(); }
+    state.running = false;
+  }
+  state.status = s;
+  return s;
+}
+
+async function poll() {
+  const s = await refreshStatus().catch((e) => showError(e.message));
+  if (s && s.state === 'running') setTimeout(poll, 150);
+}
+
+function setupRegion() {
+  const canvas = $('image'), rect = $('rect');
+  let start = null;
+  const toPixel = (e) => {
+    const b = canvas.getBoundingClientRect();
+    return [Math.round((e.clientX - b.left) * canvas.width / b.width), Math.round((e.clientY - b.top) * canvas.height / b.height)];
+  };
+  canvas.addEventListener('mousedown', (e) => { if ($('region-mode').checked) { start = toPixel(e); e.preventDefault(); } });
+  window.addEventListener('mousemove', (e) => {
+    if (!start) return;
+    const [x, y] = toPixel(e);
+    const clamp = (v, hi) => Math.max(0, Math.min(hi, v));
+    const x0 = clamp(Math.min(start[0], x), canvas.width), x1 = clamp(Math.max(start[0], x), canvas.width);
+    const y0 = clamp(Math.min(start[1], y), canvas.height), y1 = clamp(Math.max(start[1], y), canvas.height);
+    state.crop = x1 > x0 && y1 > y0 ? [x0, x1, y0, y1] : null;
+    const s = canvas.getBoundingClientRect().width / canvas.width;
+    Object.assign(rect.style, { display: 'block', left: `${x0 * s}px`, top: `${y0 * s}px`, width: `${(x1 - x0) * s}px`, height: `${(y1 - y0) * s}px` });
+  });
+  window.addEventListener('mouseup', () => { start = null; });
+  $('region-mode').addEventListener('change', () => { if (!$('region-mode').checked) rect.style.display = 'none'; });
+}
+
+// ---- 3D view ----
+const view = {};
+
+function initView() {
+  const el = $('view');
+  view.renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  view.renderer.setSize(el.clientWidth, el.clientHeight);
+  el.appendChild(view.renderer.domElement);
+  view.scene = new THREE.Scene();
+  view.camera = new THREE.PerspectiveCamera(45, el.clientWidth / el.clientHeight, 0.01, 1e7);
+  view.orbit = new OrbitControls(view.camera, view.renderer.domElement);
+  view.drag = new TransformControls(view.camera, view.renderer.domElement);
+  view.drag.addEventListener('dragging-changed', (e) => {
+    view.orbit.enabled = !e.value;
+    if (!e.value && view.drag.object) moveLight(view.drag.object);
+  });
+  view.scene.add(view.drag);
+  view.scene.add(new THREE.AmbientLight(0xffffff, 0.6));
+  const sun = new THREE.DirectionalLight(0xffffff, 0.8);
+  sun.position.set(1, 2, 1.5);
+  view.scene.add(sun);
+  view.renderer.domElement.addEventListener('click', pickLight);
+  const loop = () => { view.renderer.render(view.scene, view.camera); requestAnimationFrame(loop); };
+  loop();
+}
+
+async function loadScene() {
+  const { data: s } = await api('/api/scene?max_triangles=100000');
+  $('scene-name').textContent = state.status ? state.status.scene : '';
+  if (view.geometry) view.scene.remove(view.geometry);
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.Float32BufferAttribute(s.triangles, 3));
+  g.computeVertexNormals();
+  view.geometry = new THREE.Mesh(g, new THREE.MeshLambertMaterial({ color: 0x888888, side: THREE.DoubleSide, transparent: true, opacity: 0.55 }));
+  view.scene.add(view.geometry);
+  const c = s.camera;
+  const cam = new THREE.PerspectiveCamera(c.fov, c.width / c.height, 0.05 * dist(c.position, c.look_at), dist(c.position, c.look_at));
+  cam.position.set(...c.position); cam.up.set(...c.up); cam.lookAt(...c.look_at); cam.updateMatrixWorld(); cam.updateProjectionMatrix();
+  if (view.frustum) view.scene.remove(view.frustum);
+  view.frustum = new THREE.CameraHelper(cam);
+  view.scene.add(view.frustum);
+  if (!view.placed) {
+    view.camera.position.set(...c.position); view.orbit.target.set(...c.look_at); view.orbit.update(); view.placed = true;
+  }
+  for (const h of view.lights || []) view.scene.remove(h);
+  const size = dist(s.bounds[0], s.bounds[1]) * 0.015;
+  view.lights = s.lights.filter((l) => l.position).map((l) => {
+    const m = new THREE.Mesh(new THREE.SphereGeometry(size), new THREE.MeshBasicMaterial({ color: 0xffdd55 }));
+    m.position.set(...l.position);
+    m.userData = l;
+    view.scene.add(m);
+    return m;
+  });
+}
+
+function dist(a, b) { return Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]); }
+
+function pickLight(e) {
+  const b = view.renderer.domElement.getBoundingClientRect();
+  const ray = new THREE.Raycaster();
+  ray.setFromCamera(new THREE.Vector2(((e.clientX - b.left) / b.width) * 2 - 1, -((e.clientY - b.top) / b.height) * 2 + 1), view.camera);
+  const hit = ray.intersectObjects(view.lights || [])[0];
+  if (hit) view.drag.attach(hit.object);
+}
+
+async function moveLight(handle) {
+  const l = handle.userData, p = handle.position;
+  const off = l.offset || [0, 0, 0];
+  const value = [p.x - off[0], p.y - off[1], p.z - off[2]].map((v) => +v.toPrecision(6));
+  const tr = [...$('sheet').tBodies[0].rows].find((r) => r.dataset.key === l.key);
+  if (tr) { tr.querySelector('input').value = JSON.stringify(value); await edit(l.key, tr.querySelector('input'), tr); }
+}
+
+async function loadRecords() {
+  const files = $('cache-file');
+  const file = files.value && files.selectedIndex > 0 ? `&file=${encodeURIComponent(files.value)}` : '';
+  let r;
+  try { ({ data: r } = await api(`/api/records?limit=200000${file}`)); } catch { $('record-count').textContent = 'records: 0'; return; }
+  if (view.records) view.scene.remove(view.records);
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.Float32BufferAttribute(r.p, 3));
+  const colours = new Float32Array(r.shown * 3);
+  const ao = $('record-colour').value === 'ao';
+  let max = 1e-9;
+  for (let i = 0; i < r.E.length; i++) max = Math.max(max, r.E[i]);
+  for (let i = 0; i < r.shown; i++)
+    for (let c = 0; c < 3; c++) colours[3 * i + c] = ao ? r.ao[i] : Math.sqrt(r.E[3 * i + c] / max);
+  g.setAttribute('color', new THREE.Float32BufferAttribute(colours, 3));
+  view.records = new THREE.Points(g, new THREE.PointsMaterial({ size: 4, sizeAttenuation: false, vertexColors: true }));
+  view.records.visible = $('show-records').checked;
+  view.scene.add(view.records);
+  $('record-count').textContent = `records: ${r.count} (frame ${r.frame})`;
+  $('record-count').dataset.count = r.count;
+}
+
+async function loadCacheFiles() {
+  const { data: files } = await api('/api/caches');
+  const sel = $('cache-file'), cur = sel.value;
+  sel.innerHTML = '<option value="">session</option>' + files.map((f) => `<option>${f}</option>`).join('');
+  sel.value = files.includes(cur) ? cur : '';
+  const seq = files.filter((f) => /\d+\.bic$/.test(f));
+  $('frame').max = Math.max(0, seq.length - 1);
+  $('frame').dataset.files = JSON.stringify(seq);
+}
+
+// ---- wiring ----
+async function main() {
+  for (const a of ['reshade', 'regather', 'rasterize']) $(a).addEventListener('click', () => render(a));
+  $('update').addEventListener('click', () => render(null));
+  $('stop').addEventListener('click', () => api('/api/stop', {}).then(refreshStatus).catch((e) => showError(e.message)));
+  $('layer').addEventListener('change', fetchImage);
+  $('exposure').addEventListener('input', fetchImage);
+  $('filter').addEventListener('input', filterRows);
+  $('show-records').addEventListener('change', () => { if (view.records) view.records.visible = $('show-records').checked; });
+  $('record-colour').addEventListener('change', loadRecords);
+  $('cache-file').addEventListener('change', loadRecords);
+  $('frame').addEventListener('input', () => {
+    const seq = JSON.parse($('frame').dataset.files || '[]');
+    if (seq.length) { $('cache-file').value = seq[+$('frame').value]; loadRecords(); }
+  });
+  const post = (path, body) => api(path, body).then(({ data }) => { showError(''); return data; }).catch((e) => showError(e.message));
+  $('save-scene').addEventListener('click', () => post('/api/save-scene', { name: $('save-scene-name').value || 'edited.json' }));
+  $('save-cache').addEventListener('click', () => post('/api/save-cache', { name: $('save-cache-name').value || 'shot.bic' }).then(loadCacheFiles));
+  $('load-cache').addEventListener('click', () => post('/api/load-cache', { file: $('cache-file').value || $('save-cache-name').value }).then(loadRecords));
+  setupRegion();
+  initView();
+  await refreshStatus();
+  await Promise.all([loadParams(), loadScene(), loadRecords(), loadCacheFiles()]);
+  state.ready = true;
+}
+
+main().catch((e) => showError(e.message));
