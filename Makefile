@@ -9,6 +9,7 @@ OUT ?= out/cornell.exr
 
 deps:
 	./scripts/install-deps.sh
+	npm ci --no-audit --no-fund --loglevel=error
 
 configure: deps
 	cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release

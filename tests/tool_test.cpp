@@ -209,6 +209,13 @@ TEST(LightingToolHttp, AnEditAndARenderThroughTheApi) {
     const json rec = json::parse(s.client.Get("/api/records")->body);
     EXPECT_EQ(rec["count"].get<size_t>(), read_cache_file(s.session.cache_path().string()).records.size());
     EXPECT_EQ(rec["p"].size(), 3 * rec["shown"].get<size_t>());
+    // A region keeps exactly the records the camera projects into it; all of them for the frame.
+    const json whole = json::parse(s.client.Get("/api/records?region=0,48,0,40")->body);
+    const json left = json::parse(s.client.Get("/api/records?region=0,24,0,40")->body);
+    const json right = json::parse(s.client.Get("/api/records?region=24,48,0,40")->body);
+    EXPECT_EQ(left["in_region"].get<size_t>() + right["in_region"].get<size_t>(), whole["in_region"].get<size_t>());
+    EXPECT_GT(left["in_region"].get<size_t>(), 0u);
+    EXPECT_EQ(s.client.Get("/api/records?region=1,2,3")->status, 400);
     const json view = json::parse(s.client.Get("/api/scene?max_triangles=10")->body);
     EXPECT_LE(view["triangles"].size(), 9u * 12u);
     EXPECT_EQ(view["camera"]["width"], 48);

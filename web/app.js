@@ -232,7 +232,8 @@ async function moveLight(handle) {
 
 async function loadRecords() {
   const files = $('cache-file');
-  const file = files.value && files.selectedIndex > 0 ? `&file=${encodeURIComponent(files.value)}` : '';
+  let file = files.value && files.selectedIndex > 0 ? `&file=${encodeURIComponent(files.value)}` : '';
+  if ($('records-in-region').checked && state.crop) file += `&region=${state.crop.join(',')}`;
   let r;
   try { ({ data: r } = await api(`/api/records?limit=200000${file}`)); } catch { $('record-count').textContent = 'records: 0'; return; }
   if (view.records) view.scene.remove(view.records);
@@ -248,7 +249,7 @@ async function loadRecords() {
   view.records = new THREE.Points(g, new THREE.PointsMaterial({ size: 4, sizeAttenuation: false, vertexColors: true }));
   view.records.visible = $('show-records').checked;
   view.scene.add(view.records);
-  $('record-count').textContent = `records: ${r.count} (frame ${r.frame})`;
+  $('record-count').textContent = `records: ${r.count} (frame ${r.frame})` + (r.in_region !== r.count ? `, ${r.in_region} in the sub-viewport` : '');
   $('record-count').dataset.count = r.count;
 }
 
@@ -272,6 +273,7 @@ async function main() {
   $('filter').addEventListener('input', filterRows);
   $('show-records').addEventListener('change', () => { if (view.records) view.records.visible = $('show-records').checked; });
   $('record-colour').addEventListener('change', loadRecords);
+  $('records-in-region').addEventListener('change', loadRecords);
   $('cache-file').addEventListener('change', loadRecords);
   $('frame').addEventListener('input', () => {
     const seq = JSON.parse($('frame').dataset.files || '[]');

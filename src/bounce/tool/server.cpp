@@ -148,7 +148,16 @@ void LightingServer::routes() {
     });
     s.Get("/api/records", [this](const httplib::Request& req, httplib::Response& res) {
         const std::string file = req.has_param("file") ? req.get_param_value("file") : "";
-        reply(res, 200, session_.records(file, static_cast<size_t>(int_param(req, "limit", 200000, 0, 10000000))));
+        std::optional<std::array<int, 4>> region;
+        if (req.has_param("region")) {
+            region = std::array<int, 4>{};
+            const std::string v = req.get_param_value("region");
+            int used = 0;
+            auto& r = *region;
+            if (std::sscanf(v.c_str(), "%d,%d,%d,%d%n", &r[0], &r[1], &r[2], &r[3], &used) != 4 || used != static_cast<int>(v.size()))
+                throw InputError("request", "region", fmt::format("'{}' is not x0,x1,y0,y1", v));
+        }
+        reply(res, 200, session_.records(file, static_cast<size_t>(int_param(req, "limit", 200000, 0, 10000000)), region));
     });
     s.Get("/api/caches", [this](const httplib::Request&, httplib::Response& res) { reply(res, 200, session_.cache_files()); });
     s.Get("/api/scene", [this](const httplib::Request& req, httplib::Response& res) {

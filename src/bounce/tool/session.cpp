@@ -11,6 +11,7 @@
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
 #include "bounce/core/stats.h"
+#include "bounce/deep/deep_buffer.h"
 #include "bounce/render/render.h"
 #include "bounce/scene/params.h"
 #include "bounce/scene/scene_load.h"
@@ -221,6 +222,8 @@ void LightingSession::run(SessionAction action, std::optional<std::array<int, 4>
             std::vector<Override> o = overrides_locked();
             if (crop) o.emplace_back(fmt::format("render.crop=[{},{},{},{}]", (*crop)[0], (*crop)[1], (*crop)[2], (*crop)[3]));
             if (options_.threads > 0) o.emplace_back(fmt::format("render.threads={}", options_.threads));
+            // Gathers stream the hierarchical preview unless the lighter turned it off.
+            if (action != SessionAction::Reshade && !edits_.count("render.preview")) o.emplace_back("render.preview=true");
             scene = load_scene(options_.scene, o);
             req.cancel = cancel_.get();
         }
@@ -304,9 +307,24 @@ fs::path LightingSession::confined(const std::string& name, const std::string& w
     throw InputError("request", what, fmt::format("'{}' is not inside the scene or output folder", name));
 }
 
-json LightingSession::records(const std::string& file, size_t limit) const {
+json LightingSession::records(const std::string& file, size_t limit, std::optional<std::array<int, 4>> region) const {
     const fs::path path = file.empty() ? cache_path_ : confined(file, "file");
     CacheFile f = read_cache_file(path.string());
+    const size_t all = f.records.size();
+    if (region) {
+        Camera camera;
+        {
+            std::lock_guard lock(mutex_);
+            camera = scene_.camera;
+        }
+        const CameraRays rays(camera);
+        const auto& c = *region;
+        std::erase_if(f.records, [&](const Record& r) {
+            float px, py;
+            return !rays.project(r.p, px, py) || px < static_cast<float>(c[0]) || px >= static_cast<float>(c[1]) ||
+                   py < static_cast<float>(c[2]) || py >= static_cast<float>(c[3]);
+        });
+    }
     const size_t n = std::min(limit, f.records.size());
     json p = json::array(), r = json::array(), e = json::array(), ao = json::array();
     // An even subset when the cache holds more than the view asked for.
@@ -317,7 +335,7 @@ json LightingSession::records(const std::string& file, size_t limit) const {
         for (float v : {rec.E.x, rec.E.y, rec.E.z}) e.push_back(v);
         ao.push_back(rec.ao);
     }
-    return {{"file", path.filename().string()}, {"count", f.records.size()}, {"fragment_records", f.fragment_records.size()},
+    return {{"file", path.filename().string()}, {"count", all}, {"in_region", f.records.size()}, {"fragment_records", f.fragment_records.size()},
             {"shown", n}, {"frame", f.info.frame}, {"p", p}, {"r", r}, {"E", e}, {"ao", ao}};
 }
 

@@ -1,0 +1,131 @@
+// Browser test of the lighting tool (issue 17): Debian's chromium, headless, driven by
+// playwright-core (nothing is downloaded). Starts `bounce light` on a copy of the Cornell box,
+// then: render, change the light's intensity in the spreadsheet and re-shade (the image's pixels
+// must change), drag a sub-viewport and re-gather it (only its pixels may change), and check
+// that the 3D view shows as many records as the cache file holds. A screenshot of each step goes
+// to the output folder (argv[2], default build/browser-test).
+// Exit 77 (CTest: skipped) when chromium or playwright-core is missing, unless
+// BOUNCE_REQUIRE_BROWSER=1 (CI), which makes that a failure.
+import { spawn, execFileSync } from 'node:child_process';
+import fs from 'node:fs';
+import path from 'node:path';
+import os from 'node:os';
+import { fileURLToPath } from 'node:url';
+
+const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
+const bin = process.env.BOUNCE_BINARY || path.join(root, 'build/bounce');
+const outDir = path.resolve(process.argv[2] || path.join(root, 'build/browser-test'));
+const chromiumPath = process.env.CHROMIUM || '/usr/bin/chromium';
+const required = process.env.BOUNCE_REQUIRE_BROWSER === '1';
+
+function skip(why) {
+  console.error(`browser test: ${why}`);
+  process.exit(required ? 1 : 77);
+}
+
+let chromium;
+try { ({ chromium } = await import('playwright-core')); } catch { skip('playwright-core is not installed (npm ci)'); }
+if (!fs.existsSync(chromiumPath)) skip(`no chromium at ${chromiumPath} (apt install chromium)`);
+if (!fs.existsSync(path.join(root, 'node_modules/three/build/three.module.js'))) skip('three is not installed (npm ci)');
+
+fs.mkdirSync(outDir, { recursive: true });
+const work = fs.mkdtempSync(path.join(os.tmpdir(), 'bounce-light-'));
+fs.cpSync(path.join(root, 'scenes/cornell'), path.join(work, 'scene'), { recursive: true });
+
+const server = spawn(bin, ['light', path.join(work, 'scene/cornell.json'), '--port', '0', '--out', path.join(work, 'out'),
+  '--threads', '2', '--set', 'camera.resolution=[160,120]', '--set', 'render.spp=1', '--set', 'render.rays=128',
+  '--set', 'render.light_samples=2'], { stdio: ['ignore', 'pipe', 'inherit'] });
+const url = await new Promise((resolve, reject) => {
+  let text = '';
+  server.stdout.on('data', (d) => { text += d; const m = text.match(/http:\/\/[^ ]+\//); if (m) resolve(m[0]); });
+  server.on('exit', (code) => reject(new Error(`bounce light exited with ${code}`)));
+  setTimeout(() => reject(new Error('bounce light printed no URL')), 20000);
+});
+
+let failures = 0;
+function check(ok, what) {
+  console.log(`${ok ? 'ok  ' : 'FAIL'} ${what}`);
+  if (!ok) failures++;
+}
+
+const browser = await chromium.launch({ executablePath: chromiumPath, args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader'] });
+try {
+  const page = await browser.newPage({ viewport: { width: 1400, height: 900 } });
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(e.message));
+  await page.goto(url);
+  await page.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 30000 });
+
+  const waitDone = async (minVersion) => {
+    await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v,
+      minVersion, { timeout: 120000 });
+    return page.evaluate(() => window.bounce.status);
+  };
+  const pixels = () => page.evaluate(() => {
+    const c = document.getElementById('image');
+    return Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data);
+  });
+  const shot = (name) => page.screenshot({ path: path.join(outDir, name), fullPage: true });
+
+  // 1. The first render: a new deep file and cache.
+  await page.click('#rasterize');
+  let s = await waitDone(1);
+  check(s.state === 'done', `first render finished (${s.state} ${s.message})`);
+  const first = await pixels();
+  check(first.length === 160 * 120 * 4, 'the image is 160x120');
+  await shot('1-render.png');
+
+  // 2. The light's intensity in the spreadsheet, then a re-shade.
+  await page.fill('#filter', 'light.emission');
+  const input = page.locator('input[aria-label="materials.light.emission"]');
+  await input.fill('[40, 28, 9]');
+  await input.dispatchEvent('change');
+  await page.waitForFunction(() => document.getElementById('pending').textContent.includes('reshade'));
+  const v1 = await page.evaluate(() => window.bounce.version);
+  await page.click('#reshade');
+  s = await waitDone(v1 + 1);
+  const second = await pixels();
+  let changed = 0;
+  for (let i = 0; i < first.length; i++) changed += first[i] !== second[i];
+  check(s.state === 'done' && changed > 1000, `the re-shade changed the image (${changed} channel values)`);
+  check(s.stats.records_new === 0 && !(s.stats.phases_s || {}).visibility, 're-shade: 0 new records, no visibility pass');
+  await shot('2-reshade.png');
+
+  // 3. A sub-viewport: drag a rectangle, re-gather it.
+  await page.check('#region-mode');
+  const box = await page.locator('#image').boundingBox();
+  await page.mouse.move(box.x + box.width * 0.25, box.y + box.height * 0.25);
+  await page.mouse.down();
+  await page.mouse.move(box.x + box.width * 0.6, box.y + box.height * 0.7, { steps: 5 });
+  await page.mouse.up();
+  const crop = await page.evaluate(() => window.bounce.crop);
+  check(Array.isArray(crop) && crop[1] > crop[0] && crop[3] > crop[2], `a rectangle was dragged (${crop})`);
+  const v2 = await page.evaluate(() => window.bounce.version);
+  await page.click('#regather');
+  s = await waitDone(v2 + 1);
+  const third = await pixels();
+  let outside = 0;
+  for (let y = 0; y < 120; y++)
+    for (let x = 0; x < 160; x++) {
+      if (x >= crop[0] && x < crop[1] && y >= crop[2] && y < crop[3]) continue;
+      for (let c = 0; c < 4; c++) outside += third[4 * (y * 160 + x) + c] !== second[4 * (y * 160 + x) + c];
+    }
+  check(s.state === 'done' && s.stats.records_new > 0, `the sub-viewport was re-gathered (${s.stats.records_new} new records)`);
+  check(outside === 0, `nothing outside the rectangle changed (${outside})`);
+  await shot('3-subviewport.png');
+
+  // 4. The 3D view shows the cache's records.
+  await page.waitForFunction(() => +document.getElementById('record-count').dataset.count > 0);
+  const shown = await page.evaluate(() => +document.getElementById('record-count').dataset.count);
+  const info = JSON.parse(execFileSync(bin, ['cache', 'info', path.join(work, 'out/session.bic'), '--json']).toString());
+  check(shown === info.records, `the 3D view shows ${shown} records; the cache holds ${info.records}`);
+  await page.locator('#view-panel').scrollIntoViewIfNeeded();
+  await shot('4-view.png');
+  check(errors.length === 0, `no page errors${errors.length ? ': ' + errors.join('; ') : ''}`);
+} finally {
+  await browser.close();
+  server.kill();
+  fs.rmSync(work, { recursive: true, force: true });
+}
+console.log(failures ? `${failures} check(s) failed` : `all checks passed; screenshots in ${outDir}`);
+process.exit(failures ? 1 : 0);
