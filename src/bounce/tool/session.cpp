@@ -210,57 +210,67 @@ void LightingSession::wait() {
     idle_.wait(lock, [&] { return !running_; });
 }
 
-void LightingSession::run(SessionAction action, std::optional<std::array<int, 4>> crop) {
-    Sink sink(*this);
-    Stats stats;
-    std::string state = "done", message;
-    try {
-        Scene scene;
-        RenderRequest req;
-        {
-            std::lock_guard lock(mutex_);
-            std::vector<Override> o = overrides_locked();
-            if (crop) o.emplace_back(fmt::format("render.crop=[{},{},{},{}]", (*crop)[0], (*crop)[1], (*crop)[2], (*crop)[3]));
-            if (options_.threads > 0) o.emplace_back(fmt::format("render.threads={}", options_.threads));
-            // Gathers stream the hierarchical preview unless the lighter turned it off.
-            if (action != SessionAction::Reshade && !edits_.count("render.preview")) o.emplace_back("render.preview=true");
-            scene = load_scene(options_.scene, o);
-            req.cancel = cancel_.get();
-        }
-        const bool cached = scene.render.indirect.gi == GiMode::Cache;
-        if (action == SessionAction::Rasterize || !fs::exists(deep_path_))
-            req.deep_out = deep_path_.string();
-        else
-            req.deep_in = deep_path_.string();
-        if (cached && action != SessionAction::Rasterize && fs::exists(cache_path_)) {
-            // The session knows its cache's history: lights and materials may have changed
-            // since it was gathered (a re-shade keeps its bounce light on purpose).
-            req.cache_in = cache_path_.string();
-            req.force = true;
-            req.cache_reuse = CacheReuse::Any;
-            req.regather = action == SessionAction::Regather;
-        }
-        if (cached && action != SessionAction::Reshade && scene.render.parallel.preview)
-            req.preview = [&](const Image& img) {
-                std::lock_guard lock(mutex_);
-                image_ = crop ? paste_over(image_, img, "session image") : img;
-                ++version_;
-            };
-        RenderResult r = render(scene, req, stats, &sink);
-        if (cached && r.cache && (r.records_new > 0 || action != SessionAction::Reshade ||
-                                  stats.to_json().value("refined_fragments", 0.0) > 0))
-            write_cache_file(cache_path_.string(), r.cache->to_file(r.cache_info));
+void LightingSession::render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats,
+                                  ProgressSink& sink) {
+    Scene scene;
+    RenderRequest req;
+    {
         std::lock_guard lock(mutex_);
-        image_ = crop ? paste_over(image_, r.image, "session image") : std::move(r.image);
-        ++version_;
-        if (!crop) pending_ = -1;
-    } catch (const Cancelled&) {
-        state = "cancelled";
-    } catch (const std::exception& e) {
-        state = "failed", message = e.what();  // the previous image and cache stay
+        std::vector<Override> o = overrides_locked();
+        if (crop) o.emplace_back(fmt::format("render.crop=[{},{},{},{}]", (*crop)[0], (*crop)[1], (*crop)[2], (*crop)[3]));
+        if (options_.threads > 0) o.emplace_back(fmt::format("render.threads={}", options_.threads));
+        // Gathers stream the hierarchical preview unless the lighter turned it off.
+        if (action != SessionAction::Reshade && !edits_.count("render.preview")) o.emplace_back("render.preview=true");
+        scene = load_scene(options_.scene, o);
+        req.cancel = cancel_.get();
+    }
+    const bool cached = scene.render.indirect.gi == GiMode::Cache;
+    if (action == SessionAction::Rasterize || !fs::exists(deep_path_))
+        req.deep_out = deep_path_.string();
+    else
+        req.deep_in = deep_path_.string();
+    if (cached && action != SessionAction::Rasterize && fs::exists(cache_path_)) {
+        // The session knows its cache's history: lights and materials may have changed since
+        // it was gathered (a re-shade keeps its bounce light on purpose).
+        req.cache_in = cache_path_.string();
+        req.force = true;
+        req.cache_reuse = CacheReuse::Any;
+        req.regather = action == SessionAction::Regather;
+    }
+    if (cached && action != SessionAction::Reshade && scene.render.parallel.preview)
+        req.preview = [&](const Image& img) {
+            std::lock_guard lock(mutex_);
+            image_ = crop ? paste_over(image_, img, "session image") : img;
+            ++version_;
+        };
+    RenderResult r = render(scene, req, stats, &sink);
+    // Only a finished render replaces the cache (atomically) and the image.
+    if (cached && r.cache && (r.records_new > 0 || action != SessionAction::Reshade ||
+                              stats.to_json().value("refined_fragments", 0.0) > 0))
+        write_cache_file(cache_path_.string(), r.cache->to_file(r.cache_info));
+    std::lock_guard lock(mutex_);
+    image_ = crop ? paste_over(image_, r.image, "session image") : std::move(r.image);
+    ++version_;
+    if (!crop) pending_ = -1;
+}
+
+void LightingSession::run(SessionAction action, std::optional<std::array<int, 4>> crop) {
+    std::string state = "done", message;
+    json stats_json;
+    {  // everything the render allocated is freed before the session says it is idle
+        Sink sink(*this);
+        Stats stats;
+        try {
+            render_once(action, crop, stats, sink);
+        } catch (const Cancelled&) {
+            state = "cancelled";
+        } catch (const std::exception& e) {
+            state = "failed", message = e.what();  // the previous image and cache stay
+        }
+        stats_json = stats.to_json();
     }
     std::lock_guard lock(mutex_);
-    stats_ = stats.to_json();
+    stats_ = std::move(stats_json);
     state_ = state, message_ = message;
     running_ = false;
     idle_.notify_all();

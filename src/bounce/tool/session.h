@@ -16,6 +16,7 @@
 
 #include "bounce/core/image.h"
 #include "bounce/core/progress.h"
+#include "bounce/core/stats.h"
 #include "bounce/scene/json_reader.h"
 #include "bounce/scene/scene.h"
 
@@ -104,6 +105,7 @@ public:
 private:
     class Sink;
     void run(SessionAction action, std::optional<std::array<int, 4>> crop);
+    void render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats, ProgressSink& sink);
     std::vector<Override> overrides_locked() const;
 
     SessionOptions options_;
