@@ -83,6 +83,24 @@ TEST(LightingTool, ALightEditReshadesWithoutNewRecordsOrVisibility) {
     EXPECT_EQ(bytes_of(s.cache_path()), cache);  // the cache is untouched
 }
 
+TEST(LightingTool, AReshadeOfACacheWithHolesGathersThem) {
+    test::TempDir d;
+    LightingSession s(small_session(d));
+    render_and_wait(s, SessionAction::Rasterize);
+    // Drop the records of the left half of the room (x > 278 mm): those fragments now miss.
+    CacheFile f = read_cache_file(s.cache_path().string());
+    const size_t before = f.records.size();
+    std::erase_if(f.records, [](const Record& r) { return r.p.x > 278; });
+    f.fragment_records.clear();
+    write_cache_file(s.cache_path().string(), f);
+    render_and_wait(s, SessionAction::Reshade);
+    const json st = s.status()["stats"];
+    EXPECT_GT(st["records_new"].get<double>(), 0.0);
+    EXPECT_LT(f.records.size(), before);
+    EXPECT_EQ(st["shading_misses"].get<double>(), 0.0);
+    EXPECT_EQ(read_cache_file(s.cache_path().string()).records.size(), f.records.size() + st["records_new"].get<size_t>());
+}
+
 TEST(LightingTool, RegatherReplacesTheRecords) {
     test::TempDir d;
     LightingSession s(small_session(d));

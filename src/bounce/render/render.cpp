@@ -243,7 +243,9 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             if (!loaded.differences.empty()) stats.set("cache_reused_with_other_settings", nlohmann::json(loaded.differences));
         }
         result.cache_info = cache_file_info(scene, request.frame);
-        if (ind.any()) {
+        // A shading-only re-shade of a loaded cache skips the gathering and refinement passes.
+        const bool gathering = ind.gi != GiMode::Cache || !request.shade_only || request.cache_in.empty();
+        if (ind.any() && gathering) {
             GatherSettings gs = gather_settings(scene);
             gs.record_terms = ind.gi == GiMode::Cache;  // brute force needs no gradients
             gs.hessian = gs.record_terms && scene.render.cache.metric == Metric::Hessian;
@@ -300,6 +302,10 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             double secs = t.stop();
             uint64_t rays = stats.total().gather_rays - rays_before;
             stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
+        }
+        if (!gathering) {
+            stats.set("records_loaded", static_cast<double>(result.records_loaded));
+            stats.set("records_new", 0.0);
         }
         {
             PhaseTimer t(stats, "shading");

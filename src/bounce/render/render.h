@@ -28,6 +28,10 @@ struct RenderRequest {
     bool regather = false;  ///< flush the cache before gathering; with a crop and cache_in, only
                             ///< the records seen inside the crop are flushed
     bool force = false;     ///< accept a cache made for another scene or camera
+    /// With cache_in and gi cache: shade the loaded cache as it is, with no gathering or
+    /// refinement pass (an interactive re-shade). Where it lacks records the shading pass
+    /// counts "shading_misses"; the caller gathers then.
+    bool shade_only = false;
     CacheReuse cache_reuse = CacheReuse::Strict;  ///< keep a cache made with other settings
     int frame = 0;          ///< frame number stamped on new records (sequences)
     const CancelToken* cancel = nullptr;  ///< stops the render (throws Cancelled) when set

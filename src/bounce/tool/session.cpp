@@ -210,8 +210,8 @@ void LightingSession::wait() {
     idle_.wait(lock, [&] { return !running_; });
 }
 
-void LightingSession::render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats,
-                                  ProgressSink& sink) {
+bool LightingSession::render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats,
+                                  ProgressSink& sink, bool shade_only) {
     Scene scene;
     RenderRequest req;
     {
@@ -236,6 +236,7 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
         req.force = true;
         req.cache_reuse = CacheReuse::Any;
         req.regather = action == SessionAction::Regather;
+        req.shade_only = shade_only && action == SessionAction::Reshade;
     }
     if (cached && action != SessionAction::Reshade && scene.render.parallel.preview)
         req.preview = [&](const Image& img) {
@@ -244,6 +245,7 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
             ++version_;
         };
     RenderResult r = render(scene, req, stats, &sink);
+    if (req.shade_only && stats.to_json().value("shading_misses", 0.0) > 0) return false;  // gather after all
     // Only a finished render replaces the cache (atomically) and the image.
     if (cached && r.cache && (r.records_new > 0 || action != SessionAction::Reshade ||
                               stats.to_json().value("refined_fragments", 0.0) > 0))
@@ -252,22 +254,28 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
     image_ = crop ? paste_over(image_, r.image, "session image") : std::move(r.image);
     ++version_;
     if (!crop) pending_ = -1;
+    return true;
 }
 
 void LightingSession::run(SessionAction action, std::optional<std::array<int, 4>> crop) {
     std::string state = "done", message;
     json stats_json;
-    {  // everything the render allocated is freed before the session says it is idle
+    // A re-shade first shades the cache as it is; only if some fragment has no record does it
+    // run the gathering pass too.
+    for (bool shade_only : {true, false}) {
+        // Everything the render allocated is freed before the session says it is idle.
         Sink sink(*this);
         Stats stats;
+        bool done = true;
         try {
-            render_once(action, crop, stats, sink);
+            done = render_once(action, crop, stats, sink, shade_only);
         } catch (const Cancelled&) {
             state = "cancelled";
         } catch (const std::exception& e) {
             state = "failed", message = e.what();  // the previous image and cache stay
         }
         stats_json = stats.to_json();
+        if (done || action != SessionAction::Reshade) break;
     }
     std::lock_guard lock(mutex_);
     stats_ = std::move(stats_json);

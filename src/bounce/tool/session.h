@@ -105,7 +105,9 @@ public:
 private:
     class Sink;
     void run(SessionAction action, std::optional<std::array<int, 4>> crop);
-    void render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats, ProgressSink& sink);
+    /// One render; false when a shading-only re-shade found fragments without records.
+    bool render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats, ProgressSink& sink,
+                     bool shade_only);
     std::vector<Override> overrides_locked() const;
 
     SessionOptions options_;
