@@ -171,6 +171,23 @@ TEST(LightingTool, ANewRequestCancelsTheRunningOneAndAFailureKeepsTheImage) {
     EXPECT_EQ(s.status()["image"]["version"], version);
 }
 
+TEST(LightingTool, RequestsFromManyThreadsRunOneAtATime) {
+    test::TempDir d;
+    LightingSession s(small_session(d));
+    render_and_wait(s, SessionAction::Rasterize);
+    std::vector<std::thread> clients;
+    for (int i = 0; i < 4; ++i)
+        clients.emplace_back([&s, i] {
+            s.start(i % 2 ? SessionAction::Reshade : SessionAction::Regather);
+            (void)s.status();
+            if (i == 3) s.stop();
+        });
+    for (auto& t : clients) t.join();
+    s.wait();
+    render_and_wait(s, SessionAction::Reshade);  // the session is still usable
+    EXPECT_EQ(s.status()["stats"]["shading_misses"], 0.0);
+}
+
 /// A server on a free loopback port, serving in the background.
 struct Served {
     test::TempDir dir;

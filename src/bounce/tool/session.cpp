@@ -133,6 +133,7 @@ LightingSession::LightingSession(SessionOptions options) : options_(std::move(op
 }
 
 LightingSession::~LightingSession() {
+    std::lock_guard control(control_);
     stop();
     if (worker_.joinable()) worker_.join();
 }
@@ -180,6 +181,7 @@ SessionAction LightingSession::pending() const {
 }
 
 void LightingSession::start(SessionAction action, std::optional<std::array<int, 4>> crop) {
+    std::lock_guard control(control_);  // two requests at once: one after the other
     stop();
     if (worker_.joinable()) worker_.join();
     std::lock_guard lock(mutex_);
@@ -437,6 +439,7 @@ std::string LightingSession::save_cache(const std::string& name) const {
 void LightingSession::load_cache(const std::string& file) {
     const fs::path from = confined(file, "file");
     CacheFile f = read_cache_file(from.string());  // refuses a bad file before anything changes
+    std::lock_guard control(control_);
     stop();
     write_cache_file(cache_path_.string(), f);
 }

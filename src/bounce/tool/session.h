@@ -112,6 +112,7 @@ private:
 
     SessionOptions options_;
     std::filesystem::path scene_dir_, out_dir_, deep_path_, cache_path_;
+    std::mutex control_;  ///< serialises start / load_cache / destruction (the worker thread's owners)
     mutable std::mutex mutex_;
     std::condition_variable idle_;
     std::map<std::string, nlohmann::json> edits_;  ///< key -> value, in the order of the table
