@@ -92,7 +92,8 @@ TEST(LightingTool, AReshadeOfACacheWithHolesGathersThem) {
     const size_t before = f.records.size();
     std::erase_if(f.records, [](const Record& r) { return r.p.x > 278; });
     f.fragment_records.clear();
-    write_cache_file(s.cache_path().string(), f);
+    write_cache_file(d.file("out/holes.bic"), f);
+    s.load_cache("holes.bic");
     render_and_wait(s, SessionAction::Reshade);
     const json st = s.status()["stats"];
     EXPECT_GT(st["records_new"].get<double>(), 0.0);
@@ -161,13 +162,17 @@ TEST(LightingTool, ANewRequestCancelsTheRunningOneAndAFailureKeepsTheImage) {
     EXPECT_EQ(s.status()["state"], "cancelled");
     EXPECT_EQ(s.status()["image"]["version"], version);
     EXPECT_EQ(bytes_of(s.cache_path()), cache);
-    // A render that fails (its cache file was damaged) leaves the image and reports why.
+    // A bad value or a bad cache file changes nothing; a render that fails (a camera edit
+    // makes the deep buffer another camera's) leaves the image and says why.
     EXPECT_THROW(s.edit("render.rays", -1), InputError);
-    std::ofstream(s.cache_path(), std::ios::binary) << "not a cache";
+    std::ofstream(d.file("out/bad.bic"), std::ios::binary) << "not a cache";
+    EXPECT_THROW(s.load_cache("bad.bic"), InputError);
+    EXPECT_EQ(bytes_of(s.cache_path()), cache);
+    EXPECT_EQ(s.edit("camera.fov", 30)["needs"], "rasterize");
     s.start(SessionAction::Reshade);
     s.wait();
     EXPECT_EQ(s.status()["state"], "failed");
-    EXPECT_NE(s.status()["message"].get<std::string>().find("session.bic"), std::string::npos);
+    EXPECT_NE(s.status()["message"].get<std::string>().find("deep"), std::string::npos) << s.status()["message"];
     EXPECT_EQ(s.status()["image"]["version"], version);
 }
 

@@ -131,13 +131,15 @@ DeepBuffer gathered_window(const Scene& scene, const RenderRequest& request, con
                            ProgressSink* sink) {
     const std::array<int, 4> crop = frame_window(scene);
     const int margin = scene.render.visibility.has_crop() && scene.render.indirect.gi == GiMode::Cache ? crop_margin(scene) : 0;
-    if (!request.deep_in.empty()) {
+    if (!request.deep_in.empty() || request.deep) {
         DeepBuffer deep;
-        {
+        if (request.deep) {
+            deep = *request.deep;
+        } else {
             PhaseTimer t(stats, "read deep");
             deep = read_deep(request.deep_in);
         }
-        validate_deep_for_scene(deep, scene, request.deep_in);
+        validate_deep_for_scene(deep, scene, request.deep_in.empty() ? "the session's deep buffer" : request.deep_in);
         // Without a crop, a deep file of a window renders that window.
         if (!scene.render.visibility.has_crop()) return deep;
         if (crop[0] < deep.x0 || crop[2] < deep.y0 || crop[1] > deep.x0 + deep.width || crop[3] > deep.y0 + deep.height)
@@ -235,7 +237,10 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         std::unique_ptr<RadiosityTextures> radiosity;
         std::vector<uint8_t> refined;
         size_t baked_before = 0;  // radiosity sides held before this render
-        if (ind.gi == GiMode::Cache || !request.cache_in.empty()) {
+        const bool in_memory = request.shade_only && request.shade_cache && ind.gi == GiMode::Cache;
+        if (in_memory) {
+            result.records_loaded = request.shade_cache->size();
+        } else if (ind.gi == GiMode::Cache || !request.cache_in.empty()) {
             result.cache = std::make_unique<IrradianceCache>(scene.bounds(), scene.render.cache, ind.ao);
             PhaseTimer tl(stats, "cache read");
             LoadedCache loaded = load_request_cache(scene, request, *result.cache);
@@ -243,8 +248,9 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             if (!loaded.differences.empty()) stats.set("cache_reused_with_other_settings", nlohmann::json(loaded.differences));
         }
         result.cache_info = cache_file_info(scene, request.frame);
+        const IrradianceCache* const shaded = in_memory ? request.shade_cache.get() : result.cache.get();
         // A shading-only re-shade of a loaded cache skips the gathering and refinement passes.
-        const bool gathering = ind.gi != GiMode::Cache || !request.shade_only || request.cache_in.empty();
+        const bool gathering = ind.gi != GiMode::Cache || !request.shade_only || (request.cache_in.empty() && !in_memory);
         if (ind.any() && gathering) {
             GatherSettings gs = gather_settings(scene);
             gs.record_terms = ind.gi == GiMode::Cache;  // brute force needs no gradients
@@ -311,19 +317,19 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             PhaseTimer t(stats, "shading");
             if (ind.gi == GiMode::Cache) {
                 auto t0 = std::chrono::steady_clock::now();
-                indirect = shading_pass(scene, result.deep, *result.cache, stats, ps, &refined);
+                indirect = shading_pass(scene, result.deep, *shaded, stats, ps, &refined);
                 stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
             }
             result.image = shade(scene, result.deep, materials, lighting, ind.any() ? &indirect : nullptr, stats, ps);
         }
-        if (result.cache) {
+        if (shaded) {
             std::vector<Vec3> positions;
-            for (size_t i = 0; i < result.cache->size(); ++i) positions.push_back(result.cache->record(i).p);
+            for (size_t i = 0; i < shaded->size(); ++i) positions.push_back(shaded->record(i).p);
             add_records_layer(result.image, scene.camera, positions);
         }
         // After the shading pass: refined fragments' gathers may have baked sides too.
         if (radiosity) save_radiosity(*radiosity, baked_before, scene, stats);
-        if (result.cache && (scene.render.cache.refine > 0 || result.cache->fragment_record_count() > 0))
+        if (shaded && (scene.render.cache.refine > 0 || shaded->fragment_record_count() > 0))
             add_fragment_mask_layer(result.image, result.deep, refined, "refined");
     });
     stats.set("pixels", static_cast<double>(result.deep.pixel_count()));

@@ -20,6 +20,9 @@ namespace bounce {
 
 struct RenderRequest {
     std::string deep_in;   ///< start from this deep file instead of tracing visibility
+    /// Or from this deep buffer in memory (the lighting tool keeps its frame's); named
+    /// deep_in in errors.
+    std::shared_ptr<const DeepBuffer> deep;
     std::string deep_out;  ///< write the deep buffer (of the gathered window) here
     /// Preview mode (render.preview with gi cache): called with the whole image after every
     /// sub-pass, pixelated first and finer after.
@@ -32,6 +35,8 @@ struct RenderRequest {
     /// refinement pass (an interactive re-shade). Where it lacks records the shading pass
     /// counts "shading_misses"; the caller gathers then.
     bool shade_only = false;
+    /// With shade_only: shade this cache (in memory, never modified) instead of loading cache_in.
+    std::shared_ptr<const IrradianceCache> shade_cache;
     CacheReuse cache_reuse = CacheReuse::Strict;  ///< keep a cache made with other settings
     int frame = 0;          ///< frame number stamped on new records (sequences)
     const CancelToken* cancel = nullptr;  ///< stops the render (throws Cancelled) when set

@@ -227,8 +227,16 @@ bool LightingSession::render_once(SessionAction action, std::optional<std::array
         req.cancel = cancel_.get();
     }
     const bool cached = scene.render.indirect.gi == GiMode::Cache;
+    std::shared_ptr<const DeepBuffer> deep;
+    std::shared_ptr<const IrradianceCache> cache;
+    {
+        std::lock_guard lock(mutex_);
+        deep = deep_, cache = cache_;
+    }
     if (action == SessionAction::Rasterize || !fs::exists(deep_path_))
         req.deep_out = deep_path_.string();
+    else if (deep)
+        req.deep = deep;  // the last frame's, kept in memory: no file to read
     else
         req.deep_in = deep_path_.string();
     if (cached && action != SessionAction::Rasterize && fs::exists(cache_path_)) {
@@ -239,6 +247,7 @@ bool LightingSession::render_once(SessionAction action, std::optional<std::array
         req.cache_reuse = CacheReuse::Any;
         req.regather = action == SessionAction::Regather;
         req.shade_only = shade_only && action == SessionAction::Reshade;
+        if (req.shade_only) req.shade_cache = cache;
     }
     if (cached && action != SessionAction::Reshade && scene.render.parallel.preview)
         req.preview = [&](const Image& img) {
@@ -255,7 +264,11 @@ bool LightingSession::render_once(SessionAction action, std::optional<std::array
     std::lock_guard lock(mutex_);
     image_ = crop ? paste_over(image_, r.image, "session image") : std::move(r.image);
     ++version_;
-    if (!crop) pending_ = -1;
+    if (!crop) {
+        pending_ = -1;
+        deep_ = std::make_shared<const DeepBuffer>(std::move(r.deep));
+    }
+    if (r.cache) cache_ = std::shared_ptr<const IrradianceCache>(std::move(r.cache));  // what the file now holds
     return true;
 }
 
@@ -442,6 +455,8 @@ void LightingSession::load_cache(const std::string& file) {
     std::lock_guard control(control_);
     stop();
     write_cache_file(cache_path_.string(), f);
+    std::lock_guard lock(mutex_);
+    cache_.reset();  // the next render reads the file
 }
 
 }  // namespace bounce

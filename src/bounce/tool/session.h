@@ -14,7 +14,9 @@
 #include <string>
 #include <thread>
 
+#include "bounce/cache/irradiance_cache.h"
 #include "bounce/core/image.h"
+#include "bounce/deep/deep_buffer.h"
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
 #include "bounce/scene/json_reader.h"
@@ -128,6 +130,9 @@ private:
     uint64_t done_ = 0, total_ = 0;
     nlohmann::json stats_ = nlohmann::json::object();
     Image image_;          ///< the last full frame (a sub-viewport render is pasted over it)
+    /// The session's deep buffer and cache as its files hold them, kept for re-shades.
+    std::shared_ptr<const DeepBuffer> deep_;
+    std::shared_ptr<const IrradianceCache> cache_;
     uint64_t version_ = 0;
 };
 
