@@ -217,13 +217,14 @@ bool LightingSession::render_once(SessionAction action, std::optional<std::array
     Scene scene;
     RenderRequest req;
     {
+        // The scene as the last edit loaded it (no file is read again); the request's own
+        // settings are not part of any identity.
         std::lock_guard lock(mutex_);
-        std::vector<Override> o = overrides_locked();
-        if (crop) o.emplace_back(fmt::format("render.crop=[{},{},{},{}]", (*crop)[0], (*crop)[1], (*crop)[2], (*crop)[3]));
-        if (options_.threads > 0) o.emplace_back(fmt::format("render.threads={}", options_.threads));
+        scene = scene_;
+        if (crop) scene.render.visibility.crop = *crop;
+        if (options_.threads > 0) scene.render.parallel.threads = options_.threads;
         // Gathers stream the hierarchical preview unless the lighter turned it off.
-        if (action != SessionAction::Reshade && !edits_.count("render.preview")) o.emplace_back("render.preview=true");
-        scene = load_scene(options_.scene, o);
+        if (action != SessionAction::Reshade && !edits_.count("render.preview")) scene.render.parallel.preview = true;
         req.cancel = cancel_.get();
     }
     const bool cached = scene.render.indirect.gi == GiMode::Cache;
