@@ -90,7 +90,7 @@ async function fetchImage() {
 }
 
 const STAT_KEYS = [['phases_s', 'visibility', 's'], ['phases_s', 'gather', 's'], ['phases_s', 'shading', 's'], ['records', null, ''],
-  ['records_new', null, ''], ['refined_fragments', null, ''], ['rays_per_gather', null, 'rays/record'], ['gather_rays_per_pixel', null, 'rays/pixel'],
+  ['records_new', null, ''], ['refined_fragments', null, ''], ['rays_per_gather', null, 'rays/record'], ['gather_rays_per_pixel', null, 'M rays/MP'],
   ['shading_misses', null, ''], ['total_s', null, 's']];
 
 function showStats(stats) {
@@ -102,7 +102,7 @@ function showStats(stats) {
     if (v === undefined) v = sub ? 0 : undefined;
     if (v === undefined) continue;
     const tr = body.insertRow();
-    tr.insertCell().textContent = sub ? `${sub} time` : k.replaceAll('_', ' ');
+    tr.insertCell().textContent = sub ? `${sub} time` : k === 'gather_rays_per_pixel' ? 'gather rays' : k.replaceAll('_', ' ');
     tr.insertCell().textContent = `${typeof v === 'number' ? +v.toPrecision(4) : v} ${unit}`;
     tr.dataset.stat = sub || k;
   }
@@ -237,17 +237,31 @@ async function loadRecords() {
   let r;
   try { ({ data: r } = await api(`/api/records?limit=200000${file}`)); } catch { $('record-count').textContent = 'records: 0'; return; }
   if (view.records) view.scene.remove(view.records);
-  const g = new THREE.BufferGeometry();
-  g.setAttribute('position', new THREE.Float32BufferAttribute(r.p, 3));
-  const colours = new Float32Array(r.shown * 3);
   const ao = $('record-colour').value === 'ao';
   let max = 1e-9;
   for (let i = 0; i < r.E.length; i++) max = Math.max(max, r.E[i]);
-  for (let i = 0; i < r.shown; i++)
-    for (let c = 0; c < 3; c++) colours[3 * i + c] = ao ? r.ao[i] : Math.sqrt(r.E[3 * i + c] / max);
-  g.setAttribute('color', new THREE.Float32BufferAttribute(colours, 3));
-  view.records = new THREE.Points(g, new THREE.PointsMaterial({ size: 4, sizeAttenuation: false, vertexColors: true }));
+  const colour = (i, c) => (ao ? r.ao[i] : Math.sqrt(r.E[3 * i + c] / max));
+  if ($('record-shape').value === 'discs') {
+    // One disc per record in its tangent plane, of its validity radius.
+    const mesh = new THREE.InstancedMesh(new THREE.CircleGeometry(1, 16), new THREE.MeshBasicMaterial({ side: THREE.DoubleSide }), r.shown);
+    const m = new THREE.Matrix4(), q = new THREE.Quaternion(), z = new THREE.Vector3(0, 0, 1), col = new THREE.Color();
+    for (let i = 0; i < r.shown; i++) {
+      q.setFromUnitVectors(z, new THREE.Vector3(r.n[3 * i], r.n[3 * i + 1], r.n[3 * i + 2]));
+      m.compose(new THREE.Vector3(r.p[3 * i], r.p[3 * i + 1], r.p[3 * i + 2]), q, new THREE.Vector3(r.r[i], r.r[i], r.r[i]));
+      mesh.setMatrixAt(i, m);
+      mesh.setColorAt(i, col.setRGB(colour(i, 0), colour(i, 1), colour(i, 2)));
+    }
+    view.records = mesh;
+  } else {
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.Float32BufferAttribute(r.p, 3));
+    const colours = new Float32Array(r.shown * 3);
+    for (let i = 0; i < r.shown; i++) for (let c = 0; c < 3; c++) colours[3 * i + c] = colour(i, c);
+    g.setAttribute('color', new THREE.Float32BufferAttribute(colours, 3));
+    view.records = new THREE.Points(g, new THREE.PointsMaterial({ size: 4, sizeAttenuation: false, vertexColors: true }));
+  }
   view.records.visible = $('show-records').checked;
+  state.recordsDrawn = $('record-shape').value;
   view.scene.add(view.records);
   $('record-count').textContent = `records: ${r.count} (frame ${r.frame})` + (r.in_region !== r.count ? `, ${r.in_region} in the sub-viewport` : '');
   $('record-count').dataset.count = r.count;
@@ -273,6 +287,17 @@ async function main() {
   $('filter').addEventListener('input', filterRows);
   $('show-records').addEventListener('change', () => { if (view.records) view.records.visible = $('show-records').checked; });
   $('record-colour').addEventListener('change', loadRecords);
+  $('record-shape').addEventListener('change', loadRecords);
+  $('play').addEventListener('click', () => {
+    // Plays the cache sequence: one frame every half second, from the slider's position.
+    if (view.playing) { clearInterval(view.playing); view.playing = null; return; }
+    view.playing = setInterval(() => {
+      const f = $('frame');
+      if (+f.value >= +f.max) { clearInterval(view.playing); view.playing = null; return; }
+      f.value = +f.value + 1;
+      f.dispatchEvent(new Event('input'));
+    }, 500);
+  });
   $('records-in-region').addEventListener('change', loadRecords);
   $('cache-file').addEventListener('change', loadRecords);
   $('frame').addEventListener('input', () => {

@@ -119,6 +119,10 @@ try {
   const shown = await page.evaluate(() => +document.getElementById('record-count').dataset.count);
   const info = JSON.parse(execFileSync(bin, ['cache', 'info', path.join(work, 'out/session.bic'), '--json']).toString());
   check(shown === info.records, `the 3D view shows ${shown} records; the cache holds ${info.records}`);
+  await page.selectOption('#record-shape', 'discs');
+  await page.waitForFunction(() => window.bounce.recordsDrawn === 'discs');
+  check(+(await page.evaluate(() => document.getElementById('record-count').dataset.count)) === info.records,
+    'the records drawn as discs of their radius: the same count');
   await page.locator('#view-panel').scrollIntoViewIfNeeded();
   await shot('4-view.png');
   check(errors.length === 0, `no page errors${errors.length ? ': ' + errors.join('; ') : ''}`);

@@ -58,13 +58,16 @@ void add_scene_rows(const json& description, json& rows) {
             const json& l = description["lights"][i];
             if (!l.is_object()) continue;
             for (const auto& [k, v] : l.items())
-                if (editable(v)) row(fmt::format("lights.{}.{}", i, k), "light", v, fmt::format("{} light {}", l.value("type", "?"), i));
+                if (editable(v))
+                    row(fmt::format("lights.{}.{}", i, k), "light", v,
+                        fmt::format("{} light {}; a re-gather updates its bounce light", l.value("type", "?"), i));
         }
     if (description.contains("materials") && description["materials"].is_object())
         for (const auto& [name, m] : description["materials"].items()) {
             if (!m.is_object()) continue;
             for (const auto& [k, v] : m.items())
-                if (editable(v)) row(fmt::format("materials.{}.{}", name, k), "material", v, "material " + name);
+                if (editable(v))
+                    row(fmt::format("materials.{}.{}", name, k), "material", v, "material " + name + "; a re-gather updates its bounce light");
         }
 }
 
@@ -360,17 +363,18 @@ json LightingSession::records(const std::string& file, size_t limit, std::option
         });
     }
     const size_t n = std::min(limit, f.records.size());
-    json p = json::array(), r = json::array(), e = json::array(), ao = json::array();
+    json p = json::array(), nn = json::array(), r = json::array(), e = json::array(), ao = json::array();
     // An even subset when the cache holds more than the view asked for.
     for (size_t k = 0; k < n; ++k) {
         const Record& rec = f.records[k * f.records.size() / std::max<size_t>(n, 1)];
         for (float v : {rec.p.x, rec.p.y, rec.p.z}) p.push_back(v);
+        for (float v : {rec.n.x, rec.n.y, rec.n.z}) nn.push_back(v);
         r.push_back(rec.radius);
         for (float v : {rec.E.x, rec.E.y, rec.E.z}) e.push_back(v);
         ao.push_back(rec.ao);
     }
     return {{"file", path.filename().string()}, {"count", all}, {"in_region", f.records.size()}, {"fragment_records", f.fragment_records.size()},
-            {"shown", n}, {"frame", f.info.frame}, {"p", p}, {"r", r}, {"E", e}, {"ao", ao}};
+            {"shown", n}, {"frame", f.info.frame}, {"p", p}, {"n", nn}, {"r", r}, {"E", e}, {"ao", ao}};
 }
 
 json LightingSession::cache_files() const {

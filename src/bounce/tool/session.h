@@ -83,7 +83,7 @@ public:
     };
     Pixels pixels(const std::string& layer, float exposure) const;
     /// Records of a cache file (the session's when `file` is empty; else a path confined to
-    /// the allowed folders): {file, count, frame, p, r, E, ao} as flat arrays, at most `limit`;
+    /// the allowed folders): {file, count, frame, p, n, r, E, ao} as flat arrays, at most `limit`;
     /// with `region` (x0, x1, y0, y1 in pixels) only the records the camera sees inside it.
     nlohmann::json records(const std::string& file, size_t limit, std::optional<std::array<int, 4>> region = std::nullopt) const;
     /// Cache files in the allowed folders (for the 3D view's frame slider).
