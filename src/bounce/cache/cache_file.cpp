@@ -152,7 +152,8 @@ std::string serialize_cache_file(const CacheFile& file) {
     h["record_layout"] = record_layout();
     h["record_bytes"] = kRecordBytes;
     h["record_count"] = file.records.size();
-    h["fragment_record_count"] = file.fragment_records.size();
+    // Only when there are any: a cache without them is byte for byte what earlier versions wrote.
+    if (!file.fragment_records.empty()) h["fragment_record_count"] = file.fragment_records.size();
     h["block_records"] = kBlockRecords;
     h["scene_fingerprint"] = fmt::format("{:016x}", file.info.scene_fingerprint);
     h["camera_fingerprint"] = fmt::format("{:016x}", file.info.camera_fingerprint);
