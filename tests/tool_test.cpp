@@ -76,6 +76,7 @@ TEST(LightingTool, ALightEditReshadesWithoutNewRecordsOrVisibility) {
     render_and_wait(s, SessionAction::Reshade);
     const json st = s.status()["stats"];
     EXPECT_EQ(st["records_new"], 0.0);
+    EXPECT_EQ(st["records"], static_cast<double>(read_cache_file(s.cache_path().string()).records.size()));
     EXPECT_EQ(st["rays"]["gather"], 0);
     EXPECT_EQ(st["rays"]["camera"], 0);
     EXPECT_FALSE(st["phases_s"].contains("visibility"));

@@ -309,7 +309,8 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
             uint64_t rays = stats.total().gather_rays - rays_before;
             stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
         }
-        if (!gathering) {
+        if (!gathering && shaded) {
+            stats.set("records", static_cast<double>(shaded->size()));
             stats.set("records_loaded", static_cast<double>(result.records_loaded));
             stats.set("records_new", 0.0);
         }
