@@ -31,7 +31,7 @@ async function loadParams() {
     const tr = document.createElement('tr');
     tr.dataset.key = r.key;
     if (state.edited.has(r.key)) tr.classList.add('edited');
-    const range = Array.isArray(r.range) ? `${+r.range[0].toPrecision(3)} .. ${+r.range[1].toPrecision(3)}` : '';
+    const range = Array.isArray(r.range) ? `${+r.range[0].toPrecision(6)} .. ${+r.range[1].toPrecision(6)}` : '';
     tr.innerHTML = `<td title="${r.doc || ''}"></td><td><input></td><td></td><td>${r.unit || ''}</td><td>${range}</td><td>${r.needs}</td>`;
     tr.cells[0].textContent = r.key;
     tr.cells[2].textContent = shown(r.default);
