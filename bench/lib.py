@@ -26,10 +26,17 @@ def timed_render(scene, deep, out, res, threads, extra):
     stats = out.replace(".exr", ".json")
     textures = deep.replace(".deep.exr", ".radiosity")
     run(["render", scene, "-o", out, "--deep-in", deep, "--res", res, "--threads", str(threads), "-q", "--stats-json", stats,
-         "--radiosity-textures", textures] + extra)
+         "--radiosity-textures", textures] + BAKE + extra)
     s = json.load(open(stats))
     ph = s["phases_s"]
     return sum(ph.get(k, 0.0) for k in ("radiosity load", "gather", "shading")), s
+
+
+# Every bench render of a scene shades gather hits from the same radiosity textures (#15: same
+# deep buffer and textures per scene), baked once at this quality: the references in out/bench
+# were made with them. (The default, auto = the scene's light_samples, would re-bake whenever
+# a scene's light_samples differ and put that bake's noise into the measured error.)
+BAKE = ["--radiosity-light-samples", "16"]
 
 
 def run(args):
