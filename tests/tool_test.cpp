@@ -74,6 +74,7 @@ TEST(LightingTool, ALightEditReshadesWithoutNewRecordsOrVisibility) {
     EXPECT_EQ(s.edit("materials.light.emission", {34, 24, 8})["needs"], "reshade");
     EXPECT_EQ(s.pending(), SessionAction::Reshade);
     render_and_wait(s, SessionAction::Reshade);
+    EXPECT_EQ(s.status()["pending"], nullptr);
     const json st = s.status()["stats"];
     EXPECT_EQ(st["records_new"], 0.0);
     EXPECT_EQ(st["records"], static_cast<double>(read_cache_file(s.cache_path().string()).records.size()));

@@ -170,6 +170,7 @@ json LightingSession::edit(const std::string& key, const json& value) {
     Scene s = load_scene(options_.scene, o);  // throws with the file and place on a bad value
     if (!edits_.count(key)) edit_order_.push_back(key);
     edits_[key] = value;
+    ++edit_count_;
     scene_ = std::move(s);
     const Param* p = find_param(scene_params(), key);
     // Lights and materials: a re-shade shows them (the bounce light follows on a re-gather).
@@ -219,11 +220,13 @@ bool LightingSession::render_once(SessionAction action, std::optional<std::array
                                   ProgressSink& sink, bool shade_only) {
     Scene scene;
     RenderRequest req;
+    uint64_t edits_seen = 0;
     {
         // The scene as the last edit loaded it (no file is read again); the request's own
         // settings are not part of any identity.
         std::lock_guard lock(mutex_);
         scene = scene_;
+        edits_seen = edit_count_;
         if (crop) scene.render.visibility.crop = *crop;
         if (options_.threads > 0) scene.render.parallel.threads = options_.threads;
         // Gathers stream the hierarchical preview unless the lighter turned it off.
@@ -269,7 +272,7 @@ bool LightingSession::render_once(SessionAction action, std::optional<std::array
     image_ = crop ? paste_over(image_, r.image, "session image") : std::move(r.image);
     ++version_;
     if (!crop) {
-        pending_ = -1;
+        if (edit_count_ == edits_seen) pending_ = -1;  // edits made while it ran still need showing
         deep_ = std::make_shared<const DeepBuffer>(std::move(r.deep));
     }
     if (r.cache) cache_ = std::shared_ptr<const IrradianceCache>(std::move(r.cache));  // what the file now holds

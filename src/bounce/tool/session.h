@@ -121,6 +121,7 @@ private:
     std::vector<std::string> edit_order_;
     Scene scene_;  ///< with every edit
     int pending_ = -1;  ///< SessionAction, or -1 = nothing to show
+    uint64_t edit_count_ = 0;  ///< edits so far (a render clears pending_ only if none came while it ran)
     // Worker state.
     std::thread worker_;
     std::unique_ptr<CancelToken> cancel_;
