@@ -225,7 +225,12 @@ function pickLight(e) {
 async function moveLight(handle) {
   const l = handle.userData, p = handle.position;
   const off = l.offset || [0, 0, 0];
-  const value = [p.x - off[0], p.y - off[1], p.z - off[2]].map((v) => +v.toPrecision(6));
+  let value = [p.x - off[0], p.y - off[1], p.z - off[2]];
+  if (l.towards) {  // a distant light: the direction from the handle to the scene's centre
+    const d = new THREE.Vector3(l.towards[0] - p.x, l.towards[1] - p.y, l.towards[2] - p.z).normalize();
+    value = [d.x, d.y, d.z];
+  }
+  value = value.map((v) => +v.toPrecision(6));
   const tr = [...$('sheet').tBodies[0].rows].find((r) => r.dataset.key === l.key);
   if (tr) { tr.querySelector('input').value = JSON.stringify(value); await edit(l.key, tr.querySelector('input'), tr); }
 }

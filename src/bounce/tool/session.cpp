@@ -404,6 +404,14 @@ json LightingSession::scene_view(size_t max_triangles) const {
             j["offset"] = {c.x - l.corner.x, c.y - l.corner.y, c.z - l.corner.z};
         } else if (l.type == LightType::Point || l.type == LightType::Spot) {
             j["position"] = {l.position.x, l.position.y, l.position.z}, j["key"] = fmt::format("lights.{}.position", i);
+        } else if (l.type == LightType::Distant) {
+            // A handle on the scene's bounding sphere, where the light comes from; dragging it
+            // sets the direction towards the centre.
+            const Bounds b = scene_.bounds();
+            const Vec3 c = (b.lo + b.hi) * 0.5f, d = normalize(l.direction);
+            const Vec3 h = c - d * (0.6f * length(b.hi - b.lo));
+            j["position"] = {h.x, h.y, h.z}, j["key"] = fmt::format("lights.{}.direction", i);
+            j["towards"] = {c.x, c.y, c.z};
         }
         lights.push_back(j);
     }
