@@ -86,6 +86,24 @@ TEST(BadInput, NegativeAndNanFlagsExitTwo) {
             {"camera.resolution", "needs about", "GiB"});
 }
 
+TEST(BadInput, TheLightingToolRefusesBeforeServing) {
+    test::TempDir d;
+    const std::string scene = test::cornell_scene(), out = " --out " + d.file("out");
+    refused("light " + d.file("nope.json") + out, {"nope.json", "not found"});
+    refused("light " + scene + out + " --bind 0.0.0.0", {"--bind", "loopback"});
+    refused("light " + scene + out + " --port 70000", {"--port"});
+    refused("light " + scene + " --out /dev/null", {"/dev/null", "output folder"});
+    refused("light " + scene + out + " --set render.rays=-1", {"--set render.rays=-1", "out of range"});
+    refused("light " + scene + out + " --set nonsense", {"--set nonsense", "key=value"});
+    // A bad cache or deep file is named and never replaces the session's own.
+    std::filesystem::create_directories(d.file("out"));
+    d.write("out/session.bic", "the session's cache");
+    refused("light " + scene + out + " --cache-in " + scene, {scene, "bad magic"});
+    refused("light " + scene + out + " --deep-in " + scene, {scene});
+    std::ifstream in(d.file("out/session.bic"));
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "the session's cache");
+}
+
 TEST(BadInput, SubdivisionSurfacesThatCannotBeDiced) {
     test::TempDir d;
     std::string obj;  // a 45 x 45 grid of quads

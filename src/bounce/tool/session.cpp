@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <fstream>
 
 #include "bounce/cache/cache_file.h"
@@ -116,9 +117,11 @@ LightingSession::LightingSession(SessionOptions options) : options_(std::move(op
     deep_path_ = out_dir_ / "session.deep.exr";
     cache_path_ = out_dir_ / "session.bic";
     // Start from the given files: copies, so the lighter's originals are never overwritten.
-    auto copy_in = [&](const std::string& from, const fs::path& to) {
+    // Each is read (and refused, naming it) before it replaces the session's own file.
+    auto copy_in = [&](const std::string& from, const fs::path& to, const std::function<void(const std::string&)>& check) {
         if (from.empty()) return;
         check_input_file(from);
+        check(from);
         if (fs::weakly_canonical(from) != to) fs::copy_file(from, to, fs::copy_options::overwrite_existing);
     };
     for (const std::string& s : options_.sets) {
@@ -126,13 +129,12 @@ LightingSession::LightingSession(SessionOptions options) : options_(std::move(op
         if (eq == std::string::npos) throw InputError("command line", "--set " + s, "expected key=value");
         const std::string text = s.substr(eq + 1);
         json v = json::parse(text, nullptr, false);
-        edit(s.substr(0, eq), v.is_discarded() ? json(text) : v);
+        edit(s.substr(0, eq), v.is_discarded() ? json(text) : v, "--set " + s);
     }
     if (options_.default_to_cache && scene_.render.indirect.gi == GiMode::None && !scene_.render.indirect.ao) edit("render.gi", "cache");
     pending_ = -1;  // nothing rendered yet: the first render is a new deep file anyway
-    copy_in(options_.deep_in, deep_path_);
-    copy_in(options_.cache_in, cache_path_);
-    if (!options_.cache_in.empty()) read_cache_file(cache_path_.string());  // refuse a bad cache now
+    copy_in(options_.deep_in, deep_path_, [&](const std::string& f) { validate_deep_for_scene(read_deep(f), scene_, f); });
+    copy_in(options_.cache_in, cache_path_, [](const std::string& f) { read_cache_file(f); });
 }
 
 LightingSession::~LightingSession() {
@@ -162,11 +164,11 @@ json LightingSession::params() const {
     return rows;
 }
 
-json LightingSession::edit(const std::string& key, const json& value) {
+json LightingSession::edit(const std::string& key, const json& value, const std::string& origin) {
     if (key.empty() || key.size() > 256) throw InputError("request", "key", "a parameter key of 1..256 characters is required");
     std::lock_guard lock(mutex_);
     std::vector<Override> o = overrides_locked();
-    o.emplace_back(key + "=" + value.dump(), "edit of " + key);
+    o.emplace_back(key + "=" + value.dump(), origin.empty() ? "edit of " + key : origin);
     Scene s = load_scene(options_.scene, o);  // throws with the file and place on a bad value
     if (!edits_.count(key)) edit_order_.push_back(key);
     edits_[key] = value;

@@ -60,7 +60,8 @@ public:
     nlohmann::json params() const;
     /// Sets `key` to `value` with the scene loader's validation (InputError, one line, on a bad
     /// key or value: nothing changes). Returns {key, value, needs}.
-    nlohmann::json edit(const std::string& key, const nlohmann::json& value);
+    /// `origin` names the edit in errors (default "edit of KEY"; the CLI's "--set ...").
+    nlohmann::json edit(const std::string& key, const nlohmann::json& value, const std::string& origin = "");
     /// The least action that shows every edit since the last finished render.
     SessionAction pending() const;
 
