@@ -3,6 +3,7 @@
 // pixel bounds, no misses in the shading pass, and error against a brute-force reference.
 #include <gtest/gtest.h>
 
+#include "bounce/cache/cache_file.h"
 #include "bounce/cache/irradiance_cache.h"
 #include "bounce/cache/passes.h"
 #include "bounce/core/image_compare.h"
@@ -260,6 +261,37 @@ TEST(CachePasses, PreviewShowsEverySubPassAndEndsAtTheFinalImage) {
     // The first frame is pixelated: neighbouring pixels share values in blocks.
     const Layer& first = *frames.front().find("indirect");
     EXPECT_EQ(frames.front().at(first, 17, 17)[1], frames.front().at(first, 18, 18)[1]);
+}
+
+TEST(CachePasses, AShadingOnlyReshadePreviewsOnePixelInSixteenExactly) {
+    test::TempDir d;
+    const Scene s = load_scene(test::cornell_scene(), {"camera.resolution=[48,40]", "render.spp=1", "render.gi=\"cache\"",
+                                                      "render.rays=64", "render.light_samples=2", "render.preview=true"});
+    Stats s1, s2;
+    RenderResult first = render(s, {}, s1, nullptr);
+    write_cache_file(d.file("c.bic"), first.cache->to_file(first.cache_info));
+    std::vector<Image> frames;
+    RenderRequest req;
+    req.cache_in = d.file("c.bic");
+    req.shade_only = true;
+    req.preview = [&](const Image& img) { frames.push_back(img); };
+    RenderResult r = render(s, req, s2, nullptr);
+    ASSERT_EQ(frames.size(), 1u);
+    EXPECT_EQ(s2.total().gather_rays, 0u);
+    const Layer &p = *frames[0].find("beauty"), &f = *r.image.find("beauty");
+    size_t lattice_differs = 0, block_differs = 0;
+    for (int y = 0; y < 40; ++y)
+        for (int x = 0; x < 48; ++x) {
+            const float* a = frames[0].at(p, x, y);
+            const float* lattice = frames[0].at(p, x - x % 4, y - y % 4);
+            if (x % 4 == 0 && y % 4 == 0)
+                lattice_differs += !std::equal(a, a + 4, r.image.at(f, x, y));
+            else
+                block_differs += !std::equal(a, a + 4, lattice);
+        }
+    EXPECT_EQ(lattice_differs, 0u);  // shaded exactly as the final image shades them
+    EXPECT_EQ(block_differs, 0u);
+    EXPECT_TRUE(r.image.find("indirect")->data == first.image.find("indirect")->data);
 }
 
 TEST(CacheAccuracy, CornellCacheIsCloseToABruteForceReference) {

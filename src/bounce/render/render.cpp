@@ -183,6 +183,35 @@ void set_metadata(Image& image, const Scene& scene, const DeepBuffer& deep, Stat
     md["render_time_s"] = fmt::format("{:.3f}", stats.to_json()["total_s"].get<double>());
 }
 
+/// The fragments of every `step`-th window pixel in x and y; the other pixels empty.
+DeepBuffer lattice_of(const DeepBuffer& deep, int step) {
+    DeepBuffer out = deep;
+    out.fragments.clear();
+    out.offsets.assign(deep.pixel_count() + 1, 0);
+    for (int wy = 0; wy < deep.height; ++wy)
+        for (int wx = 0; wx < deep.width; ++wx) {
+            const size_t i = static_cast<size_t>(wy) * deep.width + wx;
+            if (wx % step == 0 && wy % step == 0) {
+                auto f = deep.pixel(wx, wy);
+                out.fragments.insert(out.fragments.end(), f.begin(), f.end());
+            }
+            out.offsets[i + 1] = static_cast<uint32_t>(out.fragments.size());
+        }
+    return out;
+}
+
+/// Each pixel of every layer takes the value of its step x step block's first pixel.
+void fill_blocks(Image& img, int step) {
+    for (Layer& l : img.layers) {
+        const size_t nc = l.channels.size();
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x < img.width; ++x) {
+                const float* src = img.at(l, x - x % step, y - y % step);
+                std::copy_n(src, nc, img.at(l, x, y));
+            }
+    }
+}
+
 }  // namespace
 
 Image paste_over(const Image& base, const Image& window, const std::string& base_name) {
@@ -316,6 +345,15 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         }
         {
             PhaseTimer t(stats, "shading");
+            if (!gathering && shaded && scene.render.parallel.preview && request.preview) {
+                // A re-shade's quick look first: one pixel in 16 shaded exactly as the final
+                // image shades it, standing for its 4x4 block.
+                const DeepBuffer coarse = lattice_of(result.deep, 4);
+                const std::vector<Indirect> light = shading_pass(scene, coarse, *shaded, stats, nullptr);
+                Image look = shade(scene, coarse, materials, lighting, &light, stats, nullptr);
+                fill_blocks(look, 4);
+                request.preview(look);
+            }
             if (ind.gi == GiMode::Cache) {
                 auto t0 = std::chrono::steady_clock::now();
                 indirect = shading_pass(scene, result.deep, *shaded, stats, ps, &refined);

@@ -25,7 +25,8 @@ struct RenderRequest {
     std::shared_ptr<const DeepBuffer> deep;
     std::string deep_out;  ///< write the deep buffer (of the gathered window) here
     /// Preview mode (render.preview with gi cache): called with the whole image after every
-    /// sub-pass, pixelated first and finer after.
+    /// sub-pass, pixelated first and finer after; a shading-only re-shade calls it once, with
+    /// every 4th pixel in x and y shaded and standing for its 4x4 block, before shading the rest.
     std::function<void(const Image&)> preview;
     std::string cache_in;   ///< start the irradiance cache from this file (gathers only where it misses)
     bool regather = false;  ///< flush the cache before gathering; with a crop and cache_in, only

@@ -231,8 +231,8 @@ bool LightingSession::render_once(SessionAction action, std::optional<std::array
         edits_seen = edit_count_;
         if (crop) scene.render.visibility.crop = *crop;
         if (options_.threads > 0) scene.render.parallel.threads = options_.threads;
-        // Gathers stream the hierarchical preview unless the lighter turned it off.
-        if (action != SessionAction::Reshade && !edits_.count("render.preview")) scene.render.parallel.preview = true;
+        // Renders stream their previews unless the lighter turned them off.
+        if (!edits_.count("render.preview")) scene.render.parallel.preview = true;
         req.cancel = cancel_.get();
     }
     const bool cached = scene.render.indirect.gi == GiMode::Cache;
@@ -258,10 +258,18 @@ bool LightingSession::render_once(SessionAction action, std::optional<std::array
         req.shade_only = shade_only && action == SessionAction::Reshade;
         if (req.shade_only) req.shade_cache = cache;
     }
-    if (cached && action != SessionAction::Reshade && scene.render.parallel.preview)
+    if (cached && scene.render.parallel.preview)
         req.preview = [&](const Image& img) {
             std::lock_guard lock(mutex_);
-            image_ = crop ? paste_over(image_, img, "session image") : img;
+            // Over the last full frame when there is one: layers a preview lacks stay shown.
+            // (A frame with other layers, e.g. rendered before GI was on, is replaced instead.)
+            const bool over = crop || (image_.width == img.full_width && image_.height == img.full_height);
+            try {
+                image_ = over ? paste_over(image_, img, "session image") : img;
+            } catch (const InputError&) {
+                if (crop) return;  // the final paste says why
+                image_ = img;
+            }
             ++version_;
         };
     RenderResult r = render(scene, req, stats, &sink);
