@@ -5,7 +5,7 @@ import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { TransformControls } from 'three/addons/controls/TransformControls.js';
 
 const $ = (id) => document.getElementById(id);
-const state = { version: -1, crop: null, layer: 'beauty', running: false, edited: new Set(), imageFetches: 0 };
+const state = { version: -1, crop: null, running: false, edited: new Set() };
 window.bounce = state;  // for the browser test
 
 function showError(msg) { $('error').textContent = msg || ''; }
@@ -85,7 +85,6 @@ async function fetchImage() {
     canvas.width = w; canvas.height = h;
     canvas.getContext('2d').putImageData(new ImageData(new Uint8ClampedArray(data), w, h), 0, 0);
     state.version = +res.headers.get('X-Version');
-    state.imageFetches++;
   } catch (e) { if (!e.message.includes('nothing rendered')) showError(e.message); }
 }
 

@@ -254,8 +254,7 @@ std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceC
                     break;
                 }
             }
-            auto src = deep.pixel(lx, ly);
-            if (src.empty()) lx = wx, ly = wy;
+            if (deep.pixel(lx, ly).empty()) lx = wx, ly = wy;
             size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
             auto frags = deep.pixel(wx, wy);
             const auto n = static_cast<uint32_t>(deep.pixel(lx, ly).size());

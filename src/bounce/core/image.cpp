@@ -110,6 +110,8 @@ float srgb_encode(float x) {
     return x <= 0.0031308f ? 12.92f * x : 1.055f * std::pow(x, 1 / 2.4f) - 0.055f;
 }
 
+uint8_t srgb8(float linear) { return static_cast<uint8_t>(std::lround(255.0f * srgb_encode(linear))); }
+
 void write_png_rgb8(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb) {
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
     write_atomically(path, [&](const std::string& tmp) {
@@ -129,7 +131,7 @@ void write_png(const std::string& path, const Image& image, const std::string& l
     size_t nc = l->channels.size();
     for (size_t p = 0; p < static_cast<size_t>(image.width) * image.height; ++p)
         for (size_t c = 0; c < 3; ++c)
-            rgb[3 * p + c] = static_cast<uint8_t>(std::lround(255.0f * srgb_encode(scale * l->data[p * nc + c])));
+            rgb[3 * p + c] = srgb8(scale * l->data[p * nc + c]);
     write_png_rgb8(path, image.width, image.height, rgb);
 }
 

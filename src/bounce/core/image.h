@@ -2,6 +2,7 @@
 // metadata, and a tone-mapped sRGB PNG for a quick look.
 #pragma once
 
+#include <cstdint>
 #include <deque>
 #include <map>
 #include <string>
@@ -50,5 +51,7 @@ void write_png_rgb8(const std::string& path, int width, int height, const std::v
 
 /// Linear to sRGB-encoded value in [0,1].
 float srgb_encode(float linear);
+/// Linear to the 8-bit sRGB value a PNG stores (clamped to [0, 1] first).
+uint8_t srgb8(float linear);
 
 }  // namespace bounce

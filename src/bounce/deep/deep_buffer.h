@@ -93,6 +93,9 @@ public:
     float footprint(const Vec3& d, float t, const Vec3& n) const;
     /// Full-image pixel position of world point p; false if p is behind the camera.
     bool project(const Vec3& p, float& px, float& py) const;
+    /// True when p is in front of the camera and projects into the pixel window
+    /// [x0, x1) x [y0, y1) (full-image coordinates).
+    bool projects_into(const Vec3& p, const std::array<int, 4>& window) const;
 
 private:
     Vec3 pos_, forward_, right_, up_;

@@ -162,12 +162,7 @@ LoadedCache load_request_cache(const Scene& scene, const RenderRequest& request,
     std::function<bool(const Record&)> keep;
     if (request.regather) {
         const auto crop = scene.render.visibility.crop;
-        keep = [crop, camera = CameraRays(scene.camera)](const Record& r) {
-            float px, py;
-            if (!camera.project(r.p, px, py)) return true;
-            return !(px >= static_cast<float>(crop[0]) && px < static_cast<float>(crop[1]) &&
-                     py >= static_cast<float>(crop[2]) && py < static_cast<float>(crop[3]));
-        };
+        keep = [crop, camera = CameraRays(scene.camera)](const Record& r) { return !camera.projects_into(r.p, crop); };
     }
     return load_cache(request.cache_in, scene, request.force, request.cache_reuse, cache, keep);
 }
@@ -279,7 +274,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         result.cache_info = cache_file_info(scene, request.frame);
         const IrradianceCache* const shaded = in_memory ? request.shade_cache.get() : result.cache.get();
         // A shading-only re-shade of a loaded cache skips the gathering and refinement passes.
-        const bool gathering = ind.gi != GiMode::Cache || !request.shade_only || (request.cache_in.empty() && !in_memory);
+        const bool gathering = !(ind.gi == GiMode::Cache && request.shade_only && (in_memory || !request.cache_in.empty()));
         if (ind.any() && gathering) {
             GatherSettings gs = gather_settings(scene);
             gs.record_terms = ind.gi == GiMode::Cache;  // brute force needs no gradients

@@ -77,15 +77,15 @@ void tone_map(const Image& image, const Layer& l, float exposure, std::string& o
     out.resize(4 * n);
     const float scale = std::exp2(exposure);
     const bool signed_values = l.name.find("normal") != std::string::npos;  // [-1, 1] directions
-    for (size_t i = 0; i < n; ++i)
-        for (size_t c = 0; c < 4; ++c) {
-            float v = 1;
-            if (c < 3) {
-                const float x = l.data[i * nc + std::min(c, nc - 1)];
-                v = signed_values ? 0.5f * x + 0.5f : srgb_encode(std::clamp(x * scale, 0.0f, 1.0f));
-            }
-            out[4 * i + c] = static_cast<char>(static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255)));
+    for (size_t i = 0; i < n; ++i) {
+        for (size_t c = 0; c < 3; ++c) {
+            const float x = l.data[i * nc + std::min(c, nc - 1)];
+            const uint8_t v = signed_values ? static_cast<uint8_t>(std::lround(std::clamp(0.5f * x + 0.5f, 0.0f, 1.0f) * 255))
+                                            : srgb8(x * scale);
+            out[4 * i + c] = static_cast<char>(v);
         }
+        out[4 * i + 3] = static_cast<char>(255);
+    }
 }
 
 }  // namespace
@@ -223,6 +223,8 @@ bool LightingSession::render_once(SessionAction action, std::optional<std::array
     Scene scene;
     RenderRequest req;
     uint64_t edits_seen = 0;
+    std::shared_ptr<const DeepBuffer> deep;
+    std::shared_ptr<const IrradianceCache> cache;
     {
         // The scene as the last edit loaded it (no file is read again); the request's own
         // settings are not part of any identity.
@@ -234,14 +236,9 @@ bool LightingSession::render_once(SessionAction action, std::optional<std::array
         // Renders stream their previews unless the lighter turned them off.
         if (!edits_.count("render.preview")) scene.render.parallel.preview = true;
         req.cancel = cancel_.get();
-    }
-    const bool cached = scene.render.indirect.gi == GiMode::Cache;
-    std::shared_ptr<const DeepBuffer> deep;
-    std::shared_ptr<const IrradianceCache> cache;
-    {
-        std::lock_guard lock(mutex_);
         deep = deep_, cache = cache_;
     }
+    const bool cached = scene.render.indirect.gi == GiMode::Cache;
     if (action == SessionAction::Rasterize || !fs::exists(deep_path_))
         req.deep_out = deep_path_.string();
     else if (deep)
@@ -273,17 +270,17 @@ bool LightingSession::render_once(SessionAction action, std::optional<std::array
             ++version_;
         };
     RenderResult r = render(scene, req, stats, &sink);
-    if (req.shade_only && stats.to_json().value("shading_misses", 0.0) > 0) return false;  // gather after all
+    const json st = stats.to_json();
+    if (req.shade_only && st.value("shading_misses", 0.0) > 0) return false;  // gather after all
     // Only a finished render replaces the cache (atomically) and the image.
-    if (cached && r.cache && (r.records_new > 0 || action != SessionAction::Reshade ||
-                              stats.to_json().value("refined_fragments", 0.0) > 0))
+    if (cached && r.cache && (r.records_new > 0 || action != SessionAction::Reshade || st.value("refined_fragments", 0.0) > 0))
         write_cache_file(cache_path_.string(), r.cache->to_file(r.cache_info));
     std::lock_guard lock(mutex_);
     image_ = crop ? paste_over(image_, r.image, "session image") : std::move(r.image);
     ++version_;
     if (!crop) {
         if (edit_count_ == edits_seen) pending_ = -1;  // edits made while it ran still need showing
-        deep_ = std::make_shared<const DeepBuffer>(std::move(r.deep));
+        if (!req.deep) deep_ = std::make_shared<const DeepBuffer>(std::move(r.deep));  // else it is deep_ already
     }
     if (r.cache) cache_ = std::shared_ptr<const IrradianceCache>(std::move(r.cache));  // what the file now holds
     return true;
@@ -368,12 +365,7 @@ json LightingSession::records(const std::string& file, size_t limit, std::option
             camera = scene_.camera;
         }
         const CameraRays rays(camera);
-        const auto& c = *region;
-        std::erase_if(f.records, [&](const Record& r) {
-            float px, py;
-            return !rays.project(r.p, px, py) || px < static_cast<float>(c[0]) || px >= static_cast<float>(c[1]) ||
-                   py < static_cast<float>(c[2]) || py >= static_cast<float>(c[3]);
-        });
+        std::erase_if(f.records, [&](const Record& r) { return !rays.projects_into(r.p, *region); });
     }
     const size_t n = std::min(limit, f.records.size());
     json p = json::array(), nn = json::array(), r = json::array(), e = json::array(), ao = json::array();
