@@ -26,11 +26,13 @@ RTCRayHit make_ray(const Vec3& o, const Vec3& d, float tnear, float tfar) {
 }
 }  // namespace
 
-Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes) {
+Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs)
+    : mesh_count_(static_cast<unsigned>(meshes.size())) {
     scene_ = rtcNewScene(device);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
     for (size_t id = 0; id < meshes.size(); ++id) {
+        if (!meshes[id]) continue;  // an id held for fur only
         const TriangleMesh& m = *meshes[id];
         RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
         auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
@@ -45,6 +47,20 @@ Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes) {
         rtcAttachGeometryByID(scene_, g, static_cast<unsigned>(id));
         rtcReleaseGeometry(g);
     }
+    for (size_t id = 0; id < furs.size(); ++id) {
+        const Fur* f = furs[id];
+        if (!f || f->segment_count() == 0) continue;
+        // Ribbons facing the ray: strands are thinner than a pixel, so their round profile
+        // does not show, and flat curves intersect faster. The buffers are the fur's own.
+        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE);
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, f->vertices.data(), 0,
+                                   4 * sizeof(float), f->vertices.size() / 4);
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, f->segment_first.data(), 0,
+                                   sizeof(uint32_t), f->segment_count());
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(scene_, g, mesh_count_ + static_cast<unsigned>(id));
+        rtcReleaseGeometry(g);
+    }
     rtcCommitScene(scene_);
 }
 
@@ -57,14 +73,18 @@ Hit Bvh::intersect(const Vec3& o, const Vec3& d, float tnear, float tfar) const 
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh = make_ray(o, d, tnear, tfar);
     rtcIntersect1(scene_, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
+    return make_hit(rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v);
+}
+
+Hit Bvh::make_hit(unsigned geom, unsigned prim, float t, float u, float v) const {
     Hit h;
-    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
-        h.t = rh.ray.tfar;
-        h.object = rh.hit.geomID;
-        h.prim = rh.hit.primID;
-        h.u = rh.hit.u;
-        h.v = rh.hit.v;
-    }
+    h.t = t;
+    h.hair = geom >= mesh_count_;
+    h.object = h.hair ? geom - mesh_count_ : geom;
+    h.prim = prim;
+    h.u = u;
+    h.v = v;
     return h;
 }
 
@@ -94,15 +114,9 @@ void Bvh::intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear
         }
         rtcIntersect16(valid, scene_, &ctx, &rh);
         for (size_t i = 0; i < n; ++i) {
-            Hit& h = out[base + i];
-            h = Hit{};
-            if (rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID) {
-                h.t = rh.ray.tfar[i];
-                h.object = rh.hit.geomID[i];
-                h.prim = rh.hit.primID[i];
-                h.u = rh.hit.u[i];
-                h.v = rh.hit.v[i];
-            }
+            out[base + i] = rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID
+                                ? Hit{}
+                                : make_hit(rh.hit.geomID[i], rh.hit.primID[i], rh.ray.tfar[i], rh.hit.u[i], rh.hit.v[i]);
         }
     }
 }
@@ -120,14 +134,26 @@ SceneAccel::SceneAccel(const Scene& scene) {
     if (!device_) throw std::runtime_error("cannot create Embree device");
     rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
     std::vector<const TriangleMesh*> coarse, fine;
-    bool any_fine = false;
+    // Fur: always seen by the camera; by gather rays only when it casts indirect light; by
+    // shadow rays when it casts shadows.
+    std::vector<const Fur*> visible_fur, indirect_fur, shadow_fur;
+    bool any_fine = false, any_indirect = false, any_shadow = false;
     for (const auto& o : scene.objects) {
         coarse.push_back(&o.coarse);
         fine.push_back(&o.visible());
         any_fine |= o.has_fine();
+        const Fur* f = o.fur && o.fur->segment_count() ? o.fur.get() : nullptr;
+        has_fur_ |= f != nullptr;
+        visible_fur.push_back(f);
+        indirect_fur.push_back(f && f->params.cast_indirect ? f : nullptr);
+        shadow_fur.push_back(f && f->params.cast_shadows && !f->params.cast_indirect ? f : nullptr);
+        any_indirect |= indirect_fur.back() != nullptr;
+        any_shadow |= shadow_fur.back() != nullptr;
     }
-    coarse_ = std::make_unique<Bvh>(device_, coarse);
-    if (any_fine) fine_ = std::make_unique<Bvh>(device_, fine);
+    coarse_ = std::make_unique<Bvh>(device_, coarse, any_indirect ? indirect_fur : std::vector<const Fur*>{});
+    if (any_fine || has_fur_) fine_ = std::make_unique<Bvh>(device_, fine, visible_fur);
+    // Fur already in the coarse BVH shadows through it; the rest that casts shadows gets its own.
+    if (any_shadow) shadow_fur_ = std::make_unique<Bvh>(device_, std::vector<const TriangleMesh*>(scene.objects.size(), nullptr), shadow_fur);
 
     // Measure how far the fine surface strays from the coarse one: from each fine vertex,
     // along its normal both ways, to the nearest coarse surface of the same object.
@@ -169,6 +195,7 @@ float SceneAccel::self_epsilon(const Vec3& p) const {
 }
 
 SceneAccel::~SceneAccel() {
+    shadow_fur_.reset();
     fine_.reset();
     coarse_.reset();
     if (device_) rtcReleaseDevice(device_);
@@ -214,7 +241,18 @@ void SceneAccel::trace_many(const Vec3& p, std::span<const Vec3> dirs, std::span
         if (out[i].valid() && out[i].t < delta) out[i] = probed_trace(p, dirs[i]);
 }
 
-bool SceneAccel::occluded(const Vec3& p, const Vec3& d, float dist) const {
+bool SceneAccel::occluded(const Vec3& p, const Vec3& d, float dist, float hair_start) const {
+    if (hair_start > 0) {
+        // From a strand: it is on no surface, so no offsetting; skip past its own ribbon.
+        const float end = std::isfinite(dist) ? dist * (1 - 1e-4f) : INFINITY;
+        if (end <= hair_start) return false;
+        if (coarse_->occluded(p, d, self_epsilon(p), end)) return true;
+        return shadow_fur_ && shadow_fur_->occluded(p, d, hair_start, end);
+    }
+    if (shadow_fur_) {
+        const float end = std::isfinite(dist) ? dist * (1 - 1e-4f) : INFINITY;
+        if (end > self_epsilon(p) && shadow_fur_->occluded(p, d, self_epsilon(p), end)) return true;
+    }
     const float delta = ray_offset_;
     float start = offset_start(p, d);
     // Stop short of the end point so the surface it lies on does not occlude it.

@@ -21,13 +21,16 @@ struct Hit {
     uint32_t object = kNoHit;  ///< index into Scene::objects
     uint32_t prim = 0;
     float u = 0, v = 0;
+    bool hair = false;         ///< a fur segment of `object` (prim = segment, u along it)
     bool valid() const { return object != kNoHit; }
 };
 
-/// One Embree scene over a list of meshes; the geometry id is the index in the list.
+/// One Embree scene over a list of meshes (geometry id = index in the list) and, optionally,
+/// fur: `furs[i]` (null = none) is object i's, traced as flat linear curves whose hits say
+/// `hair` and name object i.
 class Bvh {
 public:
-    Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes);
+    Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs = {});
     ~Bvh();
     Bvh(const Bvh&) = delete;
     Bvh& operator=(const Bvh&) = delete;
@@ -39,7 +42,9 @@ public:
     bool occluded(const Vec3& o, const Vec3& d, float tnear, float tfar) const;
 
 private:
+    Hit make_hit(unsigned geom, unsigned prim, float t, float u, float v) const;
     RTCScene scene_ = nullptr;
+    unsigned mesh_count_ = 0;
 };
 
 /// Everything rays need from a scene: both BVHs and the offset distance.
@@ -69,7 +74,11 @@ public:
     void trace_many(const Vec3& p, std::span<const Vec3> dirs, std::span<Hit> out) const;
     /// Visibility from `p` (on the fine surface) to the point `p + d * dist` (dist may be
     /// INFINITY), with the same origin offsetting; the end point's own surface is excluded.
-    bool occluded(const Vec3& p, const Vec3& d, float dist) const;
+    /// Fur that casts shadows occludes too. From a strand (`hair_start` > 0, its largest
+    /// width) there is no offsetting and fur closer than `hair_start` is ignored (its own strand).
+    bool occluded(const Vec3& p, const Vec3& d, float dist, float hair_start = 0) const;
+    /// Whether any object has fur.
+    bool has_fur() const { return has_fur_; }
 
     /// Where the first, probe-free traversal from p starts: 1e-5 of p's largest coordinate
     /// (at least 1e-7 of the scene diagonal), above float rounding, far below delta.
@@ -83,6 +92,8 @@ private:
 
     RTCDevice device_ = nullptr;
     std::unique_ptr<Bvh> coarse_, fine_;
+    std::unique_ptr<Bvh> shadow_fur_;  ///< fur that casts shadows (null = none)
+    bool has_fur_ = false;
     float ray_offset_ = 0, gap_ = 0, min_epsilon_ = 0;
 };
 

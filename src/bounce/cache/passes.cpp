@@ -33,17 +33,25 @@ namespace {
 
 /// Where a fragment's records live and the hemisphere its gathers use: the un-displaced
 /// surface by default (rays still leave from the displaced point f.p), or the displaced one.
+/// Hair: at its strand's root on the growing surface whatever the mode (gather.h hair_site);
+/// its gathers leave from there too.
 struct Site {
     Vec3 p, n;
+    Vec3 origin;  ///< where the gather's rays leave from
 };
-Site record_site(const Fragment& f, RecordSurface where) {
-    return where == RecordSurface::Displaced ? Site{f.p, f.n} : Site{f.p_base, f.n_base};
+Site record_site(const Scene& scene, const Fragment& f, RecordSurface where) {
+    if (f.is_hair()) {
+        const HairSite h = hair_site(scene, f);
+        return {h.p, h.n, h.p};
+    }
+    return where == RecordSurface::Displaced ? Site{f.p, f.n, f.p} : Site{f.p_base, f.n_base, f.p};
 }
 
 /// The shading-pass interpolation at a fragment: weights at its record site, each record's
 /// value extrapolated with its gradients to the fragment's own (displaced) point and normal.
+/// Hair gets no gradient along the strand: its value is the one at its site.
 Interpolated interpolate_at(const IrradianceCache& cache, const Fragment& f, const Site& site) {
-    return cache.lookup(site.p, site.n, true, &f.p, &f.n);
+    return f.is_hair() ? cache.lookup(site.p, site.n, true, &site.p, &site.n) : cache.lookup(site.p, site.n, true, &f.p, &f.n);
 }
 
 uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k) {
@@ -56,14 +64,15 @@ enum class Source { Records, Own, Missed };
 
 /// The light at fragment k of window pixel (wx, wy): its own record if per-fragment
 /// refinement gave it one, else the interpolation.
-Indirect indirect_at(const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k, Source& src) {
+Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
+                     Source& src) {
     const Fragment& f = deep.pixel(wx, wy)[k];
     if (cache.fragment_record_count() > 0)
         if (const Record* r = cache.fragment_record(candidate_key(deep, wx, wy, k), f.p)) {
             src = Source::Own;
             return {r->E, r->ao, r->bent, r->dir};
         }
-    Interpolated in = interpolate_at(cache, f, record_site(f, cache.settings().displaced_records));
+    Interpolated in = interpolate_at(cache, f, record_site(scene, f, cache.settings().displaced_records));
     src = in.weight > 0 ? Source::Records : Source::Missed;
     return {in.E, in.ao, in.bent, in.dir};
 }
@@ -107,13 +116,13 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
                     auto frags = deep.pixel(wx, wy);
                     for (uint32_t k = 0; k < frags.size(); ++k) {
                         const Fragment& f = frags[k];
-                        const Site site = record_site(f, where);
+                        const Site site = record_site(scene, f, where);
                         if (!cache.misses(site.p, site.n, per_tile ? std::span<const Record>(out)
                                                                        : std::span<const Record>())) continue;
                         const RandomStream rng = fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k);
-                        GatherResult g = first ? first->gather(f.p, site.n, rng, counters) : GatherResult{};
+                        GatherResult g = first ? first->gather(site.origin, site.n, rng, counters) : GatherResult{};
                         if (!first || g.rel_stderr > cache.settings().ray_noise) {
-                            g = gatherer.gather(f.p, site.n, rng, counters);
+                            g = gatherer.gather(site.origin, site.n, rng, counters);
                             ++full_gathers.local();
                         }
                         Record r = cache.make_record(g, site.p, site.n, f.footprint, candidate_key(deep, wx, wy, k));
@@ -181,9 +190,10 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = frags[k];
+                if (f.is_hair()) continue;  // hair keeps its strand's value (no fragment gathers)
                 const uint64_t key = candidate_key(deep, wx, wy, k);
                 if (cache.fragment_record(key, f.p)) continue;  // refined by an earlier render
-                const Interpolated in = interpolate_at(cache, f, record_site(f, where));
+                const Interpolated in = interpolate_at(cache, f, record_site(scene, f, where));
                 if (in.weight > 0 && in.spread <= threshold) continue;
                 // Gathered about the fragment's own (displaced) point and normal, as brute force does.
                 const GatherResult g = refiner.gather(
@@ -220,7 +230,7 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
         auto frags = deep.pixel(wx, wy);
         for (uint32_t k = 0; k < frags.size(); ++k) {
             Source src;
-            out[first + k] = indirect_at(cache, deep, wx, wy, k, src);
+            out[first + k] = indirect_at(scene, cache, deep, wx, wy, k, src);
             ++lookups.local();
             if (src == Source::Own) {
                 ++own.local();
@@ -241,7 +251,7 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
 
 /// Preview: each pixel takes the indirect light of the nearest pixel (on the lattices of the
 /// current step, then coarser ones) that a finished sub-pass visited.
-std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceCache& cache,
+std::vector<Indirect> preview_indirect(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
                                        const std::vector<uint8_t>& visited, int step) {
     std::vector<Indirect> out(deep.fragments.size());
     parallel_for_each_index(0, deep.height, [&](int wy) {
@@ -259,7 +269,7 @@ std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceC
             auto frags = deep.pixel(wx, wy);
             const auto n = static_cast<uint32_t>(deep.pixel(lx, ly).size());
             Source unused;
-            for (uint32_t k = 0; k < frags.size(); ++k) out[first + k] = indirect_at(cache, deep, lx, ly, std::min(k, n - 1), unused);
+            for (uint32_t k = 0; k < frags.size(); ++k) out[first + k] = indirect_at(scene, cache, deep, lx, ly, std::min(k, n - 1), unused);
         }
     });
     return out;

@@ -63,7 +63,7 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
 /// Progressive preview after a sub-pass of step `step`: each fragment takes the interpolated
 /// light at the nearest pixel (on that step's lattice, then coarser ones) a finished sub-pass
 /// visited (`visited`, one flag per window pixel); a fragment record counts for its own pixel.
-std::vector<Indirect> preview_indirect(const DeepBuffer& deep, const IrradianceCache& cache,
+std::vector<Indirect> preview_indirect(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
                                        const std::vector<uint8_t>& visited, int step);
 
 }  // namespace bounce

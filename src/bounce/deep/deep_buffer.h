@@ -36,6 +36,12 @@ struct Fragment {
     float depth = 0;       ///< distance from the camera
     float weight = 0;      ///< fraction of the pixel's subsamples (coverage)
     float footprint = 0;   ///< world-space width of one pixel at p (ray differentials)
+    /// Fur: the strand's unit tangent (root to tip; zero on surfaces) and the position along
+    /// it (0 root, 1 tip). A hair fragment's p_base / n_base are its strand's root and the
+    /// growing surface's normal there, uv the root's, prim the strand.
+    Vec3 tangent{0};
+    float strand_v = 0;
+    bool is_hair() const { return tangent.x != 0 || tangent.y != 0 || tangent.z != 0; }
     bool operator==(const Fragment&) const = default;
 };
 

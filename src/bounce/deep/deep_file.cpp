@@ -12,7 +12,9 @@ namespace bounce {
 
 namespace {
 
-constexpr int kDeepVersion = 1;
+// Version 2 added the fur channels (T, v); version 1 files read with them zero.
+constexpr int kDeepVersion = 2;
+constexpr size_t kFirstFurChannel = 23;
 
 struct Channel {
     const char* name;
@@ -31,15 +33,17 @@ const std::vector<Channel>& deep_channels() {
         {"uv.U", OIIO::TypeDesc::FLOAT},    {"uv.V", OIIO::TypeDesc::FLOAT},
         {"id.material", OIIO::TypeDesc::UINT}, {"id.object", OIIO::TypeDesc::UINT}, {"id.prim", OIIO::TypeDesc::UINT},
         {"footprint", OIIO::TypeDesc::FLOAT},
+        {"T.X", OIIO::TypeDesc::FLOAT},     {"T.Y", OIIO::TypeDesc::FLOAT},     {"T.Z", OIIO::TypeDesc::FLOAT},
+        {"v", OIIO::TypeDesc::FLOAT},
     };
     return ch;
 }
 
 /// Float channel values of a fragment in deep_channels() order (ids handled separately).
-std::array<float, 23> float_values(const Fragment& f) {
+std::array<float, 27> float_values(const Fragment& f) {
     return {f.depth, f.weight, f.p.x, f.p.y, f.p.z, f.n.x, f.n.y, f.n.z, f.ng.x, f.ng.y, f.ng.z,
             f.p_base.x, f.p_base.y, f.p_base.z, f.n_base.x, f.n_base.y, f.n_base.z, f.uv.x, f.uv.y,
-            0, 0, 0, f.footprint};
+            0, 0, 0, f.footprint, f.tangent.x, f.tangent.y, f.tangent.z, f.strand_v};
 }
 
 }  // namespace
@@ -102,7 +106,7 @@ DeepBuffer read_deep(const std::string& path) {
     const OIIO::ImageSpec& spec = in->spec();
     if (!spec.deep) throw InputError(path, "", "not a deep image (expected an OpenEXR deep file from --deep-out)");
     int version = spec.get_int_attribute("bounce:deep_version", -1);
-    if (version != kDeepVersion)
+    if (version != kDeepVersion && version != 1)
         throw InputError(path, "bounce:deep_version",
                          version < 0 ? "not a bounce deep file (no bounce:deep_version attribute)"
                                      : fmt::format("unsupported version {} (this bounce reads {})", version, kDeepVersion));
@@ -112,6 +116,7 @@ DeepBuffer read_deep(const std::string& path) {
     for (size_t c = 0; c < chans.size(); ++c) {
         for (int k = 0; k < spec.nchannels; ++k)
             if (spec.channelnames[static_cast<size_t>(k)] == chans[c].name) index[c] = k;
+        if (index[c] < 0 && version == 1 && c >= kFirstFurChannel) continue;
         if (index[c] < 0) throw InputError(path, "channels", fmt::format("missing channel \"{}\"", chans[c].name));
         if (spec.channelformat(index[c]) != chans[c].type)
             throw InputError(path, fmt::format("channel {}", chans[c].name),
@@ -147,7 +152,10 @@ DeepBuffer read_deep(const std::string& path) {
         auto pix = static_cast<int64_t>(i);
         for (uint32_t k = deep.offsets[i]; k < deep.offsets[i + 1]; ++k) {
             int s = static_cast<int>(k - deep.offsets[i]);
-            auto v = [&](int c) { return dd.deep_value(pix, index[static_cast<size_t>(c)], s); };
+            auto v = [&](int c) {
+                const int at = index[static_cast<size_t>(c)];
+                return at < 0 ? 0.0f : dd.deep_value(pix, at, s);
+            };
             auto id = [&](int c) { return dd.deep_value_uint(pix, index[static_cast<size_t>(c)], s); };
             Fragment& f = deep.fragments[k];
             f.depth = v(0), f.weight = v(1);
@@ -158,7 +166,9 @@ DeepBuffer read_deep(const std::string& path) {
             f.object = id(20);
             f.prim = id(21);
             f.footprint = v(22);
-            if (!isfinite(f.p) || !isfinite(f.n) || !std::isfinite(f.weight) || f.weight < 0 || f.weight > 1)
+            f.tangent = {v(23), v(24), v(25)}, f.strand_v = v(26);
+            if (!isfinite(f.p) || !isfinite(f.n) || !std::isfinite(f.weight) || f.weight < 0 || f.weight > 1 ||
+                !isfinite(f.tangent) || !(f.strand_v >= 0 && f.strand_v <= 1))
                 throw InputError(path, fmt::format("pixel {} fragment {}", i, s), "non-finite or out-of-range values");
         }
     }

@@ -23,7 +23,23 @@ struct Accum {
     Vec3 p_base{0}, n_base{0};  ///< sums over the subsamples of a displaced surface
     Vec3 n_base0{0};            ///< the first subsample's (oriented) un-displaced normal
     int based = 0;              ///< subsamples that carried an un-displaced surface
+    bool hair = false;          ///< subsamples of one strand (prim = the strand)
+    Vec3 tangent{0};
+    float v = 0;
 };
+
+/// A camera subsample that hit fur: the strand's point as a (camera-facing) surface point.
+/// The normal is the direction to the camera with the tangent's component removed.
+SurfacePoint hair_point(const Fur& fur, const Hit& h, const Vec3& o, const Vec3& dn, const TriangleMesh& surface) {
+    SurfacePoint sp;
+    sp.p = o + dn * h.t;
+    const Vec3 t = fur.tangent(h.prim);
+    Vec3 n = -dn - t * dot(-dn, t);
+    sp.n = sp.ng = dot(n, n) > 1e-12f ? normalize(n) : fur.root_n[fur.strand_of(h.prim)];
+    sp.uv = fur.root_uv[fur.strand_of(h.prim)];
+    sp.material = surface.face_materials.empty() ? 0 : surface.face_materials[0];
+    return sp;
+}
 
 }  // namespace
 
@@ -88,7 +104,9 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     Hit h = accel.fine().intersect(camera.origin(), dn, 0, INFINITY);
                     if (!h.valid()) continue;
                     const Object& obj = scene.objects[h.object];
-                    SurfacePoint sp = surface_point(obj.visible(), h.prim, h.u, h.v);
+                    const uint32_t prim = h.hair ? obj.fur->strand_of(h.prim) : h.prim;
+                    SurfacePoint sp = h.hair ? hair_point(*obj.fur, h, camera.origin(), dn, obj.visible())
+                                             : surface_point(obj.visible(), h.prim, h.u, h.v);
                     // Face the camera (all surfaces are two-sided).
                     if (dot(sp.ng, dn) > 0) sp.ng = -sp.ng, sp.n = -sp.n;
                     if (dot(sp.n, dn) > 0) sp.n = normalize(sp.n - dn * (2 * dot(sp.n, dn)));
@@ -99,26 +117,33 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     // faces is two surfaces, however close their depths).
                     Accum* g = nullptr;
                     for (auto& a : groups) {
+                        if (a.hair != h.hair || (h.hair && (a.object != h.object || a.prim != prim))) continue;
                         const float off = std::abs(dot(sp.p - a.p0, a.ng0));
-                        if (a.object == h.object && a.material == sp.material &&
-                            dot(normalize(a.ng), sp.ng) > 0.9f &&
-                            std::abs(a.depth / static_cast<float>(a.count) - h.t) < 0.05f * h.t + 4 * fp && off < fp) {
+                        if (h.hair ||  // subsamples of one strand are one fragment
+                            (a.object == h.object && a.material == sp.material &&
+                             dot(normalize(a.ng), sp.ng) > 0.9f &&
+                             std::abs(a.depth / static_cast<float>(a.count) - h.t) < 0.05f * h.t + 4 * fp && off < fp)) {
                             g = &a;
                             g->off_plane = std::max(g->off_plane, off / fp);
                             break;
                         }
                     }
                     if (!g) {
-                        groups.push_back({Vec3(0), Vec3(0), Vec3(0), sp.p, sp.ng, 0, {}, sp.material, h.object, h.prim,
+                        groups.push_back({Vec3(0), Vec3(0), Vec3(0), sp.p, sp.ng, 0, {}, sp.material, h.object, prim,
                                           0, 0, 0});
                         g = &groups.back();
+                        g->hair = h.hair;
                     }
                     subsamples.emplace_back(sp.p, static_cast<size_t>(g - groups.data()));
                     g->p += sp.p, g->n += sp.n, g->ng += sp.ng;
                     g->uv.x += sp.uv.x, g->uv.y += sp.uv.y;
                     g->depth += h.t, g->footprint += fp;
                     ++g->count;
-                    if (obj.visible().displaced()) {
+                    if (h.hair) {
+                        g->tangent += obj.fur->tangent(h.prim);
+                        g->v += obj.fur->v_of(h.prim, h.u);
+                        g->p_base = obj.fur->root_p[prim], g->n_base = obj.fur->root_n[prim];
+                    } else if (obj.visible().displaced()) {
                         auto [pb, nb] = base_point(obj.visible(), h.prim, h.u, h.v);
                         // On the side of the displaced normal seen: at a silhouette a bump can face
                         // the camera where the smooth surface under it does not, and flipping Nref
@@ -152,6 +177,11 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     // (Across a fold the subsamples' orientations can cancel: keep the first's.)
                     f.p_base = a.based ? a.p_base / static_cast<float>(a.based) : f.p;
                     f.n_base = !a.based ? f.n : dot(a.n_base, a.n_base) > 1e-12f ? normalize(a.n_base) : a.n_base0;
+                    if (a.hair) {
+                        f.p_base = a.p_base, f.n_base = a.n_base;
+                        f.tangent = dot(a.tangent, a.tangent) > 0 ? normalize(a.tangent) : a.n_base;
+                        f.strand_v = a.v / c;
+                    }
                     f.uv = {a.uv.x / c, a.uv.y / c};
                     f.material = a.material, f.object = a.object, f.prim = a.prim;
                     f.depth = a.depth / c;

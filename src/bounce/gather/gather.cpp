@@ -112,7 +112,18 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
                         : 0;
             // Distance for the record radius: leave out rays that are grazing both where
             // they leave and where they land (slightly concave surfaces).
-            if (settings_.record_terms || !settings_.ao) {
+            if (h.hair) {
+                // Fur that casts indirect light (fur.cast_indirect): a strand seen from the
+                // gather reflects its albedo x the direct light on its side facing the ray.
+                if (settings_.record_terms) res.min_distance = std::min(res.min_distance, h.t);
+                if (!settings_.ao) {
+                    const Fur& fur = *scene_.objects[h.object].fur;
+                    RandomStream hit_rng(rng.bits(c, kDimGather + 3), c);
+                    l = fur.params.albedo(fur.v_of(h.prim, h.u)) * kInvPi *
+                        lighting_.irradiance(p + d * h.t, -d, hit_rng, settings_.hit_light_samples, counters, true, nullptr,
+                                             fur.max_width());
+                }
+            } else if (settings_.record_terms || !settings_.ao) {
                 const SurfacePoint sp = surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v);
                 if (settings_.record_terms) {
                     bool grazing = cos_theta[c] < cos_concave_ && std::abs(dot(sp.ng, d)) < cos_concave_;
@@ -245,6 +256,11 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
 
 namespace bounce {
 
+HairSite hair_site(const Scene& scene, const Fragment& f) {
+    const bool at_root = scene.objects[f.object].fur->params.indirect_at == FurIndirectAt::Root;
+    return {at_root ? f.p_base : f.p, f.n_base};
+}
+
 GatherSettings gather_settings(const Scene& scene) {
     const IndirectSettings& r = scene.render.indirect;
     GatherSettings g;
@@ -261,8 +277,10 @@ std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer
         auto frags = deep.pixel(wx, wy);
         for (uint32_t k = 0; k < frags.size(); ++k) {
             // The true surface: the displaced point and normal (the cache's un-displaced
-            // hemisphere is its approximation, measured against this).
-            GatherResult g = gatherer.gather(frags[k].p, frags[k].n,
+            // hemisphere is its approximation, measured against this). Hair: its site.
+            const Fragment& f = frags[k];
+            const HairSite site = f.is_hair() ? hair_site(scene, f) : HairSite{f.p, f.n};
+            GatherResult g = gatherer.gather(site.p, site.n,
                                              fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), counters);
             out[first + k] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
         }

@@ -102,6 +102,14 @@ struct Indirect {
     std::array<Vec3, 3> light_dir{};  ///< per channel: mean incoming direction x radiance (GatherResult)
 };
 
+/// Where a hair fragment's indirect light is gathered and looked up: its strand's root on the
+/// growing surface, about that surface's normal there (fur.indirect_at "fragment": its own
+/// point, about the same normal). Hair fragments have no normal of their own worth a hemisphere.
+struct HairSite {
+    Vec3 p, n;
+};
+HairSite hair_site(const Scene& scene, const Fragment& f);
+
 /// The gather settings a scene's render settings ask for (resolves the automatic AO distance).
 GatherSettings gather_settings(const Scene& scene);
 

@@ -38,15 +38,17 @@ public:
     /// normal `n`, with shadows. `samples` stratified samples per area light and for the sky.
     /// Diffuse radiance leaving the point is albedo * E / pi.
     /// `include_sky = false` leaves sky lights out (when the gather brings the sky instead).
+    /// `hair_start` > 0: p is on a strand of that width (SceneAccel::occluded).
     Color irradiance(const Vec3& p, const Vec3& n, const RandomStream& rng, int samples,
-                     Counters& counters, bool include_sky = true, const LightSampleFn* each = nullptr) const;
+                     Counters& counters, bool include_sky = true, const LightSampleFn* each = nullptr,
+                     float hair_start = 0) const;
 
     /// Radiance the camera sees where a primary ray escapes (the sky; black without one).
     Color background(const Vec3& dir) const;
 
 private:
     Color sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng,
-                       int samples, Counters& counters, const LightSampleFn* each) const;
+                       int samples, Counters& counters, const LightSampleFn* each, float hair_start) const;
 
     const Scene& scene_;
     const SceneAccel& accel_;

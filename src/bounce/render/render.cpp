@@ -29,6 +29,10 @@ void validate_deep_for_scene(const DeepBuffer& deep, const Scene& scene, const s
         const Fragment& f = deep.fragments[i];
         if (f.material >= scene.materials.size() || f.object >= scene.objects.size())
             throw InputError(path, fmt::format("fragment {}", i), "material or object id out of range for this scene");
+        if (f.is_hair() && !scene.objects[f.object].fur)
+            throw InputError(path, fmt::format("fragment {}", i), "a hair fragment of an object without fur");
+        if (!f.is_hair() && f.prim >= scene.objects[f.object].visible().triangle_count())
+            throw InputError(path, fmt::format("fragment {}", i), "triangle id out of range for this scene");
     }
 }
 
@@ -78,7 +82,7 @@ std::unique_ptr<RadiosityTextures> radiosity_for(const Scene& scene, const Mater
     return rt;
 }
 
-/// The scene loader's dicing of subdivision surfaces, as a phase with its sizes.
+/// The scene loader's dicing of subdivision surfaces and growing of fur, as phases with their sizes.
 void report_dicing(const Scene& scene, Stats& stats) {
     double seconds = 0, micropolygons = 0, ray_triangles = 0;
     int level = 0;
@@ -88,6 +92,20 @@ void report_dicing(const Scene& scene, Stats& stats) {
         micropolygons += static_cast<double>(o.visible().triangle_count());
         ray_triangles += static_cast<double>(o.coarse.triangle_count());
         level = std::max(level, o.dicing_level);
+    }
+    double fur_seconds = 0, strands = 0, segments = 0, fur_bytes = 0;
+    for (const Object& o : scene.objects)
+        if (o.fur) {
+            fur_seconds += o.fur->seconds;
+            strands += static_cast<double>(o.fur->strand_count());
+            segments += static_cast<double>(o.fur->segment_count());
+            fur_bytes += static_cast<double>(o.fur->memory_bytes());
+        }
+    if (strands > 0) {
+        stats.add_phase("fur", fur_seconds);
+        stats.set("fur_strands", strands);
+        stats.set("fur_segments", segments);
+        stats.set("fur_bytes", fur_bytes);
     }
     if (level == 0) return;
     stats.add_phase("dicing", seconds);
@@ -298,7 +316,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
                         for (int wy = 0; wy < d.height; ++wy)
                             for (int wx = 0; wx < d.width; ++wx)
                                 if (sp.contains(wx + d.x0, wy + d.y0)) visited[static_cast<size_t>(wy) * d.width + wx] = 1;
-                        std::vector<Indirect> pre = preview_indirect(d, cache, visited, sp.step);
+                        std::vector<Indirect> pre = preview_indirect(scene, d, cache, visited, sp.step);
                         request.preview(shade(scene, d, materials, lighting, &pre, stats, nullptr, &direct));
                     };
                 }

@@ -150,6 +150,8 @@ ParamTable make_table() {
     rows.push_back(row("max_level", "dicing", &R::dicing, &DicingSettings::max_level).range(1, 8).unit("levels")
                        .doc("cap on the fine tessellation's subdivision level (each level: 4x the micropolygons)").id(deep | cache).flag());
     // Lighting.
+    rows.push_back(row("memory_budget", "dicing", &R::dicing, &DicingSettings::memory_budget).range(0.001, 1e6).unit("GiB")
+                       .doc("memory generated geometry (fur strands and their BVH) may take; a scene asking for more is refused before growing it").flag());
     rows.push_back(row("light_samples", "lighting", &R::lighting, &LightingSettings::light_samples).range(1, 65536).unit("samples")
                        .doc("stratified samples per area light, emissive mesh and sky, per fragment").flag());
     rows.push_back(row("ray_offset", "lighting", &R::lighting, &LightingSettings::ray_offset).automatic(-1).range(0, kMaxCoordinate)

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bounce/core/math.h"
+#include "bounce/geometry/fur.h"
 #include "bounce/geometry/mesh.h"
 #include "bounce/scene/settings.h"
 
@@ -70,6 +71,7 @@ struct Object {
     int dicing_level = 0;       ///< subdivision surfaces: the fine tessellation's level (0 = not one)
     double dicing_seconds = 0;  ///< time the loader spent dicing it
     float displacement_bound = 0;  ///< largest distance displacement moves a point (0 = none)
+    std::shared_ptr<const Fur> fur;  ///< strands grown on the visible surface (null = none)
     bool has_fine() const { return !fine.indices.empty(); }
     const TriangleMesh& visible() const { return has_fine() ? fine : coarse; }
 };

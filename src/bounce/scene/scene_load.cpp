@@ -12,6 +12,7 @@
 #include "bounce/core/random.h"
 #include "bounce/scene/json_reader.h"
 #include "bounce/dice/displacement.h"
+#include "bounce/scene/fur_reader.h"
 #include "bounce/scene/mesh_import.h"
 #include "bounce/scene/params.h"
 
@@ -276,6 +277,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
     for (const auto& p : obj.coarse.positions)
         if (!isfinite(p) || std::fabs(p.x) > kMaxCoordinate || std::fabs(p.y) > kMaxCoordinate || std::fabs(p.z) > kMaxCoordinate)
             r.fail("", fmt::format("mesh has vertex positions that are not finite or beyond +-{:g} (after the transform)", kMaxCoordinate));
+    if (r.has("fur")) obj.fur = read_fur(JsonReader(r.raw("fur"), r.at("fur"), r.ctx(), fur_keys()), obj.visible(), scene);
     scene.objects.push_back(std::move(obj));
 }
 
@@ -347,7 +349,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     for (size_t i = 0; i < objs.size(); ++i) {
         JsonReader o(objs[i], fmt::format("/objects/{}", i), ctx,
                      {"name", "type", "file", "material", "transform", "fine_subdivisions", "vertices", "center", "radius",
-                      "subdivisions", "subdivision", "boundary", "displacement"});
+                      "subdivisions", "subdivision", "boundary", "displacement", "fur"});
         read_object(o, scene, i);
     }
 

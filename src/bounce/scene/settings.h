@@ -30,6 +30,7 @@ struct DicingSettings {
     float shading_rate = 1;  ///< pixels per micropolygon edge on the fine tessellation
     int ray_level = 2;       ///< subdivision level of the coarse tessellation secondary rays trace
     int max_level = 5;       ///< cap on the fine tessellation's level (memory: x4 per level)
+    float memory_budget = 16;  ///< GiB generated geometry (fur) may take; more is refused up front
 };
 
 /// Direct lighting and ray tracing.

@@ -25,6 +25,33 @@ Color fragment_direct(const Scene& scene, const Materials& materials, const Dire
     return materials.emission(f.material) + surf.albedo * e * kInvPi + gloss;
 }
 
+/// Emission-free direct light reflected by a strand towards wo: Kajiya-Kay over light samples
+/// from both sides of the strand (light reaches a fibre from the whole sphere), with shadow
+/// rays that skip the strand itself.
+Color hair_direct(const Scene& scene, const DirectLighting& lighting, const Fragment& f, const Vec3& wo, int x, int y,
+                  uint32_t k, bool include_sky, Counters& counters) {
+    const Fur& fur = *scene.objects[f.object].fur;
+    const Color albedo = fur.params.albedo(f.strand_v);
+    Color out(0);
+    for (int side = 0; side < 2; ++side) {
+        const Vec3 n = side ? -f.n : f.n;
+        // A sample's share of the irradiance is L dw cos(n, w): the fibre wants L dw.
+        const LightSampleFn each = [&](const Vec3& w, const Color& e) {
+            const float c = dot(n, w);
+            if (c > 1e-6f) out += kajiya_kay(f.tangent, w, wo, albedo, fur.params.specular, fur.params.specular_exponent) * (e / c);
+        };
+        lighting.irradiance(f.p, n, fragment_stream(scene.render.visibility.seed, x, y, side ? k | 0x80000000u : k),
+                            scene.render.lighting.light_samples, counters, include_sky, &each, fur.max_width());
+    }
+    return out;
+}
+
+/// The light direction of cached indirect light (luminance-weighted mean), or `fallback`.
+Vec3 indirect_direction(const Indirect& in, const Vec3& fallback) {
+    const Vec3 d = in.light_dir[0] * 0.2126f + in.light_dir[1] * 0.7152f + in.light_dir[2] * 0.0722f;
+    return dot(d, d) > 1e-20f ? normalize(d) : fallback;
+}
+
 }  // namespace
 
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
@@ -65,24 +92,30 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = frags[k];
-                const SurfaceShading surf = materials.surface(f.material, f.object, f.prim, f.uv, f.n, f.footprint);
-                const Color& alb = surf.albedo;
+                const bool hair = f.is_hair();
+                const Fur* fur = hair ? scene.objects[f.object].fur.get() : nullptr;
+                const SurfaceShading surf = hair ? SurfaceShading{} : materials.surface(f.material, f.object, f.prim, f.uv, f.n, f.footprint);
+                const Color alb = hair ? fur->params.albedo(f.strand_v) : surf.albedo;
                 const Vec3 wo = normalize(camera.origin() - f.p);
                 if (indirect) {
                     const Indirect& in = (*indirect)[first + k];
-                    const float w = f.weight * surf.occlusion;  // baked AO of detail the gather cannot see
+                    // Baked AO of detail the gather cannot see; on hair the self-shadowing falloff.
+                    const float w = f.weight * (hair ? fur->params.falloff(f.strand_v) : surf.occlusion);
                     e_ind += in.irradiance * w;
                     occl += in.ao * w;
                     bn += in.bent_normal * f.weight;
                     if (ao_only)
                         b += Color(in.ao) * w;
+                    else if (hair)
+                        b += hair_indirect(f.tangent, indirect_direction(in, f.n_base), in.irradiance, alb) * w;
                     else
                         b += indirect_radiance(in, f.n, surf, wo, scene.render.shading.light_per_channel) * w;
                 }
                 if (!ao_only) {
                     Color radiance = direct_radiance ? (*direct_radiance)[first + k]
-                                                     : fragment_direct(scene, materials, lighting, f, surf, wo, x, y, k,
-                                                                       indirect == nullptr, counters);
+                                     : hair ? hair_direct(scene, lighting, f, wo, x, y, k, indirect == nullptr, counters)
+                                            : fragment_direct(scene, materials, lighting, f, surf, wo, x, y, k,
+                                                              indirect == nullptr, counters);
                     d += radiance * f.weight;
                     b += radiance * f.weight;
                 }
@@ -123,9 +156,14 @@ std::vector<Color> fragment_direct_radiance(const Scene& scene, const DeepBuffer
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = frags[k];
+                const Vec3 wo = normalize(camera.origin() - f.p);
+                if (f.is_hair()) {
+                    out[first + k] = hair_direct(scene, lighting, f, wo, wx + deep.x0, wy + deep.y0, k, include_sky, counters);
+                    continue;
+                }
                 const SurfaceShading surf = materials.surface(f.material, f.object, f.prim, f.uv, f.n, f.footprint);
-                out[first + k] = fragment_direct(scene, materials, lighting, f, surf, normalize(camera.origin() - f.p),
-                                                 wx + deep.x0, wy + deep.y0, k, include_sky, counters);
+                out[first + k] = fragment_direct(scene, materials, lighting, f, surf, wo, wx + deep.x0, wy + deep.y0, k,
+                                                 include_sky, counters);
             }
         }
     });

@@ -1,0 +1,153 @@
+#include "bounce/geometry/fur.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+
+#include "bounce/core/random.h"
+
+namespace bounce {
+
+float UvMap::at(const Vec2& uv) const {
+    if (width <= 0 || height <= 0) return 1;
+    const float u = uv.x - std::floor(uv.x), v = uv.y - std::floor(uv.y);
+    const int x = std::min(width - 1, static_cast<int>(u * static_cast<float>(width)));
+    const int y = std::min(height - 1, static_cast<int>((1 - v) * static_cast<float>(height)));
+    return values[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)];
+}
+
+float FurParams::falloff(float v) const {
+    return falloff_root + (1 - falloff_root) * std::pow(std::clamp(v, 0.0f, 1.0f), falloff_exponent);
+}
+
+size_t FurParams::memory_bytes(uint64_t strands) const {
+    const auto s = static_cast<size_t>(segments);
+    const size_t per_strand = (s + 1) * 4 * sizeof(float) + s * (sizeof(uint32_t) + 64) + 2 * sizeof(Vec3) + sizeof(Vec2);
+    return static_cast<size_t>(strands) * per_strand;
+}
+
+size_t Fur::memory_bytes() const { return params.memory_bytes(strand_count()); }
+
+Vec3 Fur::tangent(uint32_t segment) const {
+    const float* a = &vertices[4 * static_cast<size_t>(segment_first[segment])];
+    const Vec3 d = Vec3(a[4], a[5], a[6]) - Vec3(a[0], a[1], a[2]);
+    const float l = length(d);
+    return l > 0 ? d / l : root_n[strand_of(segment)];
+}
+
+namespace {
+
+enum FurDim : uint32_t { kTriangle, kBaryA, kBaryB, kLength, kLeanAngle, kLeanAmount, kPhase, kKeep };
+
+/// Area CDF over the surface's triangles.
+std::vector<double> area_cdf(const TriangleMesh& m) {
+    std::vector<double> cdf(m.triangle_count());
+    double sum = 0;
+    for (size_t t = 0; t < m.triangle_count(); ++t) {
+        const Vec3 &a = m.positions[m.indices[3 * t]], &b = m.positions[m.indices[3 * t + 1]],
+                   &c = m.positions[m.indices[3 * t + 2]];
+        sum += 0.5 * static_cast<double>(length(cross(b - a, c - a)));
+        cdf[t] = sum;
+    }
+    return cdf;
+}
+
+}  // namespace
+
+Fur grow_fur(const TriangleMesh& surface, const FurParams& params) {
+    const auto t0 = std::chrono::steady_clock::now();
+    Fur fur;
+    fur.params = params;
+    fur.segments = params.segments;
+    const std::vector<double> cdf = area_cdf(surface);
+    if (cdf.empty() || cdf.back() <= 0 || params.count == 0) return fur;
+    const size_t per = static_cast<size_t>(params.segments) + 1;
+    fur.vertices.reserve(params.count * per * 4);
+    fur.root_p.reserve(params.count), fur.root_n.reserve(params.count), fur.root_uv.reserve(params.count);
+    const Vec3 down(0, -1, 0);
+    for (uint64_t i = 0; i < params.count; ++i) {
+        const RandomStream rng(params.seed, i);
+        // The root: a triangle by area, a uniform point on it.
+        const double pick = static_cast<double>(rng.get(0, kTriangle)) * cdf.back();
+        const size_t tri = std::min(cdf.size() - 1, static_cast<size_t>(std::upper_bound(cdf.begin(), cdf.end(), pick) - cdf.begin()));
+        float a = rng.get(0, kBaryA), b = rng.get(0, kBaryB);
+        if (a + b > 1) a = 1 - a, b = 1 - b;
+        const SurfacePoint sp = surface_point(surface, static_cast<uint32_t>(tri), a, b);
+        if (params.density_map && rng.get(0, kKeep) >= params.density_map->at(sp.uv)) continue;
+        float len = params.length * (1 + params.length_variation * (2 * rng.get(0, kLength) - 1));
+        if (params.length_map) len *= params.length_map->at(sp.uv);
+        if (len <= 0) continue;
+        // A frame about the root normal: the strand leans a little off it, curls about its
+        // own axis and bends under gravity as it grows.
+        const Frame frame(sp.n);
+        const float lean_phi = 2 * kPi * rng.get(0, kLeanAngle), lean = params.lean * rng.get(0, kLeanAmount);
+        Vec3 dir = frame.to_world(Vec3(std::sin(lean) * std::cos(lean_phi), std::sin(lean) * std::sin(lean_phi), std::cos(lean)));
+        const float phase = 2 * kPi * rng.get(0, kPhase);
+        const float step = len / static_cast<float>(params.segments);
+        Vec3 axis = sp.p;
+        const size_t strand = fur.root_p.size();
+        for (int k = 0; k <= params.segments; ++k) {
+            const float s = static_cast<float>(k) / static_cast<float>(params.segments);
+            Vec3 q = axis;
+            if (params.curl > 0) {
+                // The helix grows from nothing at the root so the root stays on the surface.
+                const float ang = phase + 2 * kPi * params.curl_turns * s;
+                q = q + (frame.s * std::cos(ang) + frame.t * std::sin(ang)) * (params.curl * len * s);
+            }
+            const float w = params.width_root + (params.width_tip - params.width_root) * s;
+            fur.vertices.insert(fur.vertices.end(), {q.x, q.y, q.z, 0.5f * w});
+            axis = axis + dir * step;
+            if (params.gravity > 0) dir = normalize(dir + down * (2 * params.gravity / static_cast<float>(params.segments)));
+        }
+        for (int k = 0; k < params.segments; ++k)
+            fur.segment_first.push_back(static_cast<uint32_t>(strand * per + static_cast<size_t>(k)));
+        fur.root_p.push_back(sp.p);
+        fur.root_n.push_back(sp.n);
+        fur.root_uv.push_back(sp.uv);
+    }
+    fur.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return fur;
+}
+
+Color kajiya_kay(const Vec3& t, const Vec3& wi, const Vec3& wo, const Color& albedo, float specular, float exponent) {
+    const float ti = dot(t, wi), to = dot(t, wo);
+    const float si = std::sqrt(std::max(0.0f, 1 - ti * ti)), so = std::sqrt(std::max(0.0f, 1 - to * to));
+    // The mirror cone of wi about the strand keeps the tangential component: t.wo = -t.wi on it.
+    const float cone = std::max(0.0f, -ti * to + si * so);
+    constexpr float kDiffuse = 2 / (kPi * kPi);
+    return albedo * (kDiffuse * si) + Color(specular * std::pow(cone, exponent));
+}
+
+Color hair_indirect(const Vec3& t, const Vec3& d, const Color& e, const Color& albedo) {
+    // h as a function of |t.d|, integrated once (midpoint rule over the hemisphere about +z).
+    static const std::array<float, 33> table = [] {
+        std::array<float, 33> h{};
+        constexpr int nt = 128, np = 256;
+        for (size_t i = 0; i < h.size(); ++i) {
+            const float c = static_cast<float>(i) / static_cast<float>(h.size() - 1), s = std::sqrt(1 - c * c);
+            const Vec3 tt(s, 0, c);
+            double sum = 0;
+            for (int a = 0; a < nt; ++a) {
+                const double th = (a + 0.5) * (kPi / 2) / nt;
+                for (int b = 0; b < np; ++b) {
+                    const double ph = (b + 0.5) * 2 * kPi / np;
+                    const Vec3 w(static_cast<float>(std::sin(th) * std::cos(ph)), static_cast<float>(std::sin(th) * std::sin(ph)),
+                                 static_cast<float>(std::cos(th)));
+                    const double tw = dot(tt, w);
+                    sum += std::sqrt(std::max(0.0, 1 - tw * tw)) * std::sin(th);
+                }
+            }
+            const double domega = (kPi / 2 / nt) * (2 * kPi / np);
+            h[i] = static_cast<float>(sum * domega * 2 / (kPi * kPi));
+        }
+        return h;
+    }();
+    const float x = std::min(1.0f, std::abs(dot(t, d))) * static_cast<float>(table.size() - 1);
+    const auto i = std::min(table.size() - 2, static_cast<size_t>(x));
+    const float f = x - static_cast<float>(i);
+    const float h = table[i] + (table[i + 1] - table[i]) * f;
+    return albedo * e * (h * kInvPi);
+}
+
+}  // namespace bounce

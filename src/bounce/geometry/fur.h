@@ -1,0 +1,96 @@
+// Fur and grass: strands grown deterministically on a growing surface (docs/fur.md). Each strand
+// is a polyline of flat linear curve segments (Embree ribbons facing the ray) and keeps its root
+// position, root normal and root uv on the growing surface: where its cache lookups happen.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "bounce/core/math.h"
+#include "bounce/geometry/mesh.h"
+
+namespace bounce {
+
+/// A scalar map over the growing surface's uv square (density or length), values in [0, 1].
+struct UvMap {
+    int width = 0, height = 0;
+    std::vector<float> values;  ///< row 0 at v = 1 (image order)
+    float at(const Vec2& uv) const;
+};
+
+/// Where a hair fragment's indirect light is looked up (and, for brute force, gathered).
+enum class FurIndirectAt : uint8_t { Root, Fragment };
+
+/// An object's "fur" block: how strands grow and how they are shaded.
+struct FurParams {
+    uint64_t count = 0;            ///< strands grown (before the density map thins them)
+    float length = 0.1f;           ///< world units
+    float length_variation = 0.2f; ///< each strand's length is length x (1 +- this), uniform
+    float width_root = 0.004f, width_tip = 0.001f;  ///< world units
+    int segments = 4;              ///< linear segments per strand
+    float curl = 0;                ///< helix radius as a fraction of the length
+    float curl_turns = 2;          ///< helix turns over the strand
+    float gravity = 0;             ///< bend towards -Y: tip drop as a fraction of the length (0..1)
+    float lean = 0.15f;            ///< random tilt of the root direction from the normal (radians)
+    uint64_t seed = 1;
+    Color color_root{0.3f}, color_tip{0.6f};  ///< diffuse albedo, root to tip
+    float specular = 0.04f;        ///< Kajiya-Kay specular strength
+    float specular_exponent = 40;  ///< Kajiya-Kay specular exponent
+    float falloff_root = 0.35f;    ///< self-shadowing f(v) at the root (f = 1 at the tip)
+    float falloff_exponent = 1;    ///< f(v) = root + (1 - root) v^exponent
+    bool cast_indirect = false;    ///< gather rays see the strands
+    bool cast_shadows = true;      ///< shadow rays (direct light) see the strands
+    FurIndirectAt indirect_at = FurIndirectAt::Root;
+    std::shared_ptr<const UvMap> density_map, length_map;
+
+    /// Self-shadowing falloff at v (0 = root, 1 = tip) multiplying cached irradiance and AO.
+    float falloff(float v) const;
+    /// Albedo at v.
+    Color albedo(float v) const { return color_root + (color_tip - color_root) * v; }
+    /// Bytes a fur of `strands` strands takes (vertices, indices, roots) plus Embree's BVH
+    /// over its segments (estimated at 64 bytes a segment).
+    size_t memory_bytes(uint64_t strands) const;
+};
+
+/// The strands of one object.
+struct Fur {
+    FurParams params;
+    int segments = 0;                ///< per strand
+    std::vector<float> vertices;     ///< (x, y, z, radius) per control point, segments+1 per strand
+    std::vector<uint32_t> segment_first;  ///< per segment: index of its first control point
+    std::vector<Vec3> root_p, root_n;     ///< per strand, on the growing surface
+    std::vector<Vec2> root_uv;
+    double seconds = 0;              ///< generation time
+
+    size_t strand_count() const { return root_p.size(); }
+    size_t segment_count() const { return segment_first.size(); }
+    uint32_t strand_of(uint32_t segment) const { return segment / static_cast<uint32_t>(segments); }
+    /// Position along the strand (0 root, 1 tip) at parameter u of `segment`.
+    float v_of(uint32_t segment, float u) const {
+        return (static_cast<float>(segment % static_cast<uint32_t>(segments)) + u) / static_cast<float>(segments);
+    }
+    /// Unit tangent of `segment` (root to tip).
+    Vec3 tangent(uint32_t segment) const;
+    /// Largest strand width.
+    float max_width() const { return std::max(params.width_root, params.width_tip); }
+    size_t memory_bytes() const;
+};
+
+/// Grows `params.count` strands on `surface` (area-weighted, thinned by the density map),
+/// each a pure function of (seed, strand index): the same seed gives the same fur.
+Fur grow_fur(const TriangleMesh& surface, const FurParams& params);
+
+/// The Kajiya-Kay hair reflectance for direct light arriving from unit `wi` at a strand of
+/// unit tangent `t`, seen from unit `wo`, per unit of (radiance x solid angle): the diffuse
+/// lobe albedo sin(t, wi) (2 / pi^2) and the specular cone specular cos^e. The diffuse
+/// normalisation makes a strand standing on a surface under a uniform sky reflect what the
+/// surface itself does (albedo E / pi).
+Color kajiya_kay(const Vec3& t, const Vec3& wi, const Vec3& wo, const Color& albedo, float specular, float exponent);
+
+/// The diffuse radiance of a strand of tangent `t` under cached irradiance `E` whose light
+/// arrives about unit direction `d`, taken as a uniform hemisphere about `d`: albedo E / pi
+/// x h(t, d) with h = (2 / pi^2) x the hemisphere's integral of sin(t, w) (h = 1 when t = d).
+Color hair_indirect(const Vec3& t, const Vec3& d, const Color& e, const Color& albedo);
+
+}  // namespace bounce

@@ -1,0 +1,98 @@
+#include "bounce/scene/fur_reader.h"
+
+#include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace bounce {
+
+const std::vector<std::string>& fur_keys() {
+    static const std::vector<std::string> keys = {
+        "count", "density", "length", "length_variation", "width_root", "width_tip", "segments", "curl", "curl_turns",
+        "gravity", "lean", "seed", "color_root", "color_tip", "specular", "specular_exponent", "falloff_root",
+        "falloff_exponent", "cast_indirect", "cast_shadows", "indirect_at", "density_texture", "length_texture"};
+    return keys;
+}
+
+namespace {
+
+/// A map's first channel as floats in [0, 1].
+std::shared_ptr<const UvMap> load_uv_map(const JsonReader& r, const std::string& key) {
+    const std::string path = r.file(key, false);
+    if (path.empty()) return nullptr;
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) r.fail(key, "cannot read image \"" + path + "\": " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    if (spec.width <= 0 || spec.height <= 0 || static_cast<int64_t>(spec.width) * spec.height > (int64_t{1} << 28))
+        r.fail(key, fmt::format("image \"{}\" has an unusable size {}x{}", path, spec.width, spec.height));
+    auto map = std::make_shared<UvMap>();
+    map->width = spec.width, map->height = spec.height;
+    std::vector<float> all(static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height) * static_cast<size_t>(spec.nchannels));
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()))
+        r.fail(key, "cannot read image \"" + path + "\": " + in->geterror());
+    map->values.resize(static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height));
+    for (size_t i = 0; i < map->values.size(); ++i) {
+        const float v = all[i * static_cast<size_t>(spec.nchannels)];
+        map->values[i] = std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 0.0f;
+    }
+    return map;
+}
+
+double surface_area(const TriangleMesh& m) {
+    double a = 0;
+    for (size_t t = 0; t < m.triangle_count(); ++t) {
+        const Vec3 &p = m.positions[m.indices[3 * t]], &q = m.positions[m.indices[3 * t + 1]], &s = m.positions[m.indices[3 * t + 2]];
+        a += 0.5 * static_cast<double>(length(cross(q - p, s - p)));
+    }
+    return a;
+}
+
+}  // namespace
+
+std::shared_ptr<const Fur> read_fur(const JsonReader& r, const TriangleMesh& surface, const Scene& scene) {
+    FurParams p;
+    constexpr int kMaxStrands = 2'000'000'000;
+    if (r.has("count") == r.has("density")) r.fail("", "fur needs one of \"count\" (strands) or \"density\" (strands per unit area)");
+    if (r.has("count")) {
+        p.count = static_cast<uint64_t>(r.integer("count", 0, 0, kMaxStrands));
+    } else {
+        const double n = static_cast<double>(r.number("density", 0, 0, 1e30)) * surface_area(surface);
+        if (!(n <= kMaxStrands)) r.fail("density", fmt::format("{:.3g} strands on this surface, more than {}", n, kMaxStrands));
+        p.count = static_cast<uint64_t>(std::llround(n));
+    }
+    p.length = r.number("length", p.length, 0, kMaxCoordinate);
+    if (!(p.length > 0)) r.fail("length", "length must be > 0");
+    p.length_variation = r.number("length_variation", p.length_variation, 0, 1);
+    p.width_root = r.number("width_root", p.width_root, 0, kMaxCoordinate);
+    p.width_tip = r.number("width_tip", p.width_tip, 0, kMaxCoordinate);
+    if (!(std::max(p.width_root, p.width_tip) > 0)) r.fail("width_root", "strands need a width > 0 at the root or the tip");
+    p.segments = r.integer("segments", p.segments, 1, 64);
+    p.curl = r.number("curl", p.curl, 0, 10);
+    p.curl_turns = r.number("curl_turns", p.curl_turns, 0, 1000);
+    p.gravity = r.number("gravity", p.gravity, 0, 1);
+    p.lean = r.number("lean", p.lean, 0, 1.5707);
+    p.seed = static_cast<uint64_t>(r.integer("seed", 1, 0, 2'147'483'647));
+    p.color_root = r.color("color_root", p.color_root);
+    p.color_tip = r.color("color_tip", p.color_tip);
+    p.specular = r.number("specular", p.specular, 0, 100);
+    p.specular_exponent = r.number("specular_exponent", p.specular_exponent, 0, 1e4);
+    p.falloff_root = r.number("falloff_root", p.falloff_root, 0, 1);
+    p.falloff_exponent = r.number("falloff_exponent", p.falloff_exponent, 0.01, 100);
+    p.cast_indirect = r.boolean("cast_indirect", p.cast_indirect);
+    p.cast_shadows = r.boolean("cast_shadows", p.cast_shadows);
+    p.indirect_at = r.choice("indirect_at", "root", {"root", "fragment"}) == "root" ? FurIndirectAt::Root : FurIndirectAt::Fragment;
+    p.density_map = load_uv_map(r, "density_texture");
+    p.length_map = load_uv_map(r, "length_texture");
+    if ((p.density_map || p.length_map) && surface.uvs.empty())
+        r.fail(p.density_map ? "density_texture" : "length_texture", "the growing surface has no uvs to look the map up with");
+    const double budget = static_cast<double>(scene.render.dicing.memory_budget) * 1073741824.0;
+    const auto bytes = static_cast<double>(p.memory_bytes(p.count));
+    if (bytes > budget)
+        r.fail(r.has("count") ? "count" : "density",
+               fmt::format("{} strands would take {:.1f} GiB, over render.memory_budget ({:g} GiB)", p.count,
+                           bytes / 1073741824.0, scene.render.dicing.memory_budget));
+    return std::make_shared<const Fur>(grow_fur(surface, p));
+}
+
+}  // namespace bounce
