@@ -129,6 +129,23 @@ TEST(BadInput, SubdivisionSurfacesThatCannotBeDiced) {
             {"dense.json", "/objects/0", "micropolygons", "render.shading_rate"});
 }
 
+TEST(BadInput, FurThatCannotGrow) {
+    test::TempDir d;
+    nlohmann::json j = test::base_scene();
+    auto with_fur = [&](const std::string& name, const nlohmann::json& fur) {
+        j["objects"][0]["fur"] = fur;
+        return d.write(name, j.dump());
+    };
+    refused(render_cmd(with_fur("neg.json", {{"count", 10}, {"length", -1}}), d.file("x.exr")), {"neg.json", "/objects/0/fur/length"});
+    refused(render_cmd(with_fur("nan.json", {{"count", 10}, {"width_root", "NaN"}}), d.file("x.exr")),
+            {"nan.json", "/objects/0/fur/width_root"});
+    // 400 strands per unit area on the 2000 x 2000 floor would need ~600 GiB.
+    refused(render_cmd(with_fur("dense.json", {{"density", 400}}), d.file("x.exr")),
+            {"dense.json", "/objects/0/fur/density", "render.memory_budget"});
+    refused(render_cmd(with_fur("map.json", {{"count", 10}, {"density_texture", "gone.png"}}), d.file("x.exr")),
+            {"map.json", "/objects/0/fur/density_texture", "gone.png"});
+}
+
 TEST(BadInput, SceneFilesThatLie) {
     test::TempDir d;
     d.write("dup.json", R"({"camera": {"position": [0, 1, 5], "look_at": [0, 0, 0]}, "objects": [], "objects": []})");
