@@ -12,6 +12,8 @@ SCENES = {
     "sibenik": os.path.join(ROOT, "bench", "scenes", "sibenik.json"),
     "bunny": os.path.join(ROOT, "bench", "scenes", "bunny.json"),
     "ogre": os.path.join(ROOT, "bench", "scenes", "ogre.json"),
+    "furball": os.path.join(ROOT, "scenes", "fur", "furball.json"),
+    "grass": os.path.join(ROOT, "scenes", "fur", "grass.json"),
 }
 
 

@@ -126,6 +126,21 @@ TEST(Fur, HairFragmentsCarryTheirRootAndRoundTripThroughTheDeepFile) {
     EXPECT_EQ(read_deep(dir.file("fur.exr")), deep);
 }
 
+TEST(Fur, ADeepFileSurvivesFurShadingEditsButNotGrowthEdits) {
+    const json fur = plain_fur();
+    const uint64_t base = test::scene_from(fur_scene(fur)).visibility_fingerprint();
+    for (const char* key : {"color_tip", "falloff_root", "cast_indirect", "indirect_at", "specular"}) {
+        json f = fur;
+        f[key] = std::string(key) == "cast_indirect" ? json(true) : std::string(key) == "indirect_at" ? json("fragment") : json(0.5);
+        EXPECT_EQ(test::scene_from(fur_scene(f)).visibility_fingerprint(), base) << key;
+    }
+    for (const char* key : {"length", "width_root", "curl", "lean"}) {
+        json f = fur;
+        f[key] = 0.3;
+        EXPECT_NE(test::scene_from(fur_scene(f)).visibility_fingerprint(), base) << key;
+    }
+}
+
 TEST(Fur, StrandsLookUpTheCacheAtTheRootAndShareOneValue) {
     // Hair invisible to gathers under a uniform sky: the root sees the open sky, E = pi L
     // exactly, for every hair fragment (records at the roots, no gradient along the strand).

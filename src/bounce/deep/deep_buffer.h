@@ -51,7 +51,7 @@ struct DeepBuffer {
     int x0 = 0, y0 = 0, width = 0, height = 0;  ///< the window this buffer covers
     int spp = 0;
     uint64_t seed = 0;
-    uint64_t scene_fingerprint = 0;  ///< Scene::fingerprint({"camera", "objects"})
+    uint64_t scene_fingerprint = 0;  ///< Scene::visibility_fingerprint()
     std::vector<uint32_t> offsets;   ///< width*height+1 prefix sums into fragments
     std::vector<Fragment> fragments;
 

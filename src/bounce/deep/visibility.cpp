@@ -78,7 +78,7 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
     deep.width = window[1] - window[0], deep.height = window[3] - window[2];
     deep.spp = rs.spp;
     deep.seed = rs.seed;
-    deep.scene_fingerprint = scene.fingerprint({"camera", "objects"});
+    deep.scene_fingerprint = scene.visibility_fingerprint();
 
     CameraRays camera(cam);
     const int spp = rs.spp;

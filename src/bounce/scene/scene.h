@@ -93,6 +93,9 @@ struct Scene {
     /// reflects light to the camera (specular, roughness, bump and normal maps): cached
     /// irradiance does not depend on them.
     uint64_t fingerprint(const std::vector<std::string>& parts, bool without_surface_shading = false) const;
+    /// What a deep file depends on: the camera and the objects, without the fur keys that only
+    /// change how strands are lit (colours, specular, falloff, what rays see them).
+    uint64_t visibility_fingerprint() const;
 };
 
 }  // namespace bounce

@@ -412,6 +412,17 @@ uint64_t Scene::fingerprint(const std::vector<std::string>& parts, bool without_
     return h;
 }
 
+uint64_t Scene::visibility_fingerprint() const {
+    Scene copy;
+    copy.description = {{"camera", description.value("camera", json())}, {"objects", description.value("objects", json())}};
+    for (auto& o : copy.description["objects"])
+        if (o.is_object() && o.contains("fur") && o["fur"].is_object())
+            for (const char* key : {"color_root", "color_tip", "specular", "specular_exponent", "falloff_root", "falloff_exponent",
+                                    "cast_indirect", "cast_shadows", "indirect_at"})
+                o["fur"].erase(key);
+    return copy.fingerprint({"camera", "objects"});
+}
+
 Color LatLongMap::lookup(const Vec3& d, float rotation_deg) const {
     float u = 0.5f + std::atan2(d.x, -d.z) / (2 * kPi) + rotation_deg / 360.0f;
     u -= std::floor(u);
