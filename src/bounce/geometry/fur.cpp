@@ -1,7 +1,6 @@
 #include "bounce/geometry/fur.h"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
 
@@ -119,35 +118,16 @@ Color kajiya_kay(const Vec3& t, const Vec3& wi, const Vec3& wo, const Color& alb
     return albedo * (kDiffuse * si) + Color(specular * std::pow(cone, exponent));
 }
 
-Color hair_indirect(const Vec3& t, const Vec3& d, const Color& e, const Color& albedo) {
-    // h as a function of |t.d|, integrated once (midpoint rule over the hemisphere about +z).
-    static const std::array<float, 33> table = [] {
-        std::array<float, 33> h{};
-        constexpr int nt = 128, np = 256;
-        for (size_t i = 0; i < h.size(); ++i) {
-            const float c = static_cast<float>(i) / static_cast<float>(h.size() - 1), s = std::sqrt(1 - c * c);
-            const Vec3 tt(s, 0, c);
-            double sum = 0;
-            for (int a = 0; a < nt; ++a) {
-                const double th = (a + 0.5) * (kPi / 2) / nt;
-                for (int b = 0; b < np; ++b) {
-                    const double ph = (b + 0.5) * 2 * kPi / np;
-                    const Vec3 w(static_cast<float>(std::sin(th) * std::cos(ph)), static_cast<float>(std::sin(th) * std::sin(ph)),
-                                 static_cast<float>(std::cos(th)));
-                    const double tw = dot(tt, w);
-                    sum += std::sqrt(std::max(0.0, 1 - tw * tw)) * std::sin(th);
-                }
-            }
-            const double domega = (kPi / 2 / nt) * (2 * kPi / np);
-            h[i] = static_cast<float>(sum * domega * 2 / (kPi * kPi));
-        }
-        return h;
-    }();
-    const float x = std::min(1.0f, std::abs(dot(t, d))) * static_cast<float>(table.size() - 1);
-    const auto i = std::min(table.size() - 2, static_cast<size_t>(x));
-    const float f = x - static_cast<float>(i);
-    const float h = table[i] + (table[i + 1] - table[i]) * f;
-    return albedo * e * (h * kInvPi);
+Color hair_indirect(const Vec3& t, const Vec3& d, const Vec3& n, const Vec3& wo, const Color& e, const Color& albedo,
+                    float specular, float exponent) {
+    Color out = albedo * e * kInvPi;
+    if (specular > 0) {
+        // As surfaces do: a grazing mean direction carries no reliable direction (brdf.h).
+        const float nd = dot(n, d);
+        const bool grazing = nd < 0.05f;
+        out += kajiya_kay(t, grazing ? n : d, wo, Color(0), specular, exponent) * (grazing ? e : e / nd);
+    }
+    return out;
 }
 
 }  // namespace bounce

@@ -88,9 +88,13 @@ Fur grow_fur(const TriangleMesh& surface, const FurParams& params);
 /// surface itself does (albedo E / pi).
 Color kajiya_kay(const Vec3& t, const Vec3& wi, const Vec3& wo, const Color& albedo, float specular, float exponent);
 
-/// The diffuse radiance of a strand of tangent `t` under cached irradiance `E` whose light
-/// arrives about unit direction `d`, taken as a uniform hemisphere about `d`: albedo E / pi
-/// x h(t, d) with h = (2 / pi^2) x the hemisphere's integral of sin(t, w) (h = 1 when t = d).
-Color hair_indirect(const Vec3& t, const Vec3& d, const Color& e, const Color& albedo);
+/// Radiance a strand of tangent `t` reflects towards `wo` under cached irradiance `e` (about
+/// the growing surface's normal `n`) whose light arrives about unit direction `d`. Diffuse: the
+/// light read as a uniform hemisphere about d, under which a Kajiya-Kay fibre reflects exactly
+/// albedo E / pi whatever its orientation (sin(t, w) is even in w, so its integral over any
+/// hemisphere is half the sphere's). Specular: the pair read as surfaces read it (shade/brdf.h),
+/// all of the light from d with radiance x solid angle E / (n . d).
+Color hair_indirect(const Vec3& t, const Vec3& d, const Vec3& n, const Vec3& wo, const Color& e, const Color& albedo,
+                    float specular, float exponent);
 
 }  // namespace bounce

@@ -107,7 +107,8 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                     if (ao_only)
                         b += Color(in.ao) * w;
                     else if (hair)
-                        b += hair_indirect(f.tangent, indirect_direction(in, f.n_base), in.irradiance, alb) * w;
+                        b += hair_indirect(f.tangent, indirect_direction(in, f.n_base), f.n_base, wo, in.irradiance, alb,
+                                           fur->params.specular, fur->params.specular_exponent) * w;
                     else
                         b += indirect_radiance(in, f.n, surf, wo, scene.render.shading.light_per_channel) * w;
                 }
