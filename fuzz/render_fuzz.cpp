@@ -28,7 +28,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         bounce::Scene scene = bounce::load_scene_text(
             text, "fuzz.json",
             {"camera.resolution=[16,16]", "render.spp=1", "render.rays=16", "render.gi=\"cache\"", "render.threads=1",
-             "render.light_samples=1", "render.radiosity_light_samples=1", "render.crop=[0,0,0,0]"});
+             "render.light_samples=1", "render.radiosity_light_samples=1", "render.crop=[0,0,0,0]",
+             "render.memory_budget=0.01"});  // fur: ~27k strands at most
         bounce::RenderRequest request;
         if (!cache_bytes.empty()) {
             std::ofstream(cache_path, std::ios::binary) << cache_bytes;

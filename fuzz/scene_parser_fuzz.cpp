@@ -14,7 +14,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // Keep sphere tessellation small so a fuzz run measures the parser, not icosphere building.
     if (text.find("subdivisions") != std::string::npos) return 0;
     try {
-        bounce::load_scene_text(text, "fuzz.json");
+        // Fur: ~27k strands at most, so growing it stays quick.
+        bounce::load_scene_text(text, "fuzz.json", {"render.memory_budget=0.01"});
     } catch (const bounce::InputError&) {
     }
     return 0;

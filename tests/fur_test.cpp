@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <array>
 #include <map>
 
 #include "bounce/accel/accel.h"
@@ -53,6 +54,32 @@ TEST(Fur, GrowingIsDeterministicAndStrandsStartOnTheSurface) {
         EXPECT_NEAR(a.tangent(static_cast<uint32_t>(5 * s)).y, 1.0f, 1e-5f);
     }
     EXPECT_FLOAT_EQ(a.v_of(7, 0.5f), 2.5f / 5);  // segment 2 of strand 1
+}
+
+TEST(Fur, ClumpingDrawsTipsToTheGuideAndLeavesRootsInPlace) {
+    const TriangleMesh quad = make_quad({-1, 0, -1}, {-1, 0, 1}, {1, 0, 1}, {1, 0, -1}, 0);
+    FurParams p;
+    p.count = 2000, p.segments = 2, p.lean = 0.6f, p.clump_size = 0.5f;
+    const Fur loose = grow_fur(quad, p);
+    p.clump = 1;
+    const Fur tight = grow_fur(quad, p);
+    // Fully clumped: every tip is its cell's guide's tip; roots never move.
+    std::map<std::array<int, 3>, Vec3> guide_tip;
+    size_t drawn = 0;
+    for (size_t s = 0; s < tight.strand_count(); ++s) {
+        const float* root = &tight.vertices[12 * s];
+        EXPECT_EQ(Vec3(root[0], root[1], root[2]), loose.root_p[s]);
+        const Vec3 c = tight.root_p[s] / 0.5f;
+        const std::array<int, 3> cell{static_cast<int>(std::floor(c.x)), static_cast<int>(std::floor(c.y)), static_cast<int>(std::floor(c.z))};
+        const Vec3 tip(root[8], root[9], root[10]);
+        auto [it, fresh] = guide_tip.emplace(cell, tip);
+        if (!fresh) {
+            ++drawn;
+            EXPECT_LT(length(tip - it->second), 1e-5f);
+        }
+    }
+    EXPECT_EQ(guide_tip.size(), 16u);  // a 2 x 2 quad in cells of 0.5
+    EXPECT_EQ(drawn, 2000u - 16u);
 }
 
 TEST(Fur, TheDensityMapThinsStrandsWhereItIsDark) {

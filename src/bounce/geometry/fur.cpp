@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <unordered_map>
 
 #include "bounce/core/random.h"
 
@@ -50,6 +51,28 @@ std::vector<double> area_cdf(const TriangleMesh& m) {
         cdf[t] = sum;
     }
     return cdf;
+}
+
+/// Draws each strand towards its clump's guide (the first strand rooted in the same cell of
+/// clump_size): control point k moves clump x s_k of the way to the guide's, s_k = k / segments,
+/// so roots stay put and tips gather.
+void clump(Fur& fur) {
+    const FurParams& p = fur.params;
+    const size_t per = static_cast<size_t>(fur.segments) + 1;
+    std::unordered_map<uint64_t, size_t> guide;
+    for (size_t s = 0; s < fur.strand_count(); ++s) {
+        const Vec3 c = fur.root_p[s] / p.clump_size;
+        uint64_t key = 0;
+        for (float x : {c.x, c.y, c.z}) key = hash_combine(key, static_cast<uint64_t>(static_cast<int64_t>(std::floor(x))));
+        const size_t g = guide.emplace(key, s).first->second;
+        if (g == s) continue;
+        for (size_t k = 1; k < per; ++k) {
+            const float w = p.clump * static_cast<float>(k) / static_cast<float>(fur.segments);
+            float* q = &fur.vertices[4 * (s * per + k)];
+            const float* t = &fur.vertices[4 * (g * per + k)];
+            for (int i = 0; i < 3; ++i) q[i] += w * (t[i] - q[i]);
+        }
+    }
 }
 
 }  // namespace
@@ -105,6 +128,7 @@ Fur grow_fur(const TriangleMesh& surface, const FurParams& params) {
         fur.root_n.push_back(sp.n);
         fur.root_uv.push_back(sp.uv);
     }
+    if (params.clump > 0) clump(fur);
     fur.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return fur;
 }

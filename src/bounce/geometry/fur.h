@@ -32,6 +32,8 @@ struct FurParams {
     float curl = 0;                ///< helix radius as a fraction of the length
     float curl_turns = 2;          ///< helix turns over the strand
     float gravity = 0;             ///< bend towards -Y: tip drop as a fraction of the length (0..1)
+    float clump = 0;               ///< how far tips are drawn to their clump's guide strand (0..1)
+    float clump_size = 0.05f;      ///< clumps: strands whose roots share a cell of this size (world units)
     float lean = 0.15f;            ///< random tilt of the root direction from the normal (radians)
     uint64_t seed = 1;
     Color color_root{0.3f}, color_tip{0.6f};  ///< diffuse albedo, root to tip

@@ -10,7 +10,7 @@ namespace bounce {
 const std::vector<std::string>& fur_keys() {
     static const std::vector<std::string> keys = {
         "count", "density", "length", "length_variation", "width_root", "width_tip", "segments", "curl", "curl_turns",
-        "gravity", "lean", "seed", "color_root", "color_tip", "specular", "specular_exponent", "falloff_root",
+        "gravity", "clump", "clump_size", "lean", "seed", "color_root", "color_tip", "specular", "specular_exponent", "falloff_root",
         "falloff_exponent", "cast_indirect", "cast_shadows", "indirect_at", "density_texture", "length_texture"};
     return keys;
 }
@@ -71,6 +71,9 @@ std::shared_ptr<const Fur> read_fur(const JsonReader& r, const TriangleMesh& sur
     p.curl = r.number("curl", p.curl, 0, 10);
     p.curl_turns = r.number("curl_turns", p.curl_turns, 0, 1000);
     p.gravity = r.number("gravity", p.gravity, 0, 1);
+    p.clump = r.number("clump", p.clump, 0, 1);
+    p.clump_size = r.number("clump_size", p.clump_size, 0, kMaxCoordinate);
+    if (p.clump > 0 && !(p.clump_size > 0)) r.fail("clump_size", "clumping needs a clump_size > 0");
     p.lean = r.number("lean", p.lean, 0, 1.5707);
     p.seed = static_cast<uint64_t>(r.integer("seed", 1, 0, 2'147'483'647));
     p.color_root = r.color("color_root", p.color_root);
