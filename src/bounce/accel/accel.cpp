@@ -28,6 +28,39 @@ RTCRayHit make_ray(const Vec3& o, const Vec3& d, float tnear, float tfar) {
 
 Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs)
     : mesh_count_(static_cast<unsigned>(meshes.size())) {
+    begin(device, meshes);
+    for (size_t id = 0; id < furs.size(); ++id) {
+        const Fur* f = furs[id];
+        if (!f || f->segment_count() == 0) continue;
+        // Ribbons facing the ray: strands are thinner than a pixel, so their round profile
+        // does not show, and flat curves intersect faster. The buffers are the fur's own.
+        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE);
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, f->vertices.data(), 0,
+                                   4 * sizeof(float), f->vertices.size() / 4);
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, f->segment_first.data(), 0,
+                                   sizeof(uint32_t), f->segment_count());
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(scene_, g, mesh_count_ + static_cast<unsigned>(id));
+        rtcReleaseGeometry(g);
+    }
+    rtcCommitScene(scene_);
+}
+
+Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const Bvh& fur)
+    : mesh_count_(static_cast<unsigned>(meshes.size())) {
+    begin(device, meshes);
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(g, fur.scene_);
+    const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
+    rtcCommitGeometry(g);
+    // Past every mesh and fur id: hits report the instanced scene's own geometry ids.
+    rtcAttachGeometryByID(scene_, g, 2 * mesh_count_ + 1);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(scene_);
+}
+
+void Bvh::begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes) {
     scene_ = rtcNewScene(device);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
@@ -47,21 +80,6 @@ Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const
         rtcAttachGeometryByID(scene_, g, static_cast<unsigned>(id));
         rtcReleaseGeometry(g);
     }
-    for (size_t id = 0; id < furs.size(); ++id) {
-        const Fur* f = furs[id];
-        if (!f || f->segment_count() == 0) continue;
-        // Ribbons facing the ray: strands are thinner than a pixel, so their round profile
-        // does not show, and flat curves intersect faster. The buffers are the fur's own.
-        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE);
-        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, f->vertices.data(), 0,
-                                   4 * sizeof(float), f->vertices.size() / 4);
-        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, f->segment_first.data(), 0,
-                                   sizeof(uint32_t), f->segment_count());
-        rtcCommitGeometry(g);
-        rtcAttachGeometryByID(scene_, g, mesh_count_ + static_cast<unsigned>(id));
-        rtcReleaseGeometry(g);
-    }
-    rtcCommitScene(scene_);
 }
 
 Bvh::~Bvh() {
@@ -151,9 +169,11 @@ SceneAccel::SceneAccel(const Scene& scene) {
         any_shadow |= shadow_fur.back() != nullptr;
     }
     coarse_ = std::make_unique<Bvh>(device_, coarse, any_indirect ? indirect_fur : std::vector<const Fur*>{});
-    if (any_fine || has_fur_) fine_ = std::make_unique<Bvh>(device_, fine, visible_fur);
     // Fur already in the coarse BVH shadows through it; the rest that casts shadows gets its own.
     if (any_shadow) shadow_fur_ = std::make_unique<Bvh>(device_, std::vector<const TriangleMesh*>(scene.objects.size(), nullptr), shadow_fur);
+    // The camera sees all fur: when that is the shadow BVH's, instance it rather than build it twice.
+    if (any_shadow && shadow_fur == visible_fur) fine_ = std::make_unique<Bvh>(device_, fine, *shadow_fur_);
+    else if (any_fine || has_fur_) fine_ = std::make_unique<Bvh>(device_, fine, visible_fur);
 
     // Measure how far the fine surface strays from the coarse one: from each fine vertex,
     // along its normal both ways, to the nearest coarse surface of the same object.

@@ -31,6 +31,9 @@ struct Hit {
 class Bvh {
 public:
     Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs = {});
+    /// Meshes plus an instance of `fur`, a BVH of fur only over as many mesh ids (so its hits
+    /// decode the same): fur traced by several BVHs is built once.
+    Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const Bvh& fur);
     ~Bvh();
     Bvh(const Bvh&) = delete;
     Bvh& operator=(const Bvh&) = delete;
@@ -42,6 +45,8 @@ public:
     bool occluded(const Vec3& o, const Vec3& d, float tnear, float tfar) const;
 
 private:
+    /// A new scene holding `meshes` (not committed).
+    void begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes);
     Hit make_hit(unsigned geom, unsigned prim, float t, float u, float v) const;
     RTCScene scene_ = nullptr;
     unsigned mesh_count_ = 0;
