@@ -172,49 +172,59 @@ TEST(Fur, ADeepFileSurvivesFurShadingEditsButNotGrowthEdits) {
     }
 }
 
+/// A cache render of fur_scene(fur) under a sky of 0.5, and its shading pass's light per fragment.
+struct HairRender {
+    RenderResult result;
+    std::vector<Indirect> indirect;
+    double misses = 0;
+};
+HairRender render_hair(const json& fur) {
+    Scene scene = test::scene_from(fur_scene(fur, 0.5f), {"render.gi=\"cache\""});
+    Stats stats;
+    HairRender h{render(scene, {}, stats, nullptr), {}, 0};
+    h.indirect = shading_pass(scene, h.result.deep, *h.result.cache, stats, nullptr);
+    h.misses = stats.to_json()["shading_misses"].get<double>();
+    return h;
+}
+
 TEST(Fur, StrandsLookUpTheCacheAtTheRootAndShareOneValue) {
     // Hair invisible to gathers under a uniform sky: the root sees the open sky, E = pi L
     // exactly, for every hair fragment (records at the roots, no gradient along the strand).
     json fur = plain_fur();
-    Scene scene = test::scene_from(fur_scene(fur, 0.5f), {"render.gi=\"cache\""});
-    Stats stats;
-    RenderResult r = render(scene, {}, stats, nullptr);
-    std::vector<Indirect> in = shading_pass(scene, r.deep, *r.cache, stats, nullptr);
+    const HairRender open = render_hair(fur);
     std::map<uint32_t, Color> by_strand;
     size_t hair = 0;
-    for (size_t i = 0; i < r.deep.fragments.size(); ++i) {
-        const Fragment& f = r.deep.fragments[i];
+    for (size_t i = 0; i < open.result.deep.fragments.size(); ++i) {
+        const Fragment& f = open.result.deep.fragments[i];
         if (!f.is_hair()) continue;
         ++hair;
-        EXPECT_NEAR(in[i].irradiance.x, kPi * 0.5f, 1e-4f);
-        EXPECT_NEAR(in[i].ao, 1.0f, 1e-6f);
-        auto [it, fresh] = by_strand.emplace(f.prim, in[i].irradiance);
+        EXPECT_NEAR(open.indirect[i].irradiance.x, kPi * 0.5f, 1e-4f);
+        EXPECT_NEAR(open.indirect[i].ao, 1.0f, 1e-6f);
+        auto [it, fresh] = by_strand.emplace(f.prim, open.indirect[i].irradiance);
         if (!fresh) {
-            EXPECT_EQ(it->second, in[i].irradiance);  // exactly one value per strand
+            EXPECT_EQ(it->second, open.indirect[i].irradiance);  // exactly one value per strand
         }
     }
     EXPECT_GT(hair, 100u);
-    EXPECT_EQ(stats.to_json()["shading_misses"].get<double>(), 0.0);
+    EXPECT_EQ(open.misses, 0.0);
 
     // Seen by the gathers, the fur occludes its own roots: AO and E fall, and fragments of one
     // strand still share one value exactly.
     fur["cast_indirect"] = true;
-    Scene occluding = test::scene_from(fur_scene(fur, 0.5f), {"render.gi=\"cache\""});
-    Stats s2;
-    RenderResult r2 = render(occluding, {}, s2, nullptr);
-    std::vector<Indirect> in2 = shading_pass(occluding, r2.deep, *r2.cache, s2, nullptr);
+    const HairRender occluded = render_hair(fur);
     std::map<uint32_t, Indirect> strands;
     double ao = 0;
     size_t n = 0, shared = 0;
-    for (size_t i = 0; i < r2.deep.fragments.size(); ++i) {
-        const Fragment& f = r2.deep.fragments[i];
+    for (size_t i = 0; i < occluded.result.deep.fragments.size(); ++i) {
+        const Fragment& f = occluded.result.deep.fragments[i];
+        const Indirect& in = occluded.indirect[i];
         if (!f.is_hair()) continue;
-        ao += in2[i].ao, ++n;
-        auto [it, fresh] = strands.emplace(f.prim, in2[i]);
+        ao += in.ao, ++n;
+        auto [it, fresh] = strands.emplace(f.prim, in);
         if (!fresh) {
             ++shared;
-            EXPECT_EQ(it->second.irradiance, in2[i].irradiance);
-            EXPECT_EQ(it->second.ao, in2[i].ao);
+            EXPECT_EQ(it->second.irradiance, in.irradiance);
+            EXPECT_EQ(it->second.ao, in.ao);
         }
     }
     ASSERT_GT(n, 100u);
