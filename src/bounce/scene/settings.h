@@ -66,7 +66,7 @@ struct CacheSettings {
     float min_spacing = 2.0f;     ///< smallest record radius, pixels
     float max_spacing = 16.0f;    ///< largest record radius, pixels
     float max_angle = 10.0f;      ///< normal deviation at which the normal metric reaches 1, degrees
-    float gradient_limit = 1.0f;  ///< Weber limit tau; 0 = off
+    float gradient_limit = 0.1f;  ///< Weber limit tau; 0 = off (0.1: issue 15, docs/irradiance-cache.md)
     float quality = 1.0f;         ///< kappa: every TL04 metric is scaled by it
     float min_weight = 0.5f;      ///< a lookup misses when the weights sum below this (TL04)
     float accuracy = 0.2f;        ///< Ward's a
