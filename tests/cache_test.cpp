@@ -305,10 +305,11 @@ TEST(CacheAccuracy, CornellCacheIsCloseToABruteForceReference) {
     RenderResult ref = render(with({"render.gi=\"brute\"", "render.rays=4096"}), {}, s1, nullptr);
     RenderResult cache = render(with({"render.gi=\"cache\"", "render.rays=512", "render.max_spacing=8"}), {}, s2, nullptr);
     auto e = compare_images(cache.image, ref.image, "indirect", "cache");
-    // Measured 6.3% with 27x fewer gather rays; much of it is the 4096-ray reference's own
-    // noise at this size. The bound leaves room for sampling changes.
+    // Measured 6.3% with 27x fewer gather rays at tau = 1, 17x at the default tau = 0.1 (more
+    // records); much of the error is the 4096-ray reference's own noise at this size. The
+    // bounds leave room for sampling changes.
     EXPECT_LT(e[0].rel_rmse, 0.08);
-    EXPECT_LT(s2.total().gather_rays * 20, s1.total().gather_rays);  // far fewer rays
+    EXPECT_LT(s2.total().gather_rays * 15, s1.total().gather_rays);  // far fewer rays
 }
 
 }  // namespace
