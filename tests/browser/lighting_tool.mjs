@@ -115,9 +115,12 @@ try {
   await shot('3-subviewport.png');
 
   // 4. The 3D view shows the cache's records.
-  await page.waitForFunction(() => +document.getElementById('record-count').dataset.count > 0);
-  const shown = await page.evaluate(() => +document.getElementById('record-count').dataset.count);
+  // The view refreshes its records after the re-gather; a slow build (ThreadSanitizer) may
+  // still show the count of the render before it, so wait for the cache's count first.
   const info = JSON.parse(execFileSync(bin, ['cache', 'info', path.join(work, 'out/session.bic'), '--json']).toString());
+  await page.waitForFunction((n) => +document.getElementById('record-count').dataset.count === n, info.records,
+                             { timeout: 20000 }).catch(() => {});
+  const shown = await page.evaluate(() => +document.getElementById('record-count').dataset.count);
   check(shown === info.records, `the 3D view shows ${shown} records; the cache holds ${info.records}`);
   await page.selectOption('#record-shape', 'discs');
   await page.waitForFunction(() => window.bounce.recordsDrawn === 'discs');
