@@ -44,12 +44,7 @@ enum FurDim : uint32_t { kTriangle, kBaryA, kBaryB, kLength, kLeanAngle, kLeanAm
 std::vector<double> area_cdf(const TriangleMesh& m) {
     std::vector<double> cdf(m.triangle_count());
     double sum = 0;
-    for (size_t t = 0; t < m.triangle_count(); ++t) {
-        const Vec3 &a = m.positions[m.indices[3 * t]], &b = m.positions[m.indices[3 * t + 1]],
-                   &c = m.positions[m.indices[3 * t + 2]];
-        sum += 0.5 * static_cast<double>(length(cross(b - a, c - a)));
-        cdf[t] = sum;
-    }
+    for (size_t t = 0; t < m.triangle_count(); ++t) cdf[t] = sum += m.triangle_area(t);
     return cdf;
 }
 

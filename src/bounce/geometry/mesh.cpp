@@ -9,6 +9,17 @@
 
 namespace bounce {
 
+float TriangleMesh::triangle_area(size_t t) const {
+    const Vec3& a = positions[indices[3 * t]];
+    return 0.5f * length(cross(positions[indices[3 * t + 1]] - a, positions[indices[3 * t + 2]] - a));
+}
+
+double TriangleMesh::area() const {
+    double sum = 0;
+    for (size_t t = 0; t < triangle_count(); ++t) sum += triangle_area(t);
+    return sum;
+}
+
 Bounds TriangleMesh::bounds() const {
     Bounds b;
     for (const auto& p : positions) b.extend(p);

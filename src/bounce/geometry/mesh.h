@@ -24,6 +24,10 @@ struct TriangleMesh {
     bool displaced() const { return !base_positions.empty(); }
 
     size_t triangle_count() const { return indices.size() / 3; }
+    /// Area of triangle t.
+    float triangle_area(size_t t) const;
+    /// Sum of the triangles' areas.
+    double area() const;
     Bounds bounds() const;
     /// Applies a transform to positions and normals.
     void transform(const Transform& t);

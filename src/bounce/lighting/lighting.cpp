@@ -12,9 +12,7 @@ DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel)
         const TriangleMesh& m = scene.objects[l.object].coarse;
         for (uint32_t t = 0; t < m.triangle_count(); ++t) {
             if (!scene.materials[m.face_materials[t]].is_emissive()) continue;
-            const Vec3& a = m.positions[m.indices[3 * t]];
-            float area = 0.5f * length(cross(m.positions[m.indices[3 * t + 1]] - a,
-                                             m.positions[m.indices[3 * t + 2]] - a));
+            const float area = m.triangle_area(t);
             if (area <= 0) continue;
             e.area += area;
             e.prims.push_back(t);

@@ -39,15 +39,6 @@ std::shared_ptr<const UvMap> load_uv_map(const JsonReader& r, const std::string&
     return map;
 }
 
-double surface_area(const TriangleMesh& m) {
-    double a = 0;
-    for (size_t t = 0; t < m.triangle_count(); ++t) {
-        const Vec3 &p = m.positions[m.indices[3 * t]], &q = m.positions[m.indices[3 * t + 1]], &s = m.positions[m.indices[3 * t + 2]];
-        a += 0.5 * static_cast<double>(length(cross(q - p, s - p)));
-    }
-    return a;
-}
-
 }  // namespace
 
 std::shared_ptr<const Fur> read_fur(const JsonReader& r, const TriangleMesh& surface, const Scene& scene) {
@@ -57,7 +48,7 @@ std::shared_ptr<const Fur> read_fur(const JsonReader& r, const TriangleMesh& sur
     if (r.has("count")) {
         p.count = static_cast<uint64_t>(r.integer("count", 0, 0, kMaxStrands));
     } else {
-        const double n = static_cast<double>(r.number("density", 0, 0, 1e30)) * surface_area(surface);
+        const double n = static_cast<double>(r.number("density", 0, 0, 1e30)) * surface.area();
         if (!(n <= kMaxStrands)) r.fail("density", fmt::format("{:.3g} strands on this surface, more than {}", n, kMaxStrands));
         p.count = static_cast<uint64_t>(std::llround(n));
     }
