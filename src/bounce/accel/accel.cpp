@@ -155,13 +155,13 @@ SceneAccel::SceneAccel(const Scene& scene) {
     // Fur: always seen by the camera; by gather rays only when it casts indirect light; by
     // shadow rays when it casts shadows.
     std::vector<const Fur*> visible_fur, indirect_fur, shadow_fur;
-    bool any_fine = false, any_indirect = false, any_shadow = false;
+    bool any_fine = false, any_fur = false, any_indirect = false, any_shadow = false;
     for (const auto& o : scene.objects) {
         coarse.push_back(&o.coarse);
         fine.push_back(&o.visible());
         any_fine |= o.has_fine();
         const Fur* f = o.fur && o.fur->segment_count() ? o.fur.get() : nullptr;
-        has_fur_ |= f != nullptr;
+        any_fur |= f != nullptr;
         visible_fur.push_back(f);
         indirect_fur.push_back(f && f->params.cast_indirect ? f : nullptr);
         shadow_fur.push_back(f && f->params.cast_shadows && !f->params.cast_indirect ? f : nullptr);
@@ -173,7 +173,7 @@ SceneAccel::SceneAccel(const Scene& scene) {
     if (any_shadow) shadow_fur_ = std::make_unique<Bvh>(device_, std::vector<const TriangleMesh*>(scene.objects.size(), nullptr), shadow_fur);
     // The camera sees all fur: when that is the shadow BVH's, instance it rather than build it twice.
     if (any_shadow && shadow_fur == visible_fur) fine_ = std::make_unique<Bvh>(device_, fine, *shadow_fur_);
-    else if (any_fine || has_fur_) fine_ = std::make_unique<Bvh>(device_, fine, visible_fur);
+    else if (any_fine || any_fur) fine_ = std::make_unique<Bvh>(device_, fine, visible_fur);
 
     // Measure how far the fine surface strays from the coarse one: from each fine vertex,
     // along its normal both ways, to the nearest coarse surface of the same object.
@@ -262,17 +262,16 @@ void SceneAccel::trace_many(const Vec3& p, std::span<const Vec3> dirs, std::span
 }
 
 bool SceneAccel::occluded(const Vec3& p, const Vec3& d, float dist, float hair_start) const {
+    // Fur is on no tessellated surface: traced from p without offsetting, stopping just short
+    // of the end point.
+    const float fur_end = std::isfinite(dist) ? dist * (1 - 1e-4f) : INFINITY;
     if (hair_start > 0) {
-        // From a strand: it is on no surface, so no offsetting; skip past its own ribbon.
-        const float end = std::isfinite(dist) ? dist * (1 - 1e-4f) : INFINITY;
-        if (end <= hair_start) return false;
-        if (coarse_->occluded(p, d, self_epsilon(p), end)) return true;
-        return shadow_fur_ && shadow_fur_->occluded(p, d, hair_start, end);
+        // From a strand: skip past its own ribbon.
+        if (fur_end <= hair_start) return false;
+        if (coarse_->occluded(p, d, self_epsilon(p), fur_end)) return true;
+        return shadow_fur_ && shadow_fur_->occluded(p, d, hair_start, fur_end);
     }
-    if (shadow_fur_) {
-        const float end = std::isfinite(dist) ? dist * (1 - 1e-4f) : INFINITY;
-        if (end > self_epsilon(p) && shadow_fur_->occluded(p, d, self_epsilon(p), end)) return true;
-    }
+    if (shadow_fur_ && fur_end > self_epsilon(p) && shadow_fur_->occluded(p, d, self_epsilon(p), fur_end)) return true;
     const float delta = ray_offset_;
     float start = offset_start(p, d);
     // Stop short of the end point so the surface it lies on does not occlude it.

@@ -82,8 +82,6 @@ public:
     /// Fur that casts shadows occludes too. From a strand (`hair_start` > 0, its largest
     /// width) there is no offsetting and fur closer than `hair_start` is ignored (its own strand).
     bool occluded(const Vec3& p, const Vec3& d, float dist, float hair_start = 0) const;
-    /// Whether any object has fur.
-    bool has_fur() const { return has_fur_; }
 
     /// Where the first, probe-free traversal from p starts: 1e-5 of p's largest coordinate
     /// (at least 1e-7 of the scene diagonal), above float rounding, far below delta.
@@ -98,7 +96,6 @@ private:
     RTCDevice device_ = nullptr;
     std::unique_ptr<Bvh> coarse_, fine_;
     std::unique_ptr<Bvh> shadow_fur_;  ///< fur that casts shadows (null = none)
-    bool has_fur_ = false;
     float ray_offset_ = 0, gap_ = 0, min_epsilon_ = 0;
 };
 
