@@ -46,6 +46,18 @@ Color hair_direct(const Scene& scene, const DirectLighting& lighting, const Frag
     return out;
 }
 
+/// The material where the camera sees fragment f; a strand has none (fur shades itself).
+SurfaceShading fragment_surface(const Materials& materials, const Fragment& f) {
+    return f.is_hair() ? SurfaceShading{} : materials.surface(f.material, f.object, f.prim, f.uv, f.n, f.footprint);
+}
+
+/// Direct light (and emission) leaving fragment k of pixel (x, y) towards wo: a strand's or a surface's.
+Color direct_at(const Scene& scene, const Materials& materials, const DirectLighting& lighting, const Fragment& f,
+                const SurfaceShading& surf, const Vec3& wo, int x, int y, uint32_t k, bool include_sky, Counters& counters) {
+    return f.is_hair() ? hair_direct(scene, lighting, f, wo, x, y, k, include_sky, counters)
+                       : fragment_direct(scene, materials, lighting, f, surf, wo, x, y, k, include_sky, counters);
+}
+
 /// The light direction of cached indirect light (luminance-weighted mean), or `fallback`.
 Vec3 indirect_direction(const Indirect& in, const Vec3& fallback) {
     const Vec3 d = in.light_dir[0] * 0.2126f + in.light_dir[1] * 0.7152f + in.light_dir[2] * 0.0722f;
@@ -94,7 +106,7 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                 const Fragment& f = frags[k];
                 const bool hair = f.is_hair();
                 const Fur* fur = hair ? scene.objects[f.object].fur.get() : nullptr;
-                const SurfaceShading surf = hair ? SurfaceShading{} : materials.surface(f.material, f.object, f.prim, f.uv, f.n, f.footprint);
+                const SurfaceShading surf = fragment_surface(materials, f);
                 const Color alb = hair ? fur->params.albedo(f.strand_v) : surf.albedo;
                 const Vec3 wo = normalize(camera.origin() - f.p);
                 if (indirect) {
@@ -114,9 +126,8 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                 }
                 if (!ao_only) {
                     Color radiance = direct_radiance ? (*direct_radiance)[first + k]
-                                     : hair ? hair_direct(scene, lighting, f, wo, x, y, k, indirect == nullptr, counters)
-                                            : fragment_direct(scene, materials, lighting, f, surf, wo, x, y, k,
-                                                              indirect == nullptr, counters);
+                                                     : direct_at(scene, materials, lighting, f, surf, wo, x, y, k,
+                                                                 indirect == nullptr, counters);
                     d += radiance * f.weight;
                     b += radiance * f.weight;
                 }
@@ -157,14 +168,8 @@ std::vector<Color> fragment_direct_radiance(const Scene& scene, const DeepBuffer
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = frags[k];
-                const Vec3 wo = normalize(camera.origin() - f.p);
-                if (f.is_hair()) {
-                    out[first + k] = hair_direct(scene, lighting, f, wo, wx + deep.x0, wy + deep.y0, k, include_sky, counters);
-                    continue;
-                }
-                const SurfaceShading surf = materials.surface(f.material, f.object, f.prim, f.uv, f.n, f.footprint);
-                out[first + k] = fragment_direct(scene, materials, lighting, f, surf, wo, wx + deep.x0, wy + deep.y0, k,
-                                                 include_sky, counters);
+                out[first + k] = direct_at(scene, materials, lighting, f, fragment_surface(materials, f),
+                                           normalize(camera.origin() - f.p), wx + deep.x0, wy + deep.y0, k, include_sky, counters);
             }
         }
     });
