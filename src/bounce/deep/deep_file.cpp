@@ -109,7 +109,7 @@ DeepBuffer read_deep(const std::string& path) {
     if (version != kDeepVersion && version != 1)
         throw InputError(path, "bounce:deep_version",
                          version < 0 ? "not a bounce deep file (no bounce:deep_version attribute)"
-                                     : fmt::format("unsupported version {} (this bounce reads {})", version, kDeepVersion));
+                                     : fmt::format("unsupported version {} (this bounce reads 1 to {})", version, kDeepVersion));
     // OpenEXR stores channels sorted by name: find ours by name.
     const auto& chans = deep_channels();
     std::vector<int> index(chans.size(), -1);

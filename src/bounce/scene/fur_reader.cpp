@@ -15,6 +15,12 @@ const std::vector<std::string>& fur_keys() {
     return keys;
 }
 
+const std::vector<std::string>& fur_lighting_keys() {
+    static const std::vector<std::string> keys = {"color_root", "color_tip", "specular", "specular_exponent", "falloff_root",
+                                                  "falloff_exponent", "cast_indirect", "cast_shadows", "indirect_at"};
+    return keys;
+}
+
 namespace {
 
 /// A map's first channel as floats in [0, 1].

@@ -13,6 +13,9 @@ namespace bounce {
 
 /// The keys a "fur" block may have.
 const std::vector<std::string>& fur_keys();
+/// Those of them that only change how strands are lit, not where they are: a deep file does
+/// not depend on them (Scene::visibility_fingerprint).
+const std::vector<std::string>& fur_lighting_keys();
 
 /// Reads `r` (the object's "fur" block) and grows the fur on `surface`.
 std::shared_ptr<const Fur> read_fur(const JsonReader& r, const TriangleMesh& surface, const Scene& scene);

@@ -417,9 +417,7 @@ uint64_t Scene::visibility_fingerprint() const {
     copy.description = {{"camera", description.value("camera", json())}, {"objects", description.value("objects", json())}};
     for (auto& o : copy.description["objects"])
         if (o.is_object() && o.contains("fur") && o["fur"].is_object())
-            for (const char* key : {"color_root", "color_tip", "specular", "specular_exponent", "falloff_root", "falloff_exponent",
-                                    "cast_indirect", "cast_shadows", "indirect_at"})
-                o["fur"].erase(key);
+            for (const std::string& key : fur_lighting_keys()) o["fur"].erase(key);
     return copy.fingerprint({"camera", "objects"});
 }
 
