@@ -35,6 +35,34 @@ TEST(Compare, KnownErrors) {
     EXPECT_EQ(compare_images(ref, ref, "indirect", "r.exr")[0].rmse, 0.0);
 }
 
+TEST(Compare, BeautyWithTheReferencesDirectLightMeasuresOnlyIndirect) {
+    // beauty = direct + indirect contribution; the two renders' direct light differs (their own
+    // light samples), their indirect contributions differ by 0.5 at one pixel.
+    auto render = [](float direct, float extra) {
+        Image img;
+        img.full_width = img.width = 4, img.full_height = img.height = 1;
+        Layer& b = img.add_layer("beauty", {"R", "G", "B", "A"});
+        Layer& d = img.add_layer("direct", {"direct.R", "direct.G", "direct.B"});
+        for (int x = 0; x < 4; ++x)
+            for (int c = 0; c < 3; ++c) {
+                img.at(d, x, 0)[c] = direct * static_cast<float>(x + 1);
+                img.at(b, x, 0)[c] = img.at(d, x, 0)[c] + 1.0f + (x == 2 ? extra : 0.0f);
+            }
+        for (int x = 0; x < 4; ++x) img.at(b, x, 0)[3] = 1;
+        return img;
+    };
+    Image ref = render(1.0f, 0.0f), test = render(1.5f, 0.5f);
+    auto e = compare_images(test, ref, "", "t.exr");
+    ASSERT_EQ(e.size(), 3u);
+    EXPECT_EQ(e[2].layer, kBeautyRefDirect);
+    // Reference beauty: 2, 3, 4, 5 (mean 3.5); the only difference left is 0.5 at one pixel.
+    EXPECT_NEAR(e[2].rmse, std::sqrt(3 * 0.25 / 12), 1e-6);
+    EXPECT_NEAR(e[2].mean_ref, 3.5, 1e-6);
+    EXPECT_GT(e[0].rmse, 4 * e[2].rmse);  // the plain beauty error is mostly the direct light's
+    EXPECT_EQ(compare_images(ref, ref, kBeautyRefDirect, "r.exr")[0].rmse, 0.0);
+    EXPECT_THROW(compare_images(flat(4, 1, 1), flat(4, 1, 1), kBeautyRefDirect, "t.exr"), InputError);
+}
+
 TEST(Compare, MismatchedImagesAreInputErrors) {
     EXPECT_THROW(compare_images(flat(10, 10, 1), flat(10, 9, 1), "", "t.exr"), InputError);
     EXPECT_THROW(compare_images(flat(10, 10, 1), flat(10, 10, 1), "ao", "t.exr"), InputError);

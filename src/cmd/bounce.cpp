@@ -199,9 +199,9 @@ int run_compare(const CompareArgs& a) {
                           {"mean_abs", e.mean_abs}, {"max_abs", e.max_abs}, {"mean_ref", e.mean_ref}};
         std::printf("%s\n", j.dump(2).c_str());
     } else {
-        std::printf("%-12s %12s %10s %12s %12s %12s %12s\n", "layer", "rmse", "rel_rmse", "relmse", "mean_abs", "max_abs", "mean_ref");
+        std::printf("%-18s %12s %10s %12s %12s %12s %12s\n", "layer", "rmse", "rel_rmse", "relmse", "mean_abs", "max_abs", "mean_ref");
         for (const auto& e : errors)
-            std::printf("%-12s %12.6g %10s %12.6g %12.6g %12.6g %12.6g\n", e.layer.c_str(), e.rmse,
+            std::printf("%-18s %12.6g %10s %12.6g %12.6g %12.6g %12.6g\n", e.layer.c_str(), e.rmse,
                         std::isnan(e.rel_rmse) ? "n/a" : fmt::format("{:.4f}%", 100 * e.rel_rmse).c_str(), e.relmse, e.mean_abs,
                         e.max_abs, e.mean_ref);
         std::printf("difference image (%s, full scale = 10%% of the reference mean): %s\n", diff_layer.c_str(), diff.c_str());
@@ -391,7 +391,7 @@ int main(int argc, char** argv) {
     CLI::App* compare = app.add_subcommand("compare", "error of a render against a reference, per layer");
     compare->add_option("test", ca.test, "the render to judge (EXR)")->required();
     compare->add_option("reference", ca.reference, "the reference (EXR)")->required();
-    compare->add_option("--layer", ca.layer, "only this layer (beauty, direct, indirect, ao, ...)");
+    compare->add_option("--layer", ca.layer, "only this layer (beauty, direct, indirect, ao, ..., or beauty_ref_direct: the beauty with the reference's direct light)");
     compare->add_option("--diff", ca.diff, "false-colour difference PNG (default: TEST.diff.png)");
     compare->add_flag("--json", ca.json, "print JSON");
 

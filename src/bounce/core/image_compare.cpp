@@ -8,6 +8,50 @@
 
 namespace bounce {
 
+namespace {
+
+// Accumulates the error of one layer; `test_value(i)` is the test's value at element i of the
+// reference layer `rl`.
+template <class TestValue>
+LayerError layer_error(const std::string& name, const Layer& rl, const Image& test, TestValue test_value,
+                       const std::string& test_path) {
+    LayerError e;
+    e.layer = name;
+    double se = 0, sr = 0, sa = 0, rel = 0;
+    size_t n = 0;
+    // "A" (coverage) is geometry, not light: leave it out of the beauty error.
+    size_t nc = rl.channels.size();
+    for (size_t i = 0; i < rl.data.size(); ++i) {
+        if (rl.channels[i % nc] == "A") continue;
+        double a = test_value(i), b = rl.data[i];
+        if (!std::isfinite(b)) continue;  // e.g. depth of background
+        if (!std::isfinite(a)) {
+            size_t pixel = i / nc;
+            throw InputError(test_path, fmt::format("{} pixel {},{}", rl.name, pixel % static_cast<size_t>(test.width) + test.x0,
+                                                    pixel / static_cast<size_t>(test.width) + test.y0),
+                             "not a finite value where the reference is finite");
+        }
+        double d = a - b;
+        se += d * d;
+        sa += std::abs(d);
+        sr += std::abs(b);
+        rel += d * d / (b * b + 0.01);
+        e.max_abs = std::max(e.max_abs, std::abs(d));
+        ++n;
+    }
+    if (n) {
+        e.rmse = std::sqrt(se / static_cast<double>(n));
+        e.mean_abs = sa / static_cast<double>(n);
+        e.mean_ref = sr / static_cast<double>(n);
+        e.relmse = rel / static_cast<double>(n);
+        // Against an all-zero reference a relative error means nothing: NaN ("n/a").
+        e.rel_rmse = e.mean_ref > 0 ? e.rmse / e.mean_ref : std::nan("");
+    }
+    return e;
+}
+
+}  // namespace
+
 std::vector<LayerError> compare_images(const Image& test, const Image& ref, const std::string& layer,
                                        const std::string& test_path) {
     if (test.width != ref.width || test.height != ref.height || test.x0 != ref.x0 || test.y0 != ref.y0)
@@ -24,41 +68,24 @@ std::vector<LayerError> compare_images(const Image& test, const Image& ref, cons
         }
         if (tl->channels != rl.channels)
             throw InputError(test_path, rl.name, "the layer's channels differ from the reference's");
-        LayerError e;
-        e.layer = rl.name;
-        double se = 0, sr = 0, sa = 0, rel = 0;
-        size_t n = 0;
-        // "A" (coverage) is geometry, not light: leave it out of the beauty error.
-        size_t nc = rl.channels.size();
-        for (size_t i = 0; i < rl.data.size(); ++i) {
-            if (rl.channels[i % nc] == "A") continue;
-            double a = tl->data[i], b = rl.data[i];
-            if (!std::isfinite(b)) continue;  // e.g. depth of background
-            if (!std::isfinite(a)) {
-                size_t pixel = i / nc;
-                throw InputError(test_path, fmt::format("{} pixel {},{}", rl.name, pixel % static_cast<size_t>(test.width) + test.x0,
-                                                        pixel / static_cast<size_t>(test.width) + test.y0),
-                                 "not a finite value where the reference is finite");
-            }
-            double d = a - b;
-            se += d * d;
-            sa += std::abs(d);
-            sr += std::abs(b);
-            rel += d * d / (b * b + 0.01);
-            e.max_abs = std::max(e.max_abs, std::abs(d));
-            ++n;
-        }
-        if (n) {
-            e.rmse = std::sqrt(se / static_cast<double>(n));
-            e.mean_abs = sa / static_cast<double>(n);
-            e.mean_ref = sr / static_cast<double>(n);
-            e.relmse = rel / static_cast<double>(n);
-            // Against an all-zero reference a relative error means nothing: NaN ("n/a").
-            e.rel_rmse = e.mean_ref > 0 ? e.rmse / e.mean_ref : std::nan("");
-        }
-        out.push_back(e);
+        out.push_back(layer_error(rl.name, rl, test, [&](size_t i) { return double(tl->data[i]); }, test_path));
     }
-    if (!layer.empty() && out.empty()) throw InputError(test_path, "", "reference has no layer \"" + layer + "\"");
+    if (!layer.empty() && layer != kBeautyRefDirect && out.empty())
+        throw InputError(test_path, "", "reference has no layer \"" + layer + "\"");
+    // The beauty image lit by the reference's direct light: the error a lighter sees from indirect
+    // light alone (both renders draw their own direct-light samples, whose noise would hide it).
+    const Layer *tb = test.find("beauty"), *td = test.find("direct"), *rb = ref.find("beauty"), *rd = ref.find("direct");
+    if ((layer.empty() || layer == kBeautyRefDirect) && tb && td && rb && rd && tb->channels == rb->channels &&
+        td->channels == rd->channels && td->channels.size() == 3 && rb->channels.size() >= 3) {
+        const size_t nb = rb->channels.size();
+        out.push_back(layer_error(kBeautyRefDirect, *rb, test, [&](size_t i) {
+            size_t pixel = i / nb, c = i % nb;
+            if (c >= 3) return double(tb->data[i]);
+            return double(tb->data[i]) - td->data[pixel * 3 + c] + rd->data[pixel * 3 + c];
+        }, test_path));
+    } else if (layer == kBeautyRefDirect) {
+        throw InputError(test_path, "", "\"" + layer + "\" needs beauty and direct layers in both images");
+    }
     return out;
 }
 

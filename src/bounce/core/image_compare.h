@@ -18,7 +18,12 @@ struct LayerError {
     double mean_ref = 0;  ///< mean(b)
 };
 
-/// Compares `test` against `reference`, layer by layer (only `layer` if non-empty). Both must
+/// The derived layer comparing the test's beauty with its direct light replaced by the
+/// reference's (beauty − direct + reference direct): the beauty error that indirect light causes.
+inline constexpr const char* kBeautyRefDirect = "beauty_ref_direct";
+
+/// Compares `test` against `reference`, layer by layer (only `layer` if non-empty), plus
+/// kBeautyRefDirect when both images have beauty and direct layers. Both must
 /// cover the same window. Throws InputError (naming `test_path`) on mismatched sizes or a
 /// missing layer.
 std::vector<LayerError> compare_images(const Image& test, const Image& reference, const std::string& layer,
