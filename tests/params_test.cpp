@@ -123,6 +123,19 @@ TEST(Params, SceneFileAndFlagsShareTheNamesAndErrorsNameTheFlag) {
     } catch (const InputError& e) {
         EXPECT_STREQ(e.what(), "command line: --rays -1 (/render/rays): error: -1 is out of range [1, 1048576]");
     }
+    // Lists as the help writes them ("[x0, x1, y0, y1]") or bare; a wrong count says how many came.
+    const Param* crop = find_param(scene_params(), "render.crop");
+    ASSERT_NE(crop, nullptr);
+    for (const char* text : {"[1,5,2,6]", "1,5,2,6", "[1, 5, 2, 6]"}) {
+        s = test::scene_from(test::base_scene(), {flag_override(*crop, text)});
+        EXPECT_EQ(s.render.visibility.crop, (std::array<int, 4>{1, 5, 2, 6})) << text;
+    }
+    try {
+        test::scene_from(test::base_scene(), {flag_override(*crop, "[[1,5,2,6]]")});
+        FAIL();
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("expected an array of 4 integers, got an array of 1"), std::string::npos) << e.what();
+    }
     j = test::base_scene();
     j["render"] = {{"min_spacnig", 1}};
     try {

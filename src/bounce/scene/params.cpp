@@ -315,7 +315,8 @@ json check_param(const Param& p, const json& v, const ParamFail& fail) {
         case ParamType::IntList: {
             size_t n = p.type == ParamType::Vec3 ? 3 : p.count;
             if (!v.is_array() || v.size() != n)
-                fail("", fmt::format("expected an array of {} {}, got {}", n, p.type == ParamType::Vec3 ? "numbers" : "integers", json_type_name(v)));
+                fail("", fmt::format("expected an array of {} {}, got {}{}", n, p.type == ParamType::Vec3 ? "numbers" : "integers",
+                                     json_type_name(v), v.is_array() ? fmt::format(" of {}", v.size()) : ""));
             json out = json::array();
             for (size_t i = 0; i < n; ++i) {
                 std::string sub = "/" + std::to_string(i);

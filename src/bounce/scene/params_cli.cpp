@@ -13,10 +13,10 @@ Override flag_override(const Param& p, const std::string& text) {
         case ParamType::Path: value = nlohmann::json(text).dump(); break;
         case ParamType::Vec3:
         case ParamType::IntList: {
-            // "1,2,3,4", "WIDTHxHEIGHT" or "x,y,z": a JSON array of the numbers given.
+            // "1,2,3,4", "[1,2,3,4]", "WIDTHxHEIGHT" or "x,y,z": a JSON array of the numbers given.
             std::string list = text;
             if (p.key == "camera.resolution") std::replace(list.begin(), list.end(), 'x', ',');
-            value = "[" + list + "]";
+            value = list.starts_with('[') ? list : "[" + list + "]";
             if (!nlohmann::json::accept(value)) value = nlohmann::json(text).dump();  // check_param names it
             break;
         }
