@@ -8,6 +8,7 @@
 #include <functional>
 
 #include "bounce/core/error.h"
+#include "bounce/core/image_compare.h"
 #include "bounce/core/random.h"
 #include "bounce/deep/deep_buffer.h"
 #include "bounce/dice/displacement.h"
@@ -189,6 +190,28 @@ TEST(Dice, RecordsOnTheUndisplacedSurfaceAreFewer) {
     }
     // Measured: 45 against 2010 (the flat base needs few records; its displaced rough skin many).
     EXPECT_GE(records[1], 10 * records[0]) << records[0] << " undisplaced, " << records[1] << " displaced";
+}
+
+TEST(Dice, UndisplacedRecordsIgnoreTheDisplacementsOwnHits) {
+    // Records on the un-displaced surface of a rough displaced grid: with displacement_near 0
+    // the bumps' near hits shrink them; with the default (10 bounds) they do not, and the
+    // interpolated light stays as close to brute force.
+    test::TempDir dir;
+    const std::string scene = displaced_grid_scene(dir, 0.05f);
+    size_t records[2];
+    double error[2];
+    Scene sb = load_scene(scene, {"render.gi=\"brute\"", "render.rays=128"});
+    Stats stats;
+    const Image brute = render(sb, RenderRequest{}, stats, nullptr).image;
+    for (int i = 0; i < 2; ++i) {
+        Scene s = load_scene(scene, {"render.gi=\"cache\"", "render.rays=128", "render.refine=0",
+                                     i ? "render.displacement_near=10" : "render.displacement_near=0"});
+        RenderResult r = render(s, RenderRequest{}, stats, nullptr);
+        records[i] = r.cache->size();
+        error[i] = compare_images(r.image, brute, "indirect", "cache")[0].rel_rmse;
+    }
+    EXPECT_LT(records[1], records[0]) << records[0] << " without, " << records[1] << " with";
+    EXPECT_LT(error[1], 1.25 * error[0] + 0.005) << error[0] << " without, " << error[1] << " with";
 }
 
 TEST(Dice, BadSubdivisionInputIsRefusedWithFileAndPlace) {

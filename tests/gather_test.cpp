@@ -106,6 +106,33 @@ TEST(Gather, FloorBesideAnInfiniteWallMatchesTheClosedForm) {
     }
 }
 
+TEST(Gather, HitsNearerThanNearDoNotSizeTheRecordButStillShadeIt) {
+    // Beside a low wall (height h at distance d) every hit is at least d away: a near distance
+    // under d changes nothing; one above it leaves the light alone but lifts d_min past it and
+    // flattens the translational gradient of the wall's top edge.
+    const float d = 0.7f, h = 0.3f, big = 1e4f;
+    json j = test::base_scene();
+    j["objects"].push_back({{"type", "quad"}, {"vertices", {{d, 0, -big}, {d, h, -big}, {d, h, big}, {d, 0, big}}}});
+    Rig rig(test::scene_from(j));
+    GatherSettings gs;
+    gs.rays = 1024;
+    gs.ao_distance = 0;
+    Gatherer g(rig.scene, rig.accel, rig.materials, rig.lighting, nullptr, gs);
+    auto at = [&](float near) {
+        Counters c;
+        return g.gather({0, 0, 0}, {0, 1, 0}, RandomStream(1, 5), c, near);
+    };
+    const GatherResult plain = at(0), under = at(0.5f * d), over = at(3 * d);
+    EXPECT_NEAR(plain.min_distance, d, 0.02f * d);
+    EXPECT_EQ(under.min_distance, plain.min_distance);
+    EXPECT_EQ(under.ao_grad_trans, plain.ao_grad_trans);
+    EXPECT_EQ(over.ao, plain.ao);
+    EXPECT_EQ(over.bent_normal, plain.bent_normal);
+    EXPECT_GE(over.min_distance, 3 * d);
+    EXPECT_LT(length(over.ao_grad_trans), 0.5f * length(plain.ao_grad_trans));
+    EXPECT_GT(length(plain.ao_grad_trans), 0.0f);
+}
+
 Scene lit_sphere_interior(float albedo, float intensity, int level) {
     json j = test::base_scene();
     j["materials"] = {{"m", {{"color", albedo}}}};

@@ -37,14 +37,19 @@ namespace {
 /// its gathers leave from there too.
 struct Site {
     Vec3 p, n;
-    Vec3 origin;  ///< where the gather's rays leave from
+    Vec3 origin;      ///< where the gather's rays leave from
+    float near = 0;   ///< hits nearer than this do not size the record (Gatherer::gather)
 };
-Site record_site(const Scene& scene, const Fragment& f, RecordSurface where) {
+Site record_site(const Scene& scene, const Fragment& f, const CacheSettings& cs) {
     if (f.is_hair()) {
         const HairSite h = hair_site(scene, f);
         return {h.p, h.n, h.p};
     }
-    return where == RecordSurface::Displaced ? Site{f.p, f.n, f.p} : Site{f.p_base, f.n_base, f.p};
+    if (cs.displaced_records == RecordSurface::Displaced) return {f.p, f.n, f.p};
+    // The displacement's own bumps are what the un-displaced surface leaves out: they shade the
+    // record's value but do not shrink its reach (docs/displacement.md).
+    const float near = cs.displacement_near * scene.objects[f.object].displacement_bound;
+    return {f.p_base, f.n_base, f.p, near};
 }
 
 /// The shading-pass interpolation at a fragment: weights at its record site, each record's
@@ -72,7 +77,7 @@ Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const Dee
             src = Source::Own;
             return {r->E, r->ao, r->bent, r->dir};
         }
-    Interpolated in = interpolate_at(cache, f, record_site(scene, f, cache.settings().displaced_records));
+    Interpolated in = interpolate_at(cache, f, record_site(scene, f, cache.settings()));
     src = in.weight > 0 ? Source::Records : Source::Missed;
     return {in.E, in.ao, in.bent, in.dir};
 }
@@ -91,7 +96,6 @@ Lock lock_cache(const IrradianceCache& cache, Counters& counters) {
 
 void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, IrradianceCache& cache,
                     Stats& stats, ProgressSink* sink, const SubPassCallback& after_subpass, int frame, const Gatherer* first) {
-    const RecordSurface where = cache.settings().displaced_records;
     tbb::enumerable_thread_specific<size_t> full_gathers(0);
     const auto schedule = subpass_schedule(static_cast<int>(cache.settings().max_spacing));
     const bool per_tile = scene.render.parallel.cache_sharing == CacheSharing::PerThread;
@@ -116,13 +120,13 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
                     auto frags = deep.pixel(wx, wy);
                     for (uint32_t k = 0; k < frags.size(); ++k) {
                         const Fragment& f = frags[k];
-                        const Site site = record_site(scene, f, where);
+                        const Site site = record_site(scene, f, cache.settings());
                         if (!cache.misses(site.p, site.n, per_tile ? std::span<const Record>(out)
                                                                        : std::span<const Record>())) continue;
                         const RandomStream rng = fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k);
-                        GatherResult g = first ? first->gather(site.origin, site.n, rng, counters) : GatherResult{};
+                        GatherResult g = first ? first->gather(site.origin, site.n, rng, counters, site.near) : GatherResult{};
                         if (!first || g.rel_stderr > cache.settings().ray_noise) {
-                            g = gatherer.gather(site.origin, site.n, rng, counters);
+                            g = gatherer.gather(site.origin, site.n, rng, counters, site.near);
                             ++full_gathers.local();
                         }
                         Record r = cache.make_record(g, site.p, site.n, f.footprint, candidate_key(deep, wx, wy, k));
@@ -179,7 +183,6 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
 
 size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,
                        Stats& stats, ProgressSink* sink, int frame) {
-    const RecordSurface where = cache.settings().displaced_records;
     const float threshold = cache.settings().refine;
     tbb::enumerable_thread_specific<std::vector<Record>> made;
     {
@@ -193,7 +196,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                 if (f.is_hair()) continue;  // hair keeps its strand's value (no fragment gathers)
                 const uint64_t key = candidate_key(deep, wx, wy, k);
                 if (cache.fragment_record(key, f.p)) continue;  // refined by an earlier render
-                const Interpolated in = interpolate_at(cache, f, record_site(scene, f, where));
+                const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cache.settings()));
                 if (in.weight > 0 && in.spread <= threshold) continue;
                 // Gathered about the fragment's own (displaced) point and normal, as brute force does.
                 const GatherResult g = refiner.gather(

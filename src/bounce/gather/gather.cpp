@@ -58,7 +58,7 @@ Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d
     return albedo * lighting_.irradiance(sp.p, n, hit_rng, settings_.hit_light_samples, counters) * kInvPi;
 }
 
-GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters) const {
+GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const {
     if (settings_.cancel) settings_.cancel->check();
     const int M = grid_.m, N = grid_.n, S = M * N;
     // Per-cell radiance, distance and unoccluded weight, for the gradients.
@@ -115,7 +115,7 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
             if (h.hair) {
                 // Fur that casts indirect light (fur.cast_indirect): a strand seen from the
                 // gather reflects its albedo x the direct light on its side facing the ray.
-                if (settings_.record_terms) res.min_distance = std::min(res.min_distance, h.t);
+                if (settings_.record_terms && h.t >= near) res.min_distance = std::min(res.min_distance, h.t);
                 if (!settings_.ao) {
                     const Fur& fur = *scene_.objects[h.object].fur;
                     RandomStream hit_rng(rng.bits(c, kDimGather + 3), c);
@@ -127,7 +127,7 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
                 const SurfacePoint sp = surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v);
                 if (settings_.record_terms) {
                     bool grazing = cos_theta[c] < cos_concave_ && std::abs(dot(sp.ng, d)) < cos_concave_;
-                    if (!grazing) res.min_distance = std::min(res.min_distance, h.t);
+                    if (!grazing && h.t >= near) res.min_distance = std::min(res.min_distance, h.t);
                 }
                 if (!settings_.ao) l = hit_radiance(h, sp, d, rng, c, counters);
             }
@@ -216,7 +216,7 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
             float sin_lo = std::sqrt(static_cast<float>(j) / fM), sin_hi = std::sqrt((static_cast<float>(j) + 1) / fM);
             if (j >= 1) {  // boundary between rows j-1 and j moves radially
                 const auto cp = static_cast<size_t>((j - 1) * N + k);
-                float rmin = std::min(R[c], R[cp]);
+                float rmin = std::max(near, std::min(R[c], R[cp]));
                 if (std::isfinite(rmin) && rmin > 0) {  // a hit at 0 (a fold of a displaced surface) moves nothing
                     float coef = sin_lo * (1 - sin_lo * sin_lo) / rmin;
                     radial += (L[c] - L[cp]) * coef;
@@ -225,7 +225,7 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
             }
             // boundary between columns k-1 and k moves in azimuth
             const auto cq = static_cast<size_t>(j * N + kprev);
-            float rmin = std::min(R[c], R[cq]);
+            float rmin = std::max(near, std::min(R[c], R[cq]));
             if (std::isfinite(rmin) && rmin > 0) {
                 float coef = (sin_hi - sin_lo) / rmin;
                 azim += (L[c] - L[cq]) * coef;

@@ -68,7 +68,11 @@ public:
     Gatherer(const Scene& scene, const SceneAccel& accel, const Materials& materials,
              const DirectLighting& lighting, const RadiosityTextures* radiosity, GatherSettings settings);
 
-    GatherResult gather(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters) const;
+    /// `near`: hits nearer than this neither limit the record radius (TL04's d_min) nor steepen
+    /// the translational gradients (their cell distances are floored at it). Records on the
+    /// un-displaced surface pass a few displacement bounds, so the displacement's own bumps do
+    /// not shrink them (CacheSettings::displacement_near); the light they gather is unchanged.
+    GatherResult gather(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near = 0) const;
     const GatherSettings& settings() const { return settings_; }
     GatherGrid grid() const { return grid_; }
 

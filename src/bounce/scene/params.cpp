@@ -225,6 +225,11 @@ ParamTable make_table() {
                        .choices({"undisplaced", "displaced"})
                        .doc("where records of displaced surfaces live: on the un-displaced surface (rays still leave the "
                             "displaced one) or on the displaced one").id(cache).flag());
+    rows.push_back(row("displacement_near", "cache", &R::cache, &CacheSettings::displacement_near).range(0, 1e6)
+                       .unit("displacement bounds")
+                       .doc("records on the un-displaced surface: gather hits nearer than this many displacement bounds (the "
+                            "surface's own bumps) neither shrink a record's radius nor steepen its gradients; 0 = off")
+                       .id(cache).flag());
     rows.push_back(row("shading_reach", "cache", &R::cache, &CacheSettings::shading_reach).range(1, 10)
                        .doc("the shading pass lets records reach this much farther (kappa / reach)").flag());
     // Shading.

@@ -81,6 +81,7 @@ struct CacheSettings {
     float refine = 0.1f;          ///< a fragment whose records disagree by more than this gets its own gather; 0 = off
     int refine_rays = 0;          ///< rays of such a gather; 0 = the gather's rays
     RecordSurface displaced_records = RecordSurface::Undisplaced;  ///< where records of displaced surfaces live
+    float displacement_near = 10;  ///< un-displaced records: hits within this many displacement bounds do not shrink them
     /// The settings the shading pass interpolates with.
     CacheSettings for_shading() const {
         CacheSettings s = *this;
