@@ -176,12 +176,13 @@ TEST(CacheGradients, MatchFiniteDifferencesOfGathers) {
     EXPECT_NEAR(predicted, fdr, 0.15 * fdr);
 }
 
-Scene facing_plane(float min_spacing, float max_spacing) {
+Scene facing_plane(float min_spacing, float max_spacing, float min_weight) {
     json j = test::base_scene();
     j["camera"] = {{"position", {0, 0, 10}}, {"look_at", {0, 0, 0}}, {"fov", 30}, {"resolution", {96, 96}}};
     j["objects"] = {{{"type", "quad"}, {"vertices", {{-10, -10, 0}, {10, -10, 0}, {10, 10, 0}, {-10, 10, 0}}}}};
     j["lights"] = {{{"type", "sky"}, {"color", 1}}};
-    j["render"] = {{"spp", 1}, {"gi", "cache"}, {"rays", 64}, {"min_spacing", min_spacing}, {"max_spacing", max_spacing}};
+    j["render"] = {{"spp", 1},           {"gi", "cache"},           {"rays", 64},
+                   {"min_spacing", min_spacing}, {"max_spacing", max_spacing}, {"min_weight", min_weight}};
     return test::scene_from(j);
 }
 
@@ -212,19 +213,24 @@ IrradianceCache build_cache(const Scene& s, Stats& stats, DeepBuffer* deep_out =
 
 TEST(CacheSpacing, StaysWithinThePixelBoundsOnAPlaneFacingTheCamera) {
     for (auto [lo, hi] : {std::pair{2.0f, 16.0f}, std::pair{4.0f, 4.0f}, std::pair{3.0f, 12.0f}}) {
-        Stats stats;
-        IrradianceCache cache = build_cache(facing_plane(lo, hi), stats);
-        ASSERT_GT(cache.size(), 4u);
-        // Open plane: nothing occludes, so every radius is max_spacing pixels.
-        for (size_t i = 0; i < cache.size(); ++i)
-            EXPECT_NEAR(cache.record(i).radius / cache.record(i).footprint, hi, 1e-3f * hi);
-        // A record is only made where the nearest one weighs < min_weight = 1/2, i.e. beyond
-        // R/2; every fragment ends within R of one, so neighbours are closer than 2R.
-        for (float d : neighbour_spacing(cache)) {
-            EXPECT_GE(d, 0.5f * lo * 0.999f);
-            EXPECT_LE(d, 2 * hi);
+        for (float mw : {0.5f, 1.5f}) {
+            Stats stats;
+            IrradianceCache cache = build_cache(facing_plane(lo, hi, mw), stats);
+            ASSERT_GT(cache.size(), 4u);
+            // Open plane: nothing occludes, so every radius is max_spacing pixels.
+            for (size_t i = 0; i < cache.size(); ++i)
+                EXPECT_NEAR(cache.record(i).radius / cache.record(i).footprint, hi, 1e-3f * hi);
+            // Every fragment ends within R of a record, so neighbours are closer than 2R. With
+            // min_weight 1/2 a record is only made where the nearest one weighs < 1/2, i.e.
+            // beyond R/2; above 1 a point beside a lone record misses too (records pair up),
+            // so only the upper bound holds.
+            const std::vector<float> spacing = neighbour_spacing(cache);
+            for (float d : spacing) {
+                if (mw < 1) EXPECT_GE(d, 0.5f * lo * 0.999f);
+                EXPECT_LE(d, 2 * hi);
+            }
+            EXPECT_EQ(stats.extra()["shading_misses"].get<double>(), 0.0);
         }
-        EXPECT_EQ(stats.extra()["shading_misses"].get<double>(), 0.0);
     }
 }
 
@@ -305,11 +311,11 @@ TEST(CacheAccuracy, CornellCacheIsCloseToABruteForceReference) {
     RenderResult ref = render(with({"render.gi=\"brute\"", "render.rays=4096"}), {}, s1, nullptr);
     RenderResult cache = render(with({"render.gi=\"cache\"", "render.rays=512", "render.max_spacing=8"}), {}, s2, nullptr);
     auto e = compare_images(cache.image, ref.image, "indirect", "cache");
-    // Measured 6.3% with 27x fewer gather rays at tau = 1, 17x at the default tau = 0.1 (more
-    // records); much of the error is the 4096-ray reference's own noise at this size. The
-    // bounds leave room for sampling changes.
+    // Measured 6.3% with 27x fewer gather rays at tau = 1, 17x at tau = 0.1 and min_weight
+    // 0.5, 6.9x at the default min_weight 1.5 (more records at this tiny size); much of the
+    // error is the 4096-ray reference's own noise. The bounds leave room for sampling changes.
     EXPECT_LT(e[0].rel_rmse, 0.08);
-    EXPECT_LT(s2.total().gather_rays * 15, s1.total().gather_rays);  // far fewer rays
+    EXPECT_LT(s2.total().gather_rays * 5, s1.total().gather_rays);  // far fewer rays
 }
 
 }  // namespace

@@ -14,9 +14,17 @@ float IrradianceCache::weight_sum(const Vec3& p, const Vec3& n) const {
 }
 
 bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Record> extra) const {
-    float w = weight_sum(p, n);
-    for (const Record& r : extra) w += record_weight(r, p, n, settings_);
-    return w < settings_.min_weight;
+    // A record at p itself (weight 1 there, 0.99 for float rounding) covers p whatever
+    // min_weight says: above 1 no single record could, and a fragment that made a record would
+    // miss again on every re-render from the cache.
+    float sum = 0, top = 0;
+    auto add = [&](const Record& r) {
+        const float w = record_weight(r, p, n, settings_);
+        sum += w, top = std::max(top, w);
+    };
+    octree_.visit(p, [&](uint32_t id) { add(records_[id]); });
+    for (const Record& r : extra) add(r);
+    return sum < settings_.min_weight && top < 0.99f;
 }
 
 Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading, const Vec3* at_p, const Vec3* at_n) const {

@@ -48,7 +48,7 @@ public:
     /// Sum of record weights at (p, n) (cheaper than lookup).
     float weight_sum(const Vec3& p, const Vec3& n) const;
     /// True when a lookup at (p, n) would miss: the weights of this cache's records and of
-    /// `extra` (a tile's private records) sum below min_weight.
+    /// `extra` (a tile's private records) sum below min_weight, and none of them sits at p.
     bool misses(const Vec3& p, const Vec3& n, std::span<const Record> extra = {}) const;
 
     /// Turns a gather at (p, n) into a record: radius from the qualifying minimum distance

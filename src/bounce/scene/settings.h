@@ -68,7 +68,7 @@ struct CacheSettings {
     float max_angle = 10.0f;      ///< normal deviation at which the normal metric reaches 1, degrees
     float gradient_limit = 0.1f;  ///< Weber limit tau; 0 = off (0.1: issue 15, docs/irradiance-cache.md)
     float quality = 1.0f;         ///< kappa: every TL04 metric is scaled by it
-    float min_weight = 0.5f;      ///< a lookup misses when the weights sum below this (TL04)
+    float min_weight = 1.5f;      ///< a lookup misses below this weight sum (TL04; 1.5: issue 15, docs/irradiance-cache.md)
     float accuracy = 0.2f;        ///< Ward's a
     bool gradients = true;        ///< extrapolate with gradients
     bool neighbour_clamp = true;  ///< R_new <= R_j + |p_new - p_j| (Krivanek et al. 2006)
