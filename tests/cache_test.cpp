@@ -226,7 +226,9 @@ TEST(CacheSpacing, StaysWithinThePixelBoundsOnAPlaneFacingTheCamera) {
             // so only the upper bound holds.
             const std::vector<float> spacing = neighbour_spacing(cache);
             for (float d : spacing) {
-                if (mw < 1) EXPECT_GE(d, 0.5f * lo * 0.999f);
+                if (mw < 1) {
+                    EXPECT_GE(d, 0.5f * lo * 0.999f);
+                }
                 EXPECT_LE(d, 2 * hi);
             }
             EXPECT_EQ(stats.extra()["shading_misses"].get<double>(), 0.0);

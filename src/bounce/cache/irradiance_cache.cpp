@@ -7,12 +7,6 @@ namespace bounce {
 IrradianceCache::IrradianceCache(const Bounds& scene_bounds, CacheSettings settings, bool ao_only)
     : settings_(std::move(settings)), shading_settings_(settings_.for_shading()), ao_only_(ao_only), octree_(scene_bounds) {}
 
-float IrradianceCache::weight_sum(const Vec3& p, const Vec3& n) const {
-    float sum = 0;
-    octree_.visit(p, [&](uint32_t id) { sum += record_weight(records_[id], p, n, settings_); });
-    return sum;
-}
-
 bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Record> extra) const {
     // A record at p itself (weight 1 there, 0.99 for float rounding) covers p whatever
     // min_weight says: above 1 no single record could, and a fragment that made a record would

@@ -45,8 +45,6 @@ public:
     /// fragment whose records live on the un-displaced surface).
     Interpolated lookup(const Vec3& p, const Vec3& n, bool shading = false, const Vec3* at_p = nullptr,
                         const Vec3* at_n = nullptr) const;
-    /// Sum of record weights at (p, n) (cheaper than lookup).
-    float weight_sum(const Vec3& p, const Vec3& n) const;
     /// True when a lookup at (p, n) would miss: the weights of this cache's records and of
     /// `extra` (a tile's private records) sum below min_weight, and none of them sits at p.
     bool misses(const Vec3& p, const Vec3& n, std::span<const Record> extra = {}) const;
