@@ -1,7 +1,7 @@
 """What the bench scripts share: the binary, the scenes, running bounce, the error of an image
 against a reference (and the reference's own noise), equal-error reading of time-error
 curves, and the log-log plot. Imported by bench/run, bench/parallel and bench/sponza-floor."""
-import json, math, os, subprocess, sys
+import json, math, os, re, subprocess, sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.environ.get("BOUNCE_BIN", os.path.join(ROOT, "build", "bounce"))
@@ -39,6 +39,12 @@ def timed_render(scene, deep, out, res, threads, extra):
 # were made with them. (The default, auto = the scene's light_samples, would re-bake whenever
 # a scene's light_samples differ and put that bake's noise into the measured error.)
 BAKE = ["--radiosity-light-samples", "16"]
+
+
+def reference_rays(folder, tag):
+    """Rays of the reference bench/run keeps for `tag` in `folder` (the one with the most), or None."""
+    refs = [int(m.group(1)) for f in os.listdir(folder) for m in [re.fullmatch(re.escape(tag) + r"\.ref(\d+)\.exr", f)] if m]
+    return max(refs) if refs else None
 
 
 def run(args):
