@@ -13,15 +13,15 @@ RecordOctree::RecordOctree(const Bounds& b) {
 void RecordOctree::insert(uint32_t id, const Vec3& p, float support) {
     Vec3 blo = p - Vec3(support), bhi = p + Vec3(support);
     float diag2 = 12 * support * support;  // squared diagonal of the support box
-    insert(root_, bounds_.lo, bounds_.hi, id, blo, bhi, diag2, 0);
+    insert(root_, bounds_.lo, bounds_.hi, Entry{p, 1.0001f * support * support, id}, blo, bhi, diag2, 0);
 }
 
-void RecordOctree::insert(Node& node, const Vec3& lo, const Vec3& hi, uint32_t id, const Vec3& blo,
+void RecordOctree::insert(Node& node, const Vec3& lo, const Vec3& hi, const Entry& e, const Vec3& blo,
                           const Vec3& bhi, float diag2, int depth) {
     Vec3 d = hi - lo;
     // Stop at nodes no bigger than the support box (or at depth 16).
     if (depth == 16 || dot(d, d) < diag2) {
-        node.ids.push_back(id);
+        node.entries.push_back(e);
         ++refs_;
         return;
     }
@@ -35,10 +35,10 @@ void RecordOctree::insert(Node& node, const Vec3& lo, const Vec3& hi, uint32_t i
         Vec3 chi{c & 1 ? hi.x : mid.x, c & 2 ? hi.y : mid.y, c & 4 ? hi.z : mid.z};
         if (bhi.x < clo.x || blo.x > chi.x || bhi.y < clo.y || blo.y > chi.y || bhi.z < clo.z || blo.z > chi.z)
             continue;
-        insert((*node.children)[static_cast<size_t>(c)], clo, chi, id, blo, bhi, diag2, depth + 1);
+        insert((*node.children)[static_cast<size_t>(c)], clo, chi, e, blo, bhi, diag2, depth + 1);
     }
 }
 
-size_t RecordOctree::memory_bytes() const { return nodes_ * sizeof(Node) + refs_ * sizeof(uint32_t); }
+size_t RecordOctree::memory_bytes() const { return nodes_ * sizeof(Node) + refs_ * sizeof(Entry); }
 
 }  // namespace bounce

@@ -18,14 +18,17 @@ public:
     explicit RecordOctree(const Bounds& bounds);
     /// Adds record `id` whose weights vanish beyond `support` from `p`.
     void insert(uint32_t id, const Vec3& p, float support);
-    /// Calls f(id) for every record whose support box contains p (a superset of the records
+    /// Calls f(id) for every record whose support sphere contains p (a superset of the records
     /// with nonzero weight at p).
     template <typename F>
     void visit(const Vec3& p, F&& f) const {
         const Node* node = &root_;
         Vec3 lo = bounds_.lo, hi = bounds_.hi;
         while (node) {
-            for (uint32_t id : node->ids) f(id);
+            for (const Entry& e : node->entries) {
+                const Vec3 d = p - e.p;
+                if (dot(d, d) <= e.reach2) f(e.id);
+            }
             Vec3 mid = (lo + hi) * 0.5f;
             int c = (p.x > mid.x ? 1 : 0) | (p.y > mid.y ? 2 : 0) | (p.z > mid.z ? 4 : 0);
             if (!node->children) break;
@@ -37,11 +40,18 @@ public:
     size_t memory_bytes() const;
 
 private:
+    /// A record as the walk needs it: most records on a path lie outside their support sphere
+    /// (nodes hold support boxes), and are skipped without touching the record itself.
+    struct Entry {
+        Vec3 p;
+        float reach2;  ///< squared support, a little enlarged so rounding never drops a weight
+        uint32_t id;
+    };
     struct Node {
-        std::vector<uint32_t> ids;
+        std::vector<Entry> entries;
         std::unique_ptr<std::array<Node, 8>> children;
     };
-    void insert(Node& node, const Vec3& lo, const Vec3& hi, uint32_t id, const Vec3& blo, const Vec3& bhi,
+    void insert(Node& node, const Vec3& lo, const Vec3& hi, const Entry& e, const Vec3& blo, const Vec3& bhi,
                 float diag2, int depth);
     Bounds bounds_;
     Node root_;

@@ -1,6 +1,21 @@
 #include "bounce/cache/record.h"
 
+#include <cmath>
+
 namespace bounce {
+
+namespace {
+/// sqrt(1 - cos(max_angle)): the normal term's bound. Every lookup of a cache uses one
+/// max_angle, so the last one is remembered rather than taking a cosine per record and lookup.
+float normal_bound(float max_angle) {
+    thread_local float angle = NAN, bound = 0;
+    if (max_angle != angle) {
+        angle = max_angle;
+        bound = std::sqrt(1 - std::cos(max_angle * kPi / 180.0f));
+    }
+    return bound;
+}
+}  // namespace
 
 MetricTerms metric_terms(const Record& r, const Vec3& p, const Vec3& n, const CacheSettings& s) {
     MetricTerms m;
@@ -17,8 +32,7 @@ MetricTerms metric_terms(const Record& r, const Vec3& p, const Vec3& n, const Ca
     } else {
         m.position = dist / r.radius;
     }
-    float cos_max = std::cos(s.max_angle * kPi / 180.0f);
-    m.normal = std::sqrt(std::max(0.0f, 1 - ndot)) / std::sqrt(1 - cos_max);
+    m.normal = std::sqrt(std::max(0.0f, 1 - ndot)) / normal_bound(s.max_angle);
     m.gradient = std::isfinite(r.weber) ? dist / r.weber : 0.0f;
     return m;
 }
