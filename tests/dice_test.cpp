@@ -204,7 +204,7 @@ TEST(Dice, UndisplacedRecordsIgnoreTheDisplacementsOwnHits) {
     Stats stats;
     const Image brute = render(sb, RenderRequest{}, stats, nullptr).image;
     for (int i = 0; i < 2; ++i) {
-        Scene s = load_scene(scene, {"render.gi=\"cache\"", "render.rays=128", "render.refine=0",
+        Scene s = load_scene(scene, {"render.gi=\"cache\"", "render.rays=128", "render.refine=0", "render.refine_tilt=0",
                                      i ? "render.displacement_near=10" : "render.displacement_near=0"});
         RenderResult r = render(s, RenderRequest{}, stats, nullptr);
         records[i] = r.cache->size();
@@ -212,6 +212,31 @@ TEST(Dice, UndisplacedRecordsIgnoreTheDisplacementsOwnHits) {
     }
     EXPECT_LT(records[1], records[0]) << records[0] << " without, " << records[1] << " with";
     EXPECT_LT(error[1], 1.25 * error[0] + 0.005) << error[0] << " without, " << error[1] << " with";
+}
+
+TEST(Dice, FragmentsTiltedFromTheUndisplacedSurfaceGatherTheirOwn) {
+    // Records on the un-displaced surface of the rough grid, refinement by spread off: exactly
+    // the fragments whose displaced normal tilts more than refine_tilt from the un-displaced one
+    // get a gather of their own, and the light comes closer to brute force.
+    test::TempDir dir;
+    const std::string scene = displaced_grid_scene(dir, 0.05f);
+    Stats stats;
+    const Image brute = render(load_scene(scene, {"render.gi=\"brute\"", "render.rays=128"}), RenderRequest{}, stats, nullptr).image;
+    double error[2];
+    for (int i = 0; i < 2; ++i) {
+        const float tilt = i ? 30.0f : 0.0f;
+        Scene s = load_scene(scene, {"render.gi=\"cache\"", "render.rays=128", "render.refine=0",
+                                     fmt::format("render.refine_tilt={}", tilt)});
+        RenderResult r = render(s, RenderRequest{}, stats, nullptr);
+        size_t tilted = 0;
+        for (const Fragment& f : r.deep.fragments) tilted += i && dot(f.n, f.n_base) < std::cos(tilt * kPi / 180);
+        EXPECT_EQ(r.cache->fragment_record_count(), tilted);
+        if (i) {
+            EXPECT_GT(tilted, r.deep.fragments.size() / 20) << "the grid is too smooth to test anything";
+        }
+        error[i] = compare_images(r.image, brute, "indirect", "cache")[0].rel_rmse;
+    }
+    EXPECT_LT(error[1], 0.8 * error[0]) << error[0] << " without, " << error[1] << " with";
 }
 
 TEST(Dice, BadSubdivisionInputIsRefusedWithFileAndPlace) {

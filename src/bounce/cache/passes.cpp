@@ -3,6 +3,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <mutex>
 #include <shared_mutex>
@@ -183,7 +184,10 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
 
 size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,
                        Stats& stats, ProgressSink* sink, int frame) {
-    const float threshold = cache.settings().refine;
+    const CacheSettings& cs = cache.settings();
+    const float threshold = cs.refine;
+    const bool undisplaced = cs.displaced_records == RecordSurface::Undisplaced && cs.refine_tilt > 0;
+    const float tilt_cos = std::cos(cs.refine_tilt * kPi / 180);
     tbb::enumerable_thread_specific<std::vector<Record>> made;
     {
         // Lookups only: nobody inserts until every fragment is judged, so the decision sees the
@@ -196,8 +200,13 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                 if (f.is_hair()) continue;  // hair keeps its strand's value (no fragment gathers)
                 const uint64_t key = candidate_key(deep, wx, wy, k);
                 if (cache.fragment_record(key, f.p)) continue;  // refined by an earlier render
-                const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cache.settings()));
-                if (in.weight > 0 && in.spread <= threshold) continue;
+                // Interpolation about the un-displaced normal cannot stand for a hemisphere
+                // tilted far from it (docs/displacement.md): those fragments gather their own.
+                const bool tilted = undisplaced && dot(f.n, f.n_base) < tilt_cos;
+                if (!tilted) {
+                    const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cache.settings()));
+                    if (in.weight > 0 && (threshold <= 0 || in.spread <= threshold)) continue;
+                }
                 // Gathered about the fragment's own (displaced) point and normal, as brute force does.
                 const GatherResult g = refiner.gather(
                     f.p, f.n, fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), stats.local());

@@ -43,9 +43,11 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
                     IrradianceCache& cache, Stats& stats, ProgressSink* progress,
                     const SubPassCallback& after_subpass = {}, int frame = 0, const Gatherer* first = nullptr);
 
-/// Per-fragment refinement (CacheSettings::refine > 0), after the gathering pass: a fragment
+/// Per-fragment refinement (CacheSettings::refines()), after the gathering pass: a fragment
 /// whose covering records disagree (the spread of their extrapolated values at the fragment
-/// exceeds `refine`) or that no record covers gets a gather of its own with `refiner`, stored
+/// exceeds `refine`), that no record covers, or whose displaced normal tilts from the
+/// un-displaced one by more than `refine_tilt` (records on the un-displaced surface) gets a
+/// gather of its own about its own point and normal with `refiner`, stored
 /// as a fragment record (IrradianceCache::insert_fragment_record) that no other fragment
 /// uses. Fragments that already have one (a loaded cache) are skipped. Every fragment is
 /// judged against the finished cache and the records are inserted in key order afterwards:

@@ -230,6 +230,9 @@ ParamTable make_table() {
                        .doc("records on the un-displaced surface: gather hits nearer than this many displacement bounds (the "
                             "surface's own bumps) neither shrink a record's radius nor steepen its gradients; 0 = off")
                        .id(cache).flag());
+    rows.push_back(row("refine_tilt", "cache", &R::cache, &CacheSettings::refine_tilt).range(0, 180).unit("degrees")
+                       .doc("records on the un-displaced surface: a fragment whose displaced normal tilts from the "
+                            "un-displaced one by more than this gets a gather of its own (refine_rays); 0 = off").flag());
     rows.push_back(row("shading_reach", "cache", &R::cache, &CacheSettings::shading_reach).range(1, 10)
                        .doc("the shading pass lets records reach this much farther (kappa / reach)").flag());
     // Shading.
