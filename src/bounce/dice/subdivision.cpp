@@ -57,6 +57,29 @@ std::unique_ptr<Far::TopologyRefiner> make_refiner(const SubdivSurface& s) {
     return r;
 }
 
+/// Positions and uvs refined level by level to `level` (the refiner already refined).
+void refine_primvars(const Far::TopologyRefiner& refiner, int level, std::vector<P3>& pts, std::vector<P2>& uvs) {
+    const Far::PrimvarRefiner primvar(refiner);
+    for (int l = 1; l <= level; ++l) {
+        std::vector<P3> next(static_cast<size_t>(refiner.GetLevel(l).GetNumVertices()));
+        primvar.Interpolate(l, pts, next);
+        pts.swap(next);
+        if (!uvs.empty()) {
+            std::vector<P2> nuv(static_cast<size_t>(refiner.GetLevel(l).GetNumFVarValues(0)));
+            primvar.InterpolateFaceVarying(l, uvs, nuv, 0);
+            uvs.swap(nuv);
+        }
+    }
+}
+
+/// The control mesh's positions and uvs as primvars.
+void control_primvars(const ControlMesh& c, std::vector<P3>& pts, std::vector<P2>& uvs) {
+    pts.resize(c.positions.size());
+    for (size_t i = 0; i < pts.size(); ++i) pts[i].v = c.positions[i];
+    uvs.resize(c.face_uvs.empty() ? 0 : c.uvs.size());
+    for (size_t i = 0; i < uvs.size(); ++i) uvs[i].v = c.uvs[i];
+}
+
 }  // namespace
 
 void check_control_mesh(const ControlMesh& c, SubdivScheme scheme) {
@@ -109,6 +132,30 @@ int dicing_level(const ControlMesh& c, const std::function<float(const Vec3&)>& 
     return std::clamp(static_cast<int>(std::lround(levels)), min_level, max_level);
 }
 
+ControlMesh refine_cage(const SubdivSurface& s, int level) {
+    check_control_mesh(s.control, s.scheme);
+    auto refiner = make_refiner(s);
+    refiner->RefineUniform(Far::TopologyRefiner::UniformOptions(level));
+    std::vector<P3> pts;
+    std::vector<P2> uvs;
+    control_primvars(s.control, pts, uvs);
+    refine_primvars(*refiner, level, pts, uvs);
+    const Far::TopologyLevel& last = refiner->GetLevel(level);
+    ControlMesh out;
+    out.source = s.control.source;
+    for (const P3& p : pts) out.positions.push_back(p.v);
+    for (const P2& t : uvs) out.uvs.push_back(t.v);
+    for (int f = 0; f < last.GetNumFaces(); ++f) {
+        const auto fv = last.GetFaceVertices(f);
+        out.face_sizes.push_back(fv.size());
+        for (int k = 0; k < fv.size(); ++k) out.face_vertices.push_back(fv[k]);
+        if (!uvs.empty())
+            for (int v : last.GetFaceFVarValues(f, 0)) out.face_uvs.push_back(v);
+        out.face_materials.push_back(0);
+    }
+    return out;
+}
+
 TriangleMesh dice(const SubdivSurface& s, int level) {
     const ControlMesh& c = s.control;
     check_control_mesh(c, s.scheme);
@@ -119,21 +166,11 @@ TriangleMesh dice(const SubdivSurface& s, int level) {
     const Far::PrimvarRefiner primvar(*refiner);
 
     // Positions (and uvs) level by level, then the last level's points pushed to the limit.
-    std::vector<P3> pts(c.positions.size());
-    for (size_t i = 0; i < pts.size(); ++i) pts[i].v = c.positions[i];
-    const bool has_uv = !c.face_uvs.empty();
-    std::vector<P2> uvs(c.uvs.size());
-    for (size_t i = 0; i < uvs.size(); ++i) uvs[i].v = c.uvs[i];
-    for (int l = 1; l <= level; ++l) {
-        std::vector<P3> next(static_cast<size_t>(refiner->GetLevel(l).GetNumVertices()));
-        primvar.Interpolate(l, pts, next);
-        pts.swap(next);
-        if (has_uv) {
-            std::vector<P2> nuv(static_cast<size_t>(refiner->GetLevel(l).GetNumFVarValues(0)));
-            primvar.InterpolateFaceVarying(l, uvs, nuv, 0);
-            uvs.swap(nuv);
-        }
-    }
+    std::vector<P3> pts;
+    std::vector<P2> uvs;
+    control_primvars(c, pts, uvs);
+    const bool has_uv = !uvs.empty();
+    refine_primvars(*refiner, level, pts, uvs);
     const Far::TopologyLevel& last = refiner->GetLevel(level);
     const auto nv = static_cast<size_t>(last.GetNumVertices());
     std::vector<P3> limit(nv), du(nv), dv(nv);

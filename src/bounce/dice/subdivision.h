@@ -59,6 +59,11 @@ void check_control_mesh(const ControlMesh& control, SubdivScheme scheme);
 /// surface's (averaged over the diced faces around each vertex).
 TriangleMesh dice(const SubdivSurface& surface, int level);
 
+/// The control mesh refined `level` times (uniformly, not pushed to the limit): the same
+/// limit surface on a denser cage, all quads for Catmull-Clark from level 1 (uvs linear, as
+/// dice's). For ray sides that take cages of quads only (bench/ray_side.cpp).
+ControlMesh refine_cage(const SubdivSurface& surface, int level);
+
 /// The refinement level at which the fine tessellation's edges are about `shading_rate`
 /// pixels: log2 of the median of the control edges' projected lengths, rounded
 /// (`pixels_per_unit(p)`: pixels per world unit at p, 0 behind the camera), in [min, max].

@@ -64,6 +64,8 @@ struct Material {
     bool is_emissive() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }
 };
 
+struct SubdivSurface;
+
 struct Object {
     std::string name;
     TriangleMesh coarse;        ///< traced by all secondary rays
@@ -72,6 +74,7 @@ struct Object {
     double dicing_seconds = 0;  ///< time the loader spent dicing it
     float displacement_bound = 0;  ///< largest distance displacement moves a point (0 = none)
     std::shared_ptr<const Fur> fur;  ///< strands grown on the visible surface (null = none)
+    std::shared_ptr<const SubdivSurface> surface;  ///< subdivision objects: what was diced (null = none)
     bool has_fine() const { return !fine.indices.empty(); }
     const TriangleMesh& visible() const { return has_fine() ? fine : coarse; }
 };

@@ -205,6 +205,7 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
         obj.displacement_bound = std::abs(surf.displacement.scale) *
                                  std::max(std::abs(surf.displacement.midpoint), std::abs(1 - surf.displacement.midpoint));
     obj.dicing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    obj.surface = std::make_shared<const SubdivSurface>(std::move(surf));
 }
 
 void read_object(const JsonReader& r, Scene& scene, size_t index) {
