@@ -239,6 +239,31 @@ TEST(Dice, FragmentsTiltedFromTheUndisplacedSurfaceGatherTheirOwn) {
     EXPECT_LT(error[1], 0.8 * error[0]) << error[0] << " without, " << error[1] << " with";
 }
 
+TEST(Dice, ARefinedCageHasTheSameLimitSurface) {
+    // A pyramid (a quad and four triangles): refined once it is all quads, and diced one level
+    // less it gives the same points as the original cage.
+    SubdivSurface s;
+    ControlMesh& c = s.control;
+    c.source = "pyramid.obj";
+    c.positions = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}, {0.5f, 1, 0.5f}};
+    c.face_sizes = {4, 3, 3, 3, 3};
+    c.face_vertices = {0, 1, 2, 3, 1, 0, 4, 2, 1, 4, 3, 2, 4, 0, 3, 4};
+    c.face_materials.assign(5, 0);
+    SubdivSurface refined = s;
+    refined.control = refine_cage(s, 1);
+    ASSERT_EQ(refined.control.face_count(), 16u);
+    for (int n : refined.control.face_sizes) EXPECT_EQ(n, 4);
+    const TriangleMesh a = dice(s, 3), b = dice(refined, 2);
+    ASSERT_EQ(a.positions.size(), b.positions.size());
+    float worst = 0;
+    for (const Vec3& p : a.positions) {
+        float nearest = INFINITY;
+        for (const Vec3& q : b.positions) nearest = std::min(nearest, length(p - q));
+        worst = std::max(worst, nearest);
+    }
+    EXPECT_LT(worst, 1e-5f);
+}
+
 TEST(Dice, BadSubdivisionInputIsRefusedWithFileAndPlace) {
     test::TempDir dir;
     // Three faces on one edge: non-manifold.
