@@ -182,6 +182,13 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
     stats.set("cache_bytes", static_cast<double>(cache.memory_bytes()));
 }
 
+bool refinement_runs(const Scene& scene) {
+    const CacheSettings& cs = scene.render.cache;
+    if (cs.refine > 0) return true;
+    if (cs.refine_tilt <= 0 || cs.displaced_records != RecordSurface::Undisplaced) return false;
+    return std::any_of(scene.objects.begin(), scene.objects.end(), [](const Object& o) { return o.displacement_bound > 0; });
+}
+
 size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,
                        Stats& stats, ProgressSink* sink, int frame) {
     const CacheSettings& cs = cache.settings();

@@ -43,7 +43,7 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
                     IrradianceCache& cache, Stats& stats, ProgressSink* progress,
                     const SubPassCallback& after_subpass = {}, int frame = 0, const Gatherer* first = nullptr);
 
-/// Per-fragment refinement (CacheSettings::refines()), after the gathering pass: a fragment
+/// Per-fragment refinement (when refinement_runs), after the gathering pass: a fragment
 /// whose covering records disagree (the spread of their extrapolated values at the fragment
 /// exceeds `refine`), that no record covers, or whose displaced normal tilts from the
 /// un-displaced one by more than `refine_tilt` (records on the un-displaced surface) gets a
@@ -52,6 +52,10 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
 /// uses. Fragments that already have one (a loaded cache) are skipped. Every fragment is
 /// judged against the finished cache and the records are inserted in key order afterwards:
 /// deterministic at any thread count. Returns how many were made.
+/// Whether the refinement pass has anything to judge: `refine` > 0, or `refine_tilt` > 0 with
+/// records on the un-displaced surface of a displaced object.
+bool refinement_runs(const Scene& scene);
+
 size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,
                        Stats& stats, ProgressSink* progress, int frame = 0);
 

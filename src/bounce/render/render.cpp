@@ -327,7 +327,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
                     first = std::make_unique<Gatherer>(scene, *accel, materials, lighting, radiosity.get(), fs);
                 }
                 gathering_pass(scene, gathered, gatherer, cache, stats, ps, after, request.frame, first.get());
-                if (scene.render.cache.refines()) {
+                if (refinement_runs(scene)) {
                     // A refined fragment's gather feeds that fragment only: no gradients needed.
                     GatherSettings own = gs;
                     own.record_terms = own.hessian = false;
@@ -381,7 +381,7 @@ RenderResult render(const Scene& scene, const RenderRequest& request, Stats& sta
         }
         // After the shading pass: refined fragments' gathers may have baked sides too.
         if (radiosity) save_radiosity(*radiosity, baked_before, scene, stats);
-        if (shaded && (scene.render.cache.refines() || shaded->fragment_record_count() > 0))
+        if (shaded && (refinement_runs(scene) || shaded->fragment_record_count() > 0))
             add_fragment_mask_layer(result.image, result.deep, refined, "refined");
     });
     stats.set("pixels", static_cast<double>(result.deep.pixel_count()));

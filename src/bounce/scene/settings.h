@@ -83,8 +83,6 @@ struct CacheSettings {
     RecordSurface displaced_records = RecordSurface::Undisplaced;  ///< where records of displaced surfaces live
     float displacement_near = 10;  ///< un-displaced records: hits within this many displacement bounds do not shrink them
     float refine_tilt = 20;       ///< un-displaced records: a fragment whose normal tilts more than this (degrees) is refined; 0 = off
-    /// Whether the refinement pass runs (either of its signals is on).
-    bool refines() const { return refine > 0 || refine_tilt > 0; }
     /// The settings the shading pass interpolates with.
     CacheSettings for_shading() const {
         CacheSettings s = *this;
