@@ -14,7 +14,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
+#include <optional>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -221,14 +224,24 @@ int run(int argc, char** argv) {
     std::string path = std::string(BOUNCE_SOURCE_DIR) + "/scenes/displaced/displaced.json";
     size_t points = 20000;
     int rays = 64, ref_level = 5;
+    // A whole number in [lo, hi], or nullopt.
+    auto count = [](const char* text, long lo, long hi) -> std::optional<long> {
+        char* end = nullptr;
+        errno = 0;
+        const long v = std::strtol(text, &end, 10);
+        if (errno || end == text || *end || v < lo || v > hi) return std::nullopt;
+        return v;
+    };
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a == "--points" && i + 1 < argc) points = std::stoul(argv[++i]);
-        else if (a == "--rays" && i + 1 < argc) rays = std::stoi(argv[++i]);
-        else if (a == "--reference-level" && i + 1 < argc) ref_level = std::stoi(argv[++i]);
+        std::optional<long> v;
+        if (a == "--points" && i + 1 < argc && (v = count(argv[++i], 1, 10'000'000))) points = static_cast<size_t>(*v);
+        else if (a == "--rays" && i + 1 < argc && (v = count(argv[++i], 1, 1 << 16))) rays = static_cast<int>(*v);
+        else if (a == "--reference-level" && i + 1 < argc && (v = count(argv[++i], 1, 7))) ref_level = static_cast<int>(*v);
         else if (!a.empty() && a[0] != '-') path = a;
         else {
-            std::fprintf(stderr, "usage: bounce_ray_side [SCENE] [--points N] [--rays M] [--reference-level L]\n");
+            std::fprintf(stderr, "bounce_ray_side: bad argument %s; usage: bounce_ray_side [SCENE] [--points 1..1e7] "
+                                 "[--rays 1..65536] [--reference-level 1..7]\n", argv[i]);
             return 2;
         }
     }
@@ -286,6 +299,13 @@ int run(int argc, char** argv) {
         return s;
     };
 
+    double quads = 0;
+    for (const SubdivSurface& c : cages) quads += static_cast<double>(c.control.face_count());
+    if (2 * quads * std::pow(4.0, ref_level) > 1e8) {
+        std::fprintf(stderr, "bounce_ray_side: %s: level %d would dice %.3g triangles (limit 1e8): lower --reference-level\n",
+                     path.c_str(), ref_level, 2 * quads * std::pow(4.0, ref_level));
+        return 2;
+    }
     std::vector<TriangleMesh> fine;
     for (const SubdivSurface& c : cages) fine.push_back(dice(c, ref_level));
     const std::vector<Probe> ps = probes(fine, points);
