@@ -177,6 +177,29 @@ TEST(Dice, DeepFileKeepsTheUndisplacedSurface) {
     EXPECT_TRUE(read_deep(dir.file("deep.exr")) == r.deep);
 }
 
+TEST(Dice, RecordsAreSpacedByTheUndisplacedSurfacesFootprint) {
+    // The rough grid and the same grid flat: a displaced fragment's footprint (the pixel's width
+    // where records are spaced) is the plane's under it, whatever way its bump faces; only the
+    // depth the bump adds or takes away changes it.
+    test::TempDir rough_dir, flat_dir;
+    Stats stats;
+    const RenderResult rough = render(load_scene(displaced_grid_scene(rough_dir, 0.3f)), RenderRequest{}, stats, nullptr);
+    const RenderResult flat = render(load_scene(displaced_grid_scene(flat_dir, 0.0f)), RenderRequest{}, stats, nullptr);
+    double sum = 0, worst = 0;
+    size_t n = 0;
+    for (int y = 0; y < rough.deep.height; ++y)
+        for (int x = 0; x < rough.deep.width; ++x) {
+            const auto a = rough.deep.pixel(x, y), b = flat.deep.pixel(x, y);
+            if (a.size() != 1 || b.size() != 1) continue;
+            // Scaled to the flat fragment's depth: what is left is the orientation's share.
+            const double ratio = (a[0].footprint / a[0].depth) / (b[0].footprint / b[0].depth);
+            sum += ratio, worst = std::max(worst, std::abs(ratio - 1)), ++n;
+        }
+    ASSERT_GT(n, 1000u);
+    EXPECT_NEAR(sum / static_cast<double>(n), 1.0, 0.01);
+    EXPECT_LT(worst, 0.1);
+}
+
 TEST(Dice, RecordsOnTheUndisplacedSurfaceAreFewer) {
     test::TempDir dir;
     const std::string scene = displaced_grid_scene(dir, 0.05f);

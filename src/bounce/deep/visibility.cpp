@@ -137,8 +137,9 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     subsamples.emplace_back(sp.p, static_cast<size_t>(g - groups.data()));
                     g->p += sp.p, g->n += sp.n, g->ng += sp.ng;
                     g->uv.x += sp.uv.x, g->uv.y += sp.uv.y;
-                    g->depth += h.t, g->footprint += fp;
+                    g->depth += h.t;
                     ++g->count;
+                    float spacing_fp = fp;  // the fragment's footprint: where records are spaced
                     if (h.hair) {
                         g->tangent += obj.fur->tangent(h.prim);
                         g->v += obj.fur->v_of(h.prim, h.u);
@@ -152,7 +153,11 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                         const Vec3 o = dot(nb, sp.n) < 0 ? -nb : nb;
                         if (g->based++ == 0) g->n_base0 = o;
                         g->p_base += pb, g->n_base += o;
+                        // Records are spaced on the un-displaced surface: its footprint, not
+                        // the bump's (a bump seen edge-on would pack them).
+                        spacing_fp = camera.footprint(d, h.t, o);
                     }
+                    g->footprint += spacing_fp;
                 }
                 auto& out = per_pixel[static_cast<size_t>(wy) * deep.width + wx];
                 for (size_t gi = 0; gi < groups.size(); ++gi) {
