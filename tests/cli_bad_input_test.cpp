@@ -106,9 +106,9 @@ TEST(BadInput, TheLightingToolRefusesBeforeServing) {
 
 TEST(BadInput, SubdivisionSurfacesThatCannotBeDiced) {
     test::TempDir d;
-    std::string obj;  // a 45 x 45 grid of quads
+    std::string obj;  // a 45 x 45 grid of quads facing the camera
     for (int j = 0; j <= 45; ++j)
-        for (int i = 0; i <= 45; ++i) obj += fmt::format("v {} {} 0\nvt {} {}\n", i, j, i / 45.0, j / 45.0);
+        for (int i = 0; i <= 45; ++i) obj += fmt::format("v {} 0 {}\nvt {} {}\n", i - 22.5, j - 22.5, i / 45.0, j / 45.0);
     for (int j = 0; j < 45; ++j)
         for (int i = 0; i < 45; ++i) {
             const int a = j * 46 + i + 1;

@@ -1,6 +1,9 @@
 #include "bounce/dice/subdivision.h"
 
 #include <fmt/format.h>
+#include <opensubdiv/bfr/refinerSurfaceFactory.h>
+#include <opensubdiv/bfr/surface.h>
+#include <opensubdiv/bfr/tessellation.h>
 #include <opensubdiv/far/primvarRefiner.h>
 #include <opensubdiv/far/topologyDescriptor.h>
 
@@ -16,6 +19,7 @@ namespace bounce {
 
 namespace {
 
+namespace Bfr = OpenSubdiv::Bfr;
 namespace Far = OpenSubdiv::Far;
 namespace Sdc = OpenSubdiv::Sdc;
 
@@ -130,6 +134,135 @@ int dicing_level(const ControlMesh& c, const std::function<float(const Vec3&)>& 
     std::nth_element(px.begin(), at, px.end());
     const float levels = std::log2(std::max(*at / shading_rate, 1.0f));
     return std::clamp(static_cast<int>(std::lround(levels)), min_level, max_level);
+}
+
+TriangleMesh dice_adaptive(const SubdivSurface& s, const std::function<int(const Vec3&, const Vec3&)>& edge_rate) {
+    const ControlMesh& c = s.control;
+    check_control_mesh(c, s.scheme);
+    auto refiner = make_refiner(s);  // the base level is all Bfr needs
+    const Far::TopologyLevel& base = refiner->GetLevel(0);
+    const Bfr::RefinerSurfaceFactory<> factory(*refiner, Bfr::SurfaceFactory::Options().SetDefaultFVarID(0));
+    const bool has_uv = !c.face_uvs.empty();
+    std::vector<int> rates(static_cast<size_t>(base.GetNumEdges()));
+    for (int e = 0; e < base.GetNumEdges(); ++e) {
+        const auto ev = base.GetEdgeVertices(e);
+        rates[static_cast<size_t>(e)] = std::max(1, edge_rate(c.positions[static_cast<size_t>(ev[0])], c.positions[static_cast<size_t>(ev[1])]));
+    }
+
+    // Points shared between faces: one per control vertex, rate - 1 per control edge (in the
+    // edge's own direction), and each face's interior points.
+    struct Point {
+        Vec3 p, n;     // un-displaced limit position and normal (from the derivatives)
+        Vec2 uv;       // where the displacement is read (the first face's uv)
+        Vec3 around{0};  // sum of the un-displaced facet normals (orientation, fallback)
+    };
+    std::vector<Point> pts;
+    std::vector<int> vertex_point(static_cast<size_t>(base.GetNumVertices()), -1), edge_point(rates.size(), -1);
+    std::vector<int> out_point;  // per output vertex: its shared point
+    TriangleMesh m;
+    Bfr::Surface<float> surface, uv_surface;
+    std::vector<float> coords, patch, uv_patch;
+    std::vector<int> facets, local;
+    const Bfr::Tessellation::Options options;
+    for (int f = 0; f < base.GetNumFaces(); ++f) {
+        if (!factory.InitVertexSurface(f, &surface)) continue;  // a hole
+        if (has_uv && !factory.InitFaceVaryingSurface(f, &uv_surface)) continue;
+        const auto fv = base.GetFaceVertices(f), fe = base.GetFaceEdges(f);
+        std::vector<int> r(static_cast<size_t>(fv.size()));
+        for (int i = 0; i < fv.size(); ++i) r[static_cast<size_t>(i)] = rates[static_cast<size_t>(fe[i])];
+        const Bfr::Tessellation tess(surface.GetParameterization(), fv.size(), r.data(), options);
+        const int n = tess.GetNumCoords();
+        coords.resize(2 * static_cast<size_t>(n));
+        tess.GetCoords(coords.data());
+        patch.resize(3 * static_cast<size_t>(surface.GetNumPatchPoints()));
+        surface.PreparePatchPoints(&c.positions[0].x, 3, patch.data(), 3);
+        if (has_uv) {
+            uv_patch.resize(2 * static_cast<size_t>(uv_surface.GetNumPatchPoints()));
+            uv_surface.PreparePatchPoints(&c.uvs[0].x, 2, uv_patch.data(), 2);
+        }
+        auto uv_at = [&](int k) {
+            Vec2 t{};
+            if (has_uv) uv_surface.Evaluate(&coords[2 * static_cast<size_t>(k)], uv_patch.data(), 2, &t.x);
+            return t;
+        };
+        auto make_point = [&](int k) {
+            Vec3 p, du, dv;
+            surface.Evaluate(&coords[2 * static_cast<size_t>(k)], patch.data(), 3, &p.x, &du.x, &dv.x);
+            pts.push_back({p, cross(du, dv), uv_at(k)});
+            return static_cast<int>(pts.size() - 1);
+        };
+        // Boundary coordinates come first, around the face: vertex i, then edge i's points.
+        local.assign(static_cast<size_t>(n), -1);
+        int b = 0;
+        for (int i = 0; i < fv.size(); ++i) {
+            int& vp = vertex_point[static_cast<size_t>(fv[i])];
+            if (vp < 0) vp = make_point(b);
+            local[static_cast<size_t>(b++)] = vp;
+            const int k = r[static_cast<size_t>(i)] - 1;
+            if (k <= 0) continue;
+            const bool forward = base.GetEdgeVertices(fe[i])[0] == fv[i];
+            int& ep = edge_point[static_cast<size_t>(fe[i])];
+            if (ep < 0) {
+                ep = static_cast<int>(pts.size());
+                for (int j = 0; j < k; ++j) make_point(b + (forward ? j : k - 1 - j));
+            }
+            for (int j = 0; j < k; ++j) local[static_cast<size_t>(b + j)] = ep + (forward ? j : k - 1 - j);
+            b += k;
+        }
+        for (; b < n; ++b) local[static_cast<size_t>(b)] = make_point(b);
+        // This face's vertices (its own uvs: a uv seam keeps both sides' values).
+        const auto first = static_cast<uint32_t>(m.uvs.size());
+        for (int k = 0; k < n; ++k) {
+            out_point.push_back(local[static_cast<size_t>(k)]);
+            m.uvs.push_back(uv_at(k));
+        }
+        facets.resize(3 * static_cast<size_t>(tess.GetNumFacets()));
+        tess.GetFacets(facets.data());
+        const uint32_t material = f < static_cast<int>(c.face_materials.size()) ? c.face_materials[static_cast<size_t>(f)] : 0;
+        for (size_t t = 0; t < facets.size(); t += 3) {
+            m.indices.insert(m.indices.end(), {first + static_cast<uint32_t>(facets[t]), first + static_cast<uint32_t>(facets[t + 1]),
+                                               first + static_cast<uint32_t>(facets[t + 2])});
+            m.face_materials.push_back(material);
+        }
+    }
+
+    // Normals per shared point: the facets' around it orient the derivatives' cross product and
+    // stand in where it degenerates (as dice does); then displace once per point.
+    auto facet_sums = [&](auto position) {
+        std::vector<Vec3> sums(pts.size(), Vec3(0));
+        for (size_t t = 0; t < m.indices.size(); t += 3) {
+            const int a = out_point[m.indices[t]], b = out_point[m.indices[t + 1]], d = out_point[m.indices[t + 2]];
+            const Vec3 fn = cross(position(b) - position(a), position(d) - position(a));
+            for (int q : {a, b, d}) sums[static_cast<size_t>(q)] += fn;
+        }
+        return sums;
+    };
+    const std::vector<Vec3> around = facet_sums([&](int i) { return pts[static_cast<size_t>(i)].p; });
+    std::vector<Vec3> disp(pts.size());
+    for (size_t i = 0; i < pts.size(); ++i) {
+        Point& q = pts[i];
+        const float len = length(q.n);
+        if (!(len > 0) || dot(q.n, around[i]) == 0) q.n = around[i];
+        else if (dot(q.n, around[i]) < 0) q.n = -q.n;
+        q.n = dot(q.n, q.n) > 0 ? normalize(q.n) : Vec3(0, 0, 1);
+        disp[i] = q.p;
+        if (s.displacement.active())
+            disp[i] = q.p + q.n * (s.displacement.scale * (s.displacement.map->height(q.uv) - s.displacement.midpoint));
+    }
+    std::vector<Vec3> normals(pts.size());
+    if (s.displacement.active()) {
+        normals = facet_sums([&](int i) { return disp[static_cast<size_t>(i)]; });
+        for (size_t i = 0; i < pts.size(); ++i) normals[i] = dot(normals[i], normals[i]) > 0 ? normalize(normals[i]) : pts[i].n;
+    } else {
+        for (size_t i = 0; i < pts.size(); ++i) normals[i] = pts[i].n;
+    }
+    for (int q : out_point) {
+        const auto i = static_cast<size_t>(q);
+        m.positions.push_back(disp[i]), m.normals.push_back(normals[i]);
+        m.base_positions.push_back(pts[i].p), m.base_normals.push_back(pts[i].n);
+    }
+    if (!has_uv) m.uvs.clear();
+    return m;
 }
 
 ControlMesh refine_cage(const SubdivSurface& s, int level) {

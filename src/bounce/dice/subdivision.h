@@ -59,6 +59,14 @@ void check_control_mesh(const ControlMesh& control, SubdivScheme scheme);
 /// surface's (averaged over the diced faces around each vertex).
 TriangleMesh dice(const SubdivSurface& surface, int level);
 
+/// The surface diced per control face (OpenSubdiv's Bfr): each control edge is split into
+/// `edge_rate(a, b)` segments (a, b: its control end points; at least 1), both faces of an edge
+/// use its rate and share its points, so faces of different rates meet without cracks; each
+/// face's interior follows its edges. Otherwise as dice(): vertices on the limit surface,
+/// displaced once per point along the limit normal, base_* the un-displaced surface, normals
+/// the displaced surface's. Vertices are per face (positions shared exactly across edges).
+TriangleMesh dice_adaptive(const SubdivSurface& surface, const std::function<int(const Vec3&, const Vec3&)>& edge_rate);
+
 /// The control mesh refined `level` times (uniformly, not pushed to the limit): the same
 /// limit surface on a denser cage, all quads for Catmull-Clark from level 1 (uvs linear, as
 /// dice's). For ray sides that take cages of quads only (bench/ray_side.cpp).

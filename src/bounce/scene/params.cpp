@@ -144,11 +144,11 @@ ParamTable make_table() {
                        .doc("[x0, x1, y0, y1], ends exclusive; all 0 = full frame; the EXR keeps the full display window").flag());
     // Dicing subdivision surfaces.
     rows.push_back(row("shading_rate", "dicing", &R::dicing, &DicingSettings::shading_rate).range(0.05, 64).unit("pixels")
-                       .doc("micropolygon edge length on subdivision surfaces (the median diced edge, within a factor 1.4)").id(deep | cache).flag());
+                       .doc("micropolygon edge length on subdivision surfaces: each control edge is diced into segments of about this many pixels, projected").id(deep | cache).flag());
     rows.push_back(row("ray_level", "dicing", &R::dicing, &DicingSettings::ray_level).range(0, 6).unit("levels")
-                       .doc("subdivision level of the coarse tessellation that secondary rays trace").id(rad | cache).flag());
+                       .doc("subdivision level of the coarse tessellation that secondary rays trace (the fine one is never coarser)").id(deep | rad | cache).flag());
     rows.push_back(row("max_level", "dicing", &R::dicing, &DicingSettings::max_level).range(1, 8).unit("levels")
-                       .doc("cap on the fine tessellation's subdivision level (each level: 4x the micropolygons)").id(deep | cache).flag());
+                       .doc("cap on the fine tessellation: at most 2^max_level segments per control edge").id(deep | cache).flag());
     // Lighting.
     rows.push_back(row("memory_budget", "dicing", &R::dicing, &DicingSettings::memory_budget).range(0.001, 1e6).unit("GiB")
                        .doc("memory generated geometry (fur strands and their BVH) may take; a scene asking for more is refused before growing it").flag());

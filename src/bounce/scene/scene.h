@@ -97,7 +97,8 @@ struct Scene {
     /// irradiance does not depend on them.
     uint64_t fingerprint(const std::vector<std::string>& parts, bool without_surface_shading = false) const;
     /// What a deep file depends on: the camera and the objects, without the fur keys that only
-    /// change how strands are lit (colours, specular, falloff, what rays see them).
+    /// change how strands are lit (colours, specular, falloff, what rays see them), and with
+    /// subdivision surfaces the dicing settings.
     uint64_t visibility_fingerprint() const;
 };
 

@@ -151,6 +151,19 @@ float pixels_per_unit(const Camera& cam, const Vec3& p) {
     return static_cast<float>(cam.height) / (2 * z * std::tan(0.5f * cam.fov * kPi / 180.0f));
 }
 
+/// Length in pixels of the segment a-b projected on the image plane of `cam` (foreshortening
+/// included); where it reaches behind the camera, its length at the nearer end's depth.
+float projected_pixels(const Camera& cam, const Vec3& a, const Vec3& b) {
+    const Vec3 forward = normalize(cam.look_at - cam.position);
+    const Vec3 right = normalize(cross(forward, cam.up)), up = cross(right, forward);
+    const float za = dot(a - cam.position, forward), zb = dot(b - cam.position, forward);
+    const float scale = static_cast<float>(cam.height) / (2 * std::tan(0.5f * cam.fov * kPi / 180.0f));
+    if (!(za > 0 && zb > 0)) return length(b - a) * std::max(pixels_per_unit(cam, a), pixels_per_unit(cam, b));
+    const Vec3 da = a - cam.position, db = b - cam.position;
+    const float dx = dot(da, right) / za - dot(db, right) / zb, dy = dot(da, up) / za - dot(db, up) / zb;
+    return std::sqrt(dx * dx + dy * dy) * scale;
+}
+
 /// A mesh object with "subdivision": its control mesh diced into the fine tessellation (from
 /// the camera, render.dicing) and the coarse one (render.dicing.ray_level), both displaced
 /// when the object has a "displacement".
@@ -184,18 +197,34 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
     const int ray_level = std::min(ds.ray_level, ds.max_level);
     const int level = dicing_level(surf.control, [&](const Vec3& p) { return pixels_per_unit(scene.camera, p); },
                                    ds.shading_rate, ray_level, ds.max_level);
-    // Refuse a dicing that cannot fit before allocating it (each level multiplies by 4).
-    const double corners = static_cast<double>(surf.control.face_vertices.size());
-    const double micropolygons = (surf.scheme == SubdivScheme::Loop ? corners / 3 * 4 : corners * 2) *
-                                 std::pow(4.0, std::max(level, ray_level) - 1);
+    // The fine tessellation per control edge: about shading_rate pixels per diced edge from the
+    // camera, never coarser than the ray tessellation (docs/displacement.md).
+    const auto rate = [&](const Vec3& a, const Vec3& b) {
+        const float px = projected_pixels(scene.camera, a, b) / ds.shading_rate;
+        return static_cast<int>(std::clamp(std::round(px), static_cast<float>(1 << ray_level), static_cast<float>(1 << ds.max_level)));
+    };
+    // Refuse a dicing that cannot fit before allocating it: per face its largest edge rate
+    // squared (twice for quads, half per corner for n-gons), and the ray tessellation.
+    double micropolygons = 0;
+    int largest = 1 << ray_level;
+    for (size_t f = 0, k = 0; f < surf.control.face_count(); k += static_cast<size_t>(surf.control.face_sizes[f++])) {
+        const int n = surf.control.face_sizes[f];
+        int rmax = 1;
+        for (int i = 0; i < n; ++i)
+            rmax = std::max(rmax, rate(surf.control.positions[static_cast<size_t>(surf.control.face_vertices[k + static_cast<size_t>(i)])],
+                                       surf.control.positions[static_cast<size_t>(surf.control.face_vertices[k + static_cast<size_t>((i + 1) % n)])]));
+        largest = std::max(largest, rmax);
+        const double cells = static_cast<double>(rmax) * rmax, coarse = std::pow(4.0, ray_level);
+        micropolygons += (n == 3 ? 1.0 : n == 4 ? 2.0 : n / 2.0) * (cells + coarse);
+    }
     if (micropolygons > kMaxMicropolygons)
-        r.fail("", fmt::format("dicing {} at level {} gives {:.3g} micropolygons (about {:.0f} GiB); the limit is {:.0e}: raise "
+        r.fail("", fmt::format("dicing {} gives {:.3g} micropolygons (about {:.0f} GiB); the limit is {:.0e}: raise "
                                "render.shading_rate or lower render.max_level / render.ray_level",
-                               obj.name, std::max(level, ray_level), micropolygons, micropolygons * 150 / (1 << 30), kMaxMicropolygons));
+                               obj.name, micropolygons, micropolygons * 150 / (1 << 30), kMaxMicropolygons));
     const auto t0 = std::chrono::steady_clock::now();
     try {
         obj.coarse = dice(surf, ray_level);
-        if (level > ray_level) obj.fine = dice(surf, level);
+        if (largest > 1 << ray_level) obj.fine = dice_adaptive(surf, rate);
     } catch (const InputError& e) {  // a map that cannot be read after all, or OpenSubdiv refusing the mesh
         const bool map = surf.displacement.map && e.file() == surf.displacement.map->path();
         r.fail(map ? "displacement/map" : "file", e.what());
@@ -419,7 +448,15 @@ uint64_t Scene::visibility_fingerprint() const {
     for (auto& o : copy.description["objects"])
         if (o.is_object() && o.contains("fur") && o["fur"].is_object())
             for (const std::string& key : fur_lighting_keys()) o["fur"].erase(key);
-    return copy.fingerprint({"camera", "objects"});
+    // Subdivision surfaces are diced from the camera by render.dicing and fragments name their
+    // micropolygons: a deep file of another dicing would shade the wrong ones. ("per-edge": the
+    // dicing rule, so files of the earlier uniform dicing are not taken for this one.)
+    const bool diced = std::any_of(objects.begin(), objects.end(), [](const Object& o) { return o.surface != nullptr; });
+    if (!diced) return copy.fingerprint({"camera", "objects"});
+    const DicingSettings& d = render.dicing;
+    copy.description["dicing"] = {{"rule", "per-edge"}, {"shading_rate", d.shading_rate}, {"ray_level", d.ray_level},
+                                  {"max_level", d.max_level}};
+    return copy.fingerprint({"camera", "objects", "dicing"});
 }
 
 Color LatLongMap::lookup(const Vec3& d, float rotation_deg) const {
