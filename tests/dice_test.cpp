@@ -202,6 +202,26 @@ TEST(Dice, RecordsAreSpacedByTheUndisplacedSurfacesFootprint) {
     EXPECT_LT(worst, 0.1);
 }
 
+TEST(Dice, ADeepFileDicedAtAnotherRateIsRefused) {
+    // Fragments name their micropolygon: a deep file diced at another shading rate would shade
+    // other triangles, so its fingerprint differs and it is refused.
+    test::TempDir dir;
+    const std::string scene = displaced_grid_scene(dir, 0.05f);
+    RenderRequest req;
+    req.deep_out = dir.file("deep.exr");
+    Stats stats;
+    render(load_scene(scene), req, stats, nullptr);
+    RenderRequest again;
+    again.deep_in = dir.file("deep.exr");
+    EXPECT_NO_THROW(render(load_scene(scene), again, stats, nullptr));
+    try {
+        render(load_scene(scene, {"render.shading_rate=0.5"}), again, stats, nullptr);
+        ADD_FAILURE() << "a deep file diced at shading_rate 1 was taken at 0.5";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("dicing"), std::string::npos) << e.what();
+    }
+}
+
 TEST(Dice, RecordsOnTheUndisplacedSurfaceAreFewer) {
     test::TempDir dir;
     const std::string scene = displaced_grid_scene(dir, 0.05f);

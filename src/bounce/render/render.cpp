@@ -24,7 +24,7 @@ namespace bounce {
 void validate_deep_for_scene(const DeepBuffer& deep, const Scene& scene, const std::string& path) {
     if (deep.scene_fingerprint != scene.visibility_fingerprint())
         throw InputError(path, "bounce:scene_fingerprint",
-                         "deep file was made for another scene or camera; re-render visibility without --deep-in");
+                         "deep file was made for another scene or camera (or dicing of its subdivision surfaces); re-render visibility without --deep-in");
     for (size_t i = 0; i < deep.fragments.size(); ++i) {
         const Fragment& f = deep.fragments[i];
         if (f.material >= scene.materials.size() || f.object >= scene.objects.size())
