@@ -5,8 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <map>
-#include <tuple>
 #include <functional>
 
 #include "bounce/core/error.h"
@@ -17,49 +15,14 @@
 #include "bounce/dice/subdivision.h"
 #include "bounce/gather/ao_bake.h"
 #include "bounce/render/render.h"
+#include "dice_util.h"
 #include "test_util.h"
 
 namespace bounce {
 namespace {
 
-/// A one-channel float EXR of f(u, v) at pixel centres (v up, as uvs are).
-std::string write_map(const test::TempDir& dir, const std::string& name, int w, int h,
-                      const std::function<float(float, float)>& f) {
-    std::vector<float> px(static_cast<size_t>(w) * h);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-            px[static_cast<size_t>(y) * w + x] =
-                f((static_cast<float>(x) + 0.5f) / static_cast<float>(w), 1 - (static_cast<float>(y) + 0.5f) / static_cast<float>(h));
-    const std::string path = dir.file(name);
-    auto out = OIIO::ImageOutput::create(path);
-    OIIO::ImageSpec spec(w, h, 1, OIIO::TypeDesc::FLOAT);
-    EXPECT_TRUE(out && out->open(path, spec) && out->write_image(OIIO::TypeDesc::FLOAT, px.data()) && out->close());
-    return path;
-}
-
-/// An n x n grid of unit-square quads in z = 0 facing +z, uv = xy. With `seam`, the faces right
-/// of x = 0.5 use their own uv values (v squeezed), so the grid has a uv seam down its middle.
-ControlMesh grid(int n, bool seam = false) {
-    ControlMesh c;
-    c.source = "grid.obj";
-    auto vid = [n](int i, int j) { return j * (n + 1) + i; };
-    for (int j = 0; j <= n; ++j)
-        for (int i = 0; i <= n; ++i) c.positions.push_back({static_cast<float>(i) / static_cast<float>(n), static_cast<float>(j) / static_cast<float>(n), 0});
-    c.uvs.resize(c.positions.size());
-    for (size_t k = 0; k < c.positions.size(); ++k) c.uvs[k] = {c.positions[k].x, c.positions[k].y};
-    const int right = static_cast<int>(c.uvs.size());
-    if (seam)
-        for (const Vec3& p : c.positions) c.uvs.push_back({p.x, 0.3f + 0.5f * p.y});
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            const int v[4] = {vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)};
-            const int off = seam && 2 * i >= n ? right : 0;
-            c.face_sizes.push_back(4);
-            for (int k : v) c.face_vertices.push_back(k), c.face_uvs.push_back(k + off);
-            c.face_materials.push_back(0);
-        }
-    return c;
-}
+using test::grid;
+using test::write_map;
 
 TEST(Dice, PlanarGridStaysOnItsPlaneWithLinearUvs) {
     SubdivSurface s;
@@ -284,90 +247,6 @@ TEST(Dice, FragmentsTiltedFromTheUndisplacedSurfaceGatherTheirOwn) {
     EXPECT_LT(error[1], 0.8 * error[0]) << error[0] << " without, " << error[1] << " with";
 }
 
-TEST(Dice, AdaptiveDicingAtOneRateIsTheUniformOne) {
-    // Every edge at rate 2^L gives the points of dice at level L (the same limit surface, the
-    // same parameter grid), displaced the same way.
-    test::TempDir dir;
-    SubdivSurface s;
-    s.control = grid(4, true);
-    for (Vec3& p : s.control.positions) p.z = 0.2f * std::sin(5 * p.x) * std::cos(3 * p.y);  // curved
-    s.displacement.map = std::make_shared<DisplacementMap>(write_map(dir, "ramp.exr", 64, 8, [](float u, float) { return u; }));
-    s.displacement.scale = 0.1f;
-    const TriangleMesh a = dice(s, 3), b = dice_adaptive(s, [](const Vec3&, const Vec3&) { return 8; });
-    EXPECT_EQ(a.triangle_count(), b.triangle_count());
-    float worst = 0, worst_base = 0;
-    for (size_t i = 0; i < b.positions.size(); ++i) {
-        float nearest = INFINITY;
-        size_t at = 0;
-        for (size_t j = 0; j < a.positions.size(); ++j)
-            if (const float d = length(b.base_positions[i] - a.base_positions[j]); d < nearest) nearest = d, at = j;
-        worst_base = std::max(worst_base, nearest);
-        worst = std::max(worst, length(b.positions[i] - a.positions[at]));
-        EXPECT_NEAR(dot(b.base_normals[i], a.base_normals[at]), 1, 1e-4);
-    }
-    EXPECT_LT(worst_base, 1e-5f);
-    EXPECT_LT(worst, 1e-4f);
-}
-
-TEST(Dice, AdaptiveDicingOfMixedRatesIsWatertight) {
-    // Rates from 1 to 16 across a curved, displaced grid with a uv seam: every edge is shared by
-    // exactly two triangles (matched by their end points' positions) but those on the grid's
-    // border, as many as the border's control edges' rates add up to.
-    test::TempDir dir;
-    SubdivSurface s;
-    s.control = grid(4, true);
-    for (Vec3& p : s.control.positions) p.z = 0.2f * std::sin(5 * p.x) * std::cos(3 * p.y);
-    s.displacement.map = std::make_shared<DisplacementMap>(write_map(dir, "ramp.exr", 64, 8, [](float u, float v) { return u * v; }));
-    s.displacement.scale = 0.1f;
-    auto rate = [](const Vec3& a, const Vec3& b) {
-        return 1 << static_cast<int>(std::min(4.0f, 5 * (a.x + b.x) / 2));  // 1 at x = 0 .. 16 at x = 1
-    };
-    const TriangleMesh m = dice_adaptive(s, rate);
-    auto key = [](const Vec3& p) { return std::make_tuple(p.x, p.y, p.z); };
-    std::map<std::pair<std::tuple<float, float, float>, std::tuple<float, float, float>>, int> edges;
-    for (size_t t = 0; t < m.indices.size(); t += 3)
-        for (size_t k = 0; k < 3; ++k)
-            ++edges[std::minmax(key(m.positions[m.indices[t + k]]), key(m.positions[m.indices[t + (k + 1) % 3]]))];
-    size_t open = 0, shared = 0;
-    for (const auto& [e, count] : edges) {
-        EXPECT_LE(count, 2);
-        open += count == 1, shared += count == 2;
-    }
-    int border = 0;  // the 16 control edges on the grid's border (4 x 4 grid of unit / 4 quads)
-    for (int i = 0; i < 4; ++i) {
-        const float x0 = static_cast<float>(i) / 4, x1 = static_cast<float>(i + 1) / 4;
-        border += 2 * rate({x0, 0, 0}, {x1, 0, 0});                        // bottom and top
-        border += rate({0, x0, 0}, {0, x1, 0}) + rate({1, x0, 0}, {1, x1, 0});  // left and right
-    }
-    EXPECT_EQ(open, static_cast<size_t>(border));
-    EXPECT_GT(shared, 1000u);
-}
-
-TEST(Dice, ARefinedCageHasTheSameLimitSurface) {
-    // A pyramid (a quad and four triangles): refined once it is all quads, and diced one level
-    // less it gives the same points as the original cage.
-    SubdivSurface s;
-    ControlMesh& c = s.control;
-    c.source = "pyramid.obj";
-    c.positions = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}, {0.5f, 1, 0.5f}};
-    c.face_sizes = {4, 3, 3, 3, 3};
-    c.face_vertices = {0, 1, 2, 3, 1, 0, 4, 2, 1, 4, 3, 2, 4, 0, 3, 4};
-    c.face_materials.assign(5, 0);
-    SubdivSurface refined = s;
-    refined.control = refine_cage(s, 1);
-    ASSERT_EQ(refined.control.face_count(), 16u);
-    for (int n : refined.control.face_sizes) EXPECT_EQ(n, 4);
-    const TriangleMesh a = dice(s, 3), b = dice(refined, 2);
-    ASSERT_EQ(a.positions.size(), b.positions.size());
-    float worst = 0;
-    for (const Vec3& p : a.positions) {
-        float nearest = INFINITY;
-        for (const Vec3& q : b.positions) nearest = std::min(nearest, length(p - q));
-        worst = std::max(worst, nearest);
-    }
-    EXPECT_LT(worst, 1e-5f);
-}
-
 TEST(Dice, BadSubdivisionInputIsRefusedWithFileAndPlace) {
     test::TempDir dir;
     // Three faces on one edge: non-manifold.
@@ -404,6 +283,8 @@ TEST(Dice, BadSubdivisionInputIsRefusedWithFileAndPlace) {
 
 namespace bounce {
 namespace {
+
+using test::write_map;
 
 TEST(BakeAo, UnderAParallelCeilingTheOpenFractionIsTheAnalyticOne) {
     // A point h below an infinite ceiling sees it within distance D for cos(theta) > h / D; a
@@ -485,6 +366,8 @@ TEST(Dice, GathersOnFoldedDisplacementStayFinite) {
 
 namespace bounce {
 namespace {
+
+using test::write_map;
 
 TEST(Dice, RayOffsettingKeepsADisplacedSurfaceFreeOfSelfHits) {
     // Seen from inside, a cube cage's limit surface pushed out by a constant displacement is a
