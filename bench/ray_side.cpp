@@ -61,7 +61,7 @@ void displace(const RTCDisplacementFunctionNArguments* a) {
         const float w[4] = {(1 - u) * (1 - v), u * (1 - v), u * v, (1 - u) * v};
         Vec2 uv;
         for (int j = 0; j < 4; ++j) uv.x += w[j] * t[j].x, uv.y += w[j] * t[j].y;
-        const float h = d.scale * (d.map->height(uv) - d.midpoint);
+        const float h = d.offset(uv);
         a->P_x[i] += h * a->Ng_x[i];
         a->P_y[i] += h * a->Ng_y[i];
         a->P_z[i] += h * a->Ng_z[i];

@@ -193,7 +193,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                        Stats& stats, ProgressSink* sink, int frame) {
     const CacheSettings& cs = cache.settings();
     const float threshold = cs.refine;
-    const bool undisplaced = cs.displaced_records == RecordSurface::Undisplaced && cs.refine_tilt > 0;
+    const bool tilt_signal = cs.displaced_records == RecordSurface::Undisplaced && cs.refine_tilt > 0;
     const float tilt_cos = std::cos(cs.refine_tilt * kPi / 180);
     tbb::enumerable_thread_specific<std::vector<Record>> made;
     {
@@ -209,9 +209,9 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                 if (cache.fragment_record(key, f.p)) continue;  // refined by an earlier render
                 // Interpolation about the un-displaced normal cannot stand for a hemisphere
                 // tilted far from it (docs/displacement.md): those fragments gather their own.
-                const bool tilted = undisplaced && dot(f.n, f.n_base) < tilt_cos;
+                const bool tilted = tilt_signal && dot(f.n, f.n_base) < tilt_cos;
                 if (!tilted) {
-                    const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cache.settings()));
+                    const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cs));
                     if (in.weight > 0 && (threshold <= 0 || in.spread <= threshold)) continue;
                 }
                 // Gathered about the fragment's own (displaced) point and normal, as brute force does.

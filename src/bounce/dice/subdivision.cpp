@@ -61,6 +61,15 @@ std::unique_ptr<Far::TopologyRefiner> make_refiner(const SubdivSurface& s) {
     return r;
 }
 
+/// The un-displaced normal from the limit tangents' cross product `n` (|du|^2 + |dv|^2 =
+/// `tangents2`), oriented by `around` (the diced faces' normals at the point), which stands in
+/// where the cross product degenerates (extraordinary vertices).
+Vec3 limit_normal(Vec3 n, float tangents2, const Vec3& around) {
+    if (!(length(n) > 1e-12f * tangents2)) n = around;
+    else if (dot(n, around) < 0) n = -n;
+    return dot(n, n) > 0 ? normalize(n) : Vec3(0, 0, 1);
+}
+
 /// Positions and uvs refined level by level to `level` (the refiner already refined).
 void refine_primvars(const Far::TopologyRefiner& refiner, int level, std::vector<P3>& pts, std::vector<P2>& uvs) {
     const Far::PrimvarRefiner primvar(refiner);
@@ -85,6 +94,8 @@ void control_primvars(const ControlMesh& c, std::vector<P3>& pts, std::vector<P2
 }
 
 }  // namespace
+
+float Displacement::offset(const Vec2& uv) const { return scale * (map->height(uv) - midpoint); }
 
 void check_control_mesh(const ControlMesh& c, SubdivScheme scheme) {
     const auto nv = static_cast<int>(c.positions.size());
@@ -152,9 +163,9 @@ TriangleMesh dice_adaptive(const SubdivSurface& s, const std::function<int(const
     // Points shared between faces: one per control vertex, rate - 1 per control edge (in the
     // edge's own direction), and each face's interior points.
     struct Point {
-        Vec3 p, n;     // un-displaced limit position and normal (from the derivatives)
-        Vec2 uv;       // where the displacement is read (the first face's uv)
-        Vec3 around{0};  // sum of the un-displaced facet normals (orientation, fallback)
+        Vec3 p, n;        // un-displaced limit position and normal (the derivatives' cross product, then limit_normal)
+        float tangents2;  // |du|^2 + |dv|^2 (limit_normal's degeneracy scale)
+        Vec2 uv;          // where the displacement is read (the first face's uv)
     };
     std::vector<Point> pts;
     std::vector<int> vertex_point(static_cast<size_t>(base.GetNumVertices()), -1), edge_point(rates.size(), -1);
@@ -188,7 +199,7 @@ TriangleMesh dice_adaptive(const SubdivSurface& s, const std::function<int(const
         auto make_point = [&](int k) {
             Vec3 p, du, dv;
             surface.Evaluate(&coords[2 * static_cast<size_t>(k)], patch.data(), 3, &p.x, &du.x, &dv.x);
-            pts.push_back({p, cross(du, dv), uv_at(k)});
+            pts.push_back({p, cross(du, dv), dot(du, du) + dot(dv, dv), uv_at(k)});
             return static_cast<int>(pts.size() - 1);
         };
         // Boundary coordinates come first, around the face: vertex i, then edge i's points.
@@ -226,8 +237,8 @@ TriangleMesh dice_adaptive(const SubdivSurface& s, const std::function<int(const
         }
     }
 
-    // Normals per shared point: the facets' around it orient the derivatives' cross product and
-    // stand in where it degenerates (as dice does); then displace once per point.
+    // Normals per shared point: the facets around it orient the derivatives' cross product and
+    // stand in where it degenerates (limit_normal, as dice does); then displace once per point.
     auto facet_sums = [&](auto position) {
         std::vector<Vec3> sums(pts.size(), Vec3(0));
         for (size_t t = 0; t < m.indices.size(); t += 3) {
@@ -241,13 +252,8 @@ TriangleMesh dice_adaptive(const SubdivSurface& s, const std::function<int(const
     std::vector<Vec3> disp(pts.size());
     for (size_t i = 0; i < pts.size(); ++i) {
         Point& q = pts[i];
-        const float len = length(q.n);
-        if (!(len > 0) || dot(q.n, around[i]) == 0) q.n = around[i];
-        else if (dot(q.n, around[i]) < 0) q.n = -q.n;
-        q.n = dot(q.n, q.n) > 0 ? normalize(q.n) : Vec3(0, 0, 1);
-        disp[i] = q.p;
-        if (s.displacement.active())
-            disp[i] = q.p + q.n * (s.displacement.scale * (s.displacement.map->height(q.uv) - s.displacement.midpoint));
+        q.n = limit_normal(q.n, q.tangents2, around[i]);
+        disp[i] = s.displacement.active() ? q.p + q.n * s.displacement.offset(q.uv) : q.p;
     }
     std::vector<Vec3> normals(pts.size());
     if (s.displacement.active()) {
@@ -327,14 +333,8 @@ TriangleMesh dice(const SubdivSurface& s, int level) {
     const std::vector<Vec3> around = normal_sums([&](int i) { return limit[static_cast<size_t>(i)].v; });
     std::vector<Vec3> bp(nv), bn(nv);  // per topological vertex: the un-displaced surface
     for (size_t i = 0; i < nv; ++i) {
-        Vec3 n = cross(du[i].v, dv[i].v);
-        const float len = length(n);
-        if (!(len > 1e-12f * (dot(du[i].v, du[i].v) + dot(dv[i].v, dv[i].v))))
-            n = around[i];
-        else if (dot(n, around[i]) < 0)
-            n = -n;
         bp[i] = limit[i].v;
-        bn[i] = dot(n, n) > 0 ? normalize(n) : Vec3(0, 0, 1);
+        bn[i] = limit_normal(cross(du[i].v, dv[i].v), dot(du[i].v, du[i].v) + dot(dv[i].v, dv[i].v), around[i]);
     }
 
     // Displace each topological vertex once (uv seams share the displaced point: no cracks).
@@ -349,8 +349,7 @@ TriangleMesh dice(const SubdivSurface& s, int level) {
                 if (done[i]) continue;
                 done[i] = 1;
                 const Vec2 uv = has_uv ? uvs[static_cast<size_t>(fuv[k])].v : Vec2{};
-                const float h = s.displacement.map->height(uv) - s.displacement.midpoint;
-                pos[i] = bp[i] + bn[i] * (s.displacement.scale * h);
+                pos[i] = bp[i] + bn[i] * s.displacement.offset(uv);
             }
         }
         nrm = normal_sums([&](int i) { return pos[static_cast<size_t>(i)]; });

@@ -39,6 +39,8 @@ struct Displacement {
     float scale = 0;
     float midpoint = 0.5f;
     bool active() const { return map && scale != 0; }
+    /// How far the point with texture coordinate `uv` moves along its normal (active() only).
+    float offset(const Vec2& uv) const;
 };
 
 struct SubdivSurface {
