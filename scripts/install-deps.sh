@@ -8,6 +8,7 @@ packages=(
   libassimp-dev nlohmann-json3-dev libcli11-dev libfmt-dev libgtest-dev libbenchmark-dev
   libosd-dev libcpp-httplib-dev chromium
   clang libclang-rt-dev python3-matplotlib
+  libopenmpi-dev openmpi-bin
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -206,7 +206,7 @@ IrradianceCache build_cache(const Scene& s, Stats& stats, DeepBuffer* deep_out =
     Gatherer gatherer(s, accel, materials, lighting, nullptr, gather_settings(s));
     IrradianceCache cache(s.bounds(), s.render.cache, false);
     gathering_pass(s, deep, gatherer, cache, stats, nullptr);
-    shading_pass(s, deep, cache, stats, nullptr);
+    interpolation_pass(s, deep, cache, stats, nullptr);
     if (deep_out) *deep_out = std::move(deep);
     return cache;
 }
@@ -281,7 +281,7 @@ TEST(CachePasses, AShadingOnlyReshadePreviewsOnePixelInSixteenExactly) {
     std::vector<Image> frames;
     RenderRequest req;
     req.cache_in = d.file("c.bic");
-    req.shade_only = true;
+    req.reshade = true;
     req.preview = [&](const Image& img) { frames.push_back(img); };
     RenderResult r = render(s, req, s2, nullptr);
     ASSERT_EQ(frames.size(), 1u);

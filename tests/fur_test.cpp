@@ -182,8 +182,9 @@ HairRender render_hair(const json& fur) {
     Scene scene = test::scene_from(fur_scene(fur, 0.5f), {"render.gi=\"cache\""});
     Stats stats;
     HairRender h{render(scene, {}, stats, nullptr), {}, 0};
-    h.indirect = shading_pass(scene, h.result.deep, *h.result.cache, stats, nullptr);
-    h.misses = stats.to_json()["shading_misses"].get<double>();
+    InterpolatedLight light = interpolation_pass(scene, h.result.deep, *h.result.cache, stats, nullptr);
+    h.indirect = std::move(light.light);
+    h.misses = static_cast<double>(light.misses);
     return h;
 }
 

@@ -81,12 +81,14 @@ int render_frame(const RenderArgs& a, const FrameFiles& files, int frame) {
             write_exr(files.output, img);
             write_png(files.png(), img, "beauty");
         };
-    RenderResult r = render(scene, request, stats, sink.get());
+    const FrameState none;  // a still, or a frame of a sequence that starts from cache files
+    const FramePlan plan = plan_frame(scene, none, request);
+    RenderResult r = run_frame(scene, plan, none, request, stats, sink.get());
     {
         PhaseTimer t(stats, "write images");
         write_frame_outputs(r, files, a.show);
     }
-    if (stats.to_json().contains("cache_reused_with_other_settings") && !a.quiet)
+    if (!r.cache_differences.empty() && !a.quiet)
         std::fprintf(stderr, "bounce: %s: records reused although gathered with other settings (--cache-reuse-any)\n",
                      files.cache_in.c_str());
     if (a.stats) {

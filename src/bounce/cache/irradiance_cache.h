@@ -77,6 +77,7 @@ public:
     /// record kept from another deep buffer does not match), or nullptr.
     const Record* fragment_record(uint64_t key, const Vec3& p) const;
     size_t fragment_record_count() const { return fragment_records_.size(); }
+    const Record& fragment_record_at(size_t i) const { return fragment_records_[i]; }
     /// Records and header information for a cache file.
     CacheFile to_file(const CacheFileInfo& info) const;
     float luminance_floor() const { return luminance_floor_; }

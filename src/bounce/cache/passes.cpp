@@ -238,10 +238,11 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
     return records.size();
 }
 
-std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
-                                   Stats& stats, ProgressSink* sink, std::vector<uint8_t>* refined) {
-    std::vector<Indirect> out(deep.fragments.size());
-    if (refined) refined->assign(deep.fragments.size(), 0);
+InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
+                                     Stats& stats, ProgressSink* sink) {
+    InterpolatedLight out;
+    out.light.resize(deep.fragments.size());
+    out.refined.assign(deep.fragments.size(), 0);
     tbb::enumerable_thread_specific<uint64_t> misses(0), lookups(0), own(0);
     // The pass holds the shared lock for its workers: no writer can interleave.
     auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache, stats.local());
@@ -249,11 +250,11 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
         auto frags = deep.pixel(wx, wy);
         for (uint32_t k = 0; k < frags.size(); ++k) {
             Source src;
-            out[first + k] = indirect_at(scene, cache, deep, wx, wy, k, src);
+            out.light[first + k] = indirect_at(scene, cache, deep, wx, wy, k, src);
             ++lookups.local();
             if (src == Source::Own) {
                 ++own.local();
-                if (refined) (*refined)[first + k] = 1;
+                out.refined[first + k] = 1;
             }
             misses.local() += src == Source::Missed;
         }
@@ -265,6 +266,7 @@ std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, c
     stats.set("shading_misses", static_cast<double>(m));
     stats.set("lookups", static_cast<double>(l));
     stats.set("fragment_records_used", static_cast<double>(o));
+    out.misses = static_cast<size_t>(m);
     return out;
 }
 

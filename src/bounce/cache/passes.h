@@ -59,12 +59,19 @@ bool refinement_runs(const Scene& scene);
 size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,
                        Stats& stats, ProgressSink* progress, int frame = 0);
 
-/// Shading pass: never creates a record. A fragment takes its fragment record if it has one
-/// (`refined`, if given, gets 1 there), else the interpolation. Misses (no record applies;
-/// the gathering pass makes them impossible) are counted in stats as "shading_misses" and
-/// left black, so a bug shows.
-std::vector<Indirect> shading_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
-                                   Stats& stats, ProgressSink* progress, std::vector<uint8_t>* refined = nullptr);
+/// What the shading pass's interpolation gives every fragment.
+struct InterpolatedLight {
+    std::vector<Indirect> light;   ///< parallel to deep.fragments
+    std::vector<uint8_t> refined;  ///< 1 where a fragment took its own (refinement) record
+    size_t misses = 0;             ///< fragments no record covered (left black)
+};
+
+/// Interpolation of the shading pass: never creates a record. A fragment takes its fragment
+/// record if it has one, else the interpolation. Misses (no record applies; the gathering pass
+/// makes them impossible) are counted (and in stats as "shading_misses") and left black, so a
+/// bug shows.
+InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
+                                     Stats& stats, ProgressSink* progress);
 
 /// Progressive preview after a sub-pass of step `step`: each fragment takes the interpolated
 /// light at the nearest pixel (on that step's lattice, then coarser ones) a finished sub-pass

@@ -218,13 +218,12 @@ void LightingSession::wait() {
     idle_.wait(lock, [&] { return !running_; });
 }
 
-bool LightingSession::render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats,
-                                  ProgressSink& sink, bool shade_only) {
+void LightingSession::render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats,
+                                  ProgressSink& sink) {
     Scene scene;
     RenderRequest req;
     uint64_t edits_seen = 0;
-    std::shared_ptr<const DeepBuffer> deep;
-    std::shared_ptr<const IrradianceCache> cache;
+    FrameState previous;
     {
         // The scene as the last edit loaded it (no file is read again); the request's own
         // settings are not part of any identity.
@@ -236,24 +235,25 @@ bool LightingSession::render_once(SessionAction action, std::optional<std::array
         // Renders stream their previews unless the lighter turned them off.
         if (!edits_.count("render.preview")) scene.render.parallel.preview = true;
         req.cancel = cancel_.get();
-        deep = deep_, cache = cache_;
+        previous.deep = deep_, previous.cache = cache_;
     }
     const bool cached = scene.render.indirect.gi == GiMode::Cache;
+    // The session's deep buffer and cache, from memory when it holds them, else from its files.
+    req.reuse_previous = action != SessionAction::Rasterize;
     if (action == SessionAction::Rasterize || !fs::exists(deep_path_))
-        req.deep_out = deep_path_.string();
-    else if (deep)
-        req.deep = deep;  // the last frame's, kept in memory: no file to read
-    else
+        req.deep_out = deep_path_.string(), req.reuse_previous = false;
+    else if (!previous.deep)
         req.deep_in = deep_path_.string();
     if (cached && action != SessionAction::Rasterize && fs::exists(cache_path_)) {
         // The session knows its cache's history: lights and materials may have changed since
         // it was gathered (a re-shade keeps its bounce light on purpose).
-        req.cache_in = cache_path_.string();
+        if (!previous.cache) req.cache_in = cache_path_.string();
         req.force = true;
         req.cache_reuse = CacheReuse::Any;
         req.regather = action == SessionAction::Regather;
-        req.shade_only = shade_only && action == SessionAction::Reshade;
-        if (req.shade_only) req.shade_cache = cache;
+        req.reshade = action == SessionAction::Reshade;
+    } else {
+        previous.cache.reset();
     }
     if (cached && scene.render.parallel.preview)
         req.preview = [&](const Image& img) {
@@ -269,42 +269,37 @@ bool LightingSession::render_once(SessionAction action, std::optional<std::array
             }
             ++version_;
         };
-    RenderResult r = render(scene, req, stats, &sink);
-    const json st = stats.to_json();
-    if (req.shade_only && st.value("shading_misses", 0.0) > 0) return false;  // gather after all
+    FramePlan plan = plan_frame(scene, previous, req);
+    if (plan.visibility == VisibilityStep::Trace) plan.deep_out = deep_path_.string();  // the session's file follows
+    RenderResult r = run_frame(scene, plan, previous, req, stats, &sink);
     // Only a finished render replaces the cache (atomically) and the image.
-    if (cached && r.cache && (r.records_new > 0 || action != SessionAction::Reshade || st.value("refined_fragments", 0.0) > 0))
+    if (cached && r.cache && (r.cache_changed() || action != SessionAction::Reshade))
         write_cache_file(cache_path_.string(), r.cache->to_file(r.cache_info));
     std::lock_guard lock(mutex_);
     image_ = crop ? paste_over(image_, r.image, "session image") : std::move(r.image);
     ++version_;
-    if (!crop) {
-        if (edit_count_ == edits_seen) pending_ = -1;  // edits made while it ran still need showing
-        if (!req.deep) deep_ = std::make_shared<const DeepBuffer>(std::move(r.deep));  // else it is deep_ already
-    }
-    if (r.cache) cache_ = std::shared_ptr<const IrradianceCache>(std::move(r.cache));  // what the file now holds
-    return true;
+    if (!crop && edit_count_ == edits_seen) pending_ = -1;  // edits made while it ran still need showing
+    const bool new_deep = !crop && plan.visibility != VisibilityStep::Previous;
+    FrameState next = r.release_state();
+    if (new_deep) deep_ = next.deep;  // else deep_ holds it already
+    if (next.cache) cache_ = next.cache;  // what the file now holds
 }
 
 void LightingSession::run(SessionAction action, std::optional<std::array<int, 4>> crop) {
     std::string state = "done", message;
     json stats_json;
-    // A re-shade first shades the cache as it is; only if some fragment has no record does it
-    // run the gathering pass too.
-    for (bool shade_only : {true, false}) {
+    {
         // Everything the render allocated is freed before the session says it is idle.
         Sink sink(*this);
         Stats stats;
-        bool done = true;
         try {
-            done = render_once(action, crop, stats, sink, shade_only);
+            render_once(action, crop, stats, sink);
         } catch (const Cancelled&) {
             state = "cancelled";
         } catch (const std::exception& e) {
             state = "failed", message = e.what();  // the previous image and cache stay
         }
         stats_json = stats.to_json();
-        if (done || action != SessionAction::Reshade) break;
     }
     std::lock_guard lock(mutex_);
     stats_ = std::move(stats_json);

@@ -108,9 +108,8 @@ public:
 private:
     class Sink;
     void run(SessionAction action, std::optional<std::array<int, 4>> crop);
-    /// One render; false when a shading-only re-shade found fragments without records.
-    bool render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats, ProgressSink& sink,
-                     bool shade_only);
+    /// One frame through its plan (plan_frame): a re-shade gathers only if records are missing.
+    void render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats, ProgressSink& sink);
     std::vector<Override> overrides_locked() const;
 
     SessionOptions options_;

@@ -1,0 +1,83 @@
+// The passes of a frame as the plan runs them. Every pass receives the one FrameContext
+// (scene, BVHs, materials, lights, stats, progress, cancel) and returns a typed result;
+// run_frame (render.h) calls them in the plan's order and nothing else does.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "bounce/accel/accel.h"
+#include "bounce/cache/irradiance_cache.h"
+#include "bounce/core/image.h"
+#include "bounce/core/progress.h"
+#include "bounce/core/stats.h"
+#include "bounce/deep/deep_buffer.h"
+#include "bounce/lighting/lighting.h"
+#include "bounce/lighting/materials.h"
+#include "bounce/radiosity/radiosity.h"
+#include "bounce/render/frame_plan.h"
+
+namespace bounce {
+
+/// What every pass of a frame receives.
+struct FrameContext {
+    const Scene& scene;
+    const SceneAccel& accel;
+    const Materials& materials;
+    const DirectLighting& lighting;
+    Stats& stats;
+    ProgressSink* progress;        ///< carries the cancel token (null: no progress, no cancel)
+    const CancelToken* cancel;
+};
+
+/// The deep buffers of a frame: the gathered window (the window and its margin) and the
+/// shaded window inside it.
+struct VisibilityResult {
+    DeepBuffer gathered, shaded;
+};
+/// Traces, reads or takes over the previous frame's deep buffer, as the plan says; writes
+/// plan.deep_out.
+VisibilityResult visibility_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous);
+
+/// The cache a frame starts from (null when the plan has none).
+struct CacheStartResult {
+    std::unique_ptr<IrradianceCache> cache;
+    size_t records_loaded = 0;
+    std::vector<std::string> differences;  ///< settings that differ from a reused file's (cache_reuse Any)
+};
+CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous);
+
+/// Radiosity textures as the plan says (null for RadiosityStep::None).
+std::unique_ptr<RadiosityTextures> radiosity_pass(const FrameContext& ctx, const FramePlan& plan);
+/// Saves radiosity textures that this frame baked into render.radiosity_textures.
+void save_radiosity_pass(const FrameContext& ctx, const RadiosityTextures& rt, size_t baked_before);
+
+/// What the gathering pass made.
+struct GatherPassResult {
+    size_t records_new = 0;
+    size_t fragment_records_new = 0;  ///< per-fragment refinement's gathers
+};
+/// The gathering pass (and refinement) into `cache`; `preview`, if set, gets an image after each
+/// sub-pass.
+GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep,
+                                   const RadiosityTextures* radiosity, IrradianceCache& cache,
+                                   const std::function<void(const Image&)>& preview);
+/// A gather at every fragment of the shaded window.
+std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffer& deep, const RadiosityTextures* radiosity);
+
+/// The shading pass: the image of the shaded window.
+struct ShadeResult {
+    Image image;
+    size_t shading_misses = 0;         ///< fragments no record covered (left black)
+    std::vector<uint8_t> refined;      ///< per fragment: 1 where its own record was used
+};
+/// Shades `deep` with the cache's interpolation (cache non-null), `brute` light (non-null) or
+/// direct light only. With a cache and `quick_look`, first calls it with every 4th pixel
+/// shaded standing for its 4x4 block (a re-shade's preview).
+ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
+                         const std::vector<Indirect>* brute, const std::function<void(const Image&)>& quick_look = {});
+
+/// A copy of `cache` that a frame may add records to.
+std::unique_ptr<IrradianceCache> copy_cache(const IrradianceCache& cache, const Scene& scene);
+
+}  // namespace bounce

@@ -1,0 +1,125 @@
+#include "bounce/render/frame_plan.h"
+
+#include <tbb/task_arena.h>
+
+#include <cmath>
+
+#include "bounce/cache/passes.h"
+#include "bounce/core/error.h"
+
+namespace bounce {
+
+int crop_margin(const Scene& scene) {
+    const CacheSettings& c = scene.render.cache;
+    return static_cast<int>(std::ceil(c.max_spacing * c.shading_reach)) + 1;
+}
+
+namespace {
+
+const char* name(VisibilityStep s) {
+    switch (s) {
+        case VisibilityStep::Trace: return "trace";
+        case VisibilityStep::ReadFile: return "read deep file";
+        case VisibilityStep::Previous: return "previous frame's";
+    }
+    return "?";
+}
+const char* name(RadiosityStep s) {
+    switch (s) {
+        case RadiosityStep::None: return "none";
+        case RadiosityStep::Bake: return "bake as hit";
+        case RadiosityStep::Load: return "load, bake what is missing";
+    }
+    return "?";
+}
+const char* name(CacheStart s) {
+    switch (s) {
+        case CacheStart::None: return "none";
+        case CacheStart::Empty: return "empty";
+        case CacheStart::File: return "cache file";
+        case CacheStart::Previous: return "previous frame's";
+    }
+    return "?";
+}
+const char* name(GatherStep s) {
+    switch (s) {
+        case GatherStep::None: return "none";
+        case GatherStep::Brute: return "brute force";
+        case GatherStep::Cache: return "gathering pass";
+        case GatherStep::WhereMissing: return "only where records are missing";
+    }
+    return "?";
+}
+
+/// Where the cache starts: the previous frame's, a file, or empty (a full re-gather).
+CacheStart cache_start(const Scene& scene, const FrameState& previous, const RenderRequest& request) {
+    const bool cached = scene.render.indirect.gi == GiMode::Cache;
+    const bool crop = scene.render.visibility.has_crop();
+    // Without a cache render, a cache file is only read for its records layer.
+    if (!cached) return request.cache_in.empty() ? CacheStart::None : CacheStart::File;
+    if (request.regather && !crop) return CacheStart::Empty;
+    if (request.reuse_previous && previous.cache) return CacheStart::Previous;
+    return request.cache_in.empty() ? CacheStart::Empty : CacheStart::File;
+}
+
+GatherStep gather_step(const Scene& scene, CacheStart cache, const RenderRequest& request) {
+    const IndirectSettings& ind = scene.render.indirect;
+    if (!ind.any()) return GatherStep::None;
+    if (ind.gi != GiMode::Cache) return GatherStep::Brute;
+    const bool starts_full = cache == CacheStart::Previous || cache == CacheStart::File;
+    return request.reshade && starts_full && !request.regather ? GatherStep::WhereMissing : GatherStep::Cache;
+}
+
+}  // namespace
+
+FramePlan plan_frame(const Scene& scene, const FrameState& previous, const RenderRequest& request) {
+    FramePlan plan;
+    plan.frame = request.frame;
+    plan.window = frame_window(scene);
+    plan.gather_window = plan.window;
+    if (scene.render.visibility.has_crop() && scene.render.indirect.gi == GiMode::Cache) {
+        const int m = crop_margin(scene);
+        const auto& w = plan.window;
+        plan.gather_window = {std::max(0, w[0] - m), std::min(scene.camera.width, w[1] + m), std::max(0, w[2] - m),
+                              std::min(scene.camera.height, w[3] + m)};
+    }
+    // (A previous deep buffer made for another camera or objects is refused by the pass, saying so.)
+    if (request.reuse_previous && previous.deep)
+        plan.visibility = VisibilityStep::Previous;
+    else if (!request.deep_in.empty())
+        plan.visibility = VisibilityStep::ReadFile, plan.deep_in = request.deep_in;
+    else
+        plan.visibility = VisibilityStep::Trace;
+    plan.deep_out = request.deep_out;
+
+    plan.cache = cache_start(scene, previous, request);
+    if (plan.cache == CacheStart::File) plan.cache_in = request.cache_in;
+    plan.flush_crop = request.regather && scene.render.visibility.has_crop() && plan.cache != CacheStart::Empty;
+    plan.force = request.force;
+    plan.cache_reuse = request.cache_reuse;
+    plan.gather = gather_step(scene, plan.cache, request);
+    plan.refine = (plan.gather == GatherStep::Cache || plan.gather == GatherStep::WhereMissing) && refinement_runs(scene);
+    const IndirectSettings& ind = scene.render.indirect;
+    if (plan.gather != GatherStep::None && scene.render.radiosity.enabled && !ind.ao)
+        plan.radiosity = scene.render.radiosity.folder.empty() ? RadiosityStep::Bake : RadiosityStep::Load;
+    plan.preview = scene.render.parallel.preview && request.preview != nullptr;
+    plan.threads = scene.render.parallel.threads > 0 ? scene.render.parallel.threads : tbb::this_task_arena::max_concurrency();
+    return plan;
+}
+
+nlohmann::json FramePlan::describe() const {
+    return {{"frame", frame},
+            {"window", window},
+            {"gather_window", gather_window},
+            {"visibility", name(visibility)},
+            {"deep_out", !deep_out.empty()},
+            {"accel", "build"},
+            {"radiosity", name(radiosity)},
+            {"cache", name(cache)},
+            {"flush_crop", flush_crop},
+            {"gather", name(gather)},
+            {"refine", refine},
+            {"threads", threads}};
+}
+
+}  // namespace bounce

@@ -1,0 +1,110 @@
+// A frame as a plan (DESIGN.md, "A frame is a plan"): built once from the scene at the
+// frame's time, what the previous frame left (FrameState) and the front end's request, it says
+// which passes run and on what. The CLI, a sequence, the lighting tool and an MPI rank all
+// drive frames through it; a new capability adds a step or a plan rule, never a flag.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "bounce/cache/cache_identity.h"
+#include "bounce/core/image.h"
+#include "bounce/core/progress.h"
+#include "bounce/deep/deep_buffer.h"
+#include "bounce/scene/scene.h"
+
+namespace bounce {
+
+/// What a front end asks of one frame.
+struct RenderRequest {
+    std::string deep_in;   ///< start from this deep file instead of tracing visibility
+    std::string deep_out;  ///< write the deep buffer (of the gathered window) here
+    /// Preview mode (render.preview with gi cache): called with the whole image after every
+    /// sub-pass, pixelated first and finer after; a re-shade calls it once, with every 4th
+    /// pixel in x and y shaded and standing for its 4x4 block, before shading the rest.
+    std::function<void(const Image&)> preview;
+    std::string cache_in;   ///< start the irradiance cache from this file (gathers only where it misses)
+    bool regather = false;  ///< flush the cache before gathering; with a crop (and a cache to start
+                            ///< from), only the records seen inside the crop are flushed
+    bool force = false;     ///< accept a cache made for another scene or camera
+    /// Re-shade: shade the cache the frame starts from (the previous frame's, or cache_in) as
+    /// it is; the gathering and refinement passes run only if some fragment has no record.
+    bool reshade = false;
+    /// Start from the previous frame's deep buffer and cache (FrameState) instead of files: the
+    /// lighting tool keeps them in memory.
+    bool reuse_previous = false;
+    CacheReuse cache_reuse = CacheReuse::Strict;  ///< keep a cache made with other settings
+    int frame = 0;          ///< frame number stamped on new records (sequences)
+    const CancelToken* cancel = nullptr;  ///< stops the render (throws Cancelled) when set
+};
+
+/// What a finished frame leaves for the next plan: the frame window's deep buffer and the cache
+/// as it ended (never modified afterwards; a plan that changes them makes copies).
+struct FrameState {
+    std::shared_ptr<const DeepBuffer> deep;
+    std::shared_ptr<const IrradianceCache> cache;
+};
+
+/// Primary visibility.
+enum class VisibilityStep : uint8_t {
+    Trace,     ///< trace the fine tessellation (a new deep buffer)
+    ReadFile,  ///< read plan.deep_in
+    Previous,  ///< the previous frame's deep buffer, in memory
+};
+/// The ray-tracing structures.
+enum class AccelStep : uint8_t { Build };
+/// Radiosity textures for the gather's hits.
+enum class RadiosityStep : uint8_t {
+    None,  ///< no gather, AO, or render.radiosity off: hits are shaded with shadow rays
+    Bake,  ///< laid out and baked lazily as rays hit them
+    Load,  ///< from render.radiosity_textures (baked lazily where the folder does not match)
+};
+/// Where the irradiance cache starts.
+enum class CacheStart : uint8_t {
+    None,      ///< no cache (brute force, direct only)
+    Empty,
+    File,      ///< plan.cache_in (with the identity checks of load_cache)
+    Previous,  ///< the previous frame's cache, in memory
+};
+/// Which gathering runs.
+enum class GatherStep : uint8_t {
+    None,          ///< direct light only, or shade the starting cache (a re-shade)
+    Brute,         ///< a gather at every fragment
+    Cache,         ///< gathering pass (and refinement) where the starting cache misses
+    WhereMissing,  ///< shade the starting cache; only if a fragment has no record, gather and shade again
+};
+
+struct FramePlan {
+    int frame = 0;
+    std::array<int, 4> window{};         ///< pixels shaded: the crop or the frame (x0, x1, y0, y1)
+    std::array<int, 4> gather_window{};  ///< pixels gathered in: the window and its margin
+    VisibilityStep visibility = VisibilityStep::Trace;
+    std::string deep_in, deep_out;
+    AccelStep accel = AccelStep::Build;
+    RadiosityStep radiosity = RadiosityStep::None;
+    CacheStart cache = CacheStart::None;
+    std::string cache_in;
+    bool flush_crop = false;  ///< leave out the starting cache's records seen inside the crop
+    bool force = false;
+    CacheReuse cache_reuse = CacheReuse::Strict;
+    GatherStep gather = GatherStep::None;
+    bool refine = false;      ///< per-fragment refinement after the gathering pass
+    bool preview = false;     ///< progressive images through the request's callback
+    int threads = 1;
+
+    /// The plan as JSON (in --stats-json and the tool's status): one entry per step.
+    nlohmann::json describe() const;
+};
+
+/// The plan of one frame. Throws InputError when the request cannot be met (a re-shade with
+/// nothing to start from, a crop outside the previous deep buffer ...).
+FramePlan plan_frame(const Scene& scene, const FrameState& previous, const RenderRequest& request);
+
+/// Pixels outside the crop a margin gathers in: records reach at most max_spacing pixels
+/// (times shading_reach in the shading pass).
+int crop_margin(const Scene& scene);
+
+}  // namespace bounce
