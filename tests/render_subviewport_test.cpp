@@ -194,12 +194,15 @@ TEST(Frames, SequencesTakeThePreviousFramesCacheAndOutputsAreChecked) {
     EXPECT_THROW(parse_frame_range("5-2", "--frames"), InputError);
     FrameFiles bad;
     bad.scene = test::cornell_scene();
-    bad.output = "/dev/full.exr";
-    EXPECT_NO_THROW(bad.check());  // a new name in /dev is a name; /dev/full itself is not
-    bad.output = "/dev/null";
-    EXPECT_THROW(bad.check(), InputError);
-    bad.output = test::cornell_scene();
-    EXPECT_THROW(bad.check(), InputError);
+    const Scene scene = load_scene(bad.scene);
+    test::TempDir d;
+    bad.output = d.file("new.exr");
+    EXPECT_NO_THROW(bad.check(scene));  // a new name in a folder that takes files
+    for (const std::string& out : {std::string("/dev/null"), test::cornell_scene(), std::string("/proc/x.exr"),
+                                   d.write("c.bic", "x") + "/x.exr", d.file("missing/x.exr")}) {
+        bad.output = out;
+        EXPECT_THROW(bad.check(scene), InputError) << out;
+    }
 }
 
 }  // namespace

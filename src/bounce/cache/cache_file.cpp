@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "bounce/core/json_limits.h"
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
@@ -206,6 +207,7 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
     std::string header = c.bytes(hlen, "header");
     auto hsum = c.get<uint64_t>("header checksum");
     if (hsum != fnv1a(header.data(), header.size())) throw InputError(name, "header", "checksum mismatch (file is corrupt)");
+    check_json_nesting(header, name);
     nlohmann::json h = nlohmann::json::parse(header, nullptr, false);
     if (h.is_discarded() || !h.is_object()) throw InputError(name, "header", "header is not valid JSON");
     CacheFile f;

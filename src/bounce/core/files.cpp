@@ -1,12 +1,20 @@
 #include "bounce/core/files.h"
 
+#include <OpenImageIO/hash.h>
 #include <signal.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <vector>
 
 #include "bounce/core/error.h"
+#include "bounce/core/random.h"
 
 namespace bounce {
 
@@ -25,7 +33,37 @@ void check_input_file(const std::string& path) {
     if (std::string why = not_a_regular_file(path); !why.empty()) throw InputError(path, "", why);
 }
 
-void check_output_file(const std::string& path, const std::vector<std::string>& inputs) {
+namespace {
+
+/// Throws unless `dir` is an existing folder in which a new file can be created (and removed).
+void check_output_folder(const std::string& path, const fs::path& dir) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(dir, ec);
+    if (ec || st.type() == fs::file_type::not_found)
+        throw InputError(path, "", "its folder " + dir.string() + " does not exist");
+    if (st.type() != fs::file_type::directory) throw InputError(path, "", dir.string() + " is not a folder");
+    std::string probe = (dir / ".bounce-probe-XXXXXX").string();
+    const int fd = ::mkstemp(probe.data());
+    if (fd < 0)
+        throw InputError(path, "", "cannot create a file in " + dir.string() + ": " + std::strerror(errno));
+    ::close(fd);
+    ::unlink(probe.c_str());
+}
+
+bool inside(const fs::path& path, const fs::path& folder) {
+    std::error_code ec;
+    const fs::path p = fs::weakly_canonical(path, ec), f = fs::weakly_canonical(folder, ec);
+    auto pi = p.begin();
+    for (auto fi = f.begin(); fi != f.end(); ++fi, ++pi)
+        if (fi->empty()) continue;  // a trailing separator
+        else if (pi == p.end() || *pi != *fi) return false;
+    return true;
+}
+
+}  // namespace
+
+void check_output_file(const std::string& path, const std::vector<std::string>& inputs,
+                       const std::vector<std::string>& input_folders) {
     std::error_code ec;
     fs::file_status st = fs::status(path, ec);
     if (!ec && st.type() == fs::file_type::directory) throw InputError(path, "", "output is a directory");
@@ -38,6 +76,42 @@ void check_output_file(const std::string& path, const std::vector<std::string>& 
                     fs::weakly_canonical(path, e1) == fs::weakly_canonical(in, e1);
         if (same) throw InputError(path, "", "output names an input (" + in + "); it would be overwritten");
     }
+    for (const auto& folder : input_folders)
+        if (!folder.empty() && inside(path, folder))
+            throw InputError(path, "", "output lies inside " + folder + ", a folder the scene reads");
+    const fs::path p(path);
+    check_output_folder(path, p.has_parent_path() ? p.parent_path() : fs::path("."));
+}
+
+uint64_t file_content_hash(const std::string& path) {
+    struct Seen {
+        uintmax_t size;
+        int64_t mtime;
+        uint64_t hash;
+    };
+    static std::mutex mutex;
+    static std::map<std::string, Seen> seen;
+    std::error_code ec;
+    const uintmax_t size = fs::file_size(path, ec);
+    if (ec) return 0;  // the loader reports a missing file itself
+    const int64_t mtime = fs::last_write_time(path, ec).time_since_epoch().count();
+    {
+        std::lock_guard lock(mutex);
+        auto it = seen.find(path);
+        if (it != seen.end() && it->second.size == size && it->second.mtime == mtime) return it->second.hash;
+    }
+    std::ifstream in(path, std::ios::binary);
+    std::vector<char> chunk(1 << 20);
+    uint64_t h = hash_combine(0x6a09e667f3bcc909ULL, size);
+    while (in) {
+        in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+        const auto n = static_cast<size_t>(in.gcount());
+        if (n == 0) break;
+        h = hash_combine(h, OIIO::xxhash::XXH64(chunk.data(), n, 0));
+    }
+    std::lock_guard lock(mutex);
+    seen[path] = {size, mtime, h};
+    return h;
 }
 
 void remove_stale_temporaries(const std::string& path) {

@@ -14,8 +14,14 @@ std::string not_a_regular_file(const std::string& path);
 /// Throws InputError(path) unless `path` is a regular file.
 void check_input_file(const std::string& path);
 /// Throws InputError(path) when `path` is a directory, a device, a FIFO or anything else
-/// but a regular file or a new name, or when it is the same file as one of `inputs`.
-void check_output_file(const std::string& path, const std::vector<std::string>& inputs);
+/// but a regular file or a new name, when it is the same file as one of `inputs` or lies
+/// inside one of `input_folders`, or when its folder does not exist or cannot take a new file
+/// (a read-only or pseudo file system such as /proc: a file is created there and removed).
+void check_output_file(const std::string& path, const std::vector<std::string>& inputs,
+                       const std::vector<std::string>& input_folders = {});
+/// A 64-bit hash of the file's whole content (xxHash), remembered per (path, size, mtime) for
+/// the process: identities cover what a file holds, not only its name.
+uint64_t file_content_hash(const std::string& path);
 /// Removes temporary files of dead processes that write_atomically left beside `path`
 /// (a SIGKILL cannot be caught).
 void remove_stale_temporaries(const std::string& path);

@@ -3,7 +3,15 @@
 #include <filesystem>
 #include <regex>
 
+#include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <fstream>
+
 #include "bounce/cache/cache_file.h"
+#include "bounce/cache/passes.h"
+#include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
 
@@ -13,18 +21,19 @@ namespace fs = std::filesystem;
 
 std::string FrameFiles::png() const { return fs::path(output).replace_extension(".png").string(); }
 
-void FrameFiles::check() const {
+void FrameFiles::check(const Scene& loaded) const {
     std::string ext = fs::path(output).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
     if (ext != ".exr")
         throw InputError("command line", "-o " + output, "the output is an OpenEXR file (.exr); its PNG is written beside it");
-    const std::vector<std::string> inputs{scene, deep_in, cache_in, base};
+    std::vector<std::string> inputs = loaded.input_paths();
+    inputs.insert(inputs.end(), {scene, deep_in, cache_in, base});
     std::vector<std::pair<std::string, std::string>> outputs{{"-o", output}, {"-o", png()}};
     if (!deep_out.empty()) outputs.emplace_back("--deep-out", deep_out);
     if (!cache_out.empty()) outputs.emplace_back("--cache-out", cache_out);
     if (!stats_json.empty()) outputs.emplace_back("--stats-json", stats_json);
     for (size_t i = 0; i < outputs.size(); ++i) {
-        check_output_file(outputs[i].second, inputs);
+        check_output_file(outputs[i].second, inputs, loaded.input_folders);
         for (size_t j = 0; j < i; ++j)
             if (fs::path(outputs[i].second).lexically_normal() == fs::path(outputs[j].second).lexically_normal())
                 throw InputError("command line", outputs[i].first + " " + outputs[i].second,
@@ -53,20 +62,61 @@ FrameFiles sequence_frame(const FrameFiles& patterns, int first, int frame) {
     return f;
 }
 
-void write_frame_outputs(const RenderResult& result, const FrameFiles& files, const std::string& show) {
+std::vector<std::string> frame_layers(const Scene& scene, bool with_cache) {
+    std::vector<std::string> layers{"beauty", "albedo", "N", "depth"};
+    const IndirectSettings& ind = scene.render.indirect;
+    if (!ind.ao) layers.push_back("direct");
+    if (ind.any()) layers.insert(layers.end(), {"indirect", "ao", "bentnormal"});
+    if (ind.gi == GiMode::Cache || with_cache) layers.push_back("records");
+    if (ind.gi == GiMode::Cache && refinement_runs(scene)) layers.push_back("refined");
+    return layers;
+}
+
+void check_show_layer(const std::string& show, const Scene& scene, bool with_cache) {
+    const std::vector<std::string> layers = frame_layers(scene, with_cache);
+    if (std::find(layers.begin(), layers.end(), show) != layers.end()) return;
+    if (show == "records") throw InputError("command line", "--show " + show, "no records to show (render with --gi cache or give --cache-in)");
+    throw InputError("command line", "--show " + show, fmt::format("this render writes no layer \"{}\" (its layers: {})", show,
+                                                                    fmt::join(layers, ", ")));
+}
+
+void check_base(const std::string& base, const Scene& scene) {
+    check_input_file(base);
+    auto in = OIIO::ImageInput::open(base);
+    if (!in) throw InputError(base, "", "not a readable image: " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    if (spec.full_width != scene.camera.width || spec.full_height != scene.camera.height || spec.width != spec.full_width ||
+        spec.height != spec.full_height)
+        throw InputError(base, "", fmt::format("base image is {}x{} ({}x{} stored); the render is a {}x{} frame", spec.full_width,
+                                               spec.full_height, spec.width, spec.height, scene.camera.width, scene.camera.height));
+    const std::string want = fmt::format("{:016x}", scene.visibility_fingerprint());
+    const std::string have = spec.get_string_attribute("bounce:scene_fingerprint");
+    if (have != want)
+        throw InputError(base, "bounce:scene_fingerprint",
+                         have.empty() ? "not a bounce render (no scene fingerprint)"
+                                      : "base was rendered from another scene or camera: paste the crop over a render of this one");
+}
+
+void write_frame_outputs(const RenderResult& result, const FrameFiles& files, const std::string& show, Stats& stats) {
+    PhaseTimer t(stats, "write outputs");
     const Image* image = &result.image;
     Image pasted;
     if (!files.base.empty()) {
         pasted = paste_over(read_exr(files.base), result.image, files.base);
         image = &pasted;
     }
-    if (!image->find(show))
-        throw InputError("command line", "--show " + show,
-                         show == "records" ? "no records to show (render with --gi cache or give --cache-in)"
-                                           : "the render has no layer \"" + show + "\"");
     write_exr(files.output, *image);
     write_png(files.png(), *image, show);
+    if (!files.deep_out.empty() && result.gathered_deep) write_deep(files.deep_out, *result.gathered_deep);
     if (result.cache && !files.cache_out.empty()) write_cache_file(files.cache_out, result.cache->to_file(result.cache_info));
+    t.stop();
+    if (files.stats_json.empty()) return;
+    const std::string text = stats.to_json().dump(2) + "\n";
+    write_atomically(files.stats_json, [&](const std::string& tmp) {
+        std::ofstream out(tmp);
+        out << text;
+        if (!out) throw InputError(files.stats_json, "", "cannot write stats file");
+    });
 }
 
 }  // namespace bounce

@@ -1,13 +1,15 @@
 // A frame's files and a sequence of frames, as a farm driver or the lighting tool needs them:
 // the checks made before any work (outputs that would destroy an input, a device or a
-// directory), the order outputs are written in (image first, then the cache), and frame
-// sequences in which each frame starts from the previous frame's cache.
+// directory; a --show layer the render does not make; a --base of another scene), the order
+// outputs are written in at the end of the frame, and frame sequences in which each frame
+// starts from the previous frame's cache.
 #pragma once
 
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "bounce/core/stats.h"
 #include "bounce/render/render.h"
 
 namespace bounce {
@@ -20,9 +22,11 @@ struct FrameFiles {
     /// The PNG written beside `output`.
     std::string png() const;
     /// Refuses (InputError) outputs that are not regular files or new names, that name an input
-    /// or each other, and an `output` that is not an .exr; removes stale temporary files that
-    /// killed renders left beside the outputs.
-    void check() const;
+    /// (this frame's files, and every file `loaded` reads: meshes, textures, maps, the sky) or
+    /// each other, that lie in a folder it reads (radiosity textures) or in a folder
+    /// that cannot take a new file, and an `output` that is not an .exr; removes stale
+    /// temporary files that killed renders left beside the outputs.
+    void check(const Scene& loaded) const;
 };
 
 /// Expands #### in every file name with `frame`.
@@ -35,9 +39,20 @@ std::pair<int, int> parse_frame_range(const std::string& text, const std::string
 /// comes from the previous frame's cache output (records are reused, new ones added).
 FrameFiles sequence_frame(const FrameFiles& patterns, int first, int frame);
 
-/// Writes the image (EXR, then the PNG of layer `show`) and then the cache, so that a render
-/// killed while writing never leaves a new cache beside an old image. With `files.base` the
-/// image is the base frame with the render's window pasted over it.
-void write_frame_outputs(const RenderResult& result, const FrameFiles& files, const std::string& show);
+/// The layers a render of `scene` writes (with_cache: a cache file is read for its records).
+std::vector<std::string> frame_layers(const Scene& scene, bool with_cache);
+/// InputError("command line", "--show ...") unless the render of `scene` writes layer `show`.
+void check_show_layer(const std::string& show, const Scene& scene, bool with_cache);
+/// InputError(base) unless `base` is a full-frame EXR rendered from this scene's camera and
+/// objects (its lights and materials may differ: that is what a lighter's crop changes).
+void check_base(const std::string& base, const Scene& scene);
+
+/// Writes a frame's outputs once it has finished, in one order: the EXR, its PNG (layer
+/// `show`), the deep file, the cache, then the stats. A render killed before this leaves every
+/// earlier output as it was; killed during it, the outputs before the one being written are new
+/// and those after it old — so a cache or stats file newer than the EXR never exists (each is
+/// written to a temporary name and renamed). With `files.base` the image is the base frame with
+/// the render's window pasted over it.
+void write_frame_outputs(const RenderResult& result, const FrameFiles& files, const std::string& show, Stats& stats);
 
 }  // namespace bounce

@@ -86,10 +86,6 @@ VisibilityResult visibility_pass(const FrameContext& ctx, const FramePlan& plan,
             break;
         }
     }
-    if (!plan.deep_out.empty()) {
-        PhaseTimer t(ctx.stats, "write deep");
-        write_deep(plan.deep_out, out.gathered);
-    }
     out.shaded = cropped ? sub_window(out.gathered, plan.window) : out.gathered;
     return out;
 }

@@ -35,8 +35,8 @@ struct FrameContext {
 struct VisibilityResult {
     DeepBuffer gathered, shaded;
 };
-/// Traces, reads or takes over the previous frame's deep buffer, as the plan says; writes
-/// plan.deep_out.
+/// Traces, reads or takes over the previous frame's deep buffer, as the plan says (plan.deep_out
+/// is written by the front end, with the frame's other outputs).
 VisibilityResult visibility_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous);
 
 /// The cache a frame starts from (null when the plan has none).

@@ -256,6 +256,7 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
             add_records_layer(result.image, scene.camera, positions);
         }
         result.deep = deep.shaded;
+        if (!plan.deep_out.empty()) result.gathered_deep = std::make_shared<const DeepBuffer>(deep.gathered);
     });
     stats.set("pixels", static_cast<double>(result.deep.pixel_count()));
     if (result.deep.pixel_count() > 0)
@@ -268,7 +269,9 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
 
 RenderResult render(const Scene& scene, const RenderRequest& request, Stats& stats, ProgressSink* progress) {
     const FrameState none;
-    return run_frame(scene, plan_frame(scene, none, request), none, request, stats, progress);
+    RenderResult r = run_frame(scene, plan_frame(scene, none, request), none, request, stats, progress);
+    if (r.gathered_deep) write_deep(r.plan.deep_out, *r.gathered_deep);
+    return r;
 }
 
 }  // namespace bounce

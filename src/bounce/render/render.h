@@ -26,6 +26,9 @@ struct RenderResult {
     FramePlan plan;   ///< the plan that ran
     Image image;      ///< the shaded window (the crop, or the full frame)
     DeepBuffer deep;  ///< its fragments
+    /// The gathered window's deep buffer (the window and its margin) when the plan has a
+    /// deep_out: the front end writes it with the frame's other outputs, at the end.
+    std::shared_ptr<const DeepBuffer> gathered_deep;
     std::unique_ptr<IrradianceCache> cache;  ///< gi cache, or a loaded cache_in
     CacheFileInfo cache_info;                ///< the header a cache file of it carries
     size_t records_loaded = 0, records_new = 0;
@@ -46,9 +49,9 @@ struct RenderResult {
 RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameState& previous, const RenderRequest& request,
                        Stats& stats, ProgressSink* progress);
 
-/// A still: the plan of `request` with nothing from a previous frame, run. With a crop, the
-/// gathering pass covers the crop and a margin as wide as the largest record reach, so a
-/// crop's edges match a full render.
+/// A still: the plan of `request` with nothing from a previous frame, run; the deep file (if
+/// asked for) written once it has finished. With a crop, the gathering pass covers the crop
+/// and a margin as wide as the largest record reach, so a crop's edges match a full render.
 RenderResult render(const Scene& scene, const RenderRequest& request, Stats& stats, ProgressSink* progress);
 
 /// The full frame: `base` (an earlier render of the whole frame) with `window` pasted over it,

@@ -9,6 +9,7 @@
 
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
+#include "bounce/core/json_limits.h"
 
 namespace bounce {
 
@@ -118,6 +119,7 @@ struct KeyTracker {
 json parse_json_text(const std::string& text, const std::string& path) {
     KeyTracker keys;
     json doc;
+    check_json_nesting(text, path);
     try {
         doc = json::parse(text, [&keys](int d, json::parse_event_t e, json& p) { return keys(d, e, p); });
     } catch (const json::parse_error& e) {
@@ -155,6 +157,7 @@ std::string apply_override(json& doc, const Override& o) {
     }
     if (key.back() == '.') fail("empty path component");
     json value;
+    check_json_nesting(text, o.origin);
     try {
         value = json::parse(text);
     } catch (const json::parse_error&) {
@@ -259,7 +262,15 @@ std::string JsonReader::file(const std::string& key, bool required) const {
     fs::path p = fs::path(s).is_absolute() ? fs::path(s) : ctx_.dir / s;
     if (std::string why = not_a_regular_file(p.string()); !why.empty())
         ctx_.fail(at(key), fmt::format("{}: \"{}\"", why, p.string()));
-    return p.lexically_normal().string();
+    const std::string path = p.lexically_normal().string();
+    if (ctx_.inputs) ctx_.inputs->push_back({path, at(key)});
+    return path;
+}
+
+void JsonReader::only(const std::vector<std::string>& keys, const std::string& what) const {
+    for (auto it = j_.begin(); it != j_.end(); ++it)
+        if (std::find(keys.begin(), keys.end(), it.key()) == keys.end())
+            ctx_.fail(at(it.key()), fmt::format("\"{}\" does not apply to {} (its keys: {})", it.key(), what, fmt::join(keys, ", ")));
 }
 
 float JsonReader::check_number(const json& v, const std::string& ptr, double lo, double hi) const {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "bounce/core/math.h"
+#include "bounce/scene/scene.h"
 
 namespace bounce {
 
@@ -29,6 +30,8 @@ struct JsonContext {
     std::string file;
     std::filesystem::path dir;
     std::map<std::string, std::string> cli_origins;  ///< JSON pointer -> how the user wrote it
+    /// Every file JsonReader::file resolves is appended here (null: not recorded).
+    std::vector<SceneInput>* inputs = nullptr;
 
     /// Throws InputError at `ptr`, blaming the command line when an override set it.
     [[noreturn]] void fail(const std::string& ptr, const std::string& msg) const;
@@ -74,10 +77,13 @@ public:
     std::string string(const std::string& key, const std::string& def, bool required = false) const;
     bool boolean(const std::string& key, bool def) const;
     std::string choice(const std::string& key, const std::string& def, const std::vector<std::string>& options) const;
-    /// A file name, resolved against the scene's folder; must be a regular file.
+    /// A file name, resolved against the scene's folder; must be a regular file. Recorded in
+    /// the context's inputs.
     std::string file(const std::string& key, bool required) const;
 
     float check_number(const nlohmann::json& v, const std::string& ptr, double lo, double hi) const;
+    /// Fails on the first key outside `keys`: "does not apply to `what` (its keys: ...)".
+    void only(const std::vector<std::string>& keys, const std::string& what) const;
     Vec3 to_vec3(const nlohmann::json& v, const std::string& ptr) const;
 
 private:

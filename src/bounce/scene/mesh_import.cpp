@@ -14,6 +14,8 @@
 #include <sstream>
 
 #include "bounce/core/error.h"
+#include "bounce/core/files.h"
+#include "bounce/scene/mesh_checks.h"
 
 namespace bounce {
 
@@ -41,9 +43,12 @@ aiMatrix4x4 node_world(const aiNode* n) {
 const unsigned kAssimpFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                               aiProcess_SortByPType | aiProcess_ValidateDataStructure;
 
-const aiScene* import_file(Assimp::Importer& imp, const std::string& path, unsigned flags = kAssimpFlags) {
+/// Reads `path` through Assimp after mesh_checks.h's checks; the files it names (a glTF's
+/// buffers and images, an OBJ's MTL files) are appended to `files_read`.
+const aiScene* import_file(Assimp::Importer& imp, const std::string& path, unsigned flags, std::vector<std::string>* files_read) {
     imp.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-    check_ply_counts(path);
+    const std::vector<std::string> named = check_mesh_file(path);
+    if (files_read) files_read->insert(files_read->end(), named.begin(), named.end());
     const aiScene* s = imp.ReadFile(path, flags);
     if (!s) throw InputError(path, "", std::string("cannot load mesh: ") + imp.GetErrorString());
     return s;
@@ -98,7 +103,7 @@ std::optional<GltfCamera> gltf_camera(const std::string& path) {
 
 json describe_mesh_file(const std::string& path) {
     Assimp::Importer imp;
-    const aiScene* s = import_file(imp, path);
+    const aiScene* s = import_file(imp, path, kAssimpFlags, nullptr);
     json doc;
     doc["objects"] = json::array({{{"name", fs::path(path).stem().string()}, {"file", fs::path(path).filename().string()}}});
     if (s->mNumCameras == 0)
@@ -167,47 +172,11 @@ json describe_mesh_file(const std::string& path) {
     return doc;
 }
 
-void check_ply_counts(const std::string& path) {
-    std::string ext = fs::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-    if (ext != ".ply") return;
-    std::ifstream in(path, std::ios::binary);
-    std::string line;
-    bool ascii = false;
-    uint64_t declared = 0;
-    size_t header_lines = 0;
-    while (std::getline(in, line)) {
-        ++header_lines;
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        std::istringstream ls(line);
-        std::string word;
-        ls >> word;
-        if (word == "format") {
-            ls >> word;
-            ascii = word == "ascii";
-        } else if (word == "element") {
-            std::string name;
-            uint64_t n = 0;
-            ls >> name >> n;
-            declared += n;
-        } else if (word == "end_header") {
-            break;
-        }
-        if (header_lines > 10000) return;
-    }
-    if (!ascii) return;
-    uint64_t body = 0;
-    while (std::getline(in, line))
-        if (line.find_first_not_of(" \t\r") != std::string::npos) ++body;
-    if (body < declared)
-        throw InputError(path, fmt::format("line {}", header_lines + body + 1),
-                         fmt::format("the header declares {} elements but the file holds {} lines of data", declared, body));
-}
-
 /// The file's materials appended to `materials` (named "<prefix>/<name>"), or `override_material`
 /// for all: the scene index of each of the file's materials.
 std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path, const std::string& prefix,
-                                       std::vector<Material>& materials, int override_material) {
+                                       std::vector<Material>& materials, int override_material,
+                                       std::vector<std::string>* files_read) {
     std::vector<uint32_t> mat_map(s->mNumMaterials);
     if (override_material < 0) {
         for (unsigned i = 0; i < s->mNumMaterials; ++i) {
@@ -220,9 +189,18 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
             aiColor3D diffuse;
             if (am->Get(AI_MATKEY_BASE_COLOR, base) == AI_SUCCESS) m.color = {base.r, base.g, base.b};
             else if (am->Get(AI_MATKEY_COLOR_DIFFUSE, diffuse) == AI_SUCCESS) m.color = to_vec3(diffuse);
-            m.color = vmin(vmax(m.color, Color(0)), Color(1));
+            const std::string where = "material " + m.name.substr(prefix.size() + 1);
+            // As a JSON material's: an albedo above 1 creates energy, a radiance above 1e20 overflows.
+            for (int c = 0; c < 3; ++c)
+                if (!(m.color[c] >= 0 && m.color[c] <= 1))
+                    throw InputError(path, where, fmt::format("base colour {} is not in [0, 1]", m.color[c]));
             aiColor3D ke;
-            if (am->Get(AI_MATKEY_COLOR_EMISSIVE, ke) == AI_SUCCESS) m.emission = vmax(to_vec3(ke), Color(0));
+            if (am->Get(AI_MATKEY_COLOR_EMISSIVE, ke) == AI_SUCCESS) m.emission = to_vec3(ke);
+            float strength = 1;
+            if (am->Get(AI_MATKEY_EMISSIVE_INTENSITY, strength) == AI_SUCCESS) m.emission = m.emission * strength;
+            for (int c = 0; c < 3; ++c)
+                if (!(m.emission[c] >= 0 && m.emission[c] <= kMaxRadiometric))
+                    throw InputError(path, where, fmt::format("emission {} is not in [0, {:g}]", m.emission[c], kMaxRadiometric));
             // Glossy lobe: glTF metallic-roughness (F0 = mix(0.04, base, metallic), the diffuse
             // part darkened by 1 - metallic), or MTL's Ks and Ns (Blinn-Phong exponent to GGX
             // roughness: alpha = sqrt(2 / (Ns + 2))).
@@ -239,13 +217,16 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
                 if (am->Get(AI_MATKEY_SHININESS, ns) == AI_SUCCESS && ns > 0)
                     m.roughness = std::clamp(std::sqrt(std::sqrt(2 / (ns + 2))), 0.01f, 1.0f);
             }
+            // A texture the file names must be there: a missing one would render untextured.
             auto texture = [&](std::initializer_list<aiTextureType> types) -> std::string {
                 aiString tex;
                 for (aiTextureType type : types) {
                     if (am->GetTexture(type, 0, &tex) != AI_SUCCESS || tex.C_Str()[0] == '*') continue;
-                    fs::path t = fs::path(path).parent_path() / tex.C_Str();
-                    std::error_code ec;
-                    if (fs::is_regular_file(t, ec)) return t.lexically_normal().string();
+                    const std::string t = (fs::path(path).parent_path() / tex.C_Str()).lexically_normal().string();
+                    if (std::string why = not_a_regular_file(t); !why.empty())
+                        throw InputError(path, where, fmt::format("texture {}: \"{}\"", why, t));
+                    if (files_read) files_read->push_back(t);
+                    return t;
                 }
                 return "";
             };
@@ -263,11 +244,11 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
     return mat_map;
 }
 
-TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
-                            std::vector<Material>& materials, int override_material) {
+TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
+                            int override_material, std::vector<std::string>* files_read) {
     Assimp::Importer imp;
-    const aiScene* s = import_file(imp, path, kAssimpFlags);
-    const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material);
+    const aiScene* s = import_file(imp, path, kAssimpFlags, files_read);
+    const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material, files_read);
     TriangleMesh out;
     for_each_mesh_instance(s, [&](const aiMesh* am, const Transform& t) {
         if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) return;
@@ -291,12 +272,12 @@ TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
 }
 
 ControlMesh load_control_mesh(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                              int override_material, const Transform& transform) {
+                              int override_material, const Transform& transform, std::vector<std::string>* files_read) {
     // Faces stay polygons; vertices are welded by position here (Assimp keeps uv seams apart,
     // which would cut the subdivision surface) and uvs become face-varying values.
     Assimp::Importer imp;
-    const aiScene* s = import_file(imp, path, aiProcess_SortByPType | aiProcess_ValidateDataStructure);
-    const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material);
+    const aiScene* s = import_file(imp, path, aiProcess_SortByPType | aiProcess_ValidateDataStructure, files_read);
+    const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material, files_read);
     ControlMesh c;
     c.source = path;
     std::map<std::array<float, 3>, int> vertex_of;

@@ -12,23 +12,22 @@
 
 namespace bounce {
 
-/// Loads every triangle of a mesh file through Assimp, node transforms applied. Materials of
-/// the file are appended to `materials` (named "<prefix>/<name>") unless `override_material`
-/// is given, in which case every face uses it.
-TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix,
-                            std::vector<Material>& materials, int override_material);
+/// Loads every triangle of a mesh file through Assimp (after mesh_checks.h's checks), node
+/// transforms applied. Materials of the file are appended to `materials` (named
+/// "<prefix>/<name>"; a base colour above 1, an emission that is not finite, or a texture that
+/// is not there is an error) unless `override_material` is given, in which case every face uses
+/// it. The other files it reads (MTL, buffers, textures) are appended to `files_read`.
+TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
+                            int override_material, std::vector<std::string>* files_read = nullptr);
 
 /// Loads a mesh file's polygons as a subdivision control mesh (faces not triangulated,
 /// vertices welded by position, uvs face-varying), node transforms and then `transform`
 /// applied; materials as load_mesh_file.
 ControlMesh load_control_mesh(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                              int override_material, const Transform& transform);
+                              int override_material, const Transform& transform,
+                              std::vector<std::string>* files_read = nullptr);
 
 /// Describes a bare mesh file as a JSON scene: the file's camera and punctual lights.
 nlohmann::json describe_mesh_file(const std::string& path);
-
-/// An ASCII PLY whose header declares more elements than its body holds is refused (Assimp
-/// would load the part that is there); binary files and other formats pass.
-void check_ply_counts(const std::string& path);
 
 }  // namespace bounce

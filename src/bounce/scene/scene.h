@@ -79,8 +79,18 @@ struct Object {
     const TriangleMesh& visible() const { return has_fine() ? fine : coarse; }
 };
 
+/// A file a scene reads and the key that named it ("/objects/2/file", "/materials/wood/color_texture");
+/// files a mesh file pulls in (an OBJ's MTL, a glTF's buffers and images) carry its key.
+struct SceneInput {
+    std::string path;
+    std::string pointer;
+    uint64_t hash = 0;  ///< file_content_hash, taken at load
+};
+
 struct Scene {
     std::string path;  ///< the file it came from
+    std::vector<SceneInput> inputs;          ///< every file it reads (not the scene file itself)
+    std::vector<std::string> input_folders;  ///< folders it reads (render.radiosity_textures)
     Camera camera;
     std::vector<Light> lights;
     std::vector<Material> materials;
@@ -95,7 +105,12 @@ struct Scene {
     /// `without_surface_shading` leaves out the material keys that only change how a surface
     /// reflects light to the camera (specular, roughness, bump and normal maps): cached
     /// irradiance does not depend on them.
+    /// Each part's hash includes the content of the files named under it (inputs_hash).
     uint64_t fingerprint(const std::vector<std::string>& parts, bool without_surface_shading = false) const;
+    /// Hash of the content of the input files named under top-level `part` ("objects" ...).
+    uint64_t inputs_hash(const std::string& part, bool without_surface_shading = false) const;
+    /// The scene file and every file it reads: what no output may overwrite.
+    std::vector<std::string> input_paths() const;
     /// What a deep file depends on: the camera and the objects, without the fur keys that only
     /// change how strands are lit (colours, specular, falloff, what rays see them), and with
     /// subdivision surfaces the dicing settings.

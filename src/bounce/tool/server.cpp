@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "bounce/core/error.h"
+#include "bounce/core/json_limits.h"
 
 namespace bounce {
 
@@ -28,6 +29,7 @@ void reply(httplib::Response& res, int status, const json& body) {
 /// The request's JSON body, an object; InputError naming the byte of a syntax error.
 json body_object(const httplib::Request& req) {
     json j;
+    check_json_nesting(req.body, "request body");
     try {
         j = json::parse(req.body);
     } catch (const json::parse_error& e) {

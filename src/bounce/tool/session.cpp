@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "bounce/cache/cache_file.h"
+#include "bounce/core/json_limits.h"
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
@@ -128,6 +129,7 @@ LightingSession::LightingSession(SessionOptions options) : options_(std::move(op
         const auto eq = s.find('=');
         if (eq == std::string::npos) throw InputError("command line", "--set " + s, "expected key=value");
         const std::string text = s.substr(eq + 1);
+        check_json_nesting(text, "--set " + s);
         json v = json::parse(text, nullptr, false);
         edit(s.substr(0, eq), v.is_discarded() ? json(text) : v, "--set " + s);
     }
@@ -272,7 +274,8 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
     FramePlan plan = plan_frame(scene, previous, req);
     if (plan.visibility == VisibilityStep::Trace) plan.deep_out = deep_path_.string();  // the session's file follows
     RenderResult r = run_frame(scene, plan, previous, req, stats, &sink);
-    // Only a finished render replaces the cache (atomically) and the image.
+    // Only a finished render replaces the deep file and the cache (atomically) and the image.
+    if (r.gathered_deep) write_deep(plan.deep_out, *r.gathered_deep);
     if (cached && r.cache && (r.cache_changed() || action != SessionAction::Reshade))
         write_cache_file(cache_path_.string(), r.cache->to_file(r.cache_info));
     std::lock_guard lock(mutex_);

@@ -1,0 +1,23 @@
+// Readers of a scene file's items other than objects: lights (keys checked per light type),
+// materials, object transforms. Each names the JSON pointer of a bad value.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "bounce/scene/json_reader.h"
+#include "bounce/scene/scene.h"
+
+namespace bounce {
+
+/// The keys a material may have.
+const std::vector<std::string>& material_keys();
+/// Every key any light type reads (the reader then checks them against the light's type).
+const std::vector<std::string>& light_keys();
+
+Material read_material(const JsonReader& m, const std::string& name);
+Light read_light(const JsonReader& r);
+/// An object's "transform": {translate, rotate [deg, axis], scale} or {matrix}; identity if absent.
+Transform read_transform(const JsonReader& obj);
+
+}  // namespace bounce

@@ -1,0 +1,223 @@
+#include "bounce/scene/mesh_checks.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "bounce/core/error.h"
+#include "bounce/core/files.h"
+#include "bounce/core/json_limits.h"
+
+namespace bounce {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string lower_extension(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    return ext;
+}
+
+/// Bytes of one value of a PLY scalar type; 0 for an unknown name.
+uint64_t ply_type_size(const std::string& t) {
+    static const std::map<std::string, uint64_t> sizes = {
+        {"char", 1},  {"uchar", 1},  {"int8", 1},   {"uint8", 1},   {"short", 2},   {"ushort", 2},   {"int16", 2},
+        {"uint16", 2}, {"int", 4},   {"uint", 4},   {"int32", 4},   {"uint32", 4},  {"float", 4},    {"float32", 4},
+        {"double", 8}, {"float64", 8}};
+    auto it = sizes.find(t);
+    return it == sizes.end() ? 0 : it->second;
+}
+
+/// The JSON of a .gltf file or a .glb's JSON chunk; InputError for a truncated or foreign .glb.
+std::string gltf_json_text(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::string text((std::istreambuf_iterator<char>(in)), {});
+    if (lower_extension(path) != ".glb") return text;
+    if (text.size() < 20 || std::memcmp(text.data(), "glTF", 4) != 0)
+        throw InputError(path, "byte 0", "not a binary glTF file (no glTF header)");
+    uint32_t version = 0, total = 0, len = 0, type = 0;
+    std::memcpy(&version, text.data() + 4, 4);
+    std::memcpy(&total, text.data() + 8, 4);
+    std::memcpy(&len, text.data() + 12, 4);
+    std::memcpy(&type, text.data() + 16, 4);
+    if (version != 2) throw InputError(path, "byte 4", fmt::format("glTF version {} (bounce reads glTF 2.0)", version));
+    if (total > text.size())
+        throw InputError(path, "byte 8", fmt::format("truncated: the header declares {} bytes, the file has {}", total, text.size()));
+    if (type != 0x4E4F534Au || 20 + static_cast<uint64_t>(len) > text.size())
+        throw InputError(path, "byte 12", "truncated or malformed JSON chunk");
+    return text.substr(20, len);
+}
+
+/// Depth of the node hierarchy, walked without recursion; a node reached twice (two parents
+/// or a cycle) or a child index out of range is an error.
+int gltf_node_depth(const json& nodes, const std::string& path) {
+    if (!nodes.is_array()) throw InputError(path, "/nodes", "expected an array");
+    const size_t n = nodes.size();
+    std::vector<int> parents(n, 0);
+    for (size_t i = 0; i < n; ++i) {
+        if (!nodes[i].is_object()) throw InputError(path, fmt::format("/nodes/{}", i), "expected an object");
+        if (!nodes[i].contains("children")) continue;
+        const json& c = nodes[i]["children"];
+        if (!c.is_array()) throw InputError(path, fmt::format("/nodes/{}/children", i), "expected an array of node indices");
+        for (size_t k = 0; k < c.size(); ++k) {
+            if (!c[k].is_number_unsigned() || c[k].get<uint64_t>() >= n)
+                throw InputError(path, fmt::format("/nodes/{}/children/{}", i, k), "not a node index");
+            if (++parents[c[k].get<size_t>()] > 1)
+                throw InputError(path, fmt::format("/nodes/{}/children/{}", i, k),
+                                 fmt::format("node {} has two parents (a glTF node tree is a forest)", c[k].get<size_t>()));
+        }
+    }
+    int deepest = 0;
+    size_t reached = 0;
+    std::vector<std::pair<size_t, int>> stack;
+    for (size_t i = 0; i < n; ++i)
+        if (parents[i] == 0) stack.emplace_back(i, 1);
+    while (!stack.empty()) {
+        auto [node, depth] = stack.back();
+        stack.pop_back();
+        ++reached;
+        if (depth > kMaxNodeDepth)
+            throw InputError(path, fmt::format("/nodes/{}", node), fmt::format("node hierarchy deeper than {} levels", kMaxNodeDepth));
+        deepest = std::max(deepest, depth);
+        if (nodes[node].contains("children"))
+            for (const json& c : nodes[node]["children"]) stack.emplace_back(c.get<size_t>(), depth + 1);
+    }
+    if (reached != n) throw InputError(path, "/nodes", "the node hierarchy has a cycle");
+    return deepest;
+}
+
+/// Files a glTF's buffers and images name (data: URIs aside), each required to exist.
+std::vector<std::string> gltf_referenced_files(const json& j, const std::string& path) {
+    std::vector<std::string> out;
+    for (const char* list : {"buffers", "images"}) {
+        if (!j.contains(list)) continue;
+        if (!j[list].is_array()) throw InputError(path, std::string("/") + list, "expected an array");
+        for (size_t i = 0; i < j[list].size(); ++i) {
+            const json& item = j[list][i];
+            if (!item.is_object() || !item.contains("uri")) continue;
+            const std::string where = fmt::format("/{}/{}/uri", list, i);
+            if (!item["uri"].is_string()) throw InputError(path, where, "expected a string");
+            const std::string uri = item["uri"].get<std::string>();
+            if (uri.rfind("data:", 0) == 0) continue;
+            const fs::path file = (fs::path(path).parent_path() / uri).lexically_normal();
+            if (std::string why = not_a_regular_file(file.string()); !why.empty())
+                throw InputError(path, where, fmt::format("{}: \"{}\"", why, file.string()));
+            out.push_back(file.string());
+        }
+    }
+    return out;
+}
+
+std::vector<std::string> check_gltf(const std::string& path) {
+    const std::string text = gltf_json_text(path);
+    check_json_nesting(text, path);
+    json j;
+    try {
+        j = json::parse(text);
+    } catch (const json::exception& e) {
+        std::string msg = e.what();
+        const auto pos = msg.find("] ");
+        throw InputError(path, "", "malformed glTF JSON (truncated?): " + (pos == std::string::npos ? msg : msg.substr(pos + 2)));
+    }
+    if (!j.is_object()) throw InputError(path, "", "a glTF file holds a JSON object");
+    if (j.contains("nodes")) gltf_node_depth(j["nodes"], path);
+    return gltf_referenced_files(j, path);
+}
+
+/// An OBJ's MTL files (mtllib lines), each counted: more materials than kMaxMtlMaterials is refused.
+std::vector<std::string> check_obj(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::vector<std::string> out;
+    for (std::string line; std::getline(in, line);) {
+        if (line.rfind("mtllib", 0) != 0) continue;
+        std::istringstream ls(line.substr(6));
+        for (std::string name; ls >> name;) {
+            const fs::path mtl = (fs::path(path).parent_path() / name).lexically_normal();
+            if (!not_a_regular_file(mtl.string()).empty()) continue;  // Assimp warns and goes on without it
+            std::ifstream m(mtl, std::ios::binary);
+            size_t count = 0, lineno = 0;
+            for (std::string l; std::getline(m, l);) {
+                ++lineno;
+                const size_t at = l.find_first_not_of(" \t");
+                if (at != std::string::npos && l.compare(at, 6, "newmtl") == 0 && ++count > kMaxMtlMaterials)
+                    throw InputError(mtl.string(), fmt::format("line {}", lineno),
+                                     fmt::format("more than {} materials", kMaxMtlMaterials));
+            }
+            out.push_back(mtl.string());
+        }
+    }
+    return out;
+}
+
+}  // namespace
+
+void check_ply_counts(const std::string& path) {
+    if (lower_extension(path) != ".ply") return;
+    std::ifstream in(path, std::ios::binary);
+    std::string line, format;
+    uint64_t declared = 0, min_bytes = 0, count = 0;
+    size_t header_lines = 0;
+    while (std::getline(in, line)) {
+        ++header_lines;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        std::istringstream ls(line);
+        std::string word;
+        ls >> word;
+        if (word == "format") {
+            ls >> format;
+        } else if (word == "element") {
+            std::string name;
+            ls >> name >> count;
+            if (!ls) throw InputError(path, fmt::format("line {}", header_lines), "malformed element line");
+            declared += count;
+        } else if (word == "property") {
+            std::string type;
+            ls >> type;
+            // A list stores at least its length; a scalar its own size.
+            if (type == "list") ls >> type;
+            const uint64_t size = ply_type_size(type);
+            if (size == 0) throw InputError(path, fmt::format("line {}", header_lines), "unknown property type \"" + type + "\"");
+            if (count > 0 && size > (UINT64_MAX - min_bytes) / count)
+                throw InputError(path, fmt::format("line {}", header_lines), "element counts overflow");
+            min_bytes += count * size;
+        } else if (word == "end_header") {
+            break;
+        }
+        if (header_lines > 10000) throw InputError(path, "header", "no end_header in the first 10000 lines");
+    }
+    const auto body_start = static_cast<uint64_t>(in.tellg());
+    std::error_code ec;
+    const uint64_t size = fs::file_size(path, ec);
+    if (format != "ascii") {
+        if (!ec && min_bytes > size - std::min(size, body_start))
+            throw InputError(path, "header",
+                             fmt::format("corrupted: the header declares {} elements needing at least {} bytes; the file holds {}",
+                                         declared, min_bytes, size - std::min(size, body_start)));
+        return;
+    }
+    uint64_t body = 0;
+    while (std::getline(in, line))
+        if (line.find_first_not_of(" \t\r") != std::string::npos) ++body;
+    if (body < declared)
+        throw InputError(path, fmt::format("line {}", header_lines + body + 1),
+                         fmt::format("the header declares {} elements but the file holds {} lines of data", declared, body));
+}
+
+std::vector<std::string> check_mesh_file(const std::string& path) {
+    const std::string ext = lower_extension(path);
+    if (ext == ".ply") check_ply_counts(path);
+    if (ext == ".gltf" || ext == ".glb") return check_gltf(path);
+    if (ext == ".obj") return check_obj(path);
+    return {};
+}
+
+}  // namespace bounce

@@ -1,0 +1,25 @@
+// Checks a mesh file must pass before Assimp reads it: what a hostile or broken file could do
+// to the importer (a PLY header declaring 4e9 vertices, a glTF node chain 20 000 deep, a
+// million-level JSON nesting, a million MTL materials, a truncated .glb) is refused here with
+// the file and the place (exit 2), never left to a crash, a bad_alloc or a minutes-long load.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace bounce {
+
+/// Deepest glTF node hierarchy accepted (Assimp recurses once per level).
+inline constexpr int kMaxNodeDepth = 1000;
+/// Most materials one OBJ's MTL files may define.
+inline constexpr int kMaxMtlMaterials = 65536;
+
+/// Runs the checks that apply to `path`'s format; returns the files it names that Assimp will
+/// read too (a glTF's buffers and images, an OBJ's MTL files), resolved.
+std::vector<std::string> check_mesh_file(const std::string& path);
+
+/// A PLY whose header declares more elements than its body can hold is refused: ASCII by
+/// counting lines, binary by the bytes its elements need.
+void check_ply_counts(const std::string& path);
+
+}  // namespace bounce

@@ -1,0 +1,233 @@
+#include "bounce/scene/object_reader.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "bounce/core/error.h"
+#include "bounce/core/memory.h"
+#include "bounce/dice/displacement.h"
+#include "bounce/dice/subdivision.h"
+#include "bounce/scene/fur_reader.h"
+#include "bounce/scene/item_readers.h"
+#include "bounce/scene/mesh_import.h"
+
+namespace bounce {
+
+using nlohmann::json;
+
+const std::vector<std::string>& object_keys() {
+    static const std::vector<std::string> keys = {"name",     "type",        "file",     "material",     "transform",
+                                                  "fine_subdivisions", "vertices", "center", "radius", "subdivisions",
+                                                  "subdivision", "boundary", "displacement", "fur"};
+    return keys;
+}
+
+int material_index(const Scene& scene, const std::string& name) {
+    for (size_t i = 0; i < scene.materials.size(); ++i)
+        if (scene.materials[i].name == name) return static_cast<int>(i);
+    return -1;
+}
+
+namespace {
+
+/// Files a mesh file pulled in, recorded as inputs under the key that named the mesh.
+void record_inputs(const JsonReader& r, const std::string& key, const std::vector<std::string>& files) {
+    if (r.ctx().inputs)
+        for (const std::string& f : files) r.ctx().inputs->push_back({f, r.at(key)});
+}
+
+/// Most micropolygons one object may be diced into (~150 bytes each with its BVH).
+constexpr double kMaxMicropolygons = 1e8;
+
+/// Pixels per world unit at p on the image plane of `cam` (0 behind it).
+float pixels_per_unit(const Camera& cam, const Vec3& p) {
+    const Vec3 forward = normalize(cam.look_at - cam.position);
+    const float z = dot(p - cam.position, forward);
+    if (!(z > 0)) return 0;
+    return static_cast<float>(cam.height) / (2 * z * std::tan(0.5f * cam.fov * kPi / 180.0f));
+}
+
+/// Length in pixels of the segment a-b projected on the image plane of `cam` (foreshortening
+/// included); where it reaches behind the camera, its length at the nearer end's depth.
+float projected_pixels(const Camera& cam, const Vec3& a, const Vec3& b) {
+    const Vec3 forward = normalize(cam.look_at - cam.position);
+    const Vec3 right = normalize(cross(forward, cam.up)), up = cross(right, forward);
+    const float za = dot(a - cam.position, forward), zb = dot(b - cam.position, forward);
+    const float scale = static_cast<float>(cam.height) / (2 * std::tan(0.5f * cam.fov * kPi / 180.0f));
+    if (!(za > 0 && zb > 0)) return length(b - a) * std::max(pixels_per_unit(cam, a), pixels_per_unit(cam, b));
+    const Vec3 da = a - cam.position, db = b - cam.position;
+    const float dx = dot(da, right) / za - dot(db, right) / zb, dy = dot(da, up) / za - dot(db, up) / zb;
+    return std::sqrt(dx * dx + dy * dy) * scale;
+}
+
+/// A mesh object with "subdivision": its control mesh diced into the fine tessellation (from
+/// the camera, render.dicing) and the coarse one (render.dicing.ray_level), both displaced
+/// when the object has a "displacement".
+void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object& obj, SubdivScheme scheme) {
+    SubdivSurface surf;
+    surf.scheme = scheme;
+    surf.boundary = r.choice("boundary", "edge-and-corner", {"edge-only", "edge-and-corner"}) == "edge-only"
+                        ? SubdivBoundary::EdgeOnly : SubdivBoundary::EdgeAndCorner;
+    if (r.has("fine_subdivisions")) r.fail("fine_subdivisions", "a subdivision surface is diced by render.dicing, not fine_subdivisions");
+    const std::string file = r.file("file", true);
+    std::vector<std::string> read;
+    try {
+        surf.control = load_control_mesh(file, obj.name, scene.materials, mat, read_transform(r), &read);
+        check_control_mesh(surf.control, surf.scheme);
+    } catch (const InputError& e) {
+        r.fail("file", e.what());
+    }
+    record_inputs(r, "file", read);
+    if (r.has("displacement")) {
+        JsonReader d(r.raw("displacement"), r.at("displacement"), r.ctx(), {"map", "scale", "midpoint"});
+        if (!d.has("map")) d.fail("", "a displacement needs a \"map\"");
+        const std::string map = d.file("map", true);
+        surf.displacement.scale = d.number("scale", 0, -kMaxCoordinate, kMaxCoordinate, true);
+        surf.displacement.midpoint = d.number("midpoint", 0.5f, -1e3, 1e3);
+        try {
+            surf.displacement.map = std::make_shared<DisplacementMap>(map);
+        } catch (const InputError& e) {
+            d.fail("map", e.what());
+        }
+        if (surf.control.face_uvs.empty()) d.fail("map", "the control mesh has no uvs to look the map up with");
+    }
+    const DicingSettings& ds = scene.render.dicing;
+    const int ray_level = std::min(ds.ray_level, ds.max_level);
+    const int level = dicing_level(surf.control, [&](const Vec3& p) { return pixels_per_unit(scene.camera, p); },
+                                   ds.shading_rate, ray_level, ds.max_level);
+    // The fine tessellation per control edge: about shading_rate pixels per diced edge from the
+    // camera, never coarser than the ray tessellation (docs/displacement.md).
+    const auto rate = [&](const Vec3& a, const Vec3& b) {
+        const float px = projected_pixels(scene.camera, a, b) / ds.shading_rate;
+        return static_cast<int>(std::clamp(std::round(px), static_cast<float>(1 << ray_level), static_cast<float>(1 << ds.max_level)));
+    };
+    // Refuse a dicing that cannot fit before allocating it: per face its largest edge rate
+    // squared (twice for quads, half per corner for n-gons), and the ray tessellation.
+    double micropolygons = 0;
+    int largest = 1 << ray_level;
+    for (size_t f = 0, k = 0; f < surf.control.face_count(); k += static_cast<size_t>(surf.control.face_sizes[f++])) {
+        const int n = surf.control.face_sizes[f];
+        int rmax = 1;
+        for (int i = 0; i < n; ++i)
+            rmax = std::max(rmax, rate(surf.control.positions[static_cast<size_t>(surf.control.face_vertices[k + static_cast<size_t>(i)])],
+                                       surf.control.positions[static_cast<size_t>(surf.control.face_vertices[k + static_cast<size_t>((i + 1) % n)])]));
+        largest = std::max(largest, rmax);
+        const double cells = static_cast<double>(rmax) * rmax, coarse = std::pow(4.0, ray_level);
+        micropolygons += (n == 3 ? 1.0 : n == 4 ? 2.0 : n / 2.0) * (cells + coarse);
+    }
+    if (micropolygons > kMaxMicropolygons)
+        r.fail("", fmt::format("dicing {} gives {:.3g} micropolygons (about {:.0f} GiB); the limit is {:.0e}: raise "
+                               "render.shading_rate or lower render.max_level / render.ray_level",
+                               obj.name, micropolygons, micropolygons * 150 / (1 << 30), kMaxMicropolygons));
+    if (std::string why = memory_shortfall(micropolygons * 150, fmt::format("dicing {} into {:.3g} micropolygons", obj.name, micropolygons));
+        !why.empty())
+        r.fail("", why + ": raise render.shading_rate or lower render.max_level / render.ray_level");
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+        obj.coarse = dice(surf, ray_level);
+        if (largest > 1 << ray_level) obj.fine = dice_adaptive(surf, rate);
+    } catch (const InputError& e) {  // a map that cannot be read after all, or OpenSubdiv refusing the mesh
+        const bool map = surf.displacement.map && e.file() == surf.displacement.map->path();
+        r.fail(map ? "displacement/map" : "file", e.what());
+    }
+    obj.dicing_level = level;
+    if (surf.displacement.active())
+        obj.displacement_bound = std::abs(surf.displacement.scale) *
+                                 std::max(std::abs(surf.displacement.midpoint), std::abs(1 - surf.displacement.midpoint));
+    obj.dicing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    obj.surface = std::make_shared<const SubdivSurface>(std::move(surf));
+}
+
+/// The keys each object type reads.
+const std::vector<std::string>& keys_of_type(const std::string& type, bool subdivision) {
+    static const std::vector<std::string> mesh = {"name", "type", "file", "material", "transform", "fine_subdivisions", "subdivision", "fur"};
+    static const std::vector<std::string> subdiv = {"name", "type", "file", "material", "transform", "subdivision", "boundary", "displacement", "fur"};
+    static const std::vector<std::string> quad = {"name", "type", "vertices", "material", "transform", "fine_subdivisions", "fur"};
+    static const std::vector<std::string> sphere = {"name", "type", "center", "radius", "subdivisions", "fine_subdivisions", "material", "transform", "fur"};
+    if (type == "mesh") return subdivision ? subdiv : mesh;
+    return type == "quad" ? quad : sphere;
+}
+
+}  // namespace
+
+void read_object(const JsonReader& r, Scene& scene, size_t index) {
+    Object obj;
+    obj.name = r.string("name", fmt::format("object{}", index));
+    std::string type = r.choice("type", r.has("file") ? "mesh" : "", {"mesh", "quad", "sphere"});
+    const bool subdivided = type == "mesh" && r.has("subdivision") && r.raw("subdivision") != "none";
+    r.only(keys_of_type(type, subdivided),
+           type != "mesh" ? "a " + type : subdivided ? "a subdivision surface" : "a mesh without \"subdivision\"");
+    int mat = -1;
+    if (r.has("material")) {
+        std::string name = r.string("material", "");
+        mat = material_index(scene, name);
+        if (mat < 0) {
+            std::vector<std::string> names;
+            for (const auto& m : scene.materials) names.push_back(m.name);
+            std::string hint = closest_match(name, names);
+            r.fail("material", fmt::format("unknown material \"{}\"{}", name,
+                                           hint.empty() ? "" : " (did you mean \"" + hint + "\"?)"));
+        }
+    }
+    auto default_material = [&]() {
+        if (mat >= 0) return static_cast<uint32_t>(mat);
+        int d = material_index(scene, "default");
+        if (d < 0) {
+            Material m;
+            m.name = "default";
+            scene.materials.push_back(m);
+            d = static_cast<int>(scene.materials.size() - 1);
+        }
+        return static_cast<uint32_t>(d);
+    };
+    int fine = 0;
+    const std::string subdivision = r.choice("subdivision", "none", {"none", "catmull-clark", "loop"});
+    if (type == "mesh" && subdivision != "none") {
+        read_subdivision_object(r, scene, mat, obj, subdivision == "loop" ? SubdivScheme::Loop : SubdivScheme::CatmullClark);
+    } else if (type == "mesh") {
+        std::string file = r.file("file", true);
+        fine = r.integer("fine_subdivisions", 0, 0, 6);
+        std::vector<std::string> read;
+        try {
+            obj.coarse = load_mesh_file(file, obj.name, scene.materials, mat, &read);
+        } catch (const InputError& e) {
+            r.fail("file", e.what());
+        }
+        record_inputs(r, "file", read);
+        obj.coarse.transform(read_transform(r));
+        if (fine > 0) obj.fine = subdivide_linear(obj.coarse, fine);
+    } else if (type == "quad") {
+        const json& v = r.has("vertices") ? r.raw("vertices") : json();
+        if (!v.is_array() || v.size() != 4) r.fail(r.has("vertices") ? "vertices" : "", "a quad needs \"vertices\": four [x,y,z] points");
+        Vec3 p[4];
+        for (size_t i = 0; i < 4; ++i) p[i] = r.to_vec3(v[i], r.at("vertices") + "/" + std::to_string(i));
+        if (length(cross(p[1] - p[0], p[2] - p[0])) == 0) r.fail("vertices", "quad is degenerate (zero area)");
+        fine = r.integer("fine_subdivisions", 0, 0, 8);
+        obj.coarse = make_quad(p[0], p[1], p[2], p[3], default_material());
+        obj.coarse.transform(read_transform(r));
+        if (fine > 0) obj.fine = subdivide_linear(obj.coarse, fine);
+    } else {
+        Vec3 c = r.vec3("center", {});
+        auto radius = static_cast<float>(r.number("radius", 1, 0, kMaxCoordinate));
+        if (radius <= 0) r.fail("radius", "radius must be > 0");
+        int level = r.integer("subdivisions", 3, 0, 8);
+        fine = r.integer("fine_subdivisions", 2, 0, 8 - level);
+        uint32_t m = default_material();
+        obj.coarse = make_icosphere(c, radius, level, m);
+        Transform t = read_transform(r);
+        obj.coarse.transform(t);
+        if (fine > 0) {
+            obj.fine = make_icosphere(c, radius, level + fine, m);
+            obj.fine.transform(t);
+        }
+    }
+    if (obj.coarse.triangle_count() == 0) r.fail(type == "mesh" ? "file" : "", "mesh has no triangles");
+    for (const auto& p : obj.coarse.positions)
+        if (!isfinite(p) || std::fabs(p.x) > kMaxCoordinate || std::fabs(p.y) > kMaxCoordinate || std::fabs(p.z) > kMaxCoordinate)
+            r.fail("", fmt::format("mesh has vertex positions that are not finite or beyond +-{:g} (after the transform)", kMaxCoordinate));
+    if (r.has("fur")) obj.fur = read_fur(JsonReader(r.raw("fur"), r.at("fur"), r.ctx(), fur_keys()), obj.visible(), scene);
+    scene.objects.push_back(std::move(obj));
+}
+}  // namespace bounce

@@ -1,0 +1,25 @@
+// Reading a scene file's objects: meshes (optionally subdivision surfaces, diced from the
+// camera, with displacement), quads and spheres, their transforms and fur. Keys are checked per
+// object type: a key another type reads (a "displacement" on a sphere, "boundary" without
+// "subdivision") is an error, never ignored. Every file an object reads is recorded in the
+// scene's inputs.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "bounce/scene/json_reader.h"
+#include "bounce/scene/scene.h"
+
+namespace bounce {
+
+/// Every key any object type reads.
+const std::vector<std::string>& object_keys();
+
+/// Appends object number `index` (read from `r`) to `scene.objects`.
+void read_object(const JsonReader& r, Scene& scene, size_t index);
+
+/// Index of the material named `name`, or -1.
+int material_index(const Scene& scene, const std::string& name);
+
+}  // namespace bounce

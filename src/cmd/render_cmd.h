@@ -1,0 +1,33 @@
+// `bounce render`: one frame or a sequence of frames from a scene file (docs/scene-format.md).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bounce/core/progress.h"
+#include "bounce/render/frame.h"
+#include "bounce/scene/json_reader.h"
+
+namespace bounce {
+
+struct RenderArgs {
+    FrameFiles files;
+    std::vector<std::string> sets;
+    std::vector<Override> flags;  ///< from the parameter table's flags
+    bool regather = false, force = false, reuse_any = false;
+    std::string show = "beauty", frames;
+    int frame = 0;
+    bool stats = false, quiet = false;
+};
+
+/// Adds the render command's options to `render`.
+void add_render_options(CLI::App& render, RenderArgs& a);
+/// Renders the frame or the frames the arguments ask for.
+int run_render(const RenderArgs& a);
+
+/// Progress on stderr: a bar on a terminal, log lines otherwise, nothing with -q.
+std::unique_ptr<ProgressSink> make_progress(bool quiet);
+
+}  // namespace bounce

@@ -1,0 +1,225 @@
+// `bounce bake-ao`, `bounce compare` and `bounce cache ...`: the tools beside the renderer.
+#include "tools_cmd.h"
+
+#include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "bounce/accel/accel.h"
+#include "bounce/cache/cache_file.h"
+#include "bounce/cache/cache_tools.h"
+#include "bounce/core/atomic_file.h"
+#include "bounce/core/error.h"
+#include "bounce/core/files.h"
+#include "bounce/core/image.h"
+#include "bounce/core/image_compare.h"
+#include "bounce/gather/ao_bake.h"
+#include "bounce/scene/scene_load.h"
+#include "render_cmd.h"
+
+namespace bounce {
+
+namespace {
+
+std::vector<float> parse_floats(const std::string& text, size_t count, const std::string& flag) {
+    std::vector<float> v;
+    std::stringstream ss(text);
+    for (std::string part; std::getline(ss, part, ',');) {
+        try {
+            size_t used = 0;
+            v.push_back(std::stof(part, &used));
+            if (used != part.size()) throw std::invalid_argument(part);
+        } catch (...) {
+            throw InputError("command line", flag + " " + text, "\"" + part + "\" is not a number");
+        }
+    }
+    if (v.size() != count) throw InputError("command line", flag + " " + text, fmt::format("expected {} comma-separated numbers", count));
+    for (float x : v)
+        if (!std::isfinite(x) || std::fabs(x) > kMaxCoordinate)
+            throw InputError("command line", flag + " " + text, fmt::format("{} is not a finite coordinate within +-1e18", x));
+    return v;
+}
+
+size_t file_size(const std::string& path) {
+    std::error_code ec;
+    auto n = std::filesystem::file_size(path, ec);
+    return ec ? 0 : static_cast<size_t>(n);
+}
+
+/// Files of a sequence pattern (cache.####.bic) that exist, in frame order.
+std::vector<std::pair<int, std::string>> sequence_files(const std::string& pattern) {
+    std::vector<std::pair<int, std::string>> out;
+    auto start = pattern.find('#');
+    auto end = pattern.find_first_not_of('#', start);
+    std::string prefix = pattern.substr(0, start), suffix = end == std::string::npos ? "" : pattern.substr(end);
+    std::filesystem::path dir = std::filesystem::path(pattern).parent_path();
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator(dir.empty() ? "." : dir, ec)) {
+        std::string p = dir.empty() ? e.path().filename().string() : e.path().string();
+        if (p.size() <= prefix.size() + suffix.size() || p.rfind(prefix, 0) != 0 ||
+            p.compare(p.size() - suffix.size(), suffix.size(), suffix) != 0)
+            continue;
+        std::string digits = p.substr(prefix.size(), p.size() - prefix.size() - suffix.size());
+        if (digits.empty() || !std::all_of(digits.begin(), digits.end(), ::isdigit)) continue;
+        out.emplace_back(std::stoi(digits), p);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+}  // namespace
+
+/// `bounce bake-ao`: an object's occlusion by its own fine detail, in its uv space (EXR, one
+/// channel), for a material's ao_texture.
+int run_bake_ao(const BakeAoArgs& a) {
+    check_input_file(a.scene);
+    check_output_file(a.output, {a.scene});
+    if (!a.output.ends_with(".exr")) throw InputError("command line", "-o " + a.output, "the occlusion map is an OpenEXR file (.exr)");
+    Scene scene = load_scene(a.scene);
+    const auto it = std::find_if(scene.objects.begin(), scene.objects.end(), [&](const Object& o) { return o.name == a.object; });
+    const auto id = static_cast<uint32_t>(it - scene.objects.begin());
+    if (it == scene.objects.end()) {
+        std::vector<std::string> names;
+        for (const Object& o : scene.objects) names.push_back(o.name);
+        const std::string hint = closest_match(a.object, names);
+        throw InputError("command line", "--object " + a.object,
+                         "no such object" + (hint.empty() ? std::string() : " (did you mean \"" + hint + "\"?)"));
+    }
+    AoBakeSettings bs;
+    bs.resolution = a.resolution;
+    bs.rays = a.rays;
+    // By default only occluders within a few displacement heights: the cache sees the rest.
+    bs.distance = a.distance > 0 ? a.distance : 4 * scene.objects[id].displacement_bound;
+    if (!(bs.distance > 0))
+        throw InputError("command line", "--distance", "object " + a.object + " is not displaced: give the occlusion distance");
+    SceneAccel accel(scene);
+    Stats stats;
+    const std::unique_ptr<ProgressSink> progress = make_progress(false);
+    const std::vector<float> ao = bake_ao(scene, accel, id, bs, stats, progress.get());
+    write_atomically(a.output, [&](const std::string& tmp) {
+        auto out = OIIO::ImageOutput::create(tmp);
+        OIIO::ImageSpec spec(bs.resolution, bs.resolution, 1, OIIO::TypeDesc::HALF);
+        spec.channelnames = {"Y"};
+        spec.attribute("compression", "zip");
+        spec.attribute("bounce:ao_distance", bs.distance);
+        spec.attribute("bounce:ao_rays", bs.rays);
+        if (!out || !out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, ao.data()) || !out->close())
+            throw std::runtime_error("cannot write " + a.output + ": " + OIIO::geterror());
+    });
+    std::fprintf(stderr, "wrote %s (%dx%d, %d rays per texel, distance %g)\n", a.output.c_str(), bs.resolution, bs.resolution, bs.rays,
+                 static_cast<double>(bs.distance));
+    return 0;
+}
+
+
+
+int run_compare(const CompareArgs& a) {
+    if (!a.diff.empty()) check_output_file(a.diff, {a.test, a.reference});
+    Image test = read_exr(a.test), ref = read_exr(a.reference);
+    std::vector<LayerError> errors = compare_images(test, ref, a.layer, a.test);
+    std::string diff_layer = a.layer.empty() ? (ref.find("indirect") ? "indirect" : "beauty") : a.layer;
+    std::string diff = a.diff;
+    if (diff.empty()) {
+        std::filesystem::path p = a.test;
+        diff = (p.parent_path() / (p.stem().string() + ".diff.png")).string();
+    }
+    double range = 0.1;
+    for (const auto& e : errors)
+        if (e.layer == diff_layer) range = std::max(1e-12, 0.1 * e.mean_ref);
+    if (ref.find(diff_layer) && ref.find(diff_layer)->channels.size() >= 1)
+        write_png_rgb8(diff, ref.width, ref.height, error_false_colour(test, ref, diff_layer, range));
+    if (a.json) {
+        nlohmann::json j = nlohmann::json::object();
+        for (const auto& e : errors)
+            j[e.layer] = {{"rmse", e.rmse}, {"rel_rmse", std::isnan(e.rel_rmse) ? nlohmann::json() : nlohmann::json(e.rel_rmse)}, {"relmse", e.relmse},
+                          {"mean_abs", e.mean_abs}, {"max_abs", e.max_abs}, {"mean_ref", e.mean_ref}};
+        std::printf("%s\n", j.dump(2).c_str());
+    } else {
+        std::printf("%-18s %12s %10s %12s %12s %12s %12s\n", "layer", "rmse", "rel_rmse", "relmse", "mean_abs", "max_abs", "mean_ref");
+        for (const auto& e : errors)
+            std::printf("%-18s %12.6g %10s %12.6g %12.6g %12.6g %12.6g\n", e.layer.c_str(), e.rmse,
+                        std::isnan(e.rel_rmse) ? "n/a" : fmt::format("{:.4f}%", 100 * e.rel_rmse).c_str(), e.relmse, e.mean_abs,
+                        e.max_abs, e.mean_ref);
+        std::printf("difference image (%s, full scale = 10%% of the reference mean): %s\n", diff_layer.c_str(), diff.c_str());
+    }
+    return 0;
+}
+
+
+
+int run_cache_info(const CacheArgs& a) {
+    const std::string& path = a.inputs.at(0);
+    if (path.find('#') != std::string::npos) {
+        auto files = sequence_files(path);
+        if (files.empty()) throw InputError(path, "", "no files match this frame pattern");
+        nlohmann::json seq = nlohmann::json::array();
+        if (!a.json) std::printf("%-8s %10s %10s %10s\n", "frame", "records", "reused", "new");
+        for (const auto& [frame, file] : files) {
+            CacheFile f = read_cache_file(file);
+            size_t fresh = 0;
+            for (const Record& r : f.records) fresh += r.frame == frame;
+            seq.push_back({{"frame", frame}, {"file", file}, {"records", f.records.size()},
+                           {"reused", f.records.size() - fresh}, {"new", fresh}});
+            if (!a.json) std::printf("%-8d %10zu %10zu %10zu\n", frame, f.records.size(), f.records.size() - fresh, fresh);
+        }
+        if (a.json) std::printf("%s\n", seq.dump(2).c_str());
+        return 0;
+    }
+    CacheFile f = read_cache_file(path);
+    nlohmann::json info = cache_info(f, file_size(path));
+    std::printf("%s", a.json ? (info.dump(2) + "\n").c_str() : cache_info_text(info, path).c_str());
+    return 0;
+}
+
+int run_cache_merge(const CacheArgs& a) {
+    check_output_file(a.output, a.inputs);
+    if (a.inputs.size() < 2) throw InputError("command line", "cache merge", "give at least two caches to merge");
+    CacheFile out = read_cache_file(a.inputs[0]);
+    for (size_t i = 1; i < a.inputs.size(); ++i) out = merge_caches(out, read_cache_file(a.inputs[i]), a.inputs[0], a.inputs[i], a.force);
+    write_cache_file(a.output, out);
+    std::fprintf(stderr, "%s: %zu records, %zu fragment records\n", a.output.c_str(), out.records.size(), out.fragment_records.size());
+    return 0;
+}
+
+int run_cache_filter(const CacheArgs& a) {
+    check_output_file(a.output, a.inputs);
+    RecordFilter filter;
+    if (!a.box.empty()) {
+        auto v = parse_floats(a.box, 6, "--box");
+        filter.has_box = true;
+        filter.box_lo = {std::min(v[0], v[3]), std::min(v[1], v[4]), std::min(v[2], v[5])};
+        filter.box_hi = {std::max(v[0], v[3]), std::max(v[1], v[4]), std::max(v[2], v[5])};
+    }
+    if (!a.sphere.empty()) {
+        auto v = parse_floats(a.sphere, 4, "--sphere");
+        filter.has_sphere = true;
+        filter.center = {v[0], v[1], v[2]};
+        filter.radius = v[3];
+        if (!(filter.radius > 0)) throw InputError("command line", "--sphere " + a.sphere, "the radius must be > 0");
+    }
+    for (const auto& w : a.where) check_where_term(w);
+    filter.where = a.where;
+    if (!filter.has_box && !filter.has_sphere && filter.where.empty())
+        throw InputError("command line", "cache filter", "give --box, --sphere or --where");
+    CacheFile in = read_cache_file(a.inputs.at(0));
+    CacheFile out = filter_cache(in, filter, a.remove);
+    write_cache_file(a.output, out);
+    std::fprintf(stderr, "%s: kept %zu of %zu records, %zu of %zu fragment records\n", a.output.c_str(), out.records.size(),
+                 in.records.size(), out.fragment_records.size(), in.fragment_records.size());
+    return 0;
+}
+
+int run_cache_export(const CacheArgs& a) {
+    check_output_file(a.output, a.inputs);
+    CacheFile f = read_cache_file(a.inputs.at(0));
+    export_ply(f, a.output);
+    std::fprintf(stderr, "%s: %zu points\n", a.output.c_str(), f.records.size());
+    return 0;
+}
+
+}  // namespace bounce

@@ -1,0 +1,36 @@
+// `bounce bake-ao`, `bounce compare` and `bounce cache info|merge|filter|export`.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace bounce {
+
+struct BakeAoArgs {
+    std::string scene, object, output;
+    int resolution = 1024, rays = 256;
+    float distance = 0;
+};
+
+struct CompareArgs {
+    std::string test, reference, layer, diff;
+    bool json = false;
+};
+
+struct CacheArgs {
+    std::vector<std::string> inputs;
+    std::string output, box, sphere;
+    std::vector<std::string> where;
+    bool json = false, remove = false, force = false;
+};
+
+/// `bounce bake-ao`: an object's occlusion by its own fine detail, in its uv space (EXR, one
+/// channel), for a material's ao_texture.
+int run_bake_ao(const BakeAoArgs& a);
+int run_compare(const CompareArgs& a);
+int run_cache_info(const CacheArgs& a);
+int run_cache_merge(const CacheArgs& a);
+int run_cache_filter(const CacheArgs& a);
+int run_cache_export(const CacheArgs& a);
+
+}  // namespace bounce
