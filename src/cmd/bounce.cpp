@@ -62,8 +62,7 @@ int main(int argc, char** argv) {
     bake->add_option("-o,--output", ba.output, "occlusion map (EXR) for a material's ao_texture")->required();
     bake->add_option("--res", ba.resolution, "texels per side")->check(CLI::Range(1, 16384));
     bake->add_option("--rays", ba.rays, "rays per texel")->check(CLI::Range(1, 1 << 20));
-    bake->add_option("--distance", ba.distance, "occluders beyond this do not count; default 4x the displacement bound")
-        ->check(CLI::Range(0.0, 1e18));
+    bake->add_option("--distance", ba.distance, "occluders beyond this do not count; default 4x the displacement bound");
 
     LightArgs la;
     CLI::App* light = app.add_subcommand("light", "the lighting tool: a local web page to edit, re-gather and re-shade");
@@ -132,6 +131,10 @@ int main(int argc, char** argv) {
         if (*cexport) return run_cache_export(ka);
     } catch (const InputError& e) {
         std::fprintf(stderr, "bounce: %s\n", e.what());
+        return 2;
+    } catch (const std::bad_alloc&) {
+        // Estimates refuse what cannot fit before allocating; this is what slipped past them.
+        std::fprintf(stderr, "bounce: error: out of memory (lower the resolution, the dicing rate or the fur density)\n");
         return 2;
     } catch (const Cancelled&) {
         std::fprintf(stderr, "bounce: cancelled\n");

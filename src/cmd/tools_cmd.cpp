@@ -18,6 +18,7 @@
 #include "bounce/core/files.h"
 #include "bounce/core/image.h"
 #include "bounce/core/image_compare.h"
+#include "bounce/core/memory.h"
 #include "bounce/gather/ao_bake.h"
 #include "bounce/scene/scene_load.h"
 #include "render_cmd.h"
@@ -80,7 +81,13 @@ int run_bake_ao(const BakeAoArgs& a) {
     check_input_file(a.scene);
     check_output_file(a.output, {a.scene});
     if (!a.output.ends_with(".exr")) throw InputError("command line", "-o " + a.output, "the occlusion map is an OpenEXR file (.exr)");
+    // Checked before any work: the distance as given, the map's memory, the file it replaces.
+    if (a.distance != BakeAoArgs::kAutomatic && !(a.distance > 0 && a.distance <= kMaxCoordinate))
+        throw InputError("command line", fmt::format("--distance {}", a.distance), "the occlusion distance must be a number > 0");
+    const double texels = static_cast<double>(a.resolution) * a.resolution;
+    check_memory(texels * 3 * sizeof(float), "command line", fmt::format("--res {}", a.resolution), "the occlusion map");
     Scene scene = load_scene(a.scene);
+    check_output_file(a.output, scene.input_paths(), scene.input_folders);
     const auto it = std::find_if(scene.objects.begin(), scene.objects.end(), [&](const Object& o) { return o.name == a.object; });
     const auto id = static_cast<uint32_t>(it - scene.objects.begin());
     if (it == scene.objects.end()) {
@@ -94,7 +101,7 @@ int run_bake_ao(const BakeAoArgs& a) {
     bs.resolution = a.resolution;
     bs.rays = a.rays;
     // By default only occluders within a few displacement heights: the cache sees the rest.
-    bs.distance = a.distance > 0 ? a.distance : 4 * scene.objects[id].displacement_bound;
+    bs.distance = a.distance != BakeAoArgs::kAutomatic ? a.distance : 4 * scene.objects[id].displacement_bound;
     if (!(bs.distance > 0))
         throw InputError("command line", "--distance", "object " + a.object + " is not displaced: give the occlusion distance");
     SceneAccel accel(scene);
@@ -102,14 +109,15 @@ int run_bake_ao(const BakeAoArgs& a) {
     const std::unique_ptr<ProgressSink> progress = make_progress(false);
     const std::vector<float> ao = bake_ao(scene, accel, id, bs, stats, progress.get());
     write_atomically(a.output, [&](const std::string& tmp) {
-        auto out = OIIO::ImageOutput::create(tmp);
+        auto out = OIIO::ImageOutput::create("openexr");
         OIIO::ImageSpec spec(bs.resolution, bs.resolution, 1, OIIO::TypeDesc::HALF);
         spec.channelnames = {"Y"};
         spec.attribute("compression", "zip");
         spec.attribute("bounce:ao_distance", bs.distance);
         spec.attribute("bounce:ao_rays", bs.rays);
-        if (!out || !out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, ao.data()) || !out->close())
-            throw std::runtime_error("cannot write " + a.output + ": " + OIIO::geterror());
+        if (!out) throw InputError(a.output, "", "cannot write: " + OIIO::geterror());
+        if (!out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, ao.data()) || !out->close())
+            throw InputError(a.output, "", "cannot write: " + out->geterror());
     });
     std::fprintf(stderr, "wrote %s (%dx%d, %d rays per texel, distance %g)\n", a.output.c_str(), bs.resolution, bs.resolution, bs.rays,
                  static_cast<double>(bs.distance));
@@ -121,7 +129,7 @@ int run_bake_ao(const BakeAoArgs& a) {
 int run_compare(const CompareArgs& a) {
     if (!a.diff.empty()) check_output_file(a.diff, {a.test, a.reference});
     Image test = read_exr(a.test), ref = read_exr(a.reference);
-    std::vector<LayerError> errors = compare_images(test, ref, a.layer, a.test);
+    std::vector<LayerError> errors = compare_images(test, ref, a.layer, a.test, a.reference);
     std::string diff_layer = a.layer.empty() ? (ref.find("indirect") ? "indirect" : "beauty") : a.layer;
     std::string diff = a.diff;
     if (diff.empty()) {

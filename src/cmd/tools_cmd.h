@@ -9,7 +9,8 @@ namespace bounce {
 struct BakeAoArgs {
     std::string scene, object, output;
     int resolution = 1024, rays = 256;
-    float distance = 0;
+    static constexpr float kAutomatic = -1;  ///< --distance not given: 4x the displacement bound
+    float distance = kAutomatic;
 };
 
 struct CompareArgs {

@@ -214,14 +214,23 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
     try {
         if (h.at("record_layout") != record_layout() || h.at("record_bytes").get<uint64_t>() != kRecordBytes)
             throw InputError(name, "header/record_layout", "record layout differs from this version's");
-        const uint64_t shared = h.at("record_count").get<uint64_t>();
-        // Absent in files written before per-fragment records were stored.
-        const uint64_t own = h.value("fragment_record_count", uint64_t{0});
+        // Counts are whole numbers >= 0 (nlohmann would read -1 as 2^64 - 1).
+        const auto count_of = [&](const char* key, bool required) -> uint64_t {
+            if (!h.contains(key)) {
+                if (required) throw InputError(name, std::string("header/") + key, "missing");
+                return 0;  // fragment_record_count: absent in files written before fragment records
+            }
+            if (!h[key].is_number_unsigned())
+                throw InputError(name, std::string("header/") + key, fmt::format("{} is not a record count", h[key].dump()));
+            return h[key].get<uint64_t>();
+        };
+        const uint64_t shared = count_of("record_count", true);
+        const uint64_t own = count_of("fragment_record_count", false);
         // Every record needs kRecordBytes plus its share of block headers: bound the count by
         // the bytes actually present before allocating anything.
         const uint64_t room = c.remaining() / kRecordBytes;
         if (shared > room || own > room - shared)
-            throw InputError(name, own ? "header/fragment_record_count" : "header/record_count",
+            throw InputError(name, shared > room ? "header/record_count" : "header/fragment_record_count",
                              fmt::format("{} + {} records cannot fit in the {} bytes that follow", shared, own, c.remaining()));
         const uint64_t count = shared + own;
         f.info.scene_fingerprint = std::stoull(h.at("scene_fingerprint").get<std::string>(), nullptr, 16);

@@ -22,7 +22,8 @@ LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, 
     CacheFileInfo want = cache_file_info(scene, 0);
     if (!force && f.info.scene_fingerprint != want.scene_fingerprint)
         throw InputError(path, "scene_fingerprint",
-                         "cache was made for another scene (objects, materials or lights differ); --force uses it anyway");
+                         "cache was made for another scene (objects, materials or lights differ, or a file they read has "
+                         "changed since); --force uses it anyway");
     if (!force && f.info.camera_fingerprint != want.camera_fingerprint)
         throw InputError(path, "camera_fingerprint",
                          "cache was made for another camera (its spacing is in that camera's pixels); --force uses it anyway");

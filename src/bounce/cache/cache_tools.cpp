@@ -121,6 +121,11 @@ CacheFile merge_caches(const CacheFile& a, const CacheFile& b, const std::string
     if (!force && ao_a != ao_b)
         throw InputError(name_b, "parameters/render.ao", fmt::format("cache holds {} but {} holds {} (--force merges anyway)",
                                                                       ao_b ? "AO" : "irradiance", name_a, ao_a ? "AO" : "irradiance"));
+    // Records made under other settings (metric, spacings, rays ...) would be judged by the
+    // first file's settings and the result accepted by --cache-in as if made with them.
+    if (const std::vector<std::string> differ = param_differences(a.info.parameters, b.info.parameters); !force && !differ.empty())
+        throw InputError(name_b, "parameters",
+                         fmt::format("gathered with other settings than {} ({}); --force merges anyway", name_a, fmt::join(differ, "; ")));
     struct Item {
         std::string bytes;
         const Record* r;

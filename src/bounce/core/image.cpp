@@ -3,6 +3,8 @@
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "bounce/core/atomic_file.h"
@@ -123,16 +125,45 @@ void write_png_rgb8(const std::string& path, int width, int height, const std::v
     });
 }
 
+std::string texture_problem(const std::string& path) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) return "not a readable image: " + OIIO::geterror();
+    const OIIO::ImageSpec& spec = in->spec();
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) return "the image has no pixels";
+    const bool mipmapped = in->seek_subimage(0, 1);
+    if (static_cast<int64_t>(spec.width) * spec.height > int64_t{8192} * 8192 && !(spec.tile_width > 0 && mipmapped))
+        return fmt::format("a {}x{} image that is not tiled and MIP-mapped would be read whole for every lookup; convert it "
+                           "with OpenImageIO's maketx", spec.width, spec.height);
+    return "";
+}
+
+std::vector<uint8_t> display_rgb8(const Image& image, const Layer& l, float exposure) {
+    const size_t n = static_cast<size_t>(image.width) * static_cast<size_t>(image.height), nc = l.channels.size();
+    std::vector<uint8_t> rgb(3 * n);
+    if (nc == 0) return rgb;
+    const float scale = std::exp2(exposure);
+    const bool direction = l.name == "N" || l.name == "bentnormal";
+    const bool depth = l.name == "depth";
+    float near = INFINITY, far = 0;
+    if (depth)
+        for (size_t p = 0; p < n; ++p)
+            if (const float z = l.data[p * nc]; z > 0 && std::isfinite(z)) near = std::min(near, z), far = std::max(far, z);
+    for (size_t p = 0; p < n; ++p)
+        for (size_t c = 0; c < 3; ++c) {
+            const float x = l.data[p * nc + std::min(c, nc - 1)];
+            // Directions and depth are shown as values, not light: no exposure, no sRGB curve.
+            const auto byte = [](float v) { return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255)); };
+            if (direction) rgb[3 * p + c] = byte(0.5f + 0.5f * x);
+            else if (depth) rgb[3 * p + c] = byte(x > 0 && std::isfinite(x) ? 1 - 0.9f * (x - near) / std::max(far - near, 1e-30f) : 0);
+            else rgb[3 * p + c] = srgb8(scale * x);
+        }
+    return rgb;
+}
+
 void write_png(const std::string& path, const Image& image, const std::string& layer, float exposure) {
     const Layer* l = image.find(layer);
-    if (!l || l->channels.size() < 3) throw std::runtime_error("write_png: no RGB layer " + layer);
-    float scale = std::exp2(exposure);
-    std::vector<uint8_t> rgb(static_cast<size_t>(image.width) * image.height * 3);
-    size_t nc = l->channels.size();
-    for (size_t p = 0; p < static_cast<size_t>(image.width) * image.height; ++p)
-        for (size_t c = 0; c < 3; ++c)
-            rgb[3 * p + c] = srgb8(scale * l->data[p * nc + c]);
-    write_png_rgb8(path, image.width, image.height, rgb);
+    if (!l) throw InputError(path, "", "the image has no layer \"" + layer + "\"");
+    write_png_rgb8(path, image.width, image.height, display_rgb8(image, *l, exposure));
 }
 
 }  // namespace bounce

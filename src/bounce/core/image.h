@@ -43,11 +43,21 @@ struct Image {
 void write_exr(const std::string& path, const Image& image);
 /// Reads an EXR written by write_exr (or any EXR: channels grouped by their prefix).
 Image read_exr(const std::string& path);
-/// Writes layer `layer` (3 channels) as an 8-bit sRGB PNG, clamped after `exposure` stops.
+/// Layer `l` of `image` as 8-bit RGB for a screen: colours as sRGB after `exposure` stops;
+/// directions (N, bentnormal) as 0.5 + 0.5 x; depth as a grey ramp from the nearest (white) to
+/// the farthest (dark) surface, pixels that see nothing black; one channel as grey.
+std::vector<uint8_t> display_rgb8(const Image& image, const Layer& l, float exposure);
+/// Writes layer `layer` as an 8-bit PNG (display_rgb8). InputError(path) if there is no such layer.
 void write_png(const std::string& path, const Image& image, const std::string& layer,
                float exposure = 0.0f);
 /// Writes raw 8-bit RGB pixels as a PNG (used for false-colour and diagnostic images).
 void write_png_rgb8(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb);
+
+/// Why `path` cannot serve as a texture (through OpenImageIO's texture system): not a readable
+/// image, no pixels, or larger than 8192 x 8192 without being tiled and MIP-mapped (the texture
+/// system would read and MIP-map it whole, minutes and gigabytes for one lookup: convert it with
+/// maketx). Empty when it can.
+std::string texture_problem(const std::string& path);
 
 /// Linear to sRGB-encoded value in [0,1].
 float srgb_encode(float linear);

@@ -14,7 +14,7 @@ namespace {
 // reference layer `rl`.
 template <class TestValue>
 LayerError layer_error(const std::string& name, const Layer& rl, const Image& test, TestValue test_value,
-                       const std::string& test_path) {
+                       const std::string& test_path, const std::string& ref_path) {
     LayerError e;
     e.layer = name;
     double se = 0, sr = 0, sa = 0, rel = 0;
@@ -24,13 +24,17 @@ LayerError layer_error(const std::string& name, const Layer& rl, const Image& te
     for (size_t i = 0; i < rl.data.size(); ++i) {
         if (rl.channels[i % nc] == "A") continue;
         double a = test_value(i), b = rl.data[i];
-        if (!std::isfinite(b)) continue;  // e.g. depth of background
-        if (!std::isfinite(a)) {
-            size_t pixel = i / nc;
-            throw InputError(test_path, fmt::format("{} pixel {},{}", rl.name, pixel % static_cast<size_t>(test.width) + test.x0,
-                                                    pixel / static_cast<size_t>(test.width) + test.y0),
-                             "not a finite value where the reference is finite");
+        const size_t pixel = i / nc;
+        const auto where = [&] {
+            return fmt::format("{} pixel {},{}", rl.name, pixel % static_cast<size_t>(test.width) + test.x0,
+                               pixel / static_cast<size_t>(test.width) + test.y0);
+        };
+        if (!std::isfinite(b)) {
+            if (rl.name == "depth") continue;  // the background's depth is infinite
+            // A reference that is not finite would score any test as perfect.
+            throw InputError(ref_path, where(), "the reference holds a value that is not finite");
         }
+        if (!std::isfinite(a)) throw InputError(test_path, where(), "not a finite value where the reference is finite");
         double d = a - b;
         se += d * d;
         sa += std::abs(d);
@@ -53,7 +57,7 @@ LayerError layer_error(const std::string& name, const Layer& rl, const Image& te
 }  // namespace
 
 std::vector<LayerError> compare_images(const Image& test, const Image& ref, const std::string& layer,
-                                       const std::string& test_path) {
+                                       const std::string& test_path, const std::string& ref_path) {
     if (test.width != ref.width || test.height != ref.height || test.x0 != ref.x0 || test.y0 != ref.y0)
         throw InputError(test_path, "", fmt::format("image window {}x{}+{}+{} differs from the reference's {}x{}+{}+{}",
                                                     test.width, test.height, test.x0, test.y0, ref.width, ref.height,
@@ -68,7 +72,7 @@ std::vector<LayerError> compare_images(const Image& test, const Image& ref, cons
         }
         if (tl->channels != rl.channels)
             throw InputError(test_path, rl.name, "the layer's channels differ from the reference's");
-        out.push_back(layer_error(rl.name, rl, test, [&](size_t i) { return double(tl->data[i]); }, test_path));
+        out.push_back(layer_error(rl.name, rl, test, [&](size_t i) { return double(tl->data[i]); }, test_path, ref_path));
     }
     if (!layer.empty() && layer != kBeautyRefDirect && out.empty())
         throw InputError(test_path, "", "reference has no layer \"" + layer + "\"");
@@ -82,7 +86,7 @@ std::vector<LayerError> compare_images(const Image& test, const Image& ref, cons
             size_t pixel = i / nb, c = i % nb;
             if (c >= 3) return double(tb->data[i]);
             return double(tb->data[i]) - td->data[pixel * 3 + c] + rd->data[pixel * 3 + c];
-        }, test_path));
+        }, test_path, ref_path));
     } else if (layer == kBeautyRefDirect) {
         throw InputError(test_path, "", "\"" + layer + "\" needs beauty and direct layers in both images");
     }

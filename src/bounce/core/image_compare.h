@@ -25,9 +25,10 @@ inline constexpr const char* kBeautyRefDirect = "beauty_ref_direct";
 /// Compares `test` against `reference`, layer by layer (only `layer` if non-empty), plus
 /// kBeautyRefDirect when both images have beauty and direct layers. Both must
 /// cover the same window. Throws InputError (naming `test_path`) on mismatched sizes or a
-/// missing layer.
+/// missing layer, and naming `ref_path` where the reference is not finite (the depth layer's
+/// background aside).
 std::vector<LayerError> compare_images(const Image& test, const Image& reference, const std::string& layer,
-                                       const std::string& test_path);
+                                       const std::string& test_path, const std::string& ref_path = "reference");
 
 /// False-colour map of the per-pixel error of `layer` (mean over channels of |a - b|), black
 /// at 0 through blue, red and yellow to white at `range`.

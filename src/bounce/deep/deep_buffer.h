@@ -128,7 +128,13 @@ void check_camera_sees_geometry(const Scene& scene, const SceneAccel& accel);
 
 /// Writes an OpenEXR deep scanline file (written to a temporary name and renamed).
 void write_deep(const std::string& path, const DeepBuffer& deep);
-/// Reads a deep file written by write_deep; InputError on anything malformed.
+/// Reads a deep file written by write_deep; InputError on anything malformed: every field of
+/// every fragment is checked (invalid_fragment_field), ids against the scene later
+/// (validate_deep_for_scene).
 DeepBuffer read_deep(const std::string& path);
+/// The deep channel of the first field of `f` out of range ("P", "Nref" ...), or nullptr:
+/// coordinates finite within +-1e18, normals and hair tangents unit length, weight in (0, 1],
+/// footprint > 0, depth >= 0, v in [0, 1].
+const char* invalid_fragment_field(const Fragment& f);
 
 }  // namespace bounce

@@ -99,6 +99,26 @@ void write_deep(const std::string& path, const DeepBuffer& deep) {
     });
 }
 
+const char* invalid_fragment_field(const Fragment& f) {
+    const auto coordinate = [](const Vec3& v) {
+        return isfinite(v) && std::fabs(v.x) <= kMaxCoordinate && std::fabs(v.y) <= kMaxCoordinate && std::fabs(v.z) <= kMaxCoordinate;
+    };
+    // Normals are written unit length; a tolerance far above half-float rounding.
+    const auto unit = [](const Vec3& v) { return isfinite(v) && std::fabs(length(v) - 1) < 1e-3f; };
+    if (!(f.depth >= 0 && f.depth <= 2 * kMaxCoordinate)) return "Z";
+    if (!(f.weight > 0 && f.weight <= 1)) return "A";
+    if (!coordinate(f.p)) return "P";
+    if (!unit(f.n)) return "N";
+    if (!unit(f.ng)) return "Ng";
+    if (!coordinate(f.p_base)) return "Pref";
+    if (!unit(f.n_base)) return "Nref";
+    if (!(std::isfinite(f.uv.x) && std::isfinite(f.uv.y) && std::fabs(f.uv.x) <= 1e9f && std::fabs(f.uv.y) <= 1e9f)) return "uv";
+    if (!(f.footprint > 0 && f.footprint <= kMaxCoordinate)) return "footprint";
+    if (!(f.is_hair() ? unit(f.tangent) : f.tangent == Vec3(0))) return "T";
+    if (!(f.strand_v >= 0 && f.strand_v <= 1)) return "v";
+    return nullptr;
+}
+
 DeepBuffer read_deep(const std::string& path) {
     check_input_file(path);
     auto in = OIIO::ImageInput::open(path);
@@ -167,9 +187,10 @@ DeepBuffer read_deep(const std::string& path) {
             f.prim = id(21);
             f.footprint = v(22);
             f.tangent = {v(23), v(24), v(25)}, f.strand_v = v(26);
-            if (!isfinite(f.p) || !isfinite(f.n) || !std::isfinite(f.weight) || f.weight < 0 || f.weight > 1 ||
-                !isfinite(f.tangent) || !(f.strand_v >= 0 && f.strand_v <= 1))
-                throw InputError(path, fmt::format("pixel {} fragment {}", i, s), "non-finite or out-of-range values");
+            if (const char* bad = invalid_fragment_field(f))
+                throw InputError(path, fmt::format("pixel ({}, {}) fragment {} channel {}", deep.x0 + static_cast<int>(i % static_cast<size_t>(deep.width)),
+                                                   deep.y0 + static_cast<int>(i / static_cast<size_t>(deep.width)), s, bad),
+                                 "value out of range (not finite, beyond +-1e18, or a normal that is not unit length)");
         }
     }
     return deep;

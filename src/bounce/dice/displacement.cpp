@@ -3,9 +3,13 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/texture.h>
 
+#include <fmt/format.h>
+
+#include <cmath>
 #include <filesystem>
 
 #include "bounce/core/error.h"
+#include "bounce/core/image.h"
 
 namespace bounce {
 
@@ -20,11 +24,8 @@ struct DisplacementMap::Impl {
 DisplacementMap::DisplacementMap(const std::string& path) : impl_(std::make_unique<Impl>()), path_(path) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path, "", "displacement map not found (or not a file)");
-    {  // Check it is an image before the texture system (which reports errors only per lookup).
-        auto in = OIIO::ImageInput::open(path);
-        if (!in) throw InputError(path, "", "cannot read displacement map: " + OIIO::geterror());
-        if (in->spec().width <= 0 || in->spec().height <= 0) throw InputError(path, "", "displacement map has no pixels");
-    }
+    // Check it is an image before the texture system (which reports errors only per lookup).
+    if (std::string why = texture_problem(path); !why.empty()) throw InputError(path, "", "displacement map: " + why);
     // A private texture system: its cache and errors belong to this map alone.
     impl_->ts = OIIO::TextureSystem::create(false);
     impl_->name = OIIO::ustring(path);
@@ -41,6 +42,9 @@ float DisplacementMap::height(const Vec2& uv) const {
     // OIIO's t runs down the image, uv's v up.
     if (!impl_->ts->texture(impl_->name, opt, uv.x, 1.0f - uv.y, 0, 0, 0, 0, 1, &h))
         throw InputError(path_, "", "cannot read displacement map: " + impl_->ts->geterror());
+    if (!std::isfinite(h) || std::fabs(h) > 1e6f)
+        throw InputError(path_, fmt::format("near uv ({:.4f}, {:.4f})", uv.x, uv.y),
+                         fmt::format("the displacement map holds {} (heights must be finite)", h));
     return h;
 }
 

@@ -50,9 +50,13 @@ struct SubdivSurface {
     Displacement displacement;
 };
 
+/// Most faces that may meet at one control vertex (check_control_mesh).
+inline constexpr int kMaxValence = 256;
+
 /// Throws InputError (naming control.source) for a control mesh OpenSubdiv cannot refine as
 /// a manifold surface: an edge shared by more than two faces, faces that disagree on an
-/// edge's direction, a Loop mesh with non-triangles, out-of-range indices.
+/// edge's direction, a Loop mesh with non-triangles, out-of-range indices, a position that is
+/// not finite, or more than kMaxValence faces round one vertex.
 void check_control_mesh(const ControlMesh& control, SubdivScheme scheme);
 
 /// The surface refined `level` times (uniformly) and split into triangles: vertices on the

@@ -37,6 +37,18 @@ bool lookup(OIIO::TextureSystem* ts, const char* file, const Vec2& uv, float du,
     return ts->texture(OIIO::ustring::from_unique(file), opt, uv.x, 1 - uv.y, du, 0, 0, dv, channels, out, d_ds, d_dt);
 }
 
+/// A texture's colour as an albedo: NaN and infinities (a broken map) are black, values
+/// beyond 1 clamp to 1 (energy conservation), so no texel can make a pixel NaN.
+Color albedo_of(const float* rgb) {
+    Color c;
+    for (int i = 0; i < 3; ++i) c[i] = std::isfinite(rgb[i]) ? std::clamp(rgb[i], 0.0f, 1.0f) : 0.0f;
+    return c;
+}
+
+bool all_finite(const float* v, int n) {
+    return std::all_of(v, v + n, [](float x) { return std::isfinite(x); });
+}
+
 }  // namespace
 
 Color Materials::albedo(uint32_t material, const Vec2& uv) const {
@@ -44,7 +56,7 @@ Color Materials::albedo(uint32_t material, const Vec2& uv) const {
     if (m.color_texture.empty() || !textures_) return m.color;
     float rgb[3] = {1, 1, 1};
     if (!lookup(textures_, names_[material].color, uv, 0, 0, 3, rgb)) return m.color;
-    return m.color * Color(rgb[0], rgb[1], rgb[2]);
+    return m.color * albedo_of(rgb);
 }
 
 bool triangle_tangents(const TriangleMesh& mesh, uint32_t prim, Vec3& dpdu, Vec3& dpdv) {
@@ -66,8 +78,8 @@ Vec3 bumped_normal(const Vec3& n, const Vec3& dpdu, const Vec3& dpdv, float dhdu
     // divided by a = n.(dpdu x dpdv) it is n plus the tilt, whatever the uv orientation.
     const float a = dot(n, cross(dpdu, dpdv));
     if (std::abs(a) < 1e-20f) return n;
-    Vec3 b = n + (cross(n, dpdv) * dhdu - cross(n, dpdu) * dhdv) / a;
-    return dot(b, b) > 0 ? normalize(b) : n;
+    const Vec3 b = normalize(n + (cross(n, dpdv) * dhdu - cross(n, dpdu) * dhdv) / a);
+    return isfinite(b) && dot(b, b) > 0.5f ? b : n;  // a huge slope overflows: keep the normal
 }
 
 SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t prim, const Vec2& uv, const Vec3& n,
@@ -88,21 +100,22 @@ SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t p
     s.albedo = m.color;
     if (!m.color_texture.empty() && textures_) {
         float rgb[3] = {1, 1, 1};
-        if (lookup(textures_, names_[material].color, uv, du, dv, 3, rgb)) s.albedo = m.color * Color(rgb[0], rgb[1], rgb[2]);
+        if (lookup(textures_, names_[material].color, uv, du, dv, 3, rgb)) s.albedo = m.color * albedo_of(rgb);
     }
     if (!m.ao_texture.empty() && textures_) {
         float ao = 1;
-        if (lookup(textures_, names_[material].ao, uv, du, dv, 1, &ao)) s.occlusion = std::clamp(ao, 0.0f, 1.0f);
+        if (lookup(textures_, names_[material].ao, uv, du, dv, 1, &ao) && std::isfinite(ao)) s.occlusion = std::clamp(ao, 0.0f, 1.0f);
     }
     if (!m.has_bump() || !tangents || !textures_) return s;
     if (!m.bump_texture.empty()) {
         float h = 0, dh_ds = 0, dh_dt = 0;
-        if (lookup(textures_, names_[material].bump, uv, du, dv, 1, &h, &dh_ds, &dh_dt))
+        if (lookup(textures_, names_[material].bump, uv, du, dv, 1, &h, &dh_ds, &dh_dt) && std::isfinite(dh_ds) &&
+            std::isfinite(dh_dt))
             s.normal = bumped_normal(n, dpdu, dpdv, m.bump_strength * dh_ds, -m.bump_strength * dh_dt);  // t = 1 - v
         return s;
     }
     float rgb[3] = {0.5f, 0.5f, 1};
-    if (!lookup(textures_, names_[material].normal, uv, du, dv, 3, rgb)) return s;
+    if (!lookup(textures_, names_[material].normal, uv, du, dv, 3, rgb) || !all_finite(rgb, 3)) return s;
     // Tangent frame from dP/du (Gram-Schmidt against n); the bitangent follows dP/dv's side.
     Vec3 t = dpdu - n * dot(n, dpdu);
     if (dot(t, t) <= 0) return s;
@@ -110,8 +123,8 @@ SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t p
     Vec3 b = cross(n, t);
     if (dot(b, dpdv) < 0) b = -b;
     Vec3 local(m.bump_strength * (2 * rgb[0] - 1), m.bump_strength * (2 * rgb[1] - 1), 2 * rgb[2] - 1);
-    Vec3 nn = t * local.x + b * local.y + n * std::max(local.z, 0.0f);
-    if (dot(nn, nn) > 0) s.normal = normalize(nn);
+    const Vec3 nn = normalize(t * local.x + b * local.y + n * std::max(local.z, 0.0f));
+    if (isfinite(nn) && dot(nn, nn) > 0.5f) s.normal = nn;
     return s;
 }
 

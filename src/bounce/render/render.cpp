@@ -25,9 +25,21 @@ namespace bounce {
 void validate_deep_for_scene(const DeepBuffer& deep, const Scene& scene, const std::string& path) {
     if (deep.scene_fingerprint != scene.visibility_fingerprint())
         throw InputError(path, "bounce:scene_fingerprint",
-                         "deep file was made for another scene or camera (or dicing of its subdivision surfaces); re-render visibility without --deep-in");
+                         "deep file was made for another scene or camera (or dicing of its subdivision surfaces), or a file "
+                         "it shows (a mesh, a displacement map) has changed since; re-render visibility without --deep-in");
+    // Fragments lie on the scene's surfaces: a position far outside them was written by hand.
+    const Bounds reach = scene.visible_bounds();
+    const float slack = 0.01f * length(reach.hi - reach.lo) + 1e-6f;
+    const auto outside = [&](const Vec3& p) {
+        return p.x < reach.lo.x - slack || p.y < reach.lo.y - slack || p.z < reach.lo.z - slack || p.x > reach.hi.x + slack ||
+               p.y > reach.hi.y + slack || p.z > reach.hi.z + slack;
+    };
     for (size_t i = 0; i < deep.fragments.size(); ++i) {
         const Fragment& f = deep.fragments[i];
+        if (const char* bad = invalid_fragment_field(f))
+            throw InputError(path, fmt::format("fragment {} channel {}", i, bad), "value out of range");
+        if (outside(f.p) || outside(f.p_base))
+            throw InputError(path, fmt::format("fragment {}", i), "position outside the scene's surfaces");
         if (f.material >= scene.materials.size() || f.object >= scene.objects.size())
             throw InputError(path, fmt::format("fragment {}", i), "material or object id out of range for this scene");
         if (f.is_hair() && !scene.objects[f.object].fur)

@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "bounce/core/memory.h"
+
 namespace bounce {
 
 const std::vector<std::string>& fur_keys() {
@@ -34,13 +36,20 @@ std::shared_ptr<const UvMap> load_uv_map(const JsonReader& r, const std::string&
         r.fail(key, fmt::format("image \"{}\" has an unusable size {}x{}", path, spec.width, spec.height));
     auto map = std::make_shared<UvMap>();
     map->width = spec.width, map->height = spec.height;
+    const double texels = static_cast<double>(spec.width) * spec.height;
+    if (std::string why = memory_shortfall(texels * (spec.nchannels + 1) * sizeof(float), "reading " + path); !why.empty())
+        r.fail(key, why);
     std::vector<float> all(static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height) * static_cast<size_t>(spec.nchannels));
     if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()))
         r.fail(key, "cannot read image \"" + path + "\": " + in->geterror());
     map->values.resize(static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height));
     for (size_t i = 0; i < map->values.size(); ++i) {
         const float v = all[i * static_cast<size_t>(spec.nchannels)];
-        map->values[i] = std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 0.0f;
+        // A NaN would silently remove the fur there: the map is broken, say where.
+        if (!std::isfinite(v))
+            r.fail(key, fmt::format("image \"{}\" pixel ({}, {}) is not a finite number", path, i % static_cast<size_t>(spec.width),
+                                    i / static_cast<size_t>(spec.width)));
+        map->values[i] = std::clamp(v, 0.0f, 1.0f);
     }
     return map;
 }
@@ -75,6 +84,9 @@ std::shared_ptr<const Fur> read_fur(const JsonReader& r, const TriangleMesh& sur
     p.seed = static_cast<uint64_t>(r.integer("seed", 1, 0, 2'147'483'647));
     p.color_root = r.color("color_root", p.color_root);
     p.color_tip = r.color("color_tip", p.color_tip);
+    for (const auto& [key, c] : {std::pair{"color_root", p.color_root}, std::pair{"color_tip", p.color_tip}})
+        for (int i = 0; i < 3; ++i)
+            if (c[i] > 1) r.fail(key, "albedo components must be <= 1 (energy conservation)");
     p.specular = r.number("specular", p.specular, 0, 100);
     p.specular_exponent = r.number("specular_exponent", p.specular_exponent, 0, 1e4);
     p.falloff_root = r.number("falloff_root", p.falloff_root, 0, 1);
@@ -88,10 +100,11 @@ std::shared_ptr<const Fur> read_fur(const JsonReader& r, const TriangleMesh& sur
         r.fail(p.density_map ? "density_texture" : "length_texture", "the growing surface has no uvs to look the map up with");
     const double budget = static_cast<double>(scene.render.dicing.memory_budget) * 1073741824.0;
     const auto bytes = static_cast<double>(p.memory_bytes(p.count));
+    const std::string key = r.has("count") ? "count" : "density";
     if (bytes > budget)
-        r.fail(r.has("count") ? "count" : "density",
-               fmt::format("{} strands would take {:.1f} GiB, over render.memory_budget ({:g} GiB)", p.count,
-                           bytes / 1073741824.0, scene.render.dicing.memory_budget));
+        r.fail(key, fmt::format("{} strands would take {:.1f} GiB, over render.memory_budget ({:g} GiB)", p.count,
+                                bytes / 1073741824.0, scene.render.dicing.memory_budget));
+    if (std::string why = memory_shortfall(bytes, fmt::format("growing {} strands", p.count)); !why.empty()) r.fail(key, why);
     return std::make_shared<const Fur>(grow_fur(surface, p));
 }
 

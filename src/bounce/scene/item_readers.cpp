@@ -7,6 +7,7 @@
 #include <map>
 
 #include "bounce/core/error.h"
+#include "bounce/core/image.h"
 #include "bounce/core/memory.h"
 
 namespace bounce {
@@ -109,21 +110,33 @@ Transform read_transform(const JsonReader& obj) {
 }
 
 
+namespace {
+
+/// A texture key's file, checked as a texture (texture_problem).
+std::string texture_file(const JsonReader& m, const std::string& key) {
+    const std::string path = m.file(key, false);
+    if (!path.empty())
+        if (std::string why = texture_problem(path); !why.empty()) m.fail(key, "\"" + path + "\": " + why);
+    return path;
+}
+
+}  // namespace
+
 Material read_material(const JsonReader& m, const std::string& name) {
     Material mat;
     mat.name = name;
     mat.color = m.color("color", Color(0.7f));
     for (int i = 0; i < 3; ++i)
         if (mat.color[i] > 1) m.fail("color", "albedo components must be <= 1 (energy conservation)");
-    mat.color_texture = m.file("color_texture", false);
+    mat.color_texture = texture_file(m, "color_texture");
     mat.emission = m.color("emission", Color(0));
     mat.specular = m.color("specular", Color(0));
     for (int i = 0; i < 3; ++i)
         if (mat.specular[i] > 1) m.fail("specular", "specular components must be <= 1");
     mat.roughness = static_cast<float>(m.number("roughness", mat.roughness, 0.01, 1));
-    mat.bump_texture = m.file("bump_texture", false);
-    mat.ao_texture = m.file("ao_texture", false);
-    mat.normal_texture = m.file("normal_texture", false);
+    mat.bump_texture = texture_file(m, "bump_texture");
+    mat.ao_texture = texture_file(m, "ao_texture");
+    mat.normal_texture = texture_file(m, "normal_texture");
     mat.bump_strength = static_cast<float>(m.number("bump_strength", mat.bump_strength, -1e3, 1e3));
     return mat;
 }

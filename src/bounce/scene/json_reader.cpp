@@ -44,8 +44,14 @@ float json_float(const json& v, double lo, double hi, const std::function<void(c
 }
 
 int64_t json_integer(const json& v, double lo, double hi, const std::function<void(const std::string&)>& fail) {
-    if (!v.is_number_integer())
-        fail(fmt::format("expected an integer, got {}", v.is_number() ? fmt::format("{}", v.get<double>()) : json_type_name(v)));
+    // 1e3 and 512.0 are whole numbers too; 2.5 is not.
+    if (v.is_number_float()) {
+        const double d = v.get<double>();
+        if (!(std::isfinite(d) && d == std::floor(d))) fail(fmt::format("expected an integer, got {}", d));
+        if (d < lo || d > hi) fail(fmt::format("{} is out of range [{}, {}]", d, lo, hi));
+        return static_cast<int64_t>(d);
+    }
+    if (!v.is_number_integer()) fail(fmt::format("expected an integer, got {}", json_type_name(v)));
     if (v.is_number_unsigned() && v.get<uint64_t>() > static_cast<uint64_t>(INT64_MAX)) fail("integer is out of range");
     const int64_t x = v.get<int64_t>();
     if (static_cast<double>(x) < lo || static_cast<double>(x) > hi) fail(fmt::format("{} is out of range [{}, {}]", x, lo, hi));
@@ -175,6 +181,10 @@ std::string apply_override(json& doc, const Override& o) {
             if (idx >= node->size()) fail(fmt::format("index {} is out of range (array has {} items)", idx, node->size()));
             node = &(*node)[idx];
         } else {
+            // An index into nothing: the scene has no such list ("lights.0" without lights).
+            const bool index = !part.empty() && part.size() <= 9 && std::all_of(part.begin(), part.end(), ::isdigit);
+            if (node->is_null() && index)
+                fail(fmt::format("the scene has no \"{}\" list to index", i > 0 ? parts[i - 1] : std::string()));
             if (node->is_null()) *node = json::object();
             if (!node->is_object()) fail("\"" + part + "\" is inside a value that is not an object");
             node = &(*node)[part];

@@ -15,6 +15,7 @@
 
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
+#include "bounce/core/image.h"
 #include "bounce/scene/mesh_checks.h"
 
 namespace bounce {
@@ -223,8 +224,9 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
                 for (aiTextureType type : types) {
                     if (am->GetTexture(type, 0, &tex) != AI_SUCCESS || tex.C_Str()[0] == '*') continue;
                     const std::string t = (fs::path(path).parent_path() / tex.C_Str()).lexically_normal().string();
-                    if (std::string why = not_a_regular_file(t); !why.empty())
-                        throw InputError(path, where, fmt::format("texture {}: \"{}\"", why, t));
+                    std::string why = not_a_regular_file(t);
+                    if (why.empty()) why = texture_problem(t);
+                    if (!why.empty()) throw InputError(path, where, fmt::format("texture \"{}\": {}", t, why));
                     if (files_read) files_read->push_back(t);
                     return t;
                 }
@@ -294,6 +296,8 @@ ControlMesh load_control_mesh(const std::string& path, const std::string& prefix
             for (unsigned i = 0; i < face.mNumIndices; ++i) {
                 const unsigned v = face.mIndices[i];
                 const Vec3 p = transform.point(t.point(to_vec3(am->mVertices[v])));
+                // Before welding: NaN keys would break the map's ordering.
+                if (!isfinite(p)) throw InputError(path, fmt::format("vertex {}", v), "position is not finite (after the transforms)");
                 auto [it, fresh] = vertex_of.emplace(std::array<float, 3>{p.x, p.y, p.z}, static_cast<int>(c.positions.size()));
                 if (fresh) c.positions.push_back(p);
                 c.face_vertices.push_back(it->second);

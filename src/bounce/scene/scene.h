@@ -99,7 +99,8 @@ struct Scene {
     /// The effective scene description after overrides (for metadata and fingerprints).
     nlohmann::json description;
 
-    Bounds bounds() const;
+    Bounds bounds() const;          ///< of the coarse tessellation (what rays trace)
+    Bounds visible_bounds() const;  ///< of everything the camera can see (fine surfaces, fur)
     /// 64-bit hash of the named top-level parts of the effective description ("camera",
     /// "objects" ...): the identity that deep and cache files are checked against.
     /// `without_surface_shading` leaves out the material keys that only change how a surface

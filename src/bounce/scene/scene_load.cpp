@@ -144,6 +144,17 @@ Bounds Scene::bounds() const {
     return b;
 }
 
+Bounds Scene::visible_bounds() const {
+    Bounds b = bounds();
+    for (const auto& o : objects) {
+        if (o.has_fine()) b.extend(o.fine.bounds());
+        if (!o.fur) continue;
+        const std::vector<float>& v = o.fur->vertices;
+        for (size_t i = 0; i + 3 < v.size() + 1; i += 4) b.extend(Vec3{v[i], v[i + 1], v[i + 2]});
+    }
+    return b;
+}
+
 uint64_t Scene::fingerprint(const std::vector<std::string>& parts, bool without_surface_shading) const {
     uint64_t h = 0x243f6a8885a308d3ULL;
     for (const auto& part : parts) {

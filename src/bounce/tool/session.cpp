@@ -73,22 +73,6 @@ void add_scene_rows(const json& description, json& rows) {
         }
 }
 
-void tone_map(const Image& image, const Layer& l, float exposure, std::string& out) {
-    const size_t nc = l.channels.size(), n = static_cast<size_t>(image.width) * static_cast<size_t>(image.height);
-    out.resize(4 * n);
-    const float scale = std::exp2(exposure);
-    const bool signed_values = l.name.find("normal") != std::string::npos;  // [-1, 1] directions
-    for (size_t i = 0; i < n; ++i) {
-        for (size_t c = 0; c < 3; ++c) {
-            const float x = l.data[i * nc + std::min(c, nc - 1)];
-            const uint8_t v = signed_values ? static_cast<uint8_t>(std::lround(std::clamp(0.5f * x + 0.5f, 0.0f, 1.0f) * 255))
-                                            : srgb8(x * scale);
-            out[4 * i + c] = static_cast<char>(v);
-        }
-        out[4 * i + 3] = static_cast<char>(255);
-    }
-}
-
 }  // namespace
 
 class LightingSession::Sink : public ProgressSink {
@@ -332,7 +316,10 @@ LightingSession::Pixels LightingSession::pixels(const std::string& layer, float 
     const Layer* l = image_.find(layer);
     if (!l || l->channels.empty()) throw InputError("request", "layer", fmt::format("the image has no layer '{}'", layer));
     Pixels p;
-    tone_map(image_, *l, exposure, p.rgba);
+    const std::vector<uint8_t> rgb = display_rgb8(image_, *l, exposure);
+    p.rgba.resize(rgb.size() / 3 * 4);
+    for (size_t i = 0; i < rgb.size() / 3; ++i)
+        for (size_t c = 0; c < 4; ++c) p.rgba[4 * i + c] = static_cast<char>(c < 3 ? rgb[3 * i + c] : 255);
     p.width = image_.width, p.height = image_.height, p.version = version_;
     return p;
 }
