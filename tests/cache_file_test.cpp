@@ -206,9 +206,9 @@ TEST(CacheFile, BadFilesAreRefusedCleanly) {
     };
     refused("", "empty");
     refused("not a cache at all", "bad magic");
-    std::string v2 = good;
-    v2[8] = 2;
-    refused(v2, "unsupported cache version 2");
+    std::string v9 = good;
+    v9[8] = 9;
+    refused(v9, "unsupported cache version 9");
     // Every truncation is an error, never a crash.
     for (size_t n = 1; n < good.size(); n += 7) EXPECT_THROW(parse_cache_file(good.substr(0, n), "t.bic"), InputError) << n;
     // Every single flipped bit after the magic and version is caught (checksums, bounds).

@@ -15,13 +15,7 @@
 namespace bounce {
 namespace {
 
-/// Runs bounce, expects exit 2 and every `parts` in its one-line message.
-void refused(const std::string& args, std::initializer_list<std::string> parts) {
-    std::string err;
-    EXPECT_EQ(test::run_bounce(args, &err), 2) << args << " -> " << err;
-    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
-    for (const auto& p : parts) EXPECT_NE(err.find(p), std::string::npos) << args << " -> " << err << " lacks " << p;
-}
+void refused(const std::string& args, std::initializer_list<std::string> parts) { test::expect_refused(args, parts); }
 
 std::string render_cmd(const std::string& scene, const std::string& out) { return "render " + scene + " -o " + out + " -q --res 16x16"; }
 

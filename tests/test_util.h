@@ -1,8 +1,10 @@
 // Helpers shared by the tests: temporary folders, scenes from inline JSON, running the CLI.
 #pragma once
 
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -50,6 +52,41 @@ inline int run_bounce(const std::string& args, std::string* err = nullptr) {
         err->assign(std::istreambuf_iterator<char>(in), {});
     }
     return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+/// Runs `command` in sh (e.g. with a ulimit before bounce); the exit status, stderr in `err`.
+inline int run_bounce_shell(const std::string& command, std::string* err = nullptr) {
+    TempDir d;
+    std::string cmd = "sh -c '" + command + "' 2>" + d.file("err.txt") + " >/dev/null";
+    int rc = std::system(cmd.c_str());
+    if (err) {
+        std::ifstream in(d.file("err.txt"));
+        err->assign(std::istreambuf_iterator<char>(in), {});
+    }
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+/// Runs bounce with `args`, expects exit 2 and every one of `parts` in its one-line message.
+inline void expect_refused(const std::string& args, std::initializer_list<std::string> parts) {
+    std::string err;
+    EXPECT_EQ(run_bounce(args, &err), 2) << args << " -> " << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    for (const auto& p : parts) EXPECT_NE(err.find(p), std::string::npos) << args << " -> " << err << " lacks " << p;
+}
+
+/// The bytes of a file ("" if it cannot be read).
+inline std::string bytes_of(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), {}};
+}
+
+/// Writes a w x h image of `channels` channels, every value `v` (float EXR, else 8-bit).
+inline void write_constant_image(const std::string& path, int w, int h, int channels, float v) {
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(w, h, channels, path.ends_with(".exr") ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+    std::vector<float> px(static_cast<size_t>(w) * h * channels, v);
+    ASSERT_TRUE(out->open(path, spec) && out->write_image(OIIO::TypeDesc::FLOAT, px.data()) && out->close());
 }
 
 /// A large floor quad (y = 0, normal +y) as a JSON object list.

@@ -1,6 +1,7 @@
 // `bounce bake-ao`, `bounce compare` and `bounce cache info|merge|filter|export`.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -9,8 +10,7 @@ namespace bounce {
 struct BakeAoArgs {
     std::string scene, object, output;
     int resolution = 1024, rays = 256;
-    static constexpr float kAutomatic = -1;  ///< --distance not given: 4x the displacement bound
-    float distance = kAutomatic;
+    std::optional<float> distance;  ///< not given: 4x the displacement bound
 };
 
 struct CompareArgs {

@@ -31,9 +31,11 @@ const Field kFields[] = {
     {"ao_grad_r", "f32", 3}, {"ao_grad_t", "f32", 3}, {"radius", "f32", 1},     {"raw_radius", "f32", 1},
     {"footprint", "f32", 1}, {"harmonic", "f32", 1},  {"dmin", "f32", 1},       {"weber", "f32", 1},
     {"radius_long", "f32", 1}, {"axis", "f32", 3},    {"key", "u64", 1},       {"rays", "u32", 1},      {"frame", "i32", 1},
+    {"origin", "f32", 3},    {"reach", "f32", kReachBins}, {"anchor", "u32", 1}, {"anchor_p", "f32", 3},  {"anchor_n", "f32", 3},
+    {"gathered", "i32", 1},  {"drift", "f32", 1},
 };
-constexpr size_t kFloats = 3 + 3 + 3 + 1 + 3 + 9 + 9 + 9 + 3 + 3 + 6 + 4;
-constexpr size_t kRecordBytes = kFloats * 4 + 8 + 4 + 4;
+constexpr size_t kFloats = 3 + 3 + 3 + 1 + 3 + 9 + 9 + 9 + 3 + 3 + 6 + 4 + 3 + kReachBins + 3 + 3 + 1;
+constexpr size_t kRecordBytes = kFloats * 4 + 8 + 4 + 4 + 4 + 4;
 
 uint64_t fnv1a(const char* data, size_t n) {
     uint64_t h = 0xcbf29ce484222325ULL;
@@ -60,6 +62,9 @@ void write_record(std::string& out, const Record& r) {
         put(out, r.weber);
     put(out, r.radius_long), put_vec(out, r.axis);
     put(out, r.key), put(out, r.rays), put(out, r.frame);
+    put_vec(out, r.origin);
+    for (float d : r.reach) put(out, d);
+    put(out, r.anchor), put_vec(out, r.anchor_p), put_vec(out, r.anchor_n), put(out, r.gathered), put(out, r.drift);
 }
 
 /// Sequential reader over the file's bytes with bounds checks.
@@ -109,6 +114,10 @@ Record read_record(Cursor& c) {
     r.weber = c.get<float>("weber");
     r.radius_long = c.get<float>("radius_long"), r.axis = c.vec("axis");
     r.key = c.get<uint64_t>("key"), r.rays = c.get<uint32_t>("rays"), r.frame = c.get<int32_t>("frame");
+    r.origin = c.vec("origin");
+    for (float& d : r.reach) d = c.get<float>("reach");
+    r.anchor = c.get<uint32_t>("anchor"), r.anchor_p = c.vec("anchor_p"), r.anchor_n = c.vec("anchor_n");
+    r.gathered = c.get<int32_t>("gathered"), r.drift = c.get<float>("drift");
     return r;
 }
 
@@ -136,6 +145,12 @@ const char* record_problem(const Record& r) {
         return "long radius is neither 0 nor in [radius, 1e18]";
     if (!isfinite(r.axis) || (r.radius_long > 0 && std::abs(length(r.axis) - 1) > 1e-3f)) return "axis is not a unit vector";
     if (r.weber <= 0 || std::isnan(r.weber)) return "gradient-limit distance is not positive";
+    if (!fin(r.origin) || !within(r.origin, kMaxCoordinate)) return "gather origin not finite or beyond +-1e18";
+    for (float d : r.reach)
+        if (!(d >= 0)) return "reach is negative or NaN";
+    if (r.anchor != kNoAnchor && (!fin(r.anchor_p) || !within(r.anchor_p, kMaxCoordinate) || !fin(r.anchor_n)))
+        return "anchor not finite or beyond +-1e18";
+    if (!(r.drift >= 0 && r.drift <= kMaxRadiometric)) return "drift is not in [0, 1e20]";
     return nullptr;
 }
 

@@ -29,7 +29,8 @@ struct CacheFile {
     std::vector<Record> fragment_records;
 };
 
-inline constexpr uint32_t kCacheFileVersion = 1;
+/// 2: records carry their gather's origin, view summary (reach), anchor, last gather frame and drift.
+inline constexpr uint32_t kCacheFileVersion = 2;
 
 /// Writes `file` to `path` (temporary name, then rename).
 void write_cache_file(const std::string& path, const CacheFile& file);

@@ -92,6 +92,8 @@ Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const 
     r.dmin = g.min_distance;
     r.key = key;
     r.rays = static_cast<uint32_t>(g.rays);
+    r.origin = p;
+    r.reach = g.reach;
     // TL04: half the minimum qualifying distance; Ward: the harmonic mean.
     r.raw_radius = settings_.metric == Metric::Ward ? g.harmonic_distance : settings_.radius_scale * g.min_distance;
     const float rmin = settings_.min_spacing * footprint, rmax = settings_.max_spacing * footprint;

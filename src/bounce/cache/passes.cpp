@@ -131,7 +131,8 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
                             ++full_gathers.local();
                         }
                         Record r = cache.make_record(g, site.p, site.n, f.footprint, candidate_key(deep, wx, wy, k));
-                        r.frame = frame;
+                        r.frame = r.gathered = frame;
+                        r.origin = site.origin;
                         if (per_tile) {
                             cache.clamp_to_neighbours(r, out);
                             r.support = cache.support(r);
@@ -223,7 +224,8 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                 r.footprint = f.footprint > 0 ? f.footprint : 1e-6f;
                 r.radius = r.raw_radius = r.footprint;
                 r.harmonic = g.harmonic_distance, r.dmin = g.min_distance;
-                r.key = key, r.rays = static_cast<uint32_t>(g.rays), r.frame = frame;
+                r.key = key, r.rays = static_cast<uint32_t>(g.rays), r.frame = r.gathered = frame;
+                r.origin = f.p;
                 made.local().push_back(r);
             }
         }, scene.render.parallel.tile_order);

@@ -4,12 +4,17 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "bounce/core/math.h"
+#include "bounce/gather/gather.h"
 #include "bounce/scene/settings.h"
 
 namespace bounce {
+
+inline constexpr uint32_t kNoAnchor = 0xffffffffu;
 
 /// One cache record: a full gather's result at (p, n), with its reach.
 struct Record {
@@ -28,9 +33,17 @@ struct Record {
     float harmonic = 0, dmin = 0;  ///< gather distances (harmonic mean, qualifying minimum)
     float weber = INFINITY;      ///< distance at which the gradient change reaches tau E (world)
     float support = 0;           ///< weights are zero beyond this distance (octree placement)
-    uint64_t key = 0;            ///< creation key (pixel, fragment): deterministic order
+    uint64_t key = 0;            ///< creation key (pixel, fragment): deterministic order and its random stream
     uint32_t rays = 0;
-    int32_t frame = 0;           ///< frame it was gathered in (sequences: reused vs new)
+    int32_t frame = 0;           ///< frame it was created in (sequences: reused vs new)
+    // Frames of a shot (temporal.h).
+    Vec3 origin{0};              ///< where the gather's rays left from (world)
+    std::array<float, kReachBins> reach{};  ///< farthest hit per direction bin (INFINITY: a ray escaped)
+    uint32_t anchor = kNoAnchor; ///< the moving object whose surface carries it, or kNoAnchor (static)
+    Vec3 anchor_p{0}, anchor_n{0};  ///< p and n in that object's own space (before its placement)
+    int32_t gathered = 0;        ///< frame of its last gather or re-shade
+    float drift = 0;             ///< bound on how far its irradiance may have moved since (relative to E)
+    std::shared_ptr<const GatherHits> hits;  ///< kept only when a shot may re-shade it (not in files)
 };
 
 /// Normalised error terms of record `r` at (p, n); each reaches 1 exactly at its bound.

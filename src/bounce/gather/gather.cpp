@@ -58,41 +58,85 @@ Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d
     return albedo * lighting_.irradiance(sp.p, n, hit_rng, settings_.hit_light_samples, counters) * kInvPi;
 }
 
-GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const {
-    if (settings_.cancel) settings_.cancel->check();
-    const int M = grid_.m, N = grid_.n, S = M * N;
-    // Per-cell radiance, distance and unoccluded weight, for the gradients.
-    thread_local std::vector<Color> L;
-    thread_local std::vector<float> R, U, cos_theta;
-    thread_local std::vector<Vec3> D;
-    thread_local std::vector<Hit> hits, packet_hits;
-    thread_local std::vector<Vec3> packet_dirs;
-    L.assign(static_cast<size_t>(S), Color(0));
-    R.assign(static_cast<size_t>(S), INFINITY);
-    U.assign(static_cast<size_t>(S), 1.0f);
-    D.resize(static_cast<size_t>(S));
-    cos_theta.resize(static_cast<size_t>(S));
-    hits.resize(static_cast<size_t>(S));
-    packet_dirs.resize(static_cast<size_t>(S));
-    packet_hits.resize(static_cast<size_t>(S));
+namespace {
 
+/// Per-cell scratch of the thread's current gather (trace or re-shade, then finish).
+struct Cells {
+    std::vector<Color> L;
+    std::vector<float> R, U, cos_theta;
+    std::vector<Vec3> D;
+    std::vector<Hit> hits, packet_hits;
+    std::vector<Vec3> packet_dirs;
+    void resize(size_t s) {
+        L.assign(s, Color(0));
+        R.assign(s, INFINITY);
+        U.assign(s, 1.0f);
+        D.resize(s), cos_theta.resize(s), hits.resize(s), packet_dirs.resize(s), packet_hits.resize(s);
+    }
+};
+thread_local Cells cells;
+
+}  // namespace
+
+void Gatherer::cell_directions(const Vec3& n, const RandomStream& rng) const {
+    const int M = grid_.m, N = grid_.n;
+    cells.resize(static_cast<size_t>(M * N));
     const Frame frame(n);
-    GatherResult res;
-    res.rays = S;
-    // Directions first (stratified, cosine-weighted), then one packet trace of all of them:
-    // neighbouring cells of a row are coherent, so Embree traverses them together.
     for (int j = 0; j < M; ++j)
         for (int k = 0; k < N; ++k) {
             const auto c = static_cast<size_t>(j * N + k);
             const Vec3 local = gather_cell_direction(grid_, j, k, rng.get(c, kDimGather), rng.get(c, kDimGather + 1));
-            cos_theta[c] = local.z;
-            D[c] = frame.to_world(local);
+            cells.cos_theta[c] = local.z;
+            cells.D[c] = frame.to_world(local);
         }
-    for (size_t i = 0; i < packet_order_.size(); ++i) packet_dirs[i] = D[packet_order_[i]];
-    accel_.trace_many(p, packet_dirs, packet_hits);
-    for (size_t i = 0; i < packet_order_.size(); ++i) hits[packet_order_[i]] = packet_hits[i];
-    counters.gather_rays += static_cast<uint64_t>(S);
+}
 
+GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near,
+                              GatherHits* keep) const {
+    if (settings_.cancel) settings_.cancel->check();
+    // Directions first (stratified, cosine-weighted), then one packet trace of all of them:
+    // neighbouring cells of a row are coherent, so Embree traverses them together.
+    cell_directions(n, rng);
+    const size_t S = cells.D.size();
+    for (size_t i = 0; i < packet_order_.size(); ++i) cells.packet_dirs[i] = cells.D[packet_order_[i]];
+    accel_.trace_many(p, cells.packet_dirs, cells.packet_hits);
+    for (size_t i = 0; i < packet_order_.size(); ++i) cells.hits[packet_order_[i]] = cells.packet_hits[i];
+    counters.gather_rays += static_cast<uint64_t>(S);
+    if (keep) {
+        keep->t.resize(S), keep->u.resize(S), keep->v.resize(S), keep->object.resize(S), keep->prim.resize(S);
+        for (size_t c = 0; c < S; ++c) {
+            const Hit& h = cells.hits[c];
+            keep->t[c] = h.t, keep->u[c] = h.u, keep->v[c] = h.v, keep->prim[c] = h.prim;
+            keep->object[c] = h.valid() && h.hair ? h.object | GatherHits::kHairBit : h.object;
+        }
+    }
+    return finish(p, n, rng, counters, near);
+}
+
+GatherResult Gatherer::reshade(const Vec3& p, const Vec3& n, const RandomStream& rng, const GatherHits& kept, Counters& counters,
+                               float near) const {
+    if (settings_.cancel) settings_.cancel->check();
+    cell_directions(n, rng);
+    const size_t S = cells.D.size();
+    if (kept.t.size() != S) return gather(p, n, rng, counters, near);  // made with other settings: trace again
+    for (size_t c = 0; c < S; ++c) {
+        Hit& h = cells.hits[c];
+        h.t = kept.t[c], h.u = kept.u[c], h.v = kept.v[c], h.prim = kept.prim[c];
+        h.hair = kept.object[c] != kNoHit && (kept.object[c] & GatherHits::kHairBit);
+        h.object = kept.object[c] == kNoHit ? kNoHit : kept.object[c] & ~GatherHits::kHairBit;
+    }
+    return finish(p, n, rng, counters, near);
+}
+
+GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const {
+    const int M = grid_.m, N = grid_.n, S = M * N;
+    std::vector<Color>& L = cells.L;
+    std::vector<float>&R = cells.R, &U = cells.U, &cos_theta = cells.cos_theta;
+    const std::vector<Vec3>& D = cells.D;
+    const std::vector<Hit>& hits = cells.hits;
+    const Frame frame(n);
+    GatherResult res;
+    res.rays = S;
     Color sum_l(0);
     Vec3 sum_u_dir(0);
     std::array<Vec3, 3> sum_dir{};
@@ -166,6 +210,12 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
         }
     }
     if (!settings_.record_terms) return res;
+    // The view summary: per direction bin, the farthest the rays went (INFINITY: one escaped).
+    for (int j = 0; j < M; ++j)
+        for (int k = 0; k < N; ++k) {
+            const size_t bin = static_cast<size_t>((j * kReachBands / M) * kReachSectors + k * kReachSectors / N);
+            res.reach[bin] = std::max(res.reach[bin], R[static_cast<size_t>(j * N + k)]);
+        }
     if (settings_.hessian) {
         // Relative values (Radiance's normalisation: 0.99 of the mean plus 0.01, so that a dark
         // hemisphere still has a geometric Hessian).

@@ -39,6 +39,20 @@ Vec3 gather_cell_direction(const GatherGrid& grid, int j, int k, float u, float 
 /// neighbouring cells, so each packet of 16 rays points in nearby directions.
 std::vector<uint32_t> gather_packet_order(const GatherGrid& grid);
 
+/// Direction bins of a gather's view summary (GatherResult::reach): its elevation strata in
+/// kReachBands bands, its azimuth strata in kReachSectors sectors. Frames of a shot test moving
+/// geometry and changed light against them (cache/temporal.h).
+inline constexpr int kReachBands = 4, kReachSectors = 8, kReachBins = kReachBands * kReachSectors;
+
+/// A gather's ray hits, per cell: what a re-shade traces again for free when only the light its
+/// rays found has changed (Gatherer::reshade).
+struct GatherHits {
+    std::vector<float> t, u, v;          ///< distance (INFINITY: escaped) and the hit's (u, v)
+    std::vector<uint32_t> object, prim;  ///< object (kNoHit: escaped; | kHairBit: a strand) and primitive
+    static constexpr uint32_t kHairBit = 0x80000000u;
+    size_t bytes() const { return t.size() * (3 * sizeof(float) + 2 * sizeof(uint32_t)); }
+};
+
 /// What a gather returns; gradients follow Ward-Heckbert (rotational) and Ward-Heckbert with
 /// Krivanek's occlusion-aware distances (translational), see docs/gather.md.
 struct GatherResult {
@@ -59,6 +73,8 @@ struct GatherResult {
     /// With GatherSettings::hessian: the tangent Hessian of relative irradiance (hessian.h).
     Vec3 hess_axis{0};
     float hess_slow = 0, hess_fast = 0;
+    /// With record_terms: the farthest hit per direction bin (INFINITY where a ray escaped).
+    std::array<float, kReachBins> reach{};
 };
 
 /// Gathers at `p` (on the fine surface) over the hemisphere of unit normal `n`.
@@ -72,11 +88,22 @@ public:
     /// the translational gradients (their cell distances are floored at it). Records on the
     /// un-displaced surface pass a few displacement bounds, so the displacement's own bumps do
     /// not shrink them (CacheSettings::displacement_near); the light they gather is unchanged.
-    GatherResult gather(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near = 0) const;
+    /// `hits`, if given, receives every ray's hit (for a later reshade).
+    GatherResult gather(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near = 0,
+                        GatherHits* hits = nullptr) const;
+    /// The same gather (same p, n, rng and settings) from the hits it traced: no ray is traced,
+    /// every hit is shaded with today's light. Bit-identical to gather() when the scene's
+    /// geometry is what it was and the hits are gather()'s.
+    GatherResult reshade(const Vec3& p, const Vec3& n, const RandomStream& rng, const GatherHits& hits, Counters& counters,
+                         float near = 0) const;
     const GatherSettings& settings() const { return settings_; }
     GatherGrid grid() const { return grid_; }
 
 private:
+    /// The directions of the gather's cells (stratified, cosine-weighted) about n.
+    void cell_directions(const Vec3& n, const RandomStream& rng) const;
+    /// Everything a gather computes from its cells' directions and hits (thread-local arrays).
+    GatherResult finish(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const;
     /// Radiance leaving a hit towards the gather point (direction -d).
     Color hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray,
                        Counters& counters) const;

@@ -163,7 +163,7 @@ std::vector<std::string> check_obj(const std::string& path) {
 void check_ply_counts(const std::string& path) {
     if (lower_extension(path) != ".ply") return;
     std::ifstream in(path, std::ios::binary);
-    std::string line, format;
+    std::string line, format, elements;
     uint64_t declared = 0, min_bytes = 0, count = 0;
     size_t header_lines = 0;
     while (std::getline(in, line)) {
@@ -179,6 +179,7 @@ void check_ply_counts(const std::string& path) {
             ls >> name >> count;
             if (!ls) throw InputError(path, fmt::format("line {}", header_lines), "malformed element line");
             declared += count;
+            elements += fmt::format("{}{} {}", elements.empty() ? "" : ", ", count, name);
         } else if (word == "property") {
             std::string type;
             ls >> type;
@@ -200,8 +201,8 @@ void check_ply_counts(const std::string& path) {
     if (format != "ascii") {
         if (!ec && min_bytes > size - std::min(size, body_start))
             throw InputError(path, "header",
-                             fmt::format("corrupted: the header declares {} elements needing at least {} bytes; the file holds {}",
-                                         declared, min_bytes, size - std::min(size, body_start)));
+                             fmt::format("corrupted: the header declares {} (at least {} bytes); the file holds {}", elements,
+                                         min_bytes, size - std::min(size, body_start)));
         return;
     }
     uint64_t body = 0;

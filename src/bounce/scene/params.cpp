@@ -50,6 +50,7 @@ struct Row {
     Row& unit(const char* u) { p.unit = u; return *this; }
     Row& doc(const char* d) { p.doc = d; return *this; }
     Row& id(unsigned mask) { p.identity = mask; return *this; }
+    Row& animate() { p.animatable = true; return *this; }
     /// The CLI flag: "--" and the key's name with dashes, unless given.
     Row& flag(std::string f = "") {
         if (f.empty()) {
@@ -113,9 +114,9 @@ ParamTable make_table() {
     const unsigned deep = kDeepIdentity, rad = kRadiosityIdentity, cache = kCacheIdentity;
     std::vector<Row> rows;
     // Camera.
-    rows.push_back(camera_vec3("position", &Camera::position, "where the camera is", true));
-    rows.push_back(camera_vec3("look_at", &Camera::look_at, "the point it looks at", true));
-    rows.push_back(camera_vec3("up", &Camera::up, "up direction; must not be parallel to the view", false));
+    rows.push_back(camera_vec3("position", &Camera::position, "where the camera is", true).animate());
+    rows.push_back(camera_vec3("look_at", &Camera::look_at, "the point it looks at", true).animate());
+    rows.push_back(camera_vec3("up", &Camera::up, "up direction; must not be parallel to the view", false).animate());
     {
         Row r;
         r.p.key = "camera.fov";
@@ -123,7 +124,40 @@ ParamTable make_table() {
         r.p.type = ParamType::Float;
         r.p.get = [](const Scene& s) -> json { return s.camera.fov; };
         r.p.set = [](Scene& s, const json& v) { s.camera.fov = v.get<float>(); };
-        rows.push_back(r.range(0.001, 179.999).unit("degrees").doc("vertical field of view").id(deep));
+        rows.push_back(r.range(0.001, 179.999).unit("degrees").doc("vertical field of view").id(deep).animate());
+    }
+    {
+        Row r;
+        r.p.key = "camera.shutter";
+        r.p.stage = "camera";
+        r.p.type = ParamType::FloatList;
+        r.p.count = 2;
+        r.p.get = [](const Scene& s) -> json { return json::array({s.camera.shutter[0], s.camera.shutter[1]}); };
+        r.p.set = [](Scene& s, const json& v) { s.camera.shutter = {v[0].get<float>(), v[1].get<float>()}; };
+        rows.push_back(r.range(-1, 1).unit("frames")
+                           .doc("[open, close] around the frame's time: primary visibility is blurred over it, shading is "
+                                "at the frame's time; [0, 0] = no motion blur")
+                           .id(deep).animate());
+    }
+    {
+        Row r;
+        r.p.key = "camera.aperture";
+        r.p.stage = "camera";
+        r.p.type = ParamType::Float;
+        r.p.get = [](const Scene& s) -> json { return s.camera.aperture; };
+        r.p.set = [](Scene& s, const json& v) { s.camera.aperture = v.get<float>(); };
+        rows.push_back(r.range(0, kMaxCoordinate).unit("world")
+                           .doc("lens diameter (thin lens): depth of field; 0 = pinhole").id(deep).animate());
+    }
+    {
+        Row r;
+        r.p.key = "camera.focus_distance";
+        r.p.stage = "camera";
+        r.p.type = ParamType::Float;
+        r.p.get = [](const Scene& s) -> json { return s.camera.focus_distance; };
+        r.p.set = [](Scene& s, const json& v) { s.camera.focus_distance = v.get<float>(); };
+        rows.push_back(r.automatic(0).range(0, kMaxCoordinate).unit("world")
+                           .doc("distance of the plane in focus along the view; auto = the distance to look_at").id(deep).animate());
     }
     {
         Row r;
@@ -269,6 +303,7 @@ std::string type_name(const Param& p) {
         case ParamType::Path: return "path";
         case ParamType::Vec3: return "[x, y, z]";
         case ParamType::IntList: return fmt::format("{} integers", p.count);
+        case ParamType::FloatList: return fmt::format("{} numbers", p.count);
     }
     return "";
 }
@@ -320,15 +355,17 @@ json check_param(const Param& p, const json& v, const ParamFail& fail) {
             return v;
         }
         case ParamType::Vec3:
+        case ParamType::FloatList:
         case ParamType::IntList: {
+            const bool floats = p.type != ParamType::IntList;
             size_t n = p.type == ParamType::Vec3 ? 3 : p.count;
             if (!v.is_array() || v.size() != n)
-                fail("", fmt::format("expected an array of {} {}, got {}{}", n, p.type == ParamType::Vec3 ? "numbers" : "integers",
+                fail("", fmt::format("expected an array of {} {}, got {}{}", n, floats ? "numbers" : "integers",
                                      json_type_name(v), v.is_array() ? fmt::format(" of {}", v.size()) : ""));
             json out = json::array();
             for (size_t i = 0; i < n; ++i) {
                 std::string sub = "/" + std::to_string(i);
-                if (p.type == ParamType::Vec3) out.push_back(check_float(v[i], p.lo, p.hi, sub, fail));
+                if (floats) out.push_back(check_float(v[i], p.lo, p.hi, sub, fail));
                 else out.push_back(check_int(v[i], p.lo, p.hi, sub, fail));
             }
             return out;
@@ -371,22 +408,56 @@ json params_listing(const ParamTable& table) {
         if (p.type == ParamType::Enum) j["choices"] = p.choices;
         if (p.lo != p.hi) j["range"] = {p.lo, p.hi};
         if (p.required) j["required"] = true;
+        if (p.animatable) j["animatable"] = true;
         out.push_back(j);
     }
     return out;
 }
 
 std::string params_markdown(const ParamTable& table) {
-    std::string s = "| key | type | default | range | unit | invalidates | CLI | meaning |\n|---|---|---|---|---|---|---|---|\n";
+    std::string s = "| key | type | default | range | unit | invalidates | animatable | CLI | meaning |\n|---|---|---|---|---|---|---|---|---|\n";
     for (const Param& p : table) {
         std::string range = p.type == ParamType::Enum ? fmt::format("{}", fmt::join(p.choices, ", "))
                             : p.lo != p.hi          ? fmt::format("{:g} .. {:g}", p.lo, p.hi)
                                                     : "";
         std::string def = p.required ? "required" : p.default_value().dump();
-        s += fmt::format("| `{}` | {} | `{}` | {} | {} | {} | {} | {} |\n", p.key, type_name(p), def, range, p.unit,
-                         identity_names(p.identity), p.flag.empty() ? "" : "`" + p.flag + "`", p.doc);
+        s += fmt::format("| `{}` | {} | `{}` | {} | {} | {} | {} | {} | {} |\n", p.key, type_name(p), def, range, p.unit,
+                         identity_names(p.identity), p.animatable ? "yes" : "", p.flag.empty() ? "" : "`" + p.flag + "`", p.doc);
     }
+    const json& items = animatable_item_keys();
+    s += "\nAnimatable keys of the other items (keyframes, docs/animation.md):\n\n";
+    for (const auto& [section, keys] : items.items())
+        s += fmt::format("- `{}`: {}\n", section, fmt::format("`{}`", fmt::join(keys.get<std::vector<std::string>>(), "`, `")));
     return s;
+}
+
+const json& animatable_item_keys() {
+    static const json keys = {
+        {"lights", {"color", "intensity", "position", "direction", "cone_angle", "cone_falloff", "corner", "edge_u", "edge_v", "rotation"}},
+        {"materials", {"color", "emission", "specular", "roughness", "bump_strength"}},
+        {"objects.transform", {"translate", "rotate", "scale"}}};
+    return keys;
+}
+
+bool animatable_pointer(const std::string& ptr) {
+    std::vector<std::string> parts;
+    for (size_t at = 1; at <= ptr.size();) {
+        const size_t next = std::min(ptr.find('/', at), ptr.size());
+        parts.push_back(ptr.substr(at, next - at));
+        at = next + 1;
+    }
+    const auto listed = [](const char* section, const std::string& key) {
+        const json& k = animatable_item_keys()[section];
+        return std::find(k.begin(), k.end(), key) != k.end();
+    };
+    if (parts.size() == 2 && parts[0] == "camera") {
+        const Param* p = find_param(scene_params(), "camera." + parts[1]);
+        return p && p->animatable;
+    }
+    if (parts.size() == 3 && parts[0] == "lights") return listed("lights", parts[2]);
+    if (parts.size() == 3 && parts[0] == "materials") return listed("materials", parts[2]);
+    if (parts.size() == 4 && parts[0] == "objects" && parts[2] == "transform") return listed("objects.transform", parts[3]);
+    return false;
 }
 
 }  // namespace bounce

@@ -23,7 +23,7 @@ enum ParamIdentity : unsigned {
     kCacheIdentity = 4,      ///< irradiance-cache records: needs a re-gather
 };
 
-enum class ParamType { Int, UInt64, Float, FloatAuto, Bool, Enum, Path, Vec3, IntList };
+enum class ParamType { Int, UInt64, Float, FloatAuto, Bool, Enum, Path, Vec3, IntList, FloatList };
 
 struct Param {
     std::string key;      ///< "render.min_spacing": the JSON path, the --set key, the name everywhere
@@ -31,11 +31,12 @@ struct Param {
     ParamType type = ParamType::Float;
     double lo = 0, hi = 0;              ///< numeric range (IntList: per element)
     std::vector<std::string> choices;   ///< Enum: the values, in enum order
-    size_t count = 0;                   ///< IntList: number of elements
+    size_t count = 0;                   ///< IntList, FloatList: number of elements
     std::string unit, doc;
     unsigned identity = kImageOnly;
     std::string flag;     ///< CLI flag ("--min-spacing"); empty = only --set
     bool required = false;
+    bool animatable = false;  ///< may be keyed in a shot (keyframes.h)
     std::function<nlohmann::json(const Scene&)> get;
     std::function<void(Scene&, const nlohmann::json&)> set;  ///< takes a validated value
 
@@ -72,5 +73,12 @@ std::string params_markdown(const ParamTable& table = scene_params());
 
 /// Names of the identities in `mask` ("deep", "radiosity", "cache"), or "image".
 std::string identity_names(unsigned mask);
+
+/// The keys of lights, materials and object transforms that may be keyed ("lights": [...] ...);
+/// the camera's are the rows marked animatable.
+const nlohmann::json& animatable_item_keys();
+/// True when the value at JSON pointer `ptr` of a scene file ("/lights/0/position",
+/// "/objects/2/transform/rotate", "/camera/fov") may be keyed.
+bool animatable_pointer(const std::string& ptr);
 
 }  // namespace bounce

@@ -12,6 +12,7 @@ Override flag_override(const Param& p, const std::string& text) {
         case ParamType::Enum:
         case ParamType::Path: value = nlohmann::json(text).dump(); break;
         case ParamType::Vec3:
+        case ParamType::FloatList:
         case ParamType::IntList: {
             // "1,2,3,4", "[1,2,3,4]", "WIDTHxHEIGHT" or "x,y,z": a JSON array of the numbers given.
             std::string list = text;

@@ -15,6 +15,7 @@
 #include "bounce/geometry/fur.h"
 #include "bounce/geometry/mesh.h"
 #include "bounce/scene/settings.h"
+#include "bounce/scene/shot.h"
 
 namespace bounce {
 
@@ -24,6 +25,10 @@ struct Camera {
     Vec3 up{0, 1, 0};
     float fov = 45.0f;  ///< vertical field of view, degrees
     int width = 512, height = 512;
+    std::array<float, 2> shutter{0, 0};  ///< [open, close] in frames around the frame's time (motion blur)
+    float aperture = 0;        ///< lens diameter (depth of field); 0 = pinhole
+    float focus_distance = 0;  ///< plane in focus along the view; 0 = the distance to look_at
+    bool has_motion_blur() const { return shutter[1] > shutter[0]; }
 };
 
 /// A float RGB lat-long image (the textured sky dome); +Y is up, u grows with azimuth.
@@ -96,8 +101,12 @@ struct Scene {
     std::vector<Material> materials;
     std::vector<Object> objects;
     RenderSettings render;
-    /// The effective scene description after overrides (for metadata and fingerprints).
+    /// The effective scene description after overrides, at the frame (for metadata and fingerprints).
     nlohmann::json description;
+    /// The description before keyed values were taken at the frame (null for a still).
+    nlohmann::json keyed;
+    ShotSettings shot;  ///< the scene file's shot (frames, fps)
+    double frame = 1;   ///< the frame this scene is
 
     Bounds bounds() const;          ///< of the coarse tessellation (what rays trace)
     Bounds visible_bounds() const;  ///< of everything the camera can see (fine surfaces, fur)

@@ -13,6 +13,7 @@
 #include "bounce/scene/fur_reader.h"
 #include "bounce/scene/item_readers.h"
 #include "bounce/scene/json_reader.h"
+#include "bounce/scene/keyframes.h"
 #include "bounce/scene/mesh_import.h"
 #include "bounce/scene/object_reader.h"
 #include "bounce/scene/params.h"
@@ -53,7 +54,7 @@ void read_params(const json& j, const std::string& section, Scene& scene, const 
     }
 }
 
-Scene build_scene(json doc, const std::string& path, const std::vector<Override>& overrides) {
+Scene build_scene(json doc, const std::string& path, const std::vector<Override>& overrides, const LoadOptions& options) {
     JsonContext ctx;
     ctx.file = path;
     ctx.dir = fs::path(path).parent_path();
@@ -62,9 +63,19 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
 
     Scene scene;
     scene.path = path;
+    // Time: the shot, and every keyed value at the frame (keyframes.h); then a plain scene.
+    scene.shot = read_shot(doc, ctx);
+    scene.frame = options.frame.value_or(scene.shot.first);
+    if (scene.shot.animated && !scene.shot.contains(scene.frame))
+        throw InputError(options.frame_origin.empty() ? path : "command line", options.frame_origin.empty() ? "/animation/frames" : options.frame_origin,
+                         fmt::format("frame {:g} is outside the shot, frames {} to {}", scene.frame, scene.shot.first, scene.shot.last));
+    if (has_keys(doc)) {
+        scene.keyed = doc;
+        doc = evaluate_keys(doc, scene.frame, ctx);
+    }
     scene.description = doc;
     ctx.inputs = &scene.inputs;
-    JsonReader root(doc, "", ctx, {"camera", "render", "materials", "lights", "objects", "description"});
+    JsonReader root(doc, "", ctx, {"camera", "render", "materials", "lights", "objects", "description", "animation"});
 
     if (root.has("render")) read_params(root.raw("render"), "render", scene, ctx);
     if (!root.has("camera")) root.fail("", "missing required key \"camera\"");
@@ -126,16 +137,17 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
 
 }  // namespace
 
-Scene load_scene_text(const std::string& text, const std::string& path, const std::vector<Override>& overrides) {
-    return build_scene(parse_json_text(text, path), path, overrides);
+Scene load_scene_text(const std::string& text, const std::string& path, const std::vector<Override>& overrides,
+                      const LoadOptions& options) {
+    return build_scene(parse_json_text(text, path), path, overrides, options);
 }
 
-Scene load_scene(const std::string& path, const std::vector<Override>& overrides) {
+Scene load_scene(const std::string& path, const std::vector<Override>& overrides, const LoadOptions& options) {
     std::string ext = fs::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-    if (ext == ".json") return load_scene_text(read_text_file(path), path, overrides);
+    if (ext == ".json") return load_scene_text(read_text_file(path), path, overrides, options);
     check_input_file(path);
-    return build_scene(describe_mesh_file(path), path, overrides);
+    return build_scene(describe_mesh_file(path), path, overrides, options);
 }
 
 Bounds Scene::bounds() const {

@@ -5,6 +5,7 @@
 // mesh_import.h's.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,13 +14,21 @@
 
 namespace bounce {
 
+/// How a scene is loaded: at which frame of its shot.
+struct LoadOptions {
+    std::optional<double> frame;  ///< the time keyed values are taken at; default: the shot's first frame
+    std::string frame_origin;     ///< how the user asked for it ("--frame 60"), for errors
+};
+
 /// Loads `path` (.json, or .gltf/.glb/.obj/.ply rendered with defaults and the file's own
 /// camera and lights) and applies `overrides`, each "dotted.path=value" where value is JSON
-/// (a bare word is taken as a string): `camera.fov=45`, `lights.0.color=[1,1,1]`.
-Scene load_scene(const std::string& path, const std::vector<Override>& overrides = {});
+/// (a bare word is taken as a string): `camera.fov=45`, `lights.0.color=[1,1,1]`; then every
+/// keyed value is taken at the frame (keyframes.h). A frame outside the shot is an error.
+Scene load_scene(const std::string& path, const std::vector<Override>& overrides = {}, const LoadOptions& options = {});
 
 /// Same, from JSON text already in memory; `path` names it in errors and anchors relative
 /// file names.
-Scene load_scene_text(const std::string& text, const std::string& path, const std::vector<Override>& overrides = {});
+Scene load_scene_text(const std::string& text, const std::string& path, const std::vector<Override>& overrides = {},
+                      const LoadOptions& options = {});
 
 }  // namespace bounce
