@@ -1,12 +1,17 @@
 #include "render_cmd.h"
 
+#include <fmt/format.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 #include "bounce/core/error.h"
 #include "bounce/core/image.h"
+#include "bounce/cache/cache_file.h"
 #include "bounce/render/render.h"
+#include "bounce/render/shot.h"
 #include "bounce/scene/params.h"
 #include "bounce/scene/params_cli.h"
 #include "bounce/scene/scene_load.h"
@@ -15,10 +20,13 @@ namespace bounce {
 
 namespace {
 
-Scene load_render_scene(const RenderArgs& a) {
+Scene load_render_scene(const RenderArgs& a, std::optional<double> frame) {
     std::vector<Override> o(a.sets.begin(), a.sets.end());
     o.insert(o.end(), a.flags.begin(), a.flags.end());  // dedicated flags win over --set
-    Scene scene = load_scene(a.files.scene, o);
+    LoadOptions options;
+    options.frame = frame;
+    if (frame) options.frame_origin = a.frames.empty() ? fmt::format("--frame {:g}", *frame) : "--frames " + a.frames;
+    Scene scene = load_scene(a.files.scene, o, options);
     const bool cache = scene.render.indirect.gi == GiMode::Cache;
     if (!cache && !a.files.cache_out.empty())
         throw InputError("command line", "--cache-out " + a.files.cache_out, "only a --gi cache render makes a cache");
@@ -49,16 +57,28 @@ void print_stats(const Stats& stats, const Scene& scene) {
     if (scene.render.indirect.any()) std::printf("\n%s", seed_table(stats.to_json()).c_str());
 }
 
-int render_frame(const RenderArgs& a, const FrameFiles& files, int frame) {
-    Scene scene = load_render_scene(a);
-    // Everything that can be refused is refused before any work: outputs against every file
-    // the scene reads, the layer --show names, the base a crop is pasted over.
+/// Everything that can be refused is refused before any work: outputs against every file the
+/// scene reads, the layer --show names, the base a crop is pasted over.
+void check_frame(const RenderArgs& a, const FrameFiles& files, const Scene& scene) {
     files.check(scene);
     check_show_layer(a.show, scene, !files.cache_in.empty());
     if (!files.base.empty()) check_base(files.base, scene);
+}
+
+void report(const RenderArgs& a, const RenderResult& r, const FrameFiles& files, const Stats& stats, const Scene& scene) {
+    if (!r.cache_differences.empty() && !a.quiet)
+        std::fprintf(stderr, "bounce: %s: records reused although gathered with other settings (--cache-reuse-any)\n",
+                     files.cache_in.c_str());
+    if (a.stats) print_stats(stats, scene);
+    if (!a.quiet) std::fprintf(stderr, "wrote %s\n", files.output.c_str());
+}
+
+int render_frame(const RenderArgs& a, const FrameFiles& files) {
+    const Scene scene = load_render_scene(a, a.frame);
+    check_frame(a, files, scene);
     std::unique_ptr<ProgressSink> sink = make_progress(a.quiet);
     Stats stats;
-    RenderRequest request = request_of(a, files, frame);
+    RenderRequest request = request_of(a, files, static_cast<int>(std::lround(scene.frame)));
     if (scene.render.parallel.preview)
         request.preview = [&](const Image& img) {
             write_exr(files.output, img);
@@ -68,11 +88,43 @@ int render_frame(const RenderArgs& a, const FrameFiles& files, int frame) {
     const FramePlan plan = plan_frame(scene, none, request);
     RenderResult r = run_frame(scene, plan, none, request, stats, sink.get());
     write_frame_outputs(r, files, a.show, stats);
-    if (!r.cache_differences.empty() && !a.quiet)
-        std::fprintf(stderr, "bounce: %s: records reused although gathered with other settings (--cache-reuse-any)\n",
-                     files.cache_in.c_str());
-    if (a.stats) print_stats(stats, scene);
-    if (!a.quiet) std::fprintf(stderr, "wrote %s\n", files.output.c_str());
+    report(a, r, files, stats, scene);
+    return 0;
+}
+
+/// Every output of a frame is there (each is written by rename: there means complete).
+bool outputs_complete(const FrameFiles& f) {
+    for (const std::string& path : {f.output, f.png(), f.deep_out, f.cache_out, f.stats_json})
+        if (!path.empty() && !std::filesystem::is_regular_file(path)) return false;
+    return true;
+}
+
+/// The frames of a shot in order, each starting from what the one before left (Shot). A
+/// frame that fails stops the sequence there: the frames before it are written.
+int render_sequence(const RenderArgs& a, int first, int last) {
+    Shot shot;
+    std::unique_ptr<ProgressSink> sink = make_progress(a.quiet);
+    for (int f = first; f <= last; ++f) {
+        const FrameFiles files = expand_frame(a.files, f);
+        if (a.resume && outputs_complete(files)) {
+            shot.forget();
+            if (!a.quiet) std::fprintf(stderr, "frame %d: outputs complete, skipped\n", f);
+            continue;
+        }
+        auto scene = std::make_shared<const Scene>(load_render_scene(a, f));
+        check_frame(a, files, *scene);
+        // A resumed shot starts from the cache the frame before left, when there is one.
+        const std::string before = f > first && !a.files.cache_out.empty() ? expand_frame_pattern(a.files.cache_out, f - 1) : "";
+        if (!shot.has_previous() && !before.empty() && std::filesystem::is_regular_file(before))
+            shot.start_from(std::make_shared<const Scene>(load_render_scene(a, f - 1)), before);
+        Stats stats;
+        RenderRequest request = request_of(a, files, f);
+        if (f > first || shot.has_previous()) request.cache_in.clear();  // the shot carries its own cache
+        RenderResult r = shot.render(scene, request, stats, sink.get());
+        write_frame_outputs(r, files, a.show, stats);
+        report(a, r, files, stats, *scene);
+        shot.keep(r, scene);
+    }
     return 0;
 }
 
@@ -84,16 +136,20 @@ std::unique_ptr<ProgressSink> make_progress(bool quiet) {
 }
 
 int run_render(const RenderArgs& a) {
-    if (a.frames.empty()) return render_frame(a, expand_frame(a.files, a.frame), a.frame);
+    if (a.frames.empty()) {
+        if (a.resume) throw InputError("command line", "--resume", "goes with --frames");
+        return render_frame(a, expand_frame(a.files, a.frame ? static_cast<int>(std::lround(*a.frame)) : 0));
+    }
+    if (a.frame) throw InputError("command line", "--frame", "give --frame or --frames, not both");
     auto [first, last] = parse_frame_range(a.frames, "--frames " + a.frames);
-    for (auto [flag, pattern] : {std::pair{"-o", a.files.output}, std::pair{"--cache-out", a.files.cache_out}})
+    std::vector<std::pair<const char*, std::string>> patterns{{"-o", a.files.output}};
+    for (auto [flag, path] : {std::pair{"--cache-out", a.files.cache_out}, std::pair{"--deep-out", a.files.deep_out},
+                              std::pair{"--stats-json", a.files.stats_json}})
+        if (!path.empty()) patterns.emplace_back(flag, path);
+    for (const auto& [flag, pattern] : patterns)
         if (pattern.find('#') == std::string::npos)
-            throw InputError("command line", std::string(flag) + " " + pattern,
-                             pattern.empty() ? "a sequence needs it, with a #### frame pattern"
-                                             : "a sequence needs a #### frame pattern in it");
-    for (int f = first; f <= last; ++f)
-        if (int rc = render_frame(a, sequence_frame(a.files, first, f), f)) return rc;
-    return 0;
+            throw InputError("command line", std::string(flag) + " " + pattern, "a sequence needs a #### frame pattern in it");
+    return render_sequence(a, first, last);
 }
 
 void add_render_options(CLI::App& render, RenderArgs& ra) {
@@ -107,8 +163,9 @@ void add_render_options(CLI::App& render, RenderArgs& ra) {
                     "keep a --cache-in gathered with other settings, gather only where it misses (the stats say so)");
     render.add_flag("--force", ra.force, "use a cache made for another scene or camera");
     render.add_option("--base", ra.files.base, "with --crop: an earlier full-frame EXR to paste the crop over");
-    render.add_option("--frame", ra.frame, "frame number (expands #### in file names, stamps new records)");
-    render.add_option("--frames", ra.frames, "render frames FIRST-LAST, each reusing the previous frame's cache");
+    render.add_option("--frame", ra.frame, "render this frame of the shot (keyed values taken then; expands #### in file names)");
+    render.add_option("--frames", ra.frames, "render frames FIRST-LAST of the shot, each starting from what the one before left");
+    render.add_flag("--resume", ra.resume, "with --frames: skip frames whose outputs are all there");
     render.add_option("--show", ra.show, "layer written to the PNG: beauty (default), records, indirect, ao ...");
     render.add_option("--set", ra.sets, "override any scene value: key.path=value")->take_all();
     render.add_option("--deep-out", ra.files.deep_out, "write the deep buffer (OpenEXR deep)");

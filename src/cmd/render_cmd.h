@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,8 +19,8 @@ struct RenderArgs {
     std::vector<Override> flags;  ///< from the parameter table's flags
     bool regather = false, force = false, reuse_any = false;
     std::string show = "beauty", frames;
-    int frame = 0;
-    bool stats = false, quiet = false;
+    std::optional<double> frame;  ///< default: the shot's first frame
+    bool stats = false, quiet = false, resume = false;
 };
 
 /// Adds the render command's options to `render`.

@@ -45,6 +45,11 @@ public:
     /// fragment whose records live on the un-displaced surface).
     Interpolated lookup(const Vec3& p, const Vec3& n, bool shading = false, const Vec3* at_p = nullptr,
                         const Vec3* at_n = nullptr) const;
+    /// Calls f(id, weight) for every record whose support holds p (weight 0 when rejected).
+    template <typename F>
+    void visit_weights(const Vec3& p, const Vec3& n, F&& f) const {
+        octree_.visit(p, [&](uint32_t id) { f(id, record_weight(records_[id], p, n, settings_)); });
+    }
     /// True when a lookup at (p, n) would miss: the weights of this cache's records and of
     /// `extra` (a tile's private records) sum below min_weight, and none of them sits at p.
     bool misses(const Vec3& p, const Vec3& n, std::span<const Record> extra = {}) const;

@@ -1,5 +1,7 @@
 #include "bounce/cache/passes.h"
 
+#include "bounce/cache/sites.h"
+
 #include <tbb/enumerable_thread_specific.h>
 
 #include <algorithm>
@@ -32,40 +34,6 @@ std::vector<SubPass> subpass_schedule(int first_step) {
 
 namespace {
 
-/// Where a fragment's records live and the hemisphere its gathers use: the un-displaced
-/// surface by default (rays still leave from the displaced point f.p), or the displaced one.
-/// Hair: at its strand's root on the growing surface whatever the mode (gather.h hair_site);
-/// its gathers leave from there too.
-struct Site {
-    Vec3 p, n;
-    Vec3 origin;      ///< where the gather's rays leave from
-    float near = 0;   ///< hits nearer than this do not size the record (Gatherer::gather)
-};
-Site record_site(const Scene& scene, const Fragment& f, const CacheSettings& cs) {
-    if (f.is_hair()) {
-        const HairSite h = hair_site(scene, f);
-        return {h.p, h.n, h.p};
-    }
-    if (cs.displaced_records == RecordSurface::Displaced) return {f.p, f.n, f.p};
-    // The displacement's own bumps are what the un-displaced surface leaves out: they shade the
-    // record's value but do not shrink its reach (docs/displacement.md).
-    const float near = cs.displacement_near * scene.objects[f.object].displacement_bound;
-    return {f.p_base, f.n_base, f.p, near};
-}
-
-/// The shading-pass interpolation at a fragment: weights at its record site, each record's
-/// value extrapolated with its gradients to the fragment's own (displaced) point and normal.
-/// Hair gets no gradient along the strand: its value is the one at its site.
-Interpolated interpolate_at(const IrradianceCache& cache, const Fragment& f, const Site& site) {
-    return f.is_hair() ? cache.lookup(site.p, site.n, true, &site.p, &site.n) : cache.lookup(site.p, site.n, true, &f.p, &f.n);
-}
-
-uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k) {
-    uint64_t pix = static_cast<uint64_t>(wy + deep.y0) * static_cast<uint64_t>(deep.full_width) +
-                   static_cast<uint64_t>(wx + deep.x0);
-    return (pix << 8) | k;
-}
-
 enum class Source { Records, Own, Missed };
 
 /// The light at fragment k of window pixel (wx, wy): its own record if per-fragment
@@ -83,105 +51,7 @@ Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const Dee
     return {in.E, in.ao, in.bent, in.dir};
 }
 
-/// Takes the cache's lock (shared or exclusive), adding the time waited to `counters`.
-template <typename Lock>
-Lock lock_cache(const IrradianceCache& cache, Counters& counters) {
-    auto t0 = std::chrono::steady_clock::now();
-    Lock lock(cache.mutex());
-    counters.lock_wait_ns += static_cast<uint64_t>(
-        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
-    return lock;
-}
-
 }  // namespace
-
-void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, IrradianceCache& cache,
-                    Stats& stats, ProgressSink* sink, const SubPassCallback& after_subpass, int frame, const Gatherer* first) {
-    tbb::enumerable_thread_specific<size_t> full_gathers(0);
-    const auto schedule = subpass_schedule(static_cast<int>(cache.settings().max_spacing));
-    const bool per_tile = scene.render.parallel.cache_sharing == CacheSharing::PerThread;
-    const auto tiles = make_tiles(deep.width, deep.height, scene.render.parallel.tile_size, scene.render.parallel.tile_order);
-    Progress progress(sink, "gathering", schedule.size());
-    std::vector<std::vector<Record>> made(tiles.size());  // this sub-pass's records, by Tile::index
-    size_t dropped = 0, gathered = 0;
-    for (size_t si = 0; si < schedule.size(); ++si) {
-        const SubPass& sp = schedule[si];
-        // 1. Each tile judges its candidates against the cache as it was when the sub-pass
-        //    began (shared lock; nobody writes until step 2) and gathers at the misses. In
-        //    per-thread mode the tile's own new records count too: they live in the tile's
-        //    private cache, which belongs to the thread shading the tile.
-        for_each_tile(tiles, [&](const Tile& t) {
-            Counters& counters = stats.local();
-            auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache, counters);
-            std::vector<Record>& out = made[static_cast<size_t>(t.index)];
-            out.clear();
-            for (int wy = t.y0; wy < t.y1; ++wy)
-                for (int wx = t.x0; wx < t.x1; ++wx) {
-                    if (!sp.contains(wx + deep.x0, wy + deep.y0)) continue;
-                    auto frags = deep.pixel(wx, wy);
-                    for (uint32_t k = 0; k < frags.size(); ++k) {
-                        const Fragment& f = frags[k];
-                        const Site site = record_site(scene, f, cache.settings());
-                        if (!cache.misses(site.p, site.n, per_tile ? std::span<const Record>(out)
-                                                                       : std::span<const Record>())) continue;
-                        const RandomStream rng = fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k);
-                        GatherResult g = first ? first->gather(site.origin, site.n, rng, counters, site.near) : GatherResult{};
-                        if (!first || g.rel_stderr > cache.settings().ray_noise) {
-                            g = gatherer.gather(site.origin, site.n, rng, counters, site.near);
-                            ++full_gathers.local();
-                        }
-                        Record r = cache.make_record(g, site.p, site.n, f.footprint, candidate_key(deep, wx, wy, k));
-                        r.frame = r.gathered = frame;
-                        r.origin = site.origin;
-                        if (per_tile) {
-                            cache.clamp_to_neighbours(r, out);
-                            r.support = cache.support(r);
-                        }
-                        out.push_back(r);
-                    }
-                }
-        });
-
-        // 2. One writer merges, in an order that does not depend on scheduling. Shared: all
-        //    records by pixel, dropping those that records inserted before them in this
-        //    sub-pass already cover. Per-thread: the tile caches in tile order, all records
-        //    kept (each came from one tile's cache, so none is merged twice).
-        std::vector<Record> records;
-        for (auto& v : made) records.insert(records.end(), v.begin(), v.end());
-        gathered += records.size();
-        if (!per_tile)
-            std::sort(records.begin(), records.end(), [](const Record& a, const Record& b) { return a.key < b.key; });
-        auto lock = lock_cache<std::unique_lock<std::shared_mutex>>(cache, stats.local());
-        if (cache.luminance_floor() < 0 && !records.empty()) {
-            double mean = 0;
-            for (const auto& r : records) mean += luminance(r.E);
-            cache.set_luminance_floor(static_cast<float>(1e-3 * mean / static_cast<double>(records.size())));
-        }
-        size_t before = cache.size();
-        for (auto& r : records) {
-            if (!per_tile && cache.size() > before && !cache.misses(r.p, r.n)) {
-                ++dropped;
-                continue;
-            }
-            cache.insert(r);
-        }
-        lock.unlock();
-        progress.add();
-        if (after_subpass) after_subpass(sp, si, schedule.size());
-    }
-    stats.set("records", static_cast<double>(cache.size()));
-    stats.set("record_gathers", static_cast<double>(gathered));
-    if (first) {
-        size_t full = 0;
-        for (size_t n : full_gathers) full += n;
-        stats.set("record_gathers_full_rays", static_cast<double>(full));
-        stats.set("record_first_rays", static_cast<double>(first->grid().rays()));
-    }
-    stats.set("records_dropped", static_cast<double>(dropped));
-    stats.set("subpasses", static_cast<double>(schedule.size()));
-    stats.set("rays_per_gather", gathered ? static_cast<double>(stats.total().gather_rays) / static_cast<double>(gathered) : 0.0);
-    stats.set("cache_bytes", static_cast<double>(cache.memory_bytes()));
-}
 
 bool refinement_runs(const Scene& scene) {
     const CacheSettings& cs = scene.render.cache;
@@ -191,7 +61,8 @@ bool refinement_runs(const Scene& scene) {
 }
 
 size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,
-                       Stats& stats, ProgressSink* sink, int frame) {
+                       Stats& stats, ProgressSink* sink, const RefinementOptions& options) {
+    const int frame = options.frame;
     const CacheSettings& cs = cache.settings();
     const float threshold = cs.refine;
     const bool tilt_signal = cs.displaced_records == RecordSurface::Undisplaced && cs.refine_tilt > 0;
@@ -215,10 +86,19 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                     const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cs));
                     if (in.weight > 0 && (threshold <= 0 || in.spread <= threshold)) continue;
                 }
+                // An earlier frame's record of this very fragment is updated rather than gathered anew.
+                if (options.stale)
+                    if (auto it = options.stale->find(key); it != options.stale->end() && it->second.p == f.p) {
+                        made.local().push_back(options.update(it->second, stats.local()));
+                        continue;
+                    }
                 // Gathered about the fragment's own (displaced) point and normal, as brute force does.
+                auto hits = options.keep_hits ? std::make_shared<GatherHits>() : nullptr;
                 const GatherResult g = refiner.gather(
-                    f.p, f.n, fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), stats.local());
+                    f.p, f.n, fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), stats.local(), 0,
+                    hits.get());
                 Record r;
+                r.hits = std::move(hits);
                 r.p = f.p, r.n = f.n, r.E = g.irradiance, r.ao = g.ao, r.bent = g.bent_normal, r.dir = g.light_dir;
                 // Never used for reach; positive so the record is a valid one in a cache file.
                 r.footprint = f.footprint > 0 ? f.footprint : 1e-6f;

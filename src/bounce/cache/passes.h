@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <unordered_map>
 #include <vector>
 
 #include "bounce/cache/irradiance_cache.h"
@@ -33,15 +34,29 @@ std::vector<SubPass> subpass_schedule(int first_step);
 /// Called after each sub-pass with the fraction done (preview mode shows the image then).
 using SubPassCallback = std::function<void(const SubPass&, size_t index, size_t count)>;
 
+class StaleRecords;
+
+/// What a gathering pass does besides making records where lookups miss.
+struct GatheringOptions {
+    SubPassCallback after_subpass;  ///< called after each sub-pass (preview)
+    int frame = 0;                  ///< stamped on new records
+    /// CacheSettings::min_rays: a record gathers with it first and with the full gatherer only
+    /// when that estimate's relative standard error exceeds CacheSettings::ray_noise.
+    const Gatherer* first = nullptr;
+    /// Records of earlier frames that need a new gather (temporal.h): where a lookup misses and
+    /// one of them would cover the point, it is redone (in place, its own random stream)
+    /// instead of a new record being made.
+    StaleRecords* stale = nullptr;
+    bool keep_hits = false;  ///< new records keep their gather's hits (re-shading in later frames)
+};
+
 /// Gathering pass: creates records until every fragment of `deep` has a covered lookup.
 /// Within a sub-pass every lookup sees the cache as it was when the sub-pass began; new
-/// records are inserted in pixel order, dropping those the earlier ones already cover, so the
-/// cache does not depend on thread count or scheduling.
-/// With `first` (CacheSettings::min_rays), a record gathers with it first and with `gatherer`
-/// only when that estimate's relative standard error exceeds CacheSettings::ray_noise.
-void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
-                    IrradianceCache& cache, Stats& stats, ProgressSink* progress,
-                    const SubPassCallback& after_subpass = {}, int frame = 0, const Gatherer* first = nullptr);
+/// records are inserted in pixel order (redone stale records first, in their order), dropping
+/// those the earlier ones already cover, so the cache does not depend on thread count or
+/// scheduling. Records on an object that moves in the shot carry their anchor on it.
+void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, IrradianceCache& cache, Stats& stats,
+                    ProgressSink* progress, const GatheringOptions& options = {});
 
 /// Per-fragment refinement (when refinement_runs), after the gathering pass: a fragment
 /// whose covering records disagree (the spread of their extrapolated values at the fragment
@@ -56,8 +71,18 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
 /// records on the un-displaced surface of a displaced object.
 bool refinement_runs(const Scene& scene);
 
+/// What a refinement pass does besides gathering fragments' own records.
+struct RefinementOptions {
+    int frame = 0;           ///< stamped on new records
+    bool keep_hits = false;  ///< new records keep their gather's hits
+    /// Frames of a shot: earlier frames' fragment records to update (by key; used when the
+    /// fragment is at exactly the same point) rather than gather anew, and how.
+    const std::unordered_map<uint64_t, Record>* stale = nullptr;
+    std::function<Record(const Record&, Counters&)> update;
+};
+
 size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,
-                       Stats& stats, ProgressSink* progress, int frame = 0);
+                       Stats& stats, ProgressSink* progress, const RefinementOptions& options = {});
 
 /// What the shading pass's interpolation gives every fragment.
 struct InterpolatedLight {

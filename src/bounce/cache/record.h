@@ -42,6 +42,7 @@ struct Record {
     uint32_t anchor = kNoAnchor; ///< the moving object whose surface carries it, or kNoAnchor (static)
     Vec3 anchor_p{0}, anchor_n{0};  ///< p and n in that object's own space (before its placement)
     int32_t gathered = 0;        ///< frame of its last gather or re-shade
+    float near = 0;              ///< its gather's `near` (Gatherer::gather), to gather it again alike
     float drift = 0;             ///< bound on how far its irradiance may have moved since (relative to E)
     std::shared_ptr<const GatherHits> hits;  ///< kept only when a shot may re-shade it (not in files)
 };

@@ -136,6 +136,20 @@ struct Transform {
         return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
                 m[8] * v.x + m[9] * v.y + m[10] * v.z};
     }
+    /// The inverse of an affine transform (identity when singular).
+    Transform inverse() const {
+        const Vec3 c0{m[0], m[4], m[8]}, c1{m[1], m[5], m[9]}, c2{m[2], m[6], m[10]};
+        const Vec3 r0 = cross(c1, c2), r1 = cross(c2, c0), r2 = cross(c0, c1);
+        const float det = dot(c0, r0);
+        if (det == 0) return {};
+        Transform r;
+        r.m = {r0.x / det, r0.y / det, r0.z / det, 0, r1.x / det, r1.y / det, r1.z / det, 0,
+               r2.x / det, r2.y / det, r2.z / det, 0, 0, 0, 0, 1};
+        const Vec3 t = r.vector({m[3], m[7], m[11]});
+        r.m[3] = -t.x, r.m[7] = -t.y, r.m[11] = -t.z;
+        return r;
+    }
+    bool operator==(const Transform&) const = default;
     /// Transforms a normal by the inverse transpose of the upper 3x3 (cofactor matrix,
     /// which differs from it only by the determinant's scale; the result is normalized).
     Vec3 normal(const Vec3& n) const {

@@ -103,6 +103,7 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
     for (size_t i = 0; i < packet_order_.size(); ++i) cells.hits[packet_order_[i]] = cells.packet_hits[i];
     counters.gather_rays += static_cast<uint64_t>(S);
     if (keep) {
+        keep->m = grid_.m, keep->n = grid_.n;
         keep->t.resize(S), keep->u.resize(S), keep->v.resize(S), keep->object.resize(S), keep->prim.resize(S);
         for (size_t c = 0; c < S; ++c) {
             const Hit& h = cells.hits[c];
@@ -126,6 +127,55 @@ GatherResult Gatherer::reshade(const Vec3& p, const Vec3& n, const RandomStream&
         h.object = kept.object[c] == kNoHit ? kNoHit : kept.object[c] & ~GatherHits::kHairBit;
     }
     return finish(p, n, rng, counters, near);
+}
+
+GatherResult Gatherer::update(const Vec3& p, const Vec3& n, const RandomStream& rng, GatherHits& kept, std::span<const uint32_t> redo,
+                              Counters& counters, float near) const {
+    if (settings_.cancel) settings_.cancel->check();
+    cell_directions(n, rng);
+    const size_t S = cells.D.size();
+    if (kept.t.size() != S) return gather(p, n, rng, counters, near, &kept);
+    std::vector<Vec3> dirs;
+    for (uint32_t c : redo) dirs.push_back(cells.D[c]);
+    std::vector<Hit> traced(dirs.size());
+    accel_.trace_many(p, dirs, traced);
+    counters.gather_rays += dirs.size();
+    for (size_t i = 0; i < redo.size(); ++i) {
+        const Hit& h = traced[i];
+        const uint32_t c = redo[i];
+        kept.t[c] = h.t, kept.u[c] = h.u, kept.v[c] = h.v, kept.prim[c] = h.prim;
+        kept.object[c] = h.valid() && h.hair ? h.object | GatherHits::kHairBit : h.object;
+    }
+    return reshade(p, n, rng, kept, counters, near);
+}
+
+void cells_through(const GatherGrid& grid, const Vec3& p, const Vec3& n, const RandomStream& rng, const GatherHits& hits,
+                   std::span<const Bounds> boxes, std::vector<uint32_t>& out) {
+    const Frame frame(n);
+    for (int j = 0; j < grid.m; ++j)
+        for (int k = 0; k < grid.n; ++k) {
+            const auto c = static_cast<size_t>(j * grid.n + k);
+            const Vec3 d = frame.to_world(gather_cell_direction(grid, j, k, rng.get(c, kDimGather), rng.get(c, kDimGather + 1)));
+            const float end = hits.t[c];
+            for (const Bounds& b : boxes) {
+                // Slab test of the segment [0, end] from p along d against the box.
+                float t0 = 0, t1 = end;
+                for (int a = 0; a < 3 && t0 <= t1; ++a) {
+                    const float inv = 1 / d[a];
+                    float lo = (b.lo[a] - p[a]) * inv, hi = (b.hi[a] - p[a]) * inv;
+                    if (lo > hi) std::swap(lo, hi);
+                    if (std::isnan(lo) || std::isnan(hi)) {  // parallel to the slab: inside it or not
+                        if (p[a] < b.lo[a] || p[a] > b.hi[a]) t0 = INFINITY;
+                        continue;
+                    }
+                    t0 = std::max(t0, lo), t1 = std::min(t1, hi);
+                }
+                if (t0 <= t1) {
+                    out.push_back(static_cast<uint32_t>(c));
+                    break;
+                }
+            }
+        }
 }
 
 GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const {

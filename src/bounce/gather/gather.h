@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <span>
 #include <vector>
 
 #include "bounce/accel/accel.h"
@@ -47,11 +48,18 @@ inline constexpr int kReachBands = 4, kReachSectors = 8, kReachBins = kReachBand
 /// A gather's ray hits, per cell: what a re-shade traces again for free when only the light its
 /// rays found has changed (Gatherer::reshade).
 struct GatherHits {
+    int m = 0, n = 0;                    ///< the gather's grid (GatherGrid)
     std::vector<float> t, u, v;          ///< distance (INFINITY: escaped) and the hit's (u, v)
     std::vector<uint32_t> object, prim;  ///< object (kNoHit: escaped; | kHairBit: a strand) and primitive
     static constexpr uint32_t kHairBit = 0x80000000u;
     size_t bytes() const { return t.size() * (3 * sizeof(float) + 2 * sizeof(uint32_t)); }
 };
+
+/// The cells of a gather (at p about n with `rng` and `grid`) whose rays, as `hits` recorded
+/// them, pass through any of `boxes` (an escaped ray: anywhere along it): the rays a moving
+/// object may now stop or let through. Appended to `out`.
+void cells_through(const GatherGrid& grid, const Vec3& p, const Vec3& n, const RandomStream& rng, const GatherHits& hits,
+                   std::span<const Bounds> boxes, std::vector<uint32_t>& out);
 
 /// What a gather returns; gradients follow Ward-Heckbert (rotational) and Ward-Heckbert with
 /// Krivanek's occlusion-aware distances (translational), see docs/gather.md.
@@ -96,6 +104,11 @@ public:
     /// geometry is what it was and the hits are gather()'s.
     GatherResult reshade(const Vec3& p, const Vec3& n, const RandomStream& rng, const GatherHits& hits, Counters& counters,
                          float near = 0) const;
+    /// The same gather again where only some rays may hit something else (a moving object's
+    /// swept bounds): those cells (`cells`, from cells_through) are traced again and `hits`
+    /// updated, the rest keep their hits, and every hit is shaded with today's light.
+    GatherResult update(const Vec3& p, const Vec3& n, const RandomStream& rng, GatherHits& hits, std::span<const uint32_t> cells,
+                        Counters& counters, float near = 0) const;
     const GatherSettings& settings() const { return settings_; }
     GatherGrid grid() const { return grid_; }
 

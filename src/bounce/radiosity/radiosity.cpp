@@ -98,13 +98,6 @@ size_t RadiosityTextures::lattice_points() const {
     return n;
 }
 
-struct RadiosityTextures::Sources {
-    const Scene* scene;
-    const Materials* materials;
-    const DirectLighting* lighting;
-    int light_samples;  ///< resolved (never 0)
-};
-
 RadiosityTextures::RadiosityTextures() = default;
 RadiosityTextures::~RadiosityTextures() = default;
 RadiosityTextures::RadiosityTextures(RadiosityTextures&&) noexcept = default;

@@ -19,6 +19,7 @@
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
 #include "bounce/lighting/lighting.h"
+#include "bounce/scene/changes.h"
 #include "bounce/scene/scene.h"
 
 namespace bounce {
@@ -31,6 +32,14 @@ struct RadiosityMap {
 
     /// Radiosity at barycentrics (u, v) of triangle `prim`, on the side `front_side`.
     Color lookup(uint32_t prim, float u, float v, bool front_side) const;
+};
+
+/// Radiosity that changed from one frame to the next in a region of space: a re-baked side
+/// whose lattice values moved by up to `delta` (luminance of radiance) inside `bounds`.
+struct LightChange {
+    Bounds bounds;
+    float delta = 0;
+    uint32_t object = 0, triangle = 0;  ///< the re-baked side's triangle
 };
 
 /// Radiosity textures of every object. A triangle side's lattice is baked on the first lookup
@@ -64,6 +73,18 @@ public:
                      const Materials& materials, const DirectLighting& lighting, RadiosityTextures& out,
                      std::string& why);
 
+    /// The previous frame's textures carried to this frame's `scene` (docs/animation.md): the same
+    /// layout (texel size and levels, so texels keep their place) and values; each side baked
+    /// before is baked again now, in parallel, when `changes` says its direct light may differ:
+    /// its object moved or deformed, its material or any light changed, or a moving object's
+    /// swept bounds come between it and a light. Sides never baked stay lazy. `changed` receives
+    /// the re-baked sides whose values moved, with by how much. `previous` is left as it was.
+    static RadiosityTextures carry(const RadiosityTextures& previous, const Scene& scene, const Materials& materials,
+                                   const DirectLighting& lighting, const SceneChanges& changes, std::vector<LightChange>& changed,
+                                   Stats& stats);
+    /// The largest radiance (luminance) any baked side holds.
+    float brightest() const;
+
     /// Hash of what the bake depends on: geometry, materials, lights, settings.
     static uint64_t fingerprint(const Scene& scene, const RadiositySettings& settings);
 
@@ -78,7 +99,13 @@ public:
     size_t sides() const;
 
 private:
-    struct Sources;
+    /// What a lazy bake reads (this frame's).
+    struct Sources {
+        const Scene* scene;
+        const Materials* materials;
+        const DirectLighting* lighting;
+        int light_samples;  ///< resolved (never 0)
+    };
     void bake_side(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
     void ensure_baked(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
 

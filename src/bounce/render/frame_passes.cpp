@@ -33,6 +33,18 @@ DeepBuffer lattice_of(const DeepBuffer& deep, int step) {
     return out;
 }
 
+/// The largest luminance a sky light sends.
+float sky_brightest(const Light& l) {
+    float top = luminance(l.color);
+    if (l.sky_map) {
+        float m = 0;
+        for (size_t i = 0; i + 2 < l.sky_map->rgb.size(); i += 3)
+            m = std::max(m, luminance(Color(l.sky_map->rgb[i], l.sky_map->rgb[i + 1], l.sky_map->rgb[i + 2])));
+        top *= m;
+    }
+    return top;
+}
+
 /// Each pixel of every layer takes the value of its step x step block's first pixel.
 void fill_blocks(Image& img, int step) {
     for (Layer& l : img.layers) {
@@ -98,16 +110,26 @@ std::unique_ptr<IrradianceCache> copy_cache(const IrradianceCache& from, const S
     return cache;
 }
 
-CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous) {
+CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous,
+                                  const RadiosityResult& radiosity) {
     const Scene& scene = ctx.scene;
     CacheStartResult out;
     if (plan.cache == CacheStart::None) return out;
     PhaseTimer t(ctx.stats, "cache read");
+    out.cache = std::make_unique<IrradianceCache>(scene.bounds(), scene.render.cache, scene.render.indirect.ao);
+    if (plan.cache == CacheStart::Temporal) {
+        // The previous frame's records and those still waiting from before, judged for this frame.
+        out.judged = judge_records(*previous.cache, previous.waiting, scene, *plan.changes, radiosity.changed, radiosity.brightest);
+        out.cache->set_luminance_floor(previous.cache->luminance_floor());
+        for (const Record& r : out.judged.valid) out.cache->insert_loaded(r);
+        for (const Record& r : out.judged.fragment_valid) out.cache->insert_fragment_record(r);
+        out.records_loaded = out.judged.valid.size();
+        return out;
+    }
     std::function<bool(const Record&)> keep;
     if (plan.flush_crop)
         keep = [crop = plan.window, camera = CameraRays(scene.camera)](const Record& r) { return !camera.projects_into(r.p, crop); };
     if (plan.cache == CacheStart::Previous) {
-        out.cache = std::make_unique<IrradianceCache>(scene.bounds(), scene.render.cache, scene.render.indirect.ao);
         const IrradianceCache& from = *previous.cache;
         out.cache->set_luminance_floor(from.luminance_floor());
         for (size_t i = 0; i < from.size(); ++i)
@@ -116,7 +138,6 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan
             if (!keep || keep(from.fragment_record_at(i))) out.cache->insert_fragment_record(from.fragment_record_at(i));
         return out;
     }
-    out.cache = std::make_unique<IrradianceCache>(scene.bounds(), scene.render.cache, scene.render.indirect.ao);
     if (plan.cache == CacheStart::File) {
         LoadedCache loaded = load_cache(plan.cache_in, scene, plan.force, plan.cache_reuse, *out.cache, keep);
         out.records_loaded = loaded.records;
@@ -125,23 +146,35 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan
     return out;
 }
 
-std::unique_ptr<RadiosityTextures> radiosity_pass(const FrameContext& ctx, const FramePlan& plan) {
-    if (plan.radiosity == RadiosityStep::None) return nullptr;
+RadiosityResult radiosity_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous) {
+    RadiosityResult out;
+    if (plan.radiosity == RadiosityStep::None) return out;
     const RadiositySettings& settings = ctx.scene.render.radiosity;
-    auto rt = std::make_unique<RadiosityTextures>();
+    out.textures = std::make_unique<RadiosityTextures>();
+    if (plan.radiosity == RadiosityStep::Carry) {
+        PhaseTimer t(ctx.stats, "radiosity carry");
+        *out.textures = RadiosityTextures::carry(*previous.radiosity, ctx.scene, ctx.materials, ctx.lighting, *plan.changes,
+                                                 out.changed, ctx.stats);
+        // What a moving object can show or hide: the brightest texel, emission or sky.
+        out.brightest = out.textures->brightest();
+        for (const Material& m : ctx.scene.materials) out.brightest = std::max(out.brightest, luminance(m.emission));
+        for (const Light& l : ctx.scene.lights)
+            if (l.type == LightType::Sky) out.brightest = std::max(out.brightest, sky_brightest(l));
+        return out;
+    }
     if (plan.radiosity == RadiosityStep::Load) {
         PhaseTimer t(ctx.stats, "radiosity load");
         std::string why;
-        if (RadiosityTextures::load(settings.folder, ctx.scene, settings, ctx.materials, ctx.lighting, *rt, why)) {
+        if (RadiosityTextures::load(settings.folder, ctx.scene, settings, ctx.materials, ctx.lighting, *out.textures, why)) {
             ctx.stats.set("radiosity_reused", 1);
-            return rt;
+            return out;
         }
         if (ctx.progress)
             std::fprintf(stderr, "radiosity textures in %s not reused: %s; baking\n", settings.folder.c_str(), why.c_str());
     }
-    *rt = RadiosityTextures::lazy(ctx.scene, ctx.materials, ctx.lighting, settings);
+    *out.textures = RadiosityTextures::lazy(ctx.scene, ctx.materials, ctx.lighting, settings);
     ctx.stats.set("radiosity_reused", 0);
-    return rt;
+    return out;
 }
 
 void save_radiosity_pass(const FrameContext& ctx, const RadiosityTextures& rt, size_t baked_before) {
@@ -180,25 +213,93 @@ SubPassCallback preview_after_subpass(const FrameContext& ctx, const DeepBuffer&
     };
 }
 
+/// How a stale record of an earlier frame is redone: re-shaded from its hits when only its
+/// light changed and it kept them, else gathered again in place with its own random stream;
+/// its reach and gradients as a new record's, its anchor and creation frame kept.
+StaleRecords::Redo redo_function(const FrameContext& ctx, const FramePlan& plan, const IrradianceCache& cache,
+                                 const Gatherer& gatherer) {
+    const uint64_t seed = ctx.scene.render.visibility.seed;
+    const int width = ctx.scene.camera.width;
+    std::vector<Bounds> boxes = plan.changes ? moving_bounds(*plan.changes) : std::vector<Bounds>();
+    return [&cache, &gatherer, seed, width, frame = plan.frame, keep = plan.keep_hits, boxes = std::move(boxes)](
+               const Record& old, StaleReason why, Counters& counters) {
+        const RandomStream rng = record_stream(old, seed, width);
+        std::shared_ptr<GatherHits> hits;
+        GatherResult g;
+        if (why == StaleReason::Update && old.hits && old.hits->m == gatherer.grid().m && old.hits->n == gatherer.grid().n) {
+            // Only the rays through moving objects' swept bounds are traced again.
+            auto updated = std::make_shared<GatherHits>(*old.hits);
+            std::vector<uint32_t> cells;
+            cells_through(gatherer.grid(), old.origin, old.n, rng, *updated, boxes, cells);
+            g = gatherer.update(old.origin, old.n, rng, *updated, cells, counters, old.near);
+            hits = std::move(updated);
+        } else if (why == StaleReason::Light && old.hits) {
+            g = gatherer.reshade(old.origin, old.n, rng, *old.hits, counters, old.near);
+            hits = std::const_pointer_cast<GatherHits>(old.hits);
+        } else {
+            if (keep) hits = std::make_shared<GatherHits>();
+            g = gatherer.gather(old.origin, old.n, rng, counters, old.near, hits.get());
+        }
+        Record r = cache.make_record(g, old.p, old.n, old.footprint, old.key);
+        r.origin = old.origin, r.near = old.near, r.frame = old.frame, r.gathered = frame;
+        r.anchor = old.anchor, r.anchor_p = old.anchor_p, r.anchor_n = old.anchor_n;
+        r.hits = std::move(hits);
+        return r;
+    };
+}
+
+/// How an earlier frame's fragment record is updated: the rays through moving objects' swept
+/// bounds traced again, every hit re-shaded (a fresh gather with its stream, for less).
+std::function<Record(const Record&, Counters&)> fragment_update_function(const FrameContext& ctx, const FramePlan& plan,
+                                                                          const Gatherer& refiner) {
+    std::vector<Bounds> boxes = plan.changes ? moving_bounds(*plan.changes) : std::vector<Bounds>();
+    return [&refiner, seed = ctx.scene.render.visibility.seed, width = ctx.scene.camera.width, frame = plan.frame,
+            boxes = std::move(boxes)](const Record& old, Counters& counters) {
+        const RandomStream rng = record_stream(old, seed, width);
+        auto hits = std::make_shared<GatherHits>(*old.hits);
+        std::vector<uint32_t> cells;
+        cells_through(refiner.grid(), old.origin, old.n, rng, *hits, boxes, cells);
+        const GatherResult g = refiner.update(old.origin, old.n, rng, *hits, cells, counters);
+        Record r = old;
+        r.E = g.irradiance, r.ao = g.ao, r.bent = g.bent_normal, r.dir = g.light_dir;
+        r.harmonic = g.harmonic_distance, r.dmin = g.min_distance, r.gathered = frame, r.drift = 0;
+        r.hits = std::move(hits);
+        return r;
+    };
+}
+
 }  // namespace
 
 GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep,
-                                   const RadiosityTextures* radiosity, IrradianceCache& cache,
+                                   const RadiosityTextures* radiosity, IrradianceCache& cache, TemporalJudgement judged,
                                    const std::function<void(const Image&)>& preview) {
     const Scene& scene = ctx.scene;
     const GatherSettings gs = frame_gather_settings(ctx, true);
     Gatherer gatherer(scene, ctx.accel, ctx.materials, ctx.lighting, radiosity, gs);
     GatherPassResult out;
     const size_t before = cache.size();
-    SubPassCallback after;
-    if (plan.preview && preview) after = preview_after_subpass(ctx, deep.shaded, cache, preview);
+    GatheringOptions options;
+    options.frame = plan.frame;
+    options.keep_hits = plan.keep_hits;
+    if (plan.preview && preview) options.after_subpass = preview_after_subpass(ctx, deep.shaded, cache, preview);
     std::unique_ptr<Gatherer> first;
     if (scene.render.cache.min_rays > 0 && scene.render.cache.min_rays < gs.rays) {
         GatherSettings fs = gs;
         fs.rays = scene.render.cache.min_rays;
         first = std::make_unique<Gatherer>(scene, ctx.accel, ctx.materials, ctx.lighting, radiosity, fs);
+        options.first = first.get();
     }
-    gathering_pass(scene, deep.gathered, gatherer, cache, ctx.stats, ctx.progress, after, plan.frame, first.get());
+    std::unique_ptr<StaleRecords> stale;
+    if (!judged.stale.empty()) {
+        stale = std::make_unique<StaleRecords>(std::move(judged.stale), std::move(judged.why), scene.bounds(), cache.settings(),
+                                               cache.ao_only(), redo_function(ctx, plan, cache, gatherer));
+        options.stale = stale.get();
+    }
+    gathering_pass(scene, deep.gathered, gatherer, cache, ctx.stats, ctx.progress, options);
+    if (stale) {
+        out.regathered = stale->regathered, out.reshaded = stale->reshaded;
+        out.waiting = stale->waiting();
+    }
     if (plan.refine) {
         // A refined fragment's gather feeds that fragment only: no gradients needed.
         GatherSettings own = gs;
@@ -206,13 +307,20 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
         if (scene.render.cache.refine_rays > 0) own.rays = scene.render.cache.refine_rays;
         Gatherer refiner(scene, ctx.accel, ctx.materials, ctx.lighting, radiosity, own);
         // Over the frame's window only: the margin's fragments are never shaded.
-        out.fragment_records_new = refinement_pass(scene, deep.shaded, refiner, cache, ctx.stats, ctx.progress, plan.frame);
-        if (out.fragment_records_new > 0 && after) {
+        RefinementOptions ro;
+        ro.frame = plan.frame;
+        ro.keep_hits = plan.keep_hits;
+        if (!judged.fragment_stale.empty()) {
+            ro.stale = &judged.fragment_stale;
+            ro.update = fragment_update_function(ctx, plan, refiner);
+        }
+        out.fragment_records_new = refinement_pass(scene, deep.shaded, refiner, cache, ctx.stats, ctx.progress, ro);
+        if (out.fragment_records_new > 0 && options.after_subpass) {
             const auto schedule = subpass_schedule(1);
-            after(schedule.back(), schedule.size() - 1, schedule.size());
+            options.after_subpass(schedule.back(), schedule.size() - 1, schedule.size());
         }
     }
-    out.records_new = cache.size() - before;
+    out.records_new = cache.size() - before - out.regathered - out.reshaded;  // made this frame
     return out;
 }
 

@@ -8,6 +8,7 @@
 
 #include "bounce/accel/accel.h"
 #include "bounce/cache/irradiance_cache.h"
+#include "bounce/cache/temporal.h"
 #include "bounce/core/image.h"
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
@@ -39,28 +40,38 @@ struct VisibilityResult {
 /// is written by the front end, with the frame's other outputs).
 VisibilityResult visibility_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous);
 
+/// Radiosity textures as the plan says (null for RadiosityStep::None), and for a carried one
+/// where its radiosity changed since the previous frame.
+struct RadiosityResult {
+    std::unique_ptr<RadiosityTextures> textures;
+    std::vector<LightChange> changed;
+    float brightest = 0;  ///< the largest radiance a moving object may show or hide (temporal.h)
+};
+RadiosityResult radiosity_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous);
+
 /// The cache a frame starts from (null when the plan has none).
 struct CacheStartResult {
     std::unique_ptr<IrradianceCache> cache;
     size_t records_loaded = 0;
     std::vector<std::string> differences;  ///< settings that differ from a reused file's (cache_reuse Any)
+    TemporalJudgement judged;               ///< CacheStart::Temporal: what became of the previous frame's records
 };
-CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous);
-
-/// Radiosity textures as the plan says (null for RadiosityStep::None).
-std::unique_ptr<RadiosityTextures> radiosity_pass(const FrameContext& ctx, const FramePlan& plan);
+CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous,
+                                  const RadiosityResult& radiosity);
 /// Saves radiosity textures that this frame baked into render.radiosity_textures.
 void save_radiosity_pass(const FrameContext& ctx, const RadiosityTextures& rt, size_t baked_before);
 
 /// What the gathering pass made.
 struct GatherPassResult {
-    size_t records_new = 0;
+    size_t records_new = 0;           ///< records in the cache that it did not start with (new and redone)
     size_t fragment_records_new = 0;  ///< per-fragment refinement's gathers
+    size_t regathered = 0, reshaded = 0;  ///< stale records of earlier frames redone
+    std::vector<Record> waiting;          ///< stale records no fragment needed (for the next frame)
 };
-/// The gathering pass (and refinement) into `cache`; `preview`, if set, gets an image after each
-/// sub-pass.
+/// The gathering pass (and refinement) into `cache`, redoing the judged stale records where
+/// they are needed; `preview`, if set, gets an image after each sub-pass.
 GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep,
-                                   const RadiosityTextures* radiosity, IrradianceCache& cache,
+                                   const RadiosityTextures* radiosity, IrradianceCache& cache, TemporalJudgement judged,
                                    const std::function<void(const Image&)>& preview);
 /// A gather at every fragment of the shaded window.
 std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffer& deep, const RadiosityTextures* radiosity);

@@ -6,6 +6,7 @@
 
 #include "bounce/cache/passes.h"
 #include "bounce/core/error.h"
+#include "bounce/scene/keyframes.h"
 
 namespace bounce {
 
@@ -29,6 +30,7 @@ const char* name(RadiosityStep s) {
         case RadiosityStep::None: return "none";
         case RadiosityStep::Bake: return "bake as hit";
         case RadiosityStep::Load: return "load, bake what is missing";
+        case RadiosityStep::Carry: return "previous frame's, re-bake what changed";
     }
     return "?";
 }
@@ -38,6 +40,7 @@ const char* name(CacheStart s) {
         case CacheStart::Empty: return "empty";
         case CacheStart::File: return "cache file";
         case CacheStart::Previous: return "previous frame's";
+        case CacheStart::Temporal: return "previous frame's records, judged";
     }
     return "?";
 }
@@ -58,6 +61,7 @@ CacheStart cache_start(const Scene& scene, const FrameState& previous, const Ren
     // Without a cache render, a cache file is only read for its records layer.
     if (!cached) return request.cache_in.empty() ? CacheStart::None : CacheStart::File;
     if (request.regather && !crop) return CacheStart::Empty;
+    if (request.sequence && previous.cache) return CacheStart::Temporal;
     if (request.reuse_previous && previous.cache) return CacheStart::Previous;
     return request.cache_in.empty() ? CacheStart::Empty : CacheStart::File;
 }
@@ -66,8 +70,22 @@ GatherStep gather_step(const Scene& scene, CacheStart cache, const RenderRequest
     const IndirectSettings& ind = scene.render.indirect;
     if (!ind.any()) return GatherStep::None;
     if (ind.gi != GiMode::Cache) return GatherStep::Brute;
-    const bool starts_full = cache == CacheStart::Previous || cache == CacheStart::File;
+    const bool starts_full = cache == CacheStart::Previous || cache == CacheStart::File || cache == CacheStart::Temporal;
     return request.reshade && starts_full && !request.regather ? GatherStep::WhereMissing : GatherStep::Cache;
+}
+
+/// Any light (or emissive material) of the shot keyed.
+bool lights_keyed(const Scene& scene) {
+    if (!scene.keyed.is_object()) return false;
+    if (scene.keyed.contains("lights") && has_keys(scene.keyed["lights"])) return true;
+    if (scene.keyed.contains("materials") && scene.keyed["materials"].is_object())
+        for (const auto& [name, m] : scene.keyed["materials"].items())
+            if (m.is_object() && m.contains("emission") && has_keys(m["emission"])) return true;
+    return false;
+}
+
+bool objects_move(const Scene& scene) {
+    return std::any_of(scene.objects.begin(), scene.objects.end(), [](const Object& o) { return o.moves; });
 }
 
 }  // namespace
@@ -83,8 +101,13 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
         plan.gather_window = {std::max(0, w[0] - m), std::min(scene.camera.width, w[1] + m), std::max(0, w[2] - m),
                               std::min(scene.camera.height, w[3] + m)};
     }
-    // (A previous deep buffer made for another camera or objects is refused by the pass, saying so.)
-    if (request.reuse_previous && previous.deep)
+    if (request.sequence && previous.scene) plan.changes = std::make_shared<const SceneChanges>(scene_changes(*previous.scene, scene));
+    const bool comparable = plan.changes && plan.changes->comparable;
+    // (A previous deep buffer made for another camera or objects is refused by the pass, saying so;
+    // a frame of a shot takes it only when its camera and objects are the same.)
+    const bool same_view = previous.deep && previous.deep->scene_fingerprint == scene.visibility_fingerprint() &&
+                           !scene.render.visibility.has_crop();
+    if ((request.reuse_previous && previous.deep) || (request.sequence && same_view))
         plan.visibility = VisibilityStep::Previous;
     else if (!request.deep_in.empty())
         plan.visibility = VisibilityStep::ReadFile, plan.deep_in = request.deep_in;
@@ -92,7 +115,9 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
         plan.visibility = VisibilityStep::Trace;
     plan.deep_out = request.deep_out;
 
+    if (comparable && previous.accel && plan.changes->visible_geometry_same) plan.accel = AccelStep::Keep;
     plan.cache = cache_start(scene, previous, request);
+    if (plan.cache == CacheStart::Temporal && !comparable) plan.cache = CacheStart::Empty;  // other objects: nothing to keep
     if (plan.cache == CacheStart::File) plan.cache_in = request.cache_in;
     plan.flush_crop = request.regather && scene.render.visibility.has_crop() && plan.cache != CacheStart::Empty;
     plan.force = request.force;
@@ -102,6 +127,10 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
     const IndirectSettings& ind = scene.render.indirect;
     if (plan.gather != GatherStep::None && scene.render.radiosity.enabled && !ind.ao)
         plan.radiosity = scene.render.radiosity.folder.empty() ? RadiosityStep::Bake : RadiosityStep::Load;
+    if (plan.radiosity != RadiosityStep::None && comparable && previous.radiosity) plan.radiosity = RadiosityStep::Carry;
+    // A shot in which anything moves keeps records' hits: a record is then updated (the rays a
+    // moving object may meet traced again, every hit re-shaded) rather than gathered again.
+    plan.keep_hits = request.sequence && scene.render.indirect.gi == GiMode::Cache && (lights_keyed(scene) || objects_move(scene));
     plan.preview = scene.render.parallel.preview && request.preview != nullptr;
     plan.threads = scene.render.parallel.threads > 0 ? scene.render.parallel.threads : tbb::this_task_arena::max_concurrency();
     return plan;
@@ -113,7 +142,8 @@ nlohmann::json FramePlan::describe() const {
             {"gather_window", gather_window},
             {"visibility", name(visibility)},
             {"deep_out", !deep_out.empty()},
-            {"accel", "build"},
+            {"accel", accel == AccelStep::Keep ? "keep" : "build"},
+            {"keep_hits", keep_hits},
             {"radiosity", name(radiosity)},
             {"cache", name(cache)},
             {"flush_crop", flush_crop},

@@ -14,6 +14,7 @@
 #include "bounce/core/image.h"
 #include "bounce/core/progress.h"
 #include "bounce/deep/deep_buffer.h"
+#include "bounce/scene/changes.h"
 #include "bounce/scene/scene.h"
 
 namespace bounce {
@@ -36,16 +37,29 @@ struct RenderRequest {
     /// Start from the previous frame's deep buffer and cache (FrameState) instead of files: the
     /// lighting tool keeps them in memory.
     bool reuse_previous = false;
+    /// A frame of a shot (the previous frame's state is the frame before in time): BVHs,
+    /// radiosity texels, cache records and the deep buffer are kept, moved or redone by what
+    /// changed between the two scenes (docs/animation.md).
+    bool sequence = false;
     CacheReuse cache_reuse = CacheReuse::Strict;  ///< keep a cache made with other settings
     int frame = 0;          ///< frame number stamped on new records (sequences)
     const CancelToken* cancel = nullptr;  ///< stops the render (throws Cancelled) when set
 };
 
+class SceneAccel;
+class RadiosityTextures;
+
 /// What a finished frame leaves for the next plan: the frame window's deep buffer and the cache
-/// as it ended (never modified afterwards; a plan that changes them makes copies).
+/// as it ended (never modified afterwards; a plan that changes them makes copies), and for the
+/// next frame of a shot its scene, BVHs, radiosity textures and the stale records no fragment
+/// needed yet.
 struct FrameState {
     std::shared_ptr<const DeepBuffer> deep;
     std::shared_ptr<const IrradianceCache> cache;
+    std::shared_ptr<const Scene> scene;  ///< its meshes back `accel`
+    std::shared_ptr<const SceneAccel> accel;
+    std::shared_ptr<const RadiosityTextures> radiosity;
+    std::vector<Record> waiting;
 };
 
 /// Primary visibility.
@@ -55,19 +69,24 @@ enum class VisibilityStep : uint8_t {
     Previous,  ///< the previous frame's deep buffer, in memory
 };
 /// The ray-tracing structures.
-enum class AccelStep : uint8_t { Build };
+enum class AccelStep : uint8_t {
+    Build,
+    Keep,  ///< the previous frame's: nothing rays or the camera see has moved
+};
 /// Radiosity textures for the gather's hits.
 enum class RadiosityStep : uint8_t {
     None,  ///< no gather, AO, or render.radiosity off: hits are shaded with shadow rays
     Bake,  ///< laid out and baked lazily as rays hit them
     Load,  ///< from render.radiosity_textures (baked lazily where the folder does not match)
+    Carry, ///< the previous frame's, re-baked where its direct light may have changed
 };
 /// Where the irradiance cache starts.
 enum class CacheStart : uint8_t {
     None,      ///< no cache (brute force, direct only)
     Empty,
     File,      ///< plan.cache_in (with the identity checks of load_cache)
-    Previous,  ///< the previous frame's cache, in memory
+    Previous,  ///< the previous frame's cache, in memory, as it is
+    Temporal,  ///< the previous frame's records judged for this frame: kept, moved or redone (temporal.h)
 };
 /// Which gathering runs.
 enum class GatherStep : uint8_t {
@@ -92,8 +111,11 @@ struct FramePlan {
     CacheReuse cache_reuse = CacheReuse::Strict;
     GatherStep gather = GatherStep::None;
     bool refine = false;      ///< per-fragment refinement after the gathering pass
+    bool keep_hits = false;   ///< records keep their gather's hits: the shot's lights change, re-shading is cheaper
     bool preview = false;     ///< progressive images through the request's callback
     int threads = 1;
+    /// Frames of a shot: what changed since the previous frame (null otherwise).
+    std::shared_ptr<const SceneChanges> changes;
 
     /// The plan as JSON (in --stats-json and the tool's status): one entry per step.
     nlohmann::json describe() const;

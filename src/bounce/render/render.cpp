@@ -12,6 +12,7 @@
 #include "bounce/render/frame_passes.h"
 #include "bounce/cache/passes.h"
 #include "bounce/core/error.h"
+#include "bounce/core/memory.h"
 #include "bounce/core/parallel.h"
 #include "bounce/gather/gather.h"
 #include "bounce/lighting/lighting.h"
@@ -59,15 +60,6 @@ double estimate_render_bytes(const Scene& scene) {
 }
 
 namespace {
-
-/// Memory this process may use: the smaller of the machine's physical memory and any address
-/// space limit.
-double available_bytes() {
-    double phys = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
-    rlimit rl{};
-    if (getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY) phys = std::min(phys, static_cast<double>(rl.rlim_cur));
-    return phys;
-}
 
 /// The scene loader's dicing of subdivision surfaces and growing of fur, as phases with their sizes.
 void report_dicing(const Scene& scene, Stats& stats) {
@@ -153,21 +145,24 @@ namespace {
 
 /// The cache, gathering and shading passes of a cache render: the plan's gathering, or for a
 /// re-shade (GatherStep::WhereMissing) shading first and gathering only where records miss.
-void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep,
-                      CacheStartResult& start, const RenderRequest& request, RenderResult& result) {
-    std::unique_ptr<RadiosityTextures> radiosity;
+/// `radiosity` is the frame's when the plan carried it; else it is made when a gather runs.
+void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep, const FrameState& previous,
+                      RadiosityResult& radiosity, CacheStartResult& start, const RenderRequest& request, RenderResult& result) {
     size_t baked_before = 0;
     auto gather = [&] {
-        radiosity = radiosity_pass(ctx, plan);
-        baked_before = radiosity ? radiosity->baked_sides() : 0;
+        if (!radiosity.textures) radiosity = radiosity_pass(ctx, plan, previous);
+        baked_before = radiosity.textures ? radiosity.textures->baked_sides() : 0;
         PhaseTimer t(ctx.stats, "gather");
         const uint64_t rays_before = ctx.stats.total().gather_rays;
-        const GatherPassResult g = cache_gather_pass(ctx, plan, deep, radiosity.get(), *start.cache, request.preview);
+        GatherPassResult g = cache_gather_pass(ctx, plan, deep, radiosity.textures.get(), *start.cache, std::move(start.judged),
+                                               request.preview);
         const double secs = t.stop();
         const uint64_t rays = ctx.stats.total().gather_rays - rays_before;
         ctx.stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
         result.records_new += g.records_new;
         result.fragment_records_new += g.fragment_records_new;
+        result.temporal.regathered = g.regathered, result.temporal.reshaded = g.reshaded;
+        result.waiting = std::move(g.waiting);
         result.gathered = true;
     };
     const auto quick_look = plan.preview ? request.preview : std::function<void(const Image&)>();
@@ -189,25 +184,26 @@ void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const Visi
     ctx.stats.set("records_loaded", static_cast<double>(result.records_loaded));
     ctx.stats.set("records_new", static_cast<double>(result.records_new));
     // After the shading pass: refined fragments' gathers may have baked sides too.
-    if (radiosity) save_radiosity_pass(ctx, *radiosity, baked_before);
+    if (radiosity.textures) save_radiosity_pass(ctx, *radiosity.textures, baked_before);
     if (plan.refine || cache.fragment_record_count() > 0)
         add_fragment_mask_layer(result.image, deep.shaded, shaded.refined, "refined");
 }
 
 /// Brute force, direct light only, or a cache file read for its records layer.
-void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep, RenderResult& result) {
+void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep, const FrameState& previous,
+                         RadiosityResult& radiosity, RenderResult& result) {
     std::vector<Indirect> light;
     if (plan.gather == GatherStep::Brute) {
-        std::unique_ptr<RadiosityTextures> radiosity = radiosity_pass(ctx, plan);
-        const size_t baked_before = radiosity ? radiosity->baked_sides() : 0;
+        if (!radiosity.textures) radiosity = radiosity_pass(ctx, plan, previous);
+        const size_t baked_before = radiosity.textures ? radiosity.textures->baked_sides() : 0;
         PhaseTimer t(ctx.stats, "gather");
         const uint64_t rays_before = ctx.stats.total().gather_rays;
-        light = brute_gather_pass(ctx, deep.shaded, radiosity.get());
+        light = brute_gather_pass(ctx, deep.shaded, radiosity.textures.get());
         const double secs = t.stop();
         const uint64_t rays = ctx.stats.total().gather_rays - rays_before;
         ctx.stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
         result.gathered = true;
-        if (radiosity) save_radiosity_pass(ctx, *radiosity, baked_before);
+        if (radiosity.textures) save_radiosity_pass(ctx, *radiosity.textures, baked_before);
     }
     ShadeResult shaded = shading_pass(ctx, deep.shaded, nullptr, plan.gather == GatherStep::Brute ? &light : nullptr);
     result.image = std::move(shaded.image);
@@ -217,18 +213,32 @@ void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const V
     }
 }
 
+/// The temporal counts of a frame of a shot, in stats.
+void report_temporal(const RenderResult& r, Stats& stats) {
+    const TemporalCounts& t = r.temporal;
+    stats.set("records_kept", static_cast<double>(t.kept));
+    stats.set("records_moved", static_cast<double>(t.moved));
+    stats.set("records_regathered", static_cast<double>(t.regathered));
+    stats.set("records_reshaded", static_cast<double>(t.reshaded));
+    stats.set("records_dropped_temporal", static_cast<double>(t.dropped));
+    stats.set("records_waiting", static_cast<double>(r.waiting.size()));
+}
+
 }  // namespace
 
 FrameState RenderResult::release_state() {
     FrameState s;
     s.deep = std::make_shared<const DeepBuffer>(std::move(deep));
     s.cache = std::shared_ptr<const IrradianceCache>(std::move(cache));
+    s.accel = std::move(accel);
+    s.radiosity = std::move(radiosity);
+    s.waiting = std::move(waiting);
     return s;
 }
 
 RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameState& previous, const RenderRequest& request,
                        Stats& stats, ProgressSink* progress) {
-    if (double need = estimate_render_bytes(scene), have = available_bytes(); need > 0.8 * have)
+    if (double need = estimate_render_bytes(scene), have = available_memory_bytes(); need > 0.8 * have)
         throw InputError(scene.path, "camera.resolution",
                          fmt::format("a {}x{} frame needs about {:.1f} GiB; {:.1f} GiB are available (render a crop)",
                                      scene.camera.width, scene.camera.height, need / 1073741824.0, have / 1073741824.0));
@@ -240,26 +250,33 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
     RenderResult result;
     result.plan = plan;
     arena.execute([&] {
-        std::unique_ptr<SceneAccel> accel;
-        {
+        if (plan.accel == AccelStep::Keep) {
+            result.accel = previous.accel;
+        } else {
             PhaseTimer t(stats, "build BVH");
-            accel = std::make_unique<SceneAccel>(scene);
+            result.accel = std::make_shared<const SceneAccel>(scene);
         }
-        stats.set("ray_offset", accel->ray_offset());
+        const SceneAccel& accel = *result.accel;
+        stats.set("ray_offset", accel.ray_offset());
         Materials materials(scene);
-        DirectLighting lighting(scene, *accel);
-        const FrameContext ctx{scene, *accel, materials, lighting, stats, ps, request.cancel};
+        DirectLighting lighting(scene, accel);
+        const FrameContext ctx{scene, accel, materials, lighting, stats, ps, request.cancel};
         const VisibilityResult deep = visibility_pass(ctx, plan, previous);
-        CacheStartResult start = cache_start_pass(ctx, plan, previous);
+        // A carried radiosity says what light changed, which the records' judgement needs first.
+        RadiosityResult radiosity;
+        if (plan.radiosity == RadiosityStep::Carry) radiosity = radiosity_pass(ctx, plan, previous);
+        CacheStartResult start = cache_start_pass(ctx, plan, previous, radiosity);
         result.records_loaded = start.records_loaded;
         result.cache_differences = start.differences;
+        const TemporalJudgement& j = start.judged;
+        result.temporal = {j.kept, j.moved, j.view, j.light, j.dropped, 0, 0};
         if (!start.differences.empty()) stats.set("cache_reused_with_other_settings", nlohmann::json(start.differences));
         result.cache_info = cache_file_info(scene, plan.frame);
         if (plan.gather == GatherStep::Cache || plan.gather == GatherStep::WhereMissing) {
-            run_cache_passes(ctx, plan, deep, start, request, result);
+            run_cache_passes(ctx, plan, deep, previous, radiosity, start, request, result);
         } else {
             result.cache = std::move(start.cache);
-            run_direct_or_brute(ctx, plan, deep, result);
+            run_direct_or_brute(ctx, plan, deep, previous, radiosity, result);
         }
         if (!result.cache) result.cache = std::move(start.cache);
         if (result.cache) {
@@ -267,9 +284,13 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
             for (size_t i = 0; i < result.cache->size(); ++i) positions.push_back(result.cache->record(i).p);
             add_records_layer(result.image, scene.camera, positions);
         }
+        // Sources of a lazy bake point at this frame's materials and lights: only a shot's next
+        // frame takes the textures (RadiosityTextures::carry points them at its own).
+        result.radiosity = std::move(radiosity.textures);
         result.deep = deep.shaded;
         if (!plan.deep_out.empty()) result.gathered_deep = std::make_shared<const DeepBuffer>(deep.gathered);
     });
+    if (plan.cache == CacheStart::Temporal) report_temporal(result, stats);
     stats.set("pixels", static_cast<double>(result.deep.pixel_count()));
     if (result.deep.pixel_count() > 0)
         stats.set("gather_rays_per_pixel", static_cast<double>(stats.total().gather_rays) /

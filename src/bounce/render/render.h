@@ -20,6 +20,17 @@
 
 namespace bounce {
 
+/// What became of the previous frame's records in a frame of a shot (temporal.h).
+struct TemporalCounts {
+    size_t kept = 0;        ///< kept as they were
+    size_t moved = 0;       ///< travelled with their object (then gathered again where needed)
+    size_t view = 0;        ///< something in their view moved
+    size_t light = 0;       ///< only the light in their view changed
+    size_t dropped = 0;     ///< on a deforming object, or the objects changed
+    size_t regathered = 0;  ///< stale records gathered again in place
+    size_t reshaded = 0;    ///< stale records re-shaded from their hits (no ray traced)
+};
+
 /// What a frame produced: its image and deep buffer, the cache it ended with, and what each
 /// pass did (typed: front ends steer on these, never on stats).
 struct RenderResult {
@@ -37,6 +48,10 @@ struct RenderResult {
     bool gathered = false;            ///< a gathering pass ran (a re-shade may not need one)
     /// Settings that differ from a reused cache file's (with CacheReuse::Any).
     std::vector<std::string> cache_differences;
+    TemporalCounts temporal;                       ///< CacheStart::Temporal
+    std::shared_ptr<const SceneAccel> accel;       ///< for the next frame of a shot
+    std::shared_ptr<const RadiosityTextures> radiosity;
+    std::vector<Record> waiting;                   ///< stale records no fragment needed
     /// True when the cache differs from the one the frame started from.
     bool cache_changed() const { return records_new > 0 || fragment_records_new > 0 || plan.cache == CacheStart::Empty; }
     /// What the next frame's plan may start from: moves the deep buffer and the cache out of

@@ -74,7 +74,8 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
     const std::string file = r.file("file", true);
     std::vector<std::string> read;
     try {
-        surf.control = load_control_mesh(file, obj.name, scene.materials, mat, read_transform(r), &read);
+        obj.placement = read_transform(r);
+        surf.control = load_control_mesh(file, obj.name, scene.materials, mat, obj.placement, &read);
         check_control_mesh(surf.control, surf.scheme);
     } catch (const InputError& e) {
         r.fail("file", e.what());
@@ -196,7 +197,8 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
             r.fail("file", e.what());
         }
         record_inputs(r, "file", read);
-        obj.coarse.transform(read_transform(r));
+        obj.placement = read_transform(r);
+        obj.coarse.transform(obj.placement);
         if (fine > 0) obj.fine = subdivide_linear(obj.coarse, fine);
     } else if (type == "quad") {
         const json& v = r.has("vertices") ? r.raw("vertices") : json();
@@ -206,7 +208,8 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         if (length(cross(p[1] - p[0], p[2] - p[0])) == 0) r.fail("vertices", "quad is degenerate (zero area)");
         fine = r.integer("fine_subdivisions", 0, 0, 8);
         obj.coarse = make_quad(p[0], p[1], p[2], p[3], default_material());
-        obj.coarse.transform(read_transform(r));
+        obj.placement = read_transform(r);
+        obj.coarse.transform(obj.placement);
         if (fine > 0) obj.fine = subdivide_linear(obj.coarse, fine);
     } else {
         Vec3 c = r.vec3("center", {});
@@ -216,7 +219,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         fine = r.integer("fine_subdivisions", 2, 0, 8 - level);
         uint32_t m = default_material();
         obj.coarse = make_icosphere(c, radius, level, m);
-        Transform t = read_transform(r);
+        const Transform t = obj.placement = read_transform(r);
         obj.coarse.transform(t);
         if (fine > 0) {
             obj.fine = make_icosphere(c, radius, level + fine, m);

@@ -267,6 +267,10 @@ ParamTable make_table() {
     rows.push_back(row("refine_tilt", "cache", &R::cache, &CacheSettings::refine_tilt).range(0, 180).unit("degrees")
                        .doc("records on the un-displaced surface: a fragment whose displaced normal tilts from the "
                             "un-displaced one by more than this gets a gather of its own (refine_rays); 0 = off").flag());
+    rows.push_back(row("temporal_tolerance", "cache", &R::cache, &CacheSettings::temporal_tolerance).range(0, 100)
+                       .doc("frames of a shot: a record kept from an earlier frame is gathered again (or re-shaded) once what "
+                            "changed in its view may have moved its irradiance by more than this fraction of it; 0 = only "
+                            "when nothing it sees changed").flag());
     rows.push_back(row("shading_reach", "cache", &R::cache, &CacheSettings::shading_reach).range(1, 10)
                        .doc("the shading pass lets records reach this much farther (kappa / reach)").flag());
     // Shading.

@@ -80,6 +80,9 @@ struct Object {
     float displacement_bound = 0;  ///< largest distance displacement moves a point (0 = none)
     std::shared_ptr<const Fur> fur;  ///< strands grown on the visible surface (null = none)
     std::shared_ptr<const SubdivSurface> surface;  ///< subdivision objects: what was diced (null = none)
+    Transform placement;    ///< the scene file's transform, already applied to both tessellations
+    bool deforms = false;   ///< its shape changes over the shot (a skin, morph targets), not only its placement
+    bool moves = false;     ///< its placement is keyed or it deforms: its cache records travel with it
     bool has_fine() const { return !fine.indices.empty(); }
     const TriangleMesh& visible() const { return has_fine() ? fine : coarse; }
 };

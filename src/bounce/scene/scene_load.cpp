@@ -129,6 +129,13 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
             scene.lights.push_back(l);
         }
     }
+    // Objects that move in the shot carry their records with them (cache/temporal.h).
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+        Object& o = scene.objects[i];
+        const nlohmann::json* keyed = scene.keyed.is_object() && scene.keyed.contains("objects") && i < scene.keyed["objects"].size()
+                                          ? &scene.keyed["objects"][i] : nullptr;
+        o.moves = o.deforms || (keyed && keyed->is_object() && keyed->contains("transform") && has_keys((*keyed)["transform"]));
+    }
     // What every file holds goes into the identities (deep and cache files).
     ctx.inputs = nullptr;
     for (SceneInput& in : scene.inputs) in.hash = file_content_hash(in.path);

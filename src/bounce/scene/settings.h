@@ -83,6 +83,7 @@ struct CacheSettings {
     RecordSurface displaced_records = RecordSurface::Undisplaced;  ///< where records of displaced surfaces live
     float displacement_near = 10;  ///< un-displaced records: hits within this many displacement bounds do not shrink them
     float refine_tilt = 20;       ///< un-displaced records: a fragment whose normal tilts more than this (degrees) is refined; 0 = off
+    float temporal_tolerance = 0.02f;  ///< frames of a shot: a kept record is redone once its irradiance may have moved by this fraction
     /// The settings the shading pass interpolates with.
     CacheSettings for_shading() const {
         CacheSettings s = *this;

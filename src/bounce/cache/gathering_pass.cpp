@@ -1,0 +1,202 @@
+// The gathering pass (passes.h): hierarchical sub-passes that make records where lookups miss,
+// or, in a frame of a shot, redo the earlier frames' stale records that would cover the miss.
+#include <tbb/enumerable_thread_specific.h>
+
+#include <algorithm>
+#include <mutex>
+#include <shared_mutex>
+
+#include "bounce/cache/passes.h"
+#include "bounce/cache/sites.h"
+#include "bounce/cache/temporal.h"
+
+namespace bounce {
+
+namespace {
+
+/// A fragment whose lookup missed, in a sub-pass.
+struct Candidate {
+    int wx, wy;
+    uint32_t k;
+};
+
+/// What one sub-pass collected, per tile.
+struct TileWork {
+    std::vector<Record> made;            ///< new records
+    std::vector<uint32_t> requests;      ///< stale records that would cover a miss
+    std::vector<Candidate> deferred;     ///< misses waiting for those to be redone
+};
+
+class Gathering {
+public:
+    Gathering(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, IrradianceCache& cache, Stats& stats,
+              const GatheringOptions& o)
+        : scene_(scene), deep_(deep), gatherer_(gatherer), cache_(cache), stats_(stats), o_(o),
+          per_tile_(scene.render.parallel.cache_sharing == CacheSharing::PerThread),
+          tiles_(make_tiles(deep.width, deep.height, scene.render.parallel.tile_size, scene.render.parallel.tile_order)),
+          work_(tiles_.size()) {}
+
+    void subpass(const SubPass& sp);
+    size_t gathered = 0, dropped = 0;
+    tbb::enumerable_thread_specific<size_t> full_gathers{0};
+
+private:
+    Record gather_at(const Candidate& c, Counters& counters);
+    void judge_tile(const SubPass& sp, const Tile& t);
+    void insert_new(std::vector<Record> records);
+
+    const Scene& scene_;
+    const DeepBuffer& deep_;
+    const Gatherer& gatherer_;
+    IrradianceCache& cache_;
+    Stats& stats_;
+    const GatheringOptions& o_;
+    const bool per_tile_;
+    const std::vector<Tile> tiles_;
+    std::vector<TileWork> work_;
+};
+
+Record Gathering::gather_at(const Candidate& c, Counters& counters) {
+    const Fragment& f = deep_.pixel(c.wx, c.wy)[c.k];
+    const Site site = record_site(scene_, f, cache_.settings());
+    const RandomStream rng = fragment_stream(scene_.render.visibility.seed, c.wx + deep_.x0, c.wy + deep_.y0, c.k);
+    auto hits = o_.keep_hits ? std::make_shared<GatherHits>() : nullptr;
+    GatherResult g = o_.first ? o_.first->gather(site.origin, site.n, rng, counters, site.near, hits.get()) : GatherResult{};
+    if (!o_.first || g.rel_stderr > cache_.settings().ray_noise) {
+        g = gatherer_.gather(site.origin, site.n, rng, counters, site.near, hits.get());
+        ++full_gathers.local();
+    }
+    Record r = cache_.make_record(g, site.p, site.n, f.footprint, candidate_key(deep_, c.wx, c.wy, c.k));
+    r.frame = r.gathered = o_.frame;
+    r.origin = site.origin;
+    r.near = site.near;
+    r.hits = std::move(hits);
+    const Object& obj = scene_.objects[f.object];
+    if (obj.moves && !f.is_hair()) {  // it travels with its object (temporal.h)
+        const Transform back = obj.placement.inverse();
+        r.anchor = f.object, r.anchor_p = back.point(r.p), r.anchor_n = normalize(back.vector(r.n));
+    }
+    return r;
+}
+
+void Gathering::judge_tile(const SubPass& sp, const Tile& t) {
+    Counters& counters = stats_.local();
+    auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache_, counters);
+    TileWork& w = work_[static_cast<size_t>(t.index)];
+    w.made.clear(), w.requests.clear(), w.deferred.clear();
+    std::vector<uint32_t> covering;
+    for (int wy = t.y0; wy < t.y1; ++wy)
+        for (int wx = t.x0; wx < t.x1; ++wx) {
+            if (!sp.contains(wx + deep_.x0, wy + deep_.y0)) continue;
+            auto frags = deep_.pixel(wx, wy);
+            for (uint32_t k = 0; k < frags.size(); ++k) {
+                const Site site = record_site(scene_, frags[k], cache_.settings());
+                if (!cache_.misses(site.p, site.n, per_tile_ ? std::span<const Record>(w.made) : std::span<const Record>())) continue;
+                if (o_.stale) {
+                    // An earlier frame's record that would cover it is redone rather than a new one made.
+                    covering.clear();
+                    o_.stale->covering(site.p, site.n, covering);
+                    if (!covering.empty()) {
+                        w.requests.insert(w.requests.end(), covering.begin(), covering.end());
+                        w.deferred.push_back({wx, wy, k});
+                        continue;
+                    }
+                }
+                Record r = gather_at({wx, wy, k}, counters);
+                if (per_tile_) {
+                    cache_.clamp_to_neighbours(r, w.made);
+                    r.support = cache_.support(r);
+                }
+                w.made.push_back(std::move(r));
+            }
+        }
+}
+
+/// New records, merged in an order that does not depend on scheduling. Shared: by pixel,
+/// dropping those that records inserted before them in this sub-pass already cover.
+/// Per-thread: the tile caches in tile order, all kept (each came from one tile's cache).
+void Gathering::insert_new(std::vector<Record> records) {
+    gathered += records.size();
+    if (!per_tile_) std::sort(records.begin(), records.end(), [](const Record& a, const Record& b) { return a.key < b.key; });
+    auto lock = lock_cache<std::unique_lock<std::shared_mutex>>(cache_, stats_.local());
+    if (cache_.luminance_floor() < 0 && !records.empty()) {
+        double mean = 0;
+        for (const auto& r : records) mean += luminance(r.E);
+        cache_.set_luminance_floor(static_cast<float>(1e-3 * mean / static_cast<double>(records.size())));
+    }
+    const size_t before = cache_.size();
+    for (auto& r : records) {
+        if (!per_tile_ && cache_.size() > before && !cache_.misses(r.p, r.n)) {
+            ++dropped;
+            continue;
+        }
+        cache_.insert(std::move(r));
+    }
+}
+
+void Gathering::subpass(const SubPass& sp) {
+    // 1. Each tile judges its candidates against the cache as it was when the sub-pass began
+    //    (shared lock; nobody writes until step 2) and gathers at the misses.
+    for_each_tile(tiles_, [&](const Tile& t) { judge_tile(sp, t); });
+    std::vector<Record> made;
+    std::vector<uint32_t> requests;
+    std::vector<Candidate> deferred;
+    for (TileWork& w : work_) {
+        made.insert(made.end(), w.made.begin(), w.made.end());
+        requests.insert(requests.end(), w.requests.begin(), w.requests.end());
+        deferred.insert(deferred.end(), w.deferred.begin(), w.deferred.end());
+    }
+    // 2. Stale records redone, in their order; then the new records.
+    if (!requests.empty()) {
+        std::sort(requests.begin(), requests.end());
+        requests.erase(std::unique(requests.begin(), requests.end()), requests.end());
+        std::vector<Record> redone = o_.stale->redo(requests, stats_);
+        auto lock = lock_cache<std::unique_lock<std::shared_mutex>>(cache_, stats_.local());
+        for (Record& r : redone) cache_.insert(std::move(r));
+    }
+    insert_new(std::move(made));
+    // 3. The misses that waited for redone records: those still missing get records of their own.
+    if (deferred.empty()) return;
+    std::vector<uint8_t> still(deferred.size(), 0);
+    parallel_for_each_index(0, static_cast<int>(deferred.size()), [&](int i) {
+        const Candidate& c = deferred[static_cast<size_t>(i)];
+        const Site site = record_site(scene_, deep_.pixel(c.wx, c.wy)[c.k], cache_.settings());
+        still[static_cast<size_t>(i)] = cache_.misses(site.p, site.n);
+    });
+    std::vector<Record> late(deferred.size());
+    parallel_for_each_index(0, static_cast<int>(deferred.size()), [&](int i) {
+        if (still[static_cast<size_t>(i)]) late[static_cast<size_t>(i)] = gather_at(deferred[static_cast<size_t>(i)], stats_.local());
+    });
+    std::vector<Record> kept;
+    for (size_t i = 0; i < late.size(); ++i)
+        if (still[i]) kept.push_back(std::move(late[i]));
+    insert_new(std::move(kept));
+}
+
+}  // namespace
+
+void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, IrradianceCache& cache, Stats& stats,
+                    ProgressSink* sink, const GatheringOptions& options) {
+    const auto schedule = subpass_schedule(static_cast<int>(cache.settings().max_spacing));
+    Progress progress(sink, "gathering", schedule.size());
+    Gathering g(scene, deep, gatherer, cache, stats, options);
+    for (size_t si = 0; si < schedule.size(); ++si) {
+        g.subpass(schedule[si]);
+        progress.add();
+        if (options.after_subpass) options.after_subpass(schedule[si], si, schedule.size());
+    }
+    stats.set("records", static_cast<double>(cache.size()));
+    stats.set("record_gathers", static_cast<double>(g.gathered));
+    if (options.first) {
+        size_t full = 0;
+        for (size_t n : g.full_gathers) full += n;
+        stats.set("record_gathers_full_rays", static_cast<double>(full));
+        stats.set("record_first_rays", static_cast<double>(options.first->grid().rays()));
+    }
+    stats.set("records_dropped", static_cast<double>(g.dropped));
+    stats.set("subpasses", static_cast<double>(schedule.size()));
+    stats.set("rays_per_gather", g.gathered ? static_cast<double>(stats.total().gather_rays) / static_cast<double>(g.gathered) : 0.0);
+    stats.set("cache_bytes", static_cast<double>(cache.memory_bytes()));
+}
+
+}  // namespace bounce

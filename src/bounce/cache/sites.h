@@ -1,0 +1,59 @@
+// What the cache's passes share (internal to cache/): where a fragment's records live, the
+// creation key of a fragment's record, and taking the cache's lock with the wait counted.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+
+#include "bounce/cache/irradiance_cache.h"
+#include "bounce/core/stats.h"
+#include "bounce/deep/deep_buffer.h"
+#include "bounce/gather/gather.h"
+
+namespace bounce {
+
+/// Where a fragment's records live and the hemisphere its gathers use: the un-displaced
+/// surface by default (rays still leave from the displaced point f.p), or the displaced one.
+/// Hair: at its strand's root on the growing surface whatever the mode (gather.h hair_site);
+/// its gathers leave from there too.
+struct Site {
+    Vec3 p, n;
+    Vec3 origin;      ///< where the gather's rays leave from
+    float near = 0;   ///< hits nearer than this do not size the record (Gatherer::gather)
+};
+inline Site record_site(const Scene& scene, const Fragment& f, const CacheSettings& cs) {
+    if (f.is_hair()) {
+        const HairSite h = hair_site(scene, f);
+        return {h.p, h.n, h.p};
+    }
+    if (cs.displaced_records == RecordSurface::Displaced) return {f.p, f.n, f.p};
+    // The displacement's own bumps are what the un-displaced surface leaves out: they shade the
+    // record's value but do not shrink its reach (docs/displacement.md).
+    const float near = cs.displacement_near * scene.objects[f.object].displacement_bound;
+    return {f.p_base, f.n_base, f.p, near};
+}
+
+/// The shading-pass interpolation at a fragment: weights at its record site, each record's
+/// value extrapolated with its gradients to the fragment's own (displaced) point and normal.
+/// Hair gets no gradient along the strand: its value is the one at its site.
+inline Interpolated interpolate_at(const IrradianceCache& cache, const Fragment& f, const Site& site) {
+    return f.is_hair() ? cache.lookup(site.p, site.n, true, &site.p, &site.n) : cache.lookup(site.p, site.n, true, &f.p, &f.n);
+}
+
+inline uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k) {
+    uint64_t pix = static_cast<uint64_t>(wy + deep.y0) * static_cast<uint64_t>(deep.full_width) +
+                   static_cast<uint64_t>(wx + deep.x0);
+    return (pix << 8) | k;
+}
+
+/// Takes the cache's lock (shared or exclusive), adding the time waited to `counters`.
+template <typename Lock>
+Lock lock_cache(const IrradianceCache& cache, Counters& counters) {
+    auto t0 = std::chrono::steady_clock::now();
+    Lock lock(cache.mutex());
+    counters.lock_wait_ns += static_cast<uint64_t>(
+        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
+    return lock;
+}
+
+}  // namespace bounce

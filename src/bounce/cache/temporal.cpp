@@ -1,0 +1,260 @@
+#include "bounce/cache/temporal.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "bounce/core/parallel.h"
+
+namespace bounce {
+
+namespace {
+
+/// Each direction bin of a gather as a cone in the gather's frame (z = normal): the axis through
+/// the middle of its elevation band and azimuth sector, and the angle to its farthest corner.
+struct BinCone {
+    Vec3 axis;
+    float cos_half;  ///< cosine of the half-angle (a margin added)
+};
+
+const std::array<BinCone, kReachBins>& bin_cones() {
+    static const std::array<BinCone, kReachBins> cones = [] {
+        std::array<BinCone, kReachBins> out{};
+        const auto dir = [](float sin2, float phi) {
+            const float s = std::sqrt(sin2), c = std::sqrt(std::max(0.0f, 1 - sin2));
+            return Vec3{s * std::cos(phi), s * std::sin(phi), c};
+        };
+        for (int b = 0; b < kReachBands; ++b)
+            for (int k = 0; k < kReachSectors; ++k) {
+                const float s0 = static_cast<float>(b) / kReachBands, s1 = static_cast<float>(b + 1) / kReachBands;
+                const float p0 = 2 * kPi * static_cast<float>(k) / kReachSectors, p1 = 2 * kPi * static_cast<float>(k + 1) / kReachSectors;
+                const Vec3 axis = normalize(dir(0.5f * (s0 + s1), 0.5f * (p0 + p1)));
+                float cos_half = 1;
+                // The corners and edge midpoints bound the cell's angular extent.
+                for (float sin2 : {s0, 0.5f * (s0 + s1), s1})
+                    for (float phi : {p0, 0.5f * (p0 + p1), p1}) cos_half = std::min(cos_half, dot(axis, dir(sin2, phi)));
+                const float half = std::acos(std::clamp(cos_half, -1.0f, 1.0f)) + 0.05f;  // ~3 degrees of margin
+                out[static_cast<size_t>(b * kReachSectors + k)] = {axis, std::cos(std::min(half, kPi))};
+            }
+        return out;
+    }();
+    return cones;
+}
+
+/// Rotates and moves a record with its object's rigid motion.
+void move_rigidly(Record& r, const Transform& delta) {
+    const auto turn = [&](Vec3& v) { v = delta.vector(v); };
+    r.p = delta.point(r.p), r.origin = delta.point(r.origin);
+    r.n = normalize(delta.vector(r.n));
+    turn(r.bent);
+    r.bent = normalize(r.bent);
+    for (size_t c = 0; c < 3; ++c) turn(r.dir[c]), turn(r.grad_r[c]), turn(r.grad_t[c]);
+    turn(r.ao_grad_r), turn(r.ao_grad_t);
+    if (r.radius_long > 0) r.axis = normalize(delta.vector(r.axis));
+}
+
+/// The record's reach for this camera: its unclamped radius within the pixel bounds of the
+/// footprint it has now (a kept record keeps the screen-space spacing a fresh one would get).
+void respace(Record& r, const CameraRays& camera, const CacheSettings& s) {
+    const Vec3 d = r.p - camera.origin();
+    const float t = length(d);
+    if (!(t > 0)) return;
+    const float fp = camera.footprint(d / t, t, r.n);
+    if (!(fp > 0) || !std::isfinite(fp)) return;
+    const float before = r.radius;
+    r.footprint = fp;
+    r.radius = std::clamp(r.raw_radius, s.min_spacing * fp, s.max_spacing * fp);
+    if (r.radius_long > 0) r.radius_long = std::max(r.radius, r.radius_long * r.radius / before);
+}
+
+/// How far `r`'s irradiance (relative to it) may have moved this frame.
+float drift_bound(const Record& r, const SceneChanges& changes, std::span<const LightChange> light, float brightest,
+                  float floor, bool ao_only) {
+    double bound = 0;
+    for (size_t o = 0; o < changes.objects.size(); ++o) {
+        const ObjectMotion& m = changes.objects[o];
+        if (m.kind == ObjectMotion::Kind::Static || o == r.anchor || !record_sees(r, m.swept)) continue;
+        // An object moving through the view can show or hide at most the brightest radiance
+        // over its swept solid angle (AO: that fraction of the cosine-weighted hemisphere).
+        bound += (ao_only ? kInvPi : brightest) * solid_angle_bound(r.origin, m.swept);
+    }
+    if (!ao_only)
+        for (const LightChange& c : light)
+            if (record_sees(r, c.bounds)) bound += c.delta * solid_angle_bound(r.origin, c.bounds);
+    const double value = ao_only ? std::max(r.ao, 0.01f) : std::max(luminance(r.E), floor);
+    return static_cast<float>(bound / value);
+}
+
+bool sees_sky(const Record& r) {
+    return std::any_of(r.reach.begin(), r.reach.end(), [](float d) { return !std::isfinite(d); });
+}
+
+/// A record with its hits: does anything its rays found change this frame? None of its rays
+/// passes through a moving object's swept bounds, no hit is on a changed side, no escaped ray
+/// sees a changed sky.
+bool hits_unchanged(const Record& r, const Scene& now, const SceneChanges& changes, const std::vector<Bounds>& boxes,
+                    const std::vector<uint64_t>& changed_sides) {
+    const GatherHits& h = *r.hits;
+    for (size_t c = 0; c < h.t.size(); ++c) {
+        if (h.object[c] == kNoHit) {
+            if (changes.sky) return false;
+            continue;
+        }
+        const uint64_t side = (static_cast<uint64_t>(h.object[c] & ~GatherHits::kHairBit) << 32) | h.prim[c];
+        if (std::binary_search(changed_sides.begin(), changed_sides.end(), side)) return false;
+    }
+    if (boxes.empty()) return true;
+    std::vector<uint32_t> cells;
+    cells_through(GatherGrid{h.m, h.n}, r.origin, r.n,
+                  record_stream(r, now.render.visibility.seed, now.camera.width), h, boxes, cells);
+    return cells.empty();
+}
+
+}  // namespace
+
+bool record_sees(const Record& r, const Bounds& box) {
+    if (box.empty()) return false;
+    const Vec3 c = (box.lo + box.hi) * 0.5f, v = c - r.origin;
+    const float rad = 0.5f * length(box.hi - box.lo), d = length(v);
+    if (d <= rad) return true;
+    const Frame frame(r.n);
+    const float sin_sub = rad / d, cos_sub = std::sqrt(std::max(0.0f, 1 - sin_sub * sin_sub));
+    const Vec3 u = v / d;
+    const auto& cones = bin_cones();
+    for (size_t b = 0; b < cones.size(); ++b) {
+        if (d - rad > r.reach[b]) continue;
+        // Angle between the bin's axis and the sphere's centre, less the sphere's half-angle.
+        const float cos_axis = dot(frame.to_world(cones[b].axis), u);
+        const float angle = std::acos(std::clamp(cos_axis, -1.0f, 1.0f)) - std::acos(std::clamp(cos_sub, -1.0f, 1.0f));
+        if (angle <= std::acos(std::clamp(cones[b].cos_half, -1.0f, 1.0f))) return true;
+    }
+    return false;
+}
+
+float solid_angle_bound(const Vec3& o, const Bounds& box) {
+    const Vec3 c = (box.lo + box.hi) * 0.5f;
+    const float rad = 0.5f * length(box.hi - box.lo), d = length(c - o);
+    if (d <= rad) return 2 * kPi;
+    const float s = rad / d;
+    return 2 * kPi * (1 - std::sqrt(std::max(0.0f, 1 - s * s)));
+}
+
+std::vector<Bounds> moving_bounds(const SceneChanges& changes, uint32_t except) {
+    std::vector<Bounds> out;
+    for (size_t o = 0; o < changes.objects.size(); ++o)
+        if (changes.objects[o].kind != ObjectMotion::Kind::Static && o != except) out.push_back(changes.objects[o].swept);
+    return out;
+}
+
+RandomStream record_stream(const Record& r, uint64_t seed, int full_width) {
+    const uint64_t pixel = r.key >> 8;
+    const auto w = static_cast<uint64_t>(std::max(1, full_width));
+    return fragment_stream(seed, static_cast<int>(pixel % w), static_cast<int>(pixel / w), static_cast<uint32_t>(r.key & 0xff));
+}
+
+TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, const Scene& now,
+                                const SceneChanges& changes, std::span<const LightChange> light, float brightest) {
+    TemporalJudgement out;
+    if (!changes.comparable) {
+        out.dropped = previous.size() + waiting.size();
+        return out;
+    }
+    const CacheSettings& s = previous.settings();
+    const CameraRays camera(now.camera);
+    const float floor = std::max(previous.luminance_floor(), 1e-12f);
+    const std::vector<Bounds> boxes = moving_bounds(changes);
+    std::vector<uint64_t> changed_sides;
+    for (const LightChange& c : light) changed_sides.push_back((static_cast<uint64_t>(c.object) << 32) | c.triangle);
+    std::sort(changed_sides.begin(), changed_sides.end());
+    const auto judge = [&](Record r, bool fragment) {
+        const bool anchored = r.anchor != kNoAnchor && r.anchor < changes.objects.size();
+        const ObjectMotion::Kind own = anchored ? changes.objects[r.anchor].kind : ObjectMotion::Kind::Static;
+        if (own == ObjectMotion::Kind::Deforming || (fragment && own != ObjectMotion::Kind::Static)) {
+            ++out.dropped;
+            return;
+        }
+        if (!fragment) respace(r, camera, s);
+        if (own == ObjectMotion::Kind::Rigid) {
+            move_rigidly(r, changes.objects[r.anchor].delta);
+            out.stale.push_back(r), out.why.push_back(StaleReason::Moved), ++out.moved;
+            return;
+        }
+        if (r.hits) {
+            if (hits_unchanged(r, now, changes, boxes, changed_sides)) {
+                ++out.kept;
+                (fragment ? out.fragment_valid : out.valid).push_back(r);
+            } else if (fragment) {
+                out.fragment_stale.emplace(r.key, r);
+            } else {
+                ++out.light;
+                out.stale.push_back(r), out.why.push_back(StaleReason::Update);
+            }
+            return;
+        }
+        r.drift += drift_bound(r, changes, light, brightest, floor, previous.ao_only());
+        bool geometry = false;
+        for (size_t o = 0; o < changes.objects.size() && !geometry; ++o)
+            geometry = changes.objects[o].kind != ObjectMotion::Kind::Static && record_sees(r, changes.objects[o].swept);
+        const bool sky = changes.sky && !previous.ao_only() && sees_sky(r);
+        if (r.drift <= s.temporal_tolerance && !sky) {
+            ++out.kept;
+            (fragment ? out.fragment_valid : out.valid).push_back(r);
+            return;
+        }
+        if (fragment) {  // refinement gathers its fragments again where it still needs them
+            ++out.dropped;
+            return;
+        }
+        const StaleReason why = geometry ? StaleReason::View : StaleReason::Light;
+        ++(why == StaleReason::View ? out.view : out.light);
+        out.stale.push_back(r), out.why.push_back(why);
+    };
+    for (size_t i = 0; i < previous.size(); ++i) judge(previous.record(i), false);
+    for (size_t i = 0; i < previous.fragment_record_count(); ++i) judge(previous.fragment_record_at(i), true);
+    for (Record r : waiting) {
+        const bool anchored = r.anchor != kNoAnchor && r.anchor < changes.objects.size();
+        const ObjectMotion::Kind own = anchored ? changes.objects[r.anchor].kind : ObjectMotion::Kind::Static;
+        if (own == ObjectMotion::Kind::Deforming) {
+            ++out.dropped;
+            continue;
+        }
+        if (own == ObjectMotion::Kind::Rigid) move_rigidly(r, changes.objects[r.anchor].delta);
+        respace(r, camera, s);
+        out.stale.push_back(r), out.why.push_back(StaleReason::View);
+    }
+    return out;
+}
+
+StaleRecords::StaleRecords(std::vector<Record> records, std::vector<StaleReason> why, const Bounds& bounds, const CacheSettings& s,
+                           bool ao_only, Redo redo)
+    : index_(bounds, s, ao_only), why_(std::move(why)), done_(records.size(), 0), redo_(std::move(redo)) {
+    for (const Record& r : records) index_.insert_loaded(r);
+}
+
+void StaleRecords::covering(const Vec3& p, const Vec3& n, std::vector<uint32_t>& out) const {
+    index_.visit_weights(p, n, [&](uint32_t id, float w) {
+        if (w > 0 && !done_[id]) out.push_back(id);
+    });
+}
+
+std::vector<Record> StaleRecords::redo(const std::vector<uint32_t>& ids, Stats& stats) {
+    std::vector<Record> out(ids.size());
+    parallel_for_each_index(0, static_cast<int>(ids.size()), [&](int i) {
+        const auto k = static_cast<size_t>(i);
+        out[k] = redo_(index_.record(ids[k]), why_[ids[k]], stats.local());
+    });
+    for (uint32_t id : ids) {
+        done_[id] = 1;
+        const bool from_hits = (why_[id] == StaleReason::Light || why_[id] == StaleReason::Update) && index_.record(id).hits;
+        ++(from_hits ? reshaded : regathered);
+    }
+    return out;
+}
+
+std::vector<Record> StaleRecords::waiting() const {
+    std::vector<Record> out;
+    for (size_t i = 0; i < done_.size(); ++i)
+        if (!done_[i]) out.push_back(index_.record(i));
+    return out;
+}
+
+}  // namespace bounce

@@ -1,0 +1,125 @@
+// Radiosity textures across the frames of a shot: kept texel for texel, re-baked only where the
+// direct light may have changed (docs/animation.md).
+#include <algorithm>
+
+#include "bounce/core/parallel.h"
+#include "bounce/radiosity/radiosity.h"
+
+namespace bounce {
+
+namespace {
+
+bool boxes_overlap(const Bounds& a, const Bounds& b) {
+    return !a.empty() && !b.empty() && a.lo.x <= b.hi.x && b.lo.x <= a.hi.x && a.lo.y <= b.hi.y && b.lo.y <= a.hi.y &&
+           a.lo.z <= b.hi.z && b.lo.z <= a.hi.z;
+}
+
+/// Conservatively, can `box` stand between triangle side (a, b, c; facing `n`) and `light`,
+/// i.e. shadow it or stop shadowing it? The box of the triangle and the light's extent (a point,
+/// a quad, or the triangle pushed far towards a distant light or the sky) must overlap it.
+bool may_shadow(const Light& light, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& n, const Bounds& box, float far) {
+    Bounds hull;
+    for (const Vec3& p : {a, b, c}) hull.extend(p);
+    switch (light.type) {
+        case LightType::Point:
+        case LightType::Spot: hull.extend(light.position); break;
+        case LightType::Quad:
+            for (const Vec3& p : {light.corner, light.corner + light.edge_u, light.corner + light.edge_v,
+                                  light.corner + light.edge_u + light.edge_v})
+                hull.extend(p);
+            break;
+        case LightType::Distant:
+            for (const Vec3& p : {a, b, c}) hull.extend(p - light.direction * far);
+            break;
+        case LightType::Sky:
+        case LightType::Mesh:
+            // Anything in front of the side may hide part of the sky (or an emissive mesh).
+            for (const Vec3& p : {a, b, c})
+                for (const Vec3& d : {Vec3{far, 0, 0}, Vec3{-far, 0, 0}, Vec3{0, far, 0}, Vec3{0, -far, 0}, Vec3{0, 0, far},
+                                      Vec3{0, 0, -far}})
+                    if (dot(d, n) > 0) hull.extend(p + d);
+            break;
+    }
+    return boxes_overlap(hull, box);
+}
+
+}  // namespace
+
+float RadiosityTextures::brightest() const {
+    float top = 0;
+    for (size_t id = 0; id < maps_.size(); ++id)
+        for (size_t t = 0; t < maps_[id].level.size(); ++t)
+            for (int side = 0; side < 2; ++side) {
+                if (state_[id][2 * t + static_cast<size_t>(side)].load(std::memory_order_relaxed) != 2) continue;
+                const RadiosityMap& m = maps_[id];
+                const std::vector<Color>& v = side == 0 ? m.front : m.back;
+                const uint32_t n = static_cast<uint32_t>((m.level[t] + 1) * (m.level[t] + 2) / 2);
+                for (uint32_t k = m.offset[t]; k < m.offset[t] + n; ++k) top = std::max(top, luminance(v[k]));
+            }
+    return top;
+}
+
+RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, const Scene& scene, const Materials& materials,
+                                           const DirectLighting& lighting, const SceneChanges& changes,
+                                           std::vector<LightChange>& changed, Stats& stats) {
+    RadiosityTextures rt;
+    rt.texel_size_ = previous.texel_size_;
+    rt.fingerprint_ = fingerprint(scene, scene.render.radiosity);
+    rt.sources_ = std::make_unique<Sources>(*previous.sources_);
+    rt.sources_->scene = &scene, rt.sources_->materials = &materials, rt.sources_->lighting = &lighting;
+    rt.maps_ = previous.maps_;
+    rt.names_ = previous.names_;
+    const float far = 2 * std::max(1e-6f, length(scene.bounds().diagonal()));
+    // Which baked sides to bake again, then bake them (in parallel) and compare.
+    std::vector<std::pair<uint32_t, uint32_t>> redo;  // (object, 2 * triangle + side)
+    for (size_t id = 0; id < previous.state_.size(); ++id) {
+        const size_t n = 2 * previous.maps_[id].level.size();
+        rt.state_.push_back(std::make_unique<std::atomic<uint8_t>[]>(n));
+        const TriangleMesh& m = scene.objects[id].coarse;
+        const bool moved = changes.objects[id].kind != ObjectMotion::Kind::Static;
+        for (size_t s = 0; s < n; ++s) {
+            const uint8_t was = previous.state_[id][s].load(std::memory_order_relaxed) == 2 ? 2 : 0;
+            rt.state_.back()[s].store(was, std::memory_order_relaxed);
+            if (was != 2) continue;
+            const size_t t = s / 2;
+            bool again = changes.lights || moved || changes.materials[m.face_materials[t]];
+            if (!again && changes.moving()) {
+                const Vec3 &a = m.positions[m.indices[3 * t]], &b = m.positions[m.indices[3 * t + 1]], &c = m.positions[m.indices[3 * t + 2]];
+                const Vec3 ng = normalize(cross(b - a, c - a)) * (s % 2 == 0 ? 1.0f : -1.0f);
+                for (size_t o = 0; o < changes.objects.size() && !again; ++o)
+                    if (o != id && changes.objects[o].kind != ObjectMotion::Kind::Static)
+                        for (const Light& l : scene.lights) again = again || may_shadow(l, a, b, c, ng, changes.objects[o].swept, far);
+            }
+            if (again) redo.emplace_back(static_cast<uint32_t>(id), static_cast<uint32_t>(s));
+        }
+    }
+    for (auto [id, s] : redo) rt.state_[id][s].store(0, std::memory_order_relaxed);
+    std::vector<LightChange> found(redo.size());
+    parallel_ranges(size_t{0}, redo.size(), size_t{16}, [&](size_t lo, size_t hi) {
+        Counters& counters = stats.local();
+        for (size_t i = lo; i < hi; ++i) {
+            const auto [id, s] = redo[i];
+            const uint32_t t = s / 2;
+            const bool front = s % 2 == 0;
+            rt.ensure_baked(id, t, front, counters);
+            const RadiosityMap &now = rt.maps_[id], &was = previous.maps_[id];
+            const std::vector<Color>&vn = front ? now.front : now.back, &vw = front ? was.front : was.back;
+            const uint32_t count = static_cast<uint32_t>((now.level[t] + 1) * (now.level[t] + 2) / 2);
+            float delta = 0;
+            for (uint32_t k = now.offset[t]; k < now.offset[t] + count; ++k)
+                delta = std::max({delta, std::abs(vn[k].x - vw[k].x), std::abs(vn[k].y - vw[k].y), std::abs(vn[k].z - vw[k].z)});
+            if (delta <= 0) continue;
+            const TriangleMesh& m = scene.objects[id].coarse;
+            Bounds b;
+            for (int v = 0; v < 3; ++v) b.extend(m.positions[m.indices[3 * t + static_cast<uint32_t>(v)]]);
+            found[i] = {b, delta, id, t};
+        }
+    });
+    for (const LightChange& c : found)
+        if (c.delta > 0) changed.push_back(c);
+    stats.set("radiosity_sides_rebaked", static_cast<double>(redo.size()));
+    stats.set("radiosity_sides_changed", static_cast<double>(changed.size()));
+    return rt;
+}
+
+}  // namespace bounce

@@ -1,0 +1,91 @@
+#include "bounce/scene/changes.h"
+
+namespace bounce {
+
+bool SceneChanges::moving() const {
+    for (const ObjectMotion& m : objects)
+        if (m.kind != ObjectMotion::Kind::Static) return true;
+    return false;
+}
+
+namespace {
+
+bool same_positions(const TriangleMesh& a, const TriangleMesh& b) { return a.positions == b.positions; }
+
+bool same_topology(const TriangleMesh& a, const TriangleMesh& b) {
+    return a.indices == b.indices && a.positions.size() == b.positions.size();
+}
+
+bool same_fur(const Object& a, const Object& b) {
+    if (!a.fur || !b.fur) return !a.fur && !b.fur;
+    return a.fur->vertices == b.fur->vertices;
+}
+
+/// Object bounds including its fine tessellation and fur.
+Bounds object_bounds(const Object& o) {
+    Bounds b = o.coarse.bounds();
+    if (o.has_fine()) b.extend(o.fine.bounds());
+    if (o.fur)
+        for (size_t i = 0; i + 2 < o.fur->vertices.size(); i += 4) b.extend(Vec3{o.fur->vertices[i], o.fur->vertices[i + 1], o.fur->vertices[i + 2]});
+    return b;
+}
+
+ObjectMotion motion_of(const Object& before, const Object& now) {
+    ObjectMotion m;
+    if (same_positions(before.coarse, now.coarse) && same_fur(before, now)) return m;
+    m.swept = object_bounds(before);
+    m.swept.extend(object_bounds(now));
+    // Rigid: the same shape under another placement (same vertices once both are undone).
+    m.kind = ObjectMotion::Kind::Deforming;
+    if (!now.deforms && !before.deforms && !(before.placement == now.placement)) {
+        const Transform delta = now.placement * before.placement.inverse();
+        bool rigid = true;
+        const float tolerance = 1e-4f * std::max(1e-6f, length(m.swept.diagonal()));
+        for (size_t i = 0; i < now.coarse.positions.size() && rigid; i += std::max<size_t>(1, now.coarse.positions.size() / 64))
+            rigid = length(delta.point(before.coarse.positions[i]) - now.coarse.positions[i]) <= tolerance;
+        if (rigid) m.kind = ObjectMotion::Kind::Rigid, m.delta = delta;
+    }
+    return m;
+}
+
+bool json_differs(const nlohmann::json& a, const nlohmann::json& b, const char* key) {
+    return a.value(key, nlohmann::json()) != b.value(key, nlohmann::json());
+}
+
+}  // namespace
+
+SceneChanges scene_changes(const Scene& before, const Scene& now) {
+    SceneChanges c;
+    c.comparable = before.objects.size() == now.objects.size() && before.materials.size() == now.materials.size();
+    for (size_t i = 0; c.comparable && i < now.objects.size(); ++i)
+        c.comparable = before.objects[i].name == now.objects[i].name && same_topology(before.objects[i].coarse, now.objects[i].coarse);
+    if (!c.comparable) return c;
+    c.visible_geometry_same = true;
+    for (size_t i = 0; i < now.objects.size(); ++i) {
+        const Object &a = before.objects[i], &b = now.objects[i];
+        c.objects.push_back(motion_of(a, b));
+        c.visible_geometry_same = c.visible_geometry_same && c.objects.back().kind == ObjectMotion::Kind::Static &&
+                                  same_positions(a.fine, b.fine) && a.fine.indices == b.fine.indices;
+    }
+    // Lights and the sky: their JSON and the files they read (a sky texture).
+    c.lights = json_differs(before.description, now.description, "lights") || before.inputs_hash("lights") != now.inputs_hash("lights");
+    for (const Light& l : now.lights) c.sky |= l.type == LightType::Sky && c.lights;
+    c.materials.assign(now.materials.size(), 0);
+    const nlohmann::json mb = before.description.value("materials", nlohmann::json::object()),
+                         mn = now.description.value("materials", nlohmann::json::object());
+    for (size_t i = 0; i < now.materials.size(); ++i) {
+        const Material &a = before.materials[i], &b = now.materials[i];
+        const bool albedo = a.name != b.name || !(a.color == b.color) || a.color_texture != b.color_texture;
+        c.materials[i] = albedo || json_differs(mb, mn, b.name.c_str());
+        // An emissive material that changed is a light that changed.
+        if (!(a.emission == b.emission)) c.lights = true;
+    }
+    if (before.inputs_hash("materials") != now.inputs_hash("materials")) c.lights = true;  // a texture file changed
+    // An emissive object that moves is a light that moves.
+    for (size_t i = 0; i < now.objects.size(); ++i)
+        if (c.objects[i].kind != ObjectMotion::Kind::Static)
+            for (uint32_t m : now.objects[i].coarse.face_materials) c.lights = c.lights || now.materials[m].is_emissive();
+    return c;
+}
+
+}  // namespace bounce
