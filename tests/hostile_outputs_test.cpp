@@ -104,7 +104,8 @@ TEST(HostileOutputs, FlagsThatCannotWorkAreRefusedBeforeTheRender) {
     test::expect_refused(quick(scene, out) + " --gi cache --cache-out /proc/c.bic", {"/proc/c.bic", "cannot create a file"});
     test::expect_refused(quick(scene, out) + " --show bogus", {"--show bogus", "no layer"});
     test::expect_refused(quick(scene, out) + " --radiosity-textures " + d.file("base.bic"), {"/render/radiosity_textures", "not a folder"});
-    test::expect_refused(quick(scene, d.file("o.####.exr")) + " --gi cache --frames 1-2", {"--cache-out", "a sequence needs it"});
+    test::expect_refused(quick(scene, d.file("o.####.exr")) + " --gi cache --frames 1-2 --cache-out " + d.file("c.bic"),
+                         {"--cache-out", "#### frame pattern"});
     EXPECT_FALSE(fs::exists(out));
     // --show of a one-channel layer writes its PNG (it used to end in "internal error").
     for (const char* layer : {"ao", "depth", "refined", "N"})

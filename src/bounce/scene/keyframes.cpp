@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "bounce/core/math.h"
 #include "bounce/scene/params.h"
@@ -80,7 +81,7 @@ std::array<double, 4> to_quaternion(const std::vector<double>& r, const std::str
     if (r.size() != 4) ctx.fail(ptr, "a keyed rotate holds [degrees, axis_x, axis_y, axis_z]");
     const double len = std::sqrt(r[1] * r[1] + r[2] * r[2] + r[3] * r[3]);
     if (!(len > 0)) ctx.fail(ptr, "rotation axis is zero");
-    const double half = 0.5 * r[0] * kPi / 180;
+    const double half = 0.5 * r[0] * std::numbers::pi / 180;
     const double s = std::sin(half) / len;
     return {std::cos(half), r[1] * s, r[2] * s, r[3] * s};
 }
@@ -120,14 +121,15 @@ json sample_rotation(const Track& tr, double t, const std::string& ptr, const Js
     for (size_t k = 0; k < tr.v.size(); ++k) {
         auto qk = to_quaternion(tr.v[k], fmt::format("{}/keys/{}/1", ptr, k), ctx);
         std::vector<double> v(qk.begin(), qk.end());
-        if (!q.empty() && v[0] * q.back()[0] + v[1] * q.back()[1] + v[2] * q.back()[2] + v[3] * q.back()[3] < 0)
+        // Half a turn apart both ways are as short: keep the direction the angles were written in.
+        if (!q.empty() && v[0] * q.back()[0] + v[1] * q.back()[1] + v[2] * q.back()[2] + v[3] * q.back()[3] < -1e-9)
             for (double& x : v) x = -x;
         q.push_back(v);
     }
     std::vector<double> r = sample(tr, q, t);
     const double len = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3]);
     for (double& x : r) x /= len;
-    const double angle = 2 * std::acos(std::clamp(r[0], -1.0, 1.0)) * 180 / kPi;
+    const double angle = 2 * std::acos(std::clamp(r[0], -1.0, 1.0)) * 180 / std::numbers::pi;
     const double s = std::sqrt(std::max(0.0, 1 - r[0] * r[0]));
     if (s < 1e-12) return json::array({0.0, 0.0, 1.0, 0.0});
     return json::array({angle, r[1] / s, r[2] / s, r[3] / s});

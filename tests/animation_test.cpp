@@ -1,0 +1,239 @@
+// Issue 26: time in scenes (keyed values, the shot), frames of a shot as a loop of plans, and
+// records across frames — kept exactly when nothing they see moved, travelling with their object.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "bounce/cache/temporal.h"
+#include "bounce/core/error.h"
+#include "bounce/render/shot.h"
+#include "bounce/scene/changes.h"
+#include "test_util.h"
+
+namespace bounce {
+namespace {
+
+using nlohmann::json;
+
+/// A floor, a wall and a sphere under a point light and a dim sky, with a shot of `frames`.
+json shot_scene(int frames = 3) {
+    json j = test::base_scene();
+    j["animation"] = {{"fps", 24}, {"frames", {1, frames}}};
+    j["camera"] = {{"position", {0, 3, 8}}, {"look_at", {0, 0.5, 0}}, {"fov", 40}, {"resolution", {24, 16}}};
+    j["render"] = {{"spp", 1}, {"gi", "cache"}, {"rays", 32}, {"light_samples", 1}, {"threads", 1}};
+    j["objects"] = {{{"name", "floor"}, {"type", "quad"}, {"vertices", {{-6, 0, -6}, {-6, 0, 6}, {6, 0, 6}, {6, 0, -6}}}},
+                    {{"name", "wall"}, {"type", "quad"}, {"vertices", {{-6, 0, -3}, {6, 0, -3}, {6, 4, -3}, {-6, 4, -3}}}},
+                    {{"name", "ball"}, {"type", "sphere"}, {"radius", 0.5}, {"subdivisions", 2}, {"fine_subdivisions", 0}}};
+    j["lights"] = {{{"type", "point"}, {"position", {1, 5, 4}}, {"color", 30}}, {{"type", "sky"}, {"color", 0.2}}};
+    return j;
+}
+
+Scene at(const json& j, double frame) {
+    LoadOptions o;
+    o.frame = frame;
+    return load_scene_text(j.dump(), "shot.json", {}, o);
+}
+
+TEST(Keyframes, LinearSmoothAndStepValuesAtFrames) {
+    json j = shot_scene(48);
+    j["camera"]["fov"] = {{"keys", {{1, 30}, {11, 50}}}};
+    j["lights"][0]["position"] = {{"keys", {{1, {0, 5, 0}}, {5, {4, 5, 0}}, {9, {4, 5, 8}}}}, {"interpolation", "smooth"}};
+    j["lights"][0]["color"] = {{"keys", {{1, 10}, {20, 40}}}, {"interpolation", "step"}};
+    EXPECT_FLOAT_EQ(at(j, 1).camera.fov, 30);
+    EXPECT_FLOAT_EQ(at(j, 6).camera.fov, 40);
+    EXPECT_FLOAT_EQ(at(j, 30).camera.fov, 50);  // held after the last key
+    // Smooth passes through its keys; between them it is C1 (here: symmetric about frame 5).
+    EXPECT_FLOAT_EQ(at(j, 5).lights[0].position.x, 4);
+    EXPECT_NEAR(at(j, 3).lights[0].position.x, 2.25, 1e-5);  // Hermite with Catmull-Rom tangents 0.5 and 0.5
+    EXPECT_FLOAT_EQ(at(j, 19.9).lights[0].color.x, 10);
+    EXPECT_FLOAT_EQ(at(j, 20).lights[0].color.x, 40);
+}
+
+TEST(Keyframes, RotationsAreInterpolatedAsQuaternions) {
+    json j = shot_scene(48);
+    j["objects"][2]["center"] = {1, 0, 0};
+    j["objects"][2]["transform"] = {{"rotate", {{"keys", {{1, {0, 0, 0, 1}}, {3, {180, 0, 0, 1}}}}}}};
+    // Half way, a quarter turn about z: the centre (1, 0, 0) is at (0, 1, 0).
+    const Scene s = at(j, 2);
+    const Bounds b = s.objects[2].coarse.bounds();
+    const Vec3 c = (b.lo + b.hi) * 0.5f;
+    EXPECT_NEAR(c.x, 0, 1e-4);
+    EXPECT_NEAR(c.y, 1, 1e-4);
+    EXPECT_TRUE(s.objects[2].moves);
+    EXPECT_FALSE(s.objects[0].moves);
+}
+
+TEST(Keyframes, BadKeysAndFramesAreRefusedWithThePointer) {
+    const auto refused = [](json j, const std::string& where, const std::string& says, double frame = 1) {
+        try {
+            at(j, frame);
+            ADD_FAILURE() << where;
+        } catch (const InputError& e) {
+            EXPECT_EQ(e.place(), where.empty() ? "/" : where) << e.what();
+            EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << e.what();
+        }
+    };
+    json j = shot_scene();
+    j["camera"]["fov"] = {{"keys", {{5, 30}, {2, 50}}}};
+    refused(j, "/camera/fov/keys/1/0", "out of order");
+    j["camera"]["fov"] = {{"keys", {{2, 30}, {2, 50}}}};
+    refused(j, "/camera/fov/keys/1/0", "keyed twice");
+    j["camera"]["fov"] = {{"keys", {{1, 30}, {2, 1e39}}}};
+    refused(j, "/camera/fov/keys/1/1", "not a finite value");
+    j = shot_scene();
+    j["render"]["rays"] = {{"keys", {{1, 30}, {2, 50}}}};
+    refused(j, "/render/rays", "cannot be animated");
+    j = shot_scene();
+    j["lights"][0]["type"] = {{"keys", {{1, 1}}}};
+    refused(j, "/lights/0/type", "cannot be animated");
+    j = shot_scene();
+    j["camera"]["fov"] = {{"keys", {{1, 30}, {3, 200}}}};  // valid keys, a value out of range at frame 3
+    refused(j, "/camera/fov", "out of range", 3);
+    refused(shot_scene(), "/animation/frames", "outside the shot", 9);
+    json keyed_without_shot = shot_scene();
+    keyed_without_shot.erase("animation");
+    keyed_without_shot["camera"]["fov"] = {{"keys", {{1, 30}}}};
+    refused(keyed_without_shot, "", "no \"animation\" block");
+}
+
+/// Frames of the shot rendered in order through a Shot; each frame's result and scene kept.
+struct Frames {
+    Shot shot;
+    std::vector<RenderResult> results;
+    std::vector<std::shared_ptr<const Scene>> scenes;
+    void render(const json& j, int frame) {
+        auto scene = std::make_shared<const Scene>(at(j, frame));
+        Stats stats;
+        RenderRequest req;
+        req.frame = frame;
+        results.push_back(shot.render(scene, req, stats, nullptr));
+        scenes.push_back(scene);
+        // The next frame starts from copies of this one's (the result keeps its own).
+        RenderResult copy;
+        copy.cache = std::make_unique<IrradianceCache>(scene->bounds(), scene->render.cache, false);
+        copy.cache->set_luminance_floor(results.back().cache->luminance_floor());
+        for (size_t i = 0; i < results.back().cache->size(); ++i) copy.cache->insert_loaded(results.back().cache->record(i));
+        for (size_t i = 0; i < results.back().cache->fragment_record_count(); ++i)
+            copy.cache->insert_fragment_record(results.back().cache->fragment_record_at(i));
+        copy.accel = results.back().accel, copy.radiosity = results.back().radiosity, copy.waiting = results.back().waiting;
+        copy.deep = results.back().deep;
+        shot.keep(copy, scene);
+    }
+};
+
+TEST(TemporalCache, AKeptRecordEqualsAFreshGatherAtItsPlaceBitForBit) {
+    // The ball moves behind the wall, out of sight of everything in front of it.
+    json j = shot_scene();
+    j["objects"][2]["transform"] = {{"translate", {{"keys", {{1, {-2, 0.5, -5}}, {3, {2, 0.5, -5}}}}}}};
+    Frames f;
+    f.render(j, 1);
+    f.render(j, 2);
+    const RenderResult& r = f.results[1];
+    EXPECT_GT(r.temporal.kept, 20u);
+    const Scene& scene = *f.scenes[1];
+    SceneAccel accel(scene);
+    Materials materials(scene);
+    DirectLighting lighting(scene, accel);
+    RadiosityTextures rt = RadiosityTextures::lazy(scene, materials, lighting, scene.render.radiosity);
+    Gatherer gatherer(scene, accel, materials, lighting, &rt, gather_settings(scene));
+    Counters counters;
+    size_t compared = 0;
+    for (size_t i = 0; i < r.cache->size(); ++i) {
+        const Record& k = r.cache->record(i);
+        if (k.gathered != 1 || k.frame != 1) continue;  // kept from frame 1 untouched
+        const GatherResult g = gatherer.gather(k.origin, k.n, record_stream(k, scene.render.visibility.seed, scene.camera.width),
+                                               counters, k.near);
+        // What the gather measured, bit for bit (the record's radius and gradient scaling are
+        // the cache's, from the footprint of this frame's camera).
+        ASSERT_EQ(g.irradiance, k.E) << "record " << i;
+        ASSERT_EQ(g.ao, k.ao) << "record " << i;
+        ASSERT_EQ(g.bent_normal, k.bent) << "record " << i;
+        ASSERT_EQ(g.light_dir, k.dir) << "record " << i;
+        ASSERT_EQ(g.min_distance, k.dmin) << "record " << i;
+        ASSERT_EQ(g.grad_rot, k.grad_r) << "record " << i;
+        ++compared;
+    }
+    EXPECT_EQ(compared, r.temporal.kept);
+}
+
+TEST(TemporalCache, RecordsOnAMovingObjectTravelWithItAndTheRestUpdateOnlyWhatTheySee) {
+    json j = shot_scene();
+    j["objects"][2]["transform"] = {{"translate", {{"keys", {{1, {-1, 0.5, 0}}, {3, {1, 0.5, 0}}}}}}};
+    Frames f;
+    f.render(j, 1);
+    f.render(j, 2);
+    const RenderResult& second = f.results[1];
+    EXPECT_GT(second.temporal.moved, 0u);
+    EXPECT_GT(second.temporal.kept + second.temporal.light, 0u);
+    // Every record anchored to the ball sits on the ball at frame 2 (radius 0.5 about (0, 0.5, 0)).
+    size_t on_ball = 0;
+    for (size_t i = 0; i < second.cache->size(); ++i) {
+        const Record& rec = second.cache->record(i);
+        if (rec.anchor != 2) continue;
+        EXPECT_NEAR(length(rec.p - Vec3(0, 0.5f, 0)), 0.5f, 0.02f);
+        ++on_ball;
+    }
+    EXPECT_GT(on_ball, 0u);
+    EXPECT_EQ(second.shading_misses, 0u);
+    // An updated record (only its rays through the ball's swept bounds traced again) is what a
+    // fresh gather with its stream finds, bit for bit.
+    const Scene& scene = *f.scenes[1];
+    SceneAccel accel(scene);
+    Materials materials(scene);
+    DirectLighting lighting(scene, accel);
+    RadiosityTextures rt = RadiosityTextures::lazy(scene, materials, lighting, scene.render.radiosity);
+    Gatherer gatherer(scene, accel, materials, lighting, &rt, gather_settings(scene));
+    Counters counters;
+    size_t updated = 0;
+    for (size_t i = 0; i < second.cache->size(); ++i) {
+        const Record& k = second.cache->record(i);
+        if (k.gathered != 2 || k.frame != 1 || k.anchor != kNoAnchor) continue;
+        const GatherResult g = gatherer.gather(k.origin, k.n, record_stream(k, scene.render.visibility.seed, scene.camera.width),
+                                               counters, k.near);
+        ASSERT_EQ(g.irradiance, k.E) << "record " << i;
+        ++updated;
+    }
+    EXPECT_GT(updated, 0u);
+}
+
+TEST(Sequences, AFrameThatFailsStopsTheShotThereAndResumeSkipsWhatIsDone) {
+    test::TempDir d;
+    json j = shot_scene(4);
+    j["camera"]["fov"] = {{"keys", {{1, 40}, {3, 60}, {4, 300}}}, {"interpolation", "step"}};  // frame 4: out of range
+    d.write("s.json", j.dump());
+    const std::string args = "render " + d.file("s.json") + " -q -o " + d.file("f.####.exr") + " --cache-out " + d.file("f.####.bic") +
+                             " --frames 1-4";
+    std::string err;
+    EXPECT_EQ(test::run_bounce(args, &err), 2);
+    EXPECT_NE(err.find("/camera/fov"), std::string::npos) << err;
+    for (const char* f : {"f.0001.exr", "f.0002.exr", "f.0003.exr", "f.0001.bic", "f.0003.bic"})
+        EXPECT_TRUE(std::filesystem::exists(d.file(f))) << f;
+    EXPECT_FALSE(std::filesystem::exists(d.file("f.0004.exr")));
+    // --resume renders only the missing frames (here: 3, starting from frame 2's cache file).
+    j["camera"]["fov"] = {{"keys", {{1, 40}, {3, 60}}}, {"interpolation", "step"}};
+    d.write("s.json", j.dump());
+    std::filesystem::remove(d.file("f.0003.exr"));
+    const std::string before = test::bytes_of(d.file("f.0001.exr"));
+    EXPECT_EQ(test::run_bounce(args + " --resume"), 0);
+    EXPECT_EQ(test::bytes_of(d.file("f.0001.exr")), before);
+    EXPECT_TRUE(std::filesystem::exists(d.file("f.0003.exr")));
+    EXPECT_TRUE(std::filesystem::exists(d.file("f.0004.exr")));
+}
+
+TEST(TemporalCache, SceneChangesTellRigidFromStaticAndSeeEmissiveObjectsAsLights) {
+    json j = shot_scene();
+    j["objects"][2]["transform"] = {{"translate", {{"keys", {{1, {0, 0.5, 0}}, {3, {2, 0.5, 0}}}}}}};
+    const SceneChanges c = scene_changes(at(j, 1), at(j, 2));
+    ASSERT_TRUE(c.comparable);
+    EXPECT_EQ(c.objects[0].kind, ObjectMotion::Kind::Static);
+    EXPECT_EQ(c.objects[2].kind, ObjectMotion::Kind::Rigid);
+    EXPECT_NEAR(c.objects[2].delta.point(Vec3(0)).x, 1, 1e-5);
+    EXPECT_FALSE(c.lights);
+    j["materials"] = {{"glow", {{"emission", 3}}}};
+    j["objects"][2]["material"] = "glow";
+    EXPECT_TRUE(scene_changes(at(j, 1), at(j, 2)).lights);
+}
+
+}  // namespace
+}  // namespace bounce
