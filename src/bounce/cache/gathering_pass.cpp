@@ -91,7 +91,9 @@ void Gathering::judge_tile(const SubPass& sp, const Tile& t) {
             auto frags = deep_.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Site site = record_site(scene_, frags[k], cache_.settings());
-                if (!cache_.misses(site.p, site.n, per_tile_ ? std::span<const Record>(w.made) : std::span<const Record>())) continue;
+                if (!cache_.misses(site.p, site.n, per_tile_ ? std::span<const Record>(w.made) : std::span<const Record>(),
+                                   o_.own_weight, o_.min_weight))
+                    continue;
                 if (o_.stale) {
                     // An earlier frame's record that would cover it is redone rather than a new one made.
                     covering.clear();
@@ -161,7 +163,7 @@ void Gathering::subpass(const SubPass& sp) {
     parallel_for_each_index(0, static_cast<int>(deferred.size()), [&](int i) {
         const Candidate& c = deferred[static_cast<size_t>(i)];
         const Site site = record_site(scene_, deep_.pixel(c.wx, c.wy)[c.k], cache_.settings());
-        still[static_cast<size_t>(i)] = cache_.misses(site.p, site.n);
+        still[static_cast<size_t>(i)] = cache_.misses(site.p, site.n, {}, o_.own_weight, o_.min_weight);
     });
     std::vector<Record> late(deferred.size());
     parallel_for_each_index(0, static_cast<int>(deferred.size()), [&](int i) {

@@ -7,7 +7,7 @@ namespace bounce {
 IrradianceCache::IrradianceCache(const Bounds& scene_bounds, CacheSettings settings, bool ao_only)
     : settings_(std::move(settings)), shading_settings_(settings_.for_shading()), ao_only_(ao_only), octree_(scene_bounds) {}
 
-bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Record> extra) const {
+bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Record> extra, float own, float min_weight) const {
     // A record at p itself (weight 1 there, 0.99 for float rounding) covers p whatever
     // min_weight says: above 1 no single record could, and a fragment that made a record would
     // miss again on every re-render from the cache.
@@ -18,7 +18,7 @@ bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Recor
     };
     octree_.visit(p, [&](uint32_t id) { add(records_[id]); });
     for (const Record& r : extra) add(r);
-    return sum < settings_.min_weight && top < 0.99f;
+    return sum < (min_weight > 0 ? min_weight : settings_.min_weight) && top < own;
 }
 
 Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading, const Vec3* at_p, const Vec3* at_n) const {

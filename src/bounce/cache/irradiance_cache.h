@@ -52,7 +52,9 @@ public:
     }
     /// True when a lookup at (p, n) would miss: the weights of this cache's records and of
     /// `extra` (a tile's private records) sum below min_weight, and none of them sits at p.
-    bool misses(const Vec3& p, const Vec3& n, std::span<const Record> extra = {}) const;
+    /// `own` (default 0.99): a record whose weight reaches it sits at p and covers it alone;
+    /// `min_weight` (default: the settings'): the sum below which a lookup misses.
+    bool misses(const Vec3& p, const Vec3& n, std::span<const Record> extra = {}, float own = 0.99f, float min_weight = -1) const;
 
     /// Turns a gather at (p, n) into a record: radius from the qualifying minimum distance
     /// (TL04) or the harmonic mean (Ward) clamped to [min_spacing, max_spacing] pixels of

@@ -1,6 +1,7 @@
 #include "bounce/cache/passes.h"
 
 #include "bounce/cache/sites.h"
+#include "bounce/cache/temporal.h"
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -68,6 +69,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
     const bool tilt_signal = cs.displaced_records == RecordSurface::Undisplaced && cs.refine_tilt > 0;
     const float tilt_cos = std::cos(cs.refine_tilt * kPi / 180);
     tbb::enumerable_thread_specific<std::vector<Record>> made;
+    tbb::enumerable_thread_specific<size_t> reused(0);
     {
         // Lookups only: nobody inserts until every fragment is judged, so the decision sees the
         // finished cache whatever the thread count.
@@ -86,7 +88,16 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                     const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cs));
                     if (in.weight > 0 && (threshold <= 0 || in.spread <= threshold)) continue;
                 }
-                // An earlier frame's record of this very fragment is updated rather than gathered anew.
+                // An earlier frame's record of this very fragment is updated rather than gathered
+                // anew; one of a neighbouring point on the same surface is taken as it is.
+                if (options.near)
+                    if (const Record* n = options.near->nearest(f.p, f.n, f.footprint)) {
+                        Record r = *n;
+                        r.key = key, r.p = f.p;  // found by this fragment; gathered where it was
+                        made.local().push_back(r);
+                        ++reused.local();
+                        continue;
+                    }
                 if (options.stale)
                     if (auto it = options.stale->find(key); it != options.stale->end() && it->second.p == f.p) {
                         made.local().push_back(options.update(it->second, stats.local()));
@@ -115,9 +126,12 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
     std::sort(records.begin(), records.end(), [](const Record& a, const Record& b) { return a.key < b.key; });
     auto lock = lock_cache<std::unique_lock<std::shared_mutex>>(cache, stats.local());
     for (const Record& r : records) cache.insert_fragment_record(r);
-    stats.set("refined_fragments", static_cast<double>(records.size()));
+    size_t taken = 0;
+    for (size_t n : reused) taken += n;
+    stats.set("refined_fragments", static_cast<double>(records.size() - taken));
+    stats.set("refined_from_neighbours", static_cast<double>(taken));
     stats.set("refine_rays_per_gather", static_cast<double>(refiner.grid().rays()));
-    return records.size();
+    return records.size() - taken;
 }
 
 InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,

@@ -35,6 +35,7 @@ std::vector<SubPass> subpass_schedule(int first_step);
 using SubPassCallback = std::function<void(const SubPass&, size_t index, size_t count)>;
 
 class StaleRecords;
+class NearFragmentRecords;
 
 /// What a gathering pass does besides making records where lookups miss.
 struct GatheringOptions {
@@ -48,6 +49,11 @@ struct GatheringOptions {
     /// instead of a new record being made.
     StaleRecords* stale = nullptr;
     bool keep_hits = false;  ///< new records keep their gather's hits (re-shading in later frames)
+    /// A record whose weight at a point reaches this covers it alone (IrradianceCache::misses).
+    /// Frames of a shot lower it: fragments move a little each frame, and a point next to a kept
+    /// record is as well served as the record's own.
+    float own_weight = 0.99f;
+    float min_weight = -1;  ///< > 0: the weight sum a point needs (IrradianceCache::misses), else the settings'
 };
 
 /// Gathering pass: creates records until every fragment of `deep` has a covered lookup.
@@ -79,6 +85,8 @@ struct RefinementOptions {
     /// fragment is at exactly the same point) rather than gather anew, and how.
     const std::unordered_map<uint64_t, Record>* stale = nullptr;
     std::function<Record(const Record&, Counters&)> update;
+    /// ... and valid ones near a fragment, taken instead of a gather (temporal.h).
+    const NearFragmentRecords* near = nullptr;
 };
 
 size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,

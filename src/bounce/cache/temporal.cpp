@@ -52,17 +52,20 @@ void move_rigidly(Record& r, const Transform& delta) {
     if (r.radius_long > 0) r.axis = normalize(delta.vector(r.axis));
 }
 
-/// The record's reach for this camera: its unclamped radius within the pixel bounds of the
-/// footprint it has now (a kept record keeps the screen-space spacing a fresh one would get).
+/// The record's reach for this camera. A moving camera would otherwise leave gaps or pile up
+/// records each frame, so the world radius stays (it is what the record's gather measured)
+/// unless it falls below the minimum spacing in this view's pixels, or grows past twice the
+/// maximum (a camera that came much closer): then it is clamped back to that bound.
 void respace(Record& r, const CameraRays& camera, const CacheSettings& s) {
     const Vec3 d = r.p - camera.origin();
     const float t = length(d);
     if (!(t > 0)) return;
     const float fp = camera.footprint(d / t, t, r.n);
     if (!(fp > 0) || !std::isfinite(fp)) return;
-    const float before = r.radius;
+    const float before = r.radius, hi = s.max_spacing * fp;
     r.footprint = fp;
-    r.radius = std::clamp(r.raw_radius, s.min_spacing * fp, s.max_spacing * fp);
+    r.radius = std::max(r.radius, s.min_spacing * fp);
+    if (r.radius > 2 * hi) r.radius = std::max(hi, s.min_spacing * fp);
     if (r.radius_long > 0) r.radius_long = std::max(r.radius, r.radius_long * r.radius / before);
 }
 
@@ -222,6 +225,25 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
         out.stale.push_back(r), out.why.push_back(StaleReason::View);
     }
     return out;
+}
+
+NearFragmentRecords::NearFragmentRecords(std::vector<Record> records, const Bounds& bounds)
+    : records_(std::move(records)), index_(bounds) {
+    for (size_t i = 0; i < records_.size(); ++i)
+        index_.insert(static_cast<uint32_t>(i), records_[i].p, 2 * kNearFragment * records_[i].footprint);
+}
+
+const Record* NearFragmentRecords::nearest(const Vec3& p, const Vec3& n, float footprint) const {
+    const Record* best = nullptr;
+    float best_d = kNearFragment * footprint;
+    const float cos_max = std::cos(10 * kPi / 180);
+    index_.visit(p, [&](uint32_t id) {
+        const Record& r = records_[id];
+        const float d = length(r.p - p);
+        if (dot(r.n, n) < cos_max || d > best_d || (best && d == best_d && r.key > best->key)) return;
+        best = &r, best_d = d;
+    });
+    return best;
 }
 
 StaleRecords::StaleRecords(std::vector<Record> records, std::vector<StaleReason> why, const Bounds& bounds, const CacheSettings& s,

@@ -60,6 +60,23 @@ float solid_angle_bound(const Vec3& o, const Bounds& box);
 /// frame `full_width` pixels wide.
 RandomStream record_stream(const Record& r, uint64_t seed, int full_width);
 
+/// Earlier frames' per-fragment records by position. A moving camera never puts a fragment on
+/// exactly the point of one before, so a fragment refinement wants a gather for takes the
+/// nearest valid one on its surface instead: within kNearFragment of its own pixel footprint (a pixel)
+/// and 10 degrees of its normal.
+class NearFragmentRecords {
+public:
+    static constexpr float kNearFragment = 1.0f;
+    NearFragmentRecords(std::vector<Record> records, const Bounds& bounds);
+    /// The nearest record to p (ties: the smaller key), or nullptr.
+    const Record* nearest(const Vec3& p, const Vec3& n, float footprint) const;
+    size_t size() const { return records_.size(); }
+
+private:
+    std::vector<Record> records_;
+    RecordOctree index_;
+};
+
 /// Stale records waiting for a new gather. The gathering pass asks which of them would cover a
 /// point its lookup misses; those are redone (by `redo`) rather than a new record made.
 class StaleRecords {

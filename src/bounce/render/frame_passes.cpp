@@ -16,6 +16,14 @@ namespace bounce {
 
 namespace {
 
+/// Frames of a shot: a point where a kept record weighs this much is covered by it alone (its
+/// centre moved a little in the image since the frame that made it). Measured on shot A.
+constexpr float kTemporalOwnWeight = 0.9f;
+/// ... and the weight sum that covers a point: min_weight above 1 makes records average their
+/// noise, but a moving camera samples the points between last frame's, where the kept records'
+/// sum dips below it; 1 asks that the kept ones cover a point as one record would.
+constexpr float kTemporalMinWeight = 1.0f;
+
 /// The fragments of every `step`-th window pixel in x and y; the other pixels empty.
 DeepBuffer lattice_of(const DeepBuffer& deep, int step) {
     DeepBuffer out = deep;
@@ -281,6 +289,10 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
     GatheringOptions options;
     options.frame = plan.frame;
     options.keep_hits = plan.keep_hits;
+    if (plan.cache == CacheStart::Temporal) {
+        options.own_weight = kTemporalOwnWeight;
+        options.min_weight = std::min(scene.render.cache.min_weight, kTemporalMinWeight);
+    }
     if (plan.preview && preview) options.after_subpass = preview_after_subpass(ctx, deep.shaded, cache, preview);
     std::unique_ptr<Gatherer> first;
     if (scene.render.cache.min_rays > 0 && scene.render.cache.min_rays < gs.rays) {
@@ -313,6 +325,11 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
         if (!judged.fragment_stale.empty()) {
             ro.stale = &judged.fragment_stale;
             ro.update = fragment_update_function(ctx, plan, refiner);
+        }
+        std::unique_ptr<NearFragmentRecords> near;
+        if (!judged.fragment_valid.empty()) {
+            near = std::make_unique<NearFragmentRecords>(std::move(judged.fragment_valid), scene.bounds());
+            ro.near = near.get();
         }
         out.fragment_records_new = refinement_pass(scene, deep.shaded, refiner, cache, ctx.stats, ctx.progress, ro);
         if (out.fragment_records_new > 0 && options.after_subpass) {
