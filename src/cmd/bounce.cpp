@@ -82,6 +82,9 @@ int main(int argc, char** argv) {
     compare->add_option("--layer", ca.layer, "only this layer (beauty, direct, indirect, ao, ..., or beauty_ref_direct: the beauty with the reference's direct light)");
     compare->add_option("--diff", ca.diff, "false-colour difference PNG (default: TEST.diff.png)");
     compare->add_flag("--json", ca.json, "print JSON");
+    compare->add_flag("--sequence", ca.sequence, "TEST and REFERENCE are #### frame patterns: per-frame error, flicker, popping");
+    compare->add_option("--frames", ca.frames, "with --sequence: FIRST-LAST");
+    compare->add_option("--strip", ca.strip, "with --sequence: a PNG strip of six frames of the test (and their record dots)");
 
     CacheArgs ka;
     CLI::App* cache = app.add_subcommand("cache", "inspect, merge, filter and export irradiance cache files");

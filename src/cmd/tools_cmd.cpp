@@ -18,6 +18,8 @@
 #include "bounce/core/files.h"
 #include "bounce/core/image.h"
 #include "bounce/core/image_compare.h"
+#include "bounce/core/sequence_compare.h"
+#include "bounce/render/frame.h"
 #include "bounce/core/memory.h"
 #include "bounce/gather/ao_bake.h"
 #include "bounce/scene/scene_load.h"
@@ -126,7 +128,38 @@ int run_bake_ao(const BakeAoArgs& a) {
 
 
 
+/// `bounce compare --sequence`: per-frame error, flicker and popping (sequence_compare.h).
+int run_compare_sequence(const CompareArgs& a) {
+    if (a.frames.empty()) throw InputError("command line", "--sequence", "give the frames: --frames FIRST-LAST");
+    const auto [first, last] = parse_frame_range(a.frames, "--frames " + a.frames);
+    for (const std::string& p : {a.test, a.reference})
+        if (p.find('#') == std::string::npos) throw InputError("command line", p, "a sequence is a #### frame pattern");
+    const std::string layer = a.layer.empty() ? "indirect" : a.layer;
+    const auto name = [&](int t) { return expand_frame_pattern(a.test, t); };
+    const auto test = [&](int t) { return read_exr(name(t)); };
+    const auto ref = [&](int t) { return read_exr(expand_frame_pattern(a.reference, t)); };
+    if (!a.strip.empty()) check_output_file(a.strip, {});
+    const SequenceError e = compare_sequences(test, ref, first, last, layer, name);
+    if (!a.strip.empty()) {
+        int w = 0, h = 0;
+        const std::vector<uint8_t> rgb = sequence_strip(test, first, last, layer, 6, w, h);
+        write_png_rgb8(a.strip, w, h, rgb);
+    }
+    nlohmann::json j = {{"layer", layer}, {"frames", e.frames}, {"rel_rmse", e.rel_rmse}, {"mean_rel_rmse", e.mean_rel_rmse},
+                        {"flicker", e.flicker}, {"popping", e.popping}};
+    if (a.json) {
+        std::printf("%s\n", j.dump(2).c_str());
+        return 0;
+    }
+    std::printf("%-8s %10s\n", "frame", "rel_rmse");
+    for (size_t i = 0; i < e.frames.size(); ++i) std::printf("%-8d %9.4f%%\n", e.frames[i], 100 * e.rel_rmse[i]);
+    std::printf("mean per-frame error %.4f%%, flicker %.4f%%, popping (99.9th percentile) %.4f%%\n", 100 * e.mean_rel_rmse,
+                100 * e.flicker, 100 * e.popping);
+    return 0;
+}
+
 int run_compare(const CompareArgs& a) {
+    if (a.sequence) return run_compare_sequence(a);
     if (!a.diff.empty()) check_output_file(a.diff, {a.test, a.reference});
     Image test = read_exr(a.test), ref = read_exr(a.reference);
     std::vector<LayerError> errors = compare_images(test, ref, a.layer, a.test, a.reference);

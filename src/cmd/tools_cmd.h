@@ -16,6 +16,9 @@ struct BakeAoArgs {
 struct CompareArgs {
     std::string test, reference, layer, diff;
     bool json = false;
+    bool sequence = false;  ///< test and reference are #### frame patterns
+    std::string frames;     ///< with sequence: FIRST-LAST
+    std::string strip;      ///< with sequence: a PNG strip of the test's frames and record dots
 };
 
 struct CacheArgs {

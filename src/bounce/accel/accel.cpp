@@ -31,9 +31,10 @@ RTCRayHit make_ray(const Vec3& o, const Vec3& d, float tnear, float tfar) {
 }
 }  // namespace
 
-Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs)
+Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs,
+         const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion)
     : mesh_count_(static_cast<unsigned>(meshes.size())) {
-    begin(device, meshes);
+    begin(device, meshes, motion);
     for (size_t id = 0; id < furs.size(); ++id) {
         const Fur* f = furs[id];
         if (!f || f->segment_count() == 0) continue;
@@ -51,9 +52,10 @@ Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const
     rtcCommitScene(scene_);
 }
 
-Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const Bvh& fur)
+Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const Bvh& fur,
+         const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion)
     : mesh_count_(static_cast<unsigned>(meshes.size())) {
-    begin(device, meshes);
+    begin(device, meshes, motion);
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(g, fur.scene_);
     const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
@@ -65,7 +67,8 @@ Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const
     rtcCommitScene(scene_);
 }
 
-void Bvh::begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes) {
+void Bvh::begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes,
+                const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion) {
     scene_ = rtcNewScene(device);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
@@ -73,10 +76,13 @@ void Bvh::begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes
         if (!meshes[id]) continue;  // an id held for fur only
         const TriangleMesh& m = *meshes[id];
         RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
-            g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m.positions.size()));
-        for (size_t i = 0; i < m.positions.size(); ++i) {
-            vb[3 * i] = m.positions[i].x, vb[3 * i + 1] = m.positions[i].y, vb[3 * i + 2] = m.positions[i].z;
+        const auto* moving = id < motion.size() && motion[id] && !(*motion[id])[0].empty() ? motion[id] : nullptr;
+        if (moving) rtcSetGeometryTimeStepCount(g, 2);
+        for (unsigned slot = 0; slot < (moving ? 2u : 1u); ++slot) {
+            const std::vector<Vec3>& pos = moving ? (*moving)[slot] : m.positions;
+            auto* vb = static_cast<float*>(
+                rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, slot, RTC_FORMAT_FLOAT3, 3 * sizeof(float), pos.size()));
+            for (size_t i = 0; i < pos.size(); ++i) vb[3 * i] = pos[i].x, vb[3 * i + 1] = pos[i].y, vb[3 * i + 2] = pos[i].z;
         }
         auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
             g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), m.triangle_count()));
@@ -91,10 +97,11 @@ Bvh::~Bvh() {
     if (scene_) rtcReleaseScene(scene_);
 }
 
-Hit Bvh::intersect(const Vec3& o, const Vec3& d, float tnear, float tfar) const {
+Hit Bvh::intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float time) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh = make_ray(o, d, tnear, tfar);
+    rh.ray.time = time;
     rtcIntersect1(scene_, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
     return make_hit(rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v);
@@ -169,11 +176,13 @@ SceneAccel::SceneAccel(const Scene& scene) {
     // Fur: always seen by the camera; by gather rays only when it casts indirect light; by
     // shadow rays when it casts shadows.
     std::vector<const Fur*> visible_fur, indirect_fur, shadow_fur;
+    std::vector<const std::array<std::vector<Vec3>, 2>*> motion;  // camera rays see motion blur
     bool any_fine = false, any_fur = false, any_indirect = false, any_shadow = false;
     for (const auto& o : scene.objects) {
         coarse.push_back(&o.coarse);
         fine.push_back(&o.visible());
-        any_fine |= o.has_fine();
+        motion.push_back(o.shutter[0].empty() ? nullptr : &o.shutter);
+        any_fine |= o.has_fine() || motion.back();
         const Fur* f = o.fur && o.fur->segment_count() ? o.fur.get() : nullptr;
         any_fur |= f != nullptr;
         visible_fur.push_back(f);
@@ -186,8 +195,8 @@ SceneAccel::SceneAccel(const Scene& scene) {
     // Fur already in the coarse BVH shadows through it; the rest that casts shadows gets its own.
     if (any_shadow) shadow_fur_ = std::make_unique<Bvh>(device_, std::vector<const TriangleMesh*>(scene.objects.size(), nullptr), shadow_fur);
     // The camera sees all fur: when that is the shadow BVH's, instance it rather than build it twice.
-    if (any_shadow && shadow_fur == visible_fur) fine_ = std::make_unique<Bvh>(device_, fine, *shadow_fur_);
-    else if (any_fine || any_fur) fine_ = std::make_unique<Bvh>(device_, fine, visible_fur);
+    if (any_shadow && shadow_fur == visible_fur) fine_ = std::make_unique<Bvh>(device_, fine, *shadow_fur_, motion);
+    else if (any_fine || any_fur) fine_ = std::make_unique<Bvh>(device_, fine, visible_fur, motion);
 
     // Measure how far the fine surface strays from the coarse one: from each fine vertex,
     // along its normal both ways, to the nearest coarse surface of the same object.

@@ -30,15 +30,20 @@ struct Hit {
 /// `hair` and name object i.
 class Bvh {
 public:
-    Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs = {});
+    /// `motion[i]` (if given and not null): mesh i's vertices at shutter open and close, traced
+    /// with Embree's motion blur (ray time 0 = open, 1 = close).
+    Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs = {},
+        const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion = {});
     /// Meshes plus an instance of `fur`, a BVH of fur only over as many mesh ids (so its hits
     /// decode the same): fur traced by several BVHs is built once.
-    Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const Bvh& fur);
+    Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const Bvh& fur,
+        const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion = {});
     ~Bvh();
     Bvh(const Bvh&) = delete;
     Bvh& operator=(const Bvh&) = delete;
 
-    Hit intersect(const Vec3& o, const Vec3& d, float tnear, float tfar) const;
+    /// `time` in [0, 1] over the shutter (meshes without motion are where they are).
+    Hit intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float time = 0) const;
     /// Closest hits of `count` rays sharing origin `o` (a gather's hemisphere), traced in
     /// packets of 16: neighbouring strata are coherent enough for Embree's packet traversal.
     void intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear, Hit* out) const;
@@ -46,7 +51,8 @@ public:
 
 private:
     /// A new scene holding `meshes` (not committed).
-    void begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes);
+    void begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes,
+               const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion);
     Hit make_hit(unsigned geom, unsigned prim, float t, float u, float v) const;
     RTCScene scene_ = nullptr;
     unsigned mesh_count_ = 0;

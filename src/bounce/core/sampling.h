@@ -18,6 +18,17 @@ inline Vec2 stratified_2d(int i, int n, float jx, float jy) {
     return {(static_cast<float>(i % nx) + jx) / fn, (static_cast<float>(i / nx) + jy) / fn};
 }
 
+/// Shirley-Chiu concentric map of the unit square onto the unit disc (area preserving, low
+/// distortion): lens samples for depth of field.
+inline Vec2 concentric_disc(float u, float v) {
+    const float a = 2 * u - 1, b = 2 * v - 1;
+    if (a == 0 && b == 0) return {0, 0};
+    float r, phi;
+    if (std::abs(a) > std::abs(b)) r = a, phi = 0.25f * kPi * (b / a);
+    else r = b, phi = 0.5f * kPi - 0.25f * kPi * (a / b);
+    return {r * std::cos(phi), r * std::sin(phi)};
+}
+
 /// Cosine-weighted direction in the local frame (z up) from a unit-square sample
 /// (pdf cos(theta)/pi).
 inline Vec3 cosine_hemisphere(float u1, float u2) {

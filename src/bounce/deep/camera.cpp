@@ -2,6 +2,7 @@
 #include <cmath>
 
 #include "bounce/deep/deep_buffer.h"
+#include "bounce/core/sampling.h"
 
 namespace bounce {
 
@@ -11,6 +12,20 @@ CameraRays::CameraRays(const Camera& cam) : pos_(cam.position), width_(cam.width
     up_ = cross(right_, forward_);
     scale_ = std::tan(cam.fov * kPi / 360.0f);
     aspect_ = static_cast<float>(cam.width) / static_cast<float>(cam.height);
+    aperture_ = cam.aperture;
+    focus_ = cam.focus_distance > 0 ? cam.focus_distance : length(cam.look_at - cam.position);
+}
+
+Vec3 CameraRays::lens_ray(float px, float py, float lu, float lv, Vec3& dir) const {
+    const Vec3 d = direction(px, py);  // forward has unit length along the view: d reaches the plane at focus_ / 1
+    if (aperture_ <= 0) {
+        dir = normalize(d);
+        return pos_;
+    }
+    const Vec2 disc = concentric_disc(lu, lv);
+    const Vec3 origin = pos_ + (right_ * disc.x + up_ * disc.y) * (0.5f * aperture_);
+    dir = normalize(pos_ + d * focus_ - origin);
+    return origin;
 }
 
 Vec3 CameraRays::direction(float px, float py) const {

@@ -92,6 +92,11 @@ public:
     explicit CameraRays(const Camera& cam);
     /// Unnormalised direction through pixel position (px, py) (0..width, 0..height, y down).
     Vec3 direction(float px, float py) const;
+    /// The thin lens's ray through pixel position (px, py) from lens point (lu, lv) in [0,1)^2
+    /// (uniform over the aperture's disc): it crosses the pinhole ray on the plane in focus.
+    /// Returns the origin; `dir` gets the unit direction. A pinhole gives origin() and the
+    /// pinhole direction.
+    Vec3 lens_ray(float px, float py, float lu, float lv, Vec3& dir) const;
     Vec3 origin() const { return pos_; }
     /// World-space width of one pixel at a hit at distance t along unit direction d on a
     /// surface of normal n: the narrowest extent of the pixel's projection (from the ray
@@ -106,6 +111,7 @@ public:
 private:
     Vec3 pos_, forward_, right_, up_;
     float scale_ = 1, aspect_ = 1;
+    float aperture_ = 0, focus_ = 1;  ///< lens diameter and distance of the plane in focus
     int width_ = 1, height_ = 1;
 };
 

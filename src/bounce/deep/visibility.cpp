@@ -3,6 +3,8 @@
 
 #include <fmt/format.h>
 
+#include <numeric>
+
 #include "bounce/core/error.h"
 #include "bounce/core/parallel.h"
 #include "bounce/core/random.h"
@@ -82,6 +84,9 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
 
     CameraRays camera(cam);
     const int spp = rs.spp;
+    const bool blur = cam.has_motion_blur();
+    int stride = 3;  // a step coprime to spp: s -> s * stride mod spp visits every time stratum once
+    while (std::gcd(stride, spp) != 1) ++stride;
     std::vector<std::vector<Fragment>> per_pixel(deep.pixel_count());
     Progress progress(sink, "visibility", static_cast<uint64_t>(deep.height));
 
@@ -96,16 +101,22 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                 groups.clear();
                 subsamples.clear();
                 for (int s = 0; s < spp; ++s) {
-                    Vec2 j = stratified_2d(s, spp, rng.get(static_cast<uint64_t>(s), kDimPixelX),
-                                             rng.get(static_cast<uint64_t>(s), kDimPixelY));
-                    Vec3 d = camera.direction(static_cast<float>(x) + j.x, static_cast<float>(y) + j.y);
-                    Vec3 dn = normalize(d);
+                    const auto su = static_cast<uint64_t>(s);
+                    Vec2 j = stratified_2d(s, spp, rng.get(su, kDimPixelX), rng.get(su, kDimPixelY));
+                    const float px = static_cast<float>(x) + j.x, py = static_cast<float>(y) + j.y;
+                    Vec3 d = camera.direction(px, py), dn;
+                    // Depth of field: the ray leaves a point of the lens; motion blur: it sees the
+                    // scene at its time in the shutter (strata in a scrambled order, so time does
+                    // not follow the pixel strata). Shading stays at the frame's time.
+                    const Vec3 origin = camera.lens_ray(px, py, rng.get(su, kDimLensU), rng.get(su, kDimLensV), dn);
+                    const int stratum = (s * stride + static_cast<int>(rng.bits(0, kDimTime) % static_cast<uint64_t>(spp))) % spp;
+                    const float time = blur ? (static_cast<float>(stratum) + rng.get(su, kDimTime)) / static_cast<float>(spp) : 0.0f;
                     ++counters.camera_rays;
-                    Hit h = accel.fine().intersect(camera.origin(), dn, 0, INFINITY);
+                    Hit h = accel.fine().intersect(origin, dn, 0, INFINITY, time);
                     if (!h.valid()) continue;
                     const Object& obj = scene.objects[h.object];
                     const uint32_t prim = h.hair ? obj.fur->strand_of(h.prim) : h.prim;
-                    SurfacePoint sp = h.hair ? hair_point(*obj.fur, h, camera.origin(), dn, obj.visible())
+                    SurfacePoint sp = h.hair ? hair_point(*obj.fur, h, origin, dn, obj.visible())
                                              : surface_point(obj.visible(), h.prim, h.u, h.v);
                     // Face the camera (all surfaces are two-sided).
                     if (dot(sp.ng, dn) > 0) sp.ng = -sp.ng, sp.n = -sp.n;

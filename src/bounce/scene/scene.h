@@ -83,6 +83,9 @@ struct Object {
     Transform placement;    ///< the scene file's transform, already applied to both tessellations
     bool deforms = false;   ///< its shape changes over the shot (a skin, morph targets), not only its placement
     bool moves = false;     ///< its placement is keyed or it deforms: its cache records travel with it
+    /// With motion blur: the visible mesh's vertices at shutter open and close (empty when it
+    /// does not move during the shutter); camera rays see it in between.
+    std::array<std::vector<Vec3>, 2> shutter;
     bool has_fine() const { return !fine.indices.empty(); }
     const TriangleMesh& visible() const { return has_fine() ? fine : coarse; }
 };

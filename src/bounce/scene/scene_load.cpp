@@ -25,6 +25,24 @@ using nlohmann::json;
 
 namespace {
 
+/// Motion blur: the visible mesh of every object whose placement is keyed, at shutter open and
+/// close (its placement then, applied to its shape now).
+void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
+    std::array<nlohmann::json, 2> docs;
+    for (int k = 0; k < 2; ++k) docs[static_cast<size_t>(k)] = evaluate_keys(scene.keyed, scene.frame + scene.camera.shutter[static_cast<size_t>(k)], ctx);
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+        Object& o = scene.objects[i];
+        if (!o.moves || o.deforms) continue;
+        const Transform undo = o.placement.inverse();
+        for (size_t k = 0; k < 2; ++k) {
+            const JsonReader r(docs[k]["objects"][i], fmt::format("/objects/{}", i), ctx, object_keys());
+            const Transform move = read_transform(r) * undo;
+            o.shutter[k].clear();
+            for (const Vec3& p : o.visible().positions) o.shutter[k].push_back(move.point(p));
+        }
+    }
+}
+
 /// Reads one section's rows of the parameter table ("camera", "render"): keys not in the table
 /// are errors with a suggestion, every value is checked as the type it is used in.
 void read_params(const json& j, const std::string& section, Scene& scene, const JsonContext& ctx) {
@@ -136,6 +154,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
                                           ? &scene.keyed["objects"][i] : nullptr;
         o.moves = o.deforms || (keyed && keyed->is_object() && keyed->contains("transform") && has_keys((*keyed)["transform"]));
     }
+    if (scene.camera.has_motion_blur()) add_shutter_positions(scene, ctx);
     // What every file holds goes into the identities (deep and cache files).
     ctx.inputs = nullptr;
     for (SceneInput& in : scene.inputs) in.hash = file_content_hash(in.path);

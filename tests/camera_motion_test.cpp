@@ -1,0 +1,86 @@
+// Issue 26: motion blur and depth of field in primary visibility, against analytic cases: a
+// moving edge's coverage, a defocused point's disc. Shading stays at the frame's time.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "bounce/render/render.h"
+#include "test_util.h"
+
+namespace bounce {
+namespace {
+
+using nlohmann::json;
+
+/// Coverage of `scene` rendered without indirect light: the beauty's alpha, or with `albedo`
+/// the albedo's red (objects of albedo 1 in front of a black backdrop).
+std::vector<float> coverage(const Scene& scene, bool albedo = false) {
+    Stats stats;
+    const RenderResult r = render(scene, {}, stats, nullptr);
+    const Layer& l = *r.image.find(albedo ? "albedo" : "beauty");
+    std::vector<float> a;
+    const size_t nc = l.channels.size();
+    for (size_t i = albedo ? 0 : 3; i < l.data.size(); i += nc) a.push_back(l.data[i]);
+    return a;
+}
+
+TEST(MotionBlur, AMovingEdgeCoversEachPixelForTheShareOfTheShutterItSpendsThere) {
+    // 90 degrees of view from z = 10 onto z = 0: 32 x 8 pixels of 2.5 x 2.5 world units. The
+    // quad's right edge moves from x = 0 to x = 10 over the shutter [0, 1] of frame 1.
+    json j = test::base_scene();
+    j["animation"] = {{"fps", 24}, {"frames", {1, 2}}};
+    j["camera"] = {{"position", {0, 0, 10}}, {"look_at", {0, 0, 0}}, {"fov", 90}, {"resolution", {32, 8}}, {"shutter", {0, 1}}};
+    j["render"] = {{"spp", 256}, {"light_samples", 1}};
+    j["objects"] = {{{"type", "quad"}, {"vertices", {{-100, -50, 0}, {0, -50, 0}, {0, 50, 0}, {-100, 50, 0}}},
+                     {"transform", {{"translate", {{"keys", {{1, {0, 0, 0}}, {2, {10, 0, 0}}}}}}}}}};
+    j["lights"] = {{{"type", "distant"}, {"direction", {0, 0, -1}}}};
+    const std::vector<float> a = coverage(test::scene_from(j));
+    // Row 4; pixel px spans x in [-40 + 2.5 px, -37.5 + 2.5 px]: covered while the edge is past it.
+    for (int px = 0; px < 32; ++px) {
+        const double centre = -40 + 2.5 * (px + 0.5);
+        const double want = std::clamp((10 - centre) / 10, 0.0, 1.0);
+        EXPECT_NEAR(a[static_cast<size_t>(4 * 32 + px)], want, 0.03) << "pixel " << px;
+    }
+    // Without a shutter the edge is where frame 1 has it: a hard edge at x = 0.
+    j["camera"]["shutter"] = {0, 0};
+    const std::vector<float> still = coverage(test::scene_from(j));
+    EXPECT_EQ(still[4 * 32 + 15], 1.0f);
+    EXPECT_EQ(still[4 * 32 + 16], 0.0f);
+}
+
+TEST(DepthOfField, APointOutOfFocusSpreadsOverItsCircleOfConfusion) {
+    // Focused on z = 0 from z = 10; a ball of radius 0.5 at z = -10 (distance 20). With a lens
+    // of diameter 4 its circle of confusion on the plane in focus is 4 x 10 / 20 = 2 units
+    // across: 64 px over 20 units there, so a disc of radius 3.2 px around an image of radius 0.8.
+    json j = test::base_scene();
+    j["camera"] = {{"position", {0, 0, 10}}, {"look_at", {0, 0, 0}}, {"fov", 90}, {"resolution", {64, 64}},
+                   {"aperture", 4}, {"focus_distance", 10}};
+    j["render"] = {{"spp", 1024}, {"light_samples", 1}};
+    j["materials"] = {{"white", {{"color", 1}}}, {"black", {{"color", 0}}}};
+    j["objects"] = {{{"type", "sphere"}, {"center", {0, 0, -10}}, {"radius", 0.5}, {"subdivisions", 4}, {"fine_subdivisions", 1},
+                     {"material", "white"}},
+                    {{"type", "quad"}, {"material", "black"}, {"vertices", {{-500, -500, -90}, {500, -500, -90}, {500, 500, -90}, {-500, 500, -90}}}}};
+    j["lights"] = {{{"type", "distant"}, {"direction", {0, 0, -1}}}};
+    const auto moments = [](const std::vector<float>& a) {
+        double sum = 0, r2 = 0;
+        for (int y = 0; y < 64; ++y)
+            for (int x = 0; x < 64; ++x) {
+                const double w = a[static_cast<size_t>(y * 64 + x)], dx = x + 0.5 - 32, dy = y + 0.5 - 32;
+                sum += w, r2 += w * (dx * dx + dy * dy);
+            }
+        return std::pair{sum, r2 / sum};
+    };
+    const auto [area, spread] = moments(coverage(test::scene_from(j), true));
+    // The image's area is conserved (pi 0.8^2 pixels) and spread as the sphere's disc convolved
+    // with the lens's: mean squared radius (3.2^2 + 0.8^2) / 2.
+    EXPECT_NEAR(area, kPi * 0.8 * 0.8, 0.1 * kPi * 0.8 * 0.8);
+    EXPECT_NEAR(std::sqrt(2 * spread), std::sqrt(3.2 * 3.2 + 0.8 * 0.8), 0.25);
+    // A pinhole keeps it a disc of radius 0.8.
+    j["camera"]["aperture"] = 0;
+    const auto [area0, spread0] = moments(coverage(test::scene_from(j), true));
+    EXPECT_NEAR(area0, kPi * 0.8 * 0.8, 0.1 * kPi * 0.8 * 0.8);
+    EXPECT_LT(std::sqrt(2 * spread0), 1.2);
+}
+
+}  // namespace
+}  // namespace bounce
