@@ -72,10 +72,7 @@ Record Gathering::gather_at(const Candidate& c, Counters& counters) {
     r.near = site.near;
     r.hits = std::move(hits);
     const Object& obj = scene_.objects[f.object];
-    if (obj.moves && !f.is_hair()) {  // it travels with its object (temporal.h)
-        const Transform back = obj.placement.inverse();
-        r.anchor = f.object, r.anchor_p = back.point(r.p), r.anchor_n = normalize(back.vector(r.n));
-    }
+    if (obj.moves && !f.is_hair()) anchor_record(r, obj, f.object, f.prim);  // it travels with its object (temporal.h)
     return r;
 }
 

@@ -40,7 +40,10 @@ struct Record {
     Vec3 origin{0};              ///< where the gather's rays left from (world)
     std::array<float, kReachBins> reach{};  ///< farthest hit per direction bin (INFINITY: a ray escaped)
     uint32_t anchor = kNoAnchor; ///< the moving object whose surface carries it, or kNoAnchor (static)
-    Vec3 anchor_p{0}, anchor_n{0};  ///< p and n in that object's own space (before its placement)
+    /// Rigid objects: p and n in the object's own space (before its placement). Deforming
+    /// objects: the triangle of its visible mesh (anchor_prim) and p's barycentrics (anchor_p.x, .y).
+    Vec3 anchor_p{0}, anchor_n{0};
+    uint32_t anchor_prim = kNoAnchor;
     int32_t gathered = 0;        ///< frame of its last gather or re-shade
     float near = 0;              ///< its gather's `near` (Gatherer::gather), to gather it again alike
     float drift = 0;             ///< bound on how far its irradiance may have moved since (relative to E)

@@ -52,6 +52,36 @@ void move_rigidly(Record& r, const Transform& delta) {
     if (r.radius_long > 0) r.axis = normalize(delta.vector(r.axis));
 }
 
+/// A triangle's orthonormal frame (first edge, then in-plane, then normal) as columns.
+std::array<Vec3, 3> triangle_frame(const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3 e = normalize(b - a), n = normalize(cross(b - a, c - a));
+    return {e, cross(n, e), n};
+}
+
+std::array<Vec3, 3> triangle_of(const TriangleMesh& m, uint32_t t) {
+    return {m.positions[m.indices[3 * t]], m.positions[m.indices[3 * t + 1]], m.positions[m.indices[3 * t + 2]]};
+}
+
+/// Moves a record on a deforming object with its triangle: to its barycentrics on the new
+/// triangle, every direction turned as the triangle turned. False if it cannot (another mesh).
+bool move_on_surface(Record& r, const TriangleMesh& was, const TriangleMesh& now) {
+    if (r.anchor_prim == kNoAnchor || r.anchor_prim >= was.triangle_count() || r.anchor_prim >= now.triangle_count()) return false;
+    const auto t0 = triangle_of(was, r.anchor_prim), t1 = triangle_of(now, r.anchor_prim);
+    const auto f0 = triangle_frame(t0[0], t0[1], t0[2]), f1 = triangle_frame(t1[0], t1[1], t1[2]);
+    if (!isfinite(f0[2]) || !isfinite(f1[2])) return false;
+    const auto turn = [&](const Vec3& v) {  // into the old frame, out of the new one
+        return f1[0] * dot(v, f0[0]) + f1[1] * dot(v, f0[1]) + f1[2] * dot(v, f0[2]);
+    };
+    const Vec3 offset = turn(r.origin - r.p);
+    r.p = t1[0] + (t1[1] - t1[0]) * r.anchor_p.x + (t1[2] - t1[0]) * r.anchor_p.y;
+    r.origin = r.p + offset;
+    r.n = normalize(turn(r.n)), r.bent = normalize(turn(r.bent));
+    for (size_t c = 0; c < 3; ++c) r.dir[c] = turn(r.dir[c]), r.grad_r[c] = turn(r.grad_r[c]), r.grad_t[c] = turn(r.grad_t[c]);
+    r.ao_grad_r = turn(r.ao_grad_r), r.ao_grad_t = turn(r.ao_grad_t);
+    if (r.radius_long > 0) r.axis = normalize(turn(r.axis));
+    return true;
+}
+
 /// The record's reach for this camera. A moving camera would otherwise leave gaps or pile up
 /// records each frame, so the world radius stays (it is what the record's gather measured)
 /// unless it falls below the minimum spacing in this view's pixels, or grows past twice the
@@ -141,6 +171,24 @@ float solid_angle_bound(const Vec3& o, const Bounds& box) {
     return 2 * kPi * (1 - std::sqrt(std::max(0.0f, 1 - s * s)));
 }
 
+void anchor_record(Record& r, const Object& obj, uint32_t object, uint32_t prim) {
+    r.anchor = object;
+    if (!obj.deforms) {
+        const Transform back = obj.placement.inverse();
+        r.anchor_p = back.point(r.p), r.anchor_n = normalize(back.vector(r.n));
+        return;
+    }
+    const TriangleMesh& m = obj.visible();
+    if (prim >= m.triangle_count()) return;
+    // Barycentrics of p projected onto the triangle.
+    const auto t = triangle_of(m, prim);
+    const Vec3 e1 = t[1] - t[0], e2 = t[2] - t[0], d = r.p - t[0];
+    const float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2), det = d11 * d22 - d12 * d12;
+    if (!(std::abs(det) > 0)) return;
+    const float b1 = (d22 * dot(d, e1) - d12 * dot(d, e2)) / det, b2 = (d11 * dot(d, e2) - d12 * dot(d, e1)) / det;
+    r.anchor_prim = prim, r.anchor_p = {b1, b2, 0};
+}
+
 std::vector<Bounds> moving_bounds(const SceneChanges& changes, uint32_t except) {
     std::vector<Bounds> out;
     for (size_t o = 0; o < changes.objects.size(); ++o)
@@ -154,8 +202,8 @@ RandomStream record_stream(const Record& r, uint64_t seed, int full_width) {
     return fragment_stream(seed, static_cast<int>(pixel % w), static_cast<int>(pixel / w), static_cast<uint32_t>(r.key & 0xff));
 }
 
-TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, const Scene& now,
-                                const SceneChanges& changes, std::span<const LightChange> light, float brightest) {
+TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, const Scene& before,
+                                const Scene& now, const SceneChanges& changes, std::span<const LightChange> light, float brightest) {
     TemporalJudgement out;
     if (!changes.comparable) {
         out.dropped = previous.size() + waiting.size();
@@ -168,19 +216,33 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
     std::vector<uint64_t> changed_sides;
     for (const LightChange& c : light) changed_sides.push_back((static_cast<uint64_t>(c.object) << 32) | c.triangle);
     std::sort(changed_sides.begin(), changed_sides.end());
+    // Moves a record with its object; false when it cannot follow (dropped).
+    const auto follow = [&](Record& r, ObjectMotion::Kind own) {
+        if (own == ObjectMotion::Kind::Static) return true;
+        ++out.anchored;
+        bool ok = true;
+        if (own == ObjectMotion::Kind::Rigid) move_rigidly(r, changes.objects[r.anchor].delta);
+        if (own == ObjectMotion::Kind::Deforming) ok = move_on_surface(r, before.objects[r.anchor].visible(), now.objects[r.anchor].visible());
+        out.anchors_kept += ok;
+        return ok;
+    };
     const auto judge = [&](Record r, bool fragment) {
         const bool anchored = r.anchor != kNoAnchor && r.anchor < changes.objects.size();
         const ObjectMotion::Kind own = anchored ? changes.objects[r.anchor].kind : ObjectMotion::Kind::Static;
-        if (own == ObjectMotion::Kind::Deforming || (fragment && own != ObjectMotion::Kind::Static)) {
+        if (fragment && own != ObjectMotion::Kind::Static) {
             ++out.dropped;
             return;
         }
-        if (!fragment) respace(r, camera, s);
-        if (own == ObjectMotion::Kind::Rigid) {
-            move_rigidly(r, changes.objects[r.anchor].delta);
+        if (own != ObjectMotion::Kind::Static) {
+            if (!follow(r, own)) {
+                ++out.dropped;
+                return;
+            }
+            respace(r, camera, s);
             out.stale.push_back(r), out.why.push_back(StaleReason::Moved), ++out.moved;
             return;
         }
+        if (!fragment) respace(r, camera, s);
         if (r.hits) {
             if (hits_unchanged(r, now, changes, boxes, changed_sides)) {
                 ++out.kept;
@@ -216,11 +278,10 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
     for (Record r : waiting) {
         const bool anchored = r.anchor != kNoAnchor && r.anchor < changes.objects.size();
         const ObjectMotion::Kind own = anchored ? changes.objects[r.anchor].kind : ObjectMotion::Kind::Static;
-        if (own == ObjectMotion::Kind::Deforming) {
+        if (!follow(r, own)) {
             ++out.dropped;
             continue;
         }
-        if (own == ObjectMotion::Kind::Rigid) move_rigidly(r, changes.objects[r.anchor].delta);
         respace(r, camera, s);
         out.stale.push_back(r), out.why.push_back(StaleReason::View);
     }

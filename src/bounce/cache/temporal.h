@@ -37,14 +37,22 @@ struct TemporalJudgement {
     std::vector<Record> fragment_valid;  ///< per-fragment refinement's records still valid
     std::unordered_map<uint64_t, Record> fragment_stale;  ///< ... to update where refinement still wants them (by key)
     size_t kept = 0, moved = 0, view = 0, light = 0, dropped = 0;
+    /// Records of the previous frame on objects that moved, and those of them that followed their
+    /// anchor to this frame (the rest could not and were dropped).
+    size_t anchored = 0, anchors_kept = 0;
 };
 
 /// Judges every record of `previous` for this frame: `changes` between the scenes, `light` the
 /// radiosity that changed, `brightest` the largest radiance a moving object can show or hide.
 /// `waiting` (stale records of earlier frames no fragment needed yet) stay stale, moved with
-/// their object. Records of a deforming object are dropped (no rigid motion carries them).
-TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, const Scene& now,
-                                const SceneChanges& changes, std::span<const LightChange> light, float brightest);
+/// their object. Records on a deforming object ride on their triangle from `before`'s mesh to
+/// `now`'s (turned with it).
+TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, const Scene& before,
+                                const Scene& now, const SceneChanges& changes, std::span<const LightChange> light, float brightest);
+
+/// Anchors a new record on object `object` (which moves in the shot): in its own space for a
+/// rigid one, at its barycentrics on triangle `prim` of its visible mesh for a deforming one.
+void anchor_record(Record& r, const Object& obj, uint32_t object, uint32_t prim);
 
 /// The swept bounds of every object that moved, except object `except`.
 std::vector<Bounds> moving_bounds(const SceneChanges& changes, uint32_t except = kNoAnchor);

@@ -127,7 +127,8 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan
     out.cache = std::make_unique<IrradianceCache>(scene.bounds(), scene.render.cache, scene.render.indirect.ao);
     if (plan.cache == CacheStart::Temporal) {
         // The previous frame's records and those still waiting from before, judged for this frame.
-        out.judged = judge_records(*previous.cache, previous.waiting, scene, *plan.changes, radiosity.changed, radiosity.brightest);
+        out.judged = judge_records(*previous.cache, previous.waiting, *previous.scene, scene, *plan.changes, radiosity.changed,
+                                   radiosity.brightest);
         out.cache->set_luminance_floor(previous.cache->luminance_floor());
         for (const Record& r : out.judged.valid) out.cache->insert_loaded(r);
         for (const Record& r : out.judged.fragment_valid) out.cache->insert_fragment_record(r);
@@ -221,6 +222,18 @@ SubPassCallback preview_after_subpass(const FrameContext& ctx, const DeepBuffer&
     };
 }
 
+/// Temporal filtering (cache.temporal_filter): a redone record keeps share `f` of its previous
+/// values (irradiance, AO, light directions and gradients; its reach is the new gather's).
+void blend_with_previous(Record& r, const Record& old, float f) {
+    if (f <= 0) return;
+    const auto mix = [f](auto now, auto was) { return now * (1 - f) + was * f; };
+    r.E = mix(r.E, old.E), r.ao = mix(r.ao, old.ao);
+    for (size_t c = 0; c < 3; ++c) r.dir[c] = mix(r.dir[c], old.dir[c]), r.grad_r[c] = mix(r.grad_r[c], old.grad_r[c]), r.grad_t[c] = mix(r.grad_t[c], old.grad_t[c]);
+    r.ao_grad_r = mix(r.ao_grad_r, old.ao_grad_r), r.ao_grad_t = mix(r.ao_grad_t, old.ao_grad_t);
+    const Vec3 bent = mix(r.bent, old.bent);
+    if (dot(bent, bent) > 0) r.bent = normalize(bent);
+}
+
 /// How a stale record of an earlier frame is redone: re-shaded from its hits when only its
 /// light changed and it kept them, else gathered again in place with its own random stream;
 /// its reach and gradients as a new record's, its anchor and creation frame kept.
@@ -249,8 +262,9 @@ StaleRecords::Redo redo_function(const FrameContext& ctx, const FramePlan& plan,
             g = gatherer.gather(old.origin, old.n, rng, counters, old.near, hits.get());
         }
         Record r = cache.make_record(g, old.p, old.n, old.footprint, old.key);
+        blend_with_previous(r, old, cache.settings().temporal_filter);
         r.origin = old.origin, r.near = old.near, r.frame = old.frame, r.gathered = frame;
-        r.anchor = old.anchor, r.anchor_p = old.anchor_p, r.anchor_n = old.anchor_n;
+        r.anchor = old.anchor, r.anchor_p = old.anchor_p, r.anchor_n = old.anchor_n, r.anchor_prim = old.anchor_prim;
         r.hits = std::move(hits);
         return r;
     };
@@ -262,7 +276,7 @@ std::function<Record(const Record&, Counters&)> fragment_update_function(const F
                                                                           const Gatherer& refiner) {
     std::vector<Bounds> boxes = plan.changes ? moving_bounds(*plan.changes) : std::vector<Bounds>();
     return [&refiner, seed = ctx.scene.render.visibility.seed, width = ctx.scene.camera.width, frame = plan.frame,
-            boxes = std::move(boxes)](const Record& old, Counters& counters) {
+            boxes = std::move(boxes), filter = ctx.scene.render.cache.temporal_filter](const Record& old, Counters& counters) {
         const RandomStream rng = record_stream(old, seed, width);
         auto hits = std::make_shared<GatherHits>(*old.hits);
         std::vector<uint32_t> cells;
@@ -270,6 +284,7 @@ std::function<Record(const Record&, Counters&)> fragment_update_function(const F
         const GatherResult g = refiner.update(old.origin, old.n, rng, *hits, cells, counters);
         Record r = old;
         r.E = g.irradiance, r.ao = g.ao, r.bent = g.bent_normal, r.dir = g.light_dir;
+        blend_with_previous(r, old, filter);
         r.harmonic = g.harmonic_distance, r.dmin = g.min_distance, r.gathered = frame, r.drift = 0;
         r.hits = std::move(hits);
         return r;

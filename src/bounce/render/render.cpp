@@ -222,6 +222,8 @@ void report_temporal(const RenderResult& r, Stats& stats) {
     stats.set("records_reshaded", static_cast<double>(t.reshaded));
     stats.set("records_dropped_temporal", static_cast<double>(t.dropped));
     stats.set("records_waiting", static_cast<double>(r.waiting.size()));
+    stats.set("records_anchored", static_cast<double>(t.anchored));
+    stats.set("records_anchor_kept", static_cast<double>(t.anchors_kept));
 }
 
 }  // namespace
@@ -269,7 +271,7 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
         result.records_loaded = start.records_loaded;
         result.cache_differences = start.differences;
         const TemporalJudgement& j = start.judged;
-        result.temporal = {j.kept, j.moved, j.view, j.light, j.dropped, 0, 0};
+        result.temporal = {j.kept, j.moved, j.view, j.light, j.dropped, 0, 0, j.anchored, j.anchors_kept};
         if (!start.differences.empty()) stats.set("cache_reused_with_other_settings", nlohmann::json(start.differences));
         result.cache_info = cache_file_info(scene, plan.frame);
         if (plan.gather == GatherStep::Cache || plan.gather == GatherStep::WhereMissing) {

@@ -29,6 +29,7 @@ struct TemporalCounts {
     size_t dropped = 0;     ///< on a deforming object, or the objects changed
     size_t regathered = 0;  ///< stale records gathered again in place
     size_t reshaded = 0;    ///< stale records re-shaded from their hits (no ray traced)
+    size_t anchored = 0, anchors_kept = 0;  ///< records on moving objects, and those that followed them
 };
 
 /// What a frame produced: its image and deep buffer, the cache it ended with, and what each

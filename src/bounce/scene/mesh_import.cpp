@@ -16,6 +16,7 @@
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
 #include "bounce/core/image.h"
+#include "bounce/scene/mesh_animation.h"
 #include "bounce/scene/mesh_checks.h"
 
 namespace bounce {
@@ -66,6 +67,18 @@ void for_each_mesh_instance(const aiScene* s, Fn&& fn) {
             stack.emplace_back(node->mChildren[c], world * node->mChildren[c]->mTransformation);
         const Transform t = to_transform(world);
         for (unsigned k = 0; k < node->mNumMeshes; ++k) fn(s->mMeshes[node->mMeshes[k]], t);
+    }
+}
+
+/// Calls fn(mesh, posed world transform) for every mesh instance of the node tree.
+template <typename Fn>
+void for_each_posed_instance(const aiScene* s, const std::unordered_map<const aiNode*, aiMatrix4x4>& nodes, Fn&& fn) {
+    std::vector<const aiNode*> stack{s->mRootNode};
+    while (!stack.empty()) {
+        const aiNode* node = stack.back();
+        stack.pop_back();
+        for (unsigned c = 0; c < node->mNumChildren; ++c) stack.push_back(node->mChildren[c]);
+        for (unsigned k = 0; k < node->mNumMeshes; ++k) fn(s->mMeshes[node->mMeshes[k]], nodes.at(node));
     }
 }
 
@@ -247,17 +260,22 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
 }
 
 TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                            int override_material, std::vector<std::string>* files_read) {
+                            int override_material, std::vector<std::string>* files_read, const MeshPose& pose) {
     Assimp::Importer imp;
     const aiScene* s = import_file(imp, path, kAssimpFlags, files_read);
     const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material, files_read);
+    // Posed (animation channels, skins, morph targets) or at rest.
+    const MeshTime time{pose.clip.empty() ? -1 : find_clip(s, pose.clip, path), pose.seconds};
+    const auto nodes = posed_nodes(s, time, path);
     TriangleMesh out;
-    for_each_mesh_instance(s, [&](const aiMesh* am, const Transform& t) {
+    std::vector<Vec3> posed, posed_normals;
+    for_each_posed_instance(s, nodes, [&](const aiMesh* am, const aiMatrix4x4& world) {
         if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) return;
+        pose_mesh(s, am, time, world, nodes, posed, posed_normals, path);
         TriangleMesh m;
         for (unsigned v = 0; v < am->mNumVertices; ++v) {
-            m.positions.push_back(t.point(to_vec3(am->mVertices[v])));
-            if (am->mNormals) m.normals.push_back(t.normal(to_vec3(am->mNormals[v])));
+            m.positions.push_back(posed[v]);
+            if (am->mNormals) m.normals.push_back(posed_normals[v]);
             if (am->mTextureCoords[0]) m.uvs.push_back({am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y});
         }
         const uint32_t mat = mat_map[am->mMaterialIndex];

@@ -17,8 +17,15 @@ namespace bounce {
 /// "<prefix>/<name>"; a base colour above 1, an emission that is not finite, or a texture that
 /// is not there is an error) unless `override_material` is given, in which case every face uses
 /// it. The other files it reads (MTL, buffers, textures) are appended to `files_read`.
+/// An animation of a mesh file to pose it with: the clip (name or number; empty: the rest pose)
+/// and the time into it.
+struct MeshPose {
+    std::string clip;
+    double seconds = 0;
+};
+
 TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                            int override_material, std::vector<std::string>* files_read = nullptr);
+                            int override_material, std::vector<std::string>* files_read = nullptr, const MeshPose& pose = {});
 
 /// Loads a mesh file's polygons as a subdivision control mesh (faces not triangulated,
 /// vertices welded by position, uvs face-varying), node transforms and then `transform`

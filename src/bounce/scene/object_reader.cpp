@@ -20,7 +20,7 @@ using nlohmann::json;
 const std::vector<std::string>& object_keys() {
     static const std::vector<std::string> keys = {"name",     "type",        "file",     "material",     "transform",
                                                   "fine_subdivisions", "vertices", "center", "radius", "subdivisions",
-                                                  "subdivision", "boundary", "displacement", "fur"};
+                                                  "subdivision", "boundary", "displacement", "fur", "animation"};
     return keys;
 }
 
@@ -143,7 +143,8 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
 
 /// The keys each object type reads.
 const std::vector<std::string>& keys_of_type(const std::string& type, bool subdivision) {
-    static const std::vector<std::string> mesh = {"name", "type", "file", "material", "transform", "fine_subdivisions", "subdivision", "fur"};
+    static const std::vector<std::string> mesh = {"name", "type", "file", "material", "transform", "fine_subdivisions", "subdivision", "fur",
+                                                  "animation"};
     static const std::vector<std::string> subdiv = {"name", "type", "file", "material", "transform", "subdivision", "boundary", "displacement", "fur"};
     static const std::vector<std::string> quad = {"name", "type", "vertices", "material", "transform", "fine_subdivisions", "fur"};
     static const std::vector<std::string> sphere = {"name", "type", "center", "radius", "subdivisions", "fine_subdivisions", "material", "transform", "fur"};
@@ -191,10 +192,20 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         std::string file = r.file("file", true);
         fine = r.integer("fine_subdivisions", 0, 0, 6);
         std::vector<std::string> read;
+        // An animation of the file plays over the shot: from its start at the shot's first frame.
+        MeshPose pose;
+        if (r.has("animation")) {
+            const nlohmann::json& a = r.raw("animation");
+            if (a.is_number_unsigned()) pose.clip = std::to_string(a.get<uint64_t>());
+            else if (a.is_string() && !a.get<std::string>().empty()) pose.clip = a.get<std::string>();
+            else r.fail("animation", "expected the name or the number of one of the file's animations");
+            pose.seconds = (scene.frame - scene.shot.first) / scene.shot.fps;
+            obj.deforms = true;
+        }
         try {
-            obj.coarse = load_mesh_file(file, obj.name, scene.materials, mat, &read);
+            obj.coarse = load_mesh_file(file, obj.name, scene.materials, mat, &read, pose);
         } catch (const InputError& e) {
-            r.fail("file", e.what());
+            r.fail(r.has("animation") && e.place() == "animations" ? "animation" : "file", e.what());
         }
         record_inputs(r, "file", read);
         obj.placement = read_transform(r);

@@ -271,6 +271,9 @@ ParamTable make_table() {
                        .doc("frames of a shot: a record kept from an earlier frame is gathered again (or re-shaded) once what "
                             "changed in its view may have moved its irradiance by more than this fraction of it; 0 = only "
                             "when nothing it sees changed").flag());
+    rows.push_back(row("temporal_filter", "cache", &R::cache, &CacheSettings::temporal_filter).range(0, 0.99)
+                       .doc("frames of a shot: a record gathered again keeps this share of its previous value (an "
+                            "exponential filter along its anchor: less flicker, some lag); 0 = off").flag());
     rows.push_back(row("shading_reach", "cache", &R::cache, &CacheSettings::shading_reach).range(1, 10)
                        .doc("the shading pass lets records reach this much farther (kappa / reach)").flag());
     // Shading.
