@@ -89,7 +89,8 @@ async function fetchImage() {
 }
 
 const STAT_KEYS = [['phases_s', 'visibility', 's'], ['phases_s', 'gather', 's'], ['phases_s', 'shading', 's'], ['records', null, ''],
-  ['records_new', null, ''], ['refined_fragments', null, ''], ['rays_per_gather', null, 'rays/record'], ['gather_rays_per_pixel', null, 'M rays/MP'],
+  ['records_new', null, ''], ['records_kept', null, ''], ['records_moved', null, ''], ['records_regathered', null, ''],
+  ['records_reshaded', null, ''], ['refined_fragments', null, ''], ['rays_per_gather', null, 'rays/record'], ['gather_rays_per_pixel', null, 'M rays/MP'],
   ['shading_misses', null, ''], ['total_s', null, 's']];
 
 function showStats(stats) {
@@ -119,6 +120,13 @@ async function refreshStatus() {
     const cur = sel.value;
     sel.innerHTML = s.image.layers.map((l) => `<option>${l}</option>`).join('');
     sel.value = s.image.layers.includes(cur) ? cur : 'beauty';
+  }
+  if (s.shot && s.shot.animated) {
+    $('shot-label').hidden = false;
+    const f = $('shot-frame');
+    f.min = s.shot.first, f.max = s.shot.last;
+    if (document.activeElement !== f) f.value = s.frame;
+    $('shot-frame-value').textContent = s.frame;
   }
   if (s.image.version !== state.version) await fetchImage();
   if (s.state !== 'running') {
@@ -303,6 +311,14 @@ async function main() {
     }, 500);
   });
   $('records-in-region').addEventListener('change', loadRecords);
+  $('shot-frame').addEventListener('change', async () => {
+    try {
+      await api('/api/frame', { frame: +$('shot-frame').value });
+      showError('');
+      state.running = true;
+      poll();
+    } catch (e) { showError(e.message); }
+  });
   $('cache-file').addEventListener('change', loadRecords);
   $('frame').addEventListener('input', () => {
     const seq = JSON.parse($('frame').dataset.files || '[]');

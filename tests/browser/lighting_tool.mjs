@@ -32,15 +32,23 @@ fs.mkdirSync(outDir, { recursive: true });
 const work = fs.mkdtempSync(path.join(os.tmpdir(), 'bounce-light-'));
 fs.cpSync(path.join(root, 'scenes/cornell'), path.join(work, 'scene'), { recursive: true });
 
-const server = spawn(bin, ['light', path.join(work, 'scene/cornell.json'), '--port', '0', '--out', path.join(work, 'out'),
-  '--threads', '2', '--set', 'camera.resolution=[160,120]', '--set', 'render.spp=1', '--set', 'render.rays=128',
-  '--set', 'render.light_samples=2'], { stdio: ['ignore', 'pipe', 'inherit'] });
-const url = await new Promise((resolve, reject) => {
-  let text = '';
-  server.stdout.on('data', (d) => { text += d; const m = text.match(/http:\/\/[^ ]+\//); if (m) resolve(m[0]); });
-  server.on('exit', (code) => reject(new Error(`bounce light exited with ${code}`)));
-  setTimeout(() => reject(new Error('bounce light printed no URL')), 20000);
-});
+fs.cpSync(path.join(root, 'scenes/shots'), path.join(work, 'shots'), { recursive: true });
+fs.cpSync(path.join(root, 'scenes/cornell'), path.join(work, 'cornell'), { recursive: true });
+
+/// `bounce light` on `scene` (small and quick); resolves to [server, url].
+async function startLight(scene, out) {
+  const server = spawn(bin, ['light', scene, '--port', '0', '--out', out, '--threads', '2', '--set', 'camera.resolution=[160,120]',
+    '--set', 'render.spp=1', '--set', 'render.rays=128', '--set', 'render.light_samples=2'], { stdio: ['ignore', 'pipe', 'inherit'] });
+  const url = await new Promise((resolve, reject) => {
+    let text = '';
+    server.stdout.on('data', (d) => { text += d; const m = text.match(/http:\/\/[^ ]+\//); if (m) resolve(m[0]); });
+    server.on('exit', (code) => reject(new Error(`bounce light exited with ${code}`)));
+    setTimeout(() => reject(new Error('bounce light printed no URL')), 20000);
+  });
+  return [server, url];
+}
+const [server, url] = await startLight(path.join(work, 'scene/cornell.json'), path.join(work, 'out'));
+let shotServer = null;
 
 let failures = 0;
 function check(ok, what) {
@@ -129,9 +137,32 @@ try {
   await page.locator('#view-panel').scrollIntoViewIfNeeded();
   await shot('4-view.png');
   check(errors.length === 0, `no page errors${errors.length ? ': ' + errors.join('; ') : ''}`);
+
+  // 5. A shot: the frame slider renders another frame from what the last one left (its plan).
+  let shotUrl;
+  [shotServer, shotUrl] = await startLight(path.join(work, 'shots/cornell-rolling.json'), path.join(work, 'shot-out'));
+  await page.goto(shotUrl);
+  await page.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 30000 });
+  await page.click('#rasterize');
+  s = await waitDone(1);
+  const f1 = await pixels();
+  check(await page.isVisible('#shot-frame'), 'an animated scene shows the frame slider');
+  const v5 = await page.evaluate(() => window.bounce.version);
+  await page.locator('#shot-frame').fill('3');
+  await page.locator('#shot-frame').dispatchEvent('change');
+  s = await waitDone(v5 + 1);
+  const f3 = await pixels();
+  let moved = 0;
+  for (let i = 0; i < f1.length; i++) moved += f1[i] !== f3[i];
+  check(s.state === 'done' && s.frame === 3 && moved > 100, `frame 3 rendered (${s.state}, frame ${s.frame}, ${moved} values changed)`);
+  check(s.stats.plan && s.stats.plan.cache === "previous frame's records, judged" && s.stats.records_regathered > 0,
+    `frame 3 was planned from frame 1's records (${s.stats.plan && s.stats.plan.cache}, ${s.stats.records_regathered} re-gathered)`);
+  await shot('5-shot-frame.png');
+  check(errors.length === 0, `no page errors${errors.length ? ': ' + errors.join('; ') : ''}`);
 } finally {
   await browser.close();
   server.kill();
+  if (shotServer) shotServer.kill();
   fs.rmSync(work, { recursive: true, force: true });
 }
 console.log(failures ? `${failures} check(s) failed` : `all checks passed; screenshots in ${outDir}`);

@@ -153,9 +153,12 @@ void pose_mesh(const aiScene* s, const aiMesh* mesh, const MeshTime& t, const ai
         }
     }
     for (unsigned v = 0; v < nv; ++v) {
-        // Weights that do not sum to 1 are normalised; a vertex no joint moves stays in bind space.
-        if (total[v] > 0) positions[v] = positions[v] / total[v];
-        else positions[v] = to_vec3(base[v]);
+        // Weights that do not sum to 1 are normalised. A vertex of a skin that no joint moves is
+        // a broken file (a joint index outside the skin, or all its weights zero).
+        if (!(total[v] > 0))
+            throw InputError(path, fmt::format("mesh {} vertex {}", mesh->mName.C_Str(), v),
+                             "no joint of the skin moves it (a joint index outside the skin, or weights that are all zero)");
+        positions[v] = positions[v] / total[v];
         if (mesh->mNormals) normals[v] = dot(normals[v], normals[v]) > 0 ? normalize(normals[v]) : to_vec3(mesh->mNormals[v]);
     }
 }

@@ -117,6 +117,42 @@ std::vector<std::string> gltf_referenced_files(const json& j, const std::string&
     return out;
 }
 
+/// Indices into `list` held at `ptr` of `j` (a number, or every element of an array).
+void check_indices(const json& j, const std::string& ptr, size_t count, const std::string& what, const std::string& path) {
+    const auto one = [&](const json& v, const std::string& at) {
+        if (!v.is_number_unsigned() || v.get<uint64_t>() >= count)
+            throw InputError(path, at, fmt::format("{} is not a {} index (the file has {})", v.dump(), what, count));
+    };
+    if (j.is_array())
+        for (size_t i = 0; i < j.size(); ++i) one(j[i], fmt::format("{}/{}", ptr, i));
+    else
+        one(j, ptr);
+}
+
+/// Skins and animations name nodes and accessors that exist (Assimp's own message names no place).
+void check_gltf_references(const json& j, const std::string& path) {
+    const size_t nodes = j.contains("nodes") && j["nodes"].is_array() ? j["nodes"].size() : 0;
+    const size_t accessors = j.contains("accessors") && j["accessors"].is_array() ? j["accessors"].size() : 0;
+    if (j.contains("skins") && j["skins"].is_array())
+        for (size_t s = 0; s < j["skins"].size(); ++s) {
+            const json& skin = j["skins"][s];
+            if (!skin.is_object()) continue;
+            if (skin.contains("joints")) check_indices(skin["joints"], fmt::format("/skins/{}/joints", s), nodes, "node", path);
+            if (skin.contains("inverseBindMatrices"))
+                check_indices(skin["inverseBindMatrices"], fmt::format("/skins/{}/inverseBindMatrices", s), accessors, "accessor", path);
+        }
+    if (!j.contains("animations") || !j["animations"].is_array()) return;
+    for (size_t a = 0; a < j["animations"].size(); ++a) {
+        const json& anim = j["animations"][a];
+        if (!anim.is_object() || !anim.contains("channels") || !anim["channels"].is_array()) continue;
+        for (size_t c = 0; c < anim["channels"].size(); ++c) {
+            const json& ch = anim["channels"][c];
+            if (ch.is_object() && ch.contains("target") && ch["target"].is_object() && ch["target"].contains("node"))
+                check_indices(ch["target"]["node"], fmt::format("/animations/{}/channels/{}/target/node", a, c), nodes, "node", path);
+        }
+    }
+}
+
 std::vector<std::string> check_gltf(const std::string& path) {
     const std::string text = gltf_json_text(path);
     check_json_nesting(text, path);
@@ -130,6 +166,7 @@ std::vector<std::string> check_gltf(const std::string& path) {
     }
     if (!j.is_object()) throw InputError(path, "", "a glTF file holds a JSON object");
     if (j.contains("nodes")) gltf_node_depth(j["nodes"], path);
+    check_gltf_references(j, path);
     return gltf_referenced_files(j, path);
 }
 

@@ -135,6 +135,11 @@ void LightingServer::routes() {
         session_.start(action, crop);
         reply(res, 202, {{"started", session_action_name(action)}});
     });
+    s.Post("/api/frame", [this](const httplib::Request& req, httplib::Response& res) {
+        const json b = body_object(req);
+        if (!b.contains("frame") || !b["frame"].is_number()) throw InputError("request body", "frame", "a frame number is required");
+        reply(res, 202, session_.set_frame(b["frame"].get<double>()));
+    });
     s.Post("/api/stop", [this](const httplib::Request&, httplib::Response& res) {
         session_.stop();
         reply(res, 200, session_.status());

@@ -27,11 +27,18 @@ SessionAction parse_session_action(const std::string& name) {
     if (name == "reshade") return SessionAction::Reshade;
     if (name == "regather") return SessionAction::Regather;
     if (name == "rasterize") return SessionAction::Rasterize;
-    throw InputError("request", "action", fmt::format("'{}' is not reshade, regather or rasterize", name));
+    if (name == "frame") return SessionAction::Frame;
+    throw InputError("request", "action", fmt::format("'{}' is not reshade, regather, rasterize or frame", name));
 }
 
 const char* session_action_name(SessionAction a) {
-    return a == SessionAction::Reshade ? "reshade" : a == SessionAction::Regather ? "regather" : "rasterize";
+    switch (a) {
+        case SessionAction::Reshade: return "reshade";
+        case SessionAction::Regather: return "regather";
+        case SessionAction::Rasterize: return "rasterize";
+        case SessionAction::Frame: return "frame";
+    }
+    return "?";
 }
 
 namespace {
@@ -93,6 +100,7 @@ private:
 
 LightingSession::LightingSession(SessionOptions options) : options_(std::move(options)) {
     scene_ = load_scene(options_.scene);
+    frame_ = scene_.frame;
     scene_dir_ = fs::weakly_canonical(fs::absolute(options_.scene)).parent_path();
     std::error_code ec;
     fs::create_directories(options_.out_dir, ec);
@@ -155,7 +163,9 @@ json LightingSession::edit(const std::string& key, const json& value, const std:
     std::lock_guard lock(mutex_);
     std::vector<Override> o = overrides_locked();
     o.emplace_back(key + "=" + value.dump(), origin.empty() ? "edit of " + key : origin);
-    Scene s = load_scene(options_.scene, o);  // throws with the file and place on a bad value
+    LoadOptions at;
+    at.frame = frame_;
+    Scene s = load_scene(options_.scene, o, at);  // throws with the file and place on a bad value
     if (!edits_.count(key)) edit_order_.push_back(key);
     edits_[key] = value;
     ++edit_count_;
@@ -165,6 +175,22 @@ json LightingSession::edit(const std::string& key, const json& value, const std:
     const SessionAction needs = needs_for(p ? p->identity : kImageOnly);
     pending_ = std::max(pending_, static_cast<int>(needs));
     return {{"key", key}, {"value", value}, {"needs", session_action_name(needs)}};
+}
+
+json LightingSession::set_frame(double frame) {
+    {
+        std::lock_guard lock(mutex_);
+        if (!scene_.shot.animated) throw InputError("request", "frame", "the scene has no shot (no \"animation\" block)");
+        if (!std::isfinite(frame) || !scene_.shot.contains(frame))
+            throw InputError("request", "frame", fmt::format("{} is outside the shot, frames {} to {}", frame, scene_.shot.first, scene_.shot.last));
+        LoadOptions at;
+        at.frame = frame;
+        scene_ = load_scene(options_.scene, overrides_locked(), at);
+        frame_ = frame;
+        ++edit_count_;
+    }
+    start(SessionAction::Frame);
+    return {{"frame", frame}};
 }
 
 SessionAction LightingSession::pending() const {
@@ -222,24 +248,14 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
         if (!edits_.count("render.preview")) scene.render.parallel.preview = true;
         req.cancel = cancel_.get();
         previous.deep = deep_, previous.cache = cache_;
+        previous.scene = rendered_, previous.accel = accel_, previous.radiosity = radiosity_, previous.waiting = waiting_;
     }
     const bool cached = scene.render.indirect.gi == GiMode::Cache;
-    // The session's deep buffer and cache, from memory when it holds them, else from its files.
-    req.reuse_previous = action != SessionAction::Rasterize;
-    if (action == SessionAction::Rasterize || !fs::exists(deep_path_))
-        req.deep_out = deep_path_.string(), req.reuse_previous = false;
-    else if (!previous.deep)
-        req.deep_in = deep_path_.string();
-    if (cached && action != SessionAction::Rasterize && fs::exists(cache_path_)) {
-        // The session knows its cache's history: lights and materials may have changed since
-        // it was gathered (a re-shade keeps its bounce light on purpose).
-        if (!previous.cache) req.cache_in = cache_path_.string();
-        req.force = true;
-        req.cache_reuse = CacheReuse::Any;
-        req.regather = action == SessionAction::Regather;
-        req.reshade = action == SessionAction::Reshade;
+    if (action == SessionAction::Frame) {
+        // Another frame of the shot: its plan keeps, moves or redoes what the last one left.
+        req.sequence = true;
     } else {
-        previous.cache.reset();
+        set_session_files(action, req, previous, cached);
     }
     if (cached && scene.render.parallel.preview)
         req.preview = [&](const Image& img) {
@@ -270,6 +286,30 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
     FrameState next = r.release_state();
     if (new_deep) deep_ = next.deep;  // else deep_ holds it already
     if (next.cache) cache_ = next.cache;  // what the file now holds
+    if (!crop) {
+        rendered_ = std::make_shared<const Scene>(std::move(scene));
+        accel_ = next.accel, radiosity_ = next.radiosity, waiting_ = std::move(next.waiting);
+    }
+}
+
+void LightingSession::set_session_files(SessionAction action, RenderRequest& req, FrameState& previous, bool cached) const {
+    // The session's deep buffer and cache, from memory when it holds them, else from its files.
+    req.reuse_previous = action != SessionAction::Rasterize;
+    if (action == SessionAction::Rasterize || !fs::exists(deep_path_))
+        req.deep_out = deep_path_.string(), req.reuse_previous = false;
+    else if (!previous.deep)
+        req.deep_in = deep_path_.string();
+    if (cached && action != SessionAction::Rasterize && fs::exists(cache_path_)) {
+        // The session knows its cache's history: lights and materials may have changed since
+        // it was gathered (a re-shade keeps its bounce light on purpose).
+        if (!previous.cache) req.cache_in = cache_path_.string();
+        req.force = true;
+        req.cache_reuse = CacheReuse::Any;
+        req.regather = action == SessionAction::Regather;
+        req.reshade = action == SessionAction::Reshade;
+    } else {
+        previous.cache.reset();
+    }
 }
 
 void LightingSession::run(SessionAction action, std::optional<std::array<int, 4>> crop) {
@@ -306,6 +346,8 @@ json LightingSession::status() const {
             {"stats", stats_},
             {"image", {{"version", version_}, {"width", image_.width}, {"height", image_.height}, {"layers", layers}}},
             {"pending", pending_ < 0 ? json(nullptr) : json(session_action_name(static_cast<SessionAction>(pending_)))},
+            {"frame", frame_},
+            {"shot", {{"animated", scene_.shot.animated}, {"first", scene_.shot.first}, {"last", scene_.shot.last}, {"fps", scene_.shot.fps}}},
             {"scene", options_.scene}};
 }
 

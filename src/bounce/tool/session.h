@@ -19,6 +19,7 @@
 #include "bounce/deep/deep_buffer.h"
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
+#include "bounce/render/frame_plan.h"
 #include "bounce/scene/json_reader.h"
 #include "bounce/scene/scene.h"
 
@@ -42,6 +43,7 @@ enum class SessionAction {
     Reshade,    ///< deep file and cache reused: shading (and gathers only where records miss)
     Regather,   ///< deep file reused, records flushed (inside the crop, if one is given)
     Rasterize,  ///< new deep file, new cache
+    Frame,      ///< another frame of the shot: what the last frame left is kept, moved or redone by its plan
 };
 SessionAction parse_session_action(const std::string& name);  ///< InputError on another name
 const char* session_action_name(SessionAction a);
@@ -64,6 +66,9 @@ public:
     nlohmann::json edit(const std::string& key, const nlohmann::json& value, const std::string& origin = "");
     /// The least action that shows every edit since the last finished render.
     SessionAction pending() const;
+    /// Moves to `frame` of the scene's shot (InputError outside it, or for a still) and starts
+    /// its render, planned from what the last frame left (a frame slider). Returns {frame}.
+    nlohmann::json set_frame(double frame);
 
     /// Starts a render on the worker, cancelling a running one first. `crop` (full-frame pixel
     /// coordinates x0, x1, y0, y1) limits a re-shade or re-gather to a sub-viewport, pasted
@@ -111,6 +116,8 @@ private:
     /// One frame through its plan (plan_frame): a re-shade gathers only if records are missing.
     void render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats, ProgressSink& sink);
     std::vector<Override> overrides_locked() const;
+    /// A re-shade, re-gather or new deep file: the session's deep buffer and cache (memory or files).
+    void set_session_files(SessionAction action, RenderRequest& req, FrameState& previous, bool cached) const;
 
     SessionOptions options_;
     std::filesystem::path scene_dir_, out_dir_, deep_path_, cache_path_;
@@ -119,7 +126,8 @@ private:
     std::condition_variable idle_;
     std::map<std::string, nlohmann::json> edits_;  ///< key -> value, in the order of the table
     std::vector<std::string> edit_order_;
-    Scene scene_;  ///< with every edit
+    Scene scene_;  ///< with every edit, at frame_
+    double frame_ = 1;  ///< the shot's frame the session shows
     int pending_ = -1;  ///< SessionAction, or -1 = nothing to show
     uint64_t edit_count_ = 0;  ///< edits so far (a render clears pending_ only if none came while it ran)
     // Worker state.
@@ -134,6 +142,12 @@ private:
     /// The session's deep buffer and cache as its files hold them, kept for re-shades.
     std::shared_ptr<const DeepBuffer> deep_;
     std::shared_ptr<const IrradianceCache> cache_;
+    /// For the next frame of a shot: the scene last rendered and its BVHs, radiosity textures and
+    /// the records no fragment needed yet (frame_plan.h, FrameState).
+    std::shared_ptr<const Scene> rendered_;
+    std::shared_ptr<const SceneAccel> accel_;
+    std::shared_ptr<const RadiosityTextures> radiosity_;
+    std::vector<Record> waiting_;
     uint64_t version_ = 0;
 };
 
