@@ -159,6 +159,42 @@ const char* record_problem(const Record& r) {
 
 }  // namespace
 
+std::string serialize_records(std::span<const Record> records) {
+    std::string out;
+    put(out, static_cast<uint64_t>(records.size()));
+    for (const Record& r : records) {
+        write_record(out, r);
+        const GatherHits* h = r.hits.get();
+        put(out, static_cast<uint32_t>(h ? h->t.size() : 0));
+        if (!h) continue;
+        put(out, h->m), put(out, h->n);
+        for (size_t c = 0; c < h->t.size(); ++c) put(out, h->t[c]), put(out, h->u[c]), put(out, h->v[c]), put(out, h->object[c]), put(out, h->prim[c]);
+    }
+    return out;
+}
+
+std::vector<Record> parse_records(const std::string& bytes) {
+    const std::string name = "records from another process";
+    Cursor c(bytes, name);
+    const auto n = c.get<uint64_t>("count");
+    std::vector<Record> out;
+    out.reserve(static_cast<size_t>(std::min<uint64_t>(n, bytes.size() / kRecordBytes)));
+    for (uint64_t i = 0; i < n; ++i) {
+        Record r = read_record(c);
+        if (const auto cells = c.get<uint32_t>("hits")) {
+            auto h = std::make_shared<GatherHits>();
+            h->m = c.get<int>("grid"), h->n = c.get<int>("grid");
+            h->t.resize(cells), h->u.resize(cells), h->v.resize(cells), h->object.resize(cells), h->prim.resize(cells);
+            for (uint32_t k = 0; k < cells; ++k)
+                h->t[k] = c.get<float>("t"), h->u[k] = c.get<float>("u"), h->v[k] = c.get<float>("v"),
+                h->object[k] = c.get<uint32_t>("object"), h->prim[k] = c.get<uint32_t>("prim");
+            r.hits = std::move(h);
+        }
+        out.push_back(std::move(r));
+    }
+    return out;
+}
+
 nlohmann::json record_layout() {
     nlohmann::json l = nlohmann::json::array();
     for (const auto& f : kFields) l.push_back({{"name", f.name}, {"type", f.type}, {"count", f.count}});

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,11 @@ CacheFile read_cache_file(const std::string& path);
 CacheFile parse_cache_file(const std::string& bytes, const std::string& name);
 /// Serialises to bytes.
 std::string serialize_cache_file(const CacheFile& file);
+
+/// Records with their gather hits, as bytes for another process of the same build (an MPI
+/// exchange; not a file format), and back.
+std::string serialize_records(std::span<const Record> records);
+std::vector<Record> parse_records(const std::string& bytes);
 
 /// The record layout this version writes, as (name, type, count) triples for the header.
 nlohmann::json record_layout();

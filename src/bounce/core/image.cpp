@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <nlohmann/json.hpp>
 #include <filesystem>
 
 #include "bounce/core/atomic_file.h"
@@ -123,6 +125,46 @@ void write_png_rgb8(const std::string& path, int width, int height, const std::v
         if (!out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) || !out->close())
             throw InputError(path, "", "cannot write image: " + out->geterror());
     });
+}
+
+std::string serialize_image(const Image& img) {
+    nlohmann::json head = {{"size", {img.full_width, img.full_height, img.x0, img.y0, img.width, img.height}}, {"metadata", img.metadata}};
+    for (const Layer& l : img.layers) head["layers"].push_back({{"name", l.name}, {"channels", l.channels}});
+    std::string out = head.dump();
+    const auto n = static_cast<uint64_t>(out.size());
+    out.insert(0, reinterpret_cast<const char*>(&n), sizeof(n));
+    for (const Layer& l : img.layers) out.append(reinterpret_cast<const char*>(l.data.data()), l.data.size() * sizeof(float));
+    return out;
+}
+
+Image parse_image(const std::string& bytes) {
+    uint64_t n = 0;
+    std::memcpy(&n, bytes.data(), sizeof(n));
+    const nlohmann::json head = nlohmann::json::parse(bytes.substr(sizeof(n), n));
+    Image img;
+    const auto s = head["size"].get<std::vector<int>>();
+    img.full_width = s[0], img.full_height = s[1], img.x0 = s[2], img.y0 = s[3], img.width = s[4], img.height = s[5];
+    img.metadata = head["metadata"].get<std::map<std::string, std::string>>();
+    size_t at = sizeof(n) + n;
+    if (head.contains("layers"))
+        for (const auto& l : head["layers"]) {
+            Layer& layer = img.add_layer(l["name"], l["channels"].get<std::vector<std::string>>());
+            std::memcpy(layer.data.data(), bytes.data() + at, layer.data.size() * sizeof(float));
+            at += layer.data.size() * sizeof(float);
+        }
+    return img;
+}
+
+Image stack_rows(const std::vector<Image>& bands) {
+    Image out = bands.front();
+    out.height = 0;
+    for (const Image& b : bands) out.height += b.height;
+    for (size_t li = 0; li < out.layers.size(); ++li) {
+        Layer& l = out.layers[li];
+        l.data.clear();
+        for (const Image& b : bands) l.data.insert(l.data.end(), b.layers[li].data.begin(), b.layers[li].data.end());
+    }
+    return out;
 }
 
 std::string texture_problem(const std::string& path) {

@@ -38,6 +38,12 @@ struct Image {
     }
 };
 
+/// An image as bytes for another process of the same build (an MPI exchange), and back.
+std::string serialize_image(const Image& image);
+Image parse_image(const std::string& bytes);
+/// Images of consecutive row bands (same layers and columns), top to bottom, as one image.
+Image stack_rows(const std::vector<Image>& bands);
+
 /// Writes all layers to one OpenEXR (temporary name, then rename). The layer named "beauty"
 /// is written as the unprefixed R,G,B,A channels.
 void write_exr(const std::string& path, const Image& image);

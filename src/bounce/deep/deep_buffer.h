@@ -129,6 +129,14 @@ std::array<int, 4> frame_window(const Scene& scene);
 /// The fragments of window `w` of `deep`, which must contain it.
 DeepBuffer sub_window(const DeepBuffer& deep, const std::array<int, 4>& w);
 
+/// A window's fragments as bytes for another process of the same build (an MPI exchange), and back.
+std::string serialize_window(const DeepBuffer& deep);
+DeepBuffer parse_window(const std::string& bytes);
+/// Windows of consecutive row bands (same columns), top to bottom, as one window.
+DeepBuffer stack_rows(const std::vector<DeepBuffer>& bands);
+/// Rows [y0, y1) of window `w` split in `n` bands: band `i`'s {x0, x1, y0, y1}.
+std::array<int, 4> row_band(const std::array<int, 4>& w, int i, int n);
+
 /// Throws InputError (naming the camera) if no camera ray hits any geometry.
 void check_camera_sees_geometry(const Scene& scene, const SceneAccel& accel);
 

@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <cstring>
 #include <numeric>
 
 #include "bounce/core/error.h"
@@ -220,6 +221,56 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
     for (auto& v : per_pixel) deep.fragments.insert(deep.fragments.end(), v.begin(), v.end());
     stats.set("fragments", static_cast<double>(deep.fragments.size()));
     return deep;
+}
+
+std::array<int, 4> row_band(const std::array<int, 4>& w, int i, int n) {
+    const int h = w[3] - w[2];
+    return {w[0], w[1], w[2] + static_cast<int>(static_cast<int64_t>(h) * i / n), w[2] + static_cast<int>(static_cast<int64_t>(h) * (i + 1) / n)};
+}
+
+std::string serialize_window(const DeepBuffer& d) {
+    std::string out;
+    const auto put = [&out](const void* p, size_t n) { out.append(static_cast<const char*>(p), n); };
+    const int64_t head[8] = {d.full_width, d.full_height, d.x0, d.y0, d.width, d.height, d.spp, static_cast<int64_t>(d.fragments.size())};
+    put(head, sizeof(head));
+    put(&d.seed, sizeof(d.seed)), put(&d.scene_fingerprint, sizeof(d.scene_fingerprint));
+    put(d.offsets.data(), d.offsets.size() * sizeof(uint32_t));
+    put(d.fragments.data(), d.fragments.size() * sizeof(Fragment));  // a trivially copyable struct, same build
+    return out;
+}
+
+DeepBuffer parse_window(const std::string& bytes) {
+    DeepBuffer d;
+    int64_t head[8];
+    size_t at = 0;
+    const auto get = [&](void* p, size_t n) {
+        if (at + n > bytes.size()) throw std::runtime_error("truncated deep window from another process");
+        std::memcpy(p, bytes.data() + at, n);
+        at += n;
+    };
+    get(head, sizeof(head));
+    d.full_width = static_cast<int>(head[0]), d.full_height = static_cast<int>(head[1]), d.x0 = static_cast<int>(head[2]);
+    d.y0 = static_cast<int>(head[3]), d.width = static_cast<int>(head[4]), d.height = static_cast<int>(head[5]), d.spp = static_cast<int>(head[6]);
+    get(&d.seed, sizeof(d.seed)), get(&d.scene_fingerprint, sizeof(d.scene_fingerprint));
+    d.offsets.resize(d.pixel_count() + 1);
+    get(d.offsets.data(), d.offsets.size() * sizeof(uint32_t));
+    d.fragments.resize(static_cast<size_t>(head[7]));
+    get(d.fragments.data(), d.fragments.size() * sizeof(Fragment));
+    return d;
+}
+
+DeepBuffer stack_rows(const std::vector<DeepBuffer>& bands) {
+    DeepBuffer out = bands.front();
+    out.height = 0;
+    out.offsets.assign(1, 0);
+    out.fragments.clear();
+    for (const DeepBuffer& b : bands) {
+        out.height += b.height;
+        const uint32_t base = static_cast<uint32_t>(out.fragments.size());
+        for (size_t i = 1; i < b.offsets.size(); ++i) out.offsets.push_back(base + b.offsets[i]);
+        out.fragments.insert(out.fragments.end(), b.fragments.begin(), b.fragments.end());
+    }
+    return out;
 }
 
 void check_camera_sees_geometry(const Scene& scene, const SceneAccel& accel) {

@@ -1,0 +1,74 @@
+#include "bounce/dist/mpi.h"
+
+#include <mpi.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+
+#include "bounce/core/error.h"
+
+namespace bounce {
+
+bool launched_by_mpi() {
+    return std::getenv("OMPI_COMM_WORLD_SIZE") || std::getenv("PMIX_RANK") || std::getenv("PMI_RANK");
+}
+
+MpiCommunicator::MpiCommunicator(int* argc, char*** argv) {
+    int provided = 0;
+    // Only the main thread calls MPI; TBB's workers never do.
+    MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+    MPI_Comm_size(MPI_COMM_WORLD, &size_);
+}
+
+MpiCommunicator::~MpiCommunicator() { MPI_Finalize(); }
+
+std::vector<std::string> MpiCommunicator::allgather(const std::string& mine) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto n = static_cast<long long>(mine.size());
+    std::vector<long long> sizes(static_cast<size_t>(size_));
+    MPI_Allgather(&n, 1, MPI_LONG_LONG, sizes.data(), 1, MPI_LONG_LONG, MPI_COMM_WORLD);
+    // MPI counts are ints: large exchanges go in chunks of at most 1 GiB per rank.
+    constexpr long long kChunk = 1LL << 30;
+    std::vector<std::string> out(static_cast<size_t>(size_));
+    for (size_t r = 0; r < out.size(); ++r) out[r].resize(static_cast<size_t>(sizes[r]));
+    long long largest = 0;
+    for (long long s : sizes) largest = std::max(largest, s);
+    std::vector<int> counts(out.size()), displs(out.size());
+    std::string recv;
+    for (long long at = 0; at < largest; at += kChunk) {
+        int total = 0;
+        for (size_t r = 0; r < out.size(); ++r) {
+            counts[r] = static_cast<int>(std::clamp(sizes[r] - at, 0LL, kChunk));
+            displs[r] = total;
+            total += counts[r];
+        }
+        recv.resize(static_cast<size_t>(total));
+        const int mine_count = counts[static_cast<size_t>(rank_)];
+        MPI_Allgatherv(mine.data() + std::min<long long>(at, n), mine_count, MPI_BYTE, recv.data(), counts.data(), displs.data(),
+                       MPI_BYTE, MPI_COMM_WORLD);
+        for (size_t r = 0; r < out.size(); ++r)
+            std::copy_n(recv.data() + displs[r], counts[r], out[r].data() + at);
+    }
+    bytes_sent += mine.size();
+    ++exchanges;
+    wait_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return out;
+}
+
+void MpiCommunicator::abort(int code) {
+    MPI_Abort(MPI_COMM_WORLD, code);
+    std::exit(code);  // not reached
+}
+
+void check_same_job(Communicator& comm, const std::string& identity) {
+    const std::vector<std::string> all = comm.allgather(identity);
+    for (size_t r = 1; r < all.size(); ++r)
+        if (all[r] != all[0])
+            throw InputError(fmt::format("rank {}", r), "",
+                             fmt::format("runs another binary or reads another scene than rank 0 ({} against {})", all[r], all[0]));
+}
+
+}  // namespace bounce
