@@ -2,6 +2,9 @@
 // render_cmd.cpp runs frames and sequences, tools_cmd.cpp the tools, light.cpp the lighting tool.
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <chrono>
+#include <memory>
+#include <thread>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -10,6 +13,7 @@
 
 #include "bounce/core/error.h"
 #include "bounce/core/progress.h"
+#include "bounce/dist/mpi.h"
 #include "bounce/scene/params.h"
 #include "light.h"
 #include "render_cmd.h"
@@ -41,12 +45,28 @@ int run_params(bool json, bool markdown) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+/// One line on stderr for a failure; in a job of many ranks it names the rank. Ranks other than
+/// 0 wait a moment first: when every rank fails alike (a bad scene), rank 0's abort ends the
+/// others before they print, so the user reads the cause once.
+void report_failure(const Communicator* comm, const std::string& text) {
+    if (comm && comm->size() > 1) {
+        if (comm->rank() > 0) std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        // A refusal that names the rank at fault (check_same_job) is printed as it is.
+        if (text.starts_with("rank ")) std::fprintf(stderr, "bounce: %s\n", text.c_str());
+        else std::fprintf(stderr, "bounce: rank %d: %s\n", comm->rank(), text.c_str());
+    } else {
+        std::fprintf(stderr, "bounce: %s\n", text.c_str());
+    }
+    std::fflush(stderr);
+}
+
+int run_command(int argc, char** argv, Communicator* comm) {
     CLI::App app{"bounce: one-bounce diffuse global illumination and ambient occlusion"};
     app.require_subcommand(1);
     app.set_version_flag("--version", std::string("bounce ") + BOUNCE_VERSION + " (" + BOUNCE_GIT_REV + ")");
 
     RenderArgs ra;
+    ra.comm = comm;
     CLI::App* render = app.add_subcommand("render", "render a scene to a multi-layer EXR and a PNG");
     add_render_options(*render, ra);
 
@@ -124,6 +144,7 @@ int main(int argc, char** argv) {
     }
     try {
         if (*render) return run_render(ra);
+        if (comm && comm->size() > 1) throw InputError("command line", argv[1], "only render runs as an MPI job of many ranks");
         if (*params) return run_params(params_json, params_markdown_flag);
         if (*compare) return run_compare(ca);
         if (*bake) return run_bake_ao(ba);
@@ -133,18 +154,29 @@ int main(int argc, char** argv) {
         if (*cfilter) return run_cache_filter(ka);
         if (*cexport) return run_cache_export(ka);
     } catch (const InputError& e) {
-        std::fprintf(stderr, "bounce: %s\n", e.what());
+        report_failure(comm, e.what());
         return 2;
     } catch (const std::bad_alloc&) {
         // Estimates refuse what cannot fit before allocating; this is what slipped past them.
-        std::fprintf(stderr, "bounce: error: out of memory (lower the resolution, the dicing rate or the fur density)\n");
+        report_failure(comm, "error: out of memory (lower the resolution, the dicing rate or the fur density)");
         return 2;
     } catch (const Cancelled&) {
-        std::fprintf(stderr, "bounce: cancelled\n");
+        report_failure(comm, "cancelled");
         return 130;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "bounce: internal error: %s\n", e.what());
+        report_failure(comm, std::string("internal error: ") + e.what());
         return 1;
     }
     return 0;
+}
+
+int main(int argc, char** argv) {
+    // Under mpirun (or srun) the job's ranks share each frame (docs/parallel.md); alone, or as
+    // a job of one rank, bounce is the one-process renderer.
+    std::unique_ptr<MpiCommunicator> mpi;
+    if (launched_by_mpi()) mpi = std::make_unique<MpiCommunicator>(&argc, &argv);
+    const int code = run_command(argc, argv, mpi.get());
+    // A failed rank must not leave the others waiting at a collective call forever.
+    if (code != 0 && mpi && mpi->size() > 1) MpiCommunicator::abort(code);
+    return code;
 }

@@ -9,6 +9,7 @@
 
 #include "bounce/core/error.h"
 #include "bounce/core/image.h"
+#include "bounce/dist/mpi.h"
 #include "bounce/cache/cache_file.h"
 #include "bounce/render/render.h"
 #include "bounce/render/shot.h"
@@ -52,6 +53,27 @@ RenderRequest request_of(const RenderArgs& a, const FrameFiles& files, int frame
     return request;
 }
 
+/// Rank 0 writes a frame's outputs and talks to the user; every rank renders.
+bool writes(const Communicator* comm) { return !comm || comm->rank() == 0; }
+
+/// Rank 0's answer to a question about files (are the outputs there?), so that every rank
+/// takes the same branch whatever its view of a shared folder.
+bool rank0_says(Communicator* comm, bool mine) {
+    if (!comm || comm->size() == 1) return mine;
+    return comm->allgather(mine ? "1" : "0").front() == "1";
+}
+
+/// Refuses a job whose ranks run another build, command line or scene (check_same_job).
+void check_ranks(const RenderArgs& a, const Scene& scene) {
+    if (!a.comm || a.comm->size() == 1) return;
+    std::string command;
+    for (const auto& o : a.sets) command += " --set " + o;
+    const std::string identity = fmt::format("bounce {} ({}), {} {}{} (scene {:016x})", BOUNCE_VERSION, BOUNCE_GIT_REV,
+                                             a.files.scene, a.files.output, command,
+                                             scene.fingerprint({"objects", "materials", "lights", "camera", "render"}));
+    check_same_job(*a.comm, identity);
+}
+
 void print_stats(const Stats& stats, const Scene& scene) {
     std::printf("%s", stats.to_text().c_str());
     if (scene.render.indirect.any()) std::printf("\n%s", seed_table(stats.to_json()).c_str());
@@ -75,11 +97,13 @@ void report(const RenderArgs& a, const RenderResult& r, const FrameFiles& files,
 
 int render_frame(const RenderArgs& a, const FrameFiles& files) {
     const Scene scene = load_render_scene(a, a.frame);
-    check_frame(a, files, scene);
-    std::unique_ptr<ProgressSink> sink = make_progress(a.quiet);
+    check_ranks(a, scene);
+    if (writes(a.comm)) check_frame(a, files, scene);
+    std::unique_ptr<ProgressSink> sink = make_progress(a.quiet || !writes(a.comm));
     Stats stats;
     RenderRequest request = request_of(a, files, static_cast<int>(std::lround(scene.frame)));
-    if (scene.render.parallel.preview)
+    request.comm = a.comm;
+    if (scene.render.parallel.preview && writes(a.comm))
         request.preview = [&](const Image& img) {
             write_exr(files.output, img);
             write_png(files.png(), img, "beauty");
@@ -87,6 +111,7 @@ int render_frame(const RenderArgs& a, const FrameFiles& files) {
     const FrameState none;  // a still, or a frame of a sequence that starts from cache files
     const FramePlan plan = plan_frame(scene, none, request);
     RenderResult r = run_frame(scene, plan, none, request, stats, sink.get());
+    if (!writes(a.comm)) return 0;
     write_frame_outputs(r, files, a.show, stats);
     report(a, r, files, stats, scene);
     return 0;
@@ -99,33 +124,55 @@ bool outputs_complete(const FrameFiles& f) {
     return true;
 }
 
-/// The frames of a shot in order, each starting from what the one before left (Shot). A
-/// frame that fails stops the sequence there: the frames before it are written.
-int render_sequence(const RenderArgs& a, int first, int last) {
+/// Frames `first`..`last` of a shot that starts at `shot_first`, in order, each starting from
+/// what the one before left (Shot), spread over `comm`'s ranks (null: this process). A frame
+/// that fails stops the sequence there: the frames before it are written. `before_ok`: the
+/// cache file of the frame before `first` may be started from (decided before any rank ran).
+int render_sequence(const RenderArgs& a, int first, int last, int shot_first, Communicator* comm, bool before_ok) {
     Shot shot;
-    std::unique_ptr<ProgressSink> sink = make_progress(a.quiet);
+    std::unique_ptr<ProgressSink> sink = make_progress(a.quiet || !writes(comm));
     for (int f = first; f <= last; ++f) {
         const FrameFiles files = expand_frame(a.files, f);
-        if (a.resume && outputs_complete(files)) {
+        if (a.resume && rank0_says(comm, outputs_complete(files))) {
             shot.forget();
-            if (!a.quiet) std::fprintf(stderr, "frame %d: outputs complete, skipped\n", f);
+            if (!a.quiet && writes(comm)) std::fprintf(stderr, "frame %d: outputs complete, skipped\n", f);
             continue;
         }
         auto scene = std::make_shared<const Scene>(load_render_scene(a, f));
-        check_frame(a, files, *scene);
+        if (f == first && comm) check_ranks(a, *scene);
+        if (writes(comm)) check_frame(a, files, *scene);
         // A resumed shot starts from the cache the frame before left, when there is one.
-        const std::string before = f > first && !a.files.cache_out.empty() ? expand_frame_pattern(a.files.cache_out, f - 1) : "";
-        if (!shot.has_previous() && !before.empty() && std::filesystem::is_regular_file(before))
+        const std::string before = f > shot_first && !a.files.cache_out.empty() ? expand_frame_pattern(a.files.cache_out, f - 1) : "";
+        if (!shot.has_previous() && !before.empty() && (f > first || before_ok) &&
+            rank0_says(comm, std::filesystem::is_regular_file(before)))
             shot.start_from(std::make_shared<const Scene>(load_render_scene(a, f - 1)), before);
         Stats stats;
         RenderRequest request = request_of(a, files, f);
-        if (f > first || shot.has_previous()) request.cache_in.clear();  // the shot carries its own cache
+        request.comm = comm;
+        if (f > shot_first || shot.has_previous()) request.cache_in.clear();  // the shot carries its own cache
         RenderResult r = shot.render(scene, request, stats, sink.get());
-        write_frame_outputs(r, files, a.show, stats);
-        report(a, r, files, stats, *scene);
+        if (writes(comm)) {
+            write_frame_outputs(r, files, a.show, stats);
+            report(a, r, files, stats, *scene);
+        }
         shot.keep(r, scene);
     }
     return 0;
+}
+
+/// --distribute frames: each rank renders a contiguous chunk of the range alone. A chunk starts
+/// from the cache file of the frame before it only if that file was there before any rank
+/// started (a file another rank writes meanwhile would make the result depend on timing).
+int render_frame_chunks(const RenderArgs& a, int first, int last) {
+    check_ranks(a, load_render_scene(a, first));  // every rank's chunk is of the same shot
+    const int ranks = a.comm->size(), r = a.comm->rank(), n = last - first + 1;
+    const int lo = first + static_cast<int>(static_cast<int64_t>(n) * r / ranks);
+    const int hi = first + static_cast<int>(static_cast<int64_t>(n) * (r + 1) / ranks) - 1;
+    const bool before_ok = lo > first && !a.files.cache_out.empty() &&
+                           std::filesystem::is_regular_file(expand_frame_pattern(a.files.cache_out, lo - 1));
+    a.comm->allgather("");  // every rank has looked before any renders
+    if (lo > hi) return 0;  // more ranks than frames
+    return render_sequence(a, lo, hi, first, nullptr, before_ok);
 }
 
 }  // namespace
@@ -141,6 +188,8 @@ int run_render(const RenderArgs& a) {
         return render_frame(a, expand_frame(a.files, a.frame ? static_cast<int>(std::lround(*a.frame)) : 0));
     }
     if (a.frame) throw InputError("command line", "--frame", "give --frame or --frames, not both");
+    if (a.distribute != "tiles" && a.distribute != "frames")
+        throw InputError("command line", "--distribute " + a.distribute, "is tiles or frames");
     auto [first, last] = parse_frame_range(a.frames, "--frames " + a.frames);
     std::vector<std::pair<const char*, std::string>> patterns{{"-o", a.files.output}};
     for (auto [flag, path] : {std::pair{"--cache-out", a.files.cache_out}, std::pair{"--deep-out", a.files.deep_out},
@@ -149,7 +198,8 @@ int run_render(const RenderArgs& a) {
     for (const auto& [flag, pattern] : patterns)
         if (pattern.find('#') == std::string::npos)
             throw InputError("command line", std::string(flag) + " " + pattern, "a sequence needs a #### frame pattern in it");
-    return render_sequence(a, first, last);
+    if (a.distribute == "frames" && a.comm && a.comm->size() > 1) return render_frame_chunks(a, first, last);
+    return render_sequence(a, first, last, first, a.comm, false);
 }
 
 void add_render_options(CLI::App& render, RenderArgs& ra) {
@@ -166,6 +216,8 @@ void add_render_options(CLI::App& render, RenderArgs& ra) {
     render.add_option("--frame", ra.frame, "render this frame of the shot (keyed values taken then; expands #### in file names)");
     render.add_option("--frames", ra.frames, "render frames FIRST-LAST of the shot, each starting from what the one before left");
     render.add_flag("--resume", ra.resume, "with --frames: skip frames whose outputs are all there");
+    render.add_option("--distribute", ra.distribute,
+                      "under mpirun with --frames: tiles (every rank on every frame) or frames (a chunk of frames per rank)");
     render.add_option("--show", ra.show, "layer written to the PNG: beauty (default), records, indirect, ao ...");
     render.add_option("--set", ra.sets, "override any scene value: key.path=value")->take_all();
     render.add_option("--deep-out", ra.files.deep_out, "write the deep buffer (OpenEXR deep)");

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "bounce/core/communicator.h"
 #include "bounce/core/progress.h"
 #include "bounce/render/frame.h"
 #include "bounce/scene/json_reader.h"
@@ -21,6 +22,10 @@ struct RenderArgs {
     std::string show = "beauty", frames;
     std::optional<double> frame;  ///< default: the shot's first frame
     bool stats = false, quiet = false, resume = false;
+    /// Under mpirun: the job's ranks (null: this process alone), and how a --frames range is
+    /// shared among them: "tiles" (every frame on every rank) or "frames" (a chunk per rank).
+    Communicator* comm = nullptr;
+    std::string distribute = "tiles";
 };
 
 /// Adds the render command's options to `render`.

@@ -164,6 +164,7 @@ std::string serialize_records(std::span<const Record> records) {
     put(out, static_cast<uint64_t>(records.size()));
     for (const Record& r : records) {
         write_record(out, r);
+        put(out, r.support);  // in memory only: files recompute it
         const GatherHits* h = r.hits.get();
         put(out, static_cast<uint32_t>(h ? h->t.size() : 0));
         if (!h) continue;
@@ -181,6 +182,7 @@ std::vector<Record> parse_records(const std::string& bytes) {
     out.reserve(static_cast<size_t>(std::min<uint64_t>(n, bytes.size() / kRecordBytes)));
     for (uint64_t i = 0; i < n; ++i) {
         Record r = read_record(c);
+        r.support = c.get<float>("support");
         if (const auto cells = c.get<uint32_t>("hits")) {
             auto h = std::make_shared<GatherHits>();
             h->m = c.get<int>("grid"), h->n = c.get<int>("grid");

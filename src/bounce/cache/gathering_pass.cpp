@@ -3,9 +3,11 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include <algorithm>
+#include <cstring>
 #include <mutex>
 #include <shared_mutex>
 
+#include "bounce/cache/cache_file.h"
 #include "bounce/cache/passes.h"
 #include "bounce/cache/sites.h"
 #include "bounce/cache/temporal.h"
@@ -34,7 +36,7 @@ public:
         : scene_(scene), deep_(deep), gatherer_(gatherer), cache_(cache), stats_(stats), o_(o),
           per_tile_(scene.render.parallel.cache_sharing == CacheSharing::PerThread),
           tiles_(make_tiles(deep.width, deep.height, scene.render.parallel.tile_size, scene.render.parallel.tile_order)),
-          work_(tiles_.size()) {}
+          mine_(owned(tiles_, o.comm)), work_(tiles_.size()) {}
 
     void subpass(const SubPass& sp);
     size_t gathered = 0, dropped = 0;
@@ -44,6 +46,14 @@ private:
     Record gather_at(const Candidate& c, Counters& counters);
     void judge_tile(const SubPass& sp, const Tile& t);
     void insert_new(std::vector<Record> records);
+    void exchange_work();
+    void share_late(const std::vector<uint8_t>& still, std::vector<Record>& late);
+    static std::vector<Tile> owned(const std::vector<Tile>& tiles, const Communicator* comm) {
+        std::vector<Tile> out;
+        for (const Tile& t : tiles)
+            if (!comm || comm->owns(static_cast<size_t>(t.index))) out.push_back(t);
+        return out;
+    }
 
     const Scene& scene_;
     const DeepBuffer& deep_;
@@ -53,6 +63,7 @@ private:
     const GatheringOptions& o_;
     const bool per_tile_;
     const std::vector<Tile> tiles_;
+    const std::vector<Tile> mine_;  ///< the tiles this process judges (all of them without MPI)
     std::vector<TileWork> work_;
 };
 
@@ -133,10 +144,63 @@ void Gathering::insert_new(std::vector<Record> records) {
     }
 }
 
+/// Every process sends the work of its tiles and takes the others': afterwards each holds
+/// every tile's work, as one process that judged them all would.
+void Gathering::exchange_work() {
+    std::string mine;
+    const auto put = [&mine](const void* p, size_t n) { mine.append(static_cast<const char*>(p), n); };
+    for (const Tile& t : mine_) {
+        const TileWork& w = work_[static_cast<size_t>(t.index)];
+        const std::string made = serialize_records(w.made);
+        const uint64_t head[4] = {static_cast<uint64_t>(t.index), made.size(), w.requests.size(), w.deferred.size()};
+        put(head, sizeof(head));
+        put(made.data(), made.size());
+        put(w.requests.data(), w.requests.size() * sizeof(uint32_t));
+        put(w.deferred.data(), w.deferred.size() * sizeof(Candidate));
+    }
+    const std::vector<std::string> all = o_.comm->allgather(mine);
+    for (int r = 0; r < o_.comm->size(); ++r) {
+        if (r == o_.comm->rank()) continue;
+        const std::string& b = all[static_cast<size_t>(r)];
+        for (size_t at = 0; at < b.size();) {
+            uint64_t head[4];
+            std::memcpy(head, b.data() + at, sizeof(head));
+            at += sizeof(head);
+            TileWork& w = work_.at(head[0]);
+            w.made = parse_records(b.substr(at, head[1]));
+            at += head[1];
+            w.requests.resize(head[2]);
+            std::memcpy(w.requests.data(), b.data() + at, head[2] * sizeof(uint32_t));
+            at += head[2] * sizeof(uint32_t);
+            w.deferred.resize(head[3]);
+            std::memcpy(w.deferred.data(), b.data() + at, head[3] * sizeof(Candidate));
+            at += head[3] * sizeof(Candidate);
+        }
+    }
+}
+
+/// Late gathers are shared out round robin; each process sends its own in index order.
+void Gathering::share_late(const std::vector<uint8_t>& still, std::vector<Record>& late) {
+    const auto size = static_cast<size_t>(o_.comm->size());
+    std::vector<Record> mine;
+    for (size_t i = static_cast<size_t>(o_.comm->rank()); i < late.size(); i += size)
+        if (still[i]) mine.push_back(late[i]);
+    const std::vector<std::string> all = o_.comm->allgather(serialize_records(mine));
+    for (size_t r = 0; r < size; ++r) {
+        if (static_cast<int>(r) == o_.comm->rank()) continue;
+        std::vector<Record> theirs = parse_records(all[r]);
+        size_t next = 0;
+        for (size_t i = r; i < late.size(); i += size)
+            if (still[i]) late[i] = std::move(theirs.at(next++));
+    }
+}
+
 void Gathering::subpass(const SubPass& sp) {
     // 1. Each tile judges its candidates against the cache as it was when the sub-pass began
-    //    (shared lock; nobody writes until step 2) and gathers at the misses.
-    for_each_tile(tiles_, [&](const Tile& t) { judge_tile(sp, t); });
+    //    (shared lock; nobody writes until step 2) and gathers at the misses. Under MPI each
+    //    process judges its own tiles and the tiles' work is exchanged.
+    for_each_tile(mine_, [&](const Tile& t) { judge_tile(sp, t); });
+    if (o_.comm && o_.comm->size() > 1) exchange_work();
     std::vector<Record> made;
     std::vector<uint32_t> requests;
     std::vector<Candidate> deferred;
@@ -163,9 +227,12 @@ void Gathering::subpass(const SubPass& sp) {
         still[static_cast<size_t>(i)] = cache_.misses(site.p, site.n, {}, o_.own_weight, o_.min_weight);
     });
     std::vector<Record> late(deferred.size());
+    const bool shared = o_.comm && o_.comm->size() > 1;
     parallel_for_each_index(0, static_cast<int>(deferred.size()), [&](int i) {
-        if (still[static_cast<size_t>(i)]) late[static_cast<size_t>(i)] = gather_at(deferred[static_cast<size_t>(i)], stats_.local());
+        if (still[static_cast<size_t>(i)] && (!shared || o_.comm->owns(static_cast<size_t>(i))))
+            late[static_cast<size_t>(i)] = gather_at(deferred[static_cast<size_t>(i)], stats_.local());
     });
+    if (shared) share_late(still, late);
     std::vector<Record> kept;
     for (size_t i = 0; i < late.size(); ++i)
         if (still[i]) kept.push_back(std::move(late[i]));

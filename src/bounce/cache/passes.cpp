@@ -1,5 +1,6 @@
 #include "bounce/cache/passes.h"
 
+#include "bounce/cache/cache_file.h"
 #include "bounce/cache/sites.h"
 #include "bounce/cache/temporal.h"
 
@@ -8,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <chrono>
+#include <cstring>
 #include <mutex>
 #include <shared_mutex>
 
@@ -119,15 +121,29 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                 r.origin = f.p;
                 made.local().push_back(r);
             }
-        }, scene.render.parallel.tile_order);
+        }, scene.render.parallel.tile_order, options.comm);
     }
     std::vector<Record> records;
     for (auto& v : made) records.insert(records.end(), v.begin(), v.end());
+    size_t taken = 0;
+    for (size_t n : reused) taken += n;
+    if (options.comm && options.comm->size() > 1) {
+        // Each process refined its own tiles: all take every process's records (sorted below).
+        std::string mine = serialize_records(records);
+        mine.append(reinterpret_cast<const char*>(&taken), sizeof(taken));
+        const std::vector<std::string> all = options.comm->allgather(mine);
+        records.clear(), taken = 0;
+        for (const std::string& b : all) {
+            size_t theirs = 0;
+            std::memcpy(&theirs, b.data() + b.size() - sizeof(theirs), sizeof(theirs));
+            taken += theirs;
+            std::vector<Record> r = parse_records(b.substr(0, b.size() - sizeof(theirs)));
+            records.insert(records.end(), std::make_move_iterator(r.begin()), std::make_move_iterator(r.end()));
+        }
+    }
     std::sort(records.begin(), records.end(), [](const Record& a, const Record& b) { return a.key < b.key; });
     auto lock = lock_cache<std::unique_lock<std::shared_mutex>>(cache, stats.local());
     for (const Record& r : records) cache.insert_fragment_record(r);
-    size_t taken = 0;
-    for (size_t n : reused) taken += n;
     stats.set("refined_fragments", static_cast<double>(records.size() - taken));
     stats.set("refined_from_neighbours", static_cast<double>(taken));
     stats.set("refine_rays_per_gather", static_cast<double>(refiner.grid().rays()));

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "bounce/cache/irradiance_cache.h"
+#include "bounce/core/communicator.h"
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
 #include "bounce/deep/deep_buffer.h"
@@ -54,6 +55,9 @@ struct GatheringOptions {
     /// record is as well served as the record's own.
     float own_weight = 0.99f;
     float min_weight = -1;  ///< > 0: the weight sum a point needs (IrradianceCache::misses), else the settings'
+    /// The processes of an MPI job (core/communicator.h): each judges its own tiles of a
+    /// sub-pass and the tiles' work is exchanged before it is merged (null: this process alone).
+    Communicator* comm = nullptr;
 };
 
 /// Gathering pass: creates records until every fragment of `deep` has a covered lookup.
@@ -87,6 +91,7 @@ struct RefinementOptions {
     std::function<Record(const Record&, Counters&)> update;
     /// ... and valid ones near a fragment, taken instead of a gather (temporal.h).
     const NearFragmentRecords* near = nullptr;
+    Communicator* comm = nullptr;  ///< as GatheringOptions::comm: each process refines its own tiles
 };
 
 size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,

@@ -16,6 +16,7 @@
 #include "bounce/core/progress.h"
 #include "bounce/core/random.h"
 #include "bounce/core/stats.h"
+#include "bounce/core/communicator.h"
 #include "bounce/core/tiles.h"
 #include "bounce/scene/scene.h"
 
@@ -67,10 +68,12 @@ struct DeepBuffer {
 /// Runs `pixel(wx, wy, first)` for every pixel of `deep` (window coordinates; `first` indexes
 /// the pixel's first fragment), tile by tile in parallel with TBB, reporting one progress unit
 /// per tile under `name`. Work order never affects results: each pixel writes its own slots.
+/// With `comm`, only the tiles this process owns.
 template <typename PixelFn>
 void for_each_pixel_in_tiles(const DeepBuffer& deep, int tile, ProgressSink* sink, const char* name,
-                             PixelFn&& pixel, TileOrder order = TileOrder::Rows) {
-    const auto tiles = make_tiles(deep.width, deep.height, tile, order);
+                             PixelFn&& pixel, TileOrder order = TileOrder::Rows, const Communicator* comm = nullptr) {
+    auto tiles = make_tiles(deep.width, deep.height, tile, order);
+    if (comm) std::erase_if(tiles, [comm](const Tile& t) { return !comm->owns(static_cast<size_t>(t.index)); });
     Progress progress(sink, name, tiles.size());
     for_each_tile(tiles, [&](const Tile& t) {
         for (int wy = t.y0; wy < t.y1; ++wy, sink ? sink->check_cancel() : void())

@@ -4,10 +4,12 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 
 #include "bounce/cache/passes.h"
 #include "bounce/core/error.h"
 #include "bounce/gather/gather.h"
+#include "bounce/render/distributed.h"
 #include "bounce/render/render.h"
 #include "bounce/shade/layers.h"
 #include "bounce/shade/shade.h"
@@ -102,7 +104,16 @@ VisibilityResult visibility_pass(const FrameContext& ctx, const FramePlan& plan,
         case VisibilityStep::Trace: {
             check_camera_sees_geometry(scene, ctx.accel);
             PhaseTimer t(ctx.stats, "visibility");
-            out.gathered = render_visibility(scene, ctx.accel, ctx.stats, ctx.progress, plan.gather_window);
+            if (ctx.comm.size() == 1) {
+                out.gathered = render_visibility(scene, ctx.accel, ctx.stats, ctx.progress, plan.gather_window);
+                break;
+            }
+            std::vector<DeepBuffer> bands;
+            for (const std::string& b : in_row_bands(ctx.comm, plan.gather_window, [&](const std::array<int, 4>& band) {
+                     return serialize_window(render_visibility(scene, ctx.accel, ctx.stats, nullptr, band));
+                 }))
+                bands.push_back(parse_window(b));
+            out.gathered = stack_rows(bands);
             break;
         }
     }
@@ -304,6 +315,7 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
     GatheringOptions options;
     options.frame = plan.frame;
     options.keep_hits = plan.keep_hits;
+    options.comm = &ctx.comm;
     if (plan.cache == CacheStart::Temporal) {
         options.own_weight = kTemporalOwnWeight;
         options.min_weight = std::min(scene.render.cache.min_weight, kTemporalMinWeight);
@@ -337,6 +349,7 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
         RefinementOptions ro;
         ro.frame = plan.frame;
         ro.keep_hits = plan.keep_hits;
+        ro.comm = &ctx.comm;
         if (!judged.fragment_stale.empty()) {
             ro.stale = &judged.fragment_stale;
             ro.update = fragment_update_function(ctx, plan, refiner);
@@ -358,17 +371,69 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
 
 std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffer& deep, const RadiosityTextures* radiosity) {
     Gatherer gatherer(ctx.scene, ctx.accel, ctx.materials, ctx.lighting, radiosity, frame_gather_settings(ctx, false));
-    std::vector<Indirect> light = gather_every_fragment(ctx.scene, deep, gatherer, ctx.stats, ctx.progress);
+    std::vector<Indirect> light =
+        ctx.comm.size() == 1 ? gather_every_fragment(ctx.scene, deep, gatherer, ctx.stats, ctx.progress)
+                             : indirect_in_row_bands(ctx.comm, deep, [&](const DeepBuffer& band) {
+                                   return gather_every_fragment(ctx.scene, band, gatherer, ctx.stats, nullptr);
+                               });
     ctx.stats.set("gathers", static_cast<double>(deep.fragments.size()));
     ctx.stats.set("rays_per_gather", gatherer.grid().rays());
     return light;
 }
 
+namespace {
+
+ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
+                         const std::vector<Indirect>* brute, ProgressSink* progress) {
+    const Scene& scene = ctx.scene;
+    ShadeResult out;
+    std::vector<Indirect> interpolated;
+    if (cache && scene.render.indirect.gi == GiMode::Cache) {
+        auto t0 = std::chrono::steady_clock::now();
+        InterpolatedLight light = interpolation_pass(scene, deep, *cache, ctx.stats, progress);
+        ctx.stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        interpolated = std::move(light.light);
+        out.refined = std::move(light.refined);
+        out.shading_misses = light.misses;
+        brute = &interpolated;
+    }
+    out.image = shade(scene, deep, ctx.materials, ctx.lighting, scene.render.indirect.any() ? brute : nullptr, ctx.stats,
+                      progress);
+    return out;
+}
+
+/// Each process shades its row bands; every process takes the whole image.
+ShadeResult shade_in_row_bands(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
+                               const std::vector<Indirect>* brute) {
+    const auto bands = in_row_bands(ctx.comm, window_of(deep), [&](const std::array<int, 4>& band) {
+        const DeepBuffer sub = sub_window(deep, band);
+        const std::vector<Indirect> light = brute ? band_slice(deep, *brute, band) : std::vector<Indirect>();
+        const ShadeResult r = shade_window(ctx, sub, cache, brute ? &light : nullptr, nullptr);
+        const uint64_t head[3] = {r.shading_misses, r.refined.size(), 0};
+        std::string bytes(reinterpret_cast<const char*>(head), sizeof(head));
+        bytes.append(reinterpret_cast<const char*>(r.refined.data()), r.refined.size());
+        return bytes + serialize_image(r.image);
+    });
+    ShadeResult out;
+    std::vector<Image> images;
+    for (const std::string& b : bands) {
+        uint64_t head[3];
+        std::memcpy(head, b.data(), sizeof(head));
+        out.shading_misses += head[0];
+        out.refined.insert(out.refined.end(), b.begin() + sizeof(head), b.begin() + static_cast<std::ptrdiff_t>(sizeof(head) + head[1]));
+        images.push_back(parse_image(b.substr(sizeof(head) + head[1])));
+    }
+    out.image = stack_rows(images);
+    ctx.stats.set("shading_misses", static_cast<double>(out.shading_misses));
+    return out;
+}
+
+}  // namespace
+
 ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
                          const std::vector<Indirect>* brute, const std::function<void(const Image&)>& quick_look) {
     const Scene& scene = ctx.scene;
     PhaseTimer t(ctx.stats, "shading");
-    ShadeResult out;
     if (cache && quick_look) {
         // A re-shade's quick look first: one pixel in 16 shaded exactly as the final image
         // shades it, standing for its 4x4 block.
@@ -378,19 +443,8 @@ ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const 
         fill_blocks(look, 4);
         quick_look(look);
     }
-    std::vector<Indirect> interpolated;
-    if (cache && scene.render.indirect.gi == GiMode::Cache) {
-        auto t0 = std::chrono::steady_clock::now();
-        InterpolatedLight light = interpolation_pass(scene, deep, *cache, ctx.stats, ctx.progress);
-        ctx.stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-        interpolated = std::move(light.light);
-        out.refined = std::move(light.refined);
-        out.shading_misses = light.misses;
-        brute = &interpolated;
-    }
-    out.image = shade(scene, deep, ctx.materials, ctx.lighting, scene.render.indirect.any() ? brute : nullptr, ctx.stats,
-                      ctx.progress);
-    return out;
+    if (ctx.comm.size() > 1) return shade_in_row_bands(ctx, deep, cache, brute);
+    return shade_window(ctx, deep, cache, brute, ctx.progress);
 }
 
 }  // namespace bounce

@@ -9,6 +9,7 @@
 #include "bounce/accel/accel.h"
 #include "bounce/cache/irradiance_cache.h"
 #include "bounce/cache/temporal.h"
+#include "bounce/core/communicator.h"
 #include "bounce/core/image.h"
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
@@ -29,6 +30,9 @@ struct FrameContext {
     Stats& stats;
     ProgressSink* progress;        ///< carries the cancel token (null: no progress, no cancel)
     const CancelToken* cancel;
+    /// The processes the frame is spread over (an MPI job's ranks, or this process alone):
+    /// visibility, gathering, refinement and shading split their work among them.
+    Communicator& comm;
 };
 
 /// The deep buffers of a frame: the gathered window (the window and its margin) and the

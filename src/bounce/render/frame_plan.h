@@ -19,6 +19,8 @@
 
 namespace bounce {
 
+class Communicator;
+
 /// What a front end asks of one frame.
 struct RenderRequest {
     std::string deep_in;   ///< start from this deep file instead of tracing visibility
@@ -44,6 +46,7 @@ struct RenderRequest {
     CacheReuse cache_reuse = CacheReuse::Strict;  ///< keep a cache made with other settings
     int frame = 0;          ///< frame number stamped on new records (sequences)
     const CancelToken* cancel = nullptr;  ///< stops the render (throws Cancelled) when set
+    Communicator* comm = nullptr;         ///< an MPI job's ranks the frame is spread over (null: this process)
 };
 
 class SceneAccel;

@@ -262,7 +262,8 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
         stats.set("ray_offset", accel.ray_offset());
         Materials materials(scene);
         DirectLighting lighting(scene, accel);
-        const FrameContext ctx{scene, accel, materials, lighting, stats, ps, request.cancel};
+        SingleProcess alone;
+        const FrameContext ctx{scene, accel, materials, lighting, stats, ps, request.cancel, request.comm ? *request.comm : alone};
         const VisibilityResult deep = visibility_pass(ctx, plan, previous);
         // A carried radiosity says what light changed, which the records' judgement needs first.
         RadiosityResult radiosity;

@@ -1,0 +1,191 @@
+// Many machines (docs/parallel.md): a frame or a shot over an Open MPI job of 1 to 4 ranks
+// (oversubscribed on this machine) against one process: every EXR layer and the cache file
+// byte-identical; a killed rank ends the job and leaves the previous outputs; ranks of another
+// scene, or that cannot read it, are refused naming the rank; --distribute frames and --resume.
+#include <fmt/format.h>
+#include <signal.h>
+
+#include <chrono>
+#include <cstring>
+#include <thread>
+
+#include "bounce/core/image.h"
+#include "test_util.h"
+
+namespace bounce {
+namespace {
+
+/// mpirun of `np` ranks of bounce on this machine. As root (CI's containers) Open MPI must be
+/// told that is allowed; more ranks than cores need --oversubscribe.
+std::string mpirun(int np) {
+    return fmt::format("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe --bind-to none -np {} {}", np,
+                       BOUNCE_BINARY);
+}
+
+int run_mpi(int np, const std::string& args, std::string* err = nullptr) {
+    return test::run_bounce_shell(mpirun(np) + " " + args, err);
+}
+
+// Open MPI is not built with the sanitizers (its own threads would be reported): the plain
+// build runs these tests; the sanitized build checks the threads of one process.
+#if defined(__SANITIZE_THREAD__) || defined(__SANITIZE_ADDRESS__)
+#define SKIP_UNDER_SANITIZER() GTEST_SKIP() << "Open MPI is not instrumented"
+#else
+#define SKIP_UNDER_SANITIZER() (void)0
+#endif
+
+/// Every layer of two EXRs holds the same bytes (metadata such as the render time may differ).
+void expect_same_layers(const std::string& a, const std::string& b) {
+    const Image x = read_exr(a), y = read_exr(b);
+    ASSERT_EQ(x.layers.size(), y.layers.size()) << b;
+    ASSERT_EQ(x.width, y.width);
+    ASSERT_EQ(x.height, y.height);
+    for (size_t i = 0; i < x.layers.size(); ++i) {
+        EXPECT_EQ(x.layers[i].name, y.layers[i].name);
+        ASSERT_EQ(x.layers[i].data.size(), y.layers[i].data.size());
+        EXPECT_EQ(std::memcmp(x.layers[i].data.data(), y.layers[i].data.data(), x.layers[i].data.size() * sizeof(float)), 0)
+            << b << ": layer " << x.layers[i].name << " differs from " << a;
+    }
+}
+
+/// One process with 2 threads, then jobs of 1..4 ranks of 1 thread: same layers, same cache bytes.
+void expect_identical_at_any_rank_count(const std::string& scene, const std::string& extra) {
+    test::TempDir d;
+    const std::string common = scene + " --res 64x48 --gi cache -q " + extra;
+    ASSERT_EQ(test::run_bounce(fmt::format("render {} -o {} --cache-out {} --threads 2", common, d.file("one.exr"), d.file("one.bic"))), 0);
+    for (int np = 1; np <= 4; ++np) {
+        const std::string exr = d.file(fmt::format("np{}.exr", np)), bic = d.file(fmt::format("np{}.bic", np));
+        std::string err;
+        ASSERT_EQ(run_mpi(np, fmt::format("render {} -o {} --cache-out {} --threads 1", common, exr, bic), &err), 0) << err;
+        expect_same_layers(d.file("one.exr"), exr);
+        EXPECT_EQ(test::bytes_of(d.file("one.bic")), test::bytes_of(bic)) << scene << " at -np " << np;
+    }
+}
+
+TEST(Mpi, TheCornellBoxIsByteIdenticalAtAnyRankCount) {
+    SKIP_UNDER_SANITIZER();
+    expect_identical_at_any_rank_count(test::cornell_scene(), "--set render.refine=0.05");
+}
+
+TEST(Mpi, FurIsByteIdenticalAtAnyRankCount) {
+    SKIP_UNDER_SANITIZER();
+    expect_identical_at_any_rank_count(test::source_dir() + "/scenes/fur/furball.json", "");
+}
+
+TEST(Mpi, DisplacementWithRefinedFragmentsIsByteIdenticalAtAnyRankCount) {
+    SKIP_UNDER_SANITIZER();
+    expect_identical_at_any_rank_count(test::source_dir() + "/scenes/displaced/displaced.json", "");
+}
+
+TEST(Mpi, BruteForceAndTheFramesOfAShotAreByteIdentical) {
+    SKIP_UNDER_SANITIZER();
+    test::TempDir d;
+    const std::string cornell = test::cornell_scene() + " --res 40x40 -q --gi brute --rays 32";
+    ASSERT_EQ(test::run_bounce(fmt::format("render {} -o {} --threads 2", cornell, d.file("b1.exr"))), 0);
+    ASSERT_EQ(run_mpi(3, fmt::format("render {} -o {} --threads 1", cornell, d.file("b3.exr"))), 0);
+    expect_same_layers(d.file("b1.exr"), d.file("b3.exr"));
+    // A shot: records kept, moved and redone from frame to frame (docs/animation.md).
+    const std::string shot = test::source_dir() + "/scenes/shots/cornell-rolling.json --res 48x48 --gi cache -q --frames 1-3";
+    ASSERT_EQ(test::run_bounce(fmt::format("render {} -o {} --cache-out {} --threads 2", shot, d.file("s1.####.exr"), d.file("s1.####.bic"))), 0);
+    std::string err;
+    ASSERT_EQ(run_mpi(3, fmt::format("render {} -o {} --cache-out {} --threads 1", shot, d.file("s3.####.exr"), d.file("s3.####.bic")), &err), 0) << err;
+    for (int f = 1; f <= 3; ++f) {
+        expect_same_layers(d.file(fmt::format("s1.{:04d}.exr", f)), d.file(fmt::format("s3.{:04d}.exr", f)));
+        EXPECT_EQ(test::bytes_of(d.file(fmt::format("s1.{:04d}.bic", f))), test::bytes_of(d.file(fmt::format("s3.{:04d}.bic", f)))) << f;
+    }
+}
+
+/// The pid of rank `rank` of a running job whose command line contains `marker`, or 0.
+int find_rank(const std::string& marker, int rank) {
+    for (const auto& e : std::filesystem::directory_iterator("/proc")) {
+        const std::string pid = e.path().filename().string();
+        if (pid.find_first_not_of("0123456789") != std::string::npos) continue;
+        std::string cmd = test::bytes_of("/proc/" + pid + "/cmdline"), env = test::bytes_of("/proc/" + pid + "/environ");
+        std::replace(cmd.begin(), cmd.end(), '\0', ' ');
+        if (cmd.find(marker) == std::string::npos || cmd.find("mpirun") != std::string::npos) continue;
+        if (env.find(fmt::format("OMPI_COMM_WORLD_RANK={}", rank) + '\0') != std::string::npos) return std::stoi(pid);
+    }
+    return 0;
+}
+
+TEST(Mpi, AKilledRankEndsTheJobWithinSecondsAndThePreviousOutputsStay) {
+    SKIP_UNDER_SANITIZER();
+    test::TempDir d;
+    const std::string out = d.file("killed.exr");
+    const std::string args = fmt::format("render {} -o {} --cache-out {} --res 384x384 --gi cache --threads 1 -q", test::cornell_scene(),
+                                         out, d.file("killed.bic"));
+    ASSERT_EQ(test::run_bounce(args + " --set render.rays=16"), 0);  // the previous run's outputs
+    const std::string before = test::bytes_of(out), cache_before = test::bytes_of(d.file("killed.bic"));
+    std::thread killer([&] {
+        // Mid-frame: once rank 1 is up, and a moment later (the gathering pass runs seconds).
+        for (int tries = 0; tries < 200; ++tries) {
+            if (const int pid = find_rank(out, 1)) {
+                std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+                kill(pid, SIGKILL);
+                return;
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        }
+    });
+    const auto t0 = std::chrono::steady_clock::now();
+    std::string err;
+    const int rc = run_mpi(3, args, &err);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    killer.join();
+    EXPECT_NE(rc, 0) << err;
+    EXPECT_NE(err.find("rank 1"), std::string::npos) << err;
+    EXPECT_LT(seconds, 30) << "the job must not hang at a collective call";
+    EXPECT_EQ(test::bytes_of(out), before);
+    EXPECT_EQ(test::bytes_of(d.file("killed.bic")), cache_before);
+}
+
+TEST(Mpi, RanksOfAnotherSceneOrThatCannotReadItAreRefusedNamingTheRank) {
+    SKIP_UNDER_SANITIZER();
+    test::TempDir d;
+    const std::string one = fmt::format("render {} -o {} --res 16x16 -q", test::cornell_scene(), d.file("o.exr"));
+    // Multiple programs, multiple data: rank 1 runs another command line.
+    const std::string mpmd = std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe --bind-to none");
+    std::string err;
+    EXPECT_EQ(test::run_bounce_shell(fmt::format("{} -np 1 {} {} : -np 1 {} {} --set camera.fov=30", mpmd, BOUNCE_BINARY, one,
+                                                 BOUNCE_BINARY, one), &err), 2) << err;
+    EXPECT_NE(err.find("rank 1: error: runs another binary or reads another scene"), std::string::npos) << err;
+    EXPECT_NE(err.find("camera.fov=30"), std::string::npos) << err;
+    const std::string missing = d.file("nowhere.json");
+    EXPECT_EQ(test::run_bounce_shell(fmt::format("{} -np 1 {} {} : -np 1 {} render {} -o {} -q", mpmd, BOUNCE_BINARY, one, BOUNCE_BINARY,
+                                                 missing, d.file("o.exr")), &err), 2) << err;
+    EXPECT_NE(err.find("bounce: rank 1: " + missing), std::string::npos) << err;
+    EXPECT_FALSE(std::filesystem::exists(d.file("o.exr")));
+    // Only render runs as a job of many ranks (the tools would write their outputs N times).
+    EXPECT_EQ(run_mpi(2, "params", &err), 2);
+    EXPECT_NE(err.find("only render runs as an MPI job"), std::string::npos) << err;
+}
+
+TEST(Mpi, FramesAreDistributedInChunksAndAResumedJobRendersOnlyWhatIsMissing) {
+    SKIP_UNDER_SANITIZER();
+    test::TempDir d;
+    const std::string shot = test::source_dir() + "/scenes/shots/cornell-rolling.json --res 40x40 --gi cache --threads 1 -q";
+    const auto files = [&](const std::string& tag) {
+        return fmt::format("-o {0}.####.exr --cache-out {0}.####.bic", d.file(tag));
+    };
+    std::string err;
+    ASSERT_EQ(run_mpi(3, fmt::format("render {} --frames 1-6 --distribute frames {}", shot, files("job")), &err), 0) << err;
+    // Rank 0 rendered frames 1-2 as one process renders that range; rank 1 started frame 3
+    // afresh (frame 2's cache was not there when the job began).
+    ASSERT_EQ(test::run_bounce(fmt::format("render {} --frames 1-2 {}", shot, files("alone"))), 0);
+    ASSERT_EQ(test::run_bounce(fmt::format("render {} --frame 3 {}", shot, files("alone"))), 0);
+    for (int f = 1; f <= 3; ++f)
+        EXPECT_EQ(test::bytes_of(d.file(fmt::format("job.{:04d}.bic", f))), test::bytes_of(d.file(fmt::format("alone.{:04d}.bic", f)))) << f;
+    for (int f = 4; f <= 6; ++f) EXPECT_TRUE(std::filesystem::exists(d.file(fmt::format("job.{:04d}.exr", f)))) << f;
+    // A job killed before frames 5 and 6 were written: the resumed job renders only those,
+    // frame 5 starting from frame 4's cache.
+    std::filesystem::remove(d.file("job.0005.exr")), std::filesystem::remove(d.file("job.0006.bic"));
+    const std::string kept = test::bytes_of(d.file("job.0004.exr"));
+    ASSERT_EQ(run_mpi(3, fmt::format("render {} --frames 1-6 --distribute frames --resume {}", shot, files("job")), &err), 0) << err;
+    EXPECT_EQ(test::bytes_of(d.file("job.0004.exr")), kept);
+    EXPECT_TRUE(std::filesystem::exists(d.file("job.0005.exr")));
+    EXPECT_TRUE(std::filesystem::exists(d.file("job.0006.bic")));
+    test::expect_refused(fmt::format("render {} --frames 1-2 --distribute rows {}", shot, files("x")), {"--distribute rows", "tiles or frames"});
+}
+
+}  // namespace
+}  // namespace bounce
