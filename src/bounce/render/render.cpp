@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <tbb/task_arena.h>
 
 #include "bounce/accel/accel.h"
@@ -238,8 +239,40 @@ FrameState RenderResult::release_state() {
     return s;
 }
 
+namespace {
+
+/// A frame spread over an MPI job: what every rank traced and what the exchanges cost, in
+/// the stats of each (rank 0's are written). `sent0`, `wait0`: the communicator's totals
+/// when the frame began.
+void report_ranks(Communicator& comm, Stats& stats, uint64_t sent0, double wait0) {
+    struct Mine {
+        Counters counters;
+        uint64_t sent;
+        double wait_s;
+    } mine{stats.total(), comm.bytes_sent - sent0, comm.wait_s - wait0};
+    const std::vector<std::string> all = comm.allgather(std::string(reinterpret_cast<const char*>(&mine), sizeof(mine)));
+    Counters sum;
+    uint64_t sent = 0;
+    nlohmann::json waits = nlohmann::json::array();
+    for (const std::string& b : all) {
+        Mine theirs;
+        std::memcpy(&theirs, b.data(), sizeof(theirs));
+        sum += theirs.counters, sent += theirs.sent;
+        waits.push_back(theirs.wait_s);
+    }
+    stats.set("ranks", comm.size());
+    stats.set("gather_rays_all_ranks", static_cast<double>(sum.gather_rays));
+    stats.set("shadow_rays_all_ranks", static_cast<double>(sum.shadow_rays));
+    stats.set("exchange_bytes", static_cast<double>(sent));
+    stats.set("exchange_s_per_rank", std::move(waits));  // waiting for the slowest rank, and the transfer
+}
+
+}  // namespace
+
 RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameState& previous, const RenderRequest& request,
                        Stats& stats, ProgressSink* progress) {
+    const uint64_t sent0 = request.comm ? request.comm->bytes_sent : 0;
+    const double wait0 = request.comm ? request.comm->wait_s : 0;
     if (double need = estimate_render_bytes(scene), have = available_memory_bytes(); need > 0.8 * have)
         throw InputError(scene.path, "camera.resolution",
                          fmt::format("a {}x{} frame needs about {:.1f} GiB; {:.1f} GiB are available (render a crop)",
@@ -293,6 +326,7 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
         result.deep = deep.shaded;
         if (!plan.deep_out.empty()) result.gathered_deep = std::make_shared<const DeepBuffer>(deep.gathered);
     });
+    if (request.comm && request.comm->size() > 1) report_ranks(*request.comm, stats, sent0, wait0);
     if (plan.cache == CacheStart::Temporal) report_temporal(result, stats);
     stats.set("pixels", static_cast<double>(result.deep.pixel_count()));
     if (result.deep.pixel_count() > 0)
