@@ -122,6 +122,19 @@ struct Frames {
     }
 };
 
+/// A gatherer of a frame's scene as a fresh render would build it.
+struct FreshGatherer {
+    explicit FreshGatherer(const Scene& scene)
+        : accel(scene), materials(scene), lighting(scene, accel),
+          rt(RadiosityTextures::lazy(scene, materials, lighting, scene.render.radiosity)),
+          gatherer(scene, accel, materials, lighting, &rt, gather_settings(scene)) {}
+    SceneAccel accel;
+    Materials materials;
+    DirectLighting lighting;
+    RadiosityTextures rt;
+    Gatherer gatherer;
+};
+
 TEST(TemporalCache, AKeptRecordEqualsAFreshGatherAtItsPlaceBitForBit) {
     // The ball moves behind the wall, out of sight of everything in front of it.
     json j = shot_scene();
@@ -132,11 +145,8 @@ TEST(TemporalCache, AKeptRecordEqualsAFreshGatherAtItsPlaceBitForBit) {
     const RenderResult& r = f.results[1];
     EXPECT_GT(r.temporal.kept, 20u);
     const Scene& scene = *f.scenes[1];
-    SceneAccel accel(scene);
-    Materials materials(scene);
-    DirectLighting lighting(scene, accel);
-    RadiosityTextures rt = RadiosityTextures::lazy(scene, materials, lighting, scene.render.radiosity);
-    Gatherer gatherer(scene, accel, materials, lighting, &rt, gather_settings(scene));
+    const FreshGatherer fresh(scene);
+    const Gatherer& gatherer = fresh.gatherer;
     Counters counters;
     size_t compared = 0;
     for (size_t i = 0; i < r.cache->size(); ++i) {
@@ -179,11 +189,8 @@ TEST(TemporalCache, RecordsOnAMovingObjectTravelWithItAndTheRestUpdateOnlyWhatTh
     // An updated record (only its rays through the ball's swept bounds traced again) is what a
     // fresh gather with its stream finds, bit for bit.
     const Scene& scene = *f.scenes[1];
-    SceneAccel accel(scene);
-    Materials materials(scene);
-    DirectLighting lighting(scene, accel);
-    RadiosityTextures rt = RadiosityTextures::lazy(scene, materials, lighting, scene.render.radiosity);
-    Gatherer gatherer(scene, accel, materials, lighting, &rt, gather_settings(scene));
+    const FreshGatherer fresh(scene);
+    const Gatherer& gatherer = fresh.gatherer;
     Counters counters;
     size_t updated = 0;
     for (size_t i = 0; i < second.cache->size(); ++i) {

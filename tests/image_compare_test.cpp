@@ -140,18 +140,9 @@ TEST(BruteForce, CompareCommandReportsTheError) {
 namespace bounce {
 namespace {
 
-/// A w x h one-layer image ("indirect", 3 channels) with every value v.
-Image flat_image(int w, int h, float v) {
-    Image img;
-    img.width = img.full_width = w, img.height = img.full_height = h;
-    Layer& l = img.add_layer("indirect", {"indirect.R", "indirect.G", "indirect.B"});
-    std::fill(l.data.begin(), l.data.end(), v);
-    return img;
-}
-
 TEST(SequenceCompare, AStaticSequenceHasNoFlickerAndAKnownPerturbationItsKnownValue) {
     const auto name = [](int t) { return "frame " + std::to_string(t); };
-    const auto ref = [](int) { return flat_image(8, 4, 2.0f); };
+    const auto ref = [](int) { return flat(8, 4, 2.0f); };
     SequenceError still = compare_sequences(ref, ref, 1, 5, "indirect", name);
     EXPECT_EQ(still.flicker, 0.0);
     EXPECT_EQ(still.popping, 0.0);
@@ -159,14 +150,14 @@ TEST(SequenceCompare, AStaticSequenceHasNoFlickerAndAKnownPerturbationItsKnownVa
     // The test alternates +c / -c about the reference: every frame difference is off by 2c, so
     // flicker = 2c / mean(ref), and each frame's error is c / mean(ref).
     const float c = 0.1f;
-    const auto test = [&](int t) { return flat_image(8, 4, 2.0f + (t % 2 ? c : -c)); };
+    const auto test = [&](int t) { return flat(8, 4, 2.0f + (t % 2 ? c : -c)); };
     SequenceError e = compare_sequences(test, ref, 1, 5, "indirect", name);
     EXPECT_NEAR(e.flicker, 2 * c / 2.0, 1e-6);
     EXPECT_NEAR(e.popping, 2 * c / 2.0, 1e-6);
     EXPECT_NEAR(e.mean_rel_rmse, c / 2.0, 1e-6);
     // A test that lags the reference by a constant offset changes as the reference does: no flicker.
-    const auto moving = [](int t) { return flat_image(8, 4, 1.0f + 0.1f * static_cast<float>(t)); };
-    const auto offset = [](int t) { return flat_image(8, 4, 1.05f + 0.1f * static_cast<float>(t)); };
+    const auto moving = [](int t) { return flat(8, 4, 1.0f + 0.1f * static_cast<float>(t)); };
+    const auto offset = [](int t) { return flat(8, 4, 1.05f + 0.1f * static_cast<float>(t)); };
     EXPECT_NEAR(compare_sequences(offset, moving, 1, 5, "indirect", name).flicker, 0.0, 1e-6);
 }
 
