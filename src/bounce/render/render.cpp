@@ -263,6 +263,8 @@ void report_ranks(Communicator& comm, Stats& stats, uint64_t sent0, double wait0
     stats.set("ranks", comm.size());
     stats.set("gather_rays_all_ranks", static_cast<double>(sum.gather_rays));
     stats.set("shadow_rays_all_ranks", static_cast<double>(sum.shadow_rays));
+    // Radiosity texels are baked by each rank's own gathers: a texel two ranks need is baked twice.
+    stats.set("radiosity_bake_cpu_s_all_ranks", static_cast<double>(sum.radiosity_bake_ns) * 1e-9);
     stats.set("exchange_bytes", static_cast<double>(sent));
     stats.set("exchange_s_per_rank", std::move(waits));  // waiting for the slowest rank, and the transfer
 }
