@@ -1,5 +1,8 @@
 // Cache files and the cache tools: bit-exact round trips, duplicate-free and commutative
 // merges, exact box filters, reuse without new records, sequences, and every kind of bad file.
+#include <fmt/format.h>
+
+#include <regex>
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -357,6 +360,31 @@ TEST(CacheSharing, PerThreadMergesNeverDuplicateARecordAndNeverMiss) {
     EXPECT_EQ(value(shared, "records") + value(shared, "records_dropped"), value(shared, "record_gathers"));
     EXPECT_EQ(value(per_thread, "shading_misses"), 0.0);
     EXPECT_EQ(static_cast<double>(f.records.size()), value(per_thread, "records"));
+}
+
+}  // namespace
+}  // namespace bounce
+
+namespace bounce {
+namespace {
+
+/// docs/cache-format.md's record table is the layout files declare, row for row, and its
+/// record_bytes the sum (the docs once said 224 bytes and left fields out).
+TEST(CacheFile, TheDocumentedLayoutIsTheWrittenOne) {
+    const std::string doc = test::bytes_of(test::source_dir() + "/docs/cache-format.md");
+    const std::regex row("\\n\\| (\\w+) \\| (f32|u32|i32|u64) × (\\d+) \\|");
+    nlohmann::json documented = nlohmann::json::array();
+    const size_t from = doc.find("## Record layout");
+    ASSERT_NE(from, std::string::npos);
+    const std::string table = doc.substr(from, doc.find("## Validation") - from);
+    size_t bytes = 0;
+    for (auto it = std::sregex_iterator(table.begin(), table.end(), row); it != std::sregex_iterator(); ++it) {
+        const int count = std::stoi((*it)[3]);
+        documented.push_back({{"name", (*it)[1]}, {"type", (*it)[2]}, {"count", count}});
+        bytes += static_cast<size_t>(count) * ((*it)[2] == "u64" ? 8 : 4);
+    }
+    EXPECT_EQ(documented, record_layout());
+    EXPECT_NE(doc.find(fmt::format("bytes per record ({} in version", bytes)), std::string::npos) << bytes;
 }
 
 }  // namespace

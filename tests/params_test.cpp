@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <regex>
 #include <sstream>
 
 #include "bounce/cache/cache_identity.h"
@@ -159,6 +160,44 @@ TEST(Params, CacheIdentityHoldsEveryRecordChangingSettingAndNoShadingOne) {
     auto diff = param_differences(id, cache_file_info(t, 0).parameters);
     ASSERT_EQ(diff.size(), 1u);
     EXPECT_EQ(diff[0], "render.min_spacing: 2.0 -> 1.0");
+}
+
+}  // namespace
+}  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(Params, TheHelpOfANoFlagSaysItTurnsTheSettingOff) {
+    std::string help;
+    ASSERT_EQ(test::run_bounce_shell(std::string(BOUNCE_BINARY) + " render --help 1>&2", &help), 0);
+    for (const char* flag : {"--no-gradients", "--no-neighbour-clamp", "--no-radiosity"}) {
+        const size_t at = help.find(flag);
+        ASSERT_NE(at, std::string::npos) << flag;
+        const std::string line = help.substr(at, help.find('\n', at) - at);
+        EXPECT_NE(line.find("turn off: "), std::string::npos) << line;
+    }
+}
+
+}  // namespace
+}  // namespace bounce
+
+namespace bounce {
+namespace {
+
+/// Every `render.x` / `camera.x` key named in back-quotes in the docs and bench scripts is a row
+/// of the parameter table (docs/displacement.md and bench/ogre once named keys that were not).
+TEST(Params, EveryKeyTheDocsNameExists) {
+    const std::regex key("`((render|camera)\\.[a-z_]+)[`=]");
+    for (const char* file : {"docs/displacement.md", "docs/animation.md", "docs/irradiance-cache.md", "docs/fur.md", "docs/parallel.md",
+                             "docs/shading.md", "README.md"}) {
+        const std::string text = test::bytes_of(test::source_dir() + "/" + file);
+        ASSERT_FALSE(text.empty()) << file;
+        for (auto it = std::sregex_iterator(text.begin(), text.end(), key); it != std::sregex_iterator(); ++it)
+            EXPECT_NE(find_param(scene_params(), (*it)[1]), nullptr) << file << " names " << (*it)[1];
+    }
+    for (const char* old : {"`cache.", "`render.dicing`"})
+        EXPECT_EQ(test::bytes_of(test::source_dir() + "/docs/displacement.md").find(old), std::string::npos) << old;
 }
 
 }  // namespace

@@ -233,7 +233,7 @@ SubPassCallback preview_after_subpass(const FrameContext& ctx, const DeepBuffer&
     };
 }
 
-/// Temporal filtering (cache.temporal_filter): a redone record keeps share `f` of its previous
+/// Temporal filtering (render.temporal_filter): a redone record keeps share `f` of its previous
 /// values (irradiance, AO, light directions and gradients; its reach is the new gather's).
 void blend_with_previous(Record& r, const Record& old, float f) {
     if (f <= 0) return;

@@ -37,6 +37,8 @@ void add_param_flags(CLI::App& app, const ParamTable& table, std::vector<Overrid
         help += fmt::format(" ({}; default {})", p.key, p.default_value().dump());
         if (p.type == ParamType::Bool) {
             const bool sets = p.flag.rfind("--no-", 0) != 0;
+            // The doc says what the setting does when on; a --no- flag turns that off.
+            if (!sets) help = "turn off: " + help;
             app.add_flag_callback(p.flag, [&out, &p, sets] { out.push_back(flag_override(p, sets ? "true" : "false")); }, help);
         } else {
             app.add_option_function<std::string>(p.flag, [&out, &p](const std::string& text) { out.push_back(flag_override(p, text)); },
