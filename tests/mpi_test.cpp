@@ -67,6 +67,22 @@ TEST(Mpi, TheCornellBoxIsByteIdenticalAtAnyRankCount) {
     expect_identical_at_any_rank_count(test::cornell_scene(), "--set render.refine=0.05");
 }
 
+TEST(Mpi, SavedRadiosityTexturesHoldEverySideAnyRankBaked) {
+    SKIP_UNDER_SANITIZER();
+    // Each rank bakes the sides its own gathers hit; rank 0 saves them all, as one process would.
+    test::TempDir d;
+    const std::string common = test::cornell_scene() + " --res 48x48 --gi cache -q --threads 1 -o ";
+    ASSERT_EQ(test::run_bounce(fmt::format("render {} {} --radiosity-textures {}", common, d.file("a.exr"), d.file("one"))), 0);
+    std::string err;
+    ASSERT_EQ(run_mpi(3, fmt::format("render {} {} --radiosity-textures {}", common, d.file("b.exr"), d.file("three")), &err), 0) << err;
+    size_t files = 0;
+    for (const auto& e : std::filesystem::directory_iterator(d.file("one"))) {
+        expect_same_layers(e.path().string(), d.file("three/" + e.path().filename().string()));  // (the header holds a date)
+        ++files;
+    }
+    EXPECT_GT(files, 0u);
+}
+
 TEST(Mpi, FurIsByteIdenticalAtAnyRankCount) {
     SKIP_UNDER_SANITIZER();
     expect_identical_at_any_rank_count(test::source_dir() + "/scenes/fur/furball.json", "");

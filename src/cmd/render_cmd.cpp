@@ -103,7 +103,7 @@ int render_frame(const RenderArgs& a, const FrameFiles& files) {
     Stats stats;
     RenderRequest request = request_of(a, files, static_cast<int>(std::lround(scene.frame)));
     request.comm = a.comm;
-    if (scene.render.parallel.preview && writes(a.comm))
+    if (scene.render.parallel.preview && (!a.comm || a.comm->size() == 1))  // a preview needs every band
         request.preview = [&](const Image& img) {
             write_exr(files.output, img);
             write_png(files.png(), img, "beauty");

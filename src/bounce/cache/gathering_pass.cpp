@@ -36,7 +36,8 @@ public:
         : scene_(scene), deep_(deep), gatherer_(gatherer), cache_(cache), stats_(stats), o_(o),
           per_tile_(scene.render.parallel.cache_sharing == CacheSharing::PerThread),
           tiles_(make_tiles(deep.width, deep.height, scene.render.parallel.tile_size, scene.render.parallel.tile_order)),
-          mine_(owned(tiles_, o.comm)), work_(tiles_.size()) {}
+          bands_(deep.height, scene.render.parallel.tile_size, o.comm ? o.comm->size() : 1),
+          mine_(owned(tiles_, bands_, o.comm)), work_(tiles_.size()) {}
 
     void subpass(const SubPass& sp);
     size_t gathered = 0, dropped = 0;
@@ -47,12 +48,17 @@ private:
     void judge_tile(const SubPass& sp, const Tile& t);
     void insert_new(std::vector<Record> records);
     void exchange_work();
-    void share_late(const std::vector<uint8_t>& still, std::vector<Record>& late);
-    static std::vector<Tile> owned(const std::vector<Tile>& tiles, const Communicator* comm) {
+    void share_late(const std::vector<Candidate>& deferred, std::vector<uint8_t>& still, std::vector<Record>& late);
+    /// The tiles of this process's row bands: it holds only their fragments (RowBands).
+    static std::vector<Tile> owned(const std::vector<Tile>& tiles, const RowBands& bands, const Communicator* comm) {
         std::vector<Tile> out;
         for (const Tile& t : tiles)
-            if (!comm || comm->owns(static_cast<size_t>(t.index))) out.push_back(t);
+            if (!comm || comm->owns(static_cast<size_t>(bands.band_of_row(t.y0)))) out.push_back(t);
         return out;
+    }
+    /// The process whose band holds window row `wy`.
+    size_t owner_of_row(int wy) const {
+        return static_cast<size_t>(bands_.band_of_row(wy)) % static_cast<size_t>(o_.comm->size());
     }
 
     const Scene& scene_;
@@ -63,6 +69,7 @@ private:
     const GatheringOptions& o_;
     const bool per_tile_;
     const std::vector<Tile> tiles_;
+    const RowBands bands_;
     const std::vector<Tile> mine_;  ///< the tiles this process judges (all of them without MPI)
     std::vector<TileWork> work_;
 };
@@ -179,19 +186,31 @@ void Gathering::exchange_work() {
     }
 }
 
-/// Late gathers are shared out round robin; each process sends its own in index order.
-void Gathering::share_late(const std::vector<uint8_t>& still, std::vector<Record>& late) {
-    const auto size = static_cast<size_t>(o_.comm->size());
-    std::vector<Record> mine;
-    for (size_t i = static_cast<size_t>(o_.comm->rank()); i < late.size(); i += size)
-        if (still[i]) mine.push_back(late[i]);
-    const std::vector<std::string> all = o_.comm->allgather(serialize_records(mine));
-    for (size_t r = 0; r < size; ++r) {
-        if (static_cast<int>(r) == o_.comm->rank()) continue;
-        std::vector<Record> theirs = parse_records(all[r]);
-        size_t next = 0;
-        for (size_t i = r; i < late.size(); i += size)
-            if (still[i]) late[i] = std::move(theirs.at(next++));
+/// Late gathers are judged and made by the process whose band holds the candidate; each sends
+/// its candidates' verdicts and records in index order.
+void Gathering::share_late(const std::vector<Candidate>& deferred, std::vector<uint8_t>& still, std::vector<Record>& late) {
+    const auto rank = static_cast<size_t>(o_.comm->rank());
+    std::string flags;
+    std::vector<Record> made;
+    for (size_t i = 0; i < late.size(); ++i)
+        if (owner_of_row(deferred[i].wy) == rank) {
+            flags.push_back(static_cast<char>(still[i]));
+            if (still[i]) made.push_back(late[i]);
+        }
+    const uint64_t n = flags.size();
+    const std::vector<std::string> all =
+        o_.comm->allgather(std::string(reinterpret_cast<const char*>(&n), sizeof(n)) + flags + serialize_records(made));
+    for (size_t r = 0; r < all.size(); ++r) {
+        if (r == rank) continue;
+        uint64_t count = 0;
+        std::memcpy(&count, all[r].data(), sizeof(count));
+        std::vector<Record> theirs = parse_records(all[r].substr(sizeof(count) + count));
+        size_t next_flag = sizeof(count), next = 0;
+        for (size_t i = 0; i < late.size(); ++i)
+            if (owner_of_row(deferred[i].wy) == r) {
+                still[i] = static_cast<uint8_t>(all[r].at(next_flag++));
+                if (still[i]) late[i] = std::move(theirs.at(next++));
+            }
     }
 }
 
@@ -220,19 +239,21 @@ void Gathering::subpass(const SubPass& sp) {
     insert_new(std::move(made));
     // 3. The misses that waited for redone records: those still missing get records of their own.
     if (deferred.empty()) return;
-    std::vector<uint8_t> still(deferred.size(), 0);
-    parallel_for_each_index(0, static_cast<int>(deferred.size()), [&](int i) {
-        const Candidate& c = deferred[static_cast<size_t>(i)];
-        const Site site = record_site(scene_, deep_.pixel(c.wx, c.wy)[c.k], cache_.settings());
-        still[static_cast<size_t>(i)] = cache_.misses(site.p, site.n, {}, o_.own_weight, o_.min_weight);
-    });
-    std::vector<Record> late(deferred.size());
+    // Under MPI each process judges and gathers the candidates of its own bands (it holds only
+    // their fragments); share_late gives every process the others'.
     const bool shared = o_.comm && o_.comm->size() > 1;
+    const auto mine = [&](size_t i) { return !shared || owner_of_row(deferred[i].wy) == static_cast<size_t>(o_.comm->rank()); };
+    std::vector<uint8_t> still(deferred.size(), 0);
+    std::vector<Record> late(deferred.size());
     parallel_for_each_index(0, static_cast<int>(deferred.size()), [&](int i) {
-        if (still[static_cast<size_t>(i)] && (!shared || o_.comm->owns(static_cast<size_t>(i))))
-            late[static_cast<size_t>(i)] = gather_at(deferred[static_cast<size_t>(i)], stats_.local());
+        const auto u = static_cast<size_t>(i);
+        if (!mine(u)) return;
+        const Candidate& c = deferred[u];
+        const Site site = record_site(scene_, deep_.pixel(c.wx, c.wy)[c.k], cache_.settings());
+        still[u] = cache_.misses(site.p, site.n, {}, o_.own_weight, o_.min_weight);
+        if (still[u]) late[u] = gather_at(c, stats_.local());
     });
-    if (shared) share_late(still, late);
+    if (shared) share_late(deferred, still, late);
     std::vector<Record> kept;
     for (size_t i = 0; i < late.size(); ++i)
         if (still[i]) kept.push_back(std::move(late[i]));

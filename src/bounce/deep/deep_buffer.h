@@ -12,11 +12,11 @@
 #include <vector>
 
 #include "bounce/accel/accel.h"
+#include "bounce/core/communicator.h"
 #include "bounce/core/math.h"
 #include "bounce/core/progress.h"
 #include "bounce/core/random.h"
 #include "bounce/core/stats.h"
-#include "bounce/core/communicator.h"
 #include "bounce/core/tiles.h"
 #include "bounce/scene/scene.h"
 
@@ -68,12 +68,15 @@ struct DeepBuffer {
 /// Runs `pixel(wx, wy, first)` for every pixel of `deep` (window coordinates; `first` indexes
 /// the pixel's first fragment), tile by tile in parallel with TBB, reporting one progress unit
 /// per tile under `name`. Work order never affects results: each pixel writes its own slots.
-/// With `comm`, only the tiles this process owns.
+/// With `comm`, only the tiles of this process's row bands (RowBands).
 template <typename PixelFn>
 void for_each_pixel_in_tiles(const DeepBuffer& deep, int tile, ProgressSink* sink, const char* name,
                              PixelFn&& pixel, TileOrder order = TileOrder::Rows, const Communicator* comm = nullptr) {
     auto tiles = make_tiles(deep.width, deep.height, tile, order);
-    if (comm) std::erase_if(tiles, [comm](const Tile& t) { return !comm->owns(static_cast<size_t>(t.index)); });
+    if (comm) {
+        const RowBands bands(deep.height, tile, comm->size());
+        std::erase_if(tiles, [&](const Tile& t) { return !comm->owns(static_cast<size_t>(bands.band_of_row(t.y0))); });
+    }
     Progress progress(sink, name, tiles.size());
     for_each_tile(tiles, [&](const Tile& t) {
         for (int wy = t.y0; wy < t.y1; ++wy, sink ? sink->check_cancel() : void())
@@ -137,8 +140,8 @@ std::string serialize_window(const DeepBuffer& deep);
 DeepBuffer parse_window(const std::string& bytes);
 /// Windows of consecutive row bands (same columns), top to bottom, as one window.
 DeepBuffer stack_rows(const std::vector<DeepBuffer>& bands);
-/// Rows [y0, y1) of window `w` split in `n` bands: band `i`'s {x0, x1, y0, y1}.
-std::array<int, 4> row_band(const std::array<int, 4>& w, int i, int n);
+/// A window of `scene`'s image with no fragments (the bands another process traced).
+DeepBuffer empty_window(const Scene& scene, const std::array<int, 4>& window);
 
 /// Throws InputError (naming the camera) if no camera ray hits any geometry.
 void check_camera_sees_geometry(const Scene& scene, const SceneAccel& accel);

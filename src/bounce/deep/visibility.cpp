@@ -70,18 +70,24 @@ DeepBuffer sub_window(const DeepBuffer& deep, const std::array<int, 4>& w) {
     return out;
 }
 
+DeepBuffer empty_window(const Scene& scene, const std::array<int, 4>& window) {
+    DeepBuffer deep;
+    deep.full_width = scene.camera.width;
+    deep.full_height = scene.camera.height;
+    deep.x0 = window[0], deep.y0 = window[2];
+    deep.width = window[1] - window[0], deep.height = window[3] - window[2];
+    deep.spp = scene.render.visibility.spp;
+    deep.seed = scene.render.visibility.seed;
+    deep.scene_fingerprint = scene.visibility_fingerprint();
+    deep.offsets.assign(deep.pixel_count() + 1, 0);
+    return deep;
+}
+
 DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* sink,
                              const std::array<int, 4>& window) {
     const Camera& cam = scene.camera;
     const VisibilitySettings& rs = scene.render.visibility;
-    DeepBuffer deep;
-    deep.full_width = cam.width;
-    deep.full_height = cam.height;
-    deep.x0 = window[0], deep.y0 = window[2];
-    deep.width = window[1] - window[0], deep.height = window[3] - window[2];
-    deep.spp = rs.spp;
-    deep.seed = rs.seed;
-    deep.scene_fingerprint = scene.visibility_fingerprint();
+    DeepBuffer deep = empty_window(scene, window);
 
     CameraRays camera(cam);
     const int spp = rs.spp;
@@ -221,11 +227,6 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
     for (auto& v : per_pixel) deep.fragments.insert(deep.fragments.end(), v.begin(), v.end());
     stats.set("fragments", static_cast<double>(deep.fragments.size()));
     return deep;
-}
-
-std::array<int, 4> row_band(const std::array<int, 4>& w, int i, int n) {
-    const int h = w[3] - w[2];
-    return {w[0], w[1], w[2] + static_cast<int>(static_cast<int64_t>(h) * i / n), w[2] + static_cast<int>(static_cast<int64_t>(h) * (i + 1) / n)};
 }
 
 std::string serialize_window(const DeepBuffer& d) {

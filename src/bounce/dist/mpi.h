@@ -5,6 +5,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "bounce/core/communicator.h"
 
@@ -24,10 +25,12 @@ public:
     int rank() const override { return rank_; }
     int size() const override { return size_; }
     std::vector<std::string> allgather(const std::string& mine) override;
+    std::vector<std::string> gather_to_first(const std::string& mine) override;
     /// Ends every rank of the job with `code` (a rank that failed says why first).
     [[noreturn]] static void abort(int code);
 
 private:
+    std::vector<std::string> exchange(const std::string& mine, bool everyone);
     int rank_ = 0, size_ = 1;
 };
 

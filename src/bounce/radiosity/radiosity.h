@@ -82,6 +82,12 @@ public:
     static RadiosityTextures carry(const RadiosityTextures& previous, const Scene& scene, const Materials& materials,
                                    const DirectLighting& lighting, const SceneChanges& changes, std::vector<LightChange>& changed,
                                    Stats& stats);
+    /// The sides baked here, with their values, as bytes for the other processes of an MPI job
+    /// (docs/parallel.md), and taking theirs: sides are baked lazily by each process's own
+    /// gathers, and a shot's next frame (which sides changed, the brightest texel) and a saved
+    /// texture must not depend on which process baked what. Values are the same wherever baked.
+    std::string baked_bytes() const;
+    void take_baked(const std::string& bytes);
     /// The largest radiance (luminance) any baked side holds.
     float brightest() const;
 

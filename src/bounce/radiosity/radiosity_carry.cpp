@@ -1,6 +1,7 @@
 // Radiosity textures across the frames of a shot: kept texel for texel, re-baked only where the
 // direct light may have changed (docs/animation.md).
 #include <algorithm>
+#include <cstring>
 
 #include "bounce/core/parallel.h"
 #include "bounce/radiosity/radiosity.h"
@@ -120,6 +121,38 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
     stats.set("radiosity_sides_rebaked", static_cast<double>(redo.size()));
     stats.set("radiosity_sides_changed", static_cast<double>(changed.size()));
     return rt;
+}
+
+std::string RadiosityTextures::baked_bytes() const {
+    std::string out;
+    const auto put = [&out](const void* p, size_t n) { out.append(static_cast<const char*>(p), n); };
+    for (uint32_t id = 0; id < state_.size(); ++id) {
+        const RadiosityMap& m = maps_[id];
+        for (uint32_t s = 0; s < 2 * m.level.size(); ++s) {
+            if (state_[id][s].load(std::memory_order_acquire) != 2) continue;
+            const uint32_t t = s / 2, count = static_cast<uint32_t>((m.level[t] + 1) * (m.level[t] + 2) / 2);
+            const uint32_t head[3] = {id, s, count};
+            put(head, sizeof(head));
+            put((s % 2 == 0 ? m.front : m.back).data() + m.offset[t], count * sizeof(Color));
+        }
+    }
+    return out;
+}
+
+void RadiosityTextures::take_baked(const std::string& bytes) {
+    for (size_t at = 0; at + 3 * sizeof(uint32_t) <= bytes.size();) {
+        uint32_t head[3];
+        std::memcpy(head, bytes.data() + at, sizeof(head));
+        at += sizeof(head);
+        const auto [id, s, count] = head;
+        RadiosityMap& m = maps_.at(id);
+        const uint32_t t = s / 2;
+        if (state_[id][s].load(std::memory_order_acquire) != 2) {
+            std::memcpy(static_cast<void*>((s % 2 == 0 ? m.front : m.back).data() + m.offset.at(t)), bytes.data() + at, count * sizeof(Color));
+            state_[id][s].store(2, std::memory_order_release);
+        }
+        at += count * sizeof(Color);
+    }
 }
 
 }  // namespace bounce

@@ -108,12 +108,10 @@ VisibilityResult visibility_pass(const FrameContext& ctx, const FramePlan& plan,
                 out.gathered = render_visibility(scene, ctx.accel, ctx.stats, ctx.progress, plan.gather_window);
                 break;
             }
-            std::vector<DeepBuffer> bands;
-            for (const std::string& b : in_row_bands(ctx.comm, plan.gather_window, [&](const std::array<int, 4>& band) {
-                     return serialize_window(render_visibility(scene, ctx.accel, ctx.stats, nullptr, band));
-                 }))
-                bands.push_back(parse_window(b));
-            out.gathered = stack_rows(bands);
+            // Each process keeps the fragments of its own bands, unless a crop's bands differ
+            // from the gathered window's or rank 0 writes the deep file.
+            out.gathered = visibility_in_row_bands(ctx.comm, scene, ctx.accel, ctx.stats, plan.gather_window,
+                                                   cropped || !plan.deep_out.empty());
             break;
         }
     }
@@ -197,12 +195,19 @@ RadiosityResult radiosity_pass(const FrameContext& ctx, const FramePlan& plan, c
     return out;
 }
 
+void share_radiosity_pass(const FrameContext& ctx, RadiosityTextures& rt) {
+    if (ctx.comm.size() == 1) return;
+    const std::vector<std::string> all = ctx.comm.allgather(rt.baked_bytes());
+    for (size_t r = 0; r < all.size(); ++r)
+        if (static_cast<int>(r) != ctx.comm.rank()) rt.take_baked(all[r]);
+}
+
 void save_radiosity_pass(const FrameContext& ctx, const RadiosityTextures& rt, size_t baked_before) {
     const size_t baked = rt.baked_sides();
     ctx.stats.set("radiosity_sides_baked", static_cast<double>(baked - baked_before));
     ctx.stats.set("radiosity_sides", static_cast<double>(rt.sides()));
     const std::string& folder = ctx.scene.render.radiosity.folder;
-    if (folder.empty() || baked == baked_before) return;
+    if (folder.empty() || baked == baked_before || ctx.comm.rank() != 0) return;  // rank 0 writes
     PhaseTimer t(ctx.stats, "radiosity save");
     rt.save(folder);
 }
@@ -373,7 +378,7 @@ std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffe
     Gatherer gatherer(ctx.scene, ctx.accel, ctx.materials, ctx.lighting, radiosity, frame_gather_settings(ctx, false));
     std::vector<Indirect> light =
         ctx.comm.size() == 1 ? gather_every_fragment(ctx.scene, deep, gatherer, ctx.stats, ctx.progress)
-                             : indirect_in_row_bands(ctx.comm, deep, [&](const DeepBuffer& band) {
+                             : indirect_in_row_bands(ctx.comm, deep, ctx.scene.render.parallel.tile_size, [&](const DeepBuffer& band) {
                                    return gather_every_fragment(ctx.scene, band, gatherer, ctx.stats, nullptr);
                                });
     ctx.stats.set("gathers", static_cast<double>(deep.fragments.size()));
@@ -393,7 +398,7 @@ ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const 
         InterpolatedLight light = interpolation_pass(scene, deep, *cache, ctx.stats, progress);
         ctx.stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         interpolated = std::move(light.light);
-        out.refined = std::move(light.refined);
+        out.refined = fragment_mask(deep, light.refined);
         out.shading_misses = light.misses;
         brute = &interpolated;
     }
@@ -402,25 +407,29 @@ ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const 
     return out;
 }
 
-/// Each process shades its row bands; every process takes the whole image.
+/// Each process shades its row bands; rank 0 takes the whole image (the others' stays empty).
 ShadeResult shade_in_row_bands(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
                                const std::vector<Indirect>* brute) {
-    const auto bands = in_row_bands(ctx.comm, window_of(deep), [&](const std::array<int, 4>& band) {
+    const auto bands = in_row_bands(ctx.comm, window_of(deep), ctx.scene.render.parallel.tile_size, BandsTo::First,
+                                    [&](const std::array<int, 4>& band) {
         const DeepBuffer sub = sub_window(deep, band);
         const std::vector<Indirect> light = brute ? band_slice(deep, *brute, band) : std::vector<Indirect>();
         const ShadeResult r = shade_window(ctx, sub, cache, brute ? &light : nullptr, nullptr);
-        const uint64_t head[3] = {r.shading_misses, r.refined.size(), 0};
+        const uint64_t head[3] = {r.shading_misses, r.refined.size() * sizeof(float), 0};
         std::string bytes(reinterpret_cast<const char*>(head), sizeof(head));
-        bytes.append(reinterpret_cast<const char*>(r.refined.data()), r.refined.size());
+        bytes.append(reinterpret_cast<const char*>(r.refined.data()), r.refined.size() * sizeof(float));
         return bytes + serialize_image(r.image);
     });
     ShadeResult out;
+    if (ctx.comm.rank() != 0) return out;  // rank 0 writes the image
     std::vector<Image> images;
     for (const std::string& b : bands) {
         uint64_t head[3];
         std::memcpy(head, b.data(), sizeof(head));
         out.shading_misses += head[0];
-        out.refined.insert(out.refined.end(), b.begin() + sizeof(head), b.begin() + static_cast<std::ptrdiff_t>(sizeof(head) + head[1]));
+        const size_t at = out.refined.size();
+        out.refined.resize(at + head[1] / sizeof(float));
+        std::memcpy(out.refined.data() + at, b.data() + sizeof(head), head[1]);
         images.push_back(parse_image(b.substr(sizeof(head) + head[1])));
     }
     out.image = stack_rows(images);

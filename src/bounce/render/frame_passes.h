@@ -62,6 +62,8 @@ struct CacheStartResult {
 };
 CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous,
                                   const RadiosityResult& radiosity);
+/// Under MPI: every process takes the sides the others baked (RadiosityTextures::take_baked).
+void share_radiosity_pass(const FrameContext& ctx, RadiosityTextures& rt);
 /// Saves radiosity textures that this frame baked into render.radiosity_textures.
 void save_radiosity_pass(const FrameContext& ctx, const RadiosityTextures& rt, size_t baked_before);
 
@@ -84,7 +86,7 @@ std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffe
 struct ShadeResult {
     Image image;
     size_t shading_misses = 0;         ///< fragments no record covered (left black)
-    std::vector<uint8_t> refined;      ///< per fragment: 1 where its own record was used
+    std::vector<float> refined;        ///< per pixel: the coverage of fragments that used their own record
 };
 /// Shades `deep` with the cache's interpolation (cache non-null), `brute` light (non-null) or
 /// direct light only. With a cache and `quick_look`, first calls it with every 4th pixel

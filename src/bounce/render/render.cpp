@@ -185,9 +185,12 @@ void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const Visi
     ctx.stats.set("records_loaded", static_cast<double>(result.records_loaded));
     ctx.stats.set("records_new", static_cast<double>(result.records_new));
     // After the shading pass: refined fragments' gathers may have baked sides too.
-    if (radiosity.textures) save_radiosity_pass(ctx, *radiosity.textures, baked_before);
-    if (plan.refine || cache.fragment_record_count() > 0)
-        add_fragment_mask_layer(result.image, deep.shaded, shaded.refined, "refined");
+    if (radiosity.textures) {
+        share_radiosity_pass(ctx, *radiosity.textures);
+        save_radiosity_pass(ctx, *radiosity.textures, baked_before);
+    }
+    if ((plan.refine || cache.fragment_record_count() > 0) && !shaded.refined.empty())  // empty: a rank that writes no image
+        add_mask_layer(result.image, shaded.refined, "refined");
 }
 
 /// Brute force, direct light only, or a cache file read for its records layer.
@@ -204,7 +207,10 @@ void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const V
         const uint64_t rays = ctx.stats.total().gather_rays - rays_before;
         ctx.stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
         result.gathered = true;
-        if (radiosity.textures) save_radiosity_pass(ctx, *radiosity.textures, baked_before);
+        if (radiosity.textures) {
+            share_radiosity_pass(ctx, *radiosity.textures);
+            save_radiosity_pass(ctx, *radiosity.textures, baked_before);
+        }
     }
     ShadeResult shaded = shading_pass(ctx, deep.shaded, nullptr, plan.gather == GatherStep::Brute ? &light : nullptr);
     result.image = std::move(shaded.image);

@@ -24,17 +24,23 @@ void add_records_layer(Image& image, const Camera& camera, const std::vector<Vec
     }
 }
 
-void add_fragment_mask_layer(Image& image, const DeepBuffer& deep, const std::vector<uint8_t>& flags, const std::string& name) {
-    Layer& l = image.add_layer(name, {name + ".Y"});
+std::vector<float> fragment_mask(const DeepBuffer& deep, const std::vector<uint8_t>& flags) {
+    std::vector<float> mask(deep.pixel_count(), 0.0f);
     for (int y = 0; y < deep.height; ++y)
         for (int x = 0; x < deep.width; ++x) {
-            size_t first = deep.offsets[static_cast<size_t>(y) * deep.width + x];
-            float cover = 0;
+            const size_t first = deep.offsets[static_cast<size_t>(y) * deep.width + x];
             auto frags = deep.pixel(x, y);
+            float cover = 0;
             for (size_t k = 0; k < frags.size(); ++k)
                 if (flags[first + k]) cover += frags[k].weight;
-            *image.at(l, x, y) = cover;
+            mask[static_cast<size_t>(y) * deep.width + x] = cover;
         }
+    return mask;
+}
+
+void add_mask_layer(Image& image, const std::vector<float>& mask, const std::string& name) {
+    Layer& l = image.add_layer(name, {name + ".Y"});
+    std::copy(mask.begin(), mask.end(), l.data.begin());
 }
 
 }  // namespace bounce

@@ -15,6 +15,10 @@ void add_records_layer(Image& image, const Camera& camera, const std::vector<Vec
 
 /// Adds a one-channel layer `name` (`name.Y`): per pixel, the coverage of its fragments whose
 /// flag is set (e.g. the fragments refined with gathers of their own).
-void add_fragment_mask_layer(Image& image, const DeepBuffer& deep, const std::vector<uint8_t>& flags, const std::string& name);
+/// Per pixel of `deep`: the summed weight of its fragments whose flag (parallel to
+/// deep.fragments) is set.
+std::vector<float> fragment_mask(const DeepBuffer& deep, const std::vector<uint8_t>& flags);
+/// Adds a one-channel layer `name` (`name`.Y) holding `mask`, one value per pixel.
+void add_mask_layer(Image& image, const std::vector<float>& mask, const std::string& name);
 
 }  // namespace bounce
