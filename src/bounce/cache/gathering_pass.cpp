@@ -36,8 +36,7 @@ public:
         : scene_(scene), deep_(deep), gatherer_(gatherer), cache_(cache), stats_(stats), o_(o),
           per_tile_(scene.render.parallel.cache_sharing == CacheSharing::PerThread),
           tiles_(make_tiles(deep.width, deep.height, scene.render.parallel.tile_size, scene.render.parallel.tile_order)),
-          bands_(deep.height, scene.render.parallel.tile_size, o.comm ? o.comm->size() : 1),
-          mine_(owned(tiles_, bands_, o.comm)), work_(tiles_.size()) {}
+          mine_(owned(tiles_, o.comm)), work_(tiles_.size()) {}
 
     void subpass(const SubPass& sp);
     size_t gathered = 0, dropped = 0;
@@ -49,16 +48,17 @@ private:
     void insert_new(std::vector<Record> records);
     void exchange_work();
     void share_late(const std::vector<Candidate>& deferred, std::vector<uint8_t>& still, std::vector<Record>& late);
-    /// The tiles of this process's row bands: it holds only their fragments (RowBands).
-    static std::vector<Tile> owned(const std::vector<Tile>& tiles, const RowBands& bands, const Communicator* comm) {
+    /// The tiles this process judges: it holds only their fragments (render/distributed.h).
+    static std::vector<Tile> owned(const std::vector<Tile>& tiles, const Communicator* comm) {
         std::vector<Tile> out;
         for (const Tile& t : tiles)
-            if (!comm || comm->owns(static_cast<size_t>(bands.band_of_row(t.y0)))) out.push_back(t);
+            if (!comm || comm->owns(static_cast<size_t>(t.index))) out.push_back(t);
         return out;
     }
-    /// The process whose band holds window row `wy`.
-    size_t owner_of_row(int wy) const {
-        return static_cast<size_t>(bands_.band_of_row(wy)) % static_cast<size_t>(o_.comm->size());
+    /// The process that owns the tile of window pixel (wx, wy).
+    size_t owner_of(const Candidate& c) const {
+        return static_cast<size_t>(tile_index_of(c.wx, c.wy, deep_.width, scene_.render.parallel.tile_size)) %
+               static_cast<size_t>(o_.comm->size());
     }
 
     const Scene& scene_;
@@ -69,7 +69,6 @@ private:
     const GatheringOptions& o_;
     const bool per_tile_;
     const std::vector<Tile> tiles_;
-    const RowBands bands_;
     const std::vector<Tile> mine_;  ///< the tiles this process judges (all of them without MPI)
     std::vector<TileWork> work_;
 };
@@ -186,14 +185,14 @@ void Gathering::exchange_work() {
     }
 }
 
-/// Late gathers are judged and made by the process whose band holds the candidate; each sends
+/// Late gathers are judged and made by the process whose tile holds the candidate; each sends
 /// its candidates' verdicts and records in index order.
 void Gathering::share_late(const std::vector<Candidate>& deferred, std::vector<uint8_t>& still, std::vector<Record>& late) {
     const auto rank = static_cast<size_t>(o_.comm->rank());
     std::string flags;
     std::vector<Record> made;
     for (size_t i = 0; i < late.size(); ++i)
-        if (owner_of_row(deferred[i].wy) == rank) {
+        if (owner_of(deferred[i]) == rank) {
             flags.push_back(static_cast<char>(still[i]));
             if (still[i]) made.push_back(late[i]);
         }
@@ -207,7 +206,7 @@ void Gathering::share_late(const std::vector<Candidate>& deferred, std::vector<u
         std::vector<Record> theirs = parse_records(all[r].substr(sizeof(count) + count));
         size_t next_flag = sizeof(count), next = 0;
         for (size_t i = 0; i < late.size(); ++i)
-            if (owner_of_row(deferred[i].wy) == r) {
+            if (owner_of(deferred[i]) == r) {
                 still[i] = static_cast<uint8_t>(all[r].at(next_flag++));
                 if (still[i]) late[i] = std::move(theirs.at(next++));
             }
@@ -239,10 +238,10 @@ void Gathering::subpass(const SubPass& sp) {
     insert_new(std::move(made));
     // 3. The misses that waited for redone records: those still missing get records of their own.
     if (deferred.empty()) return;
-    // Under MPI each process judges and gathers the candidates of its own bands (it holds only
+    // Under MPI each process judges and gathers the candidates of its own tiles (it holds only
     // their fragments); share_late gives every process the others'.
     const bool shared = o_.comm && o_.comm->size() > 1;
-    const auto mine = [&](size_t i) { return !shared || owner_of_row(deferred[i].wy) == static_cast<size_t>(o_.comm->rank()); };
+    const auto mine = [&](size_t i) { return !shared || owner_of(deferred[i]) == static_cast<size_t>(o_.comm->rank()); };
     std::vector<uint8_t> still(deferred.size(), 0);
     std::vector<Record> late(deferred.size());
     parallel_for_each_index(0, static_cast<int>(deferred.size()), [&](int i) {

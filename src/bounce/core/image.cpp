@@ -155,15 +155,19 @@ Image parse_image(const std::string& bytes) {
     return img;
 }
 
-Image stack_rows(const std::vector<Image>& bands) {
-    Image out = bands.front();
-    out.height = 0;
-    for (const Image& b : bands) out.height += b.height;
-    for (size_t li = 0; li < out.layers.size(); ++li) {
-        Layer& l = out.layers[li];
-        l.data.clear();
-        for (const Image& b : bands) l.data.insert(l.data.end(), b.layers[li].data.begin(), b.layers[li].data.end());
-    }
+Image assemble_tiles(const std::array<int, 4>& w, const std::vector<Image>& tiles) {
+    Image out;
+    out.full_width = tiles.front().full_width, out.full_height = tiles.front().full_height;
+    out.x0 = w[0], out.y0 = w[2], out.width = w[1] - w[0], out.height = w[3] - w[2];
+    out.metadata = tiles.front().metadata;
+    for (const Layer& l : tiles.front().layers) out.add_layer(l.name, l.channels);
+    for (const Image& t : tiles)
+        for (size_t li = 0; li < out.layers.size(); ++li) {
+            const size_t nc = out.layers[li].channels.size();
+            for (int y = 0; y < t.height; ++y)
+                std::copy_n(&t.layers[li].data[static_cast<size_t>(y) * t.width * nc], static_cast<size_t>(t.width) * nc,
+                            out.at(out.layers[li], t.x0 - out.x0, t.y0 - out.y0 + y));
+        }
     return out;
 }
 

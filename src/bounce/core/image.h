@@ -2,6 +2,7 @@
 // metadata, and a tone-mapped sRGB PNG for a quick look.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <map>
@@ -41,8 +42,9 @@ struct Image {
 /// An image as bytes for another process of the same build (an MPI exchange), and back.
 std::string serialize_image(const Image& image);
 Image parse_image(const std::string& bytes);
-/// Images of consecutive row bands (same layers and columns), top to bottom, as one image.
-Image stack_rows(const std::vector<Image>& bands);
+/// One image of window `w` ({x0, x1, y0, y1}, full-image pixels) from images of its tiles
+/// (same layers; each placed by its own x0, y0); pixels no tile covers are 0.
+Image assemble_tiles(const std::array<int, 4>& w, const std::vector<Image>& tiles);
 
 /// Writes all layers to one OpenEXR (temporary name, then rename). The layer named "beauty"
 /// is written as the unprefixed R,G,B,A channels.

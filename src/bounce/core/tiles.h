@@ -24,6 +24,8 @@ enum class TileOrder : uint8_t { Rows, Spiral };
 
 /// Tiles of `size` pixels covering a width x height window, listed in `order`.
 std::vector<Tile> make_tiles(int width, int height, int size, TileOrder order = TileOrder::Rows);
+/// The row-major index (Tile::index) of the tile that holds pixel (x, y) of a `width`-wide image.
+inline int tile_index_of(int x, int y, int width, int size) { return (y / size) * ((width + size - 1) / size) + x / size; }
 
 /// Calls fn(tile) for every tile, in parallel in the current task arena; each worker takes the
 /// next tile of the list when it is free (greedy load balancing).

@@ -68,15 +68,12 @@ struct DeepBuffer {
 /// Runs `pixel(wx, wy, first)` for every pixel of `deep` (window coordinates; `first` indexes
 /// the pixel's first fragment), tile by tile in parallel with TBB, reporting one progress unit
 /// per tile under `name`. Work order never affects results: each pixel writes its own slots.
-/// With `comm`, only the tiles of this process's row bands (RowBands).
+/// With `comm`, only the tiles this process owns (it holds only their fragments).
 template <typename PixelFn>
 void for_each_pixel_in_tiles(const DeepBuffer& deep, int tile, ProgressSink* sink, const char* name,
                              PixelFn&& pixel, TileOrder order = TileOrder::Rows, const Communicator* comm = nullptr) {
     auto tiles = make_tiles(deep.width, deep.height, tile, order);
-    if (comm) {
-        const RowBands bands(deep.height, tile, comm->size());
-        std::erase_if(tiles, [&](const Tile& t) { return !comm->owns(static_cast<size_t>(bands.band_of_row(t.y0))); });
-    }
+    if (comm) std::erase_if(tiles, [comm](const Tile& t) { return !comm->owns(static_cast<size_t>(t.index)); });
     Progress progress(sink, name, tiles.size());
     for_each_tile(tiles, [&](const Tile& t) {
         for (int wy = t.y0; wy < t.y1; ++wy, sink ? sink->check_cancel() : void())
@@ -138,9 +135,10 @@ DeepBuffer sub_window(const DeepBuffer& deep, const std::array<int, 4>& w);
 /// A window's fragments as bytes for another process of the same build (an MPI exchange), and back.
 std::string serialize_window(const DeepBuffer& deep);
 DeepBuffer parse_window(const std::string& bytes);
-/// Windows of consecutive row bands (same columns), top to bottom, as one window.
-DeepBuffer stack_rows(const std::vector<DeepBuffer>& bands);
-/// A window of `scene`'s image with no fragments (the bands another process traced).
+/// One window `w` ({x0, x1, y0, y1}) of `scene` from the fragments of some of its tiles
+/// (each a DeepBuffer of its own window inside `w`); pixels no tile covers are empty.
+DeepBuffer assemble_tiles(const Scene& scene, const std::array<int, 4>& w, const std::vector<DeepBuffer>& tiles);
+/// A window of `scene`'s image with no fragments.
 DeepBuffer empty_window(const Scene& scene, const std::array<int, 4>& window);
 
 /// Throws InputError (naming the camera) if no camera ray hits any geometry.

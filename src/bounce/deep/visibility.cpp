@@ -260,17 +260,23 @@ DeepBuffer parse_window(const std::string& bytes) {
     return d;
 }
 
-DeepBuffer stack_rows(const std::vector<DeepBuffer>& bands) {
-    DeepBuffer out = bands.front();
-    out.height = 0;
-    out.offsets.assign(1, 0);
-    out.fragments.clear();
-    for (const DeepBuffer& b : bands) {
-        out.height += b.height;
-        const uint32_t base = static_cast<uint32_t>(out.fragments.size());
-        for (size_t i = 1; i < b.offsets.size(); ++i) out.offsets.push_back(base + b.offsets[i]);
-        out.fragments.insert(out.fragments.end(), b.fragments.begin(), b.fragments.end());
-    }
+DeepBuffer assemble_tiles(const Scene& scene, const std::array<int, 4>& w, const std::vector<DeepBuffer>& tiles) {
+    DeepBuffer out = empty_window(scene, w);
+    std::vector<uint32_t> count(out.pixel_count(), 0);
+    const auto at = [&](const DeepBuffer& t, int x, int y) {
+        return static_cast<size_t>(t.y0 + y - out.y0) * out.width + static_cast<size_t>(t.x0 + x - out.x0);
+    };
+    for (const DeepBuffer& t : tiles)
+        for (int y = 0; y < t.height; ++y)
+            for (int x = 0; x < t.width; ++x) count[at(t, x, y)] = static_cast<uint32_t>(t.pixel(x, y).size());
+    for (size_t i = 0; i < count.size(); ++i) out.offsets[i + 1] = out.offsets[i] + count[i];
+    out.fragments.resize(out.offsets.back());
+    for (const DeepBuffer& t : tiles)
+        for (int y = 0; y < t.height; ++y)
+            for (int x = 0; x < t.width; ++x) {
+                const auto f = t.pixel(x, y);
+                std::copy(f.begin(), f.end(), out.fragments.begin() + out.offsets[at(t, x, y)]);
+            }
     return out;
 }
 

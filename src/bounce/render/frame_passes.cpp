@@ -108,10 +108,10 @@ VisibilityResult visibility_pass(const FrameContext& ctx, const FramePlan& plan,
                 out.gathered = render_visibility(scene, ctx.accel, ctx.stats, ctx.progress, plan.gather_window);
                 break;
             }
-            // Each process keeps the fragments of its own bands, unless a crop's bands differ
+            // Each process keeps the fragments of its own tiles, unless a crop's tiles differ
             // from the gathered window's or rank 0 writes the deep file.
-            out.gathered = visibility_in_row_bands(ctx.comm, scene, ctx.accel, ctx.stats, plan.gather_window,
-                                                   cropped || !plan.deep_out.empty());
+            out.gathered = visibility_in_tiles(ctx.comm, scene, ctx.accel, ctx.stats, plan.gather_window,
+                                               cropped || !plan.deep_out.empty());
             break;
         }
     }
@@ -378,8 +378,8 @@ std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffe
     Gatherer gatherer(ctx.scene, ctx.accel, ctx.materials, ctx.lighting, radiosity, frame_gather_settings(ctx, false));
     std::vector<Indirect> light =
         ctx.comm.size() == 1 ? gather_every_fragment(ctx.scene, deep, gatherer, ctx.stats, ctx.progress)
-                             : indirect_in_row_bands(ctx.comm, deep, ctx.scene.render.parallel.tile_size, [&](const DeepBuffer& band) {
-                                   return gather_every_fragment(ctx.scene, band, gatherer, ctx.stats, nullptr);
+                             : indirect_in_tiles(ctx.comm, deep, ctx.scene.render.parallel.tile_size, [&](const DeepBuffer& tile) {
+                                   return gather_every_fragment(ctx.scene, tile, gatherer, ctx.stats, nullptr);
                                });
     ctx.stats.set("gathers", static_cast<double>(deep.fragments.size()));
     ctx.stats.set("rays_per_gather", gatherer.grid().rays());
@@ -407,32 +407,33 @@ ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const 
     return out;
 }
 
-/// Each process shades its row bands; rank 0 takes the whole image (the others' stays empty).
-ShadeResult shade_in_row_bands(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
-                               const std::vector<Indirect>* brute) {
-    const auto bands = in_row_bands(ctx.comm, window_of(deep), ctx.scene.render.parallel.tile_size, BandsTo::First,
-                                    [&](const std::array<int, 4>& band) {
-        const DeepBuffer sub = sub_window(deep, band);
-        const std::vector<Indirect> light = brute ? band_slice(deep, *brute, band) : std::vector<Indirect>();
-        const ShadeResult r = shade_window(ctx, sub, cache, brute ? &light : nullptr, nullptr);
-        const uint64_t head[3] = {r.shading_misses, r.refined.size() * sizeof(float), 0};
-        std::string bytes(reinterpret_cast<const char*>(head), sizeof(head));
-        bytes.append(reinterpret_cast<const char*>(r.refined.data()), r.refined.size() * sizeof(float));
-        return bytes + serialize_image(r.image);
+/// Each process shades its tiles; rank 0 takes the whole image (the others' stays empty).
+ShadeResult shade_in_tiles(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
+                           const std::vector<Indirect>* brute) {
+    const auto tiles = in_tiles(ctx.comm, window_of(deep), ctx.scene.render.parallel.tile_size, TilesTo::First,
+                                [&](const std::array<int, 4>& w) {
+        const DeepBuffer sub = sub_window(deep, w);
+        const std::vector<Indirect> light = brute ? window_slice(deep, *brute, w) : std::vector<Indirect>();
+        ShadeResult r = shade_window(ctx, sub, cache, brute ? &light : nullptr, nullptr);
+        // The refined mask travels as a layer of the tile's image.
+        if (!r.refined.empty()) add_mask_layer(r.image, r.refined, "refined");
+        const uint64_t misses = r.shading_misses;
+        return std::string(reinterpret_cast<const char*>(&misses), sizeof(misses)) + serialize_image(r.image);
     });
     ShadeResult out;
     if (ctx.comm.rank() != 0) return out;  // rank 0 writes the image
     std::vector<Image> images;
-    for (const std::string& b : bands) {
-        uint64_t head[3];
-        std::memcpy(head, b.data(), sizeof(head));
-        out.shading_misses += head[0];
-        const size_t at = out.refined.size();
-        out.refined.resize(at + head[1] / sizeof(float));
-        std::memcpy(out.refined.data() + at, b.data() + sizeof(head), head[1]);
-        images.push_back(parse_image(b.substr(sizeof(head) + head[1])));
+    for (const std::string& b : tiles) {
+        uint64_t misses = 0;
+        std::memcpy(&misses, b.data(), sizeof(misses));
+        out.shading_misses += misses;
+        images.push_back(parse_image(b.substr(sizeof(misses))));
     }
-    out.image = stack_rows(images);
+    out.image = assemble_tiles(window_of(deep), images);
+    if (Layer* mask = out.image.find("refined")) {
+        out.refined = std::move(mask->data);
+        out.image.layers.pop_back();  // added back where one process adds it
+    }
     ctx.stats.set("shading_misses", static_cast<double>(out.shading_misses));
     return out;
 }
@@ -452,7 +453,7 @@ ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const 
         fill_blocks(look, 4);
         quick_look(look);
     }
-    if (ctx.comm.size() > 1) return shade_in_row_bands(ctx, deep, cache, brute);
+    if (ctx.comm.size() > 1) return shade_in_tiles(ctx, deep, cache, brute);
     return shade_window(ctx, deep, cache, brute, ctx.progress);
 }
 
