@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cstring>
+#include <map>
 #include <thread>
 
 #include "bounce/core/image.h"
@@ -153,6 +154,35 @@ TEST(Mpi, AKilledRankEndsTheJobWithinSecondsAndThePreviousOutputsStay) {
     EXPECT_LT(seconds, 30) << "the job must not hang at a collective call";
     EXPECT_EQ(test::bytes_of(out), before);
     EXPECT_EQ(test::bytes_of(d.file("killed.bic")), cache_before);
+}
+
+TEST(Mpi, AShotKilledMidwayResumesWhereItStopped) {
+    SKIP_UNDER_SANITIZER();
+    test::TempDir d;
+    const std::string args = fmt::format("render {}/scenes/shots/cornell-rolling.json --res 96x96 --gi cache --threads 1 -q "
+                                         "--frames 1-9 --distribute frames -o {} --cache-out {}",
+                                         test::source_dir(), d.file("k.####.exr"), d.file("k.####.bic"));
+    std::thread killer([&] {
+        // Once rank 0 has written its first frame, rank 2 dies in the middle of its chunk.
+        for (int tries = 0; tries < 600 && !std::filesystem::exists(d.file("k.0001.exr")); ++tries)
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        if (const int pid = find_rank(d.file("k.####.exr"), 2)) kill(pid, SIGKILL);
+    });
+    std::string err;
+    const int rc = run_mpi(3, args, &err);
+    killer.join();
+    ASSERT_NE(rc, 0) << "the kill came too late: " << err;
+    std::map<int, std::string> done;  // frames whose outputs are complete, and their bytes
+    for (int f = 1; f <= 9; ++f)
+        if (std::filesystem::exists(d.file(fmt::format("k.{:04d}.bic", f)))) done[f] = test::bytes_of(d.file(fmt::format("k.{:04d}.exr", f)));
+    EXPECT_LT(done.size(), 9u);
+    ASSERT_EQ(run_mpi(3, args + " --resume", &err), 0) << err;
+    for (int f = 1; f <= 9; ++f) {
+        EXPECT_TRUE(std::filesystem::exists(d.file(fmt::format("k.{:04d}.bic", f)))) << f;
+        if (done.count(f)) {
+            EXPECT_TRUE(test::bytes_of(d.file(fmt::format("k.{:04d}.exr", f))) == done[f]) << "frame " << f << " was redone";
+        }
+    }
 }
 
 TEST(Mpi, RanksOfAnotherSceneOrThatCannotReadItAreRefusedNamingTheRank) {
