@@ -76,6 +76,31 @@ TEST(Cli, DeepFileFromAnotherSceneIsRefused) {
     EXPECT_NE(err.find("another scene or camera"), std::string::npos) << err;
 }
 
+TEST(Cli, TheReadmesLightersLoopReshadesALightEditWithTheCache) {
+    // README, "the lighter's loop": a light edit re-shades a region with the frame's cache
+    // (its bounce light is the old lights', and bounce says so); moved objects are refused.
+    test::TempDir d;
+    const std::string scene = test::source_dir() + "/scenes/cornell/glossy-bump.json";
+    const std::string common = " --gi cache --res 48x48 --rays 32 --deep-in " + d.file("f.deep.exr") + " --cache-in " + d.file("f.bic");
+    ASSERT_EQ(run_bounce("render " + scene + " -o " + d.file("full.exr") + " --gi cache --res 48x48 --rays 32 -q --deep-out " +
+                         d.file("f.deep.exr") + " --cache-out " + d.file("f.bic")),
+              0);
+    std::string err;
+    EXPECT_EQ(run_bounce("render " + scene + " -o " + d.file("crop.exr") + common + " --crop 8,40,8,40 --base " + d.file("full.exr") +
+                             " --set lights.0.intensity=2",
+                         &err),
+              0)
+        << err;
+    EXPECT_NE(err.find("f.bic: lights or materials differ from the cache's"), std::string::npos) << err;
+    EXPECT_EQ(run_bounce("render " + scene + " -o " + d.file("same.exr") + common, &err), 0) << err;
+    EXPECT_EQ(err.find("differ"), std::string::npos) << err;
+    EXPECT_EQ(run_bounce("render " + scene + " -o " + d.file("other.exr") + " --gi cache --res 48x48 --rays 32 --cache-in " + d.file("f.bic") +
+                             " --set objects.3.material=red",
+                         &err),
+              2);
+    EXPECT_NE(err.find("f.bic: scene_fingerprint: error: cache was made for another scene (its objects differ"), std::string::npos) << err;
+}
+
 TEST(Cli, HelpAndVersionSucceed) {
     EXPECT_EQ(run_bounce("--help"), 0);
     EXPECT_EQ(run_bounce("--version"), 0);

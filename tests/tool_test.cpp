@@ -3,6 +3,7 @@
 #include <httplib.h>
 
 #include <fstream>
+#include <map>
 #include <thread>
 
 #include "bounce/cache/cache_file.h"
@@ -62,6 +63,34 @@ TEST(LightingTool, ParamsListTheTableAndTheScenesMaterials) {
     for (const json& r : rows)
         if (r["key"] == "render.gi") {
             EXPECT_EQ(r["value"], "cache");
+        }
+}
+
+TEST(LightingTool, EveryFieldALightOrMaterialReadsHasARowEvenAtItsDefault) {
+    // The scene leaves the spot's cone and the light material's roughness at their defaults:
+    // rows show them with the reader's defaults (Light{}, Material{}), and they can be edited.
+    test::TempDir d;
+    SessionOptions o = small_session(d);
+    o.sets.push_back(R"(lights=[{"type": "spot", "position": [278, 540, 278], "intensity": 5}])");
+    LightingSession s(o);
+    std::map<std::string, json> rows;
+    for (const json& r : s.params()) rows[r["key"]] = r;
+    ASSERT_TRUE(rows.count("lights.0.cone_angle"));
+    EXPECT_EQ(rows["lights.0.cone_angle"]["value"], Light{}.cone_angle);
+    EXPECT_EQ(rows["lights.0.cone_angle"]["default"], Light{}.cone_angle);
+    EXPECT_EQ(rows["lights.0.cone_falloff"]["value"], Light{}.cone_falloff);
+    EXPECT_EQ(rows["lights.0.direction"]["value"], json({0, -1, 0}));
+    EXPECT_EQ(rows["lights.0.intensity"]["value"], 5);
+    EXPECT_EQ(rows["lights.0.intensity"]["default"], 1);
+    EXPECT_EQ(rows["lights.0.intensity"]["stage"], "light");
+    EXPECT_EQ(rows.count("lights.0.corner"), 0u);  // a spot does not read it
+    ASSERT_TRUE(rows.count("materials.light.roughness"));
+    EXPECT_EQ(rows["materials.light.roughness"]["value"], Material{}.roughness);
+    EXPECT_EQ(rows["materials.light.roughness"]["stage"], "material");
+    EXPECT_EQ(s.edit("lights.0.cone_angle", 40)["needs"], "reshade");
+    for (const json& r : s.params())
+        if (r["key"] == "lights.0.cone_angle") {
+            EXPECT_EQ(r["value"], 40);
         }
 }
 
@@ -166,7 +195,12 @@ TEST(LightingTool, ANewRequestCancelsTheRunningOneAndAFailureKeepsTheImage) {
     EXPECT_EQ(bytes_of(s.cache_path()), cache);
     // A bad value or a bad cache file changes nothing; a render that fails (a camera edit
     // makes the deep buffer another camera's) leaves the image and says why.
-    EXPECT_THROW(s.edit("render.rays", -1), InputError);
+    try {  // blamed on the edit, not on the command line or the scene file
+        s.edit("render.rays", -1);
+        ADD_FAILURE() << "a bad edit was taken";
+    } catch (const InputError& e) {
+        EXPECT_STREQ(e.what(), "lighting tool: edit render.rays=-1 (/render/rays): error: -1 is out of range [1, 1048576]");
+    }
     std::ofstream(d.file("out/bad.bic"), std::ios::binary) << "not a cache";
     EXPECT_THROW(s.load_cache("bad.bic"), InputError);
     EXPECT_EQ(bytes_of(s.cache_path()), cache);

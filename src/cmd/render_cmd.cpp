@@ -91,6 +91,9 @@ void report(const RenderArgs& a, const RenderResult& r, const FrameFiles& files,
     if (!r.cache_differences.empty() && !a.quiet)
         std::fprintf(stderr, "bounce: %s: records reused although gathered with other settings (--cache-reuse-any)\n",
                      files.cache_in.c_str());
+    if (r.cache_other_lighting && !a.quiet)
+        std::fprintf(stderr, "bounce: %s: lights or materials differ from the cache's: its bounce light is theirs (--regather gathers it anew)\n",
+                     files.cache_in.c_str());
     if (a.stats) print_stats(stats, scene);
     if (!a.quiet) std::fprintf(stderr, "wrote %s\n", files.output.c_str());
 }

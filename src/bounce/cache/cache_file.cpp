@@ -214,6 +214,7 @@ std::string serialize_cache_file(const CacheFile& file) {
     h["block_records"] = kBlockRecords;
     h["scene_fingerprint"] = fmt::format("{:016x}", file.info.scene_fingerprint);
     h["camera_fingerprint"] = fmt::format("{:016x}", file.info.camera_fingerprint);
+    h["geometry_fingerprint"] = fmt::format("{:016x}", file.info.geometry_fingerprint);
     h["parameters"] = file.info.parameters;
     h["luminance_floor"] = file.info.luminance_floor;
     h["frame"] = file.info.frame;
@@ -291,6 +292,8 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
         const uint64_t count = shared + own;
         f.info.scene_fingerprint = std::stoull(h.at("scene_fingerprint").get<std::string>(), nullptr, 16);
         f.info.camera_fingerprint = std::stoull(h.at("camera_fingerprint").get<std::string>(), nullptr, 16);
+        if (h.contains("geometry_fingerprint"))  // absent in files of earlier builds
+            f.info.geometry_fingerprint = std::stoull(h.at("geometry_fingerprint").get<std::string>(), nullptr, 16);
         f.info.parameters = h.at("parameters");
         f.info.luminance_floor = h.at("luminance_floor").get<float>();
         f.info.frame = h.at("frame").get<int>();

@@ -17,6 +17,10 @@ namespace bounce {
 struct CacheFileInfo {
     uint64_t scene_fingerprint = 0;   ///< Scene::fingerprint({"objects","materials","lights"})
     uint64_t camera_fingerprint = 0;  ///< Scene::fingerprint({"camera"})
+    /// Scene::fingerprint({"objects"}): where records lie and what their rays can hit (0: not
+    /// known, a file from before it was written). Equal while scene_fingerprint differs: only
+    /// lights or materials changed, so the records still fit the scene and hold its old light.
+    uint64_t geometry_fingerprint = 0;
     nlohmann::json parameters = nlohmann::json::object();  ///< the settings that made it
     float luminance_floor = 0;
     int frame = 0;

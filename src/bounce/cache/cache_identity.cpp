@@ -11,6 +11,7 @@ CacheFileInfo cache_file_info(const Scene& scene, int frame) {
     CacheFileInfo info;
     info.scene_fingerprint = scene.fingerprint({"objects", "materials", "lights"}, true);
     info.camera_fingerprint = scene.fingerprint({"camera"});
+    info.geometry_fingerprint = scene.fingerprint({"objects"});
     info.parameters = param_values(scene, kCacheIdentity);
     info.frame = frame;
     return info;
@@ -20,10 +21,14 @@ LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, 
                        const std::function<bool(const Record&)>& keep) {
     CacheFile f = read_cache_file(path);
     CacheFileInfo want = cache_file_info(scene, 0);
-    if (!force && f.info.scene_fingerprint != want.scene_fingerprint)
+    // A lighter's re-shade after a light or material edit reuses the records on purpose (the
+    // bounce light follows on a re-gather); other objects make them wrong.
+    const bool same_objects = f.info.geometry_fingerprint != 0 && f.info.geometry_fingerprint == want.geometry_fingerprint;
+    const bool other_scene = f.info.scene_fingerprint != want.scene_fingerprint;
+    if (!force && other_scene && !same_objects)
         throw InputError(path, "scene_fingerprint",
-                         "cache was made for another scene (objects, materials or lights differ, or a file they read has "
-                         "changed since); --force uses it anyway");
+                         "cache was made for another scene (its objects differ, or a file they read has changed since); "
+                         "--force uses it anyway");
     if (!force && f.info.camera_fingerprint != want.camera_fingerprint)
         throw InputError(path, "camera_fingerprint",
                          "cache was made for another camera (its spacing is in that camera's pixels); --force uses it anyway");
@@ -32,6 +37,7 @@ LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, 
     if (f.info.parameters.contains(ao_key) && f.info.parameters[ao_key] != want.parameters[ao_key])
         throw InputError(path, "parameters/" + ao_key, scene.render.indirect.ao ? "cache holds irradiance, not AO" : "cache holds AO, not irradiance");
     LoadedCache out;
+    out.other_lighting = other_scene && same_objects;
     out.differences = param_differences(f.info.parameters, want.parameters);
     if (!out.differences.empty() && reuse == CacheReuse::Strict)
         throw InputError(path, "parameters",

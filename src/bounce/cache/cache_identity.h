@@ -25,10 +25,12 @@ struct LoadedCache {
     size_t records = 0;
     size_t fragment_records = 0;  ///< per-fragment refinement's records
     std::vector<std::string> differences;  ///< "key: was -> now", for the settings that differ
+    /// Same objects, other lights or materials: the records hold the bounce light of those.
+    bool other_lighting = false;
 };
 
-/// Loads `path` into `cache`. Refuses (InputError, exit 2) a cache made for another scene or
-/// camera unless `force`, and one whose record-changing settings differ unless reuse is Any,
+/// Loads `path` into `cache`. Refuses (InputError, exit 2) a cache made for other objects or
+/// another camera unless `force` (other lights or materials only: loaded, `other_lighting`), and one whose record-changing settings differ unless reuse is Any,
 /// naming each differing key with both values.
 /// Records for which `keep` is false are left out.
 LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, CacheReuse reuse, IrradianceCache& cache,

@@ -160,6 +160,7 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan
         LoadedCache loaded = load_cache(plan.cache_in, scene, plan.force, plan.cache_reuse, *out.cache, keep);
         out.records_loaded = loaded.records;
         out.differences = loaded.differences;
+        out.other_lighting = loaded.other_lighting;
     }
     return out;
 }

@@ -58,6 +58,7 @@ struct CacheStartResult {
     std::unique_ptr<IrradianceCache> cache;
     size_t records_loaded = 0;
     std::vector<std::string> differences;  ///< settings that differ from a reused file's (cache_reuse Any)
+    bool other_lighting = false;           ///< the file's records hold other lights' bounce light
     TemporalJudgement judged;               ///< CacheStart::Temporal: what became of the previous frame's records
 };
 CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous,

@@ -312,6 +312,8 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
         CacheStartResult start = cache_start_pass(ctx, plan, previous, radiosity);
         result.records_loaded = start.records_loaded;
         result.cache_differences = start.differences;
+        result.cache_other_lighting = start.other_lighting;
+        if (start.other_lighting) stats.set("cache_bounce_light_stale", 1);
         const TemporalJudgement& j = start.judged;
         result.temporal = {j.kept, j.moved, j.view, j.light, j.dropped, 0, 0, j.anchored, j.anchors_kept};
         if (!start.differences.empty()) stats.set("cache_reused_with_other_settings", nlohmann::json(start.differences));

@@ -49,6 +49,8 @@ struct RenderResult {
     bool gathered = false;            ///< a gathering pass ran (a re-shade may not need one)
     /// Settings that differ from a reused cache file's (with CacheReuse::Any).
     std::vector<std::string> cache_differences;
+    /// The loaded cache was gathered under other lights or materials: its bounce light is theirs.
+    bool cache_other_lighting = false;
     TemporalCounts temporal;                       ///< CacheStart::Temporal
     std::shared_ptr<const SceneAccel> accel;       ///< for the next frame of a shot
     std::shared_ptr<const RadiosityTextures> radiosity;

@@ -14,6 +14,30 @@ namespace bounce {
 
 using nlohmann::json;
 
+namespace {
+
+constexpr double kDefaultIntensity = 1;
+
+json to_json(const Vec3& v) { return {v.x, v.y, v.z}; }
+
+}  // namespace
+
+json light_defaults(const std::string& type) {
+    const Light l;
+    json d = json::object();
+    if (type != "point" && type != "spot" && type != "distant" && type != "quad" && type != "sky") return d;
+    d["color"] = to_json(l.color), d["intensity"] = kDefaultIntensity;
+    if (type == "spot") d["direction"] = to_json(l.direction), d["cone_angle"] = l.cone_angle, d["cone_falloff"] = l.cone_falloff;
+    if (type == "sky") d["rotation"] = l.sky_rotation;
+    return d;
+}
+
+json material_defaults() {
+    const Material m;
+    return {{"color", to_json(m.color)}, {"emission", to_json(m.emission)}, {"specular", to_json(m.specular)},
+            {"roughness", m.roughness}, {"bump_strength", m.bump_strength}};
+}
+
 const std::vector<std::string>& material_keys() {
     static const std::vector<std::string> keys = {"color",          "color_texture", "emission",      "specular",  "roughness",
                                                   "bump_texture",   "normal_texture", "bump_strength", "ao_texture"};
@@ -125,12 +149,13 @@ std::string texture_file(const JsonReader& m, const std::string& key) {
 Material read_material(const JsonReader& m, const std::string& name) {
     Material mat;
     mat.name = name;
-    mat.color = m.color("color", Color(0.7f));
+    // Defaults are Material's own (scene.h), written once.
+    mat.color = m.color("color", mat.color);
     for (int i = 0; i < 3; ++i)
         if (mat.color[i] > 1) m.fail("color", "albedo components must be <= 1 (energy conservation)");
     mat.color_texture = texture_file(m, "color_texture");
-    mat.emission = m.color("emission", Color(0));
-    mat.specular = m.color("specular", Color(0));
+    mat.emission = m.color("emission", mat.emission);
+    mat.specular = m.color("specular", mat.specular);
     for (int i = 0; i < 3; ++i)
         if (mat.specular[i] > 1) m.fail("specular", "specular components must be <= 1");
     mat.roughness = static_cast<float>(m.number("roughness", mat.roughness, 0.01, 1));
@@ -147,18 +172,19 @@ Light read_light(const JsonReader& r) {
     for (const char* k : {"type", "color", "intensity", "name"}) allowed.emplace_back(k);
     r.only(allowed, "a " + type + " light");
     Light l;
-    l.color = r.color("color", Color(1)) * r.number("intensity", 1, 0, kMaxRadiometric);
+    // Defaults are Light's own (scene.h), written once.
+    l.color = r.color("color", l.color) * r.number("intensity", kDefaultIntensity, 0, kMaxRadiometric);
     for (int i = 0; i < 3; ++i)
         if (!(l.color[i] <= kMaxRadiometric)) r.fail("intensity", fmt::format("color x intensity exceeds {:g}", kMaxRadiometric));
     if (type == "point" || type == "spot") {
         l.type = type == "point" ? LightType::Point : LightType::Spot;
         l.position = r.vec3("position", {}, true);
         if (type == "spot") {
-            l.direction = r.vec3("direction", {0, -1, 0});
+            l.direction = r.vec3("direction", l.direction);
             if (length(l.direction) == 0) r.fail("direction", "direction is zero");
             l.direction = normalize(l.direction);
-            l.cone_angle = static_cast<float>(r.number("cone_angle", 30, 0, 90));
-            l.cone_falloff = static_cast<float>(r.number("cone_falloff", 5, 0, 90));
+            l.cone_angle = static_cast<float>(r.number("cone_angle", l.cone_angle, 0, 90));
+            l.cone_falloff = static_cast<float>(r.number("cone_falloff", l.cone_falloff, 0, 90));
         }
     } else if (type == "distant") {
         l.type = LightType::Distant;
@@ -173,7 +199,7 @@ Light read_light(const JsonReader& r) {
         if (length(cross(l.edge_u, l.edge_v)) == 0) r.fail("edge_v", "quad light has zero area");
     } else {
         l.type = LightType::Sky;
-        l.sky_rotation = static_cast<float>(r.number("rotation", 0));
+        l.sky_rotation = static_cast<float>(r.number("rotation", l.sky_rotation));
         std::string tex = r.file("texture", false);
         if (!tex.empty()) l.sky_map = load_latlong(tex, r, "texture");
     }

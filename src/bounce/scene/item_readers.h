@@ -15,6 +15,12 @@ const std::vector<std::string>& material_keys();
 /// Every key any light type reads (the reader then checks them against the light's type).
 const std::vector<std::string>& light_keys();
 
+/// The numeric keys a light of `type` reads and their defaults ({"intensity": 1, ...}; what the
+/// reader uses, for the lighting tool's rows of keys a scene leaves out). Empty for an unknown type.
+nlohmann::json light_defaults(const std::string& type);
+/// The numeric keys of a material and their defaults.
+nlohmann::json material_defaults();
+
 Material read_material(const JsonReader& m, const std::string& name);
 Light read_light(const JsonReader& r);
 /// An object's "transform": {translate, rotate [deg, axis], scale} or {matrix}; identity if absent.

@@ -17,8 +17,8 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 void JsonContext::fail(const std::string& ptr, const std::string& msg) const {
-    for (const auto& [p, origin] : cli_origins)
-        if (ptr == p || ptr.rfind(p + "/", 0) == 0) throw InputError("command line", origin + " (" + ptr + ")", msg);
+    for (const auto& [p, o] : overridden)
+        if (ptr == p || ptr.rfind(p + "/", 0) == 0) throw InputError(o.source, o.origin + " (" + ptr + ")", msg);
     throw InputError(file, ptr.empty() ? "/" : ptr, msg);
 }
 
@@ -149,7 +149,7 @@ json parse_json_text(const std::string& text, const std::string& path) {
 
 std::string apply_override(json& doc, const Override& o) {
     const std::string& assignment = o.assignment;
-    auto fail = [&](const std::string& msg) -> void { throw InputError("command line", o.origin, msg); };
+    auto fail = [&](const std::string& msg) -> void { throw InputError(o.source, o.origin, msg); };
     auto eq = assignment.find('=');
     if (eq == std::string::npos || eq == 0) fail("expected key=value");
     std::string key = assignment.substr(0, eq), text = assignment.substr(eq + 1);
@@ -169,7 +169,7 @@ std::string apply_override(json& doc, const Override& o) {
     } catch (const json::parse_error&) {
         value = text;  // a bare word is a string
     } catch (const json::out_of_range&) {
-        throw InputError("command line", o.origin + " (" + ptr + ")", "number is not finite: " + text);
+        throw InputError(o.source, o.origin + " (" + ptr + ")", "number is not finite: " + text);
     }
     json* node = &doc;
     for (size_t i = 0; i < parts.size(); ++i) {

@@ -15,27 +15,30 @@
 
 namespace bounce {
 
-/// A command-line override: "dotted.path=value" (value is JSON; a bare word is a string) and
-/// how the user wrote it, for errors ("--set render.rays=-1", "--rays -1").
+/// An override of the scene file: "dotted.path=value" (value is JSON; a bare word is a string),
+/// how the user wrote it ("--set render.rays=-1", "--rays -1") and where (the command line, or
+/// the lighting tool's edit requests): errors name both, not the scene file.
 struct Override {
     std::string assignment;
     std::string origin;
+    std::string source = "command line";
     Override(std::string a) : assignment(std::move(a)), origin("--set " + assignment) {}  // NOLINT: implicit by design
     Override(const char* a) : Override(std::string(a)) {}                                 // NOLINT
     Override(std::string a, std::string o) : assignment(std::move(a)), origin(std::move(o)) {}
+    Override(std::string a, std::string o, std::string s) : assignment(std::move(a)), origin(std::move(o)), source(std::move(s)) {}
 };
 
 /// Where values come from: the file, its folder, and the pointers set on the command line.
 struct JsonContext {
     std::string file;
     std::filesystem::path dir;
-    std::map<std::string, std::string> cli_origins;  ///< JSON pointer -> how the user wrote it
+    std::map<std::string, Override> overridden;  ///< JSON pointer -> the override that set it
     /// Every file JsonReader::file resolves is appended here (null: not recorded).
     std::vector<SceneInput>* inputs = nullptr;
 
-    /// Throws InputError at `ptr`, blaming the command line when an override set it.
+    /// Throws InputError at `ptr`, blaming the override's source when one set it.
     [[noreturn]] void fail(const std::string& ptr, const std::string& msg) const;
-    bool from_command_line(const std::string& ptr) const { return cli_origins.count(ptr) > 0; }
+    bool from_override(const std::string& ptr) const { return overridden.count(ptr) > 0; }
 };
 
 /// The text of a regular file; "is a directory" / "not a regular file" (FIFOs, devices) are

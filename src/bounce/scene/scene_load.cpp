@@ -60,7 +60,7 @@ void read_params(const json& j, const std::string& section, Scene& scene, const 
         const std::string ptr = r.at(p.name());
         json v = check_param(p, r.raw(p.name()), [&](const std::string& sub, const std::string& msg) { ctx.fail(ptr + sub, msg); });
         if (p.type == ParamType::Path && !v.get<std::string>().empty()) {
-            if (fs::path(v.get<std::string>()).is_relative() && !ctx.from_command_line(ptr)) v = (ctx.dir / v.get<std::string>()).string();
+            if (fs::path(v.get<std::string>()).is_relative() && !ctx.from_override(ptr)) v = (ctx.dir / v.get<std::string>()).string();
             // A folder the render reads and writes: a file of that name is refused now, not after the render.
             std::error_code ec;
             const auto st = fs::status(v.get<std::string>(), ec);
@@ -77,7 +77,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     ctx.file = path;
     ctx.dir = fs::path(path).parent_path();
     if (!doc.is_object()) ctx.fail("", fmt::format("expected an object at the top of the scene, got {}", json_type_name(doc)));
-    for (const auto& o : overrides) ctx.cli_origins[apply_override(doc, o)] = o.origin;
+    for (const auto& o : overrides) ctx.overridden.insert_or_assign(apply_override(doc, o), o);
 
     Scene scene;
     scene.path = path;

@@ -15,6 +15,7 @@
 #include "bounce/core/stats.h"
 #include "bounce/deep/deep_buffer.h"
 #include "bounce/render/render.h"
+#include "bounce/scene/item_readers.h"
 #include "bounce/scene/params.h"
 #include "bounce/scene/scene_load.h"
 
@@ -43,6 +44,12 @@ const char* session_action_name(SessionAction a) {
 
 namespace {
 
+/// An edit request as an override: its errors name the tool's edit, not the command line.
+Override edit_override(const std::string& key, const json& value) {
+    const std::string assignment = key + "=" + value.dump();
+    return {assignment, "edit " + assignment, "lighting tool"};
+}
+
 /// The least action that shows a change of a parameter with identity `identity`.
 SessionAction needs_for(unsigned identity) {
     if (identity & kDeepIdentity) return SessionAction::Rasterize;
@@ -56,28 +63,28 @@ bool editable(const json& v) {
     return v.is_array() && v.size() == 3 && std::all_of(v.begin(), v.end(), [](const json& e) { return e.is_number(); });
 }
 
-/// Light and material rows of the effective scene description.
+/// Light and material rows of the effective scene description: every numeric key the item
+/// reads, with the scene's value or, where the scene leaves it out, the default.
 void add_scene_rows(const json& description, json& rows) {
-    auto row = [&](const std::string& key, const std::string& stage, const json& value, const std::string& doc) {
-        rows.push_back({{"key", key}, {"stage", stage}, {"value", value}, {"default", nullptr}, {"unit", ""},
-                        {"range", nullptr}, {"doc", doc}, {"needs", "reshade"}});
+    auto add = [&](const std::string& stage, const std::string& prefix, const json& item, const json& defaults, const std::string& doc) {
+        json keys = defaults;
+        for (const auto& [k, v] : item.items())
+            if (editable(v)) keys[k] = v;
+        for (const auto& [k, v] : keys.items())
+            rows.push_back({{"key", prefix + k}, {"stage", stage}, {"value", v},
+                            {"default", defaults.contains(k) ? defaults[k] : json(nullptr)}, {"unit", ""}, {"range", nullptr},
+                            {"doc", doc}, {"needs", "reshade"}});
     };
     if (description.contains("lights") && description["lights"].is_array())
         for (size_t i = 0; i < description["lights"].size(); ++i) {
             const json& l = description["lights"][i];
             if (!l.is_object()) continue;
-            for (const auto& [k, v] : l.items())
-                if (editable(v))
-                    row(fmt::format("lights.{}.{}", i, k), "light", v,
-                        fmt::format("{} light {}; a re-gather updates its bounce light", l.value("type", "?"), i));
+            const std::string type = l.value("type", "?");
+            add("light", fmt::format("lights.{}.", i), l, light_defaults(type), fmt::format("{} light {}; a re-gather updates its bounce light", type, i));
         }
     if (description.contains("materials") && description["materials"].is_object())
-        for (const auto& [name, m] : description["materials"].items()) {
-            if (!m.is_object()) continue;
-            for (const auto& [k, v] : m.items())
-                if (editable(v))
-                    row(fmt::format("materials.{}.{}", name, k), "material", v, "material " + name + "; a re-gather updates its bounce light");
-        }
+        for (const auto& [name, m] : description["materials"].items())
+            if (m.is_object()) add("material", "materials." + name + ".", m, material_defaults(), "material " + name + "; a re-gather updates its bounce light");
 }
 
 }  // namespace
@@ -139,7 +146,7 @@ LightingSession::~LightingSession() {
 
 std::vector<Override> LightingSession::overrides_locked() const {
     std::vector<Override> out;
-    for (const auto& key : edit_order_) out.emplace_back(key + "=" + edits_.at(key).dump(), "edit of " + key);
+    for (const auto& key : edit_order_) out.push_back(edit_override(key, edits_.at(key)));
     return out;
 }
 
@@ -158,11 +165,11 @@ json LightingSession::params() const {
     return rows;
 }
 
-json LightingSession::edit(const std::string& key, const json& value, const std::string& origin) {
+json LightingSession::edit(const std::string& key, const json& value, const std::string& cli_origin) {
     if (key.empty() || key.size() > 256) throw InputError("request", "key", "a parameter key of 1..256 characters is required");
     std::lock_guard lock(mutex_);
     std::vector<Override> o = overrides_locked();
-    o.emplace_back(key + "=" + value.dump(), origin.empty() ? "edit of " + key : origin);
+    o.push_back(cli_origin.empty() ? edit_override(key, value) : Override(key + "=" + value.dump(), cli_origin));
     LoadOptions at;
     at.frame = frame_;
     Scene s = load_scene(options_.scene, o, at);  // throws with the file and place on a bad value

@@ -62,8 +62,9 @@ public:
     nlohmann::json params() const;
     /// Sets `key` to `value` with the scene loader's validation (InputError, one line, on a bad
     /// key or value: nothing changes). Returns {key, value, needs}.
-    /// `origin` names the edit in errors (default "edit of KEY"; the CLI's "--set ...").
-    nlohmann::json edit(const std::string& key, const nlohmann::json& value, const std::string& origin = "");
+    /// Errors name the lighting tool's edit ("lighting tool: edit KEY=VALUE (/pointer): ..."),
+    /// or with `cli_origin` the command line's ("--set ...", given when the session starts).
+    nlohmann::json edit(const std::string& key, const nlohmann::json& value, const std::string& cli_origin = "");
     /// The least action that shows every edit since the last finished render.
     SessionAction pending() const;
     /// Moves to `frame` of the scene's shot (InputError outside it, or for a still) and starts
