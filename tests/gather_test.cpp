@@ -224,7 +224,7 @@ TEST(Radiosity, TexturesConvergeToShadowRayShading) {
                     float u = static_cast<float>(i) / 20, v = static_cast<float>(k) / 20;
                     SurfacePoint sp = surface_point(m, t, u, v);
                     Counters c;
-                    Color exact = Color(0.5f) * rig.lighting.irradiance(sp.p, {0, 1, 0}, RandomStream(0, 0), 1, c) * kInvPi;
+                    Color exact = Color(0.5f) * rig.lighting.irradiance(sp.p, {0, 1, 0}, 0, RandomStream(0, 0), 1, c) * kInvPi;
                     bool front = sp.ng.y > 0;
                     Color got = rig.radiosity->object(0).lookup(t, u, v, front);
                     err += std::abs(got.x - exact.x);

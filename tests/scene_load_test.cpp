@@ -15,18 +15,7 @@ using nlohmann::json;
 using test::base_scene;
 using test::scene_from;
 
-/// Runs `f`, expects an InputError whose message contains every string of `parts`.
-template <typename F>
-void expect_input_error(F f, const std::vector<std::string>& parts) {
-    try {
-        f();
-        ADD_FAILURE() << "no error raised";
-    } catch (const InputError& e) {
-        std::string msg = e.what();
-        for (const auto& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << "missing \"" << p << "\" in: " << msg;
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << "not one line: " << msg;
-    }
-}
+using test::expect_input_error;
 
 TEST(SceneLoad, CornellSceneHasItsMeasuredContent) {
     Scene s = load_scene(test::cornell_scene());

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "bounce/core/error.h"
 #include "bounce/scene/scene_load.h"
 
 namespace bounce::test {
@@ -104,6 +105,19 @@ inline nlohmann::json base_scene() {
 
 inline Scene scene_from(const nlohmann::json& j, const std::vector<Override>& overrides = {}) {
     return load_scene_text(j.dump(), "inline.json", overrides);
+}
+
+/// Runs `f`, expects an InputError whose message contains every string of `parts`.
+template <typename F>
+void expect_input_error(F f, const std::vector<std::string>& parts) {
+    try {
+        f();
+        ADD_FAILURE() << "no error raised";
+    } catch (const InputError& e) {
+        std::string msg = e.what();
+        for (const auto& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << "missing \"" << p << "\" in: " << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << "not one line: " << msg;
+    }
 }
 
 }  // namespace bounce::test

@@ -18,23 +18,31 @@ void embree_error(void*, RTCError code, const char* str) {
     throw std::runtime_error(fmt::format("Embree error {}: {}", static_cast<int>(code), str ? str : ""));
 }
 
-RTCRayHit make_ray(const Vec3& o, const Vec3& d, float tnear, float tfar) {
+RTCRayHit make_ray(const Vec3& o, const Vec3& d, float tnear, float tfar, unsigned mask) {
     RTCRayHit rh{};
     rh.ray.org_x = o.x, rh.ray.org_y = o.y, rh.ray.org_z = o.z;
     rh.ray.dir_x = d.x, rh.ray.dir_y = d.y, rh.ray.dir_z = d.z;
     rh.ray.tnear = tnear;
     rh.ray.tfar = tfar;
-    rh.ray.mask = 0xffffffffu;
+    rh.ray.mask = mask;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     return rh;
 }
 }  // namespace
 
+unsigned object_ray_mask(const Scene& scene, size_t index) {
+    const RayVisibility& to = scene.objects[index].visible_to;
+    unsigned mask = (to.camera ? kRayCamera : 0u) | (to.shadows ? kRayShadow : 0u) | (to.indirect ? kRayIndirect : 0u);
+    for (const Light& l : scene.lights)
+        if (l.shadow_slot >= 0 && to.shadows && l.shadowed_by[index]) mask |= kRayShadowLink << l.shadow_slot;
+    return mask;
+}
+
 Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs,
-         const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion)
+         const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion, const std::vector<unsigned>& masks)
     : mesh_count_(static_cast<unsigned>(meshes.size())) {
-    begin(device, meshes, motion);
+    begin(device, meshes, motion, masks);
     for (size_t id = 0; id < furs.size(); ++id) {
         const Fur* f = furs[id];
         if (!f || f->segment_count() == 0) continue;
@@ -45,6 +53,7 @@ Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const
                                    4 * sizeof(float), f->vertices.size() / 4);
         rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, f->segment_first.data(), 0,
                                    sizeof(uint32_t), f->segment_count());
+        rtcSetGeometryMask(g, kRayAll);  // fur has flags of its own (which BVHs hold it)
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(scene_, g, mesh_count_ + static_cast<unsigned>(id));
         rtcReleaseGeometry(g);
@@ -53,13 +62,14 @@ Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const
 }
 
 Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const Bvh& fur,
-         const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion)
+         const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion, const std::vector<unsigned>& masks)
     : mesh_count_(static_cast<unsigned>(meshes.size())) {
-    begin(device, meshes, motion);
+    begin(device, meshes, motion, masks);
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(g, fur.scene_);
     const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
     rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
+    rtcSetGeometryMask(g, kRayAll);
     rtcCommitGeometry(g);
     // Past every mesh and fur id: hits report the instanced scene's own geometry ids.
     rtcAttachGeometryByID(scene_, g, 2 * mesh_count_ + 1);
@@ -68,7 +78,7 @@ Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const
 }
 
 void Bvh::begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes,
-                const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion) {
+                const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion, const std::vector<unsigned>& masks) {
     scene_ = rtcNewScene(device);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
@@ -87,6 +97,7 @@ void Bvh::begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes
         auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
             g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), m.triangle_count()));
         std::copy(m.indices.begin(), m.indices.end(), ib);
+        if (id < masks.size()) rtcSetGeometryMask(g, masks[id]);
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(scene_, g, static_cast<unsigned>(id));
         rtcReleaseGeometry(g);
@@ -97,10 +108,10 @@ Bvh::~Bvh() {
     if (scene_) rtcReleaseScene(scene_);
 }
 
-Hit Bvh::intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float time) const {
+Hit Bvh::intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float time, unsigned mask) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    RTCRayHit rh = make_ray(o, d, tnear, tfar);
+    RTCRayHit rh = make_ray(o, d, tnear, tfar, mask);
     rh.ray.time = time;
     rtcIntersect1(scene_, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
@@ -118,7 +129,7 @@ Hit Bvh::make_hit(unsigned geom, unsigned prim, float t, float u, float v) const
     return h;
 }
 
-void Bvh::intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear, Hit* out) const {
+void Bvh::intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear, Hit* out, unsigned mask) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -136,7 +147,7 @@ void Bvh::intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear
             rh.ray.tnear[i] = tnear;
             rh.ray.tfar[i] = INFINITY;
             rh.ray.time[i] = 0;
-            rh.ray.mask[i] = 0xffffffffu;
+            rh.ray.mask[i] = mask;
             rh.ray.id[i] = static_cast<unsigned>(i);
             rh.ray.flags[i] = 0;
             rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
@@ -151,10 +162,10 @@ void Bvh::intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear
     }
 }
 
-bool Bvh::occluded(const Vec3& o, const Vec3& d, float tnear, float tfar) const {
+bool Bvh::occluded(const Vec3& o, const Vec3& d, float tnear, float tfar, unsigned mask) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    RTCRay r = make_ray(o, d, tnear, tfar).ray;
+    RTCRay r = make_ray(o, d, tnear, tfar, mask).ray;
     rtcOccluded1(scene_, &ctx, &r);
     return r.tfar < 0;  // Embree sets tfar to -inf on a hit
 }
@@ -177,9 +188,11 @@ SceneAccel::SceneAccel(const Scene& scene) {
     // shadow rays when it casts shadows.
     std::vector<const Fur*> visible_fur, indirect_fur, shadow_fur;
     std::vector<const std::array<std::vector<Vec3>, 2>*> motion;  // camera rays see motion blur
+    std::vector<unsigned> masks;  // which rays see each object
     bool any_fine = false, any_fur = false, any_indirect = false, any_shadow = false;
     for (const auto& o : scene.objects) {
         coarse.push_back(&o.coarse);
+        masks.push_back(object_ray_mask(scene, masks.size()));
         fine.push_back(&o.visible());
         motion.push_back(o.shutter[0].empty() ? nullptr : &o.shutter);
         any_fine |= o.has_fine() || motion.back();
@@ -191,12 +204,13 @@ SceneAccel::SceneAccel(const Scene& scene) {
         any_indirect |= indirect_fur.back() != nullptr;
         any_shadow |= shadow_fur.back() != nullptr;
     }
-    coarse_ = std::make_unique<Bvh>(device_, coarse, any_indirect ? indirect_fur : std::vector<const Fur*>{});
+    coarse_ = std::make_unique<Bvh>(device_, coarse, any_indirect ? indirect_fur : std::vector<const Fur*>{},
+                                    std::vector<const std::array<std::vector<Vec3>, 2>*>{}, masks);
     // Fur already in the coarse BVH shadows through it; the rest that casts shadows gets its own.
     if (any_shadow) shadow_fur_ = std::make_unique<Bvh>(device_, std::vector<const TriangleMesh*>(scene.objects.size(), nullptr), shadow_fur);
     // The camera sees all fur: when that is the shadow BVH's, instance it rather than build it twice.
-    if (any_shadow && shadow_fur == visible_fur) fine_ = std::make_unique<Bvh>(device_, fine, *shadow_fur_, motion);
-    else if (any_fine || any_fur) fine_ = std::make_unique<Bvh>(device_, fine, visible_fur, motion);
+    if (any_shadow && shadow_fur == visible_fur) fine_ = std::make_unique<Bvh>(device_, fine, *shadow_fur_, motion, masks);
+    else if (any_fine || any_fur) fine_ = std::make_unique<Bvh>(device_, fine, visible_fur, motion, masks);
 
     // Measure how far the fine surface strays from the coarse one: from each fine vertex,
     // along its normal both ways, to the nearest coarse surface of the same object.
@@ -265,33 +279,34 @@ Hit SceneAccel::trace(const Vec3& p, const Vec3& d) const {
     // Most rays meet nothing within delta of p: then the offsetting cannot change the hit and
     // one traversal is enough. Only the others (a few %: contacts, interpenetrating or
     // fine-vs-coarse surfaces) pay for the probe.
-    Hit first = coarse_->intersect(p, d, self_epsilon(p), INFINITY);
+    Hit first = coarse_->intersect(p, d, self_epsilon(p), INFINITY, 0, kRayIndirect);
     return !first.valid() || first.t >= delta ? first : probed_trace(p, d);
 }
 
 Hit SceneAccel::probed_trace(const Vec3& p, const Vec3& d) const {
     const float delta = ray_offset_;
-    Hit h = coarse_->intersect(p - d * delta, d, offset_start(p, d), INFINITY);
+    // The probe (offset_start) finds p's own surface whatever sees it; the ray, only what gathers see.
+    Hit h = coarse_->intersect(p - d * delta, d, offset_start(p, d), INFINITY, 0, kRayIndirect);
     if (h.valid()) h.t = std::max(0.0f, h.t - delta);
     return h;
 }
 
 void SceneAccel::trace_many(const Vec3& p, std::span<const Vec3> dirs, std::span<Hit> out) const {
-    coarse_->intersect_from(p, dirs.data(), dirs.size(), self_epsilon(p), out.data());
+    coarse_->intersect_from(p, dirs.data(), dirs.size(), self_epsilon(p), out.data(), kRayIndirect);
     const float delta = ray_offset_;
     // As in trace: only rays meeting something within delta of p pay for the probe.
     for (size_t i = 0; i < dirs.size(); ++i)
         if (out[i].valid() && out[i].t < delta) out[i] = probed_trace(p, dirs[i]);
 }
 
-bool SceneAccel::occluded(const Vec3& p, const Vec3& d, float dist, float hair_start) const {
+bool SceneAccel::occluded(const Vec3& p, const Vec3& d, float dist, float hair_start, unsigned mask) const {
     // Fur is on no tessellated surface: traced from p without offsetting, stopping just short
     // of the end point.
     const float fur_end = std::isfinite(dist) ? dist * (1 - 1e-4f) : INFINITY;
     if (hair_start > 0) {
         // From a strand: skip past its own ribbon.
         if (fur_end <= hair_start) return false;
-        if (coarse_->occluded(p, d, self_epsilon(p), fur_end)) return true;
+        if (coarse_->occluded(p, d, self_epsilon(p), fur_end, mask)) return true;
         return shadow_fur_ && shadow_fur_->occluded(p, d, hair_start, fur_end);
     }
     if (shadow_fur_ && fur_end > self_epsilon(p) && shadow_fur_->occluded(p, d, self_epsilon(p), fur_end)) return true;
@@ -300,7 +315,7 @@ bool SceneAccel::occluded(const Vec3& p, const Vec3& d, float dist, float hair_s
     // Stop short of the end point so the surface it lies on does not occlude it.
     float end = std::isfinite(dist) ? delta + dist - std::max(delta, 1e-4f * dist) : INFINITY;
     if (end <= start) return false;
-    return coarse_->occluded(p - d * delta, d, start, end);
+    return coarse_->occluded(p - d * delta, d, start, end, mask);
 }
 
 }  // namespace bounce

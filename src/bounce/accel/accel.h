@@ -16,6 +16,17 @@ namespace bounce {
 
 inline constexpr uint32_t kNoHit = 0xffffffffu;
 
+/// Ray masks (Embree: a ray sees a geometry when their masks share a bit). Objects carry the
+/// bits of the rays that see them (Object::visible_to); a light with a shadow link has a bit
+/// of its own (kRayShadowLink << Light::shadow_slot) that only the objects casting its shadows hold.
+inline constexpr unsigned kRayCamera = 1u, kRayShadow = 2u, kRayIndirect = 4u, kRayShadowLink = 8u, kRayAll = ~0u;
+/// The mask of object `index`'s geometry.
+unsigned object_ray_mask(const Scene& scene, size_t index);
+/// The mask of a shadow ray towards `light`.
+inline unsigned shadow_ray_mask(const Light& light) {
+    return light.shadow_slot < 0 ? kRayShadow : kRayShadowLink << light.shadow_slot;
+}
+
 struct Hit {
     float t = INFINITY;
     uint32_t object = kNoHit;  ///< index into Scene::objects
@@ -31,28 +42,29 @@ struct Hit {
 class Bvh {
 public:
     /// `motion[i]` (if given and not null): mesh i's vertices at shutter open and close, traced
-    /// with Embree's motion blur (ray time 0 = open, 1 = close).
+    /// with Embree's motion blur (ray time 0 = open, 1 = close). `masks[i]` (if given): mesh
+    /// i's ray mask (else every ray sees it; fur always is).
     Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs = {},
-        const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion = {});
+        const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion = {}, const std::vector<unsigned>& masks = {});
     /// Meshes plus an instance of `fur`, a BVH of fur only over as many mesh ids (so its hits
     /// decode the same): fur traced by several BVHs is built once.
     Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const Bvh& fur,
-        const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion = {});
+        const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion = {}, const std::vector<unsigned>& masks = {});
     ~Bvh();
     Bvh(const Bvh&) = delete;
     Bvh& operator=(const Bvh&) = delete;
 
     /// `time` in [0, 1] over the shutter (meshes without motion are where they are).
-    Hit intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float time = 0) const;
+    Hit intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float time = 0, unsigned mask = kRayAll) const;
     /// Closest hits of `count` rays sharing origin `o` (a gather's hemisphere), traced in
     /// packets of 16: neighbouring strata are coherent enough for Embree's packet traversal.
-    void intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear, Hit* out) const;
-    bool occluded(const Vec3& o, const Vec3& d, float tnear, float tfar) const;
+    void intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear, Hit* out, unsigned mask = kRayAll) const;
+    bool occluded(const Vec3& o, const Vec3& d, float tnear, float tfar, unsigned mask = kRayAll) const;
 
 private:
     /// A new scene holding `meshes` (not committed).
     void begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes,
-               const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion);
+               const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion, const std::vector<unsigned>& masks);
     Hit make_hit(unsigned geom, unsigned prim, float t, float u, float v) const;
     RTCScene scene_ = nullptr;
     unsigned mesh_count_ = 0;
@@ -76,7 +88,7 @@ public:
     /// Largest measured distance between a fine-tessellation vertex and its coarse surface.
     float fine_coarse_gap() const { return gap_; }
 
-    /// Traces a secondary ray that leaves the fine surface at `p` along unit `d`: the origin
+    /// Traces a gather ray (objects visible to indirect rays) that leaves the fine surface at `p` along unit `d`: the origin
     /// is moved to the coarse intersection closest to `p` within +-delta along the ray, and
     /// the first coarse hit after that origin is returned (t measured from `p`). Rays whose
     /// first hit from p is beyond delta take one traversal; only the others probe.
@@ -87,7 +99,8 @@ public:
     /// INFINITY), with the same origin offsetting; the end point's own surface is excluded.
     /// Fur that casts shadows occludes too. From a strand (`hair_start` > 0, its largest
     /// width) there is no offsetting and fur closer than `hair_start` is ignored (its own strand).
-    bool occluded(const Vec3& p, const Vec3& d, float dist, float hair_start = 0) const;
+    /// `mask`: which objects may occlude (shadow_ray_mask of the light).
+    bool occluded(const Vec3& p, const Vec3& d, float dist, float hair_start = 0, unsigned mask = kRayShadow) const;
 
     /// Where the first, probe-free traversal from p starts: 1e-5 of p's largest coordinate
     /// (at least 1e-7 of the scene diagonal), above float rounding, far below delta.

@@ -119,7 +119,7 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     const int stratum = (s * stride + static_cast<int>(rng.bits(0, kDimTime) % static_cast<uint64_t>(spp))) % spp;
                     const float time = blur ? (static_cast<float>(stratum) + rng.get(su, kDimTime)) / static_cast<float>(spp) : 0.0f;
                     ++counters.camera_rays;
-                    Hit h = accel.fine().intersect(origin, dn, 0, INFINITY, time);
+                    Hit h = accel.fine().intersect(origin, dn, 0, INFINITY, time, kRayCamera);
                     if (!h.valid()) continue;
                     const Object& obj = scene.objects[h.object];
                     const uint32_t prim = h.hair ? obj.fur->strand_of(h.prim) : h.prim;

@@ -55,7 +55,7 @@ Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d
     Vec3 n = front ? sp.ng : -sp.ng;
     Color albedo = materials_.albedo(sp.material, sp.uv);
     RandomStream hit_rng(rng.bits(ray, kDimGather + 3), ray);
-    return albedo * lighting_.irradiance(sp.p, n, hit_rng, settings_.hit_light_samples, counters) * kInvPi;
+    return albedo * lighting_.irradiance(sp.p, n, h.object, hit_rng, settings_.hit_light_samples, counters) * kInvPi;
 }
 
 namespace {
@@ -214,7 +214,7 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
                     const Fur& fur = *scene_.objects[h.object].fur;
                     RandomStream hit_rng(rng.bits(c, kDimGather + 3), c);
                     l = fur.params.albedo(fur.v_of(h.prim, h.u)) * kInvPi *
-                        lighting_.irradiance(p + d * h.t, -d, hit_rng, settings_.hit_light_samples, counters, true, nullptr,
+                        lighting_.irradiance(p + d * h.t, -d, h.object, hit_rng, settings_.hit_light_samples, counters, true, nullptr,
                                              fur.max_width());
                 }
             } else if (settings_.record_terms || !settings_.ao) {

@@ -21,12 +21,14 @@ DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel)
     }
 }
 
-Color DirectLighting::irradiance(const Vec3& p, const Vec3& n, const RandomStream& rng,
+Color DirectLighting::irradiance(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng,
                                  int samples, Counters& counters, bool include_sky, const LightSampleFn* each,
                                  float hair_start) const {
     Color e(0);
-    for (size_t i = 0; i < scene_.lights.size(); ++i)
-        if (include_sky || scene_.lights[i].type != LightType::Sky) e += sample_light(i, p, n, rng, samples, counters, each, hair_start);
+    for (size_t i = 0; i < scene_.lights.size(); ++i) {
+        const Light& l = scene_.lights[i];
+        if ((include_sky || l.type != LightType::Sky) && l.lights(object)) e += sample_light(i, p, n, rng, samples, counters, each, hair_start);
+    }
     return e;
 }
 
@@ -41,6 +43,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
                                    int samples, Counters& counters, const LightSampleFn* each, float hair_start) const {
     const Light& l = scene_.lights[index];
     const auto dim = [&](uint32_t d) { return static_cast<uint32_t>(kDimLight + 16 * index + d); };
+    const unsigned mask = shadow_ray_mask(l);
     switch (l.type) {
         case LightType::Point:
         case LightType::Spot: {
@@ -59,7 +62,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
                 }
             }
             ++counters.shadow_rays;
-            if (accel_.occluded(p, w, r, hair_start)) return Color(0);
+            if (accel_.occluded(p, w, r, hair_start, mask)) return Color(0);
             Color e = l.color * (cone * cos_x / r2);
             if (each) (*each)(w, e);
             return e;
@@ -69,7 +72,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
             float cos_x = dot(n, w);
             if (cos_x <= 0) return Color(0);
             ++counters.shadow_rays;
-            if (accel_.occluded(p, w, INFINITY, hair_start)) return Color(0);
+            if (accel_.occluded(p, w, INFINITY, hair_start, mask)) return Color(0);
             if (each) (*each)(w, l.color * cos_x);
             return l.color * cos_x;
         }
@@ -87,7 +90,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
                 float cos_x = dot(n, w), cos_l = -dot(ln, w);
                 if (cos_x <= 0 || cos_l <= 0) continue;
                 ++counters.shadow_rays;
-                if (accel_.occluded(p, w, r, hair_start)) continue;
+                if (accel_.occluded(p, w, r, hair_start, mask)) continue;
                 e += l.color * (cos_x * cos_l / r2);
                 if (each) (*each)(w, l.color * (cos_x * cos_l / r2 * area / static_cast<float>(samples)));
             }
@@ -101,7 +104,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
                                         rng.get(static_cast<uint64_t>(s), dim(2)));
                 Vec3 w = f.to_world(cosine_hemisphere(uv.x, uv.y));
                 ++counters.shadow_rays;
-                if (accel_.occluded(p, w, INFINITY, hair_start)) continue;
+                if (accel_.occluded(p, w, INFINITY, hair_start, mask)) continue;
                 Color L = l.sky_map ? l.color * l.sky_map->lookup(w, l.sky_rotation) : l.color;
                 e += L;
                 if (each) (*each)(w, L * (kPi / static_cast<float>(samples)));
@@ -134,7 +137,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
                 float cos_x = dot(n, w), cos_l = -dot(q.ng, w);
                 if (cos_x <= 0 || cos_l <= 0) continue;
                 ++counters.shadow_rays;
-                if (accel_.occluded(p, w, r, hair_start)) continue;
+                if (accel_.occluded(p, w, r, hair_start, mask)) continue;
                 e += scene_.materials[q.material].emission * (cos_x * cos_l / r2);
                 if (each)
                     (*each)(w, scene_.materials[q.material].emission *

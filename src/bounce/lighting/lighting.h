@@ -34,12 +34,13 @@ class DirectLighting {
 public:
     DirectLighting(const Scene& scene, const SceneAccel& accel);
 
-    /// Irradiance E arriving at `p` (on the fine surface) through the hemisphere of unit
-    /// normal `n`, with shadows. `samples` stratified samples per area light and for the sky.
+    /// Irradiance E arriving at `p` (on the fine surface of object `object`) through the
+    /// hemisphere of unit normal `n`, from the lights linked to that object, with the shadows
+    /// each light's shadow link lets fall. `samples` stratified samples per area light and for the sky.
     /// Diffuse radiance leaving the point is albedo * E / pi.
     /// `include_sky = false` leaves sky lights out (when the gather brings the sky instead).
     /// `hair_start` > 0: p is on a strand of that width (SceneAccel::occluded).
-    Color irradiance(const Vec3& p, const Vec3& n, const RandomStream& rng, int samples,
+    Color irradiance(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng, int samples,
                      Counters& counters, bool include_sky = true, const LightSampleFn* each = nullptr,
                      float hair_start = 0) const;
 

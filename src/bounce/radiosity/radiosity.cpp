@@ -136,10 +136,10 @@ void RadiosityTextures::bake_side(uint32_t id, uint32_t t, bool front, Counters&
             // happens to use.
             if (front) {
                 RandomStream rng(0, (static_cast<uint64_t>(id) << 40) | (static_cast<uint64_t>(t) << 12), k);
-                map.front[k] = albedo * src.lighting->irradiance(sp.p, sp.ng, rng, src.light_samples, counters);
+                map.front[k] = albedo * src.lighting->irradiance(sp.p, sp.ng, id, rng, src.light_samples, counters);
             } else {
                 RandomStream rng(1, (static_cast<uint64_t>(id) << 40) | t, k);
-                map.back[k] = albedo * src.lighting->irradiance(sp.p, -sp.ng, rng, src.light_samples, counters);
+                map.back[k] = albedo * src.lighting->irradiance(sp.p, -sp.ng, id, rng, src.light_samples, counters);
             }
         }
 }

@@ -46,7 +46,8 @@ const std::vector<std::string>& material_keys() {
 
 const std::vector<std::string>& light_keys() {
     static const std::vector<std::string> keys = {"type",   "color",  "intensity", "position", "direction", "cone_angle", "cone_falloff",
-                                                  "corner", "edge_u", "edge_v",    "texture",  "rotation",  "name"};
+                                                  "corner", "edge_u", "edge_v",    "texture",  "rotation",  "name",
+                                                  "light_link", "shadow_link"};
     return keys;
 }
 
@@ -84,7 +85,7 @@ std::shared_ptr<const LatLongMap> load_latlong(const std::string& path, const Js
     return map;
 }
 
-/// The keys each light type reads (beside type, color, intensity and name).
+/// The keys each light type reads (beside type, color, intensity, name and the links).
 const std::map<std::string, std::vector<std::string>>& keys_by_light_type() {
     static const std::map<std::string, std::vector<std::string>> keys = {
         {"point", {"position"}},
@@ -169,7 +170,7 @@ Material read_material(const JsonReader& m, const std::string& name) {
 Light read_light(const JsonReader& r) {
     std::string type = r.choice("type", "", {"point", "spot", "distant", "quad", "sky"});
     std::vector<std::string> allowed = keys_by_light_type().at(type);
-    for (const char* k : {"type", "color", "intensity", "name"}) allowed.emplace_back(k);
+    for (const char* k : {"type", "color", "intensity", "name", "light_link", "shadow_link"}) allowed.emplace_back(k);
     r.only(allowed, "a " + type + " light");
     Light l;
     // Defaults are Light's own (scene.h), written once.

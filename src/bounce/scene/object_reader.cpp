@@ -11,6 +11,7 @@
 #include "bounce/dice/subdivision.h"
 #include "bounce/scene/fur_reader.h"
 #include "bounce/scene/item_readers.h"
+#include "bounce/scene/link_reader.h"
 #include "bounce/scene/mesh_import.h"
 
 namespace bounce {
@@ -20,7 +21,8 @@ using nlohmann::json;
 const std::vector<std::string>& object_keys() {
     static const std::vector<std::string> keys = {"name",     "type",        "file",     "material",     "transform",
                                                   "fine_subdivisions", "vertices", "center", "radius", "subdivisions",
-                                                  "subdivision", "boundary", "displacement", "fur", "animation"};
+                                                  "subdivision", "boundary", "displacement", "fur", "animation",
+                                                  "visible_to", "matte"};
     return keys;
 }
 
@@ -148,8 +150,15 @@ const std::vector<std::string>& keys_of_type(const std::string& type, bool subdi
     static const std::vector<std::string> subdiv = {"name", "type", "file", "material", "transform", "subdivision", "boundary", "displacement", "fur"};
     static const std::vector<std::string> quad = {"name", "type", "vertices", "material", "transform", "fine_subdivisions", "fur"};
     static const std::vector<std::string> sphere = {"name", "type", "center", "radius", "subdivisions", "fine_subdivisions", "material", "transform", "fur"};
-    if (type == "mesh") return subdivision ? subdiv : mesh;
-    return type == "quad" ? quad : sphere;
+    // Every type also takes the lighter's controls (link_reader.h).
+    static const auto with_controls = [](std::vector<std::string> keys) {
+        keys.insert(keys.end(), {"visible_to", "matte"});
+        return keys;
+    };
+    static const std::vector<std::string> mesh_c = with_controls(mesh), subdiv_c = with_controls(subdiv),
+                                          quad_c = with_controls(quad), sphere_c = with_controls(sphere);
+    if (type == "mesh") return subdivision ? subdiv_c : mesh_c;
+    return type == "quad" ? quad_c : sphere_c;
 }
 
 }  // namespace
@@ -242,6 +251,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         if (!isfinite(p) || std::fabs(p.x) > kMaxCoordinate || std::fabs(p.y) > kMaxCoordinate || std::fabs(p.z) > kMaxCoordinate)
             r.fail("", fmt::format("mesh has vertex positions that are not finite or beyond +-{:g} (after the transform)", kMaxCoordinate));
     if (r.has("fur")) obj.fur = read_fur(JsonReader(r.raw("fur"), r.at("fur"), r.ctx(), fur_keys()), obj.visible(), scene);
+    read_object_visibility(r, obj);
     scene.objects.push_back(std::move(obj));
 }
 }  // namespace bounce

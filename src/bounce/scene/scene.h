@@ -51,7 +51,19 @@ struct Light {
     std::shared_ptr<const LatLongMap> sky_map;          ///< sky: optional texture (times color)
     float sky_rotation = 0;                             ///< sky: rotation about +Y, degrees
     uint32_t object = 0;  ///< mesh: the object whose emissive faces emit
+    /// Light linking, per object index (scene file: "light_link"): 1 = lit by this light.
+    /// Empty = every object.
+    std::vector<uint8_t> lit;
+    /// Shadow linking (scene file: "shadow_link"): 1 = casts this light's shadows. Empty =
+    /// every object that casts shadows at all (Object::visible_to.shadows).
+    std::vector<uint8_t> shadowed_by;
+    /// Which of the ray-mask bits for linked shadows this light's shadow rays use (-1: none).
+    int shadow_slot = -1;
+    bool lights(uint32_t object_index) const { return lit.empty() || lit[object_index]; }
 };
+
+/// How many lights may have a shadow link (one Embree ray-mask bit each).
+inline constexpr int kMaxShadowLinkedLights = 28;
 
 struct Material {
     std::string name;
@@ -71,6 +83,14 @@ struct Material {
 
 struct SubdivSurface;
 
+/// Which rays see an object (scene file: "visible_to"). Fur keeps its own flags
+/// (fur.cast_shadows, fur.cast_indirect).
+struct RayVisibility {
+    bool camera = true;    ///< primary visibility
+    bool shadows = true;   ///< shadow rays of direct light (and of the radiosity bake)
+    bool indirect = true;  ///< gather rays (the bounce light and AO)
+};
+
 struct Object {
     std::string name;
     TriangleMesh coarse;        ///< traced by all secondary rays
@@ -83,6 +103,9 @@ struct Object {
     Transform placement;    ///< the scene file's transform, already applied to both tessellations
     bool deforms = false;   ///< its shape changes over the shot (a skin, morph targets), not only its placement
     bool moves = false;     ///< its placement is keyed or it deforms: its cache records travel with it
+    RayVisibility visible_to;
+    /// A holdout: where the camera sees it, black with alpha 0, hiding what is behind it.
+    bool matte = false;
     /// With motion blur: the visible mesh's vertices at shutter open and close (empty when it
     /// does not move during the shutter); camera rays see it in between.
     std::array<std::vector<Vec3>, 2> shutter;

@@ -12,6 +12,7 @@
 #include "bounce/core/random.h"
 #include "bounce/scene/fur_reader.h"
 #include "bounce/scene/item_readers.h"
+#include "bounce/scene/link_reader.h"
 #include "bounce/scene/json_reader.h"
 #include "bounce/scene/keyframes.h"
 #include "bounce/scene/mesh_import.h"
@@ -132,9 +133,11 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     if (root.has("lights")) {
         const json& ls = root.raw("lights");
         if (!ls.is_array()) root.fail("lights", "expected an array of lights");
+        int shadow_slots = 0;
         for (size_t i = 0; i < ls.size(); ++i) {
             JsonReader l(ls[i], fmt::format("/lights/{}", i), ctx, light_keys());
             scene.lights.push_back(read_light(l));
+            read_light_links(l, scene, scene.lights.back(), shadow_slots);
         }
     }
     for (size_t i = 0; i < scene.objects.size(); ++i) {

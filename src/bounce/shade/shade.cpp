@@ -20,7 +20,7 @@ Color fragment_direct(const Scene& scene, const Materials& materials, const Dire
         glossy.emplace([&](const Vec3& w, const Color& e) {
             gloss += ggx_specular(surf.normal, wo, w, surf.specular, surf.roughness) * e;
         });
-    Color e = lighting.irradiance(f.p, surf.normal, fragment_stream(scene.render.visibility.seed, x, y, k),
+    Color e = lighting.irradiance(f.p, surf.normal, f.object, fragment_stream(scene.render.visibility.seed, x, y, k),
                                   scene.render.lighting.light_samples, counters, include_sky, glossy ? &*glossy : nullptr);
     return materials.emission(f.material) + surf.albedo * e * kInvPi + gloss;
 }
@@ -40,7 +40,7 @@ Color hair_direct(const Scene& scene, const DirectLighting& lighting, const Frag
             const float c = dot(n, w);
             if (c > 1e-6f) out += kajiya_kay(f.tangent, w, wo, albedo, fur.params.specular, fur.params.specular_exponent) * (e / c);
         };
-        lighting.irradiance(f.p, n, fragment_stream(scene.render.visibility.seed, x, y, side ? k | 0x80000000u : k),
+        lighting.irradiance(f.p, n, f.object, fragment_stream(scene.render.visibility.seed, x, y, side ? k | 0x80000000u : k),
                             scene.render.lighting.light_samples, counters, include_sky, &each, fur.max_width());
     }
     return out;
@@ -100,10 +100,15 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
             int x = wx + deep.x0, y = wy + deep.y0;
             Color b(0), d(0), a(0), e_ind(0);
             Vec3 n(0), bn(0);
-            float cover = 0, z = INFINITY, occl = 0;
+            float cover = 0, held = 0, z = INFINITY, occl = 0;
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = frags[k];
+                // A holdout: hides what is behind it and adds nothing, alpha included.
+                if (scene.objects[f.object].matte) {
+                    held += f.weight;
+                    continue;
+                }
                 const bool hair = f.is_hair();
                 const Fur* fur = hair ? scene.objects[f.object].fur.get() : nullptr;
                 const SurfaceShading surf = fragment_surface(materials, f);
@@ -137,12 +142,12 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
                 z = std::min(z, f.depth);
                 ++counters.fragments_shaded;
             }
-            if (cover < 1 && !ao_only) {
+            if (cover + held < 1 && !ao_only) {
                 // Escaping camera rays see the sky (in beauty and direct).
                 Color bg = lighting.background(normalize(
                     camera.direction(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f)));
-                b += bg * (1 - cover);
-                d += bg * (1 - cover);
+                b += bg * (1 - cover - held);
+                d += bg * (1 - cover - held);
             }
             float* pb = img.at(beauty, wx, wy);
             pb[0] = b.x, pb[1] = b.y, pb[2] = b.z, pb[3] = cover;
