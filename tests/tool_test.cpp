@@ -94,6 +94,37 @@ TEST(LightingTool, EveryFieldALightOrMaterialReadsHasARowEvenAtItsDefault) {
         }
 }
 
+TEST(LightingTool, EditsMayNotReadOrWriteFilesOutsideTheSceneAndOutputFolders) {
+    // Every path-valued key an edit sets obeys the file API's confinement: a mesh, a texture
+    // or the radiosity folder outside both folders is refused, and nothing is created there.
+    test::TempDir d, elsewhere;
+    LightingSession s(small_session(d));
+    const std::string mesh = elsewhere.write("stolen.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    std::filesystem::create_symlink(elsewhere.path(), d.path() / "scene" / "link");
+    auto refused = [&](const std::string& key, const json& value, const std::string& outside) {
+        try {
+            s.edit(key, value);
+            ADD_FAILURE() << key << " = " << value << " was taken";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("lighting tool: edit " + key), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find(outside + "' is outside the scene's folder and the output folder"), std::string::npos)
+                << e.what();
+        }
+    };
+    refused("objects.6.file", mesh, mesh);
+    refused("objects.0", json{{"file", mesh}}, mesh);
+    refused("objects.6.file", "link/stolen.obj", "link/stolen.obj");
+    refused("materials.white.color_texture", elsewhere.path().string() + "/../" + elsewhere.path().filename().string() + "/stolen.obj",
+            "stolen.obj");
+    const std::string folder = (elsewhere.path() / "made").string();
+    refused("render.radiosity_textures", folder, folder);
+    EXPECT_FALSE(std::filesystem::exists(folder));
+    // Inside them, the same keys are taken.
+    std::filesystem::copy_file(mesh, d.path() / "scene" / "mine.obj");
+    EXPECT_EQ(s.edit("objects.6.file", "mine.obj")["key"], "objects.6.file");
+    EXPECT_EQ(s.edit("render.radiosity_textures", d.file("out/textures"))["key"], "render.radiosity_textures");
+}
+
 TEST(LightingTool, ALightEditReshadesWithoutNewRecordsOrVisibility) {
     test::TempDir d;
     LightingSession s(small_session(d));
@@ -260,6 +291,12 @@ TEST(LightingToolHttp, BadRequestsGetAStatusAndAMessage) {
     for (const char* name : {"../secret.bic", "/etc/passwd", "a/../../b.bic"})
         EXPECT_EQ(s.client.Get("/api/records", httplib::Params{{"file", name}}, httplib::Headers{})->status, 400) << name;
     EXPECT_EQ(post("/api/save-scene", R"({"name": "../escape.json"})")->status, 400);
+    // Path-valued keys set through an edit obey the same confinement as the file API.
+    r = post("/api/edit", R"({"key": "render.radiosity_textures", "value": "/tmp/bounce-escape-folder"})");
+    EXPECT_EQ(r->status, 400);
+    EXPECT_NE(json::parse(r->body)["error"].get<std::string>().find("outside the scene's folder"), std::string::npos) << r->body;
+    EXPECT_FALSE(std::filesystem::exists("/tmp/bounce-escape-folder"));
+    EXPECT_EQ(post("/api/edit", R"({"key": "objects.6.file", "value": "/etc/hostname"})")->status, 400);
     EXPECT_EQ(s.client.Get("/api/image?layer=beauty&exposure=nan")->status, 400);
     EXPECT_EQ(s.client.Get("/api/scene?max_triangles=-4")->status, 400);
     EXPECT_EQ(post("/api/edit", std::string(5u << 20, ' '))->status, 413);

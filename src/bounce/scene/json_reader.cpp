@@ -270,6 +270,7 @@ std::string JsonReader::file(const std::string& key, bool required) const {
     std::string s = string(key, "", required);
     if (s.empty()) return s;
     fs::path p = fs::path(s).is_absolute() ? fs::path(s) : ctx_.dir / s;
+    if (ctx_.check_path) ctx_.check_path(p.lexically_normal().string(), at(key));
     if (std::string why = not_a_regular_file(p.string()); !why.empty())
         ctx_.fail(at(key), fmt::format("{}: \"{}\"", why, p.string()));
     const std::string path = p.lexically_normal().string();

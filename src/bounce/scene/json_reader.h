@@ -35,6 +35,8 @@ struct JsonContext {
     std::map<std::string, Override> overridden;  ///< JSON pointer -> the override that set it
     /// Every file JsonReader::file resolves is appended here (null: not recorded).
     std::vector<SceneInput>* inputs = nullptr;
+    /// LoadOptions::check_path: sees every file and folder path before it is used.
+    std::function<void(const std::string& path, const std::string& pointer)> check_path;
 
     /// Throws InputError at `ptr`, blaming the override's source when one set it.
     [[noreturn]] void fail(const std::string& ptr, const std::string& msg) const;

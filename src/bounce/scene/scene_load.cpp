@@ -62,6 +62,7 @@ void read_params(const json& j, const std::string& section, Scene& scene, const 
         json v = check_param(p, r.raw(p.name()), [&](const std::string& sub, const std::string& msg) { ctx.fail(ptr + sub, msg); });
         if (p.type == ParamType::Path && !v.get<std::string>().empty()) {
             if (fs::path(v.get<std::string>()).is_relative() && !ctx.from_override(ptr)) v = (ctx.dir / v.get<std::string>()).string();
+            if (ctx.check_path) ctx.check_path(v.get<std::string>(), ptr);
             // A folder the render reads and writes: a file of that name is refused now, not after the render.
             std::error_code ec;
             const auto st = fs::status(v.get<std::string>(), ec);
@@ -77,6 +78,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     JsonContext ctx;
     ctx.file = path;
     ctx.dir = fs::path(path).parent_path();
+    ctx.check_path = options.check_path;
     if (!doc.is_object()) ctx.fail("", fmt::format("expected an object at the top of the scene, got {}", json_type_name(doc)));
     for (const auto& o : overrides) ctx.overridden.insert_or_assign(apply_override(doc, o), o);
 

@@ -5,6 +5,7 @@
 // mesh_import.h's.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -18,6 +19,9 @@ namespace bounce {
 struct LoadOptions {
     std::optional<double> frame;  ///< the time keyed values are taken at; default: the shot's first frame
     std::string frame_origin;     ///< how the user asked for it ("--frame 60"), for errors
+    /// Called with every file and folder the scene names (resolved path, JSON pointer) before
+    /// it is read or used; throws to refuse it (the lighting tool confines its edits). Null: none.
+    std::function<void(const std::string& path, const std::string& pointer)> check_path;
 };
 
 /// Loads `path` (.json, or .gltf/.glb/.obj/.ply rendered with defaults and the file's own

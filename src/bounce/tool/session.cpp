@@ -172,6 +172,7 @@ json LightingSession::edit(const std::string& key, const json& value, const std:
     o.push_back(cli_origin.empty() ? edit_override(key, value) : Override(key + "=" + value.dump(), cli_origin));
     LoadOptions at;
     at.frame = frame_;
+    if (cli_origin.empty()) at.check_path = edit_path_check(key);
     Scene s = load_scene(options_.scene, o, at);  // throws with the file and place on a bad value
     if (!edits_.count(key)) edit_order_.push_back(key);
     edits_[key] = value;
@@ -182,6 +183,22 @@ json LightingSession::edit(const std::string& key, const json& value, const std:
     const SessionAction needs = needs_for(p ? p->identity : kImageOnly);
     pending_ = std::max(pending_, static_cast<int>(needs));
     return {{"key", key}, {"value", value}, {"needs", session_action_name(needs)}};
+}
+
+std::function<void(const std::string&, const std::string&)> LightingSession::edit_path_check(const std::string& key) const {
+    std::string ptr = "/" + key;
+    std::replace(ptr.begin(), ptr.end(), '.', '/');
+    return [this, key, ptr](const std::string& path, const std::string& pointer) {
+        // What the edit set: the key itself or anything under it (an edit of a whole object).
+        if (pointer != ptr && !pointer.starts_with(ptr + "/")) return;
+        const fs::path full = fs::weakly_canonical(fs::absolute(path));  // resolves symlinks that exist
+        for (const fs::path& base : {scene_dir_, out_dir_}) {
+            const fs::path rel = full.lexically_relative(base);
+            if (!rel.empty() && *rel.begin() != "..") return;
+        }
+        throw InputError("lighting tool", "edit " + key + " (" + pointer + ")",
+                         fmt::format("'{}' is outside the scene's folder and the output folder", path));
+    };
 }
 
 json LightingSession::set_frame(double frame) {

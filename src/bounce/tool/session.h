@@ -117,6 +117,10 @@ private:
     /// One frame through its plan (plan_frame): a re-shade gathers only if records are missing.
     void render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats, ProgressSink& sink);
     std::vector<Override> overrides_locked() const;
+    /// The loader's check (LoadOptions::check_path) for an edit of `key`: a file or folder it
+    /// sets outside the scene's folder and the output folder (a mesh, a texture, the radiosity
+    /// folder) is refused before it is read or made: the page reaches no further than the file API.
+    std::function<void(const std::string&, const std::string&)> edit_path_check(const std::string& key) const;
     /// A re-shade, re-gather or new deep file: the session's deep buffer and cache (memory or files).
     void set_session_files(SessionAction action, RenderRequest& req, FrameState& previous, bool cached) const;
 
