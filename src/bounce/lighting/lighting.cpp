@@ -64,7 +64,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
             ++counters.shadow_rays;
             if (accel_.occluded(p, w, r, hair_start, mask)) return Color(0);
             Color e = l.color * (cone * cos_x / r2);
-            if (each) (*each)(w, e);
+            if (each) (*each)(index, w, e);
             return e;
         }
         case LightType::Distant: {
@@ -73,7 +73,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
             if (cos_x <= 0) return Color(0);
             ++counters.shadow_rays;
             if (accel_.occluded(p, w, INFINITY, hair_start, mask)) return Color(0);
-            if (each) (*each)(w, l.color * cos_x);
+            if (each) (*each)(index, w, l.color * cos_x);
             return l.color * cos_x;
         }
         case LightType::Quad: {
@@ -92,7 +92,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
                 ++counters.shadow_rays;
                 if (accel_.occluded(p, w, r, hair_start, mask)) continue;
                 e += l.color * (cos_x * cos_l / r2);
-                if (each) (*each)(w, l.color * (cos_x * cos_l / r2 * area / static_cast<float>(samples)));
+                if (each) (*each)(index, w, l.color * (cos_x * cos_l / r2 * area / static_cast<float>(samples)));
             }
             return e * (area / static_cast<float>(samples));
         }
@@ -107,7 +107,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
                 if (accel_.occluded(p, w, INFINITY, hair_start, mask)) continue;
                 Color L = l.sky_map ? l.color * l.sky_map->lookup(w, l.sky_rotation) : l.color;
                 e += L;
-                if (each) (*each)(w, L * (kPi / static_cast<float>(samples)));
+                if (each) (*each)(index, w, L * (kPi / static_cast<float>(samples)));
             }
             // Cosine-weighted estimator of the integral of L cos: pi * mean(L).
             return e * (kPi / static_cast<float>(samples));
@@ -140,7 +140,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
                 if (accel_.occluded(p, w, r, hair_start, mask)) continue;
                 e += scene_.materials[q.material].emission * (cos_x * cos_l / r2);
                 if (each)
-                    (*each)(w, scene_.materials[q.material].emission *
+                    (*each)(index, w, scene_.materials[q.material].emission *
                                    (cos_x * cos_l / r2 * em.area / static_cast<float>(samples)));
             }
             return e * (em.area / static_cast<float>(samples));

@@ -24,10 +24,11 @@ struct Emitter {
     float area = 0;
 };
 
-/// Called for each unshadowed light sample with its direction (unit, from the point) and its
-/// share of the irradiance (the samples' shares sum to the returned E): lets glossy BRDFs
-/// reuse the samples the diffuse estimate draws.
-using LightSampleFn = std::function<void(const Vec3& w, const Color& e)>;
+/// Called for each unshadowed light sample with its light (index into Scene::lights), its
+/// direction (unit, from the point) and its share of the irradiance (the samples' shares sum
+/// to the returned E): lets glossy BRDFs reuse the samples the diffuse estimate draws, and the
+/// shading pass split the light per light.
+using LightSampleFn = std::function<void(size_t light, const Vec3& w, const Color& e)>;
 
 /// Direct lighting over all of a scene's lights.
 class DirectLighting {

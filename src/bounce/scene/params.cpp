@@ -279,6 +279,10 @@ ParamTable make_table() {
     // Shading.
     rows.push_back(row("light_per_channel", "shading", &R::shading, &ShadingSettings::light_per_channel)
                        .doc("cached indirect light as three (radiance, direction) pairs, one per RGB channel").flag());
+    rows.push_back(row("layers", "shading", &R::shading, &ShadingSettings::layers).choices({"standard", "components"})
+                       .doc("components adds the beauty's parts for compositing: emission, diffuse and specular direct "
+                            "(also per light) and indirect, background, and object and material ids (docs/shading.md)")
+                       .flag());
     // Threads and tiles: never change the image (docs/parallel.md).
     rows.push_back(row("threads", "parallel", &R::parallel, &ParallelSettings::threads).range(0, 4096).unit("threads")
                        .doc("worker threads; 0 = all cores").flag());

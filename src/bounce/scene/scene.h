@@ -42,6 +42,7 @@ enum class LightType { Point, Spot, Distant, Quad, Sky, Mesh };
 
 struct Light {
     LightType type = LightType::Point;
+    std::string name;          ///< "name" in the scene file, else "lightN"; a mesh light's is its object's
     Color color{1};            ///< point/spot: intensity (W/sr); distant: irradiance; quad/sky: radiance
     Vec3 position{0};          ///< point, spot
     Vec3 direction{0, -1, 0};  ///< spot: where it points; distant: direction light travels

@@ -139,6 +139,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
         for (size_t i = 0; i < ls.size(); ++i) {
             JsonReader l(ls[i], fmt::format("/lights/{}", i), ctx, light_keys());
             scene.lights.push_back(read_light(l));
+            scene.lights.back().name = l.string("name", fmt::format("light{}", i));
             read_light_links(l, scene, scene.lights.back(), shadow_slots);
         }
     }
@@ -149,6 +150,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
             Light l;
             l.type = LightType::Mesh;
             l.object = static_cast<uint32_t>(i);
+            l.name = scene.objects[i].name;
             scene.lights.push_back(l);
         }
     }

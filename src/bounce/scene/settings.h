@@ -16,6 +16,8 @@ enum class GiMode : uint8_t { None, Brute, Cache };
 enum class Metric : uint8_t { TL04, Ward, Hessian };
 enum class CacheSharing : uint8_t { Shared, PerThread };
 enum class RecordSurface : uint8_t { Undisplaced, Displaced };
+/// Which layers the EXR holds beside the standard ones (shade/layers.h).
+enum class LayerSet : uint8_t { Standard, Components };
 
 /// Primary visibility and the deep file.
 struct VisibilitySettings {
@@ -97,6 +99,7 @@ struct CacheSettings {
 /// How indirect light reaches the BRDF.
 struct ShadingSettings {
     bool light_per_channel = false;  ///< three (radiance, direction) pairs, not one
+    LayerSet layers = LayerSet::Standard;  ///< Components: the beauty's parts, per light, and ids
 };
 
 /// Threads, tiles and progressive output.

@@ -23,9 +23,9 @@ Color ggx_specular(const Vec3& n, const Vec3& wo, const Vec3& wi, const Color& f
 
 namespace {
 
-/// Outgoing radiance for irradiance E (per channel, masked by the caller) arriving along the
-/// unnormalised mean direction D.
-Color one_pair(const Color& E, const Vec3& D, const Vec3& n_lookup, const SurfaceShading& s, const Vec3& wo) {
+/// Outgoing radiance (diffuse and glossy lobes) for irradiance E (per channel, masked by the
+/// caller) arriving along the unnormalised mean direction D.
+IndirectLobes one_pair(const Color& E, const Vec3& D, const Vec3& n_lookup, const SurfaceShading& s, const Vec3& wo) {
     Vec3 d = n_lookup;
     float cos_lookup = dot(n_lookup, n_lookup);
     if (dot(D, D) > 0) {
@@ -35,27 +35,34 @@ Color one_pair(const Color& E, const Vec3& D, const Vec3& n_lookup, const Surfac
     }
     // The ratio is exactly 1 when the shading normal is the lookup normal: no energy change.
     const float ratio = std::max(dot(s.normal, d), 0.0f) / cos_lookup;
-    Color out = s.albedo * E * (kInvPi * ratio);
-    if (s.specular.x > 0 || s.specular.y > 0 || s.specular.z > 0)
-        out += ggx_specular(s.normal, wo, d, s.specular, s.roughness) * E * ratio;
+    IndirectLobes out;
+    out.diffuse = s.albedo * E * (kInvPi * ratio);
+    if (s.specular.x > 0 || s.specular.y > 0 || s.specular.z > 0) out.specular = ggx_specular(s.normal, wo, d, s.specular, s.roughness) * E * ratio;
     return out;
 }
 
 }  // namespace
 
-Color indirect_radiance(const Indirect& in, const Vec3& n_lookup, const SurfaceShading& s, const Vec3& wo,
-                        bool per_channel) {
+IndirectLobes indirect_lobes(const Indirect& in, const Vec3& n_lookup, const SurfaceShading& s, const Vec3& wo,
+                             bool per_channel) {
     if (!per_channel) {
         const Vec3 D = in.light_dir[0] * 0.2126f + in.light_dir[1] * 0.7152f + in.light_dir[2] * 0.0722f;
         return one_pair(in.irradiance, D, n_lookup, s, wo);
     }
-    Color out(0);
+    IndirectLobes out;
     for (int c = 0; c < 3; ++c) {
         Color E(0);
         E[c] = in.irradiance[c];
-        out[c] = one_pair(E, in.light_dir[static_cast<size_t>(c)], n_lookup, s, wo)[c];
+        const IndirectLobes one = one_pair(E, in.light_dir[static_cast<size_t>(c)], n_lookup, s, wo);
+        out.diffuse[c] = one.diffuse[c], out.specular[c] = one.specular[c];
     }
     return out;
+}
+
+Color indirect_radiance(const Indirect& in, const Vec3& n_lookup, const SurfaceShading& s, const Vec3& wo,
+                        bool per_channel) {
+    const IndirectLobes l = indirect_lobes(in, n_lookup, s, wo, per_channel);
+    return l.diffuse + l.specular;
 }
 
 }  // namespace bounce

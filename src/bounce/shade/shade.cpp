@@ -4,45 +4,54 @@
 
 #include "bounce/core/parallel.h"
 #include "bounce/shade/brdf.h"
+#include "bounce/shade/components.h"
 
 namespace bounce {
 
 namespace {
 
-/// Emission plus direct light reflected by the fragment's bumped, glossy surface towards wo.
+/// Emission plus direct light reflected by the fragment's bumped, glossy surface towards wo;
+/// with `parts`, also its components (per light as well when they are sized).
 Color fragment_direct(const Scene& scene, const Materials& materials, const DirectLighting& lighting, const Fragment& f,
                       const SurfaceShading& surf, const Vec3& wo, int x, int y, uint32_t k, bool include_sky,
-                      Counters& counters) {
+                      Counters& counters, ShadedParts* parts) {
     // Glossy surfaces reflect the same light samples the diffuse estimate draws.
     Color gloss(0);
-    std::optional<LightSampleFn> glossy;
-    if (surf.specular != Color(0))
-        glossy.emplace([&](const Vec3& w, const Color& e) {
-            gloss += ggx_specular(surf.normal, wo, w, surf.specular, surf.roughness) * e;
-        });
+    const bool glossy = surf.specular != Color(0), per_light = parts && !parts->light_diffuse.empty();
+    const LightSampleFn each = [&](size_t light, const Vec3& w, const Color& e) {
+        const Color g = glossy ? ggx_specular(surf.normal, wo, w, surf.specular, surf.roughness) * e : Color(0);
+        gloss += g;
+        if (per_light) parts->light_diffuse[light] += surf.albedo * e * kInvPi, parts->light_specular[light] += g;
+    };
     Color e = lighting.irradiance(f.p, surf.normal, f.object, fragment_stream(scene.render.visibility.seed, x, y, k),
-                                  scene.render.lighting.light_samples, counters, include_sky, glossy ? &*glossy : nullptr);
-    return materials.emission(f.material) + surf.albedo * e * kInvPi + gloss;
+                                  scene.render.lighting.light_samples, counters, include_sky, glossy || per_light ? &each : nullptr);
+    const Color emission = materials.emission(f.material), diffuse = surf.albedo * e * kInvPi;
+    if (parts) parts->emission = emission, parts->diffuse_direct = diffuse, parts->specular_direct = gloss;
+    return emission + diffuse + gloss;
 }
 
 /// Emission-free direct light reflected by a strand towards wo: Kajiya-Kay over light samples
 /// from both sides of the strand (light reaches a fibre from the whole sphere), with shadow
 /// rays that skip the strand itself.
 Color hair_direct(const Scene& scene, const DirectLighting& lighting, const Fragment& f, const Vec3& wo, int x, int y,
-                  uint32_t k, bool include_sky, Counters& counters) {
+                  uint32_t k, bool include_sky, Counters& counters, ShadedParts* parts) {
     const Fur& fur = *scene.objects[f.object].fur;
     const Color albedo = fur.params.albedo(f.strand_v);
     Color out(0);
     for (int side = 0; side < 2; ++side) {
         const Vec3 n = side ? -f.n : f.n;
         // A sample's share of the irradiance is L dw cos(n, w): the fibre wants L dw.
-        const LightSampleFn each = [&](const Vec3& w, const Color& e) {
+        const LightSampleFn each = [&](size_t light, const Vec3& w, const Color& e) {
             const float c = dot(n, w);
-            if (c > 1e-6f) out += kajiya_kay(f.tangent, w, wo, albedo, fur.params.specular, fur.params.specular_exponent) * (e / c);
+            if (c <= 1e-6f) return;
+            const Color kk = kajiya_kay(f.tangent, w, wo, albedo, fur.params.specular, fur.params.specular_exponent) * (e / c);
+            out += kk;
+            if (parts && !parts->light_diffuse.empty()) parts->light_diffuse[light] += kk;
         };
         lighting.irradiance(f.p, n, f.object, fragment_stream(scene.render.visibility.seed, x, y, side ? k | 0x80000000u : k),
                             scene.render.lighting.light_samples, counters, include_sky, &each, fur.max_width());
     }
+    if (parts) parts->diffuse_direct = out;  // a strand's lobes are one (Kajiya-Kay): all in diffuse
     return out;
 }
 
@@ -53,15 +62,90 @@ SurfaceShading fragment_surface(const Materials& materials, const Fragment& f) {
 
 /// Direct light (and emission) leaving fragment k of pixel (x, y) towards wo: a strand's or a surface's.
 Color direct_at(const Scene& scene, const Materials& materials, const DirectLighting& lighting, const Fragment& f,
-                const SurfaceShading& surf, const Vec3& wo, int x, int y, uint32_t k, bool include_sky, Counters& counters) {
-    return f.is_hair() ? hair_direct(scene, lighting, f, wo, x, y, k, include_sky, counters)
-                       : fragment_direct(scene, materials, lighting, f, surf, wo, x, y, k, include_sky, counters);
+                const SurfaceShading& surf, const Vec3& wo, int x, int y, uint32_t k, bool include_sky, Counters& counters,
+                ShadedParts* parts = nullptr) {
+    return f.is_hair() ? hair_direct(scene, lighting, f, wo, x, y, k, include_sky, counters, parts)
+                       : fragment_direct(scene, materials, lighting, f, surf, wo, x, y, k, include_sky, counters, parts);
 }
 
 /// The light direction of cached indirect light (luminance-weighted mean), or `fallback`.
 Vec3 indirect_direction(const Indirect& in, const Vec3& fallback) {
     const Vec3 d = in.light_dir[0] * 0.2126f + in.light_dir[1] * 0.7152f + in.light_dir[2] * 0.0722f;
     return dot(d, d) > 1e-20f ? normalize(d) : fallback;
+}
+
+}  // namespace
+
+namespace {
+
+/// What one pixel's fragments add up to, layer by layer.
+struct PixelSum {
+    Color beauty{0}, direct{0}, albedo{0}, indirect{0};
+    Vec3 n{0}, bent{0};
+    float cover = 0, held = 0, z = INFINITY, ao = 0;
+    float largest = 0;  ///< weight of the fragment the id layer names
+    uint32_t object = 0, material = 0;
+};
+
+/// The shading pass's fixed inputs.
+struct ShadeContext {
+    const Scene& scene;
+    const Materials& materials;
+    const DirectLighting& lighting;
+    const std::vector<Indirect>* indirect;
+    const std::vector<Color>* direct_radiance;
+    const CameraRays& camera;
+    bool ao_only;
+};
+
+/// Adds fragment k of pixel (x, y) (its index `at` in the deep buffer) to `sum`; with layer
+/// components on, also to `comps` at window pixel (wx, wy).
+void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint32_t k, size_t at, PixelSum& sum,
+                    ComponentLayers& comps, int wx, int wy, Counters& counters) {
+    // A holdout: hides what is behind it and adds nothing, alpha included.
+    if (c.scene.objects[f.object].matte) {
+        sum.held += f.weight;
+        return;
+    }
+    const bool hair = f.is_hair();
+    const Fur* fur = hair ? c.scene.objects[f.object].fur.get() : nullptr;
+    const SurfaceShading surf = fragment_surface(c.materials, f);
+    const Color alb = hair ? fur->params.albedo(f.strand_v) : surf.albedo;
+    const Vec3 wo = normalize(c.camera.origin() - f.p);
+    if (c.indirect) {
+        const Indirect& in = (*c.indirect)[at];
+        // Baked AO of detail the gather cannot see; on hair the self-shadowing falloff.
+        const float w = f.weight * (hair ? fur->params.falloff(f.strand_v) : surf.occlusion);
+        sum.indirect += in.irradiance * w;
+        sum.ao += in.ao * w;
+        sum.bent += in.bent_normal * f.weight;
+        IndirectLobes lobes;
+        if (c.ao_only)
+            lobes.diffuse = Color(in.ao);
+        else if (hair)
+            lobes.diffuse = hair_indirect(f.tangent, indirect_direction(in, f.n_base), f.n_base, wo, in.irradiance, alb,
+                                          fur->params.specular, fur->params.specular_exponent);
+        else
+            lobes = indirect_lobes(in, f.n, surf, wo, c.scene.render.shading.light_per_channel);
+        sum.beauty += (lobes.diffuse + lobes.specular) * w;
+        if (comps.on()) comps.add_indirect(wx, wy, lobes.diffuse, lobes.specular, w);
+    }
+    if (!c.ao_only) {
+        ShadedParts parts = comps.on() ? comps.parts() : ShadedParts{};
+        const Color radiance = c.direct_radiance && !comps.on()
+                                   ? (*c.direct_radiance)[at]
+                                   : direct_at(c.scene, c.materials, c.lighting, f, surf, wo, x, y, k, c.indirect == nullptr, counters,
+                                               comps.on() ? &parts : nullptr);
+        sum.direct += radiance * f.weight;
+        sum.beauty += radiance * f.weight;
+        if (comps.on()) comps.add(wx, wy, parts, f.weight);
+    }
+    sum.albedo += alb * f.weight;
+    sum.n += f.n * f.weight;
+    sum.cover += f.weight;
+    sum.z = std::min(sum.z, f.depth);
+    if (f.weight > sum.largest) sum.largest = f.weight, sum.object = f.object, sum.material = f.material;
+    ++counters.fragments_shaded;
 }
 
 }  // namespace
@@ -86,8 +170,11 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
     Layer& albedo = img.add_layer("albedo", {"albedo.R", "albedo.G", "albedo.B"});
     Layer& normal = img.add_layer("N", {"N.X", "N.Y", "N.Z"});
     Layer& depth = img.add_layer("depth", {"Z"});
+    // AO-only renders have no components to split.
+    ComponentLayers comps(img, scene, scene.render.shading.layers == LayerSet::Components && !ao_only);
 
     CameraRays camera(scene.camera);
+    const ShadeContext ctx{scene, materials, lighting, indirect, direct_radiance, camera, ao_only};
     auto put3 = [&](Layer* l, int x, int y, const Vec3& v) {
         if (!l) return;
         float* p = img.at(*l, x, y);
@@ -98,66 +185,27 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
         deep, scene.render.parallel.tile_size, sink, "shading", [&](int wx, int wy, size_t first) {
             Counters& counters = stats.local();
             int x = wx + deep.x0, y = wy + deep.y0;
-            Color b(0), d(0), a(0), e_ind(0);
-            Vec3 n(0), bn(0);
-            float cover = 0, held = 0, z = INFINITY, occl = 0;
+            PixelSum sum;
             auto frags = deep.pixel(wx, wy);
-            for (uint32_t k = 0; k < frags.size(); ++k) {
-                const Fragment& f = frags[k];
-                // A holdout: hides what is behind it and adds nothing, alpha included.
-                if (scene.objects[f.object].matte) {
-                    held += f.weight;
-                    continue;
-                }
-                const bool hair = f.is_hair();
-                const Fur* fur = hair ? scene.objects[f.object].fur.get() : nullptr;
-                const SurfaceShading surf = fragment_surface(materials, f);
-                const Color alb = hair ? fur->params.albedo(f.strand_v) : surf.albedo;
-                const Vec3 wo = normalize(camera.origin() - f.p);
-                if (indirect) {
-                    const Indirect& in = (*indirect)[first + k];
-                    // Baked AO of detail the gather cannot see; on hair the self-shadowing falloff.
-                    const float w = f.weight * (hair ? fur->params.falloff(f.strand_v) : surf.occlusion);
-                    e_ind += in.irradiance * w;
-                    occl += in.ao * w;
-                    bn += in.bent_normal * f.weight;
-                    if (ao_only)
-                        b += Color(in.ao) * w;
-                    else if (hair)
-                        b += hair_indirect(f.tangent, indirect_direction(in, f.n_base), f.n_base, wo, in.irradiance, alb,
-                                           fur->params.specular, fur->params.specular_exponent) * w;
-                    else
-                        b += indirect_radiance(in, f.n, surf, wo, scene.render.shading.light_per_channel) * w;
-                }
-                if (!ao_only) {
-                    Color radiance = direct_radiance ? (*direct_radiance)[first + k]
-                                                     : direct_at(scene, materials, lighting, f, surf, wo, x, y, k,
-                                                                 indirect == nullptr, counters);
-                    d += radiance * f.weight;
-                    b += radiance * f.weight;
-                }
-                a += alb * f.weight;
-                n += f.n * f.weight;
-                cover += f.weight;
-                z = std::min(z, f.depth);
-                ++counters.fragments_shaded;
-            }
-            if (cover + held < 1 && !ao_only) {
+            for (uint32_t k = 0; k < frags.size(); ++k) shade_fragment(ctx, frags[k], x, y, k, first + k, sum, comps, wx, wy, counters);
+            if (sum.cover + sum.held < 1 && !ao_only) {
                 // Escaping camera rays see the sky (in beauty and direct).
                 Color bg = lighting.background(normalize(
                     camera.direction(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f)));
-                b += bg * (1 - cover - held);
-                d += bg * (1 - cover - held);
+                sum.beauty += bg * (1 - sum.cover - sum.held);
+                sum.direct += bg * (1 - sum.cover - sum.held);
+                if (comps.on()) comps.background(wx, wy, bg * (1 - sum.cover - sum.held));
             }
+            if (comps.on() && sum.largest > 0) comps.ids(wx, wy, sum.object, sum.material);
             float* pb = img.at(beauty, wx, wy);
-            pb[0] = b.x, pb[1] = b.y, pb[2] = b.z, pb[3] = cover;
-            put3(direct, wx, wy, d);
-            put3(ind, wx, wy, e_ind);
-            if (ao) *img.at(*ao, wx, wy) = occl;
-            put3(bent, wx, wy, dot(bn, bn) > 0 ? normalize(bn) : Vec3(0));
-            put3(&albedo, wx, wy, a);
-            put3(&normal, wx, wy, cover > 0 ? normalize(n) : Vec3(0));
-            *img.at(depth, wx, wy) = z;
+            pb[0] = sum.beauty.x, pb[1] = sum.beauty.y, pb[2] = sum.beauty.z, pb[3] = sum.cover;
+            put3(direct, wx, wy, sum.direct);
+            put3(ind, wx, wy, sum.indirect);
+            if (ao) *img.at(*ao, wx, wy) = sum.ao;
+            put3(bent, wx, wy, dot(sum.bent, sum.bent) > 0 ? normalize(sum.bent) : Vec3(0));
+            put3(&albedo, wx, wy, sum.albedo);
+            put3(&normal, wx, wy, sum.cover > 0 ? normalize(sum.n) : Vec3(0));
+            *img.at(depth, wx, wy) = sum.z;
         });
     return img;
 }
