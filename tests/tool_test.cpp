@@ -243,6 +243,24 @@ TEST(LightingTool, ANewRequestCancelsTheRunningOneAndAFailureKeepsTheImage) {
     EXPECT_EQ(s.status()["image"]["version"], version);
 }
 
+TEST(LightingTool, AStoppedRenderLeavesThePreviousImageNotItsPreview) {
+    test::TempDir d;
+    LightingSession s(small_session(d));
+    render_and_wait(s, SessionAction::Rasterize);
+    const auto before = s.pixels("beauty", 0);
+    s.edit("render.rays", 20000);  // previews on (the session's default): each sub-pass shows
+    s.start(SessionAction::Regather);
+    for (int i = 0; i < 2000 && s.status()["image"]["version"].get<uint64_t>() == before.version; ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    ASSERT_GT(s.status()["image"]["version"].get<uint64_t>(), before.version) << "no preview arrived";
+    s.stop();
+    s.wait();
+    ASSERT_EQ(s.status()["state"], "cancelled");
+    const auto after = s.pixels("beauty", 0);
+    EXPECT_GT(after.version, before.version);  // pages fetch it again
+    EXPECT_EQ(after.rgba, before.rgba);
+}
+
 TEST(LightingTool, RequestsFromManyThreadsRunOneAtATime) {
     test::TempDir d;
     LightingSession s(small_session(d));

@@ -37,6 +37,7 @@ async function loadParams() {
     tr.cells[2].textContent = shown(r.default);
     const input = tr.querySelector('input');
     input.value = shown(r.value);
+    input.dataset.accepted = input.value;  // what the server holds: a rejected edit goes back to it
     input.setAttribute('aria-label', r.key);
     input.addEventListener('change', () => edit(r.key, input, tr));
     body.appendChild(tr);
@@ -47,6 +48,7 @@ async function loadParams() {
 async function edit(key, input, tr) {
   try {
     const { data } = await api('/api/edit', { key, value: parsed(input.value) });
+    input.dataset.accepted = input.value;
     input.classList.remove('bad');
     tr.classList.add('edited');
     state.edited.add(key);
@@ -54,6 +56,8 @@ async function edit(key, input, tr) {
     await refreshStatus();
     return data;
   } catch (e) {
+    // The cell shows the value in force again; the message says what was refused and why.
+    input.value = input.dataset.accepted;
     input.classList.add('bad');
     showError(e.message);
   }
@@ -129,6 +133,8 @@ async function refreshStatus() {
     $('shot-frame-value').textContent = s.frame;
   }
   if (s.image.version !== state.version) await fetchImage();
+  // A page that has never rendered is black: say how to start.
+  $('hint').hidden = s.image.layers.length > 0 || s.state === 'running';
   if (s.state !== 'running') {
     if (state.running) { showStats(s.stats); loadRecords(); loadCacheFiles(); }
     state.running = false;
@@ -180,7 +186,8 @@ function initView() {
     view.orbit.enabled = !e.value;
     if (!e.value && view.drag.object) moveLight(view.drag.object);
   });
-  view.scene.add(view.drag);
+  // TransformControls is no Object3D since three r169: its gizmo is.
+  view.scene.add(view.drag.getHelper());
   view.scene.add(new THREE.AmbientLight(0xffffff, 0.6));
   const sun = new THREE.DirectionalLight(0xffffff, 0.8);
   sun.position.set(1, 2, 1.5);
@@ -208,6 +215,10 @@ async function loadScene() {
   if (!view.placed) {
     view.camera.position.set(...c.position); view.orbit.target.set(...c.look_at); view.orbit.update(); view.placed = true;
   }
+  if (view.drag.dragging) return;  // the handles are rebuilt after the drag's own edit
+  // The gizmo follows its light to the new handle (a detached handle may not stay attached).
+  const held = view.drag.object ? view.drag.object.userData.key : null;
+  view.drag.detach();
   for (const h of view.lights || []) view.scene.remove(h);
   const size = dist(s.bounds[0], s.bounds[1]) * 0.015;
   view.lights = s.lights.filter((l) => l.position).map((l) => {
@@ -217,6 +228,8 @@ async function loadScene() {
     view.scene.add(m);
     return m;
   });
+  const again = view.lights.find((m) => m.userData.key === held);
+  if (again && !view.drag.dragging) view.drag.attach(again);
 }
 
 function dist(a, b) { return Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]); }
@@ -246,8 +259,11 @@ async function loadRecords() {
   const files = $('cache-file');
   let file = files.value && files.selectedIndex > 0 ? `&file=${encodeURIComponent(files.value)}` : '';
   if ($('records-in-region').checked && state.crop) file += `&region=${state.crop.join(',')}`;
+  // Level of detail: discs are triangles each, so fewer of them than points (the count still
+  // says how many the cache holds).
+  const limit = $('record-shape').value === 'discs' ? 20000 : 200000;
   let r;
-  try { ({ data: r } = await api(`/api/records?limit=200000${file}`)); } catch { $('record-count').textContent = 'records: 0'; return; }
+  try { ({ data: r } = await api(`/api/records?limit=${limit}${file}`)); } catch { $('record-count').textContent = 'records: 0'; return; }
   if (view.records) view.scene.remove(view.records);
   const ao = $('record-colour').value === 'ao';
   let max = 1e-9;
@@ -275,7 +291,8 @@ async function loadRecords() {
   view.records.visible = $('show-records').checked;
   state.recordsDrawn = $('record-shape').value;
   view.scene.add(view.records);
-  $('record-count').textContent = `records: ${r.count} (frame ${r.frame})` + (r.in_region !== r.count ? `, ${r.in_region} in the sub-viewport` : '');
+  $('record-count').textContent = `records: ${r.count} (frame ${r.frame})` + (r.in_region !== r.count ? `, ${r.in_region} in the sub-viewport` : '') +
+    (r.shown < r.in_region ? `, ${r.shown} drawn` : '');
   $('record-count').dataset.count = r.count;
 }
 
@@ -288,6 +305,28 @@ async function loadCacheFiles() {
   $('frame').max = Math.max(0, seq.length - 1);
   $('frame').dataset.files = JSON.stringify(seq);
 }
+
+// ---- other pages ----
+// Every page asks the server what changed once a second: edits and renders made from another
+// tab show here too (the status carries the session's edit count).
+function listen() {
+  let edits = state.status ? state.status.edits : 0;
+  setInterval(async () => {
+    if (state.running) return;  // poll() is following a render already
+    try {
+      const s = await refreshStatus();
+      if (s.edits !== edits) { edits = s.edits; await loadParams(); await loadScene(); }
+      if (s.state === 'running') { state.running = true; poll(); }
+    } catch (e) { showError(e.message); }
+  }, 1000);
+}
+
+// For the browser test: where light handle `i` is on the screen.
+state.handleOnScreen = (i) => {
+  const h = view.lights[i], b = view.renderer.domElement.getBoundingClientRect();
+  const p = h.position.clone().project(view.camera);
+  return [b.left + (p.x + 1) / 2 * b.width, b.top + (1 - p.y) / 2 * b.height];
+};
 
 // ---- wiring ----
 async function main() {
@@ -332,6 +371,7 @@ async function main() {
   initView();
   await refreshStatus();
   await Promise.all([loadParams(), loadScene(), loadRecords(), loadCacheFiles()]);
+  listen();
   state.ready = true;
 }
 

@@ -56,13 +56,105 @@ function check(ok, what) {
   if (!ok) failures++;
 }
 
+/// Issue 28's list of what a lighter found, on the glossy Cornell box (a spot light with a handle).
+async function lighterFound() {
+  const [glossy, glossyUrl] = await startLight(path.join(work, 'cornell/glossy-bump.json'), path.join(work, 'glossy-out'));
+  try {
+    const a = await browser.newPage({ viewport: { width: 1400, height: 900 } });
+    const errs = [];
+    a.on('pageerror', (e) => errs.push(e.message));
+    a.on('console', (m) => { if (m.type() === 'error' && !m.text().startsWith('Failed to load resource')) errs.push(m.text()); });
+    await a.goto(glossyUrl);
+    await a.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 30000 });
+    const done = async (page, minVersion) => {
+      await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v,
+        minVersion, { timeout: 120000 });
+      return page.evaluate(() => window.bounce.status);
+    };
+    const imageOf = (page) => page.evaluate(() => {
+      const c = document.getElementById('image');
+      return Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data);
+    });
+    await a.click('#rasterize');
+    await done(a, 1);
+    const cell = (page, key) => page.locator(`input[aria-label="${key}"]`);
+
+    // The range and "needs" columns are in view at 1400 px.
+    const panel = await a.locator('#sheet-panel').boundingBox(), needs = await a.locator('#sheet th:last-child').boundingBox();
+    check(needs.x + needs.width <= panel.x + panel.width + 1, `the "needs" column is in view (ends at ${needs.x + needs.width}, panel at ${panel.x + panel.width})`);
+    // A rejected value leaves the cell at the value in force, and says why.
+    await a.fill('#filter', 'lights.0');
+    const before = await cell(a, 'lights.0.intensity').inputValue();
+    await cell(a, 'lights.0.intensity').fill('-5');
+    await cell(a, 'lights.0.intensity').dispatchEvent('change');
+    await a.waitForFunction(() => document.getElementById('error').textContent.includes('out of range'));
+    check(await cell(a, 'lights.0.intensity').inputValue() === before, `a rejected value goes back to ${before}`);
+    // Depth is a ramp, not white; normals show negative components.
+    for (const [layer, test, what] of [['depth', (px) => new Set(px.filter((_, i) => i % 4 === 0)).size > 8, 'depth is a ramp of greys'],
+      ['N', (px) => px.some((v, i) => i % 4 < 3 && v < 100) && px.some((v, i) => i % 4 < 3 && v > 156), 'N shows negative and positive components']]) {
+      await a.selectOption('#layer', layer);
+      await a.waitForTimeout(500);
+      check(test(await imageOf(a)), what);
+    }
+    await a.selectOption('#layer', 'beauty');
+    await a.waitForTimeout(500);
+    // A second page learns of the first page's edits.
+    const b = await browser.newPage({ viewport: { width: 1400, height: 900 } });
+    await b.goto(glossyUrl);
+    await b.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 30000 });
+    await cell(a, 'lights.0.intensity').fill('2000000');
+    await cell(a, 'lights.0.intensity').dispatchEvent('change');
+    const told = await b.waitForFunction(() => {
+      const i = document.querySelector('input[aria-label="lights.0.intensity"]');
+      return i && i.value === '2000000';
+    }, null, { timeout: 15000 }).then(() => true).catch(() => false);
+    check(told, 'the second page shows the first page\'s edit');
+    await b.close();
+    // The light's handle can be dragged: the spot's position changes through an edit.
+    await a.fill('#filter', '');
+    await a.locator('#view-panel').scrollIntoViewIfNeeded();
+    const [hx, hy] = await a.evaluate(() => window.bounce.handleOnScreen(0));
+    const was = await cell(a, 'lights.0.position').inputValue();
+    await a.mouse.click(hx, hy);
+    await a.mouse.move(hx, hy);
+    await a.mouse.down();
+    await a.mouse.move(hx + 40, hy - 20, { steps: 8 });
+    await a.mouse.up();
+    const moved = await a.waitForFunction((w) => document.querySelector('input[aria-label="lights.0.position"]').value !== w, was,
+      { timeout: 10000 }).then(() => true).catch(() => false);
+    check(moved, `dragging the light's handle edits its position (was ${was}, now ${await cell(a, 'lights.0.position').inputValue()})`);
+    // Stop leaves the image the render started from, not its partial preview.
+    const shown = await imageOf(a), v = await a.evaluate(() => window.bounce.version);
+    await a.fill('#filter', 'render.rays');
+    await cell(a, 'render.rays').fill('40000');
+    await cell(a, 'render.rays').dispatchEvent('change');
+    await a.click('#regather');
+    await a.waitForFunction((w) => window.bounce.version > w, v, { timeout: 60000 });
+    await a.click('#stop');
+    const stopped = await done(a, v + 2);
+    check(stopped.state === 'cancelled', `the render was stopped (${stopped.state})`);
+    await a.waitForTimeout(500);
+    const after = await imageOf(a);
+    check(after.length === shown.length && after.every((x, i) => x === shown[i]), 'after Stop the page shows the image from before the render');
+    check(errs.length === 0, `no page errors on the glossy box${errs.length ? ': ' + errs.join('; ') : ''}`);
+    await a.screenshot({ path: path.join(outDir, '6-lighter-found.png'), fullPage: true });
+    await a.close();
+  } finally {
+    glossy.kill();
+  }
+}
+
 const browser = await chromium.launch({ executablePath: chromiumPath, args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader'] });
 try {
   const page = await browser.newPage({ viewport: { width: 1400, height: 900 } });
   const errors = [];
   page.on('pageerror', (e) => errors.push(e.message));
+  // three reports misuse (e.g. adding a non-Object3D) on the console, not as exceptions.
+  page.on('console', (m) => { if (m.type() === 'error' && !m.text().startsWith('Failed to load resource')) errors.push(m.text()); });
   await page.goto(url);
   await page.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 30000 });
+  check(await page.isVisible('#hint') && (await page.textContent('#hint')).includes('Update'),
+    'a page with nothing rendered says to press Update');
 
   const waitDone = async (minVersion) => {
     await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v,
@@ -79,6 +171,7 @@ try {
   await page.click('#rasterize');
   let s = await waitDone(1);
   check(s.state === 'done', `first render finished (${s.state} ${s.message})`);
+  check(!(await page.isVisible('#hint')), 'the hint is gone once there is an image');
   const first = await pixels();
   check(first.length === 160 * 120 * 4, 'the image is 160x120');
   await shot('1-render.png');
@@ -159,6 +252,9 @@ try {
     `frame 3 was planned from frame 1's records (${s.stats.plan && s.stats.plan.cache}, ${s.stats.records_regathered} re-gathered)`);
   await shot('5-shot-frame.png');
   check(errors.length === 0, `no page errors${errors.length ? ': ' + errors.join('; ') : ''}`);
+  shotServer.kill();
+  shotServer = null;
+  await lighterFound();
 } finally {
   await browser.close();
   server.kill();

@@ -76,6 +76,10 @@ LightingServer::LightingServer(LightingSession& session, ServerOptions options)
     if (!is_loopback_host(options_.host))
         throw InputError("command line", "--bind", fmt::format("'{}' is not a loopback address; the tool serves this machine only", options_.host));
     if (options_.port < 0 || options_.port > 65535) throw InputError("command line", "--port", "must be in [0, 65535]");
+    // A browser keeps up to six idle connections per page: httplib's default 8 threads would
+    // starve a second tab.
+    http_->new_task_queue = [] { return new httplib::ThreadPool(32); };
+    http_->set_keep_alive_timeout(2);
     routes();
 }
 

@@ -339,6 +339,13 @@ void LightingSession::set_session_files(SessionAction action, RenderRequest& req
 void LightingSession::run(SessionAction action, std::optional<std::array<int, 4>> crop) {
     std::string state = "done", message;
     json stats_json;
+    // A render that is stopped or fails leaves the image it started from, not its previews.
+    Image before;
+    uint64_t before_version = 0;
+    {
+        std::lock_guard lock(mutex_);
+        before = image_, before_version = version_;
+    }
     {
         // Everything the render allocated is freed before the session says it is idle.
         Sink sink(*this);
@@ -353,6 +360,7 @@ void LightingSession::run(SessionAction action, std::optional<std::array<int, 4>
         stats_json = stats.to_json();
     }
     std::lock_guard lock(mutex_);
+    if (state != "done" && version_ != before_version) image_ = std::move(before), ++version_;
     stats_ = std::move(stats_json);
     state_ = state, message_ = message;
     running_ = false;
@@ -364,6 +372,7 @@ json LightingSession::status() const {
     json layers = json::array();
     for (const Layer& l : image_.layers) layers.push_back(l.name);
     return {{"state", state_},
+            {"edits", edit_count_},
             {"action", action_},
             {"message", message_},
             {"progress", {{"phase", phase_}, {"done", done_}, {"total", total_}}},
