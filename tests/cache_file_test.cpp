@@ -264,7 +264,7 @@ TEST(CacheReuse, OwnCacheCreatesNoRecordsAndTheSameImage) {
     EXPECT_EQ(c.records_new, a.records_new);
 }
 
-TEST(CacheReuse, CacheForAnotherSceneOrCameraIsRefusedUnlessForced) {
+TEST(CacheReuse, CacheForOtherObjectsOrCameraIsRefusedUnlessForced) {
     test::TempDir d;
     RenderRequest first;
     Stats s;
@@ -272,7 +272,11 @@ TEST(CacheReuse, CacheForAnotherSceneOrCameraIsRefusedUnlessForced) {
     RenderRequest reuse;
     reuse.cache_in = d.file("c.bic");
     EXPECT_THROW(render_with({"camera.fov=50"}, reuse, s), InputError);
-    EXPECT_THROW(render_with({"materials.light.emission=[1,1,1]"}, reuse, s), InputError);
+    EXPECT_THROW(render_with({"objects.0.material=\"red\""}, reuse, s), InputError);
+    // A light or material edit keeps the records (the lighter's loop), saying their bounce
+    // light is the old lights'.
+    EXPECT_TRUE(render_with({"materials.light.emission=[1,1,1]"}, reuse, s).cache_other_lighting);
+    EXPECT_FALSE(render_with({}, reuse, s).cache_other_lighting);
     reuse.force = true;
     EXPECT_NO_THROW(render_with({"camera.fov=50"}, reuse, s));
 }

@@ -1,5 +1,6 @@
 // Direct lighting against closed forms: point, spot, distant, quad area light (Lambert's
 // polygon formula), constant sky, and an emissive mesh equal to the same quad light.
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include "bounce/accel/accel.h"
@@ -142,6 +143,53 @@ TEST(DirectLighting, StratifiedQuadErrorFallsWithSampleCount) {
     // Jittered stratification of a smooth integrand converges at least like 1/N (2D): going
     // from 16 to 256 samples must cut the RMS error by well over sqrt(16) = 4.
     EXPECT_GT(rms(16) / rms(256), 8.0);
+}
+
+/// A 2x1 RGB EXR: the left texel white, the right one black.
+std::string half_white(const test::TempDir& d) {
+    const std::string path = d.file("half.exr");
+    auto out = OIIO::ImageOutput::create(path);
+    OIIO::ImageSpec spec(2, 1, 3, OIIO::TypeDesc::FLOAT);
+    const float px[6] = {1, 1, 1, 0, 0, 0};
+    EXPECT_TRUE(out && out->open(path, spec) && out->write_image(OIIO::TypeDesc::FLOAT, px) && out->close());
+    return path;
+}
+
+TEST(DirectLighting, ATexturedQuadLightEmitsOnlyWhereItsTextureIsLit) {
+    test::TempDir d;
+    json j = base_scene();
+    j["lights"] = {{{"type", "quad"}, {"corner", {-1, 1, -1}}, {"edge_u", {2, 0, 0}}, {"edge_v", {0, 0, 2}}, {"color", 1},
+                    {"texture", half_white(d)}}};
+    const Scene s = scene_from(j);
+    const Vec3 p{0.4f, 0, 0.3f};
+    // Only the half with u < 0.5 (x < 0) emits: the irradiance of that polygon alone.
+    const float exact = lambert_polygon({{-1, 1, -1}, {-1, 1, 1}, {0, 1, 1}, {0, 1, -1}}, p, {0, 1, 0}, 1);
+    EXPECT_NEAR(irradiance_at(s, p, {0, 1, 0}, 1024).x, exact, 0.01f * exact);
+}
+
+TEST(DirectLighting, ASpotProjectsItsSlideAndStopsAtItsBarnDoors) {
+    test::TempDir d;
+    json j = base_scene();
+    const json spot = {{"type", "spot"}, {"position", {0, 1, 0}}, {"direction", {0, -1, 0}}, {"color", 2}, {"cone_angle", 40}, {"cone_falloff", 0}};
+    auto lit = [&](const json& extra, float z) {
+        json l = spot;
+        l.update(extra);
+        j["lights"] = json::array({l});
+        return irradiance_at(scene_from(j), {0, 0, z}, {0, 1, 0}, 1).x;
+    };
+    auto full = [](float z) { return 2 / (1 + z * z) / std::sqrt(1 + z * z); };  // I cos / r^2
+    // Pointing down, the spot's right is +z: the slide's white left half falls on z < 0.
+    const json slide = {{"texture", half_white(d)}};
+    EXPECT_NEAR(lit(slide, -0.3f), full(-0.3f), 1e-6f);
+    EXPECT_EQ(lit(slide, 0.3f), 0.0f);
+    // The right barn door at 10 degrees: 0.1 (5.7 degrees) is lit, 0.3 (16.7) is not; the left is open.
+    const json doors = {{"barn_doors", {90, 10, 90, 90}}};
+    EXPECT_NEAR(lit(doors, 0.1f), full(0.1f), 1e-6f);
+    EXPECT_EQ(lit(doors, 0.3f), 0.0f);
+    EXPECT_NEAR(lit(doors, -0.3f), full(-0.3f), 1e-6f);
+    // A key another type reads is refused with the type's keys.
+    j["lights"] = {{{"type", "point"}, {"position", {0, 1, 0}}, {"barn_doors", {1, 2, 3, 4}}}};
+    EXPECT_THROW(scene_from(j), InputError);
 }
 
 }  // namespace

@@ -2,6 +2,28 @@
 
 namespace bounce {
 
+namespace {
+
+/// What a spot sends along unit `d` (from the light) besides its cone: 0 beyond its barn doors,
+/// else its slide's colour (1 without one), the slide covering the outer cone.
+Color spot_filter(const Light& l, const Vec3& d) {
+    const Vec3 fwd = l.direction;
+    const Vec3 right = normalize(std::abs(fwd.y) > 0.999f ? cross(fwd, Vec3(1, 0, 0)) : cross(fwd, Vec3(0, 1, 0)));
+    const Vec3 up = cross(right, fwd);
+    const float along = dot(d, fwd);
+    if (along <= 0) return Color(0);
+    const float x = dot(d, right) / along, y = dot(d, up) / along;  // tangents of the angles off the axis
+    const auto beyond = [](float t, float door_deg) { return door_deg < 90 && t > std::tan(door_deg * kPi / 180); };
+    if (beyond(-x, l.barn_doors[0]) || beyond(x, l.barn_doors[1]) || beyond(y, l.barn_doors[2]) || beyond(-y, l.barn_doors[3]))
+        return Color(0);
+    if (!l.texture) return Color(1);
+    const float half = std::tan(std::min(l.cone_angle + l.cone_falloff, 89.0f) * kPi / 180);
+    const float u = 0.5f + x / (2 * half), v = 0.5f - y / (2 * half);
+    return u < 0 || u > 1 || v < 0 || v > 1 ? Color(0) : l.texture->at_uv(u, v);
+}
+
+}  // namespace
+
 DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel)
     : scene_(scene), accel_(accel), emitters_(scene.lights.size()) {
     for (size_t i = 0; i < scene.lights.size(); ++i) {
@@ -53,7 +75,10 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
             float cos_x = dot(n, w);
             if (cos_x <= 0 || r2 == 0) return Color(0);
             float cone = 1;
+            Color filter(1);
             if (l.type == LightType::Spot) {
+                filter = spot_filter(l, -w);
+                if (filter == Color(0)) return Color(0);
                 float angle = std::acos(std::clamp(dot(-w, l.direction), -1.0f, 1.0f)) * 180.0f / kPi;
                 if (angle >= l.cone_angle + l.cone_falloff) return Color(0);
                 if (angle > l.cone_angle) {
@@ -63,7 +88,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
             }
             ++counters.shadow_rays;
             if (accel_.occluded(p, w, r, hair_start, mask)) return Color(0);
-            Color e = l.color * (cone * cos_x / r2);
+            Color e = l.color * filter * (cone * cos_x / r2);
             if (each) (*each)(index, w, e);
             return e;
         }
@@ -91,8 +116,9 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
                 if (cos_x <= 0 || cos_l <= 0) continue;
                 ++counters.shadow_rays;
                 if (accel_.occluded(p, w, r, hair_start, mask)) continue;
-                e += l.color * (cos_x * cos_l / r2);
-                if (each) (*each)(index, w, l.color * (cos_x * cos_l / r2 * area / static_cast<float>(samples)));
+                const Color L = l.texture ? l.color * l.texture->at_uv(uv.x, uv.y) : l.color;
+                e += L * (cos_x * cos_l / r2);
+                if (each) (*each)(index, w, L * (cos_x * cos_l / r2 * area / static_cast<float>(samples)));
             }
             return e * (area / static_cast<float>(samples));
         }

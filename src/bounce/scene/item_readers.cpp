@@ -47,14 +47,15 @@ const std::vector<std::string>& material_keys() {
 const std::vector<std::string>& light_keys() {
     static const std::vector<std::string> keys = {"type",   "color",  "intensity", "position", "direction", "cone_angle", "cone_falloff",
                                                   "corner", "edge_u", "edge_v",    "texture",  "rotation",  "name",
-                                                  "light_link", "shadow_link"};
+                                                  "light_link", "shadow_link", "barn_doors"};
     return keys;
 }
 
 namespace {
 
-/// A sky texture, every texel checked: a NaN, infinite or absurd radiance is an error naming
-/// the pixel (a sky is read whole: every gather ray may look anywhere in it).
+/// A light's texture (a sky, a quad's radiance, a spot's slide), every texel checked: a NaN,
+/// infinite or absurd radiance is an error naming the pixel (it is read whole: any ray may
+/// look anywhere in it).
 std::shared_ptr<const LatLongMap> load_latlong(const std::string& path, const JsonReader& r,
                                                const std::string& key) {
     auto in = OIIO::ImageInput::open(path);
@@ -85,13 +86,21 @@ std::shared_ptr<const LatLongMap> load_latlong(const std::string& path, const Js
     return map;
 }
 
+/// A spot's "barn_doors": [left, right, top, bottom], degrees in [0, 90].
+void read_barn_doors(const JsonReader& r, Light& l) {
+    if (!r.has("barn_doors")) return;
+    const json& b = r.raw("barn_doors");
+    if (!b.is_array() || b.size() != 4) r.fail("barn_doors", "expected [left, right, top, bottom] in degrees");
+    for (size_t i = 0; i < 4; ++i) l.barn_doors[i] = r.check_number(b[i], r.at("barn_doors") + fmt::format("/{}", i), 0, 90);
+}
+
 /// The keys each light type reads (beside type, color, intensity, name and the links).
 const std::map<std::string, std::vector<std::string>>& keys_by_light_type() {
     static const std::map<std::string, std::vector<std::string>> keys = {
         {"point", {"position"}},
-        {"spot", {"position", "direction", "cone_angle", "cone_falloff"}},
+        {"spot", {"position", "direction", "cone_angle", "cone_falloff", "texture", "barn_doors"}},
         {"distant", {"direction"}},
-        {"quad", {"corner", "edge_u", "edge_v"}},
+        {"quad", {"corner", "edge_u", "edge_v", "texture"}},
         {"sky", {"texture", "rotation"}}};
     return keys;
 }
@@ -186,6 +195,8 @@ Light read_light(const JsonReader& r) {
             l.direction = normalize(l.direction);
             l.cone_angle = static_cast<float>(r.number("cone_angle", l.cone_angle, 0, 90));
             l.cone_falloff = static_cast<float>(r.number("cone_falloff", l.cone_falloff, 0, 90));
+            read_barn_doors(r, l);
+            if (std::string tex = r.file("texture", false); !tex.empty()) l.texture = load_latlong(tex, r, "texture");
         }
     } else if (type == "distant") {
         l.type = LightType::Distant;
@@ -198,6 +209,7 @@ Light read_light(const JsonReader& r) {
         l.edge_u = r.vec3("edge_u", {}, true);
         l.edge_v = r.vec3("edge_v", {}, true);
         if (length(cross(l.edge_u, l.edge_v)) == 0) r.fail("edge_v", "quad light has zero area");
+        if (std::string tex = r.file("texture", false); !tex.empty()) l.texture = load_latlong(tex, r, "texture");
     } else {
         l.type = LightType::Sky;
         l.sky_rotation = static_cast<float>(r.number("rotation", l.sky_rotation));

@@ -36,6 +36,8 @@ struct LatLongMap {
     int width = 0, height = 0;
     std::vector<float> rgb;  ///< width*height*3, row 0 at the zenith
     Color lookup(const Vec3& dir, float rotation_deg) const;
+    /// The texel at (u, v) in [0, 1]^2 (u across, v down from row 0), nearest; clamped at the edges.
+    Color at_uv(float u, float v) const;
 };
 
 enum class LightType { Point, Spot, Distant, Quad, Sky, Mesh };
@@ -50,6 +52,12 @@ struct Light {
     float cone_falloff = 5;    ///< spot: width of the smooth edge beyond cone_angle, degrees
     Vec3 corner{0}, edge_u{1, 0, 0}, edge_v{0, 0, 1};  ///< quad; emits towards edge_u x edge_v
     std::shared_ptr<const LatLongMap> sky_map;          ///< sky: optional texture (times color)
+    /// quad: radiance texture over the quad (u along edge_u, v along edge_v, times color);
+    /// spot: a slide projected over its outer cone (a gobo). Null = none.
+    std::shared_ptr<const LatLongMap> texture;
+    /// spot: barn doors, the largest angles (degrees, 0-90) from the axis towards the spot's
+    /// left, right, top and bottom (right = direction x +Y; top = right x direction) it lights.
+    std::array<float, 4> barn_doors{90, 90, 90, 90};
     float sky_rotation = 0;                             ///< sky: rotation about +Y, degrees
     uint32_t object = 0;  ///< mesh: the object whose emissive faces emit
     /// Light linking, per object index (scene file: "light_link"): 1 = lit by this light.

@@ -255,6 +255,13 @@ uint64_t Scene::visibility_fingerprint() const {
     return copy.fingerprint({"camera", "objects", "dicing"});
 }
 
+Color LatLongMap::at_uv(float u, float v) const {
+    const int x = std::clamp(static_cast<int>(u * static_cast<float>(width)), 0, width - 1);
+    const int y = std::clamp(static_cast<int>(v * static_cast<float>(height)), 0, height - 1);
+    const float* p = &rgb[(static_cast<size_t>(y) * width + x) * 3];
+    return {p[0], p[1], p[2]};
+}
+
 Color LatLongMap::lookup(const Vec3& d, float rotation_deg) const {
     float u = 0.5f + std::atan2(d.x, -d.z) / (2 * kPi) + rotation_deg / 360.0f;
     u -= std::floor(u);
