@@ -50,7 +50,9 @@ void check_output_folder(const std::string& path, const fs::path& dir) {
     ::unlink(probe.c_str());
 }
 
-bool inside(const fs::path& path, const fs::path& folder) {
+}  // namespace
+
+bool inside(const std::filesystem::path& path, const std::filesystem::path& folder) {
     std::error_code ec;
     const fs::path p = fs::weakly_canonical(path, ec), f = fs::weakly_canonical(folder, ec);
     auto pi = p.begin();
@@ -59,8 +61,6 @@ bool inside(const fs::path& path, const fs::path& folder) {
         else if (pi == p.end() || *pi != *fi) return false;
     return true;
 }
-
-}  // namespace
 
 void check_output_file(const std::string& path, const std::vector<std::string>& inputs,
                        const std::vector<std::string>& input_folders) {

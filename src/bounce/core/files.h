@@ -3,6 +3,7 @@
 // an input, a device or a directory (the atomic rename would replace it).
 #pragma once
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,8 @@ void check_input_file(const std::string& path);
 /// (a read-only or pseudo file system such as /proc: a file is created there and removed).
 void check_output_file(const std::string& path, const std::vector<std::string>& inputs,
                        const std::vector<std::string>& input_folders = {});
+/// True when `path` is `folder` or lies under it, symlinks that exist resolved.
+bool inside(const std::filesystem::path& path, const std::filesystem::path& folder);
 /// A 64-bit hash of the file's whole content (xxHash), remembered per (path, size, mtime) for
 /// the process: identities cover what a file holds, not only its name.
 uint64_t file_content_hash(const std::string& path);

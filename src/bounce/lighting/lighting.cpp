@@ -7,6 +7,8 @@ namespace {
 /// What a spot sends along unit `d` (from the light) besides its cone: 0 beyond its barn doors,
 /// else its slide's colour (1 without one), the slide covering the outer cone.
 Color spot_filter(const Light& l, const Vec3& d) {
+    // Most spots have neither: no frame to build on every shadow sample.
+    if (!l.texture && std::all_of(l.barn_doors.begin(), l.barn_doors.end(), [](float a) { return a >= 90; })) return Color(1);
     const Vec3 fwd = l.direction;
     const Vec3 right = normalize(std::abs(fwd.y) > 0.999f ? cross(fwd, Vec3(1, 0, 0)) : cross(fwd, Vec3(0, 1, 0)));
     const Vec3 up = cross(right, fwd);

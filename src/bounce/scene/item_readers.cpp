@@ -22,16 +22,6 @@ json to_json(const Vec3& v) { return {v.x, v.y, v.z}; }
 
 }  // namespace
 
-json light_defaults(const std::string& type) {
-    const Light l;
-    json d = json::object();
-    if (type != "point" && type != "spot" && type != "distant" && type != "quad" && type != "sky") return d;
-    d["color"] = to_json(l.color), d["intensity"] = kDefaultIntensity;
-    if (type == "spot") d["direction"] = to_json(l.direction), d["cone_angle"] = l.cone_angle, d["cone_falloff"] = l.cone_falloff;
-    if (type == "sky") d["rotation"] = l.sky_rotation;
-    return d;
-}
-
 json material_defaults() {
     const Material m;
     return {{"color", to_json(m.color)}, {"emission", to_json(m.emission)}, {"specular", to_json(m.specular)},
@@ -106,6 +96,16 @@ const std::map<std::string, std::vector<std::string>>& keys_by_light_type() {
 }
 
 }  // namespace
+
+json light_defaults(const std::string& type) {
+    const Light l;
+    json d = json::object();
+    if (!keys_by_light_type().count(type)) return d;
+    d["color"] = to_json(l.color), d["intensity"] = kDefaultIntensity;
+    if (type == "spot") d["direction"] = to_json(l.direction), d["cone_angle"] = l.cone_angle, d["cone_falloff"] = l.cone_falloff;
+    if (type == "sky") d["rotation"] = l.sky_rotation;
+    return d;
+}
 
 Transform read_transform(const JsonReader& obj) {
     if (!obj.has("transform")) return {};

@@ -1,7 +1,5 @@
 #include "bounce/shade/shade.h"
 
-#include <optional>
-
 #include "bounce/core/parallel.h"
 #include "bounce/shade/brdf.h"
 #include "bounce/shade/components.h"
@@ -73,10 +71,6 @@ Vec3 indirect_direction(const Indirect& in, const Vec3& fallback) {
     const Vec3 d = in.light_dir[0] * 0.2126f + in.light_dir[1] * 0.7152f + in.light_dir[2] * 0.0722f;
     return dot(d, d) > 1e-20f ? normalize(d) : fallback;
 }
-
-}  // namespace
-
-namespace {
 
 /// What one pixel's fragments add up to, layer by layer.
 struct PixelSum {
@@ -188,13 +182,13 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
             PixelSum sum;
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) shade_fragment(ctx, frags[k], x, y, k, first + k, sum, comps, wx, wy, counters);
-            if (sum.cover + sum.held < 1 && !ao_only) {
+            if (const float open = 1 - sum.cover - sum.held; open > 0 && !ao_only) {
                 // Escaping camera rays see the sky (in beauty and direct).
-                Color bg = lighting.background(normalize(
-                    camera.direction(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f)));
-                sum.beauty += bg * (1 - sum.cover - sum.held);
-                sum.direct += bg * (1 - sum.cover - sum.held);
-                if (comps.on()) comps.background(wx, wy, bg * (1 - sum.cover - sum.held));
+                const Color seen = lighting.background(normalize(
+                    camera.direction(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f))) * open;
+                sum.beauty += seen;
+                sum.direct += seen;
+                if (comps.on()) comps.background(wx, wy, seen);
             }
             if (comps.on() && sum.largest > 0) comps.ids(wx, wy, sum.object, sum.material);
             float* pb = img.at(beauty, wx, wy);

@@ -191,11 +191,7 @@ std::function<void(const std::string&, const std::string&)> LightingSession::edi
     return [this, key, ptr](const std::string& path, const std::string& pointer) {
         // What the edit set: the key itself or anything under it (an edit of a whole object).
         if (pointer != ptr && !pointer.starts_with(ptr + "/")) return;
-        const fs::path full = fs::weakly_canonical(fs::absolute(path));  // resolves symlinks that exist
-        for (const fs::path& base : {scene_dir_, out_dir_}) {
-            const fs::path rel = full.lexically_relative(base);
-            if (!rel.empty() && *rel.begin() != "..") return;
-        }
+        if (inside(path, scene_dir_) || inside(path, out_dir_)) return;
         throw InputError("lighting tool", "edit " + key + " (" + pointer + ")",
                          fmt::format("'{}' is outside the scene's folder and the output folder", path));
     };
