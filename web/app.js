@@ -311,11 +311,12 @@ async function loadCacheFiles() {
 // tab show here too (the status carries the session's edit count).
 function listen() {
   let edits = state.status ? state.status.edits : 0;
+  state.editsShown = edits;  // for the browser test: the spreadsheet and handles show these edits
   setInterval(async () => {
     if (state.running) return;  // poll() is following a render already
     try {
       const s = await refreshStatus();
-      if (s.edits !== edits) { edits = s.edits; await loadParams(); await loadScene(); }
+      if (s.edits !== edits) { edits = s.edits; await loadParams(); await loadScene(); state.editsShown = edits; }
       if (s.state === 'running') { state.running = true; poll(); }
     } catch (e) { showError(e.message); }
   }, 1000);

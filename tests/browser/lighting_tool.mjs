@@ -99,7 +99,11 @@ async function lighterFound() {
     await a.selectOption('#layer', 'beauty');
     await a.waitForTimeout(500);
     // A second page learns of the first page's edits.
-    const b = await browser.newPage({ viewport: { width: 1400, height: 900 } });
+    // Another browser context: its own connections, as another lighter's browser would have
+    // (in one context a second page's first requests sometimes queued behind the first page's
+    // connections under load; docs/lighting-tool.md).
+    const other = await browser.newContext({ viewport: { width: 1400, height: 900 } });
+    const b = await other.newPage();
     await b.goto(glossyUrl);
     await b.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 30000 });
     await cell(a, 'lights.0.intensity').fill('2000000');
@@ -109,10 +113,12 @@ async function lighterFound() {
       return i && i.value === '2000000';
     }, null, { timeout: 15000 }).then(() => true).catch(() => false);
     check(told, 'the second page shows the first page\'s edit');
-    await b.close();
+    await other.close();
     // The light's handle can be dragged: the spot's position changes through an edit.
     await a.fill('#filter', '');
     await a.locator('#view-panel').scrollIntoViewIfNeeded();
+    // Once the page has rebuilt its handles for the edits so far (a rebuild re-attaches the gizmo).
+    await a.waitForFunction(() => window.bounce.status && window.bounce.editsShown === window.bounce.status.edits, null, { timeout: 15000 });
     const [hx, hy] = await a.evaluate(() => window.bounce.handleOnScreen(0));
     const was = await cell(a, 'lights.0.position').inputValue();
     await a.mouse.click(hx, hy);
