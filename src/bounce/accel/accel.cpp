@@ -33,7 +33,8 @@ RTCRayHit make_ray(const Vec3& o, const Vec3& d, float tnear, float tfar, unsign
 
 unsigned object_ray_mask(const Scene& scene, size_t index) {
     const RayVisibility& to = scene.objects[index].visible_to;
-    unsigned mask = (to.camera ? kRayCamera : 0u) | (to.shadows ? kRayShadow : 0u) | (to.indirect ? kRayIndirect : 0u);
+    unsigned mask = (to.camera ? kRayCamera : 0u) | (to.shadows ? kRayShadow : 0u) | (to.indirect ? kRayIndirect : 0u) |
+                    (to.reflections ? kRayReflect : 0u);
     for (const Light& l : scene.lights)
         if (l.shadow_slot >= 0 && to.shadows && l.shadowed_by[index]) mask |= kRayShadowLink << l.shadow_slot;
     return mask;
@@ -274,19 +275,19 @@ float SceneAccel::offset_start(const Vec3& p, const Vec3& d) const {
     return best >= 0 ? best + 1e-4f * delta : delta;
 }
 
-Hit SceneAccel::trace(const Vec3& p, const Vec3& d) const {
+Hit SceneAccel::trace(const Vec3& p, const Vec3& d, unsigned mask) const {
     const float delta = ray_offset_;
     // Most rays meet nothing within delta of p: then the offsetting cannot change the hit and
     // one traversal is enough. Only the others (a few %: contacts, interpenetrating or
     // fine-vs-coarse surfaces) pay for the probe.
-    Hit first = coarse_->intersect(p, d, self_epsilon(p), INFINITY, 0, kRayIndirect);
-    return !first.valid() || first.t >= delta ? first : probed_trace(p, d);
+    Hit first = coarse_->intersect(p, d, self_epsilon(p), INFINITY, 0, mask);
+    return !first.valid() || first.t >= delta ? first : probed_trace(p, d, mask);
 }
 
-Hit SceneAccel::probed_trace(const Vec3& p, const Vec3& d) const {
+Hit SceneAccel::probed_trace(const Vec3& p, const Vec3& d, unsigned mask) const {
     const float delta = ray_offset_;
     // The probe (offset_start) finds p's own surface whatever sees it; the ray, only what gathers see.
-    Hit h = coarse_->intersect(p - d * delta, d, offset_start(p, d), INFINITY, 0, kRayIndirect);
+    Hit h = coarse_->intersect(p - d * delta, d, offset_start(p, d), INFINITY, 0, mask);
     if (h.valid()) h.t = std::max(0.0f, h.t - delta);
     return h;
 }
@@ -296,7 +297,7 @@ void SceneAccel::trace_many(const Vec3& p, std::span<const Vec3> dirs, std::span
     const float delta = ray_offset_;
     // As in trace: only rays meeting something within delta of p pay for the probe.
     for (size_t i = 0; i < dirs.size(); ++i)
-        if (out[i].valid() && out[i].t < delta) out[i] = probed_trace(p, dirs[i]);
+        if (out[i].valid() && out[i].t < delta) out[i] = probed_trace(p, dirs[i], kRayIndirect);
 }
 
 bool SceneAccel::occluded(const Vec3& p, const Vec3& d, float dist, float hair_start, unsigned mask) const {

@@ -19,7 +19,10 @@ inline constexpr uint32_t kNoHit = 0xffffffffu;
 /// Ray masks (Embree: a ray sees a geometry when their masks share a bit). Objects carry the
 /// bits of the rays that see them (Object::visible_to); a light with a shadow link has a bit
 /// of its own (kRayShadowLink << Light::shadow_slot) that only the objects casting its shadows hold.
-inline constexpr unsigned kRayCamera = 1u, kRayShadow = 2u, kRayIndirect = 4u, kRayShadowLink = 8u, kRayAll = ~0u;
+/// Mirror and glass rays take the top bit, above the shadow links' (kMaxShadowLinkedLights).
+inline constexpr unsigned kRayCamera = 1u, kRayShadow = 2u, kRayIndirect = 4u, kRayShadowLink = 8u, kRayReflect = 1u << 31,
+                          kRayAll = ~0u;
+static_assert((kRayShadowLink << (kMaxShadowLinkedLights - 1)) < kRayReflect);
 /// The mask of object `index`'s geometry.
 unsigned object_ray_mask(const Scene& scene, size_t index);
 /// The mask of a shadow ray towards `light`.
@@ -92,7 +95,8 @@ public:
     /// is moved to the coarse intersection closest to `p` within +-delta along the ray, and
     /// the first coarse hit after that origin is returned (t measured from `p`). Rays whose
     /// first hit from p is beyond delta take one traversal; only the others probe.
-    Hit trace(const Vec3& p, const Vec3& d) const;
+    /// `mask`: which objects the ray sees (kRayReflect: a mirror's or glass's ray).
+    Hit trace(const Vec3& p, const Vec3& d, unsigned mask = kRayIndirect) const;
     /// `trace` for many directions from one point, in packets (the gather's path).
     void trace_many(const Vec3& p, std::span<const Vec3> dirs, std::span<Hit> out) const;
     /// Visibility from `p` (on the fine surface) to the point `p + d * dist` (dist may be
@@ -110,7 +114,7 @@ private:
     /// Parameter along the ray from p - delta*d at which the traced ray starts.
     float offset_start(const Vec3& p, const Vec3& d) const;
     /// The offset trace proper: from the coarse crossing nearest to p (t measured from p).
-    Hit probed_trace(const Vec3& p, const Vec3& d) const;
+    Hit probed_trace(const Vec3& p, const Vec3& d, unsigned mask) const;
 
     RTCDevice device_ = nullptr;
     std::unique_ptr<Bvh> coarse_, fine_;

@@ -151,7 +151,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
 }
 
 InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
-                                     Stats& stats, ProgressSink* sink) {
+                                     Stats& stats, ProgressSink* sink, bool report) {
     InterpolatedLight out;
     out.light.resize(deep.fragments.size());
     out.refined.assign(deep.fragments.size(), 0);
@@ -175,9 +175,11 @@ InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep,
     for (auto v : misses) m += v;
     for (auto v : lookups) l += v;
     for (auto v : own) o += v;
-    stats.set("shading_misses", static_cast<double>(m));
-    stats.set("lookups", static_cast<double>(l));
-    stats.set("fragment_records_used", static_cast<double>(o));
+    if (report) {
+        stats.set("shading_misses", static_cast<double>(m));
+        stats.set("lookups", static_cast<double>(l));
+        stats.set("fragment_records_used", static_cast<double>(o));
+    }
     out.misses = static_cast<size_t>(m);
     return out;
 }

@@ -108,8 +108,9 @@ struct InterpolatedLight {
 /// record if it has one, else the interpolation. Misses (no record applies; the gathering pass
 /// makes them impossible) are counted (and in stats as "shading_misses") and left black, so a
 /// bug shows.
+/// `report`: sets the stats (shading_misses, lookups, fragment_records_used).
 InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
-                                     Stats& stats, ProgressSink* progress);
+                                     Stats& stats, ProgressSink* progress, bool report = true);
 
 /// Progressive preview after a sub-pass of step `step`: each fragment takes the interpolated
 /// light at the nearest pixel (on that step's lattice, then coarser ones) a finished sub-pass

@@ -11,6 +11,7 @@ Counters& Counters::operator+=(const Counters& o) {
     camera_rays += o.camera_rays;
     shadow_rays += o.shadow_rays;
     gather_rays += o.gather_rays;
+    specular_rays += o.specular_rays;
     fragments_shaded += o.fragments_shaded;
     lock_wait_ns += o.lock_wait_ns;
     radiosity_bake_ns += o.radiosity_bake_ns;
@@ -43,10 +44,11 @@ nlohmann::json Stats::to_json() const {
     }
     j["phases_s"] = phases;
     j["total_s"] = total_time;
-    uint64_t rays = t.camera_rays + t.shadow_rays + t.gather_rays;
+    uint64_t rays = t.camera_rays + t.shadow_rays + t.gather_rays + t.specular_rays;
     j["rays"] = {{"camera", t.camera_rays},
                  {"shadow", t.shadow_rays},
                  {"gather", t.gather_rays},
+                 {"specular", t.specular_rays},
                  {"total", rays}};
     j["rays_per_s"] = total_time > 0 ? static_cast<double>(rays) / total_time : 0.0;
     j["fragments_shaded"] = t.fragments_shaded;

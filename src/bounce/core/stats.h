@@ -17,6 +17,7 @@ struct Counters {
     uint64_t camera_rays = 0;
     uint64_t shadow_rays = 0;
     uint64_t gather_rays = 0;
+    uint64_t specular_rays = 0;  ///< mirror and glass rays (reflection, refraction)
     uint64_t fragments_shaded = 0;
     uint64_t lock_wait_ns = 0;  ///< time spent waiting for the cache's reader-writer lock
     uint64_t radiosity_bake_ns = 0;  ///< time spent baking radiosity texture sides (lazily, inside gathers)

@@ -47,6 +47,7 @@ public:
 
     /// Radiance the camera sees where a primary ray escapes (the sky; black without one).
     Color background(const Vec3& dir) const;
+    const SceneAccel& accel() const { return accel_; }
 
 private:
     Color sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng,

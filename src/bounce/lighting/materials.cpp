@@ -59,6 +59,42 @@ Color Materials::albedo(uint32_t material, const Vec2& uv) const {
     return m.color * albedo_of(rgb);
 }
 
+float fresnel_dielectric(float cos_i, float eta) {
+    cos_i = std::clamp(cos_i, 0.0f, 1.0f);
+    const float sin_t2 = (1 - cos_i * cos_i) / (eta * eta);
+    if (sin_t2 >= 1) return 1;
+    const float cos_t = std::sqrt(1 - sin_t2);
+    const float rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    const float rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+bool refract(const Vec3& d, const Vec3& n, float eta, Vec3& out) {
+    const float cos_i = -dot(d, n);
+    const float k = 1 - eta * eta * (1 - cos_i * cos_i);
+    if (k < 0) return false;
+    out = normalize(d * eta + n * (eta * cos_i - std::sqrt(k)));
+    return true;
+}
+
+SpecularSplit specular_split(const Material& m, float cos_i, bool entering) {
+    SpecularSplit s;
+    const float F = m.is_dielectric() ? fresnel_dielectric(cos_i, entering ? m.ior : 1 / m.ior) : 0.0f;
+    for (int c = 0; c < 3; ++c) {
+        const float rest = (1 - m.mirror[c]) * (1 - F);
+        s.reflect[c] = m.mirror[c] + (1 - m.mirror[c]) * F;
+        s.transmit[c] = rest * m.transmission[c];
+        s.base[c] = rest * (1 - m.transmission[c]);
+    }
+    return s;
+}
+
+Color base_share(const Material& m) { return m.is_specular() ? specular_split(m, 1, true).base : Color(1); }
+
+Color Materials::secondary_albedo(uint32_t material, const Vec2& uv) const {
+    return albedo(material, uv) * base_share(scene_.materials[material]);
+}
+
 bool triangle_tangents(const TriangleMesh& mesh, uint32_t prim, Vec3& dpdu, Vec3& dpdv) {
     if (mesh.uvs.empty()) return false;
     const uint32_t i0 = mesh.indices[3 * prim], i1 = mesh.indices[3 * prim + 1], i2 = mesh.indices[3 * prim + 2];

@@ -32,8 +32,11 @@ public:
     Materials(const Materials&) = delete;
     Materials& operator=(const Materials&) = delete;
 
-    /// Albedo at uv, unfiltered (secondary hits: gathers and radiosity textures).
+    /// Albedo at uv, unfiltered.
     Color albedo(uint32_t material, const Vec2& uv) const;
+    /// What secondary rays (gathers, radiosity textures) see: albedo x base_share (a mirror or
+    /// glass surface reflects little diffusely).
+    Color secondary_albedo(uint32_t material, const Vec2& uv) const;
     Color emission(uint32_t material) const { return scene_.materials[material].emission; }
 
     /// The material at a visible point: triangle `prim` of object `object`'s visible mesh, at
@@ -56,6 +59,27 @@ private:
     OIIO::TextureSystem* textures_ = nullptr;
     std::vector<TextureNames> names_;
 };
+
+/// Fresnel reflectance of a smooth dielectric boundary for unpolarised light arriving at cosine
+/// `cos_i` to the normal on its side; `eta` = n(far side) / n(near side). 1 beyond the critical angle.
+float fresnel_dielectric(float cos_i, float eta);
+/// Mirror direction of unit `d` about unit `n`.
+inline Vec3 reflect(const Vec3& d, const Vec3& n) { return d - n * (2 * dot(d, n)); }
+/// Snell's refraction of unit `d` through unit `n` (facing against d), `eta` = n(near) / n(far);
+/// false under total internal reflection.
+bool refract(const Vec3& d, const Vec3& n, float eta, Vec3& out);
+
+/// How a surface splits the light arriving at it: an ideal mirror's share (mirror, and a
+/// dielectric's Fresnel reflection), the refracted share, and the rest, which its diffuse and
+/// glossy lobes reflect. The three sum to 1 per channel.
+struct SpecularSplit {
+    Color reflect{0}, transmit{0}, base{1};
+};
+/// At cosine `cos_i` to the normal, arriving from outside the object (`entering`) or inside it.
+SpecularSplit specular_split(const Material& m, float cos_i, bool entering);
+/// The base share at normal incidence from outside: the albedo scale that secondary rays
+/// (gathers, the radiosity bake) see on a mirror or glass surface.
+Color base_share(const Material& m);
 
 /// dP/du and dP/dv of triangle `prim` of `mesh` (from its positions and uvs); false when the
 /// mesh has no uvs or they are degenerate there.

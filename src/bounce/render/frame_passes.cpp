@@ -312,7 +312,7 @@ std::function<Record(const Record&, Counters&)> fragment_update_function(const F
 
 GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep,
                                    const RadiosityTextures* radiosity, IrradianceCache& cache, TemporalJudgement judged,
-                                   const std::function<void(const Image&)>& preview) {
+                                   const std::function<void(const Image&)>& preview, const SpecularSitesResult& specular) {
     const Scene& scene = ctx.scene;
     const GatherSettings gs = frame_gather_settings(ctx, true);
     Gatherer gatherer(scene, ctx.accel, ctx.materials, ctx.lighting, radiosity, gs);
@@ -371,18 +371,21 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
             options.after_subpass(schedule.back(), schedule.size() - 1, schedule.size());
         }
     }
+    out.site_records_new = specular_gather_pass(ctx, plan, specular.sites, gatherer, cache);
     out.records_new = cache.size() - before - out.regathered - out.reshaded;  // made this frame
     return out;
 }
 
-std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffer& deep, const RadiosityTextures* radiosity) {
+std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffer& deep, const RadiosityTextures* radiosity,
+                                        SpecularSitesResult& specular) {
     Gatherer gatherer(ctx.scene, ctx.accel, ctx.materials, ctx.lighting, radiosity, frame_gather_settings(ctx, false));
     std::vector<Indirect> light =
         ctx.comm.size() == 1 ? gather_every_fragment(ctx.scene, deep, gatherer, ctx.stats, ctx.progress)
                              : indirect_in_tiles(ctx.comm, deep, ctx.scene.render.parallel.tile_size, [&](const DeepBuffer& tile) {
                                    return gather_every_fragment(ctx.scene, tile, gatherer, ctx.stats, nullptr);
                                });
-    ctx.stats.set("gathers", static_cast<double>(deep.fragments.size()));
+    specular_brute_pass(ctx, gatherer, specular);
+    ctx.stats.set("gathers", static_cast<double>(deep.fragments.size() + specular.brute.size()));
     ctx.stats.set("rays_per_gather", gatherer.grid().rays());
     return light;
 }
@@ -390,9 +393,11 @@ std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffe
 namespace {
 
 ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
-                         const std::vector<Indirect>* brute, ProgressSink* progress) {
+                         const std::vector<Indirect>* brute, const SpecularSitesResult& specular,
+                         const RadiosityTextures* radiosity, ProgressSink* progress) {
     const Scene& scene = ctx.scene;
     ShadeResult out;
+    const SiteLightResult sites = site_light_for(ctx, specular, window_of(deep), cache, radiosity);
     std::vector<Indirect> interpolated;
     if (cache && scene.render.indirect.gi == GiMode::Cache) {
         auto t0 = std::chrono::steady_clock::now();
@@ -400,22 +405,24 @@ ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const 
         ctx.stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         interpolated = std::move(light.light);
         out.refined = fragment_mask(deep, light.refined);
-        out.shading_misses = light.misses;
+        out.shading_misses = light.misses + sites.misses;
+        if (specular.any()) ctx.stats.set("shading_misses", static_cast<double>(out.shading_misses));
         brute = &interpolated;
     }
     out.image = shade(scene, deep, ctx.materials, ctx.lighting, scene.render.indirect.any() ? brute : nullptr, ctx.stats,
-                      progress);
+                      progress, nullptr, sites.view());
     return out;
 }
 
 /// Each process shades its tiles; rank 0 takes the whole image (the others' stays empty).
 ShadeResult shade_in_tiles(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
-                           const std::vector<Indirect>* brute) {
+                           const std::vector<Indirect>* brute, const SpecularSitesResult& specular,
+                           const RadiosityTextures* radiosity) {
     const auto tiles = in_tiles(ctx.comm, window_of(deep), ctx.scene.render.parallel.tile_size, TilesTo::First,
                                 [&](const std::array<int, 4>& w) {
         const DeepBuffer sub = sub_window(deep, w);
         const std::vector<Indirect> light = brute ? window_slice(deep, *brute, w) : std::vector<Indirect>();
-        ShadeResult r = shade_window(ctx, sub, cache, brute ? &light : nullptr, nullptr);
+        ShadeResult r = shade_window(ctx, sub, cache, brute ? &light : nullptr, specular, radiosity, nullptr);
         // The refined mask travels as a layer of the tile's image.
         if (!r.refined.empty()) add_mask_layer(r.image, r.refined, "refined");
         const uint64_t misses = r.shading_misses;
@@ -442,7 +449,8 @@ ShadeResult shade_in_tiles(const FrameContext& ctx, const DeepBuffer& deep, cons
 }  // namespace
 
 ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
-                         const std::vector<Indirect>* brute, const std::function<void(const Image&)>& quick_look) {
+                         const std::vector<Indirect>* brute, const SpecularSitesResult& specular,
+                         const RadiosityTextures* radiosity, const std::function<void(const Image&)>& quick_look) {
     const Scene& scene = ctx.scene;
     PhaseTimer t(ctx.stats, "shading");
     if (cache && quick_look) {
@@ -454,8 +462,8 @@ ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const 
         fill_blocks(look, 4);
         quick_look(look);
     }
-    if (ctx.comm.size() > 1) return shade_in_tiles(ctx, deep, cache, brute);
-    return shade_window(ctx, deep, cache, brute, ctx.progress);
+    if (ctx.comm.size() > 1) return shade_in_tiles(ctx, deep, cache, brute, specular, radiosity);
+    return shade_window(ctx, deep, cache, brute, specular, radiosity, ctx.progress);
 }
 
 }  // namespace bounce

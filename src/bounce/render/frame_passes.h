@@ -18,6 +18,7 @@
 #include "bounce/lighting/materials.h"
 #include "bounce/radiosity/radiosity.h"
 #include "bounce/render/frame_plan.h"
+#include "bounce/shade/shade.h"
 
 namespace bounce {
 
@@ -68,10 +69,41 @@ void share_radiosity_pass(const FrameContext& ctx, RadiosityTextures& rt);
 /// Saves radiosity textures that this frame baked into render.radiosity_textures.
 void save_radiosity_pass(const FrameContext& ctx, const RadiosityTextures& rt, size_t baked_before);
 
+/// What mirrors and glass show in the shaded window: the surfaces where their paths end
+/// (specular.h: sites, as fragments; empty when the scene has no mirror or glass) and, under
+/// brute force, the gather at each.
+struct SpecularSitesResult {
+    DeepBuffer sites;
+    std::vector<Indirect> brute;
+    bool any() const { return !sites.fragments.empty(); }
+    /// Whether the cache (or brute force) lights the sites: indirect_at_specular_hits = cache.
+    static bool lit_by_gathers(const Scene& scene);
+};
+SpecularSitesResult specular_sites_pass(const FrameContext& ctx, const DeepBuffer& shaded);
+/// The sites' part of the gathering pass: records where the cache does not cover a site.
+/// Returns how many it made.
+size_t specular_gather_pass(const FrameContext& ctx, const FramePlan& plan, const DeepBuffer& sites,
+                            const Gatherer& gatherer, IrradianceCache& cache);
+/// Brute force: a gather at every site (into `specular.brute`).
+void specular_brute_pass(const FrameContext& ctx, const Gatherer& gatherer, SpecularSitesResult& specular);
+/// The light the shading pass gives a window's sites: the cache's interpolation (its misses
+/// counted), brute force's gathers, or the radiosity textures.
+struct SiteLightResult {
+    DeepBuffer sites;  ///< the window's own (a tile of the frame's)
+    std::vector<Indirect> light;
+    bool has_light = false;
+    const RadiosityTextures* radiosity = nullptr;
+    size_t misses = 0;
+    SiteLight view() const { return {sites.offsets.empty() ? nullptr : &sites, has_light ? &light : nullptr, radiosity}; }
+};
+SiteLightResult site_light_for(const FrameContext& ctx, const SpecularSitesResult& specular, const std::array<int, 4>& window,
+                               const IrradianceCache* cache, const RadiosityTextures* radiosity);
+
 /// What the gathering pass made.
 struct GatherPassResult {
     size_t records_new = 0;           ///< records in the cache that it did not start with (new and redone)
     size_t fragment_records_new = 0;  ///< per-fragment refinement's gathers
+    size_t site_records_new = 0;      ///< records made for the sites of mirrors and glass (in records_new too)
     size_t regathered = 0, reshaded = 0;  ///< stale records of earlier frames redone
     std::vector<Record> waiting;          ///< stale records no fragment needed (for the next frame)
 };
@@ -79,9 +111,10 @@ struct GatherPassResult {
 /// they are needed; `preview`, if set, gets an image after each sub-pass.
 GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep,
                                    const RadiosityTextures* radiosity, IrradianceCache& cache, TemporalJudgement judged,
-                                   const std::function<void(const Image&)>& preview);
-/// A gather at every fragment of the shaded window.
-std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffer& deep, const RadiosityTextures* radiosity);
+                                   const std::function<void(const Image&)>& preview, const SpecularSitesResult& specular);
+/// A gather at every fragment of the shaded window (and at every site of `specular`).
+std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffer& deep, const RadiosityTextures* radiosity,
+                                        SpecularSitesResult& specular);
 
 /// The shading pass: the image of the shaded window.
 struct ShadeResult {
@@ -92,8 +125,11 @@ struct ShadeResult {
 /// Shades `deep` with the cache's interpolation (cache non-null), `brute` light (non-null) or
 /// direct light only. With a cache and `quick_look`, first calls it with every 4th pixel
 /// shaded standing for its 4x4 block (a re-shade's preview).
+/// `specular`: the frame's sites (lit as site_light_for says; `radiosity` for
+/// indirect_at_specular_hits = radiosity).
 ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
-                         const std::vector<Indirect>* brute, const std::function<void(const Image&)>& quick_look = {});
+                         const std::vector<Indirect>* brute, const SpecularSitesResult& specular,
+                         const RadiosityTextures* radiosity, const std::function<void(const Image&)>& quick_look = {});
 
 /// A copy of `cache` that a frame may add records to.
 std::unique_ptr<IrradianceCache> copy_cache(const IrradianceCache& cache, const Scene& scene);

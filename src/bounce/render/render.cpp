@@ -150,13 +150,17 @@ namespace {
 void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep, const FrameState& previous,
                       RadiosityResult& radiosity, CacheStartResult& start, const RenderRequest& request, RenderResult& result) {
     size_t baked_before = 0;
+    const SpecularSitesResult specular = specular_sites_pass(ctx, deep.shaded);
+    if (specular.any() && !radiosity.textures &&
+        ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity)
+        radiosity = radiosity_pass(ctx, plan, previous);
     auto gather = [&] {
         if (!radiosity.textures) radiosity = radiosity_pass(ctx, plan, previous);
         baked_before = radiosity.textures ? radiosity.textures->baked_sides() : 0;
         PhaseTimer t(ctx.stats, "gather");
         const uint64_t rays_before = ctx.stats.total().gather_rays;
         GatherPassResult g = cache_gather_pass(ctx, plan, deep, radiosity.textures.get(), *start.cache, std::move(start.judged),
-                                               request.preview);
+                                               request.preview, specular);
         const double secs = t.stop();
         const uint64_t rays = ctx.stats.total().gather_rays - rays_before;
         ctx.stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
@@ -169,14 +173,14 @@ void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const Visi
     const auto quick_look = plan.preview ? request.preview : std::function<void(const Image&)>();
     ShadeResult shaded;
     if (plan.gather == GatherStep::WhereMissing) {
-        shaded = shading_pass(ctx, deep.shaded, start.cache.get(), nullptr, quick_look);
+        shaded = shading_pass(ctx, deep.shaded, start.cache.get(), nullptr, specular, radiosity.textures.get(), quick_look);
         if (shaded.shading_misses > 0) {
             gather();
-            shaded = shading_pass(ctx, deep.shaded, start.cache.get(), nullptr);
+            shaded = shading_pass(ctx, deep.shaded, start.cache.get(), nullptr, specular, radiosity.textures.get());
         }
     } else {
         gather();
-        shaded = shading_pass(ctx, deep.shaded, start.cache.get(), nullptr);
+        shaded = shading_pass(ctx, deep.shaded, start.cache.get(), nullptr, specular, radiosity.textures.get());
     }
     result.shading_misses = shaded.shading_misses;
     result.image = std::move(shaded.image);
@@ -197,12 +201,16 @@ void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const Visi
 void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep, const FrameState& previous,
                          RadiosityResult& radiosity, RenderResult& result) {
     std::vector<Indirect> light;
+    SpecularSitesResult specular = specular_sites_pass(ctx, deep.shaded);
+    const bool radiosity_sites = ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity;
+    if (specular.any() && radiosity_sites && !radiosity.textures && ctx.scene.render.indirect.any())
+        radiosity = radiosity_pass(ctx, plan, previous);
     if (plan.gather == GatherStep::Brute) {
         if (!radiosity.textures) radiosity = radiosity_pass(ctx, plan, previous);
         const size_t baked_before = radiosity.textures ? radiosity.textures->baked_sides() : 0;
         PhaseTimer t(ctx.stats, "gather");
         const uint64_t rays_before = ctx.stats.total().gather_rays;
-        light = brute_gather_pass(ctx, deep.shaded, radiosity.textures.get());
+        light = brute_gather_pass(ctx, deep.shaded, radiosity.textures.get(), specular);
         const double secs = t.stop();
         const uint64_t rays = ctx.stats.total().gather_rays - rays_before;
         ctx.stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
@@ -212,7 +220,8 @@ void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const V
             save_radiosity_pass(ctx, *radiosity.textures, baked_before);
         }
     }
-    ShadeResult shaded = shading_pass(ctx, deep.shaded, nullptr, plan.gather == GatherStep::Brute ? &light : nullptr);
+    ShadeResult shaded = shading_pass(ctx, deep.shaded, nullptr, plan.gather == GatherStep::Brute ? &light : nullptr, specular,
+                                      radiosity.textures.get());
     result.image = std::move(shaded.image);
     if (result.cache) {
         ctx.stats.set("records", static_cast<double>(result.cache->size()));

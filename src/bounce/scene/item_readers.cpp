@@ -25,12 +25,14 @@ json to_json(const Vec3& v) { return {v.x, v.y, v.z}; }
 json material_defaults() {
     const Material m;
     return {{"color", to_json(m.color)}, {"emission", to_json(m.emission)}, {"specular", to_json(m.specular)},
-            {"roughness", m.roughness}, {"bump_strength", m.bump_strength}};
+            {"roughness", m.roughness}, {"bump_strength", m.bump_strength}, {"mirror", to_json(m.mirror)},
+            {"transmission", to_json(m.transmission)}, {"ior", m.ior}, {"absorption", to_json(m.absorption)}};
 }
 
 const std::vector<std::string>& material_keys() {
     static const std::vector<std::string> keys = {"color",          "color_texture", "emission",      "specular",  "roughness",
-                                                  "bump_texture",   "normal_texture", "bump_strength", "ao_texture"};
+                                                  "bump_texture",   "normal_texture", "bump_strength", "ao_texture",
+                                                  "mirror",         "transmission",  "ior",           "absorption"};
     return keys;
 }
 
@@ -173,6 +175,15 @@ Material read_material(const JsonReader& m, const std::string& name) {
     mat.ao_texture = texture_file(m, "ao_texture");
     mat.normal_texture = texture_file(m, "normal_texture");
     mat.bump_strength = static_cast<float>(m.number("bump_strength", mat.bump_strength, -1e3, 1e3));
+    mat.mirror = m.color("mirror", mat.mirror);
+    mat.transmission = m.color("transmission", mat.transmission);
+    for (int i = 0; i < 3; ++i) {
+        if (mat.mirror[i] > 1) m.fail("mirror", "mirror components must be <= 1 (energy conservation)");
+        if (mat.transmission[i] > 1) m.fail("transmission", "transmission components must be <= 1 (energy conservation)");
+    }
+    // Real dielectrics lie in [1, 3] (diamond 2.42); below 1 would need the medium outside.
+    mat.ior = static_cast<float>(m.number("ior", mat.ior, 1, 3));
+    mat.absorption = m.color("absorption", mat.absorption);
     return mat;
 }
 

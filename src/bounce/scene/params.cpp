@@ -281,8 +281,17 @@ ParamTable make_table() {
                        .doc("cached indirect light as three (radiance, direction) pairs, one per RGB channel").flag());
     rows.push_back(row("layers", "shading", &R::shading, &ShadingSettings::layers).choices({"standard", "components"})
                        .doc("components adds the beauty's parts for compositing: emission, diffuse and specular direct "
-                            "(also per light) and indirect, background, and object and material ids (docs/shading.md)")
+                            "(also per light) and indirect, background, reflection, refraction, and object and material ids "
+                            "(docs/shading.md)")
                        .flag());
+    rows.push_back(row("specular_depth", "shading", &R::shading, &ShadingSettings::specular_depth).range(0, 16).unit("bounces")
+                       .doc("mirror and glass bounces a path from the camera follows (reflections and refractions; 0 = "
+                            "mirrors and glass show only what their diffuse and glossy lobes reflect)").flag());
+    rows.push_back(row("indirect_at_specular_hits", "shading", &R::shading, &ShadingSettings::indirect_at_specular_hits)
+                       .choices({"cache", "radiosity"})
+                       .doc("light at the surfaces mirrors and glass show: cache = direct light plus the bounce light of "
+                            "records the gathering pass makes for them (brute force gathers there); radiosity = the "
+                            "radiosity textures' direct light only, no gathers").flag());
     // Threads and tiles: never change the image (docs/parallel.md).
     rows.push_back(row("threads", "parallel", &R::parallel, &ParallelSettings::threads).range(0, 4096).unit("threads")
                        .doc("worker threads; 0 = all cores").flag());

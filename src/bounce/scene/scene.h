@@ -85,6 +85,16 @@ struct Material {
     std::string normal_texture; ///< tangent-space normal map (used when there is no bump map)
     float bump_strength = 1.0f; ///< scales the bump height or the normal map's tilt; 0 = off
     std::string ao_texture;     ///< baked occlusion (bounce bake-ao) multiplying the indirect light and AO
+    /// An ideal mirror's reflectance (a conductor: the same at every angle, tinted for metals);
+    /// 0 = none. The rest of the light (1 - mirror) meets the surface's other lobes.
+    Color mirror{0};
+    /// A smooth dielectric (glass, water): Fresnel reflection at index `ior`, and this share of
+    /// the light let in is refracted (its tint); 0 = opaque, 1 = clear.
+    Color transmission{0};
+    float ior = 1.5f;           ///< the dielectric's index of refraction (with transmission)
+    Color absorption{0};        ///< inside the dielectric: Beer-Lambert coefficient per world unit
+    bool is_dielectric() const { return transmission.x > 0 || transmission.y > 0 || transmission.z > 0; }
+    bool is_specular() const { return is_dielectric() || mirror.x > 0 || mirror.y > 0 || mirror.z > 0; }
     bool has_specular() const { return specular.x > 0 || specular.y > 0 || specular.z > 0; }
     bool has_bump() const { return bump_strength != 0 && (!bump_texture.empty() || !normal_texture.empty()); }
     bool is_emissive() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }
@@ -98,6 +108,7 @@ struct RayVisibility {
     bool camera = true;    ///< primary visibility
     bool shadows = true;   ///< shadow rays of direct light (and of the radiosity bake)
     bool indirect = true;  ///< gather rays (the bounce light and AO)
+    bool reflections = true;  ///< rays of mirrors and glass (reflection and refraction)
 };
 
 struct Object {

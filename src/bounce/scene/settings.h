@@ -18,6 +18,9 @@ enum class CacheSharing : uint8_t { Shared, PerThread };
 enum class RecordSurface : uint8_t { Undisplaced, Displaced };
 /// Which layers the EXR holds beside the standard ones (shade/layers.h).
 enum class LayerSet : uint8_t { Standard, Components };
+/// The bounce light at the surfaces mirrors and glass show: from the cache (records the
+/// gathering pass makes for them; brute force gathers there), or from the radiosity textures.
+enum class SpecularHitLight : uint8_t { Cache, Radiosity };
 
 /// Primary visibility and the deep file.
 struct VisibilitySettings {
@@ -100,6 +103,8 @@ struct CacheSettings {
 struct ShadingSettings {
     bool light_per_channel = false;  ///< three (radiance, direction) pairs, not one
     LayerSet layers = LayerSet::Standard;  ///< Components: the beauty's parts, per light, and ids
+    int specular_depth = 4;  ///< mirror and glass bounces a path from the camera follows (0 = none)
+    SpecularHitLight indirect_at_specular_hits = SpecularHitLight::Cache;
 };
 
 /// Threads, tiles and progressive output.

@@ -32,6 +32,8 @@ ComponentLayers::ComponentLayers(Image& image, const Scene& scene, bool on) : im
     diffuse_ind_ = &rgb_layer(image, "diffuse_indirect");
     specular_ind_ = &rgb_layer(image, "specular_indirect");
     background_ = &rgb_layer(image, "background");
+    reflection_ = &rgb_layer(image, "reflection");
+    refraction_ = &rgb_layer(image, "refraction");
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         // Two lights of one name keep apart by their index.
         const std::string own = layer_name_of(scene.lights[i].name);
@@ -77,6 +79,16 @@ void ComponentLayers::add_indirect(int wx, int wy, const Color& diffuse, const C
 }
 
 void ComponentLayers::background(int wx, int wy, const Color& c) { put(background_, wx, wy, c, 1); }
+
+void ComponentLayers::add_specular(int wx, int wy, bool refraction, const Color& c) {
+    put(refraction ? refraction_ : reflection_, wx, wy, c, 1);
+}
+
+void ShadedParts::scale(const Color& s) {
+    emission *= s, diffuse_direct *= s, specular_direct *= s;
+    for (Color& c : light_diffuse) c *= s;
+    for (Color& c : light_specular) c *= s;
+}
 
 void ComponentLayers::ids(int wx, int wy, uint32_t object, uint32_t material) {
     float* px = image_.at(*ids_, wx, wy);

@@ -1,7 +1,7 @@
 // The beauty's components as EXR layers for compositing (render.layers = components), named as
 // Nuke users know them from other renderers: emission, diffuse_direct, specular_direct (and
 // per light: diffuse_direct_<light>, specular_direct_<light>), diffuse_indirect,
-// specular_indirect, background, and an id layer (id.object, id.material: index + 1, 0 where
+// specular_indirect, background, reflection and refraction (what mirrors and glass show), and an id layer (id.object, id.material: index + 1, 0 where
 // nothing is seen) whose names are in the header. The parts sum to the beauty.
 #pragma once
 
@@ -17,6 +17,8 @@ namespace bounce {
 struct ShadedParts {
     Color emission{0}, diffuse_direct{0}, specular_direct{0};
     std::vector<Color> light_diffuse, light_specular;  ///< per scene light; sized by ComponentLayers::parts
+    /// Every part times `s` (a mirror's or glass's base share).
+    void scale(const Color& s);
 };
 
 /// A light's name as an EXR layer name: letters, digits and '_' (others become '_').
@@ -35,6 +37,8 @@ public:
     /// Adds the indirect light's lobes x `weight`.
     void add_indirect(int wx, int wy, const Color& diffuse, const Color& specular, float weight);
     void background(int wx, int wy, const Color& c);
+    /// Light a mirror's or glass's paths bring (already weighted), by their first bounce.
+    void add_specular(int wx, int wy, bool refraction, const Color& c);
     /// The object and material (indices) of the pixel's largest fragment.
     void ids(int wx, int wy, uint32_t object, uint32_t material);
 
@@ -43,7 +47,7 @@ private:
     Image& image_;
     bool on_ = false;
     Layer *emission_ = nullptr, *diffuse_ = nullptr, *specular_ = nullptr, *diffuse_ind_ = nullptr, *specular_ind_ = nullptr,
-          *background_ = nullptr, *ids_ = nullptr;
+          *background_ = nullptr, *reflection_ = nullptr, *refraction_ = nullptr, *ids_ = nullptr;
     std::vector<Layer*> light_diffuse_, light_specular_;
 };
 

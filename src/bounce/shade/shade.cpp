@@ -3,6 +3,7 @@
 #include "bounce/core/parallel.h"
 #include "bounce/shade/brdf.h"
 #include "bounce/shade/components.h"
+#include "bounce/specular/specular.h"
 
 namespace bounce {
 
@@ -90,12 +91,57 @@ struct ShadeContext {
     const std::vector<Color>* direct_radiance;
     const CameraRays& camera;
     bool ao_only;
+    const SpecularTracer& tracer;
+    const SiteLight& sites;
 };
+
+/// Site j of a pixel: the random stream of its light samples is its pixel's, after every fragment's.
+constexpr uint32_t kSiteStream = 256;
+
+/// Radiance leaving a specular path's site back along the path: emission, direct light through
+/// its diffuse and glossy lobes, and its bounce light `in` (null: none); or the radiosity textures' value.
+Color site_radiance(const ShadeContext& c, const PathSite& s, int x, int y, uint32_t j, const Indirect* in, Counters& counters) {
+    const Fragment& f = s.at;
+    if (c.sites.radiosity)
+        return c.materials.emission(f.material) + c.sites.radiosity->lookup(f.object, f.prim, s.u, s.v, s.front, counters);
+    const Material& m = c.scene.materials[f.material];
+    SurfaceShading surf;
+    surf.albedo = c.materials.albedo(f.material, f.uv), surf.specular = m.specular, surf.roughness = m.roughness, surf.normal = f.n;
+    Color out = fragment_direct(c.scene, c.materials, c.lighting, f, surf, s.wo, x, y, kSiteStream + j, c.indirect == nullptr,
+                                counters, nullptr);
+    if (in) out += indirect_radiance(*in, f.n, surf, s.wo, c.scene.render.shading.light_per_channel);
+    return out;
+}
+
+/// Adds what the specular paths of a pixel's fragments bring (paths.sites shaded) to `sum`.
+void add_paths(const ShadeContext& c, const PixelPaths& paths, std::span<const Fragment> frags, int x, int y, int wx, int wy,
+               PixelSum& sum, ComponentLayers& comps, Counters& counters) {
+    const auto held = [&](uint32_t k) { return c.scene.objects[frags[k].object].matte; };
+    for (uint32_t k = 0; k < frags.size(); ++k) {
+        if (held(k)) continue;
+        const Color r = paths.seen_reflection[k] * frags[k].weight, t = paths.seen_refraction[k] * frags[k].weight;
+        sum.beauty += r + t;
+        if (comps.on()) comps.add_specular(wx, wy, false, r), comps.add_specular(wx, wy, true, t);
+    }
+    // The light the passes before gave each site, when they traced the same sites.
+    const DeepBuffer* given = c.sites.sites;
+    const size_t first = given ? given->offsets[static_cast<size_t>(wy) * given->width + wx] : 0;
+    const bool matched = given && c.sites.light && given->pixel(wx, wy).size() == paths.sites.size();
+    for (uint32_t j = 0; j < paths.sites.size(); ++j) {
+        const PathSite& s = paths.sites[j];
+        if (held(s.fragment)) continue;
+        const Indirect* in = matched ? &(*c.sites.light)[first + j] : nullptr;
+        const Color L = site_radiance(c, s, x, y, j, in, counters) * s.weight * frags[s.fragment].weight;
+        sum.beauty += L;
+        if (comps.on()) comps.add_specular(wx, wy, s.kind == PathKind::Refraction, L);
+    }
+}
 
 /// Adds fragment k of pixel (x, y) (its index `at` in the deep buffer) to `sum`; with layer
 /// components on, also to `comps` at window pixel (wx, wy).
-void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint32_t k, size_t at, PixelSum& sum,
-                    ComponentLayers& comps, int wx, int wy, Counters& counters) {
+/// `base`: the share of the light its own lobes reflect (a mirror's or glass's base share, else 1).
+void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint32_t k, size_t at, const Color& base,
+                    PixelSum& sum, ComponentLayers& comps, int wx, int wy, Counters& counters) {
     // A holdout: hides what is behind it and adds nothing, alpha included.
     if (c.scene.objects[f.object].matte) {
         sum.held += f.weight;
@@ -121,15 +167,17 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
                                           fur->params.specular, fur->params.specular_exponent);
         else
             lobes = indirect_lobes(in, f.n, surf, wo, c.scene.render.shading.light_per_channel);
+        lobes.diffuse *= base, lobes.specular *= base;
         sum.beauty += (lobes.diffuse + lobes.specular) * w;
         if (comps.on()) comps.add_indirect(wx, wy, lobes.diffuse, lobes.specular, w);
     }
     if (!c.ao_only) {
         ShadedParts parts = comps.on() ? comps.parts() : ShadedParts{};
-        const Color radiance = c.direct_radiance && !comps.on()
-                                   ? (*c.direct_radiance)[at]
-                                   : direct_at(c.scene, c.materials, c.lighting, f, surf, wo, x, y, k, c.indirect == nullptr, counters,
-                                               comps.on() ? &parts : nullptr);
+        const Color radiance = base * (c.direct_radiance && !comps.on()
+                                           ? (*c.direct_radiance)[at]
+                                           : direct_at(c.scene, c.materials, c.lighting, f, surf, wo, x, y, k, c.indirect == nullptr,
+                                                       counters, comps.on() ? &parts : nullptr));
+        parts.scale(base);
         sum.direct += radiance * f.weight;
         sum.beauty += radiance * f.weight;
         if (comps.on()) comps.add(wx, wy, parts, f.weight);
@@ -146,7 +194,7 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
 
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
             const DirectLighting& lighting, const std::vector<Indirect>* indirect, Stats& stats,
-            ProgressSink* sink, const std::vector<Color>* direct_radiance) {
+            ProgressSink* sink, const std::vector<Color>* direct_radiance, const SiteLight& sites) {
     const bool ao_only = scene.render.indirect.ao && indirect;
     Image img;
     img.full_width = deep.full_width, img.full_height = deep.full_height;
@@ -168,7 +216,9 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
     ComponentLayers comps(img, scene, scene.render.shading.layers == LayerSet::Components && !ao_only);
 
     CameraRays camera(scene.camera);
-    const ShadeContext ctx{scene, materials, lighting, indirect, direct_radiance, camera, ao_only};
+    const SpecularTracer tracer(scene, lighting.accel(), lighting);
+    const bool specular = tracer.active() && !ao_only;  // AO-only renders show no reflections
+    const ShadeContext ctx{scene, materials, lighting, indirect, direct_radiance, camera, ao_only, tracer, sites};
     auto put3 = [&](Layer* l, int x, int y, const Vec3& v) {
         if (!l) return;
         float* p = img.at(*l, x, y);
@@ -181,7 +231,11 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
             int x = wx + deep.x0, y = wy + deep.y0;
             PixelSum sum;
             auto frags = deep.pixel(wx, wy);
-            for (uint32_t k = 0; k < frags.size(); ++k) shade_fragment(ctx, frags[k], x, y, k, first + k, sum, comps, wx, wy, counters);
+            thread_local PixelPaths paths;
+            if (specular) tracer.trace(frags, camera.origin(), paths, counters);
+            for (uint32_t k = 0; k < frags.size(); ++k)
+                shade_fragment(ctx, frags[k], x, y, k, first + k, specular ? paths.base[k] : Color(1), sum, comps, wx, wy, counters);
+            if (specular) add_paths(ctx, paths, frags, x, y, wx, wy, sum, comps, counters);
             if (const float open = 1 - sum.cover - sum.held; open > 0 && !ao_only) {
                 // Escaping camera rays see the sky (in beauty and direct).
                 const Color seen = lighting.background(normalize(

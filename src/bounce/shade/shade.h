@@ -9,6 +9,7 @@
 #include "bounce/deep/deep_buffer.h"
 #include "bounce/gather/gather.h"
 #include "bounce/lighting/lighting.h"
+#include "bounce/radiosity/radiosity.h"
 
 namespace bounce {
 
@@ -20,9 +21,19 @@ namespace bounce {
 /// in AO-only mode (scene.render.indirect.ao) beauty is the AO. Sky lights are left out of the direct
 /// term when indirect light is given (the gather brings the sky). Tiles run in parallel; the
 /// result is independent of thread count and tile order.
+///
+/// Mirrors and glass (specular.h): a fragment's own lobes are scaled by its base share, and its
+/// specular paths add what they meet: the sky and quad lights, and the surfaces where they end
+/// (sites), each shaded with direct light (its glossy lobe too) and the bounce light `sites`
+/// gives it, or from the radiosity textures.
+struct SiteLight {
+    const DeepBuffer* sites = nullptr;             ///< specular_sites of this window (per pixel in trace order)
+    const std::vector<Indirect>* light = nullptr;  ///< per site: its bounce light (null: none)
+    const RadiosityTextures* radiosity = nullptr;  ///< indirect_at_specular_hits = radiosity: sites are looked up here
+};
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
             const DirectLighting& lighting, const std::vector<Indirect>* indirect, Stats& stats,
-            ProgressSink* progress, const std::vector<Color>* direct_radiance = nullptr);
+            ProgressSink* progress, const std::vector<Color>* direct_radiance = nullptr, const SiteLight& sites = {});
 
 /// Emission plus direct light reflected towards the camera at every fragment, exactly as
 /// `shade` computes it (bumped normal, glossy lobe, same random numbers): the progressive
