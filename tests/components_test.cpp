@@ -51,12 +51,27 @@ void expect_sums(const Image& img, const std::string& total, const std::vector<s
 
 TEST(ComponentLayers, SumToTheBeautyAndPerLightLayersToTheirTotals) {
     const Image img = render_image(glossy_cornell("components"));
-    expect_sums(img, "beauty", {"emission", "diffuse_direct", "specular_direct", "diffuse_indirect", "specular_indirect", "background"});
+    expect_sums(img, "beauty", {"emission", "diffuse_direct", "specular_direct", "diffuse_indirect", "specular_indirect", "background",
+                                "reflection", "refraction"});
     // Lights: the two named ones (a space becomes '_') and the emissive quad (its object's name).
     expect_sums(img, "diffuse_direct", {"diffuse_direct_key", "diffuse_direct_rim_light", "diffuse_direct_light"});
     expect_sums(img, "specular_direct", {"specular_direct_key", "specular_direct_rim_light", "specular_direct_light"});
     // Every part is there to be seen in this frame.
     for (const char* l : {"emission", "diffuse_direct_key", "specular_direct_rim_light", "diffuse_indirect", "specular_indirect"}) {
+        const Layer* layer = img.find(l);
+        ASSERT_TRUE(layer) << l;
+        EXPECT_GT(*std::max_element(layer->data.begin(), layer->data.end()), 0.0f) << l;
+    }
+}
+
+TEST(ComponentLayers, MirrorsAndGlassAddReflectionAndRefractionThatStillSumToTheBeauty) {
+    const Scene s = load_scene(test::source_dir() + "/scenes/cornell/mirror-glass.json",
+                               {"camera.resolution=[32,32]", "render.spp=2", "render.rays=64", "render.gi=cache",
+                                "render.layers=components"});
+    const Image img = render_image(s);
+    expect_sums(img, "beauty", {"emission", "diffuse_direct", "specular_direct", "diffuse_indirect", "specular_indirect",
+                                "background", "reflection", "refraction"});
+    for (const char* l : {"reflection", "refraction"}) {
         const Layer* layer = img.find(l);
         ASSERT_TRUE(layer) << l;
         EXPECT_GT(*std::max_element(layer->data.begin(), layer->data.end()), 0.0f) << l;

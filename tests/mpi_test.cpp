@@ -94,6 +94,12 @@ TEST(Mpi, DisplacementWithRefinedFragmentsIsByteIdenticalAtAnyRankCount) {
     expect_identical_at_any_rank_count(test::source_dir() + "/scenes/displaced/displaced.json", "");
 }
 
+TEST(Mpi, MirrorsAndGlassAreByteIdenticalAtAnyRankCount) {
+    SKIP_UNDER_SANITIZER();
+    // The sites of the specular paths get records in the gathering pass, split by tiles like fragments.
+    expect_identical_at_any_rank_count(test::source_dir() + "/scenes/cornell/mirror-glass.json", "--rays 64");
+}
+
 TEST(Mpi, BruteForceAndTheFramesOfAShotAreByteIdentical) {
     SKIP_UNDER_SANITIZER();
     test::TempDir d;

@@ -147,6 +147,37 @@ void SpecularTracer::follow(const Branch& b, PixelPaths& out, Counters& counters
     }
 }
 
+namespace {
+
+/// A site's footprint narrowed by its neighbours': the distance to the same site (same index,
+/// same object) of the pixels beside it, the nearest of the four, where that is less than the
+/// cone over the path length. A curved mirror or a glass ball focuses the pixel's cone (a ball
+/// lens brings it to a point just behind itself), which the cone does not know; the neighbours'
+/// paths do. Where they spread it (a minified view) records sized by the wider footprint
+/// measured worse (bench/specular: refraction 6.8 % against 5.3 %), so the cone stays the
+/// largest. The nearest neighbour, because across an edge of what the mirror shows the other
+/// side is far. At most 64 times narrower.
+void measure_footprints(std::vector<std::vector<Fragment>>& per_pixel, int width, int height) {
+    std::vector<float> measured;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            std::vector<Fragment>& mine = per_pixel[static_cast<size_t>(y) * width + x];
+            measured.assign(mine.size(), INFINITY);
+            for (auto [dx, dy] : {std::pair{1, 0}, std::pair{-1, 0}, std::pair{0, 1}, std::pair{0, -1}}) {
+                const int nx = x + dx, ny = y + dy;
+                if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
+                const std::vector<Fragment>& theirs = per_pixel[static_cast<size_t>(ny) * width + nx];
+                for (size_t j = 0; j < mine.size() && j < theirs.size(); ++j)
+                    if (theirs[j].object == mine[j].object) measured[j] = std::min(measured[j], length(theirs[j].p - mine[j].p));
+            }
+            for (size_t j = 0; j < mine.size(); ++j)
+                if (std::isfinite(measured[j]) && measured[j] > 0)
+                    mine[j].footprint = std::clamp(measured[j], mine[j].footprint / 64, mine[j].footprint);
+        }
+}
+
+}  // namespace
+
 DeepBuffer specular_sites(const Scene& scene, const DeepBuffer& deep, const SpecularTracer& tracer, Stats& stats,
                           ProgressSink* progress) {
     DeepBuffer sites;
@@ -161,6 +192,7 @@ DeepBuffer specular_sites(const Scene& scene, const DeepBuffer& deep, const Spec
         auto& mine = per_pixel[static_cast<size_t>(wy) * deep.width + wx];
         for (const PathSite& s : paths.sites) mine.push_back(s.at);
     });
+    measure_footprints(per_pixel, deep.width, deep.height);
     sites.offsets.assign(deep.pixel_count() + 1, 0);
     for (size_t i = 0; i < per_pixel.size(); ++i) sites.offsets[i + 1] = sites.offsets[i] + static_cast<uint32_t>(per_pixel[i].size());
     sites.fragments.reserve(sites.offsets.back());
