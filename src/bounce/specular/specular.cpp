@@ -156,8 +156,9 @@ namespace {
 /// paths do. Where they spread it (a minified view) records sized by the wider footprint
 /// measured worse (bench/specular: refraction 6.8 % against 5.3 %), so the cone stays the
 /// largest. The nearest neighbour, because across an edge of what the mirror shows the other
-/// side is far. At most 64 times narrower.
-void measure_footprints(std::vector<std::vector<Fragment>>& per_pixel, int width, int height) {
+/// side is far. At most 64 times narrower. Neighbours in the same tile only: the processes of an
+/// MPI job hold their own tiles' fragments, and the result must not depend on how many there are.
+void measure_footprints(std::vector<std::vector<Fragment>>& per_pixel, int width, int height, int tile) {
     std::vector<float> measured;
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
@@ -165,7 +166,7 @@ void measure_footprints(std::vector<std::vector<Fragment>>& per_pixel, int width
             measured.assign(mine.size(), INFINITY);
             for (auto [dx, dy] : {std::pair{1, 0}, std::pair{-1, 0}, std::pair{0, 1}, std::pair{0, -1}}) {
                 const int nx = x + dx, ny = y + dy;
-                if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
+                if (nx < 0 || ny < 0 || nx >= width || ny >= height || nx / tile != x / tile || ny / tile != y / tile) continue;
                 const std::vector<Fragment>& theirs = per_pixel[static_cast<size_t>(ny) * width + nx];
                 for (size_t j = 0; j < mine.size() && j < theirs.size(); ++j)
                     if (theirs[j].object == mine[j].object) measured[j] = std::min(measured[j], length(theirs[j].p - mine[j].p));
@@ -192,7 +193,7 @@ DeepBuffer specular_sites(const Scene& scene, const DeepBuffer& deep, const Spec
         auto& mine = per_pixel[static_cast<size_t>(wy) * deep.width + wx];
         for (const PathSite& s : paths.sites) mine.push_back(s.at);
     });
-    measure_footprints(per_pixel, deep.width, deep.height);
+    measure_footprints(per_pixel, deep.width, deep.height, std::max(1, scene.render.parallel.tile_size));
     sites.offsets.assign(deep.pixel_count() + 1, 0);
     for (size_t i = 0; i < per_pixel.size(); ++i) sites.offsets[i + 1] = sites.offsets[i] + static_cast<uint32_t>(per_pixel[i].size());
     sites.fragments.reserve(sites.offsets.back());
