@@ -86,15 +86,28 @@ void read_barn_doors(const JsonReader& r, Light& l) {
     for (size_t i = 0; i < 4; ++i) l.barn_doors[i] = r.check_number(b[i], r.at("barn_doors") + fmt::format("/{}", i), 0, 90);
 }
 
-/// The keys each light type reads (beside type, color, intensity, name and the links).
-const std::map<std::string, std::vector<std::string>>& keys_by_light_type() {
-    static const std::map<std::string, std::vector<std::string>> keys = {
+/// The light types, in the order users see them listed, and the keys each reads (beside type,
+/// color, intensity, name and the links).
+using LightTypeKeys = std::vector<std::pair<std::string, std::vector<std::string>>>;
+const LightTypeKeys& light_types() {
+    static const LightTypeKeys types = {
         {"point", {"position"}},
         {"spot", {"position", "direction", "cone_angle", "cone_falloff", "texture", "barn_doors"}},
         {"distant", {"direction"}},
         {"quad", {"corner", "edge_u", "edge_v", "texture"}},
         {"sky", {"texture", "rotation"}}};
+    return types;
+}
+
+const std::map<std::string, std::vector<std::string>>& keys_by_light_type() {
+    static const std::map<std::string, std::vector<std::string>> keys(light_types().begin(), light_types().end());
     return keys;
+}
+
+std::vector<std::string> light_type_names() {
+    std::vector<std::string> names;
+    for (const auto& t : light_types()) names.push_back(t.first);
+    return names;
 }
 
 }  // namespace
@@ -188,7 +201,7 @@ Material read_material(const JsonReader& m, const std::string& name) {
 }
 
 Light read_light(const JsonReader& r) {
-    std::string type = r.choice("type", "", {"point", "spot", "distant", "quad", "sky"});
+    std::string type = r.choice("type", "", light_type_names());
     std::vector<std::string> allowed = keys_by_light_type().at(type);
     for (const char* k : {"type", "color", "intensity", "name", "light_link", "shadow_link"}) allowed.emplace_back(k);
     r.only(allowed, "a " + type + " light");
