@@ -100,6 +100,16 @@ TEST(Mpi, MirrorsAndGlassAreByteIdenticalAtAnyRankCount) {
     expect_identical_at_any_rank_count(test::source_dir() + "/scenes/cornell/mirror-glass.json", "--rays 64");
 }
 
+TEST(Mpi, ADeepFileWithColourIsRefusedBeforeAnyWork) {
+    SKIP_UNDER_SANITIZER();
+    test::TempDir d;
+    std::string err;
+    EXPECT_EQ(run_mpi(2, fmt::format("render {} -o {} --res 16x16 -q --deep-out {} --deep-colour", test::cornell_scene(),
+                                     d.file("o.exr"), d.file("o.deep.exr")), &err), 2) << err;
+    EXPECT_NE(err.find("render.deep_colour"), std::string::npos) << err;
+    EXPECT_FALSE(std::filesystem::exists(d.file("o.exr")));
+}
+
 TEST(Mpi, BruteForceAndTheFramesOfAShotAreByteIdentical) {
     SKIP_UNDER_SANITIZER();
     test::TempDir d;

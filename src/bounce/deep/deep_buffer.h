@@ -144,8 +144,12 @@ DeepBuffer empty_window(const Scene& scene, const std::array<int, 4>& window);
 /// Throws InputError (naming the camera) if no camera ray hits any geometry.
 void check_camera_sees_geometry(const Scene& scene, const SceneAccel& accel);
 
-/// Writes an OpenEXR deep scanline file (written to a temporary name and renamed).
-void write_deep(const std::string& path, const DeepBuffer& deep);
+/// Writes an OpenEXR deep scanline file (written to a temporary name and renamed). With
+/// `colour` (parallel to deep.fragments: what each fragment adds to the beauty), also R, G, B
+/// for deep compositing: A is then each sample's alpha for over-compositing in depth order
+/// (coverage / the coverage not yet covered in front of it), so flattening gives the beauty's
+/// colour and alpha, and the coverage itself goes to a `coverage` channel (read_deep takes it).
+void write_deep(const std::string& path, const DeepBuffer& deep, const std::vector<Color>* colour = nullptr);
 /// Reads a deep file written by write_deep; InputError on anything malformed: every field of
 /// every fragment is checked (invalid_fragment_field), ids against the scene later
 /// (validate_deep_for_scene).

@@ -1,5 +1,6 @@
 // Deep file I/O: OpenEXR deep scanlines through OpenImageIO.
 #include <OpenImageIO/deepdata.h>
+#include <algorithm>
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
@@ -48,8 +49,39 @@ std::array<float, 27> float_values(const Fragment& f) {
 
 }  // namespace
 
-void write_deep(const std::string& path, const DeepBuffer& deep) {
-    const auto& chans = deep_channels();
+namespace {
+
+/// Per fragment (parallel to deep.fragments): the alpha that over-compositing in depth order
+/// needs for the fragments' coverages to come out as they are, a_i = w_i / (1 - the coverage
+/// of the fragments in front) (ties in depth keep their order), and 1 / (1 - that coverage) to
+/// premultiply colours by.
+void over_alphas(const DeepBuffer& deep, std::vector<float>& alpha, std::vector<float>& unshadowed) {
+    alpha.assign(deep.fragments.size(), 0);
+    unshadowed.assign(deep.fragments.size(), 1);
+    std::vector<uint32_t> order;
+    for (size_t i = 0; i < deep.pixel_count(); ++i) {
+        order.clear();
+        for (uint32_t k = deep.offsets[i]; k < deep.offsets[i + 1]; ++k) order.push_back(k);
+        std::stable_sort(order.begin(), order.end(),
+                         [&](uint32_t a, uint32_t b) { return deep.fragments[a].depth < deep.fragments[b].depth; });
+        double in_front = 0;
+        for (uint32_t k : order) {
+            const double open = std::max(1 - in_front, 1e-9);
+            alpha[k] = static_cast<float>(std::min(1.0, deep.fragments[k].weight / open));
+            unshadowed[k] = static_cast<float>(1 / open);
+            in_front += deep.fragments[k].weight;
+        }
+    }
+}
+
+}  // namespace
+
+void write_deep(const std::string& path, const DeepBuffer& deep, const std::vector<Color>* colour) {
+    std::vector<Channel> chans = deep_channels();
+    // Colour channels after bounce's own: their indices below are bounce's.
+    const size_t first_colour = chans.size();
+    if (colour)
+        for (const char* name : {"R", "G", "B", "coverage"}) chans.push_back({name, OIIO::TypeDesc::FLOAT});
     OIIO::ImageSpec spec(deep.width, deep.height, static_cast<int>(chans.size()), OIIO::TypeDesc::FLOAT);
     spec.x = deep.x0, spec.y = deep.y0;
     spec.full_x = 0, spec.full_y = 0;
@@ -63,6 +95,8 @@ void write_deep(const std::string& path, const DeepBuffer& deep) {
     }
     spec.z_channel = 0;
     spec.alpha_channel = 1;
+    std::vector<float> alpha, unshadowed;
+    if (colour) over_alphas(deep, alpha, unshadowed);
     spec.attribute("compression", "zips");
     spec.attribute("bounce:deep_version", kDeepVersion);
     spec.attribute("bounce:spp", deep.spp);
@@ -81,9 +115,17 @@ void write_deep(const std::string& path, const DeepBuffer& deep) {
             auto vals = float_values(f);
             int s = static_cast<int>(k - deep.offsets[i]);
             auto pix = static_cast<int64_t>(i);
-            for (int c = 0; c < static_cast<int>(chans.size()); ++c) {
+            for (int c = 0; c < static_cast<int>(first_colour); ++c) {
                 if (chans[static_cast<size_t>(c)].type == OIIO::TypeDesc::UINT) continue;
                 dd.set_deep_value(pix, c, s, vals[static_cast<size_t>(c)]);
+            }
+            if (colour) {
+                // Premultiplied by the sample's alpha: over in depth order then adds exactly the fragment's part.
+                const Color c = (*colour)[k] * unshadowed[k];
+                const int at = static_cast<int>(first_colour);
+                dd.set_deep_value(pix, 1, s, alpha[k]);
+                dd.set_deep_value(pix, at, s, c.x), dd.set_deep_value(pix, at + 1, s, c.y), dd.set_deep_value(pix, at + 2, s, c.z);
+                dd.set_deep_value(pix, at + 3, s, f.weight);
             }
             dd.set_deep_value(pix, 19, s, f.material);
             dd.set_deep_value(pix, 20, s, f.object);
@@ -143,6 +185,9 @@ DeepBuffer read_deep(const std::string& path) {
                              fmt::format("expected type {}, found {}", chans[c].type.c_str(),
                                          spec.channelformat(index[c]).c_str()));
     }
+    // A deep file with colour keeps the coverage in its own channel (A is then the over-alpha).
+    for (int k = 0; k < spec.nchannels; ++k)
+        if (spec.channelnames[static_cast<size_t>(k)] == "coverage" && spec.channelformat(k) == OIIO::TypeDesc::FLOAT) index[1] = k;
     DeepBuffer deep;
     deep.x0 = spec.x, deep.y0 = spec.y, deep.width = spec.width, deep.height = spec.height;
     deep.full_width = spec.full_width, deep.full_height = spec.full_height;

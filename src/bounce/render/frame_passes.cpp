@@ -410,7 +410,7 @@ ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const 
         brute = &interpolated;
     }
     out.image = shade(scene, deep, ctx.materials, ctx.lighting, scene.render.indirect.any() ? brute : nullptr, ctx.stats,
-                      progress, nullptr, sites.view());
+                      progress, nullptr, sites.view(), scene.render.shading.deep_colour ? &out.colours : nullptr);
     return out;
 }
 

@@ -121,6 +121,7 @@ struct ShadeResult {
     Image image;
     size_t shading_misses = 0;         ///< fragments no record covered (left black)
     std::vector<float> refined;        ///< per pixel: the coverage of fragments that used their own record
+    std::vector<Color> colours;        ///< render.deep_colour: what each fragment adds to the beauty (shade's `colours`)
 };
 /// Shades `deep` with the cache's interpolation (cache non-null), `brute` light (non-null) or
 /// direct light only. With a cache and `quick_look`, first calls it with every 4th pixel

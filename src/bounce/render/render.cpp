@@ -10,6 +10,7 @@
 #include <tbb/task_arena.h>
 
 #include "bounce/accel/accel.h"
+#include "bounce/render/distributed.h"
 #include "bounce/render/frame_passes.h"
 #include "bounce/cache/passes.h"
 #include "bounce/core/error.h"
@@ -184,6 +185,7 @@ void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const Visi
     }
     result.shading_misses = shaded.shading_misses;
     result.image = std::move(shaded.image);
+    result.deep_colour = std::move(shaded.colours);
     const IrradianceCache& cache = *start.cache;
     ctx.stats.set("records", static_cast<double>(cache.size()));
     ctx.stats.set("records_loaded", static_cast<double>(result.records_loaded));
@@ -223,6 +225,7 @@ void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const V
     ShadeResult shaded = shading_pass(ctx, deep.shaded, nullptr, plan.gather == GatherStep::Brute ? &light : nullptr, specular,
                                       radiosity.textures.get());
     result.image = std::move(shaded.image);
+    result.deep_colour = std::move(shaded.colours);
     if (result.cache) {
         ctx.stats.set("records", static_cast<double>(result.cache->size()));
         ctx.stats.set("records_loaded", static_cast<double>(result.records_loaded));
@@ -255,6 +258,22 @@ FrameState RenderResult::release_state() {
 }
 
 namespace {
+
+/// The shaded window's fragment colours at the gathered window's fragments (0 in its margin):
+/// what write_deep takes. Empty when there are none (an MPI rank that shades no image).
+std::vector<Color> colours_of_window(const VisibilityResult& deep, const std::vector<Color>& shaded) {
+    const DeepBuffer &g = deep.gathered, &s = deep.shaded;
+    if (shaded.size() != s.fragments.size()) return {};
+    if (window_of(g) == window_of(s)) return shaded;
+    std::vector<Color> out(g.fragments.size(), Color(0));
+    for (int wy = 0; wy < s.height; ++wy)
+        for (int wx = 0; wx < s.width; ++wx) {
+            const size_t from = s.offsets[static_cast<size_t>(wy) * s.width + wx], n = s.pixel(wx, wy).size();
+            const size_t to = g.offsets[static_cast<size_t>(wy + s.y0 - g.y0) * g.width + (wx + s.x0 - g.x0)];
+            std::copy_n(shaded.begin() + static_cast<std::ptrdiff_t>(from), n, out.begin() + static_cast<std::ptrdiff_t>(to));
+        }
+    return out;
+}
 
 /// A frame spread over an MPI job: what every rank traced and what the exchanges cost, in
 /// the stats of each (rank 0's are written). `sent0`, `wait0`: the communicator's totals
@@ -294,6 +313,8 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
         throw InputError(scene.path, "camera.resolution",
                          fmt::format("a {}x{} frame needs about {:.1f} GiB; {:.1f} GiB are available (render a crop)",
                                      scene.camera.width, scene.camera.height, need / 1073741824.0, have / 1073741824.0));
+    if (request.comm && request.comm->size() > 1 && scene.render.shading.deep_colour && !plan.deep_out.empty())
+        throw InputError(scene.path, "render.deep_colour", "a deep file with colour is written by one process (not under MPI yet)");
     tbb::task_arena arena(plan.threads);
     stats.set("threads", plan.threads);
     report_dicing(scene, stats);
@@ -343,7 +364,12 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
         // frame takes the textures (RadiosityTextures::carry points them at its own).
         result.radiosity = std::move(radiosity.textures);
         result.deep = deep.shaded;
-        if (!plan.deep_out.empty()) result.gathered_deep = std::make_shared<const DeepBuffer>(deep.gathered);
+        if (!plan.deep_out.empty()) {
+            result.gathered_deep = std::make_shared<const DeepBuffer>(deep.gathered);
+            result.deep_colour = scene.render.shading.deep_colour ? colours_of_window(deep, result.deep_colour) : std::vector<Color>();
+        } else {
+            result.deep_colour.clear();
+        }
     });
     if (request.comm && request.comm->size() > 1) report_ranks(*request.comm, stats, sent0, wait0);
     if (plan.cache == CacheStart::Temporal) report_temporal(result, stats);
@@ -359,7 +385,7 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
 RenderResult render(const Scene& scene, const RenderRequest& request, Stats& stats, ProgressSink* progress) {
     const FrameState none;
     RenderResult r = run_frame(scene, plan_frame(scene, none, request), none, request, stats, progress);
-    if (r.gathered_deep) write_deep(r.plan.deep_out, *r.gathered_deep);
+    if (r.gathered_deep) write_deep(r.plan.deep_out, *r.gathered_deep, r.deep_colour.empty() ? nullptr : &r.deep_colour);
     return r;
 }
 

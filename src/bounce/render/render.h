@@ -41,6 +41,9 @@ struct RenderResult {
     /// The gathered window's deep buffer (the window and its margin) when the plan has a
     /// deep_out: the front end writes it with the frame's other outputs, at the end.
     std::shared_ptr<const DeepBuffer> gathered_deep;
+    /// With render.deep_colour: what each of gathered_deep's fragments adds to the beauty (0
+    /// outside the shaded window), for write_deep.
+    std::vector<Color> deep_colour;
     std::unique_ptr<IrradianceCache> cache;  ///< gi cache, or a loaded cache_in
     CacheFileInfo cache_info;                ///< the header a cache file of it carries
     size_t records_loaded = 0, records_new = 0;

@@ -284,6 +284,10 @@ ParamTable make_table() {
                             "(also per light) and indirect, background, reflection, refraction, and object and material ids "
                             "(docs/shading.md)")
                        .flag());
+    rows.push_back(row("deep_colour", "shading", &R::shading, &ShadingSettings::deep_colour)
+                       .doc("the deep file of --deep-out also holds each fragment's shaded colour (R, G, B, premultiplied) "
+                            "with A as the alpha that over-compositing in depth order needs (its coverage moves to the "
+                            "coverage channel): Nuke's deep tools flatten it to the beauty (docs/architecture.md, deep file)").flag());
     rows.push_back(row("specular_depth", "shading", &R::shading, &ShadingSettings::specular_depth).range(0, 16).unit("bounces")
                        .doc("mirror and glass bounces a path from the camera follows (reflections and refractions; 0 = "
                             "mirrors and glass show only what their diffuse and glossy lobes reflect)").flag());

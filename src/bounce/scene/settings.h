@@ -105,6 +105,7 @@ struct ShadingSettings {
     LayerSet layers = LayerSet::Standard;  ///< Components: the beauty's parts, per light, and ids
     int specular_depth = 4;  ///< mirror and glass bounces a path from the camera follows (0 = none)
     SpecularHitLight indirect_at_specular_hits = SpecularHitLight::Cache;
+    bool deep_colour = false;  ///< --deep-out also holds each fragment's shaded colour (R, G, B) for deep compositing
 };
 
 /// Threads, tiles and progressive output.

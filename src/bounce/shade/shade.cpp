@@ -114,13 +114,15 @@ Color site_radiance(const ShadeContext& c, const PathSite& s, int x, int y, uint
 }
 
 /// Adds what the specular paths of a pixel's fragments bring (paths.sites shaded) to `sum`.
+/// `colours` (if given): the pixel's fragments' entries of shade's `colours`.
 void add_paths(const ShadeContext& c, const PixelPaths& paths, std::span<const Fragment> frags, int x, int y, int wx, int wy,
-               PixelSum& sum, ComponentLayers& comps, Counters& counters) {
+               PixelSum& sum, ComponentLayers& comps, Counters& counters, Color* colours) {
     const auto held = [&](uint32_t k) { return c.scene.objects[frags[k].object].matte; };
     for (uint32_t k = 0; k < frags.size(); ++k) {
         if (held(k)) continue;
         const Color r = paths.seen_reflection[k] * frags[k].weight, t = paths.seen_refraction[k] * frags[k].weight;
         sum.beauty += r + t;
+        if (colours) colours[k] += r + t;
         if (comps.on()) comps.add_specular(wx, wy, false, r), comps.add_specular(wx, wy, true, t);
     }
     // The light the passes before gave each site, when they traced the same sites.
@@ -133,6 +135,7 @@ void add_paths(const ShadeContext& c, const PixelPaths& paths, std::span<const F
         const Indirect* in = matched ? &(*c.sites.light)[first + j] : nullptr;
         const Color L = site_radiance(c, s, x, y, j, in, counters) * s.weight * frags[s.fragment].weight;
         sum.beauty += L;
+        if (colours) colours[s.fragment] += L;
         if (comps.on()) comps.add_specular(wx, wy, s.kind == PathKind::Refraction, L);
     }
 }
@@ -194,7 +197,9 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
 
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
             const DirectLighting& lighting, const std::vector<Indirect>* indirect, Stats& stats,
-            ProgressSink* sink, const std::vector<Color>* direct_radiance, const SiteLight& sites) {
+            ProgressSink* sink, const std::vector<Color>* direct_radiance, const SiteLight& sites,
+            std::vector<Color>* colours) {
+    if (colours) colours->assign(deep.fragments.size(), Color(0));
     const bool ao_only = scene.render.indirect.ao && indirect;
     Image img;
     img.full_width = deep.full_width, img.full_height = deep.full_height;
@@ -233,9 +238,12 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
             auto frags = deep.pixel(wx, wy);
             thread_local PixelPaths paths;
             if (specular) tracer.trace(frags, camera.origin(), paths, counters);
-            for (uint32_t k = 0; k < frags.size(); ++k)
+            for (uint32_t k = 0; k < frags.size(); ++k) {
+                const Color before = sum.beauty;
                 shade_fragment(ctx, frags[k], x, y, k, first + k, specular ? paths.base[k] : Color(1), sum, comps, wx, wy, counters);
-            if (specular) add_paths(ctx, paths, frags, x, y, wx, wy, sum, comps, counters);
+                if (colours) (*colours)[first + k] = sum.beauty - before;
+            }
+            if (specular) add_paths(ctx, paths, frags, x, y, wx, wy, sum, comps, counters, colours ? colours->data() + first : nullptr);
             if (const float open = 1 - sum.cover - sum.held; open > 0 && !ao_only) {
                 // Escaping camera rays see the sky (in beauty and direct).
                 const Color seen = lighting.background(normalize(

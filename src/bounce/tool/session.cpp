@@ -295,7 +295,7 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
     if (plan.visibility == VisibilityStep::Trace) plan.deep_out = deep_path_.string();  // the session's file follows
     RenderResult r = run_frame(scene, plan, previous, req, stats, &sink);
     // Only a finished render replaces the deep file and the cache (atomically) and the image.
-    if (r.gathered_deep) write_deep(plan.deep_out, *r.gathered_deep);
+    if (r.gathered_deep) write_deep(plan.deep_out, *r.gathered_deep, r.deep_colour.empty() ? nullptr : &r.deep_colour);
     if (cached && r.cache && (r.cache_changed() || action != SessionAction::Reshade))
         write_cache_file(cache_path_.string(), r.cache->to_file(r.cache_info));
     std::lock_guard lock(mutex_);
