@@ -143,6 +143,16 @@ TEST(LightingTool, ALightEditReshadesWithoutNewRecordsOrVisibility) {
     EXPECT_FALSE(st["phases_s"].contains("visibility"));
     EXPECT_NE(s.pixels("beauty", 0).rgba, before.rgba);
     EXPECT_EQ(bytes_of(s.cache_path()), cache);  // the cache is untouched
+    // ... so the bounce light is the old light's until a full re-gather.
+    EXPECT_EQ(s.status()["bounce_stale"], true);
+    render_and_wait(s, SessionAction::Regather, std::array<int, 4>{0, 16, 0, 16});
+    EXPECT_EQ(s.status()["bounce_stale"], true);  // a sub-viewport re-gathers only its rectangle
+    render_and_wait(s, SessionAction::Regather);
+    EXPECT_EQ(s.status()["bounce_stale"], false);
+    // Gloss changes how a surface reflects light to the camera, not the light that bounces.
+    s.edit("materials.white.specular", {0.2, 0.2, 0.2});
+    render_and_wait(s, SessionAction::Reshade);
+    EXPECT_EQ(s.status()["bounce_stale"], false);
 }
 
 TEST(LightingTool, AReshadeOfACacheWithHolesGathersThem) {

@@ -114,7 +114,9 @@ function showStats(stats) {
 
 async function refreshStatus() {
   const { data: s } = await api('/api/status');
-  $('pending').textContent = s.pending ? `pending: ${s.pending}` : '';
+  // A light edit re-shaded over the old records: the bounce light is the old lights' until a re-gather.
+  const stale = s.bounce_stale ? 'bounce light is stale: Re-gather to update it' : '';
+  $('pending').textContent = [s.pending ? `pending: ${s.pending}` : '', stale].filter(Boolean).join(' · ');
   const p = s.progress;
   $('bar').style.width = p.total ? `${100 * p.done / p.total}%` : s.state === 'done' ? '100%' : '0';
   $('progress-text').textContent = `${s.state}${s.action ? ' (' + s.action + ')' : ''}${p.phase ? ': ' + p.phase : ''}${s.message ? ' — ' + s.message : ''}`;

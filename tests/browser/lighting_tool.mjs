@@ -196,6 +196,9 @@ try {
   for (let i = 0; i < first.length; i++) changed += first[i] !== second[i];
   check(s.state === 'done' && changed > 1000, `the re-shade changed the image (${changed} channel values)`);
   check(s.stats.records_new === 0 && !(s.stats.phases_s || {}).visibility, 're-shade: 0 new records, no visibility pass');
+  const staleShown = await page.waitForFunction(() => document.getElementById('pending').textContent.includes('bounce light is stale'),
+    null, { timeout: 10000 }).then(() => true, () => false);
+  check(staleShown, 'after the re-shade the page says the bounce light is stale (not "nothing pending")');
   await shot('2-reshade.png');
 
   // 3. A sub-viewport: drag a rectangle, re-gather it.

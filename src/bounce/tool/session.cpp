@@ -165,6 +165,20 @@ json LightingSession::params() const {
     return rows;
 }
 
+namespace {
+
+/// Whether an edit of `key` changes the light that bounces (lights, and materials but for the
+/// keys that only change how a surface reflects light to the camera; Scene::fingerprint).
+bool changes_bounce_light(const std::string& key) {
+    if (key == "lights" || key.starts_with("lights.")) return true;
+    if (!key.starts_with("materials.")) return false;
+    for (const char* own : {".specular", ".roughness", ".bump_texture", ".normal_texture", ".bump_strength", ".ao_texture"})
+        if (key.ends_with(own)) return false;
+    return true;
+}
+
+}  // namespace
+
 json LightingSession::edit(const std::string& key, const json& value, const std::string& cli_origin) {
     if (key.empty() || key.size() > 256) throw InputError("request", "key", "a parameter key of 1..256 characters is required");
     std::lock_guard lock(mutex_);
@@ -182,6 +196,7 @@ json LightingSession::edit(const std::string& key, const json& value, const std:
     // Lights and materials: a re-shade shows them (the bounce light follows on a re-gather).
     const SessionAction needs = needs_for(p ? p->identity : kImageOnly);
     pending_ = std::max(pending_, static_cast<int>(needs));
+    if (changes_bounce_light(key)) bounce_stale_ = true;
     return {{"key", key}, {"value", value}, {"needs", session_action_name(needs)}};
 }
 
@@ -301,7 +316,10 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
     std::lock_guard lock(mutex_);
     image_ = crop ? paste_over(image_, r.image, "session image") : std::move(r.image);
     ++version_;
-    if (!crop && edit_count_ == edits_seen) pending_ = -1;  // edits made while it ran still need showing
+    if (!crop && edit_count_ == edits_seen) {  // edits made while it ran still need showing
+        pending_ = -1;
+        if (action == SessionAction::Regather || action == SessionAction::Rasterize) bounce_stale_ = false;
+    }
     const bool new_deep = !crop && plan.visibility != VisibilityStep::Previous;
     FrameState next = r.release_state();
     if (new_deep) deep_ = next.deep;  // else deep_ holds it already
@@ -375,6 +393,7 @@ json LightingSession::status() const {
             {"stats", stats_},
             {"image", {{"version", version_}, {"width", image_.width}, {"height", image_.height}, {"layers", layers}}},
             {"pending", pending_ < 0 ? json(nullptr) : json(session_action_name(static_cast<SessionAction>(pending_)))},
+            {"bounce_stale", bounce_stale_},
             {"frame", frame_},
             {"shot", {{"animated", scene_.shot.animated}, {"first", scene_.shot.first}, {"last", scene_.shot.last}, {"fps", scene_.shot.fps}}},
             {"scene", options_.scene}};

@@ -135,6 +135,9 @@ private:
     double frame_ = 1;  ///< the shot's frame the session shows
     int pending_ = -1;  ///< SessionAction, or -1 = nothing to show
     uint64_t edit_count_ = 0;  ///< edits so far (a render clears pending_ only if none came while it ran)
+    /// A light or material edit was re-shaded over records gathered with the old lights: the
+    /// bounce light is the old one until a full-frame re-gather (or new deep file) is done.
+    bool bounce_stale_ = false;
     // Worker state.
     std::thread worker_;
     std::unique_ptr<CancelToken> cancel_;
