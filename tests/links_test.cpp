@@ -152,5 +152,21 @@ TEST(Matte, AHoldoutIsBlackWithAlphaZeroAndHidesWhatIsBehindIt) {
     EXPECT_EQ(sun_at(test::scene_from(card_scene({}, {{"matte", true}})), {0, 0, 0}, 0), 0.0f);
 }
 
+TEST(Matte, AHoldoutGetsNoRecords) {
+    // Only the card in view: as a holdout nothing it shows needs bounce light.
+    json j = card_scene({}, {{"matte", true}});
+    j["objects"].erase(j["objects"].begin());  // the floor
+    j["render"] = {{"gi", "cache"}, {"rays", 16}};
+    Stats stats;
+    render(test::scene_from(j), {}, stats, nullptr);
+    const json st = stats.to_json();
+    EXPECT_EQ(st["records"].get<double>(), 0);
+    EXPECT_EQ(st["shading_misses"].get<double>(), 0);
+    j["objects"][0]["matte"] = false;
+    Stats shown;
+    render(test::scene_from(j), {}, shown, nullptr);
+    EXPECT_GT(shown.to_json()["records"].get<double>(), 0);
+}
+
 }  // namespace
 }  // namespace bounce

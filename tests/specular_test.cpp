@@ -198,6 +198,19 @@ TEST(Glass, AClearSphereUnderAUniformSkyNeitherGainsNorLosesLight) {
     EXPECT_EQ(at(none, "beauty", 16, 16), 0.0f);
 }
 
+TEST(Glass, AClearSphereNeedsNoRecordsAndATintedOneDoes) {
+    // A clear sphere shows only what its paths bring: its own fragments gather nothing.
+    Stats clear_stats, tinted_stats;
+    render_image(test::scene_from(sphere_scene({{"color", 0.5}, {"transmission", 1}}), {"render.gi=cache"}), &clear_stats);
+    render_image(test::scene_from(sphere_scene({{"color", 0.5}, {"transmission", 0.5}}), {"render.gi=cache"}), &tinted_stats);
+    const json c = clear_stats.to_json(), t = tinted_stats.to_json();
+    EXPECT_EQ(c["records"].get<double>(), 0);
+    EXPECT_EQ(c["rays"]["gather"].get<double>(), 0);
+    EXPECT_EQ(c["shading_misses"].get<double>(), 0);
+    EXPECT_GT(t["records"].get<double>(), 0);
+    EXPECT_EQ(t["shading_misses"].get<double>(), 0);
+}
+
 Scene mirror_glass(const std::vector<std::string>& extra) {
     std::vector<std::string> sets = {"camera.resolution=[48,48]", "render.spp=2", "render.rays=64"};
     sets.insert(sets.end(), extra.begin(), extra.end());

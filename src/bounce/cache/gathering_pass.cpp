@@ -104,6 +104,7 @@ void Gathering::judge_tile(const SubPass& sp, const Tile& t) {
             if (!sp.contains(wx + deep_.x0, wy + deep_.y0)) continue;
             auto frags = deep_.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
+                if (!needs_bounce_light(scene_, frags[k])) continue;
                 const Site site = record_site(scene_, frags[k], cache_.settings());
                 if (!cache_.misses(site.p, site.n, per_tile_ ? std::span<const Record>(w.made) : std::span<const Record>(),
                                    o_.own_weight, o_.min_weight))

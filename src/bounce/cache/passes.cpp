@@ -44,6 +44,10 @@ enum class Source { Records, Own, Missed };
 Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
                      Source& src) {
     const Fragment& f = deep.pixel(wx, wy)[k];
+    if (!needs_bounce_light(scene, f)) {
+        src = Source::Records;  // nothing to look up: not a miss
+        return {};
+    }
     if (cache.fragment_record_count() > 0)
         if (const Record* r = cache.fragment_record(candidate_key(deep, wx, wy, k), f.p)) {
             src = Source::Own;
@@ -81,6 +85,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = frags[k];
                 if (f.is_hair()) continue;  // hair keeps its strand's value (no fragment gathers)
+                if (!needs_bounce_light(scene, f)) continue;
                 const uint64_t key = candidate_key(deep, wx, wy, k);
                 if (cache.fragment_record(key, f.p)) continue;  // refined by an earlier render
                 // Interpolation about the un-displaced normal cannot stand for a hemisphere

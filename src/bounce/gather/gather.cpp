@@ -361,6 +361,15 @@ HairSite hair_site(const Scene& scene, const Fragment& f) {
     return {at_root ? f.p_base : f.p, f.n_base};
 }
 
+bool needs_bounce_light(const Scene& scene, const Fragment& f) {
+    if (scene.objects[f.object].matte) return false;
+    if (f.is_hair()) return true;
+    const Material& m = scene.materials[f.material];
+    for (int c = 0; c < 3; ++c)
+        if (m.mirror[c] < 1 && m.transmission[c] < 1) return true;
+    return false;
+}
+
 GatherSettings gather_settings(const Scene& scene) {
     const IndirectSettings& r = scene.render.indirect;
     GatherSettings g;
@@ -379,6 +388,7 @@ std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer
             // The true surface: the displaced point and normal (the cache's un-displaced
             // hemisphere is its approximation, measured against this). Hair: its site.
             const Fragment& f = frags[k];
+            if (!needs_bounce_light(scene, f)) continue;
             const HairSite site = f.is_hair() ? hair_site(scene, f) : HairSite{f.p, f.n};
             GatherResult g = gatherer.gather(site.p, site.n,
                                              fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), counters);

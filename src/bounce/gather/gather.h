@@ -154,6 +154,12 @@ struct HairSite {
 };
 HairSite hair_site(const Scene& scene, const Fragment& f);
 
+/// Whether fragment f's image uses the bounce light at all: not a holdout's (matte), nor a
+/// perfect mirror's or a clear glass's (base share 0 at every angle: it shows only what its
+/// specular paths bring). The gathering, refinement and interpolation passes and brute force
+/// skip the others (no records, no gathers; their indirect layers are 0 and their AO 1).
+bool needs_bounce_light(const Scene& scene, const Fragment& f);
+
 /// The gather settings a scene's render settings ask for (resolves the automatic AO distance).
 GatherSettings gather_settings(const Scene& scene);
 
