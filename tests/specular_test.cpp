@@ -211,6 +211,27 @@ TEST(Glass, AClearSphereNeedsNoRecordsAndATintedOneDoes) {
     EXPECT_EQ(t["shading_misses"].get<double>(), 0);
 }
 
+TEST(Glass, APileOfSheetsAtAGrazingAngleStopsAtTheRayBudget) {
+    // Sixty sheets of glass seen at 80 degrees: every crossing splits a path in two (F ~ 0.43), and
+    // between the sheets the reflected halves bounce on: 2^16 paths at 16 bounces unbounded.
+    json j = {{"camera", {{"position", {0, 1.76, -10}}, {"look_at", {0, 0, 0}}, {"fov", 1}, {"resolution", {4, 4}}}},
+              {"render", {{"gi", "none"}, {"spp", 1}, {"specular_depth", 16}}},
+              {"materials", {{"glass", {{"color", 0}, {"transmission", 1}, {"ior", 3}}}}},
+              {"lights", {{{"type", "sky"}, {"color", 1}}}},
+              {"objects", json::array()}};
+    for (int i = 0; i < 60; ++i) {
+        const double y = -0.05 * i;
+        j["objects"].push_back({{"name", "sheet" + std::to_string(i)}, {"type", "quad"}, {"material", "glass"},
+                                {"vertices", {{-50, y, -50}, {-50, y, 50}, {50, y, 50}, {50, y, -50}}}});
+    }
+    Stats stats;
+    render_image(test::scene_from(j), &stats);
+    // One trace per pixel: without gathers the paths are traced by the shading pass alone.
+    const double per_pixel = stats.to_json()["rays"]["specular"].get<double>() / 16;
+    EXPECT_LE(per_pixel, kMaxRaysPerPixel);
+    EXPECT_GT(per_pixel, kMaxRaysPerPixel / 2);  // the budget, not the weights, ended it
+}
+
 Scene mirror_glass(const std::vector<std::string>& extra) {
     std::vector<std::string> sets = {"camera.resolution=[48,48]", "render.spp=2", "render.rays=64"};
     sets.insert(sets.end(), extra.begin(), extra.end());

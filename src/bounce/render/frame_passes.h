@@ -73,6 +73,7 @@ void save_radiosity_pass(const FrameContext& ctx, const RadiosityTextures& rt, s
 /// (specular.h: sites, as fragments; empty when the scene has no mirror or glass) and, under
 /// brute force, the gather at each.
 struct SpecularSitesResult {
+    bool mirrors = false;  ///< the scene has mirrors or glass (sites are traced only when gathers light them)
     DeepBuffer sites;
     std::vector<Indirect> brute;
     bool any() const { return !sites.fragments.empty(); }

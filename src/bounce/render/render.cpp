@@ -152,7 +152,7 @@ void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const Visi
                       RadiosityResult& radiosity, CacheStartResult& start, const RenderRequest& request, RenderResult& result) {
     size_t baked_before = 0;
     const SpecularSitesResult specular = specular_sites_pass(ctx, deep.shaded);
-    if (specular.any() && !radiosity.textures &&
+    if (specular.mirrors && !radiosity.textures &&
         ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity)
         radiosity = radiosity_pass(ctx, plan, previous);
     auto gather = [&] {
@@ -205,7 +205,7 @@ void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const V
     std::vector<Indirect> light;
     SpecularSitesResult specular = specular_sites_pass(ctx, deep.shaded);
     const bool radiosity_sites = ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity;
-    if (specular.any() && radiosity_sites && !radiosity.textures && ctx.scene.render.indirect.any())
+    if (specular.mirrors && radiosity_sites && !radiosity.textures && ctx.scene.render.indirect.any())
         radiosity = radiosity_pass(ctx, plan, previous);
     if (plan.gather == GatherStep::Brute) {
         if (!radiosity.textures) radiosity = radiosity_pass(ctx, plan, previous);

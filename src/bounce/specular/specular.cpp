@@ -113,6 +113,8 @@ void SpecularTracer::split(const Branch& b, const Vec3& p, const Vec3& n, bool e
 }
 
 void SpecularTracer::follow(const Branch& b, PixelPaths& out, Counters& counters) const {
+    if (out.rays >= kMaxRaysPerPixel) return;
+    ++out.rays;
     ++counters.specular_rays;
     const Hit h = accel_.trace(b.o, b.d, kRayReflect);
     Color weight = b.weight;

@@ -41,10 +41,14 @@ struct PixelPaths {
     /// Per fragment of the pixel: radiance its paths met without ending on a surface (the sky,
     /// quad lights), by kind, and the fragment's own base share (1 for a non-specular surface).
     std::vector<Color> seen_reflection, seen_refraction, base;
-    void clear() { sites.clear(), seen_reflection.clear(), seen_refraction.clear(), base.clear(); }
+    uint32_t rays = 0;  ///< traced so far for this pixel (at most kMaxRaysPerPixel)
+    void clear() { sites.clear(), seen_reflection.clear(), seen_refraction.clear(), base.clear(), rays = 0; }
 };
 /// A site's index within its pixel is a byte of its cache candidate key (cache/sites.h).
 inline constexpr size_t kMaxSitesPerPixel = 255;
+/// A pixel's specular rays: glass at grazing angles splits every path in two at each of up to
+/// 16 bounces; past this many rays a pixel's remaining branches are dropped (in trace order).
+inline constexpr uint32_t kMaxRaysPerPixel = 4096;
 
 class SpecularTracer {
 public:
@@ -52,7 +56,8 @@ public:
     /// Whether any material is a mirror or glass (with render.specular_depth 0 their base shares still apply).
     bool active() const { return active_; }
     /// The paths leaving the fragments of one pixel, seen from `eye`. Branches whose weight
-    /// falls below 1e-4 are dropped; a pixel's sites beyond kMaxSitesPerPixel too.
+    /// falls below 1e-4 are dropped; a pixel's sites beyond kMaxSitesPerPixel and its rays
+    /// beyond kMaxRaysPerPixel too.
     void trace(std::span<const Fragment> frags, const Vec3& eye, PixelPaths& out, Counters& counters) const;
 
 private:
