@@ -218,6 +218,11 @@ async function loadScene() {
     view.camera.position.set(...c.position); view.orbit.target.set(...c.look_at); view.orbit.update(); view.placed = true;
   }
   if (view.drag.dragging) return;  // the handles are rebuilt after the drag's own edit
+  // Unmoved handles stay as they are: rebuilding them on an edit that moves no light (an
+  // intensity) re-attached the gizmo and dropped a drag a lighter was starting.
+  const placing = JSON.stringify([s.bounds, s.lights.filter((l) => l.position).map((l) => [l.key, l.position])]);
+  if (view.lights && placing === view.placing) return;
+  view.placing = placing;
   // The gizmo follows its light to the new handle (a detached handle may not stay attached).
   const held = view.drag.object ? view.drag.object.userData.key : null;
   view.drag.detach();

@@ -119,15 +119,19 @@ async function lighterFound() {
     await a.locator('#view-panel').scrollIntoViewIfNeeded();
     // Once the page has rebuilt its handles for the edits so far (a rebuild re-attaches the gizmo).
     await a.waitForFunction(() => window.bounce.status && window.bounce.editsShown === window.bounce.status.edits, null, { timeout: 15000 });
-    const [hx, hy] = await a.evaluate(() => window.bounce.handleOnScreen(0));
     const was = await cell(a, 'lights.0.position').inputValue();
-    await a.mouse.click(hx, hy);
-    await a.mouse.move(hx, hy);
-    await a.mouse.down();
-    await a.mouse.move(hx + 40, hy - 20, { steps: 8 });
-    await a.mouse.up();
-    const moved = await a.waitForFunction((w) => document.querySelector('input[aria-label="lights.0.position"]').value !== w, was,
-      { timeout: 10000 }).then(() => true).catch(() => false);
+    // Up to three tries: under ThreadSanitizer a late reply can still rebuild the view mid-gesture.
+    let moved = false;
+    for (let attempt = 0; attempt < 3 && !moved; attempt++) {
+      const [hx, hy] = await a.evaluate(() => window.bounce.handleOnScreen(0));
+      await a.mouse.click(hx, hy);
+      await a.mouse.move(hx, hy);
+      await a.mouse.down();
+      await a.mouse.move(hx + 40, hy - 20, { steps: 8 });
+      await a.mouse.up();
+      moved = await a.waitForFunction((w) => document.querySelector('input[aria-label="lights.0.position"]').value !== w, was,
+        { timeout: 10000 }).then(() => true).catch(() => false);
+    }
     check(moved, `dragging the light's handle edits its position (was ${was}, now ${await cell(a, 'lights.0.position').inputValue()})`);
     // Stop leaves the image the render started from, not its partial preview.
     const shown = await imageOf(a), v = await a.evaluate(() => window.bounce.version);
