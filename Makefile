@@ -18,6 +18,7 @@ build: configure
 	cmake --build $(BUILD) -j $(JOBS)
 
 render: build
+	mkdir -p $(dir $(OUT))
 	$(BUILD)/bounce render $(SCENE) -o $(OUT) --gi cache --rays 1024 --stats
 
 test: build
