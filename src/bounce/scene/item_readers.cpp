@@ -36,6 +36,11 @@ const std::vector<std::string>& material_keys() {
     return keys;
 }
 
+const std::vector<std::string>& surface_shading_keys() {
+    static const std::vector<std::string> keys = {"specular", "roughness", "bump_texture", "normal_texture", "bump_strength", "ao_texture"};
+    return keys;
+}
+
 const std::vector<std::string>& light_keys() {
     static const std::vector<std::string> keys = {"type",   "color",  "intensity", "position", "direction", "cone_angle", "cone_falloff",
                                                   "corner", "edge_u", "edge_v",    "texture",  "rotation",  "name",

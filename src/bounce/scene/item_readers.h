@@ -12,6 +12,9 @@ namespace bounce {
 
 /// The keys a material may have.
 const std::vector<std::string>& material_keys();
+/// The material keys that change only how a surface reflects light to the camera, not the
+/// light that bounces (Scene::fingerprint leaves them out; the lighting tool's stale state).
+const std::vector<std::string>& surface_shading_keys();
 /// Every key any light type reads (the reader then checks them against the light's type).
 const std::vector<std::string>& light_keys();
 

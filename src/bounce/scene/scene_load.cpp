@@ -207,7 +207,7 @@ uint64_t Scene::fingerprint(const std::vector<std::string>& parts, bool without_
         if (without_surface_shading && part == "materials" && value.is_object())
             for (auto& [name, m] : value.items())
                 if (m.is_object())
-                    for (const char* key : {"specular", "roughness", "bump_texture", "normal_texture", "bump_strength", "ao_texture"})
+                    for (const std::string& key : surface_shading_keys())
                         m.erase(key);
         std::string s = part + "=" + (value.is_null() ? "" : value.dump());
         for (unsigned char c : s) h = hash_combine(h, c);

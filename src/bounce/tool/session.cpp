@@ -172,8 +172,8 @@ namespace {
 bool changes_bounce_light(const std::string& key) {
     if (key == "lights" || key.starts_with("lights.")) return true;
     if (!key.starts_with("materials.")) return false;
-    for (const char* own : {".specular", ".roughness", ".bump_texture", ".normal_texture", ".bump_strength", ".ao_texture"})
-        if (key.ends_with(own)) return false;
+    for (const std::string& own : surface_shading_keys())
+        if (key.ends_with("." + own)) return false;
     return true;
 }
 
