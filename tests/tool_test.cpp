@@ -1,5 +1,6 @@
 // The lighting tool: the session's edit / re-shade / re-gather / sub-viewport / cancel contract,
 // and the HTTP API's validation (in-process client on a loopback port).
+#include <fmt/format.h>
 #include <httplib.h>
 
 #include <fstream>
@@ -153,6 +154,44 @@ TEST(LightingTool, ALightEditReshadesWithoutNewRecordsOrVisibility) {
     s.edit("materials.white.specular", {0.2, 0.2, 0.2});
     render_and_wait(s, SessionAction::Reshade);
     EXPECT_EQ(s.status()["bounce_stale"], false);
+}
+
+TEST(LightingTool, AnIntensityOrColourEditUpdatesTheBounceLightExactly) {
+    test::TempDir d;
+    SessionOptions o = small_session(d);
+    // A spot through the open front besides the ceiling panel (a mesh light: its emission is a material's).
+    o.sets.push_back(R"(lights=[{"type":"spot","position":[278,300,-500],"direction":[0,-0.2,1],"cone_angle":30,"color":2e5}])");
+    LightingSession s(o);
+    EXPECT_EQ(s.params().dump().find("render.light_parts") != std::string::npos, true);
+    render_and_wait(s, SessionAction::Rasterize);
+    size_t spot = 0;
+    for (const json& row : s.params())
+        if (row["key"] == "lights.1.cone_angle") spot = 1;
+    const std::string key = fmt::format("lights.{}.", spot);
+    EXPECT_EQ(s.edit(key + "intensity", 0.4)["needs"], "reshade");
+    EXPECT_EQ(s.edit(key + "color", json{1.0, 0.5, 0.2})["needs"], "reshade");
+    render_and_wait(s, SessionAction::Reshade);
+    const json st = s.status();
+    EXPECT_EQ(st["bounce_stale"], false);  // the records took the new light
+    EXPECT_EQ(st["stats"]["records_new"], 0.0);
+    EXPECT_EQ(st["stats"]["rays"]["gather"], 0);
+    const Image reshaded = s.image();
+    render_and_wait(s, SessionAction::Regather);
+    const Image regathered = s.image();
+    const Layer *a = reshaded.find("indirect"), *b = regathered.find("indirect");
+    ASSERT_TRUE(a && b);
+    size_t lit = 0;
+    for (int y = 0; y < reshaded.height; ++y)
+        for (int x = 0; x < reshaded.width; ++x) {
+            ASSERT_EQ(reshaded.at(*a, x, y)[0], regathered.at(*b, x, y)[0]) << x << "," << y;
+            ASSERT_EQ(reshaded.at(*a, x, y)[2], regathered.at(*b, x, y)[2]) << x << "," << y;
+            lit += reshaded.at(*a, x, y)[0] > 0;
+        }
+    EXPECT_GT(lit, 100u);
+    // Moving the light, or the panel's emission, is not a rescale: stale until a re-gather.
+    s.edit(key + "position", json{200, 300, -500});
+    render_and_wait(s, SessionAction::Reshade);
+    EXPECT_EQ(s.status()["bounce_stale"], true);
 }
 
 TEST(LightingTool, AReshadeOfACacheWithHolesGathersThem) {

@@ -138,7 +138,7 @@ void Gathering::insert_new(std::vector<Record> records) {
     auto lock = lock_cache<std::unique_lock<std::shared_mutex>>(cache_, stats_.local());
     if (cache_.luminance_floor() < 0 && !records.empty()) {
         double mean = 0;
-        for (const auto& r : records) mean += luminance(r.E);
+        for (const auto& r : records) mean += luminance(r.parts ? r.parts->signal.E : r.E);  // light parts: the signal's
         cache_.set_luminance_floor(static_cast<float>(1e-3 * mean / static_cast<double>(records.size())));
     }
     const size_t before = cache_.size();

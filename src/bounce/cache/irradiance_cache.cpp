@@ -1,6 +1,8 @@
 #include "bounce/cache/irradiance_cache.h"
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace bounce {
 
@@ -19,6 +21,52 @@ bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Recor
     octree_.visit(p, [&](uint32_t id) { add(records_[id]); });
     for (const Record& r : extra) add(r);
     return sum < (min_weight > 0 ? min_weight : settings_.min_weight) && top < own;
+}
+
+namespace {
+
+/// A record's signal (light parts at scale 1) extrapolated to (p, n) as lookup() extrapolates its value.
+Color extrapolated_signal(const Record& r, const Vec3& p, const Vec3& n) {
+    const LightPart& s = r.parts->signal;
+    Color e = s.E;
+    const Vec3 dp = p - r.p, rot = cross(r.n, n);
+    for (int c = 0; c < 3; ++c) {
+        auto k = static_cast<size_t>(c);
+        e[c] = std::clamp(s.E[c] + dot(dp, s.grad_t[k]) + dot(rot, s.grad_r[k]), 0.0f, 4 * s.E[c]);
+    }
+    return e;
+}
+
+}  // namespace
+
+bool IrradianceCache::has_light_parts(size_t lights) const {
+    const auto has = [lights](const Record& r) { return r.parts && r.parts->light.size() == lights; };
+    return std::all_of(records_.begin(), records_.end(), has) && std::all_of(fragment_records_.begin(), fragment_records_.end(), has);
+}
+
+void IrradianceCache::set_values(Record& r, const GatherResult& g, bool gradients, float grad_t_scale) const {
+    r.ao = g.ao;
+    r.bent = g.bent_normal;
+    r.ao_grad_r = gradients ? g.ao_grad_rot : Vec3(0);
+    r.ao_grad_t = gradients ? g.ao_grad_trans * grad_t_scale : Vec3(0);
+    if (!g.parts) {
+        r.E = g.irradiance, r.dir = g.light_dir;
+        r.grad_r = r.grad_t = {};
+        if (!gradients) return;
+        r.grad_r = g.grad_rot;
+        for (size_t c = 0; c < 3; ++c) r.grad_t[c] = g.grad_trans[c] * grad_t_scale;
+        return;
+    }
+    if (light_scales_.size() != g.parts->light.size()) throw std::logic_error("irradiance cache: light scales not set");
+    auto parts = std::make_shared<LightParts>(*g.parts);
+    const auto adjust = [&](LightPart& part) {
+        if (!gradients) part.grad_r = part.grad_t = {};
+        for (Vec3& gt : part.grad_t) gt = gt * grad_t_scale;
+    };
+    adjust(parts->signal);
+    for (LightPart& part : parts->light) adjust(part);
+    r.parts = std::move(parts);
+    apply_light_scales(r, light_scales_);
 }
 
 Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading, const Vec3* at_p, const Vec3* at_n) const {
@@ -50,7 +98,10 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
         if (first) base = ei, base_ao = ai, first = false;
         for (int c = 0; c < 3; ++c) de[c] += static_cast<double>(w) * (ei[c] - base[c]);
         dao += static_cast<double>(w) * (ai - base_ao);
-        const double l = ao_only_ ? ai : luminance(ei);
+        // The spread decides refinement: with light parts it is the signal's, which no light's
+        // colour or intensity changes.
+        const double l = ao_only_ ? ai : r.parts ? luminance(extrapolated_signal(r, at_p ? *at_p : p, at_n ? *at_n : n))
+                                                  : luminance(ei);
         lsum += w * l;
         l2sum += w * l * l;
         wsum += w;
@@ -79,14 +130,6 @@ Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const 
     Record r;
     r.p = p;
     r.n = n;
-    r.E = g.irradiance;
-    r.ao = g.ao;
-    r.bent = g.bent_normal;
-    r.dir = g.light_dir;
-    r.grad_r = g.grad_rot;
-    r.grad_t = g.grad_trans;
-    r.ao_grad_r = g.ao_grad_rot;
-    r.ao_grad_t = g.ao_grad_trans;
     r.footprint = footprint;
     r.harmonic = g.harmonic_distance;
     r.dmin = g.min_distance;
@@ -106,7 +149,9 @@ Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const 
         set_long_radius(r, radius_for(g.hess_slow), g.hess_axis);
     }
     // Weber's law: the distance at which the gradient-extrapolated change reaches tau times
-    // the record's value (luminance, or AO), never below the minimum spacing.
+    // the record's value (luminance, or AO), never below the minimum spacing. (With light
+    // parts, g's values are the signal's: every light at scale 1.)
+    float grad_t_scale = 1;
     if (settings_.gradient_limit > 0) {
         float value, slope;
         if (ao_only_) {
@@ -122,13 +167,12 @@ Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const 
             // The limit would pack records closer than the minimum spacing (corners, where
             // 1/r terms make gradients explode): keep the spacing and scale the translational
             // gradient instead, so extrapolation over R_min changes the value by at most tau E.
-            float scale = weber / rmin;
-            for (auto& g3 : r.grad_t) g3 *= scale;
-            r.ao_grad_t *= scale;
+            grad_t_scale = weber / rmin;
             weber = rmin;
         }
         r.weber = weber;
     }
+    set_values(r, g, true, grad_t_scale);
     return r;
 }
 

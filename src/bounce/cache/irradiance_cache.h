@@ -60,6 +60,15 @@ public:
     /// (TL04) or the harmonic mean (Ward) clamped to [min_spacing, max_spacing] pixels of
     /// `footprint`, and the Weber distance of the gradient limit.
     Record make_record(const GatherResult& g, const Vec3& p, const Vec3& n, float footprint, uint64_t key) const;
+    /// r's irradiance, AO, bent normal, light directions and (with `gradients`) gradients from
+    /// gather g, the translational ones times `grad_t_scale`; with light parts, the parts are
+    /// kept and the values are their sum at the cache's light scales.
+    void set_values(Record& r, const GatherResult& g, bool gradients = true, float grad_t_scale = 1) const;
+    /// CacheSettings::light_parts: what each light's part is multiplied by (light_scales).
+    void set_light_scales(std::vector<Color> scales) { light_scales_ = std::move(scales); }
+    const std::vector<Color>& light_scales() const { return light_scales_; }
+    /// Whether every record keeps its light parts, for `lights` lights (a rescale is exact).
+    bool has_light_parts(size_t lights) const;
     /// Neighbour clamping (Krivanek et al. 2006): R_r <= R_j + |p_r - p_j| on the unclamped radii
     /// over this cache's records and `extra` whose reach includes p_r; then the screen-space
     /// clamps again. A no-op when the setting is off.
@@ -105,6 +114,7 @@ private:
     std::unordered_map<uint64_t, uint32_t> fragment_index_;  ///< key -> fragment_records_ index
     RecordOctree octree_;
     float luminance_floor_ = -1;  ///< Weber floor, fixed from the first record batch
+    std::vector<Color> light_scales_;  ///< light_parts: per scene light
     std::unique_ptr<std::shared_mutex> mutex_ = std::make_unique<std::shared_mutex>();  // keeps the cache movable
 };
 

@@ -117,7 +117,8 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                     hits.get());
                 Record r;
                 r.hits = std::move(hits);
-                r.p = f.p, r.n = f.n, r.E = g.irradiance, r.ao = g.ao, r.bent = g.bent_normal, r.dir = g.light_dir;
+                r.p = f.p, r.n = f.n;
+                cache.set_values(r, g, false);  // a fragment's own value: no gradients
                 // Never used for reach; positive so the record is a valid one in a cache file.
                 r.footprint = f.footprint > 0 ? f.footprint : 1e-6f;
                 r.radius = r.raw_radius = r.footprint;

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,10 @@
 namespace bounce {
 
 inline constexpr uint32_t kNoAnchor = 0xffffffffu;
+
+/// The sum of every light's part times its scale, in one fixed order (a record made fresh and
+/// one rescaled to the same scales hold the same bits).
+LightPart combine_parts(const LightParts& parts, std::span<const Color> scales);
 
 /// One cache record: a full gather's result at (p, n), with its reach.
 struct Record {
@@ -48,7 +53,11 @@ struct Record {
     float near = 0;              ///< its gather's `near` (Gatherer::gather), to gather it again alike
     float drift = 0;             ///< bound on how far its irradiance may have moved since (relative to E)
     std::shared_ptr<const GatherHits> hits;  ///< kept only when a shot may re-shade it (not in files)
+    std::shared_ptr<const LightParts> parts; ///< CacheSettings::light_parts only (not in files)
 };
+
+/// Sets r's irradiance, directions and gradients from its light parts at `scales` (no parts: as it is).
+void apply_light_scales(Record& r, std::span<const Color> scales);
 
 /// Normalised error terms of record `r` at (p, n); each reaches 1 exactly at its bound.
 struct MetricTerms {

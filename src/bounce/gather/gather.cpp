@@ -46,23 +46,63 @@ Gatherer::Gatherer(const Scene& scene, const SceneAccel& accel, const Materials&
       grid_(gather_grid(settings.rays)),
       cos_concave_(std::cos(settings.concave_angle * kPi / 180.0f)),
       packet_order_(gather_packet_order(grid_)),
-      far_(10 * std::max(1e-6f, length(scene.bounds().diagonal()))) {}
+      far_(10 * std::max(1e-6f, length(scene.bounds().diagonal()))),
+      lights_(settings.light_parts && !settings.ao ? scene.lights.size() : 0) {
+    if (lights_ && radiosity_ && !radiosity_->has_parts())
+        throw std::logic_error("gather: light parts need radiosity textures baked with parts");
+}
+
+namespace {
+/// The sum of a cell's per-light parts, in light order (the signal: every light at scale 1).
+Color part_sum(std::span<const Color> parts) {
+    Color sum(0);
+    for (const Color& x : parts) sum += x;
+    return sum;
+}
+}  // namespace
 
 Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray,
-                             Counters& counters) const {
+                             Counters& counters, std::span<Color> parts) const {
     bool front = dot(sp.ng, d) < 0;
+    if (radiosity_ && !parts.empty()) {
+        radiosity_->lookup_parts(h.object, h.prim, h.u, h.v, front, counters, parts);
+        return part_sum(parts);
+    }
     if (radiosity_) return radiosity_->lookup(h.object, h.prim, h.u, h.v, front, counters);
     Vec3 n = front ? sp.ng : -sp.ng;
     Color albedo = materials_.secondary_albedo(sp.material, sp.uv);
     RandomStream hit_rng(rng.bits(ray, kDimGather + 3), ray);
-    return albedo * lighting_.irradiance(sp.p, n, h.object, hit_rng, settings_.hit_light_samples, counters) * kInvPi;
+    if (parts.empty()) return albedo * lighting_.irradiance(sp.p, n, h.object, hit_rng, settings_.hit_light_samples, counters) * kInvPi;
+    lighting_.irradiance_parts(sp.p, n, h.object, hit_rng, settings_.hit_light_samples, counters, parts);
+    for (Color& x : parts) x = albedo * x * kInvPi;
+    return part_sum(parts);
+}
+
+Color Gatherer::hair_radiance(const Hit& h, const Vec3& at, const Vec3& d, const RandomStream& rng, uint64_t ray,
+                              Counters& counters, std::span<Color> parts) const {
+    // A strand seen from the gather reflects its albedo x the direct light on its side facing the ray.
+    const Fur& fur = *scene_.objects[h.object].fur;
+    RandomStream hit_rng(rng.bits(ray, kDimGather + 3), ray);
+    const Color albedo = fur.params.albedo(fur.v_of(h.prim, h.u));
+    if (parts.empty())
+        return albedo * kInvPi *
+               lighting_.irradiance(at, -d, h.object, hit_rng, settings_.hit_light_samples, counters, true, nullptr, fur.max_width());
+    lighting_.irradiance_parts(at, -d, h.object, hit_rng, settings_.hit_light_samples, counters, parts, fur.max_width());
+    for (Color& x : parts) x = albedo * kInvPi * x;
+    return part_sum(parts);
+}
+
+Color Gatherer::escaped_radiance(const Vec3& d, std::span<Color> parts) const {
+    if (parts.empty()) return lighting_.background(d);
+    lighting_.background_parts(d, parts);
+    return part_sum(parts);
 }
 
 namespace {
 
 /// Per-cell scratch of the thread's current gather (trace or re-shade, then finish).
 struct Cells {
-    std::vector<Color> L;
+    std::vector<Color> L, P;  ///< radiance per cell; with light parts, per cell and light (cell-major)
     std::vector<float> R, U, cos_theta;
     std::vector<Vec3> D;
     std::vector<Hit> hits, packet_hits;
@@ -178,6 +218,74 @@ void cells_through(const GatherGrid& grid, const Vec3& p, const Vec3& n, const R
         }
 }
 
+namespace {
+
+float chan(float v, int) { return v; }
+float chan(const Color& v, int c) { return v[c]; }
+
+/// Rotational gradient (cell-centre angles): sum_k t(phi_k) sum_j tan(theta_j) L_jk, and the
+/// translational one, Ward-Heckbert over cell boundaries with min distances (docs/gather.md has
+/// the derivation and the sign convention), of the values L[c * stride] (C channels), unscaled.
+template <class V, size_t C>
+void gradient_sums(const GatherGrid& grid, const Frame& frame, float near, const float* R, const V* L, size_t stride,
+                   std::array<Vec3, C>& gr, std::array<Vec3, C>& gt) {
+    const int M = grid.m, N = grid.n;
+    const auto fM = static_cast<float>(M);
+    const auto at = [&](int j, int k) -> const V& { return L[static_cast<size_t>(j * N + k) * stride]; };
+    for (int k = 0; k < N; ++k) {
+        float phi_c = 2 * kPi * (static_cast<float>(k) + 0.5f) / static_cast<float>(N);
+        float phi_0 = 2 * kPi * static_cast<float>(k) / static_cast<float>(N);
+        Vec3 t_c = frame.to_world({-std::sin(phi_c), std::cos(phi_c), 0});
+        Vec3 u_c = frame.to_world({std::cos(phi_c), std::sin(phi_c), 0});
+        Vec3 t_0 = frame.to_world({-std::sin(phi_0), std::cos(phi_0), 0});
+        V rot(0), radial(0), azim(0);
+        const int kprev = (k + N - 1) % N;
+        for (int j = 0; j < M; ++j) {
+            const auto c = static_cast<size_t>(j * N + k);
+            float sin_c = std::sqrt((static_cast<float>(j) + 0.5f) / fM);
+            float tan_c = sin_c / std::sqrt(std::max(1e-6f, 1 - sin_c * sin_c));
+            rot += at(j, k) * tan_c;
+            float sin_lo = std::sqrt(static_cast<float>(j) / fM), sin_hi = std::sqrt((static_cast<float>(j) + 1) / fM);
+            if (j >= 1) {  // boundary between rows j-1 and j moves radially
+                const auto cp = static_cast<size_t>((j - 1) * N + k);
+                float rmin = std::max(near, std::min(R[c], R[cp]));
+                if (std::isfinite(rmin) && rmin > 0)  // a hit at 0 (a fold of a displaced surface) moves nothing
+                    radial += (at(j, k) - at(j - 1, k)) * (sin_lo * (1 - sin_lo * sin_lo) / rmin);
+            }
+            // boundary between columns k-1 and k moves in azimuth
+            const auto cq = static_cast<size_t>(j * N + kprev);
+            float rmin = std::max(near, std::min(R[c], R[cq]));
+            if (std::isfinite(rmin) && rmin > 0) azim += (at(j, k) - at(j, kprev)) * ((sin_hi - sin_lo) / rmin);
+        }
+        const float dphi = 2 * kPi / static_cast<float>(N);
+        for (size_t ch = 0; ch < C; ++ch) {
+            gr[ch] += t_c * chan(rot, static_cast<int>(ch));
+            gt[ch] += u_c * (dphi * chan(radial, static_cast<int>(ch))) + t_0 * chan(azim, static_cast<int>(ch));
+        }
+    }
+}
+
+}  // namespace
+
+LightPart Gatherer::light_part(const Color* L, size_t stride, const Frame& frame, float near, bool gradients) const {
+    const size_t S = static_cast<size_t>(grid_.rays());
+    Color sum(0);
+    std::array<Vec3, 3> dir{};
+    for (size_t c = 0; c < S; ++c) {
+        const Color& l = L[c * stride];
+        sum += l;
+        for (int ch = 0; ch < 3; ++ch) dir[static_cast<size_t>(ch)] += cells.D[c] * l[ch];
+    }
+    const float w = kPi / static_cast<float>(S);
+    LightPart out;
+    out.E = sum * w;
+    for (size_t ch = 0; ch < 3; ++ch) out.dir[ch] = dir[ch] * w;
+    if (!gradients) return out;
+    gradient_sums(grid_, frame, near, cells.R.data(), L, stride, out.grad_r, out.grad_t);
+    for (size_t ch = 0; ch < 3; ++ch) out.grad_r[ch] = out.grad_r[ch] * w;
+    return out;
+}
+
 GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const {
     const int M = grid_.m, N = grid_.n, S = M * N;
     std::vector<Color>& L = cells.L;
@@ -187,14 +295,14 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
     const Frame frame(n);
     GatherResult res;
     res.rays = S;
-    Color sum_l(0);
     Vec3 sum_u_dir(0);
-    std::array<Vec3, 3> sum_dir{};
     double inv_r_sum = 0;
     float sum_u = 0;
+    if (lights_) cells.P.assign(static_cast<size_t>(S) * lights_, Color(0));
     for (size_t c = 0; c < static_cast<size_t>(S); ++c) {
         const Vec3& d = D[c];
         const Hit& h = hits[c];
+        const std::span<Color> parts = lights_ ? std::span<Color>(cells.P.data() + c * lights_, lights_) : std::span<Color>();
         Color l(0);
         float u = 1;
         if (h.valid()) {
@@ -207,39 +315,37 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
             // Distance for the record radius: leave out rays that are grazing both where
             // they leave and where they land (slightly concave surfaces).
             if (h.hair) {
-                // Fur that casts indirect light (fur.cast_indirect): a strand seen from the
-                // gather reflects its albedo x the direct light on its side facing the ray.
+                // Fur that casts indirect light (fur.cast_indirect).
                 if (settings_.record_terms && h.t >= near) res.min_distance = std::min(res.min_distance, h.t);
-                if (!settings_.ao) {
-                    const Fur& fur = *scene_.objects[h.object].fur;
-                    RandomStream hit_rng(rng.bits(c, kDimGather + 3), c);
-                    l = fur.params.albedo(fur.v_of(h.prim, h.u)) * kInvPi *
-                        lighting_.irradiance(p + d * h.t, -d, h.object, hit_rng, settings_.hit_light_samples, counters, true, nullptr,
-                                             fur.max_width());
-                }
+                if (!settings_.ao) l = hair_radiance(h, p + d * h.t, d, rng, c, counters, parts);
             } else if (settings_.record_terms || !settings_.ao) {
                 const SurfacePoint sp = surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v);
                 if (settings_.record_terms) {
                     bool grazing = cos_theta[c] < cos_concave_ && std::abs(dot(sp.ng, d)) < cos_concave_;
                     if (!grazing && h.t >= near) res.min_distance = std::min(res.min_distance, h.t);
                 }
-                if (!settings_.ao) l = hit_radiance(h, sp, d, rng, c, counters);
+                if (!settings_.ao) l = hit_radiance(h, sp, d, rng, c, counters, parts);
             }
         } else if (!settings_.ao) {
-            l = lighting_.background(d);
+            l = escaped_radiance(d, parts);
         }
         L[c] = l;
         U[c] = u;
-        sum_l += l;
         sum_u += u;
         sum_u_dir += d * u;
-        for (int ch = 0; ch < 3; ++ch) sum_dir[static_cast<size_t>(ch)] += d * l[ch];
     }
     const float w = kPi / static_cast<float>(S);
-    res.irradiance = sum_l * w;
+    const LightPart sums = light_part(L.data(), 1, frame, near, settings_.record_terms);
+    res.irradiance = sums.E, res.light_dir = sums.dir;
+    if (lights_) {
+        auto parts = std::make_shared<LightParts>();
+        parts->signal = sums;
+        for (size_t i = 0; i < lights_; ++i)
+            parts->light.push_back(light_part(cells.P.data() + i, lights_, frame, near, settings_.record_terms));
+        res.parts = std::move(parts);
+    }
     res.ao = sum_u / static_cast<float>(S);
     res.bent_normal = dot(sum_u_dir, sum_u_dir) > 0 ? normalize(sum_u_dir) : n;
-    for (int ch = 0; ch < 3; ++ch) res.light_dir[static_cast<size_t>(ch)] = sum_dir[static_cast<size_t>(ch)] * w;
     res.harmonic_distance = inv_r_sum > 0 ? static_cast<float>(S / inv_r_sum) : INFINITY;
     if (settings_.record_terms) {  // only records use it (adaptive rays); brute force skips it
         double d2 = 0;
@@ -292,61 +398,12 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
         res.hess_axis = th.axis, res.hess_slow = th.slow, res.hess_fast = th.fast;
     }
 
-    // Rotational gradient (cell-centre angles): (pi/S) sum_k t(phi_k) sum_j tan(theta_j) L_jk.
-    // Translational gradient: Ward-Heckbert over cell boundaries with min distances
-    // (docs/gather.md has the derivation and the sign convention).
-    Vec3 gr[3] = {}, gt[3] = {};
-    Vec3 agr(0), agt(0);
-    const auto fM = static_cast<float>(M);
-    for (int k = 0; k < N; ++k) {
-        float phi_c = 2 * kPi * (static_cast<float>(k) + 0.5f) / static_cast<float>(N);
-        float phi_0 = 2 * kPi * static_cast<float>(k) / static_cast<float>(N);
-        Vec3 t_c = frame.to_world({-std::sin(phi_c), std::cos(phi_c), 0});
-        Vec3 u_c = frame.to_world({std::cos(phi_c), std::sin(phi_c), 0});
-        Vec3 t_0 = frame.to_world({-std::sin(phi_0), std::cos(phi_0), 0});
-        Color rot(0), radial(0), azim(0);
-        float arot = 0, aradial = 0, aazim = 0;
-        const int kprev = (k + N - 1) % N;
-        for (int j = 0; j < M; ++j) {
-            const auto c = static_cast<size_t>(j * N + k);
-            float sin_c = std::sqrt((static_cast<float>(j) + 0.5f) / fM);
-            float tan_c = sin_c / std::sqrt(std::max(1e-6f, 1 - sin_c * sin_c));
-            rot += L[c] * tan_c;
-            arot += U[c] * tan_c;
-            float sin_lo = std::sqrt(static_cast<float>(j) / fM), sin_hi = std::sqrt((static_cast<float>(j) + 1) / fM);
-            if (j >= 1) {  // boundary between rows j-1 and j moves radially
-                const auto cp = static_cast<size_t>((j - 1) * N + k);
-                float rmin = std::max(near, std::min(R[c], R[cp]));
-                if (std::isfinite(rmin) && rmin > 0) {  // a hit at 0 (a fold of a displaced surface) moves nothing
-                    float coef = sin_lo * (1 - sin_lo * sin_lo) / rmin;
-                    radial += (L[c] - L[cp]) * coef;
-                    aradial += (U[c] - U[cp]) * coef;
-                }
-            }
-            // boundary between columns k-1 and k moves in azimuth
-            const auto cq = static_cast<size_t>(j * N + kprev);
-            float rmin = std::max(near, std::min(R[c], R[cq]));
-            if (std::isfinite(rmin) && rmin > 0) {
-                float coef = (sin_hi - sin_lo) / rmin;
-                azim += (L[c] - L[cq]) * coef;
-                aazim += (U[c] - U[cq]) * coef;
-            }
-        }
-        const float dphi = 2 * kPi / static_cast<float>(N);
-        for (int ch = 0; ch < 3; ++ch) {
-            gr[ch] += t_c * rot[ch];
-            gt[ch] += u_c * (dphi * radial[ch]) + t_0 * azim[ch];
-        }
-        agr += t_c * arot;
-        agt += u_c * (dphi * aradial) + t_0 * aazim;
-    }
-    for (int ch = 0; ch < 3; ++ch) {
-        res.grad_rot[static_cast<size_t>(ch)] = gr[ch] * w;
-        res.grad_trans[static_cast<size_t>(ch)] = gt[ch];
-    }
+    res.grad_rot = sums.grad_r, res.grad_trans = sums.grad_t;
+    std::array<Vec3, 1> agr{}, agt{};
+    gradient_sums(grid_, frame, near, R.data(), U.data(), 1, agr, agt);
     // AO is a mean (1/S), not pi/S times a sum.
-    res.ao_grad_rot = agr / static_cast<float>(S);
-    res.ao_grad_trans = agt * kInvPi;
+    res.ao_grad_rot = agr[0] / static_cast<float>(S);
+    res.ao_grad_trans = agt[0] * kInvPi;
     return res;
 }
 
@@ -375,6 +432,7 @@ GatherSettings gather_settings(const Scene& scene) {
     GatherSettings g;
     static_cast<IndirectSettings&>(g) = r;
     g.ao_distance = r.ao_distance >= 0 ? r.ao_distance : 0.1f * length(scene.bounds().diagonal());
+    g.light_parts = scene.render.cache.light_parts && r.gi == GiMode::Cache;
     return g;
 }
 

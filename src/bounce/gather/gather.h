@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -25,6 +26,25 @@ struct GatherSettings : IndirectSettings {
                                  ///< force turns them off and gathers only E, AO and directions
     const CancelToken* cancel = nullptr;  ///< checked once per gather
     bool hessian = false;        ///< also the irradiance Hessian (record_terms only)
+    /// Also the bounce light per light (GatherResult::parts; not in AO mode). Then
+    /// every value of the result is its `signal` (every light at scale 1): what decides where
+    /// records go and how many rays they take depends on no light's colour or intensity.
+    bool light_parts = false;
+};
+
+/// The part of a gather's (and its record's) values that is linear in the light: what one light (or all of them,
+/// each at scale 1) contributes to its irradiance, directions and gradients.
+struct LightPart {
+    Color E{0};
+    std::array<Vec3, 3> dir{}, grad_r{}, grad_t{};
+};
+
+/// A gather's bounce light per light (GatherSettings::light_parts), every light's scale
+/// (light_scales) factored out; fixed once made, so records' copies share it.
+struct LightParts {
+    LightPart signal;              ///< every light at scale 1: what placement decisions read
+    std::vector<LightPart> light;  ///< per scene light
+    size_t bytes() const { return sizeof(LightParts) + light.size() * sizeof(LightPart); }
 };
 
 /// The stratification used for `rays`.
@@ -83,6 +103,7 @@ struct GatherResult {
     float hess_slow = 0, hess_fast = 0;
     /// With record_terms: the farthest hit per direction bin (INFINITY where a ray escaped).
     std::array<float, kReachBins> reach{};
+    std::shared_ptr<LightParts> parts;  ///< GatherSettings::light_parts: per light
 };
 
 /// Gathers at `p` (on the fine surface) over the hemisphere of unit normal `n`.
@@ -117,9 +138,17 @@ private:
     void cell_directions(const Vec3& n, const RandomStream& rng) const;
     /// Everything a gather computes from its cells' directions and hits (thread-local arrays).
     GatherResult finish(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const;
-    /// Radiance leaving a hit towards the gather point (direction -d).
+    /// Radiance leaving a hit towards the gather point (direction -d). With `parts` (one per
+    /// light): per light, scales factored out, and their sum is returned (the signal).
     Color hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray,
-                       Counters& counters) const;
+                       Counters& counters, std::span<Color> parts) const;
+    /// The same from a strand of fur at `at` (fur.cast_indirect), and from the sky where a ray escapes.
+    Color hair_radiance(const Hit& h, const Vec3& at, const Vec3& d, const RandomStream& rng, uint64_t ray, Counters& counters,
+                        std::span<Color> parts) const;
+    Color escaped_radiance(const Vec3& d, std::span<Color> parts) const;
+    /// The light-linear sums of the current gather over cell values L[c * stride]: E and light
+    /// directions, and with `gradients` the rotational and translational gradients.
+    LightPart light_part(const Color* L, size_t stride, const Frame& frame, float near, bool gradients) const;
 
     const Scene& scene_;
     const SceneAccel& accel_;
@@ -131,6 +160,7 @@ private:
     float cos_concave_;
     std::vector<uint32_t> packet_order_;  ///< grid cells in 4x4 blocks: coherent packets of 16
     float far_;  ///< where a ray that leaves the scene is taken to end, for the Hessian's mesh
+    size_t lights_;  ///< GatherSettings::light_parts: the scene's lights (0: no parts)
 };
 
 }  // namespace bounce

@@ -56,6 +56,25 @@ Color DirectLighting::irradiance(const Vec3& p, const Vec3& n, uint32_t object, 
     return e;
 }
 
+std::vector<Color> light_scales(const Scene& scene) {
+    std::vector<Color> out;
+    for (const Light& l : scene.lights) out.push_back(l.type == LightType::Mesh ? Color(1) : l.color);
+    return out;
+}
+
+void DirectLighting::irradiance_parts(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng, int samples,
+                                      Counters& counters, std::span<Color> out, float hair_start) const {
+    for (size_t i = 0; i < scene_.lights.size(); ++i)
+        out[i] = scene_.lights[i].lights(object) ? sample_light(i, p, n, rng, samples, counters, nullptr, hair_start, true) : Color(0);
+}
+
+void DirectLighting::background_parts(const Vec3& dir, std::span<Color> out) const {
+    for (size_t i = 0; i < scene_.lights.size(); ++i) {
+        const Light& l = scene_.lights[i];
+        out[i] = l.type != LightType::Sky ? Color(0) : l.sky_map ? l.sky_map->lookup(dir, l.sky_rotation) : Color(1);
+    }
+}
+
 Color DirectLighting::background(const Vec3& dir) const {
     Color c(0);
     for (const auto& l : scene_.lights)
@@ -64,8 +83,9 @@ Color DirectLighting::background(const Vec3& dir) const {
 }
 
 Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng,
-                                   int samples, Counters& counters, const LightSampleFn* each, float hair_start) const {
+                                   int samples, Counters& counters, const LightSampleFn* each, float hair_start, bool unit) const {
     const Light& l = scene_.lights[index];
+    const Color colour = unit ? Color(1) : l.color;
     const auto dim = [&](uint32_t d) { return static_cast<uint32_t>(kDimLight + 16 * index + d); };
     const unsigned mask = shadow_ray_mask(l);
     switch (l.type) {
@@ -90,7 +110,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
             }
             ++counters.shadow_rays;
             if (accel_.occluded(p, w, r, hair_start, mask)) return Color(0);
-            Color e = l.color * filter * (cone * cos_x / r2);
+            Color e = colour * filter * (cone * cos_x / r2);
             if (each) (*each)(index, w, e);
             return e;
         }
@@ -100,8 +120,8 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
             if (cos_x <= 0) return Color(0);
             ++counters.shadow_rays;
             if (accel_.occluded(p, w, INFINITY, hair_start, mask)) return Color(0);
-            if (each) (*each)(index, w, l.color * cos_x);
-            return l.color * cos_x;
+            if (each) (*each)(index, w, colour * cos_x);
+            return colour * cos_x;
         }
         case LightType::Quad: {
             Vec3 ln = cross(l.edge_u, l.edge_v);
@@ -118,7 +138,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
                 if (cos_x <= 0 || cos_l <= 0) continue;
                 ++counters.shadow_rays;
                 if (accel_.occluded(p, w, r, hair_start, mask)) continue;
-                const Color L = l.texture ? l.color * l.texture->at_uv(uv.x, uv.y) : l.color;
+                const Color L = l.texture ? colour * l.texture->at_uv(uv.x, uv.y) : colour;
                 e += L * (cos_x * cos_l / r2);
                 if (each) (*each)(index, w, L * (cos_x * cos_l / r2 * area / static_cast<float>(samples)));
             }
@@ -133,7 +153,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
                 Vec3 w = f.to_world(cosine_hemisphere(uv.x, uv.y));
                 ++counters.shadow_rays;
                 if (accel_.occluded(p, w, INFINITY, hair_start, mask)) continue;
-                Color L = l.sky_map ? l.color * l.sky_map->lookup(w, l.sky_rotation) : l.color;
+                Color L = l.sky_map ? colour * l.sky_map->lookup(w, l.sky_rotation) : colour;
                 e += L;
                 if (each) (*each)(index, w, L * (kPi / static_cast<float>(samples)));
             }

@@ -5,6 +5,7 @@
 
 #include <functional>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "bounce/accel/accel.h"
@@ -30,6 +31,10 @@ struct Emitter {
 /// shading pass split the light per light.
 using LightSampleFn = std::function<void(size_t light, const Vec3& w, const Color& e)>;
 
+/// What each light's unit part is multiplied by (CacheSettings::light_parts): its colour times
+/// its intensity, or 1 for a mesh light (its emission, a material's, stays in its part).
+std::vector<Color> light_scales(const Scene& scene);
+
 /// Direct lighting over all of a scene's lights.
 class DirectLighting {
 public:
@@ -45,13 +50,22 @@ public:
                      Counters& counters, bool include_sky = true, const LightSampleFn* each = nullptr,
                      float hair_start = 0) const;
 
+    /// The same irradiance per light with each light's scale (light_scales) factored out:
+    /// out[i] (size: the scene's lights) is light i's unit part, 0 for a light not linked to
+    /// `object`. Nothing in it depends on any light's colour or intensity.
+    void irradiance_parts(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng, int samples,
+                          Counters& counters, std::span<Color> out, float hair_start = 0) const;
+
     /// Radiance the camera sees where a primary ray escapes (the sky; black without one).
     Color background(const Vec3& dir) const;
+    /// The same per sky light, its scale factored out (0 for the other lights).
+    void background_parts(const Vec3& dir, std::span<Color> out) const;
     const SceneAccel& accel() const { return accel_; }
 
 private:
+    /// `unit`: with the light's scale (light_scales) factored out.
     Color sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng,
-                       int samples, Counters& counters, const LightSampleFn* each, float hair_start) const;
+                       int samples, Counters& counters, const LightSampleFn* each, float hair_start, bool unit = false) const;
 
     const Scene& scene_;
     const SceneAccel& accel_;

@@ -66,9 +66,17 @@ int radiosity_level(float edge, float texel, int max_level) {
     return std::clamp(static_cast<int>(std::ceil(edge / texel)), 1, max_level);
 }
 
-Color RadiosityMap::lookup(uint32_t prim, float u, float v, bool front_side) const {
-    const int n = level[prim];
-    const Color* vals = (front_side ? front.data() : back.data()) + offset[prim];
+namespace {
+
+/// The three lattice points whose values are interpolated at (u, v) of triangle `prim`, and their weights.
+struct LatticeBlend {
+    uint32_t k[3];
+    float w[3];
+};
+
+LatticeBlend lattice_blend(const RadiosityMap& m, uint32_t prim, float u, float v) {
+    const int n = m.level[prim];
+    const uint32_t o = m.offset[prim];
     float fu = std::clamp(u, 0.0f, 1.0f) * static_cast<float>(n), fv = std::clamp(v, 0.0f, 1.0f) * static_cast<float>(n);
     int i = std::min(static_cast<int>(fu), n - 1), j = std::min(static_cast<int>(fv), n - 1);
     if (i + j > n - 1) {  // on the far edge of the triangle
@@ -76,13 +84,26 @@ Color RadiosityMap::lookup(uint32_t prim, float u, float v, bool front_side) con
         (i >= over ? i : j) -= over;
     }
     float a = fu - static_cast<float>(i), b = fv - static_cast<float>(j);
-    if (a + b <= 1 || i + j >= n - 1) {  // lower sub-triangle (i,j) (i+1,j) (i,j+1)
-        return vals[lattice_index(i, j, n)] * (1 - a - b) + vals[lattice_index(i + 1, j, n)] * a +
-               vals[lattice_index(i, j + 1, n)] * b;
-    }
+    if (a + b <= 1 || i + j >= n - 1)  // lower sub-triangle (i,j) (i+1,j) (i,j+1)
+        return {{o + lattice_index(i, j, n), o + lattice_index(i + 1, j, n), o + lattice_index(i, j + 1, n)}, {1 - a - b, a, b}};
     // upper sub-triangle (i+1,j+1) (i,j+1) (i+1,j)
-    return vals[lattice_index(i + 1, j + 1, n)] * (a + b - 1) + vals[lattice_index(i, j + 1, n)] * (1 - a) +
-           vals[lattice_index(i + 1, j, n)] * (1 - b);
+    return {{o + lattice_index(i + 1, j + 1, n), o + lattice_index(i, j + 1, n), o + lattice_index(i + 1, j, n)},
+            {a + b - 1, 1 - a, 1 - b}};
+}
+
+}  // namespace
+
+Color RadiosityMap::lookup(uint32_t prim, float u, float v, bool front_side) const {
+    const Color* vals = front_side ? front.data() : back.data();
+    const LatticeBlend b = lattice_blend(*this, prim, u, v);
+    return vals[b.k[0]] * b.w[0] + vals[b.k[1]] * b.w[1] + vals[b.k[2]] * b.w[2];
+}
+
+void RadiosityMap::lookup_parts(uint32_t prim, float u, float v, bool front_side, std::span<Color> out) const {
+    const Color* vals = front_side ? front_parts.data() : back_parts.data();
+    const LatticeBlend b = lattice_blend(*this, prim, u, v);
+    for (size_t l = 0; l < lights; ++l)
+        out[l] = vals[b.k[0] * lights + l] * b.w[0] + vals[b.k[1] * lights + l] * b.w[1] + vals[b.k[2] * lights + l] * b.w[2];
 }
 
 uint64_t RadiosityTextures::fingerprint(const Scene& scene, const RadiositySettings& s) {
@@ -108,9 +129,15 @@ RadiosityTextures RadiosityTextures::lazy(const Scene& scene, const Materials& m
     RadiosityTextures rt;
     rt.texel_size_ = effective_texel(scene, settings);
     rt.fingerprint_ = fingerprint(scene, settings);
-    rt.sources_ = std::make_unique<Sources>(Sources{&scene, &materials, &lighting, effective_light_samples(scene, settings)});
+    rt.sources_ = std::make_unique<Sources>(Sources{&scene, &materials, &lighting, effective_light_samples(scene, settings), {}});
+    if (scene.render.cache.light_parts) rt.sources_->scales = light_scales(scene);
     for (size_t id = 0; id < scene.objects.size(); ++id) {
         rt.maps_.push_back(lay_out(scene.objects[id].coarse, rt.texel_size_, settings.max_level));
+        RadiosityMap& m = rt.maps_.back();
+        if (rt.has_parts()) {
+            m.lights = static_cast<uint32_t>(scene.lights.size());
+            m.front_parts.assign(m.front.size() * m.lights, Color(0)), m.back_parts.assign(m.back.size() * m.lights, Color(0));
+        }
         const size_t n = 2 * scene.objects[id].coarse.triangle_count();
         rt.state_.push_back(std::make_unique<std::atomic<uint8_t>[]>(n));
         for (size_t i = 0; i < n; ++i) rt.state_.back()[i].store(0, std::memory_order_relaxed);
@@ -134,12 +161,21 @@ void RadiosityTextures::bake_side(uint32_t id, uint32_t t, bool front, Counters&
             // scene alone (renders with other seeds share them) and not on the bake order.
             // Geometric normal: the value must not depend on which side's shading normal a hit
             // happens to use.
-            if (front) {
-                RandomStream rng(0, (static_cast<uint64_t>(id) << 40) | (static_cast<uint64_t>(t) << 12), k);
-                map.front[k] = albedo * src.lighting->irradiance(sp.p, sp.ng, id, rng, src.light_samples, counters);
-            } else {
-                RandomStream rng(1, (static_cast<uint64_t>(id) << 40) | t, k);
-                map.back[k] = albedo * src.lighting->irradiance(sp.p, -sp.ng, id, rng, src.light_samples, counters);
+            const RandomStream rng = front ? RandomStream(0, (static_cast<uint64_t>(id) << 40) | (static_cast<uint64_t>(t) << 12), k)
+                                           : RandomStream(1, (static_cast<uint64_t>(id) << 40) | t, k);
+            const Vec3 ng = front ? sp.ng : -sp.ng;
+            Color& value = front ? map.front[k] : map.back[k];
+            if (src.scales.empty()) {
+                value = albedo * src.lighting->irradiance(sp.p, ng, id, rng, src.light_samples, counters);
+                continue;
+            }
+            // Per light, scales factored out; the value is their scaled sum (as records' are).
+            const std::span<Color> parts((front ? map.front_parts : map.back_parts).data() + size_t{k} * map.lights, map.lights);
+            src.lighting->irradiance_parts(sp.p, ng, id, rng, src.light_samples, counters, parts);
+            value = Color(0);
+            for (size_t l = 0; l < parts.size(); ++l) {
+                parts[l] = albedo * parts[l];
+                value += parts[l] * src.scales[l];
             }
         }
 }
@@ -162,6 +198,12 @@ void RadiosityTextures::ensure_baked(uint32_t id, uint32_t tri, bool front, Coun
 Color RadiosityTextures::lookup(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters) const {
     ensure_baked(id, prim, front, counters);
     return maps_[id].lookup(prim, u, v, front);
+}
+
+void RadiosityTextures::lookup_parts(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters,
+                                     std::span<Color> out) const {
+    ensure_baked(id, prim, front, counters);
+    maps_[id].lookup_parts(prim, u, v, front, out);
 }
 
 size_t RadiosityTextures::baked_sides() const {

@@ -14,6 +14,7 @@
 
 #include <atomic>
 #include <memory>
+#include <span>
 
 #include "bounce/accel/accel.h"
 #include "bounce/core/progress.h"
@@ -29,9 +30,15 @@ struct RadiosityMap {
     std::vector<uint8_t> level;     ///< per triangle lattice level n (>= 1)
     std::vector<uint32_t> offset;   ///< per triangle first lattice point
     std::vector<Color> front, back; ///< radiosity per lattice point, on each side of ng
+    /// CacheSettings::light_parts: per lattice point, `lights` unit parts (light_scales factored
+    /// out) whose scaled sum is front / back.
+    std::vector<Color> front_parts, back_parts;
+    uint32_t lights = 0;
 
     /// Radiosity at barycentrics (u, v) of triangle `prim`, on the side `front_side`.
     Color lookup(uint32_t prim, float u, float v, bool front_side) const;
+    /// The same per light (`out`: one per light; the map must hold parts).
+    void lookup_parts(uint32_t prim, float u, float v, bool front_side, std::span<Color> out) const;
 };
 
 /// Radiosity that changed from one frame to the next in a region of space: a re-baked side
@@ -97,6 +104,9 @@ public:
     /// Radiosity of object `id` at barycentrics (u, v) of triangle `prim`, on side `front`;
     /// bakes that side first if needed (its shadow rays count in `counters`).
     Color lookup(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters) const;
+    /// The same per light, each light's scale factored out (textures of a scene with light_parts).
+    void lookup_parts(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters, std::span<Color> out) const;
+    bool has_parts() const { return sources_ && !sources_->scales.empty(); }
     /// The baked map of object `id` (only the sides baked so far hold values).
     const RadiosityMap& object(uint32_t id) const { return maps_[id]; }
     size_t lattice_points() const;
@@ -111,6 +121,7 @@ private:
         const Materials* materials;
         const DirectLighting* lighting;
         int light_samples;  ///< resolved (never 0)
+        std::vector<Color> scales;  ///< light_parts: every light's (light_scales); else empty
     };
     void bake_side(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
     void ensure_baked(uint32_t id, uint32_t tri, bool front, Counters& counters) const;

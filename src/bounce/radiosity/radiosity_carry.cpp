@@ -68,6 +68,7 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
     rt.fingerprint_ = fingerprint(scene, scene.render.radiosity);
     rt.sources_ = std::make_unique<Sources>(*previous.sources_);
     rt.sources_->scene = &scene, rt.sources_->materials = &materials, rt.sources_->lighting = &lighting;
+    if (rt.has_parts()) rt.sources_->scales = light_scales(scene);  // the plan carries parts only between alike lights
     rt.maps_ = previous.maps_;
     rt.names_ = previous.names_;
     const float far = 2 * std::max(1e-6f, length(scene.bounds().diagonal()));

@@ -122,6 +122,7 @@ VisibilityResult visibility_pass(const FrameContext& ctx, const FramePlan& plan,
 std::unique_ptr<IrradianceCache> copy_cache(const IrradianceCache& from, const Scene& scene) {
     auto cache = std::make_unique<IrradianceCache>(scene.bounds(), from.settings(), from.ao_only());
     cache->set_luminance_floor(from.luminance_floor());
+    cache->set_light_scales(from.light_scales());
     for (size_t i = 0; i < from.size(); ++i) cache->insert_loaded(from.record(i));
     for (size_t i = 0; i < from.fragment_record_count(); ++i) cache->insert_fragment_record(from.fragment_record_at(i));
     return cache;
@@ -134,6 +135,7 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan
     if (plan.cache == CacheStart::None) return out;
     PhaseTimer t(ctx.stats, "cache read");
     out.cache = std::make_unique<IrradianceCache>(scene.bounds(), scene.render.cache, scene.render.indirect.ao);
+    if (scene.render.cache.light_parts) out.cache->set_light_scales(light_scales(scene));
     if (plan.cache == CacheStart::Temporal) {
         // The previous frame's records and those still waiting from before, judged for this frame.
         out.judged = judge_records(*previous.cache, previous.waiting, *previous.scene, scene, *plan.changes, radiosity.changed,
@@ -150,10 +152,18 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan
     if (plan.cache == CacheStart::Previous) {
         const IrradianceCache& from = *previous.cache;
         out.cache->set_luminance_floor(from.luminance_floor());
+        // Records that keep their light parts show today's light colours and intensities: the
+        // bounce light of a light edit, exactly (docs/lighting-tool.md).
+        const std::vector<Color>& scales = out.cache->light_scales();
+        const auto rescaled = [&](Record r) {
+            if (r.parts && r.parts->light.size() == scales.size()) apply_light_scales(r, scales);
+            else r.parts.reset();
+            return r;
+        };
         for (size_t i = 0; i < from.size(); ++i)
-            if (!keep || keep(from.record(i))) out.cache->insert_loaded(from.record(i)), ++out.records_loaded;
+            if (!keep || keep(from.record(i))) out.cache->insert_loaded(rescaled(from.record(i))), ++out.records_loaded;
         for (size_t i = 0; i < from.fragment_record_count(); ++i)
-            if (!keep || keep(from.fragment_record_at(i))) out.cache->insert_fragment_record(from.fragment_record_at(i));
+            if (!keep || keep(from.fragment_record_at(i))) out.cache->insert_fragment_record(rescaled(from.fragment_record_at(i)));
         return out;
     }
     if (plan.cache == CacheStart::File) {
@@ -243,6 +253,7 @@ SubPassCallback preview_after_subpass(const FrameContext& ctx, const DeepBuffer&
 /// values (irradiance, AO, light directions and gradients; its reach is the new gather's).
 void blend_with_previous(Record& r, const Record& old, float f) {
     if (f <= 0) return;
+    r.parts.reset();  // a blend is no longer its light parts' sum
     const auto mix = [f](auto now, auto was) { return now * (1 - f) + was * f; };
     r.E = mix(r.E, old.E), r.ao = mix(r.ao, old.ao);
     for (size_t c = 0; c < 3; ++c) r.dir[c] = mix(r.dir[c], old.dir[c]), r.grad_r[c] = mix(r.grad_r[c], old.grad_r[c]), r.grad_t[c] = mix(r.grad_t[c], old.grad_t[c]);
@@ -290,9 +301,9 @@ StaleRecords::Redo redo_function(const FrameContext& ctx, const FramePlan& plan,
 /// How an earlier frame's fragment record is updated: the rays through moving objects' swept
 /// bounds traced again, every hit re-shaded (a fresh gather with its stream, for less).
 std::function<Record(const Record&, Counters&)> fragment_update_function(const FrameContext& ctx, const FramePlan& plan,
-                                                                          const Gatherer& refiner) {
+                                                                          const Gatherer& refiner, const IrradianceCache& cache) {
     std::vector<Bounds> boxes = plan.changes ? moving_bounds(*plan.changes) : std::vector<Bounds>();
-    return [&refiner, seed = ctx.scene.render.visibility.seed, width = ctx.scene.camera.width, frame = plan.frame,
+    return [&refiner, &cache, seed = ctx.scene.render.visibility.seed, width = ctx.scene.camera.width, frame = plan.frame,
             boxes = std::move(boxes), filter = ctx.scene.render.cache.temporal_filter](const Record& old, Counters& counters) {
         const RandomStream rng = record_stream(old, seed, width);
         auto hits = std::make_shared<GatherHits>(*old.hits);
@@ -300,7 +311,7 @@ std::function<Record(const Record&, Counters&)> fragment_update_function(const F
         cells_through(refiner.grid(), old.origin, old.n, rng, *hits, boxes, cells);
         const GatherResult g = refiner.update(old.origin, old.n, rng, *hits, cells, counters);
         Record r = old;
-        r.E = g.irradiance, r.ao = g.ao, r.bent = g.bent_normal, r.dir = g.light_dir;
+        cache.set_values(r, g, false);
         blend_with_previous(r, old, filter);
         r.harmonic = g.harmonic_distance, r.dmin = g.min_distance, r.gathered = frame, r.drift = 0;
         r.hits = std::move(hits);
@@ -358,7 +369,7 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
         ro.comm = &ctx.comm;
         if (!judged.fragment_stale.empty()) {
             ro.stale = &judged.fragment_stale;
-            ro.update = fragment_update_function(ctx, plan, refiner);
+            ro.update = fragment_update_function(ctx, plan, refiner, cache);
         }
         std::unique_ptr<NearFragmentRecords> near;
         if (!judged.fragment_valid.empty()) {

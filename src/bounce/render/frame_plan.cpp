@@ -127,7 +127,13 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
     const IndirectSettings& ind = scene.render.indirect;
     if (plan.gather != GatherStep::None && scene.render.radiosity.enabled && !ind.ao)
         plan.radiosity = scene.render.radiosity.folder.empty() ? RadiosityStep::Bake : RadiosityStep::Load;
-    if (plan.radiosity != RadiosityStep::None && comparable && previous.radiosity) plan.radiosity = RadiosityStep::Carry;
+    // Textures with light parts are baked, not loaded (files hold the sum), and carried only
+    // between frames that keep parts for as many lights.
+    const bool parts = scene.render.cache.light_parts;
+    if (parts && plan.radiosity == RadiosityStep::Load) plan.radiosity = RadiosityStep::Bake;
+    if (plan.radiosity != RadiosityStep::None && comparable && previous.radiosity && previous.radiosity->has_parts() == parts &&
+        (!parts || previous.scene->lights.size() == scene.lights.size()))
+        plan.radiosity = RadiosityStep::Carry;
     // A shot in which anything moves keeps records' hits: a record is then updated (the rays a
     // moving object may meet traced again, every hit re-shaded) rather than gathered again.
     plan.keep_hits = request.sequence && scene.render.indirect.gi == GiMode::Cache && (lights_keyed(scene) || objects_move(scene));

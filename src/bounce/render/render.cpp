@@ -315,6 +315,8 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
                                      scene.camera.width, scene.camera.height, need / 1073741824.0, have / 1073741824.0));
     if (request.comm && request.comm->size() > 1 && scene.render.shading.deep_colour && !plan.deep_out.empty())
         throw InputError(scene.path, "render.deep_colour", "a deep file with colour is written by one process (not under MPI yet)");
+    if (request.comm && request.comm->size() > 1 && scene.render.cache.light_parts && scene.render.indirect.gi == GiMode::Cache)
+        throw InputError(scene.path, "render.light_parts", "records with light parts are made by one process (the lighting tool's; not under MPI)");
     tbb::task_arena arena(plan.threads);
     stats.set("threads", plan.threads);
     report_dicing(scene, stats);

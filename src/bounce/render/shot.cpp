@@ -17,6 +17,7 @@ void Shot::keep(RenderResult& result, const std::shared_ptr<const Scene>& scene)
 
 void Shot::start_from(const std::shared_ptr<const Scene>& before, const std::string& cache_file) {
     auto cache = std::make_shared<IrradianceCache>(before->bounds(), before->render.cache, before->render.indirect.ao);
+    if (before->render.cache.light_parts) cache->set_light_scales(light_scales(*before));
     // Its own frame's scene and settings: only other settings are refused.
     load_cache(cache_file, *before, true, CacheReuse::Strict, *cache);
     state_ = {};

@@ -237,6 +237,10 @@ ParamTable make_table() {
                        .doc("extrapolate records with their gradients").id(cache).flag());
     rows.push_back(row("neighbour_clamp", "cache", &R::cache, &CacheSettings::neighbour_clamp)
                        .doc("R_new <= R_j + |p_new - p_j| (Krivanek et al. 2006)").id(cache).flag());
+    rows.push_back(row("light_parts", "cache", &R::cache, &CacheSettings::light_parts)
+                       .doc("records keep their bounce light per light and are placed as if every light were white at "
+                            "intensity 1, so a light's colour or intensity edit rescales it exactly (the lighting tool's default)")
+                       .id(cache));
     rows.push_back(row("radius_scale", "cache", &R::cache, &CacheSettings::radius_scale).range(0.01, 100)
                        .doc("R = radius_scale x d_min (TL04: 1/2)").id(cache).flag());
     rows.push_back(row("hessian_error", "cache", &R::cache, &CacheSettings::hessian_error).range(1e-5, 10)

@@ -133,6 +133,9 @@ LightingSession::LightingSession(SessionOptions options) : options_(std::move(op
         edit(s.substr(0, eq), v.is_discarded() ? json(text) : v, "--set " + s);
     }
     if (options_.default_to_cache && scene_.render.indirect.gi == GiMode::None && !scene_.render.indirect.ao) edit("render.gi", "cache");
+    const json& render_keys = scene_.description.contains("render") ? scene_.description["render"] : json();
+    if (options_.default_to_light_parts && !(render_keys.is_object() && render_keys.contains("light_parts")))
+        edit("render.light_parts", true);
     pending_ = -1;  // nothing rendered yet: the first render is a new deep file anyway
     copy_in(options_.deep_in, deep_path_, [&](const std::string& f) { validate_deep_for_scene(read_deep(f), scene_, f); });
     copy_in(options_.cache_in, cache_path_, [](const std::string& f) { read_cache_file(f); });
@@ -167,6 +170,13 @@ json LightingSession::params() const {
 
 namespace {
 
+/// Whether `key` is a light's colour or intensity ("lights.N.color"): what records with light
+/// parts rescale exactly.
+bool light_scale_key(const std::string& key) {
+    if (!key.starts_with("lights.")) return false;
+    return key.ends_with(".color") || key.ends_with(".intensity");
+}
+
 /// Whether an edit of `key` changes the light that bounces (lights, and materials but for the
 /// keys that only change how a surface reflects light to the camera; Scene::fingerprint).
 bool changes_bounce_light(const std::string& key) {
@@ -196,7 +206,11 @@ json LightingSession::edit(const std::string& key, const json& value, const std:
     // Lights and materials: a re-shade shows them (the bounce light follows on a re-gather).
     const SessionAction needs = needs_for(p ? p->identity : kImageOnly);
     pending_ = std::max(pending_, static_cast<int>(needs));
-    if (changes_bounce_light(key)) bounce_stale_ = true;
+    // Records with light parts take a light's new colour or intensity on the re-shade, exactly
+    // (a mesh light's is its material's emission: not a light key).
+    const bool rescaled = light_scale_key(key) && cache_ && scene_.render.cache.light_parts &&
+                          cache_->has_light_parts(scene_.lights.size());
+    if (changes_bounce_light(key) && !rescaled) bounce_stale_ = true;
     return {{"key", key}, {"value", value}, {"needs", session_action_name(needs)}};
 }
 

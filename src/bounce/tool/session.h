@@ -36,6 +36,9 @@ struct SessionOptions {
     /// When the scene renders no indirect light (render.gi none, no AO), start with the cache:
     /// bounce light is what the tool is for.
     bool default_to_cache = true;
+    /// Unless the scene or `sets` say otherwise, records keep their bounce light per light
+    /// (render.light_parts), so a light's colour or intensity edit updates it exactly.
+    bool default_to_light_parts = true;
 };
 
 /// What a render request does, least work first.
@@ -89,6 +92,8 @@ public:
         uint64_t version = 0;
     };
     Pixels pixels(const std::string& layer, float exposure) const;
+    /// The current image, every layer in float (tests and benches compare it).
+    Image image() const;
     /// Records of a cache file (the session's when `file` is empty; else a path confined to
     /// the allowed folders): {file, count, frame, p, n, r, E, ao} as flat arrays, at most `limit`;
     /// with `region` (x0, x1, y0, y1 in pixels) only the records the camera sees inside it.
@@ -137,6 +142,7 @@ private:
     uint64_t edit_count_ = 0;  ///< edits so far (a render clears pending_ only if none came while it ran)
     /// A light or material edit was re-shaded over records gathered with the old lights: the
     /// bounce light is the old one until a full-frame re-gather (or new deep file) is done.
+    /// (A colour or intensity edit of a light is not, while the records keep light parts.)
     bool bounce_stale_ = false;
     // Worker state.
     std::thread worker_;

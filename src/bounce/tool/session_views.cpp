@@ -19,6 +19,11 @@ namespace bounce {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+Image LightingSession::image() const {
+    std::lock_guard lock(mutex_);
+    return image_;
+}
+
 LightingSession::Pixels LightingSession::pixels(const std::string& layer, float exposure) const {
     if (!std::isfinite(exposure) || std::abs(exposure) > 64) throw InputError("request", "exposure", "must be a number in [-64, 64]");
     std::lock_guard lock(mutex_);
