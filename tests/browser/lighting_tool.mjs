@@ -43,7 +43,7 @@ async function startLight(scene, out) {
     let text = '';
     server.stdout.on('data', (d) => { text += d; const m = text.match(/http:\/\/[^ ]+\//); if (m) resolve(m[0]); });
     server.on('exit', (code) => reject(new Error(`bounce light exited with ${code}`)));
-    setTimeout(() => reject(new Error('bounce light printed no URL')), 20000);
+    setTimeout(() => reject(new Error('bounce light printed no URL')), 120000);  // a loaded machine under TSan
   });
   return [server, url];
 }

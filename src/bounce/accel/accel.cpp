@@ -31,17 +31,26 @@ RTCRayHit make_ray(const Vec3& o, const Vec3& d, float tnear, float tfar, unsign
 }
 }  // namespace
 
-unsigned object_ray_mask(const Scene& scene, size_t index) {
-    const RayVisibility& to = scene.objects[index].visible_to;
+namespace {
+unsigned ray_mask(const Scene& scene, size_t index, const RayVisibility& to) {
     unsigned mask = (to.camera ? kRayCamera : 0u) | (to.shadows ? kRayShadow : 0u) | (to.indirect ? kRayIndirect : 0u) |
                     (to.reflections ? kRayReflect : 0u);
     for (const Light& l : scene.lights)
         if (l.shadow_slot >= 0 && to.shadows && l.shadowed_by[index]) mask |= kRayShadowLink << l.shadow_slot;
     return mask;
 }
+}  // namespace
+
+unsigned object_ray_mask(const Scene& scene, size_t index) { return ray_mask(scene, index, scene.objects[index].visible_to); }
+
+unsigned fur_ray_mask(const Scene& scene, size_t index) {
+    const Object& o = scene.objects[index];
+    return o.fur ? ray_mask(scene, index, o.fur->params.visible_to) : 0u;
+}
 
 Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs,
-         const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion, const std::vector<unsigned>& masks)
+         const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion, const std::vector<unsigned>& masks,
+         const std::vector<unsigned>& fur_masks)
     : mesh_count_(static_cast<unsigned>(meshes.size())) {
     begin(device, meshes, motion, masks);
     for (size_t id = 0; id < furs.size(); ++id) {
@@ -54,7 +63,7 @@ Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const
                                    4 * sizeof(float), f->vertices.size() / 4);
         rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, f->segment_first.data(), 0,
                                    sizeof(uint32_t), f->segment_count());
-        rtcSetGeometryMask(g, kRayAll);  // fur has flags of its own (which BVHs hold it)
+        rtcSetGeometryMask(g, fur_masks.empty() ? kRayAll : fur_masks[id]);
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(scene_, g, mesh_count_ + static_cast<unsigned>(id));
         rtcReleaseGeometry(g);
@@ -185,11 +194,11 @@ SceneAccel::SceneAccel(const Scene& scene) {
     if (!device_) throw std::runtime_error("cannot create Embree device");
     rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
     std::vector<const TriangleMesh*> coarse, fine;
-    // Fur: always seen by the camera; by gather rays only when it casts indirect light; by
-    // shadow rays when it casts shadows.
+    // Fur (FurParams::visible_to): in the fine BVH when the camera sees it; in the coarse one,
+    // with its mask, when gathers or mirrors do; else in a shadow BVH of its own when it casts shadows.
     std::vector<const Fur*> visible_fur, indirect_fur, shadow_fur;
     std::vector<const std::array<std::vector<Vec3>, 2>*> motion;  // camera rays see motion blur
-    std::vector<unsigned> masks;  // which rays see each object
+    std::vector<unsigned> masks, fur_masks;  // which rays see each object, and its fur
     bool any_fine = false, any_fur = false, any_indirect = false, any_shadow = false;
     for (const auto& o : scene.objects) {
         coarse.push_back(&o.coarse);
@@ -198,15 +207,17 @@ SceneAccel::SceneAccel(const Scene& scene) {
         motion.push_back(o.shutter[0].empty() ? nullptr : &o.shutter);
         any_fine |= o.has_fine() || motion.back();
         const Fur* f = o.fur && o.fur->segment_count() ? o.fur.get() : nullptr;
-        any_fur |= f != nullptr;
-        visible_fur.push_back(f);
-        indirect_fur.push_back(f && f->params.cast_indirect ? f : nullptr);
-        shadow_fur.push_back(f && f->params.cast_shadows && !f->params.cast_indirect ? f : nullptr);
+        const RayVisibility to = f ? f->params.visible_to : RayVisibility{};
+        fur_masks.push_back(fur_ray_mask(scene, fur_masks.size()));
+        visible_fur.push_back(f && to.camera ? f : nullptr);
+        indirect_fur.push_back(f && (to.indirect || to.reflections) ? f : nullptr);
+        shadow_fur.push_back(f && to.shadows && !indirect_fur.back() ? f : nullptr);
+        any_fur |= visible_fur.back() != nullptr;
         any_indirect |= indirect_fur.back() != nullptr;
         any_shadow |= shadow_fur.back() != nullptr;
     }
     coarse_ = std::make_unique<Bvh>(device_, coarse, any_indirect ? indirect_fur : std::vector<const Fur*>{},
-                                    std::vector<const std::array<std::vector<Vec3>, 2>*>{}, masks);
+                                    std::vector<const std::array<std::vector<Vec3>, 2>*>{}, masks, fur_masks);
     // Fur already in the coarse BVH shadows through it; the rest that casts shadows gets its own.
     if (any_shadow) shadow_fur_ = std::make_unique<Bvh>(device_, std::vector<const TriangleMesh*>(scene.objects.size(), nullptr), shadow_fur);
     // The camera sees all fur: when that is the shadow BVH's, instance it rather than build it twice.

@@ -25,6 +25,8 @@ inline constexpr unsigned kRayCamera = 1u, kRayShadow = 2u, kRayIndirect = 4u, k
 static_assert((kRayShadowLink << (kMaxShadowLinkedLights - 1)) < kRayReflect);
 /// The mask of object `index`'s geometry.
 unsigned object_ray_mask(const Scene& scene, size_t index);
+/// The same for object `index`'s fur (FurParams::visible_to).
+unsigned fur_ray_mask(const Scene& scene, size_t index);
 /// The mask of a shadow ray towards `light`.
 inline unsigned shadow_ray_mask(const Light& light) {
     return light.shadow_slot < 0 ? kRayShadow : kRayShadowLink << light.shadow_slot;
@@ -46,9 +48,10 @@ class Bvh {
 public:
     /// `motion[i]` (if given and not null): mesh i's vertices at shutter open and close, traced
     /// with Embree's motion blur (ray time 0 = open, 1 = close). `masks[i]` (if given): mesh
-    /// i's ray mask (else every ray sees it; fur always is).
+    /// i's ray mask (else every ray sees it); `fur_masks[i]` likewise for fur i.
     Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs = {},
-        const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion = {}, const std::vector<unsigned>& masks = {});
+        const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion = {}, const std::vector<unsigned>& masks = {},
+        const std::vector<unsigned>& fur_masks = {});
     /// Meshes plus an instance of `fur`, a BVH of fur only over as many mesh ids (so its hits
     /// decode the same): fur traced by several BVHs is built once.
     Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const Bvh& fur,

@@ -17,21 +17,6 @@ float normal_bound(float max_angle) {
 }
 }  // namespace
 
-LightPart combine_parts(const LightParts& parts, std::span<const Color> scales) {
-    LightPart out;
-    for (size_t i = 0; i < parts.light.size(); ++i) {
-        const LightPart& p = parts.light[i];
-        const Color& s = scales[i];
-        out.E += p.E * s;
-        for (size_t c = 0; c < 3; ++c) {
-            out.dir[c] += p.dir[c] * s[static_cast<int>(c)];
-            out.grad_r[c] += p.grad_r[c] * s[static_cast<int>(c)];
-            out.grad_t[c] += p.grad_t[c] * s[static_cast<int>(c)];
-        }
-    }
-    return out;
-}
-
 void apply_light_scales(Record& r, std::span<const Color> scales) {
     if (!r.parts) return;
     const LightPart v = combine_parts(*r.parts, scales);

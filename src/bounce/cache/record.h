@@ -17,9 +17,6 @@ namespace bounce {
 
 inline constexpr uint32_t kNoAnchor = 0xffffffffu;
 
-/// The sum of every light's part times its scale, in one fixed order (a record made fresh and
-/// one rescaled to the same scales hold the same bits).
-LightPart combine_parts(const LightParts& parts, std::span<const Color> scales);
 
 /// One cache record: a full gather's result at (p, n), with its reach.
 struct Record {

@@ -8,6 +8,21 @@
 
 namespace bounce {
 
+LightPart combine_parts(const LightParts& parts, std::span<const Color> scales) {
+    LightPart out;
+    for (size_t i = 0; i < parts.light.size(); ++i) {
+        const LightPart& p = parts.light[i];
+        const Color& s = scales[i];
+        out.E += p.E * s;
+        for (size_t c = 0; c < 3; ++c) {
+            out.dir[c] += p.dir[c] * s[static_cast<int>(c)];
+            out.grad_r[c] += p.grad_r[c] * s[static_cast<int>(c)];
+            out.grad_t[c] += p.grad_t[c] * s[static_cast<int>(c)];
+        }
+    }
+    return out;
+}
+
 GatherGrid gather_grid(int rays) {
     GatherGrid g;
     g.m = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(rays) / kPi))));
@@ -47,7 +62,8 @@ Gatherer::Gatherer(const Scene& scene, const SceneAccel& accel, const Materials&
       cos_concave_(std::cos(settings.concave_angle * kPi / 180.0f)),
       packet_order_(gather_packet_order(grid_)),
       far_(10 * std::max(1e-6f, length(scene.bounds().diagonal()))),
-      lights_(settings.light_parts && !settings.ao ? scene.lights.size() : 0) {
+      lights_(settings.light_parts && !settings.ao ? scene.lights.size() : 0),
+      unit_scales_(lights_, Color(1)) {
     if (lights_ && radiosity_ && !radiosity_->has_parts())
         throw std::logic_error("gather: light parts need radiosity textures baked with parts");
 }
@@ -335,15 +351,18 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
         sum_u_dir += d * u;
     }
     const float w = kPi / static_cast<float>(S);
-    const LightPart sums = light_part(L.data(), 1, frame, near, settings_.record_terms);
-    res.irradiance = sums.E, res.light_dir = sums.dir;
+    // With light parts the values are the signal: the parts' sum (one pass over the cells per
+    // light, none more), a function of the parts alone.
+    std::shared_ptr<LightParts> parts;
     if (lights_) {
-        auto parts = std::make_shared<LightParts>();
-        parts->signal = sums;
+        parts = std::make_shared<LightParts>();
         for (size_t i = 0; i < lights_; ++i)
             parts->light.push_back(light_part(cells.P.data() + i, lights_, frame, near, settings_.record_terms));
-        res.parts = std::move(parts);
+        parts->signal = combine_parts(*parts, unit_scales_);
     }
+    const LightPart sums = parts ? parts->signal : light_part(L.data(), 1, frame, near, settings_.record_terms);
+    res.irradiance = sums.E, res.light_dir = sums.dir;
+    res.parts = std::move(parts);
     res.ao = sum_u / static_cast<float>(S);
     res.bent_normal = dot(sum_u_dir, sum_u_dir) > 0 ? normalize(sum_u_dir) : n;
     res.harmonic_distance = inv_r_sum > 0 ? static_cast<float>(S / inv_r_sum) : INFINITY;

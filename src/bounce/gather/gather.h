@@ -47,6 +47,10 @@ struct LightParts {
     size_t bytes() const { return sizeof(LightParts) + light.size() * sizeof(LightPart); }
 };
 
+/// The sum of every light's part times its scale, in one fixed order (a record made fresh and
+/// one rescaled to the same scales hold the same bits).
+LightPart combine_parts(const LightParts& parts, std::span<const Color> scales);
+
 /// The stratification used for `rays`.
 struct GatherGrid {
     int m = 1, n = 1;  ///< elevation and azimuth strata
@@ -161,6 +165,7 @@ private:
     std::vector<uint32_t> packet_order_;  ///< grid cells in 4x4 blocks: coherent packets of 16
     float far_;  ///< where a ray that leaves the scene is taken to end, for the Hessian's mesh
     size_t lights_;  ///< GatherSettings::light_parts: the scene's lights (0: no parts)
+    std::vector<Color> unit_scales_;  ///< every light at scale 1 (the signal)
 };
 
 }  // namespace bounce

@@ -19,6 +19,14 @@ struct UvMap {
     float at(const Vec2& uv) const;
 };
 
+/// Which rays see an object or its fur (scene file: "visible_to").
+struct RayVisibility {
+    bool camera = true;       ///< primary visibility
+    bool shadows = true;      ///< shadow rays of direct light (and of the radiosity bake)
+    bool indirect = true;     ///< gather rays (the bounce light and AO)
+    bool reflections = true;  ///< rays of mirrors and glass (reflection and refraction)
+};
+
 /// Where a hair fragment's indirect light is looked up (and, for brute force, gathered).
 enum class FurIndirectAt : uint8_t { Root, Fragment };
 
@@ -41,8 +49,9 @@ struct FurParams {
     float specular_exponent = 40;  ///< Kajiya-Kay specular exponent
     float falloff_root = 0.35f;    ///< self-shadowing f(v) at the root (f = 1 at the tip)
     float falloff_exponent = 1;    ///< f(v) = root + (1 - root) v^exponent
-    bool cast_indirect = false;    ///< gather rays see the strands
-    bool cast_shadows = true;      ///< shadow rays (direct light) see the strands
+    /// Which rays see the strands: the camera and shadow rays, not gathers nor mirrors unless
+    /// asked ("cast_indirect" and "cast_shadows" are the older names of indirect and shadows).
+    RayVisibility visible_to{true, true, false, false};
     FurIndirectAt indirect_at = FurIndirectAt::Root;
     std::shared_ptr<const UvMap> density_map, length_map;
 

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "bounce/core/memory.h"
+#include "bounce/scene/link_reader.h"
 
 namespace bounce {
 
@@ -13,13 +14,13 @@ const std::vector<std::string>& fur_keys() {
     static const std::vector<std::string> keys = {
         "count", "density", "length", "length_variation", "width_root", "width_tip", "segments", "curl", "curl_turns",
         "gravity", "clump", "clump_size", "lean", "seed", "color_root", "color_tip", "specular", "specular_exponent", "falloff_root",
-        "falloff_exponent", "cast_indirect", "cast_shadows", "indirect_at", "density_texture", "length_texture"};
+        "falloff_exponent", "cast_indirect", "cast_shadows", "visible_to", "indirect_at", "density_texture", "length_texture"};
     return keys;
 }
 
 const std::vector<std::string>& fur_lighting_keys() {
     static const std::vector<std::string> keys = {"color_root", "color_tip", "specular", "specular_exponent", "falloff_root",
-                                                  "falloff_exponent", "cast_indirect", "cast_shadows", "indirect_at"};
+                                                  "falloff_exponent", "cast_indirect", "cast_shadows", "indirect_at"};  // visible_to: its camera flag is visibility
     return keys;
 }
 
@@ -91,8 +92,13 @@ std::shared_ptr<const Fur> read_fur(const JsonReader& r, const TriangleMesh& sur
     p.specular_exponent = r.number("specular_exponent", p.specular_exponent, 0, 1e4);
     p.falloff_root = r.number("falloff_root", p.falloff_root, 0, 1);
     p.falloff_exponent = r.number("falloff_exponent", p.falloff_exponent, 0.01, 100);
-    p.cast_indirect = r.boolean("cast_indirect", p.cast_indirect);
-    p.cast_shadows = r.boolean("cast_shadows", p.cast_shadows);
+    // The older names of two of the flags: one name per flag in a block.
+    for (const auto& [old, now] : {std::pair{"cast_indirect", "indirect"}, std::pair{"cast_shadows", "shadows"}})
+        if (r.has(old) && r.has("visible_to") && r.raw("visible_to").is_object() && r.raw("visible_to").contains(now))
+            r.fail(old, fmt::format("the older name of visible_to.{}: give one of them", now));
+    p.visible_to.indirect = r.boolean("cast_indirect", p.visible_to.indirect);
+    p.visible_to.shadows = r.boolean("cast_shadows", p.visible_to.shadows);
+    read_visibility(r, p.visible_to);
     p.indirect_at = r.choice("indirect_at", "root", {"root", "fragment"}) == "root" ? FurIndirectAt::Root : FurIndirectAt::Fragment;
     p.density_map = load_uv_map(r, "density_texture");
     p.length_map = load_uv_map(r, "length_texture");

@@ -9,10 +9,13 @@ using nlohmann::json;
 
 void read_object_visibility(const JsonReader& r, Object& obj) {
     obj.matte = r.boolean("matte", obj.matte);
+    read_visibility(r, obj.visible_to);
+}
+
+void read_visibility(const JsonReader& r, RayVisibility& to) {
     if (!r.has("visible_to")) return;
     if (!r.raw("visible_to").is_object()) r.fail("visible_to", "expected an object {\"camera\", \"shadows\", \"indirect\", \"reflections\"}");
     JsonReader v(r.raw("visible_to"), r.at("visible_to"), r.ctx(), {"camera", "shadows", "indirect", "reflections"});
-    RayVisibility& to = obj.visible_to;
     to.camera = v.boolean("camera", to.camera);
     to.shadows = v.boolean("shadows", to.shadows);
     to.indirect = v.boolean("indirect", to.indirect);

@@ -8,8 +8,10 @@
 
 namespace bounce {
 
-/// An object's "visible_to" {camera, shadows, indirect} and "matte".
+/// An object's "visible_to" {camera, shadows, indirect, reflections} and "matte".
 void read_object_visibility(const JsonReader& r, Object& obj);
+/// A "visible_to" object (an object's or a fur block's) over the defaults in `to`.
+void read_visibility(const JsonReader& r, RayVisibility& to);
 
 /// A light's "light_link" and "shadow_link" ({"include": [...]} or {"exclude": [...]}),
 /// resolved against the names of `scene.objects`; a pattern that matches no object is an

@@ -102,15 +102,6 @@ struct Material {
 
 struct SubdivSurface;
 
-/// Which rays see an object (scene file: "visible_to"). Fur keeps its own flags
-/// (fur.cast_shadows, fur.cast_indirect).
-struct RayVisibility {
-    bool camera = true;    ///< primary visibility
-    bool shadows = true;   ///< shadow rays of direct light (and of the radiosity bake)
-    bool indirect = true;  ///< gather rays (the bounce light and AO)
-    bool reflections = true;  ///< rays of mirrors and glass (reflection and refraction)
-};
-
 struct Object {
     std::string name;
     TriangleMesh coarse;        ///< traced by all secondary rays
