@@ -253,33 +253,7 @@ TEST(Fur, TheFalloffDarkensTheRootAndTheIndirectLayerFollowsIt) {
     EXPECT_GT(checked, 50u);
 }
 
-TEST(Fur, StrandsShadowTheGroundOnlyWhenAsked) {
-    // A low key light: strands cast long shadows on the ground between them.
-    auto ground_direct = [](bool shadows) {
-        json fur = plain_fur();
-        fur["cast_shadows"] = shadows;
-        json j = fur_scene(fur, 0.0f);
-        j["lights"] = json::array({{{"type", "distant"}, {"direction", {1, -0.5, 0}}, {"color", 1}}});
-        Scene scene = test::scene_from(j, {"render.spp=1", "camera.resolution=[80,60]"});
-        Stats stats;
-        RenderResult r = render(scene, {}, stats, nullptr);
-        const Layer& d = *r.image.find("direct");
-        double sum = 0;
-        size_t n = 0;
-        for (int y = 0; y < r.deep.height; ++y)
-            for (int x = 0; x < r.deep.width; ++x) {
-                auto frags = r.deep.pixel(x, y);
-                if (frags.size() != 1 || frags[0].is_hair()) continue;
-                sum += d.data[3 * (static_cast<size_t>(y) * r.deep.width + x)], ++n;
-            }
-        EXPECT_GT(n, 200u);
-        return sum / static_cast<double>(std::max<size_t>(n, 1));
-    };
-    const double open = ground_direct(false), shaded = ground_direct(true);
-    // Unshadowed ground: albedo 0.7 x E / pi with E = cos = 0.5 / |(1, -0.5, 0)|.
-    EXPECT_NEAR(open, 0.7 / kPi * 0.5 / std::sqrt(1.25), 1e-4);
-    EXPECT_LT(shaded, 0.9 * open);
-}
+// Strands' shadows on the ground, with either name of the flag: fur_visibility_test.cpp.
 
 TEST(Fur, ImagesDoNotDependOnThreadCount) {
     json fur = plain_fur();
