@@ -25,14 +25,15 @@ bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Recor
 
 namespace {
 
-/// A record's signal (light parts at scale 1) extrapolated to (p, n) as lookup() extrapolates its value.
-Color extrapolated_signal(const Record& r, const Vec3& p, const Vec3& n) {
-    const LightPart& s = r.parts->signal;
-    Color e = s.E;
-    const Vec3 dp = p - r.p, rot = cross(r.n, n);
+/// A record's value E extrapolated by its gradients over dp (translation) and rot (n_i x n),
+/// clamped to [0, 4 E] per channel.
+Color extrapolated(const Color& E, const std::array<Vec3, 3>& grad_t, const std::array<Vec3, 3>& grad_r, const Vec3& dp,
+                   const Vec3& rot) {
+    Color e = E;
     for (int c = 0; c < 3; ++c) {
         auto k = static_cast<size_t>(c);
-        e[c] = std::clamp(s.E[c] + dot(dp, s.grad_t[k]) + dot(rot, s.grad_r[k]), 0.0f, 4 * s.E[c]);
+        float v = E[c] + dot(dp, grad_t[k]) + dot(rot, grad_r[k]);
+        e[c] = std::clamp(v, 0.0f, 4 * E[c]);  // extrapolation clamp [0, 4 E_i]
     }
     return e;
 }
@@ -86,22 +87,20 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
         if (w <= 0) return;
         Color ei = r.E;
         float ai = r.ao;
+        // The spread decides refinement: with light parts it is the signal's, which no light's
+        // colour or intensity changes.
+        const LightPart* signal = r.parts ? &r.parts->signal : nullptr;
+        Color si = signal ? signal->E : Color(0);
         if (settings_.gradients) {
             const Vec3 dp = (at_p ? *at_p : p) - r.p, rot = cross(r.n, at_n ? *at_n : n);
-            for (int c = 0; c < 3; ++c) {
-                auto k = static_cast<size_t>(c);
-                float v = r.E[c] + dot(dp, r.grad_t[k]) + dot(rot, r.grad_r[k]);
-                ei[c] = std::clamp(v, 0.0f, 4 * r.E[c]);  // extrapolation clamp [0, 4 E_i]
-            }
+            ei = extrapolated(r.E, r.grad_t, r.grad_r, dp, rot);
+            if (signal) si = extrapolated(signal->E, signal->grad_t, signal->grad_r, dp, rot);
             ai = std::clamp(r.ao + dot(dp, r.ao_grad_t) + dot(rot, r.ao_grad_r), 0.0f, 1.0f);
         }
         if (first) base = ei, base_ao = ai, first = false;
         for (int c = 0; c < 3; ++c) de[c] += static_cast<double>(w) * (ei[c] - base[c]);
         dao += static_cast<double>(w) * (ai - base_ao);
-        // The spread decides refinement: with light parts it is the signal's, which no light's
-        // colour or intensity changes.
-        const double l = ao_only_ ? ai : r.parts ? luminance(extrapolated_signal(r, at_p ? *at_p : p, at_n ? *at_n : n))
-                                                  : luminance(ei);
+        const double l = ao_only_ ? ai : luminance(signal ? si : ei);
         lsum += w * l;
         l2sum += w * l * l;
         wsum += w;
@@ -232,7 +231,10 @@ CacheFile IrradianceCache::to_file(const CacheFileInfo& info) const {
 }
 
 size_t IrradianceCache::memory_bytes() const {
-    return (records_.size() + fragment_records_.size()) * sizeof(Record) + octree_.memory_bytes() +
+    size_t parts = 0;  // light parts: per record (copies share them only across caches)
+    for (const auto* list : {&records_, &fragment_records_})
+        for (const Record& r : *list) parts += r.parts ? r.parts->bytes() : 0;
+    return parts + (records_.size() + fragment_records_.size()) * sizeof(Record) + octree_.memory_bytes() +
            fragment_index_.size() * (sizeof(uint64_t) + sizeof(uint32_t) + 2 * sizeof(void*));
 }
 

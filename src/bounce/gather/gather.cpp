@@ -384,7 +384,7 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
             // Distance for the record radius: leave out rays that are grazing both where
             // they leave and where they land (slightly concave surfaces).
             if (h.hair) {
-                // Fur that casts indirect light (fur.cast_indirect).
+                // Fur that gathers see (its visible_to.indirect).
                 if (settings_.record_terms && h.t >= near) res.min_distance = std::min(res.min_distance, h.t);
                 if (!settings_.ao) l = hair_radiance(h, p + d * h.t, d, rng, c, counters, parts);
             } else if (settings_.record_terms || !settings_.ao) {

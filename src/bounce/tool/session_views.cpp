@@ -19,6 +19,7 @@ namespace bounce {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+
 Image LightingSession::image() const {
     std::lock_guard lock(mutex_);
     return image_;
