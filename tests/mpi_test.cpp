@@ -100,14 +100,18 @@ TEST(Mpi, MirrorsAndGlassAreByteIdenticalAtAnyRankCount) {
     expect_identical_at_any_rank_count(test::source_dir() + "/scenes/cornell/mirror-glass.json", "--rays 64");
 }
 
-TEST(Mpi, ADeepFileWithColourIsRefusedBeforeAnyWork) {
+TEST(Mpi, ADeepFileWithColourAndLightPartsAreRefusedBeforeAnyWork) {
     SKIP_UNDER_SANITIZER();
     test::TempDir d;
-    std::string err;
-    EXPECT_EQ(run_mpi(2, fmt::format("render {} -o {} --res 16x16 -q --deep-out {} --deep-colour", test::cornell_scene(),
-                                     d.file("o.exr"), d.file("o.deep.exr")), &err), 2) << err;
-    EXPECT_NE(err.find("render.deep_colour"), std::string::npos) << err;
-    EXPECT_FALSE(std::filesystem::exists(d.file("o.exr")));
+    // What one process makes and the exchange does not carry: a deep file's colour, records' light parts.
+    for (const auto& [args, key] : {std::pair{fmt::format("--deep-out {} --deep-colour", d.file("o.deep.exr")), "render.deep_colour"},
+                                    std::pair{std::string("--gi cache --set render.light_parts=true"), "render.light_parts"}}) {
+        std::string err;
+        EXPECT_EQ(run_mpi(2, fmt::format("render {} -o {} --res 16x16 -q {}", test::cornell_scene(), d.file("o.exr"), args), &err), 2)
+            << err;
+        EXPECT_NE(err.find(key), std::string::npos) << err;
+        EXPECT_FALSE(std::filesystem::exists(d.file("o.exr")));
+    }
 }
 
 TEST(Mpi, BruteForceAndTheFramesOfAShotAreByteIdentical) {
