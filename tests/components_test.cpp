@@ -3,6 +3,8 @@
 // for bit, and the id layer names what each pixel sees.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include "bounce/core/image.h"
 #include "bounce/render/render.h"
 #include "test_util.h"
@@ -17,13 +19,17 @@ Image render_image(const Scene& s) {
     return render(s, {}, stats, nullptr).image;
 }
 
-/// The glossy Cornell box (emitter, coloured walls, a specular lobe) with the cache, two extra lights.
-Scene glossy_cornell(const std::string& layers) {
-    return load_scene(test::cornell_scene(),
-                      {"camera.resolution=[32,32]", "render.spp=2", "render.rays=64", "render.gi=cache", "render.layers=" + layers,
-                       "materials.white.specular=[0.3,0.3,0.3]", "materials.white.roughness=0.3",
-                       R"(lights=[{"type": "point", "name": "key", "position": [278, 400, 100], "intensity": 30000},
-                                  {"type": "spot", "name": "rim light", "position": [100, 500, 278], "direction": [1, -1, 0], "intensity": 20000}])"});
+/// The glossy Cornell box (emitter, coloured walls, a specular lobe) with the cache, two extra
+/// lights (`key` and `rim` their intensities), and `more` settings.
+Scene glossy_cornell(const std::string& layers, std::vector<Override> more = {}, float key = 30000, float rim = 20000) {
+    std::vector<Override> set = {
+        "camera.resolution=[32,32]", "render.spp=2", "render.rays=64", "render.gi=cache", "render.layers=" + layers,
+        "materials.white.specular=[0.3,0.3,0.3]", "materials.white.roughness=0.3",
+        fmt::format(R"(lights=[{{"type": "point", "name": "key", "position": [278, 400, 100], "intensity": {}}},
+                               {{"type": "spot", "name": "rim light", "position": [100, 500, 278], "direction": [1, -1, 0], "intensity": {}}}])",
+                    key, rim)};
+    set.insert(set.end(), more.begin(), more.end());
+    return load_scene(test::cornell_scene(), set);
 }
 
 /// Sum over `names` of layer channel c at pixel i.
@@ -62,6 +68,38 @@ TEST(ComponentLayers, SumToTheBeautyAndPerLightLayersToTheirTotals) {
         ASSERT_TRUE(layer) << l;
         EXPECT_GT(*std::max_element(layer->data.begin(), layer->data.end()), 0.0f) << l;
     }
+}
+
+TEST(ComponentLayers, PerLightIndirectLayersComeFromTheRecordsLightParts) {
+    const Image img = render_image(glossy_cornell("components", {"render.light_parts=true"}));
+    const std::vector<std::string> lights = {"key", "rim_light", "light"};
+    std::vector<std::string> diffuse, specular;
+    for (const std::string& l : lights) diffuse.push_back("diffuse_indirect_" + l), specular.push_back("specular_indirect_" + l);
+    expect_sums(img, "diffuse_indirect", diffuse);
+    expect_sums(img, "specular_indirect", specular);
+    for (const std::string& l : diffuse) {
+        const Layer* layer = img.find(l);
+        ASSERT_TRUE(layer) << l;
+        EXPECT_GT(*std::max_element(layer->data.begin(), layer->data.end()), 0.0f) << l;
+    }
+    // Records without parts cannot split their light: no per-light indirect layers.
+    EXPECT_EQ(render_image(glossy_cornell("components")).find("diffuse_indirect_key"), nullptr);
+}
+
+TEST(ComponentLayers, APerLightIndirectLayerIsWhatThatLightAloneBounces) {
+    // With light parts, records sit where they sit whatever the lights' intensities: the
+    // emitter's own layer equals the indirect light of a render where the other two are off.
+    const Image all = render_image(glossy_cornell("components", {"render.light_parts=true"}));
+    const Image alone = render_image(glossy_cornell("components", {"render.light_parts=true"}, 0, 0));
+    const Layer *part = all.find("diffuse_indirect_light"), *whole = alone.find("diffuse_indirect");
+    ASSERT_TRUE(part && whole);
+    double err = 0, ref = 0;
+    for (size_t i = 0; i < part->data.size(); ++i) {
+        err += std::pow(part->data[i] - whole->data[i], 2);
+        ref += std::pow(whole->data[i], 2);
+    }
+    EXPECT_GT(ref, 0);
+    EXPECT_LT(std::sqrt(err / ref), 1e-5);
 }
 
 TEST(ComponentLayers, MirrorsAndGlassAddReflectionAndRefractionThatStillSumToTheBeauty) {

@@ -124,6 +124,24 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
     return out;
 }
 
+void IrradianceCache::light_shares(const Vec3& p, const Vec3& n, bool shading, const Vec3* at_p, const Vec3* at_n,
+                                   std::span<Color> out) const {
+    const CacheSettings& s = shading ? shading_settings_ : settings_;
+    std::fill(out.begin(), out.end(), Color(0));
+    octree_.visit(p, [&](uint32_t id) {
+        const Record& r = records_[id];
+        const float w = record_weight(r, p, n, s);
+        if (w <= 0 || !r.parts || r.parts->light.size() != out.size()) return;
+        const Vec3 dp = (at_p ? *at_p : p) - r.p, rot = cross(r.n, at_n ? *at_n : n);
+        for (size_t i = 0; i < out.size(); ++i) {
+            const LightPart& part = r.parts->light[i];
+            const Color e = settings_.gradients ? extrapolated(part.E, part.grad_t, part.grad_r, dp, rot) : part.E;
+            out[i] += e * light_scales_[i] * w;
+        }
+    });
+    normalise_shares(out);
+}
+
 Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const Vec3& n, float footprint,
                                     uint64_t key) const {
     Record r;

@@ -45,6 +45,11 @@ public:
     /// fragment whose records live on the un-displaced surface).
     Interpolated lookup(const Vec3& p, const Vec3& n, bool shading = false, const Vec3* at_p = nullptr,
                         const Vec3* at_n = nullptr) const;
+    /// Each light's share of that interpolation (records need light parts): light i's part of
+    /// every record, times its scale, weighed and extrapolated as lookup does the value, then
+    /// divided per channel by the lights' sum, so the shares sum to 1 (0 where there is no
+    /// light). `out`: one entry per light.
+    void light_shares(const Vec3& p, const Vec3& n, bool shading, const Vec3* at_p, const Vec3* at_n, std::span<Color> out) const;
     /// Calls f(id, weight) for every record whose support holds p (weight 0 when rejected).
     template <typename F>
     void visit_weights(const Vec3& p, const Vec3& n, F&& f) const {

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstring>
 #include <mutex>
+#include <stdexcept>
 #include <shared_mutex>
 
 namespace bounce {
@@ -56,6 +57,20 @@ Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const Dee
     Interpolated in = interpolate_at(cache, f, record_site(scene, f, cache.settings()));
     src = in.weight > 0 ? Source::Records : Source::Missed;
     return {in.E, in.ao, in.bent, in.dir};
+}
+
+/// Each light's share of what indirect_at gave fragment k (from `src`), into `out`.
+void shares_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
+               Source src, std::span<Color> out) {
+    const Fragment& f = deep.pixel(wx, wy)[k];
+    if (src == Source::Missed || !needs_bounce_light(scene, f)) return;
+    if (src == Source::Own) {
+        const Record& r = *cache.fragment_record(candidate_key(deep, wx, wy, k), f.p);
+        for (size_t i = 0; i < out.size(); ++i) out[i] = r.parts->light[i].E * cache.light_scales()[i];
+        normalise_shares(out);
+        return;
+    }
+    light_shares_at(cache, f, record_site(scene, f, cache.settings()), out);
 }
 
 }  // namespace
@@ -157,10 +172,15 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
 }
 
 InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
-                                     Stats& stats, ProgressSink* sink, bool report) {
+                                     Stats& stats, ProgressSink* sink, bool report, bool per_light) {
     InterpolatedLight out;
     out.light.resize(deep.fragments.size());
     out.refined.assign(deep.fragments.size(), 0);
+    if (per_light) {
+        if (!cache.has_light_parts(scene.lights.size())) throw std::logic_error("interpolation: records have no light parts");
+        out.shares.lights = scene.lights.size();
+        out.shares.share.assign(deep.fragments.size() * scene.lights.size(), Color(0));
+    }
     tbb::enumerable_thread_specific<uint64_t> misses(0), lookups(0), own(0);
     // The pass holds the shared lock for its workers: no writer can interleave.
     auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache, stats.local());
@@ -169,6 +189,7 @@ InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep,
         for (uint32_t k = 0; k < frags.size(); ++k) {
             Source src;
             out.light[first + k] = indirect_at(scene, cache, deep, wx, wy, k, src);
+            if (per_light) shares_at(scene, cache, deep, wx, wy, k, src, out.shares.at(first + k));
             ++lookups.local();
             if (src == Source::Own) {
                 ++own.local();

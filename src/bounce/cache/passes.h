@@ -102,6 +102,7 @@ struct InterpolatedLight {
     std::vector<Indirect> light;   ///< parallel to deep.fragments
     std::vector<uint8_t> refined;  ///< 1 where a fragment took its own (refinement) record
     size_t misses = 0;             ///< fragments no record covered (left black)
+    LightShares shares;            ///< with `per_light` only
 };
 
 /// Interpolation of the shading pass: never creates a record. A fragment takes its fragment
@@ -109,8 +110,9 @@ struct InterpolatedLight {
 /// makes them impossible) are counted (and in stats as "shading_misses") and left black, so a
 /// bug shows.
 /// `report`: sets the stats (shading_misses, lookups, fragment_records_used).
+/// `per_light` (the records must keep light parts): also each light's share of every fragment's light.
 InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
-                                     Stats& stats, ProgressSink* progress, bool report = true);
+                                     Stats& stats, ProgressSink* progress, bool report = true, bool per_light = false);
 
 /// Progressive preview after a sub-pass of step `step`: each fragment takes the interpolated
 /// light at the nearest pixel (on that step's lattice, then coarser ones) a finished sub-pass

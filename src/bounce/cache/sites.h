@@ -40,6 +40,14 @@ inline Interpolated interpolate_at(const IrradianceCache& cache, const Fragment&
     return f.is_hair() ? cache.lookup(site.p, site.n, true, &site.p, &site.n) : cache.lookup(site.p, site.n, true, &f.p, &f.n);
 }
 
+/// Each light's share of interpolate_at's value (IrradianceCache::light_shares), into `out`.
+inline void light_shares_at(const IrradianceCache& cache, const Fragment& f, const Site& site, std::span<Color> out) {
+    if (f.is_hair())
+        cache.light_shares(site.p, site.n, true, &site.p, &site.n, out);
+    else
+        cache.light_shares(site.p, site.n, true, &f.p, &f.n, out);
+}
+
 inline uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k) {
     uint64_t pix = static_cast<uint64_t>(wy + deep.y0) * static_cast<uint64_t>(deep.full_width) +
                    static_cast<uint64_t>(wx + deep.x0);

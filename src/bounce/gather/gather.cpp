@@ -23,6 +23,13 @@ LightPart combine_parts(const LightParts& parts, std::span<const Color> scales) 
     return out;
 }
 
+void normalise_shares(std::span<Color> parts) {
+    Color sum(0);
+    for (const Color& p : parts) sum += p;
+    for (Color& p : parts)
+        for (int c = 0; c < 3; ++c) p[c] = sum[c] > 0 ? p[c] / sum[c] : 0.0f;
+}
+
 GatherGrid gather_grid(int rays) {
     GatherGrid g;
     g.m = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(rays) / kPi))));

@@ -51,6 +51,10 @@ struct LightParts {
 /// one rescaled to the same scales hold the same bits).
 LightPart combine_parts(const LightParts& parts, std::span<const Color> scales);
 
+/// Divides each channel of `parts` by the channel's sum over them (all 0 where the sum is not
+/// positive): each light's share of a total.
+void normalise_shares(std::span<Color> parts);
+
 /// The stratification used for `rays`.
 struct GatherGrid {
     int m = 1, n = 1;  ///< elevation and azimuth strata
@@ -179,6 +183,15 @@ struct Indirect {
     float ao = 1;
     Vec3 bent_normal{0, 0, 1};
     std::array<Vec3, 3> light_dir{};  ///< per channel: mean incoming direction x radiance (GatherResult)
+};
+
+/// Each scene light's share of every fragment's indirect light, per channel (render.light_parts:
+/// from the records' light parts), for the per-light indirect layers.
+struct LightShares {
+    size_t lights = 0;
+    std::vector<Color> share;  ///< share[fragment * lights + i], parallel to deep.fragments
+    std::span<const Color> at(size_t fragment) const { return {share.data() + fragment * lights, lights}; }
+    std::span<Color> at(size_t fragment) { return {share.data() + fragment * lights, lights}; }
 };
 
 /// Where a hair fragment's indirect light is gathered and looked up: its strand's root on the

@@ -410,18 +410,24 @@ ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const 
     ShadeResult out;
     const SiteLightResult sites = site_light_for(ctx, specular, window_of(deep), cache, radiosity);
     std::vector<Indirect> interpolated;
+    LightShares shares;
     if (cache && scene.render.indirect.gi == GiMode::Cache) {
         auto t0 = std::chrono::steady_clock::now();
-        InterpolatedLight light = interpolation_pass(scene, deep, *cache, ctx.stats, progress);
+        // Per-light indirect layers: each light's share of the records' light parts.
+        const bool per_light = scene.render.shading.layers == LayerSet::Components && !scene.render.indirect.ao &&
+                               !scene.lights.empty() && cache->has_light_parts(scene.lights.size());
+        InterpolatedLight light = interpolation_pass(scene, deep, *cache, ctx.stats, progress, true, per_light);
         ctx.stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         interpolated = std::move(light.light);
+        shares = std::move(light.shares);
         out.refined = fragment_mask(deep, light.refined);
         out.shading_misses = light.misses + sites.misses;
         if (specular.any()) ctx.stats.set("shading_misses", static_cast<double>(out.shading_misses));
         brute = &interpolated;
     }
     out.image = shade(scene, deep, ctx.materials, ctx.lighting, scene.render.indirect.any() ? brute : nullptr, ctx.stats,
-                      progress, nullptr, sites.view(), scene.render.shading.deep_colour ? &out.colours : nullptr);
+                      progress, nullptr, sites.view(), scene.render.shading.deep_colour ? &out.colours : nullptr,
+                      shares.lights > 0 ? &shares : nullptr);
     return out;
 }
 

@@ -24,7 +24,7 @@ Layer& rgb_layer(Image& image, const std::string& name) {
 
 }  // namespace
 
-ComponentLayers::ComponentLayers(Image& image, const Scene& scene, bool on) : image_(image), on_(on) {
+ComponentLayers::ComponentLayers(Image& image, const Scene& scene, bool on, bool per_light_indirect) : image_(image), on_(on) {
     if (!on_) return;
     emission_ = &rgb_layer(image, "emission");
     diffuse_ = &rgb_layer(image, "diffuse_direct");
@@ -42,6 +42,9 @@ ComponentLayers::ComponentLayers(Image& image, const Scene& scene, bool on) : im
         const std::string name = taken ? fmt::format("{}_{}", own, i) : own;
         light_diffuse_.push_back(&rgb_layer(image, "diffuse_direct_" + name));
         light_specular_.push_back(&rgb_layer(image, "specular_direct_" + name));
+        if (!per_light_indirect) continue;
+        light_diffuse_ind_.push_back(&rgb_layer(image, "diffuse_indirect_" + name));
+        light_specular_ind_.push_back(&rgb_layer(image, "specular_indirect_" + name));
     }
     ids_ = &image.add_layer("id", {"id.object", "id.material"});
     nlohmann::json objects = nlohmann::json::array(), materials = nlohmann::json::array();
@@ -73,9 +76,14 @@ void ComponentLayers::add(int wx, int wy, const ShadedParts& p, float weight) {
     }
 }
 
-void ComponentLayers::add_indirect(int wx, int wy, const Color& diffuse, const Color& specular, float weight) {
+void ComponentLayers::add_indirect(int wx, int wy, const Color& diffuse, const Color& specular, float weight,
+                                   std::span<const Color> shares) {
     put(diffuse_ind_, wx, wy, diffuse, weight);
     put(specular_ind_, wx, wy, specular, weight);
+    for (size_t i = 0; i < light_diffuse_ind_.size() && i < shares.size(); ++i) {
+        put(light_diffuse_ind_[i], wx, wy, diffuse * shares[i], weight);
+        put(light_specular_ind_[i], wx, wy, specular * shares[i], weight);
+    }
 }
 
 void ComponentLayers::background(int wx, int wy, const Color& c) { put(background_, wx, wy, c, 1); }

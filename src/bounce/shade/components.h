@@ -1,10 +1,11 @@
 // The beauty's components as EXR layers for compositing (render.layers = components), named as
 // Nuke users know them from other renderers: emission, diffuse_direct, specular_direct (and
 // per light: diffuse_direct_<light>, specular_direct_<light>), diffuse_indirect,
-// specular_indirect, background, reflection and refraction (what mirrors and glass show), and an id layer (id.object, id.material: index + 1, 0 where
+// specular_indirect (per light too when the records keep light parts), background, reflection and refraction (what mirrors and glass show), and an id layer (id.object, id.material: index + 1, 0 where
 // nothing is seen) whose names are in the header. The parts sum to the beauty.
 #pragma once
 
+#include <span>
 #include <string>
 #include <vector>
 
@@ -28,14 +29,16 @@ class ComponentLayers {
 public:
     /// With `on`, adds the layers to `image` and the id tables to its metadata
     /// (bounce:object_ids, bounce:material_ids: JSON arrays of names); else does nothing.
-    ComponentLayers(Image& image, const Scene& scene, bool on);
+    /// `per_light_indirect`: the indirect layers per light as well.
+    ComponentLayers(Image& image, const Scene& scene, bool on, bool per_light_indirect = false);
     bool on() const { return on_; }
     /// Zeroed parts sized for this scene's lights.
     ShadedParts parts() const;
     /// Adds `p` x `weight` (emission and direct light) to pixel (wx, wy) of the window.
     void add(int wx, int wy, const ShadedParts& p, float weight);
-    /// Adds the indirect light's lobes x `weight`.
-    void add_indirect(int wx, int wy, const Color& diffuse, const Color& specular, float weight);
+    /// Adds the indirect light's lobes x `weight`; per light, times each light's `shares`.
+    void add_indirect(int wx, int wy, const Color& diffuse, const Color& specular, float weight,
+                      std::span<const Color> shares = {});
     void background(int wx, int wy, const Color& c);
     /// Light a mirror's or glass's paths bring (already weighted), by their first bounce.
     void add_specular(int wx, int wy, bool refraction, const Color& c);
@@ -48,7 +51,7 @@ private:
     bool on_ = false;
     Layer *emission_ = nullptr, *diffuse_ = nullptr, *specular_ = nullptr, *diffuse_ind_ = nullptr, *specular_ind_ = nullptr,
           *background_ = nullptr, *reflection_ = nullptr, *refraction_ = nullptr, *ids_ = nullptr;
-    std::vector<Layer*> light_diffuse_, light_specular_;
+    std::vector<Layer*> light_diffuse_, light_specular_, light_diffuse_ind_, light_specular_ind_;
 };
 
 }  // namespace bounce

@@ -93,6 +93,7 @@ struct ShadeContext {
     bool ao_only;
     const SpecularTracer& tracer;
     const SiteLight& sites;
+    const LightShares* shares;
 };
 
 /// Site j of a pixel: the random stream of its light samples is its pixel's, after every fragment's.
@@ -172,7 +173,7 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
             lobes = indirect_lobes(in, f.n, surf, wo, c.scene.render.shading.light_per_channel);
         lobes.diffuse *= base, lobes.specular *= base;
         sum.beauty += (lobes.diffuse + lobes.specular) * w;
-        if (comps.on()) comps.add_indirect(wx, wy, lobes.diffuse, lobes.specular, w);
+        if (comps.on()) comps.add_indirect(wx, wy, lobes.diffuse, lobes.specular, w, c.shares ? c.shares->at(at) : std::span<const Color>());
     }
     if (!c.ao_only) {
         ShadedParts parts = comps.on() ? comps.parts() : ShadedParts{};
@@ -198,7 +199,7 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
             const DirectLighting& lighting, const std::vector<Indirect>* indirect, Stats& stats,
             ProgressSink* sink, const std::vector<Color>* direct_radiance, const SiteLight& sites,
-            std::vector<Color>* colours) {
+            std::vector<Color>* colours, const LightShares* shares) {
     if (colours) colours->assign(deep.fragments.size(), Color(0));
     const bool ao_only = scene.render.indirect.ao && indirect;
     Image img;
@@ -218,12 +219,12 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
     Layer& normal = img.add_layer("N", {"N.X", "N.Y", "N.Z"});
     Layer& depth = img.add_layer("depth", {"Z"});
     // AO-only renders have no components to split.
-    ComponentLayers comps(img, scene, scene.render.shading.layers == LayerSet::Components && !ao_only);
+    ComponentLayers comps(img, scene, scene.render.shading.layers == LayerSet::Components && !ao_only, shares != nullptr);
 
     CameraRays camera(scene.camera);
     const SpecularTracer tracer(scene, lighting.accel(), lighting);
     const bool specular = tracer.active() && !ao_only;  // AO-only renders show no reflections
-    const ShadeContext ctx{scene, materials, lighting, indirect, direct_radiance, camera, ao_only, tracer, sites};
+    const ShadeContext ctx{scene, materials, lighting, indirect, direct_radiance, camera, ao_only, tracer, sites, shares};
     auto put3 = [&](Layer* l, int x, int y, const Vec3& v) {
         if (!l) return;
         float* p = img.at(*l, x, y);

@@ -34,10 +34,12 @@ struct SiteLight {
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
             const DirectLighting& lighting, const std::vector<Indirect>* indirect, Stats& stats,
             ProgressSink* progress, const std::vector<Color>* direct_radiance = nullptr, const SiteLight& sites = {},
-            std::vector<Color>* colours = nullptr);
+            std::vector<Color>* colours = nullptr, const LightShares* shares = nullptr);
 /// `colours` (if given) receives, parallel to deep.fragments, what each fragment adds to the
 /// beauty (its coverage included; the sky seen past the fragments is no fragment's): the
 /// colour of a deep file's samples (write_deep).
+/// `shares` (if given, with components layers): each light's share of `indirect`, which the
+/// per-light indirect layers split the fragments' indirect lobes by.
 
 /// Emission plus direct light reflected towards the camera at every fragment, exactly as
 /// `shade` computes it (bumped normal, glossy lobe, same random numbers): the progressive
