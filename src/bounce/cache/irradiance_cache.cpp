@@ -1,5 +1,7 @@
 #include "bounce/cache/irradiance_cache.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -7,7 +9,34 @@
 namespace bounce {
 
 IrradianceCache::IrradianceCache(const Bounds& scene_bounds, CacheSettings settings, bool ao_only)
-    : settings_(std::move(settings)), shading_settings_(settings_.for_shading()), ao_only_(ao_only), octree_(scene_bounds) {}
+    : scene_bounds_(scene_bounds), settings_(std::move(settings)), shading_settings_(settings_.for_shading()), ao_only_(ao_only),
+      octree_(scene_bounds) {}
+
+IrradianceCache::IrradianceCache(const IrradianceCache& o)
+    : scene_bounds_(o.scene_bounds_), settings_(o.settings_), shading_settings_(o.shading_settings_), ao_only_(o.ao_only_),
+      records_(o.records_), fragment_records_(o.fragment_records_), fragment_index_(o.fragment_index_), octree_(o.octree_),
+      luminance_floor_(o.luminance_floor_), light_scales_(o.light_scales_) {}
+
+std::unique_ptr<IrradianceCache> IrradianceCache::clone() const { return std::unique_ptr<IrradianceCache>(new IrradianceCache(*this)); }
+
+bool IrradianceCache::made_like(const Bounds& scene_bounds, const CacheSettings& settings, bool ao_only) const {
+    return scene_bounds.lo == scene_bounds_.lo && scene_bounds.hi == scene_bounds_.hi && settings == settings_ && ao_only == ao_only_;
+}
+
+void IrradianceCache::rescale_lights(std::vector<Color> scales) {
+    light_scales_ = std::move(scales);
+    const auto rescale = [this](std::deque<Record>& records) {
+        tbb::parallel_for(size_t(0), records.size(), [&](size_t i) {
+            Record& r = records[i];
+            if (r.parts && r.parts->light.size() == light_scales_.size())
+                apply_light_scales(r, light_scales_);
+            else
+                r.parts.reset();
+        });
+    };
+    rescale(records_);
+    rescale(fragment_records_);
+}
 
 bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Record> extra, float own, float min_weight) const {
     // A record at p itself (weight 1 there, 0.99 for float rounding) covers p whatever

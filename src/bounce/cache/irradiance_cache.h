@@ -32,6 +32,19 @@ struct Interpolated {
 class IrradianceCache {
 public:
     IrradianceCache(const Bounds& scene_bounds, CacheSettings settings, bool ao_only);
+    IrradianceCache(IrradianceCache&&) = default;
+    IrradianceCache& operator=(IrradianceCache&&) = default;
+
+    /// A copy of the records, the spatial index, the light scales and the luminance floor (with
+    /// a lock of its own): what inserting every record into a new cache would give, without
+    /// re-inserting them.
+    std::unique_ptr<IrradianceCache> clone() const;
+    /// Whether a cache made with these arguments would index and weigh records as this one (so
+    /// clone() may stand for it).
+    bool made_like(const Bounds& scene_bounds, const CacheSettings& settings, bool ao_only) const;
+    /// Sets the light scales and every record's values from its light parts at them; a record
+    /// whose parts are not for as many lights loses them (CacheSettings::light_parts).
+    void rescale_lights(std::vector<Color> scales);
 
     const CacheSettings& settings() const { return settings_; }
     bool ao_only() const { return ao_only_; }
@@ -112,6 +125,8 @@ public:
     void set_luminance_floor(float f) { luminance_floor_ = f; }
 
 private:
+    IrradianceCache(const IrradianceCache& other);  ///< clone()
+    Bounds scene_bounds_;
     CacheSettings settings_, shading_settings_;
     bool ao_only_;
     std::deque<Record> records_;

@@ -10,6 +10,18 @@ RecordOctree::RecordOctree(const Bounds& b) {
     bounds_.hi = c + Vec3(half);
 }
 
+RecordOctree::RecordOctree(const RecordOctree& o) : bounds_(o.bounds_), root_(copy(o.root_)), nodes_(o.nodes_), refs_(o.refs_) {}
+
+RecordOctree::Node RecordOctree::copy(const Node& node) {
+    Node out;
+    out.entries = node.entries;
+    if (node.children) {
+        out.children = std::make_unique<std::array<Node, 8>>();
+        for (size_t c = 0; c < 8; ++c) (*out.children)[c] = copy((*node.children)[c]);
+    }
+    return out;
+}
+
 void RecordOctree::insert(uint32_t id, const Vec3& p, float support) {
     Vec3 blo = p - Vec3(support), bhi = p + Vec3(support);
     float diag2 = 12 * support * support;  // squared diagonal of the support box

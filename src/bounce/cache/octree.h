@@ -16,6 +16,10 @@ namespace bounce {
 class RecordOctree {
 public:
     explicit RecordOctree(const Bounds& bounds);
+    RecordOctree(const RecordOctree& other);  ///< a deep copy
+    RecordOctree& operator=(const RecordOctree&) = delete;
+    RecordOctree(RecordOctree&&) = default;
+    RecordOctree& operator=(RecordOctree&&) = default;
     /// Adds record `id` whose weights vanish beyond `support` from `p`.
     void insert(uint32_t id, const Vec3& p, float support);
     /// Calls f(id) for every record whose support sphere contains p (a superset of the records
@@ -51,6 +55,7 @@ private:
         std::vector<Entry> entries;
         std::unique_ptr<std::array<Node, 8>> children;
     };
+    static Node copy(const Node& node);
     void insert(Node& node, const Vec3& lo, const Vec3& hi, const Entry& e, const Vec3& blo, const Vec3& bhi,
                 float diag2, int depth);
     Bounds bounds_;

@@ -115,11 +115,12 @@ VisibilityResult visibility_pass(const FrameContext& ctx, const FramePlan& plan,
             break;
         }
     }
-    out.shaded = cropped ? sub_window(out.gathered, plan.window) : out.gathered;
+    if (cropped) out.crop = sub_window(out.gathered, plan.window);
     return out;
 }
 
 std::unique_ptr<IrradianceCache> copy_cache(const IrradianceCache& from, const Scene& scene) {
+    if (from.made_like(scene.bounds(), from.settings(), from.ao_only())) return from.clone();
     auto cache = std::make_unique<IrradianceCache>(scene.bounds(), from.settings(), from.ao_only());
     cache->set_luminance_floor(from.luminance_floor());
     cache->set_light_scales(from.light_scales());
@@ -151,19 +152,20 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan
         keep = [crop = plan.window, camera = CameraRays(scene.camera)](const Record& r) { return !camera.projects_into(r.p, crop); };
     if (plan.cache == CacheStart::Previous) {
         const IrradianceCache& from = *previous.cache;
-        out.cache->set_luminance_floor(from.luminance_floor());
         // Records that keep their light parts show today's light colours and intensities: the
         // bounce light of a light edit, exactly (docs/lighting-tool.md).
-        const std::vector<Color>& scales = out.cache->light_scales();
-        const auto rescaled = [&](Record r) {
-            if (r.parts && r.parts->light.size() == scales.size()) apply_light_scales(r, scales);
-            else r.parts.reset();
-            return r;
-        };
-        for (size_t i = 0; i < from.size(); ++i)
-            if (!keep || keep(from.record(i))) out.cache->insert_loaded(rescaled(from.record(i))), ++out.records_loaded;
-        for (size_t i = 0; i < from.fragment_record_count(); ++i)
-            if (!keep || keep(from.fragment_record_at(i))) out.cache->insert_fragment_record(rescaled(from.fragment_record_at(i)));
+        std::vector<Color> scales = out.cache->light_scales();
+        if (!keep && from.made_like(scene.bounds(), scene.render.cache, scene.render.indirect.ao)) {
+            out.cache = from.clone();  // the index inserting every record again would build
+        } else {
+            out.cache->set_luminance_floor(from.luminance_floor());
+            for (size_t i = 0; i < from.size(); ++i)
+                if (!keep || keep(from.record(i))) out.cache->insert_loaded(from.record(i));
+            for (size_t i = 0; i < from.fragment_record_count(); ++i)
+                if (!keep || keep(from.fragment_record_at(i))) out.cache->insert_fragment_record(from.fragment_record_at(i));
+        }
+        out.cache->rescale_lights(std::move(scales));
+        out.records_loaded = out.cache->size();
         return out;
     }
     if (plan.cache == CacheStart::File) {
@@ -337,7 +339,7 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
         options.own_weight = kTemporalOwnWeight;
         options.min_weight = std::min(scene.render.cache.min_weight, kTemporalMinWeight);
     }
-    if (plan.preview && preview) options.after_subpass = preview_after_subpass(ctx, deep.shaded, cache, preview);
+    if (plan.preview && preview) options.after_subpass = preview_after_subpass(ctx, deep.shaded(), cache, preview);
     std::unique_ptr<Gatherer> first;
     if (scene.render.cache.min_rays > 0 && scene.render.cache.min_rays < gs.rays) {
         GatherSettings fs = gs;
@@ -376,7 +378,7 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
             near = std::make_unique<NearFragmentRecords>(std::move(judged.fragment_valid), scene.bounds());
             ro.near = near.get();
         }
-        out.fragment_records_new = refinement_pass(scene, deep.shaded, refiner, cache, ctx.stats, ctx.progress, ro);
+        out.fragment_records_new = refinement_pass(scene, deep.shaded(), refiner, cache, ctx.stats, ctx.progress, ro);
         if (out.fragment_records_new > 0 && options.after_subpass) {
             const auto schedule = subpass_schedule(1);
             options.after_subpass(schedule.back(), schedule.size() - 1, schedule.size());

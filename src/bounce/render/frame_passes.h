@@ -4,6 +4,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "bounce/accel/accel.h"
@@ -39,7 +40,10 @@ struct FrameContext {
 /// The deep buffers of a frame: the gathered window (the window and its margin) and the
 /// shaded window inside it.
 struct VisibilityResult {
-    DeepBuffer gathered, shaded;
+    DeepBuffer gathered;             ///< the window the passes gather in
+    std::optional<DeepBuffer> crop;  ///< a crop's own window, when it differs from `gathered`
+    /// The fragments the shading pass shades (the crop, or the gathered window itself).
+    const DeepBuffer& shaded() const { return crop ? *crop : gathered; }
 };
 /// Traces, reads or takes over the previous frame's deep buffer, as the plan says (plan.deep_out
 /// is written by the front end, with the frame's other outputs).

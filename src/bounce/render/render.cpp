@@ -151,7 +151,7 @@ namespace {
 void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep, const FrameState& previous,
                       RadiosityResult& radiosity, CacheStartResult& start, const RenderRequest& request, RenderResult& result) {
     size_t baked_before = 0;
-    const SpecularSitesResult specular = specular_sites_pass(ctx, deep.shaded);
+    const SpecularSitesResult specular = specular_sites_pass(ctx, deep.shaded());
     if (specular.mirrors && !radiosity.textures &&
         ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity)
         radiosity = radiosity_pass(ctx, plan, previous);
@@ -174,14 +174,14 @@ void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const Visi
     const auto quick_look = plan.preview ? request.preview : std::function<void(const Image&)>();
     ShadeResult shaded;
     if (plan.gather == GatherStep::WhereMissing) {
-        shaded = shading_pass(ctx, deep.shaded, start.cache.get(), nullptr, specular, radiosity.textures.get(), quick_look);
+        shaded = shading_pass(ctx, deep.shaded(), start.cache.get(), nullptr, specular, radiosity.textures.get(), quick_look);
         if (shaded.shading_misses > 0) {
             gather();
-            shaded = shading_pass(ctx, deep.shaded, start.cache.get(), nullptr, specular, radiosity.textures.get());
+            shaded = shading_pass(ctx, deep.shaded(), start.cache.get(), nullptr, specular, radiosity.textures.get());
         }
     } else {
         gather();
-        shaded = shading_pass(ctx, deep.shaded, start.cache.get(), nullptr, specular, radiosity.textures.get());
+        shaded = shading_pass(ctx, deep.shaded(), start.cache.get(), nullptr, specular, radiosity.textures.get());
     }
     result.shading_misses = shaded.shading_misses;
     result.image = std::move(shaded.image);
@@ -203,7 +203,7 @@ void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const Visi
 void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep, const FrameState& previous,
                          RadiosityResult& radiosity, RenderResult& result) {
     std::vector<Indirect> light;
-    SpecularSitesResult specular = specular_sites_pass(ctx, deep.shaded);
+    SpecularSitesResult specular = specular_sites_pass(ctx, deep.shaded());
     const bool radiosity_sites = ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity;
     if (specular.mirrors && radiosity_sites && !radiosity.textures && ctx.scene.render.indirect.any())
         radiosity = radiosity_pass(ctx, plan, previous);
@@ -212,7 +212,7 @@ void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const V
         const size_t baked_before = radiosity.textures ? radiosity.textures->baked_sides() : 0;
         PhaseTimer t(ctx.stats, "gather");
         const uint64_t rays_before = ctx.stats.total().gather_rays;
-        light = brute_gather_pass(ctx, deep.shaded, radiosity.textures.get(), specular);
+        light = brute_gather_pass(ctx, deep.shaded(), radiosity.textures.get(), specular);
         const double secs = t.stop();
         const uint64_t rays = ctx.stats.total().gather_rays - rays_before;
         ctx.stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
@@ -222,7 +222,7 @@ void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const V
             save_radiosity_pass(ctx, *radiosity.textures, baked_before);
         }
     }
-    ShadeResult shaded = shading_pass(ctx, deep.shaded, nullptr, plan.gather == GatherStep::Brute ? &light : nullptr, specular,
+    ShadeResult shaded = shading_pass(ctx, deep.shaded(), nullptr, plan.gather == GatherStep::Brute ? &light : nullptr, specular,
                                       radiosity.textures.get());
     result.image = std::move(shaded.image);
     result.deep_colour = std::move(shaded.colours);
@@ -262,7 +262,7 @@ namespace {
 /// The shaded window's fragment colours at the gathered window's fragments (0 in its margin):
 /// what write_deep takes. Empty when there are none (an MPI rank that shades no image).
 std::vector<Color> colours_of_window(const VisibilityResult& deep, const std::vector<Color>& shaded) {
-    const DeepBuffer &g = deep.gathered, &s = deep.shaded;
+    const DeepBuffer &g = deep.gathered, &s = deep.shaded();
     if (shaded.size() != s.fragments.size()) return {};
     if (window_of(g) == window_of(s)) return shaded;
     std::vector<Color> out(g.fragments.size(), Color(0));
@@ -337,7 +337,7 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
         DirectLighting lighting(scene, accel);
         SingleProcess alone;
         const FrameContext ctx{scene, accel, materials, lighting, stats, ps, request.cancel, request.comm ? *request.comm : alone};
-        const VisibilityResult deep = visibility_pass(ctx, plan, previous);
+        VisibilityResult deep = visibility_pass(ctx, plan, previous);
         // A carried radiosity says what light changed, which the records' judgement needs first.
         RadiosityResult radiosity;
         if (plan.radiosity == RadiosityStep::Carry) radiosity = radiosity_pass(ctx, plan, previous);
@@ -365,13 +365,14 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
         // Sources of a lazy bake point at this frame's materials and lights: only a shot's next
         // frame takes the textures (RadiosityTextures::carry points them at its own).
         result.radiosity = std::move(radiosity.textures);
-        result.deep = deep.shaded;
         if (!plan.deep_out.empty()) {
-            result.gathered_deep = std::make_shared<const DeepBuffer>(deep.gathered);
             result.deep_colour = scene.render.shading.deep_colour ? colours_of_window(deep, result.deep_colour) : std::vector<Color>();
+            result.gathered_deep = std::make_shared<const DeepBuffer>(deep.crop ? std::move(deep.gathered) : deep.gathered);
         } else {
             result.deep_colour.clear();
         }
+        // The passes are done with the fragments: moved, not copied (a Sponza frame's are 100 MB).
+        result.deep = deep.crop ? std::move(*deep.crop) : std::move(deep.gathered);
     });
     if (request.comm && request.comm->size() > 1) report_ranks(*request.comm, stats, sent0, wait0);
     if (plan.cache == CacheStart::Temporal) report_temporal(result, stats);

@@ -94,6 +94,7 @@ struct CacheSettings {
     /// and are placed as if every light were white at intensity 1: an edit of a light's colour or
     /// intensity then rescales the cached bounce light exactly (docs/lighting-tool.md).
     bool light_parts = false;
+    bool operator==(const CacheSettings&) const = default;
     /// The settings the shading pass interpolates with.
     CacheSettings for_shading() const {
         CacheSettings s = *this;
