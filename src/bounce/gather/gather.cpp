@@ -103,16 +103,8 @@ Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d
 
 Color Gatherer::hair_radiance(const Hit& h, const Vec3& at, const Vec3& d, const RandomStream& rng, uint64_t ray,
                               Counters& counters, std::span<Color> parts) const {
-    // A strand seen from the gather reflects its albedo x the direct light on its side facing the ray.
-    const Fur& fur = *scene_.objects[h.object].fur;
-    RandomStream hit_rng(rng.bits(ray, kDimGather + 3), ray);
-    const Color albedo = fur.params.albedo(fur.v_of(h.prim, h.u));
-    if (parts.empty())
-        return albedo * kInvPi *
-               lighting_.irradiance(at, -d, h.object, hit_rng, settings_.hit_light_samples, counters, true, nullptr, fur.max_width());
-    lighting_.irradiance_parts(at, -d, h.object, hit_rng, settings_.hit_light_samples, counters, parts, fur.max_width());
-    for (Color& x : parts) x = albedo * kInvPi * x;
-    return part_sum(parts);
+    const RandomStream hit_rng(rng.bits(ray, kDimGather + 3), ray);
+    return lighting_.strand_radiance(h, at, d, hit_rng, settings_.hit_light_samples, counters, parts);
 }
 
 Color Gatherer::escaped_radiance(const Vec3& d, std::span<Color> parts) const {

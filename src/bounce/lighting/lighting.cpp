@@ -68,6 +68,17 @@ void DirectLighting::irradiance_parts(const Vec3& p, const Vec3& n, uint32_t obj
         out[i] = scene_.lights[i].lights(object) ? sample_light(i, p, n, rng, samples, counters, nullptr, hair_start, true) : Color(0);
 }
 
+Color DirectLighting::strand_radiance(const Hit& h, const Vec3& at, const Vec3& d, const RandomStream& rng, int samples,
+                                      Counters& counters, std::span<Color> parts) const {
+    const Fur& fur = *scene_.objects[h.object].fur;
+    const Color albedo = fur.params.albedo(fur.v_of(h.prim, h.u));
+    if (parts.empty()) return albedo * kInvPi * irradiance(at, -d, h.object, rng, samples, counters, true, nullptr, fur.max_width());
+    irradiance_parts(at, -d, h.object, rng, samples, counters, parts, fur.max_width());
+    Color sum(0);
+    for (Color& x : parts) x = albedo * kInvPi * x, sum += x;
+    return sum;
+}
+
 void DirectLighting::background_parts(const Vec3& dir, std::span<Color> out) const {
     for (size_t i = 0; i < scene_.lights.size(); ++i) {
         const Light& l = scene_.lights[i];

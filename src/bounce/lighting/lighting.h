@@ -56,6 +56,12 @@ public:
     void irradiance_parts(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng, int samples,
                           Counters& counters, std::span<Color> out, float hair_start = 0) const;
 
+    /// Radiance a strand sends back along a ray of direction `d` that hit it (`h`, a hair hit) at
+    /// `at`: its albedo x the direct light on the strand's side facing the ray / pi, as gathers
+    /// and reflections see fur. With `parts` (one per light): per light, scales factored out
+    /// (irradiance_parts), and their sum is returned.
+    Color strand_radiance(const Hit& h, const Vec3& at, const Vec3& d, const RandomStream& rng, int samples, Counters& counters,
+                          std::span<Color> parts = {}) const;
     /// Radiance the camera sees where a primary ray escapes (the sky; black without one).
     Color background(const Vec3& dir) const;
     /// The same per sky light, its scale factored out (0 for the other lights).

@@ -128,12 +128,8 @@ void SpecularTracer::follow(const Branch& b, PixelPaths& out, Counters& counters
     if (h.hair) {
         // A strand (fur seen by reflections) shows the direct light on its side facing the ray,
         // as a gather's hit on it does; no bounce light, no further path.
-        const Fur& fur = *scene_.objects[h.object].fur;
         const RandomStream rng(kDimLight, out.rays, h.prim);
-        const Color albedo = fur.params.albedo(fur.v_of(h.prim, h.u));
-        seen += weight * albedo * kInvPi *
-                lighting_.irradiance(b.o + b.d * h.t, -b.d, h.object, rng, scene_.render.lighting.light_samples, counters, true, nullptr,
-                                     fur.max_width());
+        seen += weight * lighting_.strand_radiance(h, b.o + b.d * h.t, b.d, rng, scene_.render.lighting.light_samples, counters);
         return;
     }
     const Object& obj = scene_.objects[h.object];
