@@ -167,6 +167,29 @@ TEST(TemporalCache, AKeptRecordEqualsAFreshGatherAtItsPlaceBitForBit) {
     EXPECT_EQ(compared, r.temporal.kept);
 }
 
+TEST(TemporalCache, AMovingCamerasRefinedFragmentsUseTheirOwnGathers) {
+    // Fragment records are keyed by pixel: frame 2's must replace frame 1's at the same pixel,
+    // or its refinement's gathers are made and never used (shot A's edges, docs/animation.md).
+    json j = shot_scene();
+    j["camera"]["position"] = {{"keys", {{1, {0, 3, 8}}, {3, {0.4, 3, 7.4}}}}};
+    j["render"]["refine"] = 0.01;  // many fragments refine
+    Frames f;
+    f.render(j, 1);
+    f.render(j, 2);
+    const RenderResult& r = f.results[1];
+    ASSERT_GT(f.results[0].fragment_records_new, 10u);
+    ASSERT_GT(r.fragment_records_new, 10u);
+    size_t own = 0, used = 0;
+    for (size_t i = 0; i < r.cache->fragment_record_count(); ++i) {
+        const Record& k = r.cache->fragment_record_at(i);
+        if (k.gathered != 2) continue;
+        ++own;
+        used += r.cache->fragment_record(k.key, k.p) == &k;
+    }
+    EXPECT_EQ(own, r.fragment_records_new);
+    EXPECT_EQ(used, own);
+}
+
 TEST(TemporalCache, RecordsOnAMovingObjectTravelWithItAndTheRestUpdateOnlyWhatTheySee) {
     json j = shot_scene();
     j["objects"][2]["transform"] = {{"translate", {{"keys", {{1, {-1, 0.5, 0}}, {3, {1, 0.5, 0}}}}}}};

@@ -261,6 +261,14 @@ void IrradianceCache::insert_fragment_record(const Record& r) {
     if (fragment_index_.emplace(r.key, static_cast<uint32_t>(fragment_records_.size())).second) fragment_records_.push_back(r);
 }
 
+void IrradianceCache::replace_fragment_record(const Record& r) {
+    auto [it, added] = fragment_index_.emplace(r.key, static_cast<uint32_t>(fragment_records_.size()));
+    if (added)
+        fragment_records_.push_back(r);
+    else
+        fragment_records_[it->second] = r;
+}
+
 const Record* IrradianceCache::fragment_record(uint64_t key, const Vec3& p) const {
     auto it = fragment_index_.find(key);
     if (it == fragment_index_.end()) return nullptr;

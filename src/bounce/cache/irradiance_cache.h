@@ -107,6 +107,9 @@ public:
     /// fragment, Record::p is its point), outside the spatial index, so no lookup uses it.
     /// Inserting a key twice keeps the first.
     void insert_fragment_record(const Record& r);
+    /// The same, but a record of the key already there is replaced: this frame's fragment at a
+    /// pixel supersedes an earlier frame's, whose point it no longer is (frames of a shot).
+    void replace_fragment_record(const Record& r);
     /// The record of the fragment with creation key `key` whose point is exactly `p` (a
     /// record kept from another deep buffer does not match), or nullptr.
     const Record* fragment_record(uint64_t key, const Vec3& p) const;

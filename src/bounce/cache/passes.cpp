@@ -164,7 +164,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
     }
     std::sort(records.begin(), records.end(), [](const Record& a, const Record& b) { return a.key < b.key; });
     auto lock = lock_cache<std::unique_lock<std::shared_mutex>>(cache, stats.local());
-    for (const Record& r : records) cache.insert_fragment_record(r);
+    for (const Record& r : records) cache.replace_fragment_record(r);
     stats.set("refined_fragments", static_cast<double>(records.size() - taken));
     stats.set("refined_from_neighbours", static_cast<double>(taken));
     stats.set("refine_rays_per_gather", static_cast<double>(refiner.grid().rays()));

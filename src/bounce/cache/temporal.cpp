@@ -288,19 +288,21 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
     return out;
 }
 
-NearFragmentRecords::NearFragmentRecords(std::vector<Record> records, const Bounds& bounds)
-    : records_(std::move(records)), index_(bounds) {
+NearFragmentRecords::NearFragmentRecords(std::vector<Record> records, const Bounds& bounds, float reach)
+    : records_(std::move(records)), index_(bounds), reach_(reach) {
+    // By where each was gathered: a record taken by a neighbour carries that neighbour's point
+    // as its own, and measured from there it would creep further every frame.
     for (size_t i = 0; i < records_.size(); ++i)
-        index_.insert(static_cast<uint32_t>(i), records_[i].p, 2 * kNearFragment * records_[i].footprint);
+        index_.insert(static_cast<uint32_t>(i), records_[i].origin, 2 * reach_ * records_[i].footprint);
 }
 
 const Record* NearFragmentRecords::nearest(const Vec3& p, const Vec3& n, float footprint) const {
     const Record* best = nullptr;
-    float best_d = kNearFragment * footprint;
+    float best_d = reach_ * footprint;
     const float cos_max = std::cos(10 * kPi / 180);
     index_.visit(p, [&](uint32_t id) {
         const Record& r = records_[id];
-        const float d = length(r.p - p);
+        const float d = length(r.origin - p);
         if (dot(r.n, n) < cos_max || d > best_d || (best && d == best_d && r.key > best->key)) return;
         best = &r, best_d = d;
     });

@@ -68,14 +68,13 @@ float solid_angle_bound(const Vec3& o, const Bounds& box);
 /// frame `full_width` pixels wide.
 RandomStream record_stream(const Record& r, uint64_t seed, int full_width);
 
-/// Earlier frames' per-fragment records by position. A moving camera never puts a fragment on
-/// exactly the point of one before, so a fragment refinement wants a gather for takes the
-/// nearest valid one on its surface instead: within kNearFragment of its own pixel footprint (a pixel)
-/// and 10 degrees of its normal.
+/// Earlier frames' per-fragment records by where they were gathered. A moving camera never puts
+/// a fragment on exactly the point of one before; with CacheSettings::temporal_refine_reuse, a
+/// fragment refinement wants a gather for takes the nearest valid one on its surface instead:
+/// within `reach` of its own pixel footprints and 10 degrees of its normal.
 class NearFragmentRecords {
 public:
-    static constexpr float kNearFragment = 1.0f;
-    NearFragmentRecords(std::vector<Record> records, const Bounds& bounds);
+    NearFragmentRecords(std::vector<Record> records, const Bounds& bounds, float reach);
     /// The nearest record to p (ties: the smaller key), or nullptr.
     const Record* nearest(const Vec3& p, const Vec3& n, float footprint) const;
     size_t size() const { return records_.size(); }
@@ -83,6 +82,7 @@ public:
 private:
     std::vector<Record> records_;
     RecordOctree index_;
+    float reach_;
 };
 
 /// Stale records waiting for a new gather. The gathering pass asks which of them would cover a
