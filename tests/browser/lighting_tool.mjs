@@ -65,7 +65,7 @@ async function lighterFound() {
     a.on('pageerror', (e) => errs.push(e.message));
     a.on('console', (m) => { if (m.type() === 'error' && !m.text().startsWith('Failed to load resource')) errs.push(m.text()); });
     await a.goto(glossyUrl);
-    await a.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 30000 });
+    await a.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
     const done = async (page, minVersion) => {
       await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v,
         minVersion, { timeout: 120000 });
@@ -105,7 +105,7 @@ async function lighterFound() {
     const other = await browser.newContext({ viewport: { width: 1400, height: 900 } });
     const b = await other.newPage();
     await b.goto(glossyUrl);
-    await b.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 30000 });
+    await b.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
     await cell(a, 'lights.0.intensity').fill('2000000');
     await cell(a, 'lights.0.intensity').dispatchEvent('change');
     const told = await b.waitForFunction(() => {
@@ -162,7 +162,7 @@ try {
   // three reports misuse (e.g. adding a non-Object3D) on the console, not as exceptions.
   page.on('console', (m) => { if (m.type() === 'error' && !m.text().startsWith('Failed to load resource')) errors.push(m.text()); });
   await page.goto(url);
-  await page.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 30000 });
+  await page.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
   check(await page.isVisible('#hint') && (await page.textContent('#hint')).includes('Update'),
     'a page with nothing rendered says to press Update');
 
@@ -248,7 +248,7 @@ try {
   let shotUrl;
   [shotServer, shotUrl] = await startLight(path.join(work, 'shots/cornell-rolling.json'), path.join(work, 'shot-out'));
   await page.goto(shotUrl);
-  await page.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 30000 });
+  await page.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
   await page.click('#rasterize');
   s = await waitDone(1);
   const f1 = await pixels();

@@ -1,6 +1,6 @@
 #include "bounce/cache/irradiance_cache.h"
 
-#include <tbb/parallel_for.h>
+#include "bounce/core/parallel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -26,7 +26,7 @@ bool IrradianceCache::made_like(const Bounds& scene_bounds, const CacheSettings&
 void IrradianceCache::rescale_lights(std::vector<Color> scales) {
     light_scales_ = std::move(scales);
     const auto rescale = [this](std::deque<Record>& records) {
-        tbb::parallel_for(size_t(0), records.size(), [&](size_t i) {
+        parallel_for_each_index(size_t(0), records.size(), [&](size_t i) {
             Record& r = records[i];
             if (r.parts && r.parts->light.size() == light_scales_.size())
                 apply_light_scales(r, light_scales_);
