@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <utility>
 
 #include "bounce/cache/irradiance_cache.h"
 #include "bounce/core/stats.h"
@@ -33,19 +34,23 @@ inline Site record_site(const Scene& scene, const Fragment& f, const CacheSettin
     return {f.p_base, f.n_base, f.p, near};
 }
 
+/// The point and normal the shading pass extrapolates a fragment's records to: its own
+/// (displaced) point and normal; hair gets no gradient along the strand (its site's).
+inline std::pair<const Vec3*, const Vec3*> extrapolated_to(const Fragment& f, const Site& site) {
+    return f.is_hair() ? std::pair{&site.p, &site.n} : std::pair{&f.p, &f.n};
+}
+
 /// The shading-pass interpolation at a fragment: weights at its record site, each record's
-/// value extrapolated with its gradients to the fragment's own (displaced) point and normal.
-/// Hair gets no gradient along the strand: its value is the one at its site.
+/// value extrapolated with its gradients to extrapolated_to.
 inline Interpolated interpolate_at(const IrradianceCache& cache, const Fragment& f, const Site& site) {
-    return f.is_hair() ? cache.lookup(site.p, site.n, true, &site.p, &site.n) : cache.lookup(site.p, site.n, true, &f.p, &f.n);
+    const auto [p, n] = extrapolated_to(f, site);
+    return cache.lookup(site.p, site.n, true, p, n);
 }
 
 /// Each light's share of interpolate_at's value (IrradianceCache::light_shares), into `out`.
 inline void light_shares_at(const IrradianceCache& cache, const Fragment& f, const Site& site, std::span<Color> out) {
-    if (f.is_hair())
-        cache.light_shares(site.p, site.n, true, &site.p, &site.n, out);
-    else
-        cache.light_shares(site.p, site.n, true, &f.p, &f.n, out);
+    const auto [p, n] = extrapolated_to(f, site);
+    cache.light_shares(site.p, site.n, true, p, n, out);
 }
 
 inline uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k) {
