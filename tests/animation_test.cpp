@@ -111,12 +111,9 @@ struct Frames {
         scenes.push_back(scene);
         // The next frame starts from copies of this one's (the result keeps its own).
         RenderResult copy;
-        copy.cache = std::make_unique<IrradianceCache>(scene->bounds(), scene->render.cache, false);
-        copy.cache->set_luminance_floor(results.back().cache->luminance_floor());
-        for (size_t i = 0; i < results.back().cache->size(); ++i) copy.cache->insert_loaded(results.back().cache->record(i));
-        for (size_t i = 0; i < results.back().cache->fragment_record_count(); ++i)
-            copy.cache->insert_fragment_record(results.back().cache->fragment_record_at(i));
+        copy.cache = results.back().cache->clone();
         copy.accel = results.back().accel, copy.radiosity = results.back().radiosity, copy.waiting = results.back().waiting;
+        copy.gathers = results.back().gathers;
         copy.deep = results.back().deep;
         shot.keep(copy, scene);
     }
@@ -188,6 +185,37 @@ TEST(TemporalCache, AMovingCamerasRefinedFragmentsUseTheirOwnGathers) {
     }
     EXPECT_EQ(own, r.fragment_records_new);
     EXPECT_EQ(used, own);
+}
+
+TEST(TemporalCache, RefinementBlendsEarlierGathersAndKeepsOnlyGathersForLater) {
+    // A slow camera: frame 2's fragments lie among frame 1's refinement gathers.
+    json j = shot_scene();
+    j["camera"]["position"] = {{"keys", {{1, {0, 3, 8}}, {3, {0.04, 3, 7.96}}}}};
+    j["render"]["refine"] = 0.01;
+    j["render"]["temporal_refine_reuse"] = 1.5;
+    Frames f;
+    f.render(j, 1);
+    f.render(j, 2);
+    f.render(j, 3);
+    const RenderResult& first = f.results[0];
+    const RenderResult& second = f.results[1];
+    ASSERT_GT(first.fragment_records_new, 10u);
+    EXPECT_EQ(first.gathers.size(), first.fragment_records_new);  // frame 1's gathers, all kept for later
+    // Frame 2 blends some fragments (records of 0 rays, used by their fragments) and gathers fewer.
+    size_t blended = 0;
+    for (size_t i = 0; i < second.cache->fragment_record_count(); ++i) {
+        const Record& k = second.cache->fragment_record_at(i);
+        if (k.gathered != 2 || k.rays > 0) continue;
+        ++blended;
+        EXPECT_EQ(second.cache->fragment_record(k.key, k.p), &k);
+        EXPECT_GT(luminance(k.E), 0.0f);
+    }
+    EXPECT_GT(blended, 0u);
+    EXPECT_LT(second.fragment_records_new, first.fragment_records_new);
+    EXPECT_EQ(second.shading_misses, 0u);
+    // Only gathers serve later frames: frame 1's and frame 2's own, never a blend.
+    EXPECT_EQ(second.gathers.size(), first.gathers.size() + second.fragment_records_new);
+    for (const Record& g : f.results[2].gathers) EXPECT_GT(g.rays, 0u);
 }
 
 TEST(TemporalCache, RecordsOnAMovingObjectTravelWithItAndTheRestUpdateOnlyWhatTheySee) {

@@ -111,18 +111,20 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                     if (in.weight > 0 && (threshold <= 0 || in.spread <= threshold)) continue;
                 }
                 // An earlier frame's record of this very fragment is updated rather than gathered
-                // anew; one of a neighbouring point on the same surface is taken as it is.
-                if (options.near)
-                    if (const Record* n = options.near->nearest(f.p, f.n, f.footprint)) {
-                        Record r = *n;
-                        r.key = key, r.p = f.p;  // found by this fragment; gathered where it was
-                        made.local().push_back(r);
-                        ++reused.local();
-                        continue;
-                    }
+                // anew; else earlier gathers around it on its surface may be blended.
                 if (options.stale)
                     if (auto it = options.stale->find(key); it != options.stale->end() && it->second.p == f.p) {
                         made.local().push_back(options.update(it->second, stats.local()));
+                        continue;
+                    }
+                if (options.earlier)
+                    if (std::optional<Record> b = options.earlier->blend(f.p, f.n, f.footprint)) {
+                        Record& r = *b;
+                        r.p = r.origin = f.p, r.n = f.n;
+                        r.footprint = r.radius = r.raw_radius = f.footprint > 0 ? f.footprint : 1e-6f;
+                        r.key = key, r.frame = r.gathered = frame;
+                        made.local().push_back(r);
+                        ++reused.local();
                         continue;
                     }
                 // Gathered about the fragment's own (displaced) point and normal, as brute force does.
@@ -166,7 +168,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
     auto lock = lock_cache<std::unique_lock<std::shared_mutex>>(cache, stats.local());
     for (const Record& r : records) cache.replace_fragment_record(r);
     stats.set("refined_fragments", static_cast<double>(records.size() - taken));
-    stats.set("refined_from_neighbours", static_cast<double>(taken));
+    stats.set("refined_from_earlier_gathers", static_cast<double>(taken));
     stats.set("refine_rays_per_gather", static_cast<double>(refiner.grid().rays()));
     return records.size() - taken;
 }

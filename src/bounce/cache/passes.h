@@ -36,7 +36,7 @@ std::vector<SubPass> subpass_schedule(int first_step);
 using SubPassCallback = std::function<void(const SubPass&, size_t index, size_t count)>;
 
 class StaleRecords;
-class NearFragmentRecords;
+class EarlierGathers;
 
 /// What a gathering pass does besides making records where lookups miss.
 struct GatheringOptions {
@@ -89,8 +89,8 @@ struct RefinementOptions {
     /// fragment is at exactly the same point) rather than gather anew, and how.
     const std::unordered_map<uint64_t, Record>* stale = nullptr;
     std::function<Record(const Record&, Counters&)> update;
-    /// ... and valid ones near a fragment, taken instead of a gather (temporal.h).
-    const NearFragmentRecords* near = nullptr;
+    /// ... and earlier gathers around a fragment, blended instead of a gather (temporal.h).
+    const EarlierGathers* earlier = nullptr;
     Communicator* comm = nullptr;  ///< as GatheringOptions::comm: each process refines its own tiles
 };
 

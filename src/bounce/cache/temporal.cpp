@@ -202,8 +202,8 @@ RandomStream record_stream(const Record& r, uint64_t seed, int full_width) {
     return fragment_stream(seed, static_cast<int>(pixel % w), static_cast<int>(pixel / w), static_cast<uint32_t>(r.key & 0xff));
 }
 
-TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, const Scene& before,
-                                const Scene& now, const SceneChanges& changes, std::span<const LightChange> light, float brightest) {
+TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, std::span<const Record> gathers,
+                                const Scene& before, const Scene& now, const SceneChanges& changes, std::span<const LightChange> light, float brightest) {
     TemporalJudgement out;
     if (!changes.comparable) {
         out.dropped = previous.size() + waiting.size();
@@ -226,11 +226,20 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
         out.anchors_kept += ok;
         return ok;
     };
-    const auto judge = [&](Record r, bool fragment) {
+    // What a judged record is: one of the cache's, a fragment record of refinement (by key), or
+    // an earlier refinement gather that refinement may blend (EarlierGathers).
+    enum class Role : uint8_t { Record, Fragment, Gather };
+    const auto judge = [&](Record r, Role role) {
+        const bool fragment = role != Role::Record;
         const bool anchored = r.anchor != kNoAnchor && r.anchor < changes.objects.size();
         const ObjectMotion::Kind own = anchored ? changes.objects[r.anchor].kind : ObjectMotion::Kind::Static;
+        const auto keep = [&](Record& k) {
+            if (role == Role::Gather) return out.earlier_gathers.push_back(k);
+            ++out.kept;
+            (fragment ? out.fragment_valid : out.valid).push_back(k);
+        };
         if (fragment && own != ObjectMotion::Kind::Static) {
-            ++out.dropped;
+            out.dropped += role == Role::Fragment;
             return;
         }
         if (own != ObjectMotion::Kind::Static) {
@@ -245,11 +254,10 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
         if (!fragment) respace(r, camera, s);
         if (r.hits) {
             if (hits_unchanged(r, now, changes, boxes, changed_sides)) {
-                ++out.kept;
-                (fragment ? out.fragment_valid : out.valid).push_back(r);
-            } else if (fragment) {
+                keep(r);
+            } else if (role == Role::Fragment) {
                 out.fragment_stale.emplace(r.key, r);
-            } else {
+            } else if (role == Role::Record) {
                 ++out.light;
                 out.stale.push_back(r), out.why.push_back(StaleReason::Update);
             }
@@ -261,20 +269,20 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
             geometry = changes.objects[o].kind != ObjectMotion::Kind::Static && record_sees(r, changes.objects[o].swept);
         const bool sky = changes.sky && !previous.ao_only() && sees_sky(r);
         if (r.drift <= s.temporal_tolerance && !sky) {
-            ++out.kept;
-            (fragment ? out.fragment_valid : out.valid).push_back(r);
+            keep(r);
             return;
         }
         if (fragment) {  // refinement gathers its fragments again where it still needs them
-            ++out.dropped;
+            out.dropped += role == Role::Fragment;
             return;
         }
         const StaleReason why = geometry ? StaleReason::View : StaleReason::Light;
         ++(why == StaleReason::View ? out.view : out.light);
         out.stale.push_back(r), out.why.push_back(why);
     };
-    for (size_t i = 0; i < previous.size(); ++i) judge(previous.record(i), false);
-    for (size_t i = 0; i < previous.fragment_record_count(); ++i) judge(previous.fragment_record_at(i), true);
+    for (size_t i = 0; i < previous.size(); ++i) judge(previous.record(i), Role::Record);
+    for (size_t i = 0; i < previous.fragment_record_count(); ++i) judge(previous.fragment_record_at(i), Role::Fragment);
+    for (const Record& r : gathers) judge(r, Role::Gather);
     for (Record r : waiting) {
         const bool anchored = r.anchor != kNoAnchor && r.anchor < changes.objects.size();
         const ObjectMotion::Kind own = anchored ? changes.objects[r.anchor].kind : ObjectMotion::Kind::Static;
@@ -288,25 +296,57 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
     return out;
 }
 
-NearFragmentRecords::NearFragmentRecords(std::vector<Record> records, const Bounds& bounds, float reach)
-    : records_(std::move(records)), index_(bounds), reach_(reach) {
-    // By where each was gathered: a record taken by a neighbour carries that neighbour's point
-    // as its own, and measured from there it would creep further every frame.
+EarlierGathers::EarlierGathers(std::vector<Record> records, const Bounds& bounds, float reach, float max_spread,
+                               float floor)
+    : records_(std::move(records)), index_(bounds), reach_(reach), max_spread_(max_spread), floor_(floor) {
+    // By where each was gathered (a refinement gather's own point).
     for (size_t i = 0; i < records_.size(); ++i)
         index_.insert(static_cast<uint32_t>(i), records_[i].origin, 2 * reach_ * records_[i].footprint);
 }
 
-const Record* NearFragmentRecords::nearest(const Vec3& p, const Vec3& n, float footprint) const {
-    const Record* best = nullptr;
-    float best_d = reach_ * footprint;
+std::optional<Record> EarlierGathers::blend(const Vec3& p, const Vec3& n, float footprint) const {
+    const float reach = reach_ * footprint;
     const float cos_max = std::cos(10 * kPi / 180);
+    // Candidates in index order: the sums below do not depend on the octree's visiting order.
+    std::vector<std::pair<uint32_t, float>> near;
     index_.visit(p, [&](uint32_t id) {
         const Record& r = records_[id];
-        const float d = length(r.origin - p);
-        if (dot(r.n, n) < cos_max || d > best_d || (best && d == best_d && r.key > best->key)) return;
-        best = &r, best_d = d;
+        const Vec3 d = r.origin - p;
+        const float dist = length(d);
+        // On this fragment's surface: the same facing, and not off its plane (a step or a rim).
+        if (dist >= reach || dot(r.n, n) < cos_max || std::abs(dot(d, n)) > 0.25f * reach) return;
+        near.emplace_back(id, 1 - dist / reach);
     });
-    return best;
+    if (near.size() < kMinGathers) return std::nullopt;
+    std::sort(near.begin(), near.end());
+    double w = 0, l = 0, l2 = 0;
+    Record out = records_[near.front().first];
+    out.E = Color(0), out.ao = 0, out.bent = Vec3(0), out.dir = {};
+    for (const auto& [id, wi] : near) {
+        const Record& r = records_[id];
+        const double li = luminance(r.E);
+        w += wi, l += wi * li, l2 += wi * li * li;
+        out.E += r.E * wi, out.ao += r.ao * wi, out.bent += r.bent * wi;
+        for (size_t c = 0; c < 3; ++c) out.dir[c] += r.dir[c] * wi;
+    }
+    // Gathers that disagree more than refinement allows between records (an edge of the light
+    // between them) are not blended: the fragment gathers its own.
+    const double mean = l / w, spread = std::sqrt(std::max(0.0, l2 / w - mean * mean)) / std::max<double>(mean, floor_);
+    if (spread > max_spread_) return std::nullopt;
+    const auto inv = static_cast<float>(1 / w);
+    out.E = out.E * inv, out.ao *= inv;
+    for (size_t c = 0; c < 3; ++c) out.dir[c] = out.dir[c] * inv;
+    out.bent = dot(out.bent, out.bent) > 0 ? normalize(out.bent) : n;
+    out.rays = 0;  // made of other gathers: never one itself
+    out.hits.reset(), out.parts.reset();
+    return out;
+}
+
+std::vector<Record> EarlierGathers::lasting(int frame) const {
+    std::vector<Record> out;
+    for (const Record& r : records_)
+        if (frame - r.gathered < kLifespan) out.push_back(r);
+    return out;
 }
 
 StaleRecords::StaleRecords(std::vector<Record> records, std::vector<StaleReason> why, const Bounds& bounds, const CacheSettings& s,

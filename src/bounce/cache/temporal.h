@@ -10,6 +10,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <span>
 #include <unordered_map>
 #include <vector>
@@ -36,6 +37,7 @@ struct TemporalJudgement {
     std::vector<StaleReason> why;        ///< parallel to stale
     std::vector<Record> fragment_valid;  ///< per-fragment refinement's records still valid
     std::unordered_map<uint64_t, Record> fragment_stale;  ///< ... to update where refinement still wants them (by key)
+    std::vector<Record> earlier_gathers;  ///< refinement gathers of earlier frames still valid (EarlierGathers)
     size_t kept = 0, moved = 0, view = 0, light = 0, dropped = 0;
     /// Records of the previous frame on objects that moved, and those of them that followed their
     /// anchor to this frame (the rest could not and were dropped).
@@ -45,10 +47,10 @@ struct TemporalJudgement {
 /// Judges every record of `previous` for this frame: `changes` between the scenes, `light` the
 /// radiosity that changed, `brightest` the largest radiance a moving object can show or hide.
 /// `waiting` (stale records of earlier frames no fragment needed yet) stay stale, moved with
-/// their object. Records on a deforming object ride on their triangle from `before`'s mesh to
+/// their object; `gathers` (EarlierGathers::lasting) are kept or dropped as fragment records are. Records on a deforming object ride on their triangle from `before`'s mesh to
 /// `now`'s (turned with it).
-TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, const Scene& before,
-                                const Scene& now, const SceneChanges& changes, std::span<const LightChange> light, float brightest);
+TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, std::span<const Record> gathers,
+                                const Scene& before, const Scene& now, const SceneChanges& changes, std::span<const LightChange> light, float brightest);
 
 /// Anchors a new record on object `object` (which moves in the shot): in its own space for a
 /// rigid one, at its barycentrics on triangle `prim` of its visible mesh for a deforming one.
@@ -68,21 +70,29 @@ float solid_angle_bound(const Vec3& o, const Bounds& box);
 /// frame `full_width` pixels wide.
 RandomStream record_stream(const Record& r, uint64_t seed, int full_width);
 
-/// Earlier frames' per-fragment records by where they were gathered. A moving camera never puts
-/// a fragment on exactly the point of one before; with CacheSettings::temporal_refine_reuse, a
-/// fragment refinement wants a gather for takes the nearest valid one on its surface instead:
-/// within `reach` of its own pixel footprints and 10 degrees of its normal.
-class NearFragmentRecords {
+/// Earlier frames' refinement gathers (per-fragment records gathered, not blended), by where
+/// they were gathered. A moving camera never puts a fragment on exactly the point of one
+/// before; with CacheSettings::temporal_refine_reuse, a fragment that refinement wants a gather
+/// for blends those on its surface within `reach` of its pixel footprints instead (a tent
+/// filter), when there are at least kMinGathers of them and they agree (the spread of their
+/// luminance within `max_spread`, refinement's own threshold). A gather serves kLifespan
+/// frames, then its fragment gathers again: the reuse cannot drift for a whole shot.
+class EarlierGathers {
 public:
-    NearFragmentRecords(std::vector<Record> records, const Bounds& bounds, float reach);
-    /// The nearest record to p (ties: the smaller key), or nullptr.
-    const Record* nearest(const Vec3& p, const Vec3& n, float footprint) const;
+    static constexpr size_t kMinGathers = 3;
+    static constexpr int kLifespan = 12;
+    EarlierGathers(std::vector<Record> records, const Bounds& bounds, float reach, float max_spread, float floor);
+    /// The blend at (p, n) (E, AO, bent normal, directions; the rest from the first gather, rays
+    /// 0), or nothing.
+    std::optional<Record> blend(const Vec3& p, const Vec3& n, float footprint) const;
+    /// The gathers that still serve at `frame`.
+    std::vector<Record> lasting(int frame) const;
     size_t size() const { return records_.size(); }
 
 private:
     std::vector<Record> records_;
     RecordOctree index_;
-    float reach_;
+    float reach_, max_spread_, floor_;
 };
 
 /// Stale records waiting for a new gather. The gathering pass asks which of them would cover a

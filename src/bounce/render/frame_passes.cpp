@@ -135,7 +135,7 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan
     if (scene.render.cache.light_parts) out.cache->set_light_scales(light_scales(scene));
     if (plan.cache == CacheStart::Temporal) {
         // The previous frame's records and those still waiting from before, judged for this frame.
-        out.judged = judge_records(*previous.cache, previous.waiting, *previous.scene, scene, *plan.changes, radiosity.changed,
+        out.judged = judge_records(*previous.cache, previous.waiting, previous.gathers, *previous.scene, scene, *plan.changes, radiosity.changed,
                                    radiosity.brightest);
         out.cache->set_luminance_floor(previous.cache->luminance_floor());
         for (const Record& r : out.judged.valid) out.cache->insert_loaded(r);
@@ -317,6 +317,18 @@ std::function<Record(const Record&, Counters&)> fragment_update_function(const F
     };
 }
 
+/// The refinement gathers the next frame may blend: earlier ones that still serve and this
+/// frame's (made, not blended), by frame and key.
+std::vector<Record> gathers_to_keep(const EarlierGathers& earlier, const IrradianceCache& cache, int frame) {
+    std::vector<Record> out = earlier.lasting(frame);
+    for (size_t i = 0; i < cache.fragment_record_count(); ++i)
+        if (const Record& r = cache.fragment_record_at(i); r.gathered == frame && r.rays > 0) out.push_back(r);
+    std::sort(out.begin(), out.end(), [](const Record& a, const Record& b) {
+        return a.gathered != b.gathered ? a.gathered < b.gathered : a.key < b.key;
+    });
+    return out;
+}
+
 }  // namespace
 
 GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep,
@@ -369,13 +381,15 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
             ro.stale = &judged.fragment_stale;
             ro.update = fragment_update_function(ctx, plan, refiner, cache);
         }
-        std::unique_ptr<NearFragmentRecords> near;
-        if (!judged.fragment_valid.empty() && scene.render.cache.temporal_refine_reuse > 0) {
-            near = std::make_unique<NearFragmentRecords>(std::move(judged.fragment_valid), scene.bounds(),
-                                                         scene.render.cache.temporal_refine_reuse);
-            ro.near = near.get();
+        std::unique_ptr<EarlierGathers> earlier;
+        if (plan.keep_gathers) {
+            earlier = std::make_unique<EarlierGathers>(std::move(judged.earlier_gathers), scene.bounds(),
+                                                       scene.render.cache.temporal_refine_reuse, scene.render.cache.refine,
+                                                       std::max(cache.luminance_floor(), 1e-12f));
+            ro.earlier = earlier.get();
         }
         out.fragment_records_new = refinement_pass(scene, deep.shaded(), refiner, cache, ctx.stats, ctx.progress, ro);
+        if (earlier) out.gathers = gathers_to_keep(*earlier, cache, plan.frame);
         if (out.fragment_records_new > 0 && options.after_subpass) {
             const auto schedule = subpass_schedule(1);
             options.after_subpass(schedule.back(), schedule.size() - 1, schedule.size());

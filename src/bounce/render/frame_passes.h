@@ -111,6 +111,7 @@ struct GatherPassResult {
     size_t site_records_new = 0;      ///< records made for the sites of mirrors and glass (in records_new too)
     size_t regathered = 0, reshaded = 0;  ///< stale records of earlier frames redone
     std::vector<Record> waiting;          ///< stale records no fragment needed (for the next frame)
+    std::vector<Record> gathers;          ///< refinement's gathers that still serve (plan.keep_gathers)
 };
 /// The gathering pass (and refinement) into `cache`, redoing the judged stale records where
 /// they are needed; `preview`, if set, gets an image after each sub-pass.

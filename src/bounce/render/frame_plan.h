@@ -63,6 +63,7 @@ struct FrameState {
     std::shared_ptr<const SceneAccel> accel;
     std::shared_ptr<const RadiosityTextures> radiosity;
     std::vector<Record> waiting;
+    std::vector<Record> gathers;  ///< refinement's gathers that still serve (plan.keep_gathers)
 };
 
 /// Primary visibility.
@@ -115,6 +116,7 @@ struct FramePlan {
     GatherStep gather = GatherStep::None;
     bool refine = false;      ///< per-fragment refinement after the gathering pass
     bool keep_hits = false;   ///< records keep their gather's hits: the shot's lights change, re-shading is cheaper
+    bool keep_gathers = false;  ///< refinement's gathers are kept for the next frames' blends (EarlierGathers)
     bool preview = false;     ///< progressive images through the request's callback
     int threads = 1;
     /// Frames of a shot: what changed since the previous frame (null otherwise).

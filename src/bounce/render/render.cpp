@@ -169,6 +169,7 @@ void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const Visi
         result.fragment_records_new += g.fragment_records_new;
         result.temporal.regathered = g.regathered, result.temporal.reshaded = g.reshaded;
         result.waiting = std::move(g.waiting);
+        result.gathers = std::move(g.gathers);
         result.gathered = true;
     };
     const auto quick_look = plan.preview ? request.preview : std::function<void(const Image&)>();
@@ -254,6 +255,7 @@ FrameState RenderResult::release_state() {
     s.accel = std::move(accel);
     s.radiosity = std::move(radiosity);
     s.waiting = std::move(waiting);
+    s.gathers = std::move(gathers);
     return s;
 }
 
