@@ -145,6 +145,14 @@ Image paste_over(const Image& base, const Image& window, const std::string& base
 
 namespace {
 
+/// Under MPI each rank bakes the sides its own gathers hit. They are exchanged only when they
+/// outlive the frame: saved by rank 0, or carried to a shot's next frame, whose list of changed
+/// sides (temporal.h) must be the same on every rank. Values are the same wherever baked.
+void finish_radiosity(const FrameContext& ctx, const RenderRequest& request, RadiosityTextures& rt, size_t baked_before) {
+    if (request.sequence || !ctx.scene.render.radiosity.folder.empty()) share_radiosity_pass(ctx, rt);
+    save_radiosity_pass(ctx, rt, baked_before);
+}
+
 /// The cache, gathering and shading passes of a cache render: the plan's gathering, or for a
 /// re-shade (GatherStep::WhereMissing) shading first and gathering only where records miss.
 /// `radiosity` is the frame's when the plan carried it; else it is made when a gather runs.
@@ -192,17 +200,14 @@ void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const Visi
     ctx.stats.set("records_loaded", static_cast<double>(result.records_loaded));
     ctx.stats.set("records_new", static_cast<double>(result.records_new));
     // After the shading pass: refined fragments' gathers may have baked sides too.
-    if (radiosity.textures) {
-        share_radiosity_pass(ctx, *radiosity.textures);
-        save_radiosity_pass(ctx, *radiosity.textures, baked_before);
-    }
+    if (radiosity.textures) finish_radiosity(ctx, request, *radiosity.textures, baked_before);
     if ((plan.refine || cache.fragment_record_count() > 0) && !shaded.refined.empty())  // empty: a rank that writes no image
         add_mask_layer(result.image, shaded.refined, "refined");
 }
 
 /// Brute force, direct light only, or a cache file read for its records layer.
 void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep, const FrameState& previous,
-                         RadiosityResult& radiosity, RenderResult& result) {
+                         RadiosityResult& radiosity, const RenderRequest& request, RenderResult& result) {
     std::vector<Indirect> light;
     SpecularSitesResult specular = specular_sites_pass(ctx, deep.shaded());
     const bool radiosity_sites = ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity;
@@ -218,10 +223,7 @@ void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const V
         const uint64_t rays = ctx.stats.total().gather_rays - rays_before;
         ctx.stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
         result.gathered = true;
-        if (radiosity.textures) {
-            share_radiosity_pass(ctx, *radiosity.textures);
-            save_radiosity_pass(ctx, *radiosity.textures, baked_before);
-        }
+        if (radiosity.textures) finish_radiosity(ctx, request, *radiosity.textures, baked_before);
     }
     ShadeResult shaded = shading_pass(ctx, deep.shaded(), nullptr, plan.gather == GatherStep::Brute ? &light : nullptr, specular,
                                       radiosity.textures.get());
@@ -356,7 +358,7 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
             run_cache_passes(ctx, plan, deep, previous, radiosity, start, request, result);
         } else {
             result.cache = std::move(start.cache);
-            run_direct_or_brute(ctx, plan, deep, previous, radiosity, result);
+            run_direct_or_brute(ctx, plan, deep, previous, radiosity, request, result);
         }
         if (!result.cache) result.cache = std::move(start.cache);
         if (result.cache) {
