@@ -57,10 +57,12 @@ std::array<int, 4> frame_window(const Scene& scene) {
 
 DeepBuffer sub_window(const DeepBuffer& deep, const std::array<int, 4>& w) {
     if (w[0] == deep.x0 && w[2] == deep.y0 && w[1] - w[0] == deep.width && w[3] - w[2] == deep.height) return deep;
-    DeepBuffer out = deep;
+    DeepBuffer out;  // the header only: copying the fragments to clear them cost a frame's worth per tile
+    out.full_width = deep.full_width, out.full_height = deep.full_height;
+    out.spp = deep.spp, out.seed = deep.seed, out.scene_fingerprint = deep.scene_fingerprint;
     out.x0 = w[0], out.y0 = w[2], out.width = w[1] - w[0], out.height = w[3] - w[2];
-    out.offsets.assign(1, 0);
-    out.fragments.clear();
+    out.offsets.reserve(out.pixel_count() + 1);
+    out.offsets.push_back(0);
     for (int y = w[2]; y < w[3]; ++y)
         for (int x = w[0]; x < w[1]; ++x) {
             auto f = deep.pixel(x - deep.x0, y - deep.y0);
