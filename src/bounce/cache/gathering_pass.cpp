@@ -6,7 +6,6 @@
 #include <cstring>
 #include <mutex>
 #include <shared_mutex>
-#include <type_traits>
 
 #include "bounce/cache/cache_file.h"
 #include "bounce/cache/passes.h"
@@ -23,18 +22,9 @@ struct Candidate {
     uint32_t k;
 };
 
-/// A miss and its fragment: under MPI the process that gathers it may not hold its tile.
-struct Miss {
-    Candidate c;
-    Fragment f;
-};
-
-static_assert(std::is_trivially_copyable_v<Miss>, "misses travel between processes as bytes");
-
 /// What one sub-pass collected, per tile.
 struct TileWork {
     std::vector<Record> made;            ///< new records
-    std::vector<Miss> misses;            ///< MPI, shared cache: misses to gather, shared out evenly
     std::vector<uint32_t> requests;      ///< stale records that would cover a miss
     std::vector<Candidate> deferred;     ///< misses waiting for those to be redone
 };
@@ -46,17 +36,14 @@ public:
         : scene_(scene), deep_(deep), gatherer_(gatherer), cache_(cache), stats_(stats), o_(o),
           per_tile_(scene.render.parallel.cache_sharing == CacheSharing::PerThread),
           tiles_(make_tiles(deep.width, deep.height, scene.render.parallel.tile_size, scene.render.parallel.tile_order)),
-          mine_(owned(tiles_, o.comm)), work_(tiles_.size()),
-          balanced_(o.comm && o.comm->size() > 1 && !per_tile_) {}
+          mine_(owned(tiles_, o.comm)), work_(tiles_.size()) {}
 
     void subpass(const SubPass& sp);
     size_t gathered = 0, dropped = 0;
     tbb::enumerable_thread_specific<size_t> full_gathers{0};
 
 private:
-    Record gather_at(const Candidate& c, Counters& counters) { return gather_at(c, deep_.pixel(c.wx, c.wy)[c.k], counters); }
-    Record gather_at(const Candidate& c, const Fragment& f, Counters& counters);
-    std::vector<Record> gather_shared_out();
+    Record gather_at(const Candidate& c, Counters& counters);
     void judge_tile(const SubPass& sp, const Tile& t);
     void insert_new(std::vector<Record> records);
     void exchange_work();
@@ -84,12 +71,10 @@ private:
     const std::vector<Tile> tiles_;
     const std::vector<Tile> mine_;  ///< the tiles this process judges (all of them without MPI)
     std::vector<TileWork> work_;
-    /// Under MPI with a shared cache the misses of every tile are shared out evenly among the
-    /// processes (tiles' misses vary tenfold: by tile, the slowest process set every sub-pass's end).
-    const bool balanced_;
 };
 
-Record Gathering::gather_at(const Candidate& c, const Fragment& f, Counters& counters) {
+Record Gathering::gather_at(const Candidate& c, Counters& counters) {
+    const Fragment& f = deep_.pixel(c.wx, c.wy)[c.k];
     const Site site = record_site(scene_, f, cache_.settings());
     const RandomStream rng = fragment_stream(scene_.render.visibility.seed, c.wx + deep_.x0, c.wy + deep_.y0, c.k);
     auto hits = o_.keep_hits ? std::make_shared<GatherHits>() : nullptr;
@@ -112,7 +97,7 @@ void Gathering::judge_tile(const SubPass& sp, const Tile& t) {
     Counters& counters = stats_.local();
     auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache_, counters);
     TileWork& w = work_[static_cast<size_t>(t.index)];
-    w.made.clear(), w.requests.clear(), w.deferred.clear(), w.misses.clear();
+    w.made.clear(), w.requests.clear(), w.deferred.clear();
     std::vector<uint32_t> covering;
     for (int wy = t.y0; wy < t.y1; ++wy)
         for (int wx = t.x0; wx < t.x1; ++wx) {
@@ -133,10 +118,6 @@ void Gathering::judge_tile(const SubPass& sp, const Tile& t) {
                         w.deferred.push_back({wx, wy, k});
                         continue;
                     }
-                }
-                if (balanced_) {
-                    w.misses.push_back({{wx, wy, k}, frags[k]});
-                    continue;
                 }
                 Record r = gather_at({wx, wy, k}, counters);
                 if (per_tile_) {
@@ -178,20 +159,18 @@ void Gathering::exchange_work() {
     for (const Tile& t : mine_) {
         const TileWork& w = work_[static_cast<size_t>(t.index)];
         const std::string made = serialize_records(w.made);
-        const uint64_t head[5] = {static_cast<uint64_t>(t.index), made.size(), w.requests.size(), w.deferred.size(),
-                                  w.misses.size()};
+        const uint64_t head[4] = {static_cast<uint64_t>(t.index), made.size(), w.requests.size(), w.deferred.size()};
         put(head, sizeof(head));
         put(made.data(), made.size());
         put(w.requests.data(), w.requests.size() * sizeof(uint32_t));
         put(w.deferred.data(), w.deferred.size() * sizeof(Candidate));
-        put(w.misses.data(), w.misses.size() * sizeof(Miss));
     }
     const std::vector<std::string> all = o_.comm->allgather(mine);
     for (int r = 0; r < o_.comm->size(); ++r) {
         if (r == o_.comm->rank()) continue;
         const std::string& b = all[static_cast<size_t>(r)];
         for (size_t at = 0; at < b.size();) {
-            uint64_t head[5];
+            uint64_t head[4];
             std::memcpy(head, b.data() + at, sizeof(head));
             at += sizeof(head);
             TileWork& w = work_.at(head[0]);
@@ -203,34 +182,8 @@ void Gathering::exchange_work() {
             w.deferred.resize(head[3]);
             std::memcpy(w.deferred.data(), b.data() + at, head[3] * sizeof(Candidate));
             at += head[3] * sizeof(Candidate);
-            w.misses.resize(head[4]);
-            std::memcpy(w.misses.data(), b.data() + at, head[4] * sizeof(Miss));
-            at += head[4] * sizeof(Miss);
         }
     }
-}
-
-/// Every tile's misses (exchanged), in tile order: this process gathers every N-th and all
-/// take each other's records. Each record is what any process would make of its miss.
-std::vector<Record> Gathering::gather_shared_out() {
-    std::vector<const Miss*> all;
-    for (const TileWork& w : work_)
-        for (const Miss& m : w.misses) all.push_back(&m);
-    const auto ranks = static_cast<size_t>(o_.comm->size()), rank = static_cast<size_t>(o_.comm->rank());
-    const size_t n = all.size() / ranks + (rank < all.size() % ranks ? 1 : 0);
-    std::vector<Record> mine(n);
-    parallel_for_each_index(0, static_cast<int>(n), [&](int i) {
-        const Miss& m = *all[static_cast<size_t>(i) * ranks + rank];
-        mine[static_cast<size_t>(i)] = gather_at(m.c, m.f, stats_.local());
-    });
-    const std::vector<std::string> all_made = o_.comm->allgather(serialize_records(mine));
-    std::vector<Record> made = std::move(mine);  // its own keep their hits (files and exchanges do not)
-    for (size_t r = 0; r < all_made.size(); ++r) {
-        if (r == rank) continue;
-        std::vector<Record> theirs = parse_records(all_made[r]);
-        made.insert(made.end(), std::make_move_iterator(theirs.begin()), std::make_move_iterator(theirs.end()));
-    }
-    return made;
 }
 
 /// Late gathers are judged and made by the process whose tile holds the candidate; each sends
@@ -270,7 +223,6 @@ void Gathering::subpass(const SubPass& sp) {
     std::vector<Record> made;
     std::vector<uint32_t> requests;
     std::vector<Candidate> deferred;
-    if (balanced_) made = gather_shared_out();
     for (TileWork& w : work_) {
         made.insert(made.end(), w.made.begin(), w.made.end());
         requests.insert(requests.end(), w.requests.begin(), w.requests.end());

@@ -202,8 +202,49 @@ RandomStream record_stream(const Record& r, uint64_t seed, int full_width) {
     return fragment_stream(seed, static_cast<int>(pixel % w), static_cast<int>(pixel / w), static_cast<uint32_t>(r.key & 0xff));
 }
 
+namespace {
+
+/// What became of a static record between two frames.
+enum class Verdict : uint8_t { Keep, Update, View, Light };
+
+/// What decides it: the moving objects' swept bounds and the changed radiosity sides.
+struct FrameChange {
+    const Scene& now;
+    const SceneChanges& changes;
+    std::span<const LightChange> light;
+    float brightest, floor, tolerance;
+    bool ao_only;
+    std::vector<Bounds> boxes;
+    std::vector<uint64_t> changed_sides;  ///< (object << 32 | triangle), sorted
+
+    FrameChange(const Scene& now_, const SceneChanges& c, std::span<const LightChange> l, float bright, float floor_,
+                const CacheSettings& s, bool ao)
+        : now(now_), changes(c), light(l), brightest(bright), floor(floor_), tolerance(s.temporal_tolerance), ao_only(ao),
+          boxes(moving_bounds(c)) {
+        for (const LightChange& lc : l) changed_sides.push_back((static_cast<uint64_t>(lc.object) << 32) | lc.triangle);
+        std::sort(changed_sides.begin(), changed_sides.end());
+    }
+
+    /// With its hits: kept unless a ray or a hit changed (Update). Without: kept while its drift
+    /// (grown here) stays within the tolerance, else gathered again (View: something moved in
+    /// its view; Light: only light changed).
+    Verdict verdict(Record& r) const {
+        if (r.hits) return hits_unchanged(r, now, changes, boxes, changed_sides) ? Verdict::Keep : Verdict::Update;
+        r.drift += drift_bound(r, changes, light, brightest, floor, ao_only);
+        bool geometry = false;
+        for (size_t o = 0; o < changes.objects.size() && !geometry; ++o)
+            geometry = changes.objects[o].kind != ObjectMotion::Kind::Static && record_sees(r, changes.objects[o].swept);
+        const bool sky = changes.sky && !ao_only && sees_sky(r);
+        if (r.drift <= tolerance && !sky) return Verdict::Keep;
+        return geometry ? Verdict::View : Verdict::Light;
+    }
+};
+
+}  // namespace
+
 TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, std::span<const Record> gathers,
-                                const Scene& before, const Scene& now, const SceneChanges& changes, std::span<const LightChange> light, float brightest) {
+                                const Scene& before, const Scene& now, const SceneChanges& changes, std::span<const LightChange> light,
+                                float brightest) {
     TemporalJudgement out;
     if (!changes.comparable) {
         out.dropped = previous.size() + waiting.size();
@@ -211,11 +252,7 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
     }
     const CacheSettings& s = previous.settings();
     const CameraRays camera(now.camera);
-    const float floor = std::max(previous.luminance_floor(), 1e-12f);
-    const std::vector<Bounds> boxes = moving_bounds(changes);
-    std::vector<uint64_t> changed_sides;
-    for (const LightChange& c : light) changed_sides.push_back((static_cast<uint64_t>(c.object) << 32) | c.triangle);
-    std::sort(changed_sides.begin(), changed_sides.end());
+    const FrameChange change(now, changes, light, brightest, std::max(previous.luminance_floor(), 1e-12f), s, previous.ao_only());
     // Moves a record with its object; false when it cannot follow (dropped).
     const auto follow = [&](Record& r, ObjectMotion::Kind own) {
         if (own == ObjectMotion::Kind::Static) return true;
@@ -226,66 +263,46 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
         out.anchors_kept += ok;
         return ok;
     };
+    const auto own_motion = [&](const Record& r) {
+        const bool anchored = r.anchor != kNoAnchor && r.anchor < changes.objects.size();
+        return anchored ? changes.objects[r.anchor].kind : ObjectMotion::Kind::Static;
+    };
     // What a judged record is: one of the cache's, a fragment record of refinement (by key), or
     // an earlier refinement gather that refinement may blend (EarlierGathers).
     enum class Role : uint8_t { Record, Fragment, Gather };
     const auto judge = [&](Record r, Role role) {
-        const bool fragment = role != Role::Record;
-        const bool anchored = r.anchor != kNoAnchor && r.anchor < changes.objects.size();
-        const ObjectMotion::Kind own = anchored ? changes.objects[r.anchor].kind : ObjectMotion::Kind::Static;
-        const auto keep = [&](Record& k) {
-            if (role == Role::Gather) return out.earlier_gathers.push_back(k);
-            ++out.kept;
-            (fragment ? out.fragment_valid : out.valid).push_back(k);
-        };
-        if (fragment && own != ObjectMotion::Kind::Static) {
-            out.dropped += role == Role::Fragment;
-            return;
-        }
+        const ObjectMotion::Kind own = own_motion(r);
         if (own != ObjectMotion::Kind::Static) {
-            if (!follow(r, own)) {
-                ++out.dropped;
+            // Refinement's records and gathers stay where their fragments were: dropped.
+            if (role != Role::Record || !follow(r, own)) {
+                out.dropped += role != Role::Gather;
                 return;
             }
             respace(r, camera, s);
             out.stale.push_back(r), out.why.push_back(StaleReason::Moved), ++out.moved;
             return;
         }
-        if (!fragment) respace(r, camera, s);
-        if (r.hits) {
-            if (hits_unchanged(r, now, changes, boxes, changed_sides)) {
-                keep(r);
-            } else if (role == Role::Fragment) {
-                out.fragment_stale.emplace(r.key, r);
-            } else if (role == Role::Record) {
-                ++out.light;
-                out.stale.push_back(r), out.why.push_back(StaleReason::Update);
-            }
-            return;
+        if (role == Role::Record) respace(r, camera, s);
+        const Verdict v = change.verdict(r);
+        if (v == Verdict::Keep) {
+            if (role == Role::Gather) return out.earlier_gathers.push_back(r);
+            ++out.kept;
+            (role == Role::Fragment ? out.fragment_valid : out.valid).push_back(r);
+        } else if (role == Role::Fragment && v == Verdict::Update) {
+            out.fragment_stale.emplace(r.key, r);  // updated where refinement still wants it
+        } else if (role == Role::Record) {
+            const StaleReason why = v == Verdict::Update ? StaleReason::Update : v == Verdict::View ? StaleReason::View : StaleReason::Light;
+            ++(why == StaleReason::View ? out.view : out.light);
+            out.stale.push_back(r), out.why.push_back(why);
+        } else {
+            out.dropped += role == Role::Fragment;  // refinement gathers its fragments again where it still needs them
         }
-        r.drift += drift_bound(r, changes, light, brightest, floor, previous.ao_only());
-        bool geometry = false;
-        for (size_t o = 0; o < changes.objects.size() && !geometry; ++o)
-            geometry = changes.objects[o].kind != ObjectMotion::Kind::Static && record_sees(r, changes.objects[o].swept);
-        const bool sky = changes.sky && !previous.ao_only() && sees_sky(r);
-        if (r.drift <= s.temporal_tolerance && !sky) {
-            keep(r);
-            return;
-        }
-        if (fragment) {  // refinement gathers its fragments again where it still needs them
-            out.dropped += role == Role::Fragment;
-            return;
-        }
-        const StaleReason why = geometry ? StaleReason::View : StaleReason::Light;
-        ++(why == StaleReason::View ? out.view : out.light);
-        out.stale.push_back(r), out.why.push_back(why);
     };
     for (size_t i = 0; i < previous.size(); ++i) judge(previous.record(i), Role::Record);
     for (size_t i = 0; i < previous.fragment_record_count(); ++i) judge(previous.fragment_record_at(i), Role::Fragment);
     for (const Record& r : gathers) judge(r, Role::Gather);
     for (Record r : waiting) {
-        const bool anchored = r.anchor != kNoAnchor && r.anchor < changes.objects.size();
-        const ObjectMotion::Kind own = anchored ? changes.objects[r.anchor].kind : ObjectMotion::Kind::Static;
+        const ObjectMotion::Kind own = own_motion(r);
         if (!follow(r, own)) {
             ++out.dropped;
             continue;
