@@ -73,6 +73,14 @@ void shares_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffe
     light_shares_at(cache, f, record_site(scene, f, cache.settings()), out);
 }
 
+/// A per-fragment record belongs to fragment `f` (its point, normal and key), made at `frame`.
+void place_fragment_record(Record& r, const Fragment& f, uint64_t key, int frame) {
+    r.p = r.origin = f.p, r.n = f.n;
+    // Never used for reach; positive so the record is a valid one in a cache file.
+    r.footprint = r.radius = r.raw_radius = f.footprint > 0 ? f.footprint : 1e-6f;
+    r.key = key, r.frame = r.gathered = frame;
+}
+
 }  // namespace
 
 bool refinement_runs(const Scene& scene) {
@@ -119,11 +127,8 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                     }
                 if (options.earlier)
                     if (std::optional<Record> b = options.earlier->blend(f.p, f.n, f.footprint)) {
-                        Record& r = *b;
-                        r.p = r.origin = f.p, r.n = f.n;
-                        r.footprint = r.radius = r.raw_radius = f.footprint > 0 ? f.footprint : 1e-6f;
-                        r.key = key, r.frame = r.gathered = frame;
-                        made.local().push_back(r);
+                        place_fragment_record(*b, f, key, frame);
+                        made.local().push_back(*b);
                         ++reused.local();
                         continue;
                     }
@@ -134,14 +139,10 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                     hits.get());
                 Record r;
                 r.hits = std::move(hits);
-                r.p = f.p, r.n = f.n;
+                place_fragment_record(r, f, key, frame);
                 cache.set_values(r, g, false);  // a fragment's own value: no gradients
-                // Never used for reach; positive so the record is a valid one in a cache file.
-                r.footprint = f.footprint > 0 ? f.footprint : 1e-6f;
-                r.radius = r.raw_radius = r.footprint;
                 r.harmonic = g.harmonic_distance, r.dmin = g.min_distance;
-                r.key = key, r.rays = static_cast<uint32_t>(g.rays), r.frame = r.gathered = frame;
-                r.origin = f.p;
+                r.rays = static_cast<uint32_t>(g.rays);
                 made.local().push_back(r);
             }
         }, scene.render.parallel.tile_order, options.comm);

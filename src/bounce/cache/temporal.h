@@ -47,10 +47,12 @@ struct TemporalJudgement {
 /// Judges every record of `previous` for this frame: `changes` between the scenes, `light` the
 /// radiosity that changed, `brightest` the largest radiance a moving object can show or hide.
 /// `waiting` (stale records of earlier frames no fragment needed yet) stay stale, moved with
-/// their object; `gathers` (EarlierGathers::lasting) are kept or dropped as fragment records are. Records on a deforming object ride on their triangle from `before`'s mesh to
-/// `now`'s (turned with it).
+/// their object; `gathers` (EarlierGathers::lasting) are kept or dropped as fragment records
+/// are. Records on a deforming object ride on their triangle from `before`'s mesh to `now`'s
+/// (turned with it).
 TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, std::span<const Record> gathers,
-                                const Scene& before, const Scene& now, const SceneChanges& changes, std::span<const LightChange> light, float brightest);
+                                const Scene& before, const Scene& now, const SceneChanges& changes,
+                                std::span<const LightChange> light, float brightest);
 
 /// Anchors a new record on object `object` (which moves in the shot): in its own space for a
 /// rigid one, at its barycentrics on triangle `prim` of its visible mesh for a deforming one.
@@ -87,7 +89,6 @@ public:
     std::optional<Record> blend(const Vec3& p, const Vec3& n, float footprint) const;
     /// The gathers that still serve at `frame`.
     std::vector<Record> lasting(int frame) const;
-    size_t size() const { return records_.size(); }
 
 private:
     std::vector<Record> records_;
