@@ -300,6 +300,35 @@ TEST(Radiosity, LazyBakesEqualTheEagerBakeInAnyOrderAndPartialSavesResume) {
     EXPECT_LT(lazy2.baked_sides(), lazy2.sides());
 }
 
+TEST(Radiosity, ABakeSplitInSharesAndExchangedEqualsTheWholeBake) {
+    // An MPI job of 3 ranks (RadiosityStep::BakeSplit): each bakes every third triangle, then
+    // takes the others' sides; every side is baked once, and the values are the whole bake's.
+    Rig rig(load_scene(test::cornell_scene()), true);
+    constexpr int kShares = 3;
+    std::vector<RadiosityTextures> ranks;
+    std::vector<std::string> bytes;
+    size_t baked = 0;
+    for (int r = 0; r < kShares; ++r) {
+        ranks.push_back(RadiosityTextures::lazy(rig.scene, rig.materials, rig.lighting, RadiositySettings{}));
+        Stats stats;
+        ranks.back().bake_all(stats, nullptr, r, kShares);
+        baked += ranks.back().baked_sides();
+        EXPECT_GT(ranks.back().baked_sides(), 0u);
+        EXPECT_LT(ranks.back().baked_sides(), ranks.back().sides() / 2);
+        bytes.push_back(ranks.back().baked_bytes());
+    }
+    EXPECT_EQ(baked, rig.radiosity->sides());  // no side twice, none left out
+    for (int r = 0; r < kShares; ++r) {
+        for (int o = 0; o < kShares; ++o)
+            if (o != r) ranks[r].take_baked(bytes[o]);
+        ASSERT_EQ(ranks[r].baked_sides(), ranks[r].sides());
+        for (uint32_t id = 0; id < rig.scene.objects.size(); ++id) {
+            EXPECT_EQ(ranks[r].object(id).front, rig.radiosity->object(id).front) << "rank " << r << " object " << id;
+            EXPECT_EQ(ranks[r].object(id).back, rig.radiosity->object(id).back) << "rank " << r << " object " << id;
+        }
+    }
+}
+
 }  // namespace
 }  // namespace bounce
 

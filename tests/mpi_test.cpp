@@ -3,6 +3,7 @@
 // byte-identical; a killed rank ends the job and leaves the previous outputs; ranks of another
 // scene, or that cannot read it, are refused naming the rank; --distribute frames and --resume.
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <signal.h>
 
 #include <chrono>
@@ -66,6 +67,24 @@ void expect_identical_at_any_rank_count(const std::string& scene, const std::str
 TEST(Mpi, TheCornellBoxIsByteIdenticalAtAnyRankCount) {
     SKIP_UNDER_SANITIZER();
     expect_identical_at_any_rank_count(test::cornell_scene(), "--set render.refine=0.05");
+}
+
+TEST(Mpi, FromThreeRanksAStillBakesEveryRadiositySideOnceAShareEach) {
+    SKIP_UNDER_SANITIZER();
+    // Rank 0 bakes every third triangle's two sides (counted over all objects) and takes the rest.
+    test::TempDir d;
+    std::string err;
+    ASSERT_EQ(run_mpi(3, fmt::format("render {} --res 48x48 --gi cache -q --threads 1 -o {} --stats-json {}", test::cornell_scene(),
+                                     d.file("a.exr"), d.file("a.json")), &err), 0) << err;
+    const auto stats = nlohmann::json::parse(test::bytes_of(d.file("a.json")));
+    EXPECT_EQ(stats["plan"]["radiosity"], "bake all, a share per rank, exchanged");
+    const auto triangles = static_cast<size_t>(stats["radiosity_sides"].get<double>()) / 2;
+    EXPECT_EQ(static_cast<size_t>(stats["radiosity_sides_split_here"].get<double>()), 2 * ((triangles + 2) / 3));
+    EXPECT_EQ(stats["radiosity_sides_baked"].get<double>(), 0.0);  // nothing left for the gathers to bake
+    // Two ranks bake as their gathers hit (equal cost at 2; docs/parallel.md).
+    ASSERT_EQ(run_mpi(2, fmt::format("render {} --res 48x48 --gi cache -q --threads 1 -o {} --stats-json {}", test::cornell_scene(),
+                                     d.file("b.exr"), d.file("b.json")), &err), 0) << err;
+    EXPECT_EQ(nlohmann::json::parse(test::bytes_of(d.file("b.json")))["plan"]["radiosity"], "bake as hit");
 }
 
 TEST(Mpi, SavedRadiosityTexturesHoldEverySideAnyRankBaked) {

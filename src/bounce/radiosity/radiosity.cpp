@@ -219,14 +219,17 @@ size_t RadiosityTextures::sides() const {
     return n;
 }
 
-void RadiosityTextures::bake_all(Stats& stats, ProgressSink* sink) {
+void RadiosityTextures::bake_all(Stats& stats, ProgressSink* sink, int share, int shares) {
     size_t total_tris = 0;
     for (const auto& m : maps_) total_tris += m.level.size();
     Progress progress(sink, "radiosity", total_tris);
-    for (size_t id = 0; id < maps_.size(); ++id) {
+    const auto count = static_cast<size_t>(std::max(shares, 1));
+    size_t first = 0;  // the object's first triangle, counted over all objects
+    for (size_t id = 0; id < maps_.size(); first += maps_[id].level.size(), ++id) {
         parallel_ranges(size_t{0}, maps_[id].level.size(), size_t{64}, [&](size_t lo, size_t hi) {
             Counters& counters = stats.local();
             for (size_t t = lo; t < hi; ++t) {
+                if ((first + t) % count != static_cast<size_t>(share)) continue;
                 ensure_baked(static_cast<uint32_t>(id), static_cast<uint32_t>(t), true, counters);
                 ensure_baked(static_cast<uint32_t>(id), static_cast<uint32_t>(t), false, counters);
             }

@@ -68,8 +68,10 @@ public:
     static RadiosityTextures bake(const Scene& scene, const Materials& materials,
                                   const DirectLighting& lighting, const RadiositySettings& settings,
                                   Stats& stats, ProgressSink* progress);
-    /// Bakes every side not baked yet (needs the lazy sources).
-    void bake_all(Stats& stats, ProgressSink* progress);
+    /// Bakes every side not baked yet (needs the lazy sources); with `shares` > 1, only the
+    /// triangles of share `share` (every shares-th triangle, counted over all objects), for the
+    /// processes of an MPI job that split the bake and exchange the sides (take_baked).
+    void bake_all(Stats& stats, ProgressSink* progress, int share = 0, int shares = 1);
     /// Writes one EXR per object into `dir` (created if needed), atomically; sides not baked
     /// are marked so and baked by whoever loads them.
     void save(const std::string& dir) const;

@@ -39,18 +39,6 @@ DeepBuffer lattice_of(const DeepBuffer& deep, int step) {
     return out;
 }
 
-/// The largest luminance a sky light sends.
-float sky_brightest(const Light& l) {
-    float top = luminance(l.color);
-    if (l.sky_map) {
-        float m = 0;
-        for (size_t i = 0; i + 2 < l.sky_map->rgb.size(); i += 3)
-            m = std::max(m, luminance(Color(l.sky_map->rgb[i], l.sky_map->rgb[i + 1], l.sky_map->rgb[i + 2])));
-        top *= m;
-    }
-    return top;
-}
-
 /// Each pixel of every layer takes the value of its step x step block's first pixel.
 void fill_blocks(Image& img, int step) {
     for (Layer& l : img.layers) {
@@ -171,54 +159,6 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan
         out.other_lighting = loaded.other_lighting;
     }
     return out;
-}
-
-RadiosityResult radiosity_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous) {
-    RadiosityResult out;
-    if (plan.radiosity == RadiosityStep::None) return out;
-    const RadiositySettings& settings = ctx.scene.render.radiosity;
-    out.textures = std::make_unique<RadiosityTextures>();
-    if (plan.radiosity == RadiosityStep::Carry) {
-        PhaseTimer t(ctx.stats, "radiosity carry");
-        *out.textures = RadiosityTextures::carry(*previous.radiosity, ctx.scene, ctx.materials, ctx.lighting, *plan.changes,
-                                                 out.changed, ctx.stats);
-        // What a moving object can show or hide: the brightest texel, emission or sky.
-        out.brightest = out.textures->brightest();
-        for (const Material& m : ctx.scene.materials) out.brightest = std::max(out.brightest, luminance(m.emission));
-        for (const Light& l : ctx.scene.lights)
-            if (l.type == LightType::Sky) out.brightest = std::max(out.brightest, sky_brightest(l));
-        return out;
-    }
-    if (plan.radiosity == RadiosityStep::Load) {
-        PhaseTimer t(ctx.stats, "radiosity load");
-        std::string why;
-        if (RadiosityTextures::load(settings.folder, ctx.scene, settings, ctx.materials, ctx.lighting, *out.textures, why)) {
-            ctx.stats.set("radiosity_reused", 1);
-            return out;
-        }
-        if (ctx.progress)
-            std::fprintf(stderr, "radiosity textures in %s not reused: %s; baking\n", settings.folder.c_str(), why.c_str());
-    }
-    *out.textures = RadiosityTextures::lazy(ctx.scene, ctx.materials, ctx.lighting, settings);
-    ctx.stats.set("radiosity_reused", 0);
-    return out;
-}
-
-void share_radiosity_pass(const FrameContext& ctx, RadiosityTextures& rt) {
-    if (ctx.comm.size() == 1) return;
-    const std::vector<std::string> all = ctx.comm.allgather(rt.baked_bytes());
-    for (size_t r = 0; r < all.size(); ++r)
-        if (static_cast<int>(r) != ctx.comm.rank()) rt.take_baked(all[r]);
-}
-
-void save_radiosity_pass(const FrameContext& ctx, const RadiosityTextures& rt, size_t baked_before) {
-    const size_t baked = rt.baked_sides();
-    ctx.stats.set("radiosity_sides_baked", static_cast<double>(baked - baked_before));
-    ctx.stats.set("radiosity_sides", static_cast<double>(rt.sides()));
-    const std::string& folder = ctx.scene.render.radiosity.folder;
-    if (folder.empty() || baked == baked_before || ctx.comm.rank() != 0) return;  // rank 0 writes
-    PhaseTimer t(ctx.stats, "radiosity save");
-    rt.save(folder);
 }
 
 namespace {

@@ -17,6 +17,12 @@ int crop_margin(const Scene& scene) {
 
 namespace {
 
+/// From this many ranks on, a still's radiosity sides are baked at once, a share per rank, and
+/// exchanged before the gathering pass: each rank's gathers touch about half of them (Sponza:
+/// 66 k of 133 k sides at 2 ranks), so a share of a third or less costs less than baking what
+/// one's own gathers hit; at 2 ranks the two are equal (docs/parallel.md).
+constexpr int kSplitBakeRanks = 3;
+
 const char* name(VisibilityStep s) {
     switch (s) {
         case VisibilityStep::Trace: return "trace";
@@ -29,6 +35,7 @@ const char* name(RadiosityStep s) {
     switch (s) {
         case RadiosityStep::None: return "none";
         case RadiosityStep::Bake: return "bake as hit";
+        case RadiosityStep::BakeSplit: return "bake all, a share per rank, exchanged";
         case RadiosityStep::Load: return "load, bake what is missing";
         case RadiosityStep::Carry: return "previous frame's, re-bake what changed";
     }
@@ -131,6 +138,10 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
     // between frames that keep parts for as many lights.
     const bool parts = scene.render.cache.light_parts;
     if (parts && plan.radiosity == RadiosityStep::Load) plan.radiosity = RadiosityStep::Bake;
+    // Not for a shot (its next frame re-bakes only the sides baked before, as one process does)
+    // nor for saved textures (which hold the sides one process would bake).
+    if (plan.radiosity == RadiosityStep::Bake && request.comm && request.comm->size() >= kSplitBakeRanks && !request.sequence)
+        plan.radiosity = RadiosityStep::BakeSplit;
     if (plan.radiosity != RadiosityStep::None && comparable && previous.radiosity && previous.radiosity->has_parts() == parts &&
         (!parts || previous.scene->lights.size() == scene.lights.size()))
         plan.radiosity = RadiosityStep::Carry;

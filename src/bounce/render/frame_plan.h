@@ -81,6 +81,7 @@ enum class AccelStep : uint8_t {
 enum class RadiosityStep : uint8_t {
     None,  ///< no gather, AO, or render.radiosity off: hits are shaded with shadow rays
     Bake,  ///< laid out and baked lazily as rays hit them
+    BakeSplit,  ///< an MPI job's still: every side baked at once, a share per rank, and exchanged
     Load,  ///< from render.radiosity_textures (baked lazily where the folder does not match)
     Carry, ///< the previous frame's, re-baked where its direct light may have changed
 };
