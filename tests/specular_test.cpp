@@ -1,6 +1,6 @@
 // Mirrors and glass against analytic cases: Fresnel, a mirror's image of a known emitter, a
 // glass slab's lateral shift, a sphere's Fresnel at normal and grazing incidence, energy
-// conservation of a clear sphere under a uniform sky; visibility to reflections; the cache
+// conservation of a clear sphere under a uniform sky; a normal map's tilt of a mirror; visibility to reflections; the cache
 // covering every site of the bundled mirror/glass scene before the shading pass.
 #include <gtest/gtest.h>
 
@@ -92,6 +92,35 @@ TEST(Mirror, AnObjectHiddenFromReflectionsDisappearsFromTheMirrorOnly) {
     EXPECT_NEAR(at(render_image(test::scene_from(mirror_scene(card))), "beauty", 2, 8), 1.6f, 1e-5f);
 }
 
+TEST(Mirror, ANormalMapTiltsWhatTheMirrorShowsByTwiceItsAngle) {
+    // A constant tangent-space normal map tilts the mirror's normal by 5 degrees towards -x
+    // (the quad's dP/du is +x), so reflections turn 10 degrees: a pixel column whose mirror point
+    // x_m satisfies x_m + 10 tan(atan(x_m / 5) - 10 deg) < 0 sees the emitter (x < 0 at z = 10).
+    // That moves the edge from x_m = 0 (between columns 7 and 8) to x_m = 0.584: columns 8-12
+    // (x_m up to 0.551) turn to the emitter, columns 14-15 (from 0.661) still show the sky.
+    test::TempDir d;
+    const float tilt = 5 * kPi / 180;
+    const std::string map = d.file("tilt.exr");
+    {
+        auto out = OIIO::ImageOutput::create(map);
+        ASSERT_TRUE(out);
+        const OIIO::ImageSpec spec(4, 4, 3, OIIO::TypeDesc::FLOAT);
+        std::vector<float> px;
+        for (int i = 0; i < 16; ++i) px.insert(px.end(), {(1 - std::sin(tilt)) / 2, 0.5f, (1 + std::cos(tilt)) / 2});
+        ASSERT_TRUE(out->open(map, spec) && out->write_image(OIIO::TypeDesc::FLOAT, px.data()) && out->close());
+    }
+    json j = mirror_scene();
+    j["materials"]["mirror"]["normal_texture"] = map;
+    const Image img = render_image(test::scene_from(j));
+    const float tints[3] = {0.8f, 0.6f, 0.4f}, emitted[3] = {2, 3, 4};
+    for (int c = 0; c < 3; ++c) {
+        for (int x : {2, 8, 12}) EXPECT_NEAR(at(img, "beauty", x, 8, c), tints[c] * emitted[c], 1e-5f) << x;
+        for (int x : {14, 15}) EXPECT_NEAR(at(img, "beauty", x, 8, c), tints[c] * 0.5f, 1e-6f) << x;
+    }
+    // Without the map, column 8 shows the sky (the untilted edge is at the image's centre).
+    EXPECT_NEAR(at(render_image(test::scene_from(mirror_scene())), "beauty", 8, 8), 0.8f * 0.5f, 1e-6f);
+}
+
 TEST(Glass, ASlabShiftsTheRayByTheAnalyticDistance) {
     // A slab of thickness 1 and index 1.5 (faces at z = 0 and z = -1, normals outwards), a wall at z = -5.
     json j = {{"camera", {{"position", {-5, 0, 5}}, {"look_at", {0, 0, 0}}, {"resolution", {8, 8}}}},
@@ -106,7 +135,8 @@ TEST(Glass, ASlabShiftsTheRayByTheAnalyticDistance) {
     const Scene s = test::scene_from(j);
     SceneAccel accel(s);
     DirectLighting lighting(s, accel);
-    const SpecularTracer tracer(s, accel, lighting);
+    const Materials materials(s);
+    const SpecularTracer tracer(s, accel, lighting, materials);
     ASSERT_TRUE(tracer.active());
     Fragment f;
     f.p = f.p_base = {0, 0, 0}, f.n = f.ng = f.n_base = {0, 0, 1};
@@ -154,7 +184,8 @@ TEST(Glass, ASphereReflectsTheFresnelShareAtNormalAndGrazingIncidence) {
     // surface's normal error (the coarse sphere's interpolated normals).
     SceneAccel accel(s);
     DirectLighting lighting(s, accel);
-    const SpecularTracer tracer(s, accel, lighting);
+    const Materials materials(s);
+    const SpecularTracer tracer(s, accel, lighting, materials);
     for (float angle_deg : {0.0f, 30.0f, 60.0f, 75.0f, 85.0f}) {
         // The point of the unit ball seen at that angle of incidence from the camera at (0, 0, 10).
         float phi = 0;

@@ -17,7 +17,7 @@ bool SpecularSitesResult::lit_by_gathers(const Scene& scene) {
 
 SpecularSitesResult specular_sites_pass(const FrameContext& ctx, const DeepBuffer& shaded) {
     SpecularSitesResult out;
-    const SpecularTracer tracer(ctx.scene, ctx.accel, ctx.lighting);
+    const SpecularTracer tracer(ctx.scene, ctx.accel, ctx.lighting, ctx.materials);
     out.mirrors = tracer.active();
     // Without gathers to light them (direct light only, AO, radiosity textures) the shading
     // pass traces the paths itself and needs no sites.

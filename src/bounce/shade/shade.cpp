@@ -222,7 +222,7 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
     ComponentLayers comps(img, scene, scene.render.shading.layers == LayerSet::Components && !ao_only, shares != nullptr);
 
     CameraRays camera(scene.camera);
-    const SpecularTracer tracer(scene, lighting.accel(), lighting);
+    const SpecularTracer tracer(scene, lighting.accel(), lighting, materials);
     const bool specular = tracer.active() && !ao_only;  // AO-only renders show no reflections
     const ShadeContext ctx{scene, materials, lighting, indirect, direct_radiance, camera, ao_only, tracer, sites, shares};
     auto put3 = [&](Layer* l, int x, int y, const Vec3& v) {

@@ -30,8 +30,9 @@ struct SpecularTracer::Branch {
     uint32_t fragment = 0;
 };
 
-SpecularTracer::SpecularTracer(const Scene& scene, const SceneAccel& accel, const DirectLighting& lighting)
-    : scene_(scene), accel_(accel), lighting_(lighting) {
+SpecularTracer::SpecularTracer(const Scene& scene, const SceneAccel& accel, const DirectLighting& lighting,
+                               const Materials& materials)
+    : scene_(scene), accel_(accel), lighting_(lighting), materials_(materials) {
     active_ = std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) { return m.is_specular(); });
 }
 
@@ -71,6 +72,21 @@ SpecularTracer::Start SpecularTracer::start_of(const Fragment& f, const Vec3& d)
     return {f.p, dot(f.n, outward) < 0 ? -f.n : f.n, outward};
 }
 
+Vec3 SpecularTracer::bumped(const Fragment& f, const Start& at, const Vec3& d) const {
+    if (!scene_.materials[f.material].has_bump()) return at.n;
+    // The map's tilt of the fragment's normal, carried over to the start's (which may face the
+    // other way, and is the coarse surface's); lessened where the mirror direction would go
+    // under the surface (a steep bump seen at a grazing angle), so every path leaves it.
+    Vec3 tilt = materials_.surface(f.material, f.object, f.prim, f.uv, f.n, f.footprint).normal - f.n;
+    if (dot(f.n, at.n) < 0) tilt = -tilt;
+    const Vec3 above = dot(d, at.outward) < 0 ? at.outward : -at.outward;
+    for (float share : {1.0f, 0.75f, 0.5f, 0.25f}) {
+        const Vec3 n = normalize(at.n + tilt * share);
+        if (isfinite(n) && dot(reflect(d, n), above) > 0) return n;
+    }
+    return at.n;
+}
+
 void SpecularTracer::trace(std::span<const Fragment> frags, const Vec3& eye, PixelPaths& out, Counters& counters) const {
     out.clear();
     out.seen_reflection.assign(frags.size(), Color(0));
@@ -82,7 +98,8 @@ void SpecularTracer::trace(std::span<const Fragment> frags, const Vec3& eye, Pix
         const Material& m = scene_.materials[f.material];
         if (f.is_hair() || !m.is_specular()) continue;
         const Vec3 d = normalize(f.p - eye);
-        const Start at = start_of(f, d);
+        Start at = start_of(f, d);
+        at.n = bumped(f, at, d);
         const bool entering = dot(d, at.outward) < 0;
         const Vec3 n = entering ? at.n : -at.n;
         const SpecularSplit s = specular_split(m, std::max(-dot(d, n), 0.0f), entering);

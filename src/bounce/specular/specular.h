@@ -52,7 +52,8 @@ inline constexpr uint32_t kMaxRaysPerPixel = 4096;
 
 class SpecularTracer {
 public:
-    SpecularTracer(const Scene& scene, const SceneAccel& accel, const DirectLighting& lighting);
+    /// `materials` tilt a fragment's mirror normal by its bump or normal map.
+    SpecularTracer(const Scene& scene, const SceneAccel& accel, const DirectLighting& lighting, const Materials& materials);
     /// Whether any material is a mirror or glass (with render.specular_depth 0 their base shares still apply).
     bool active() const { return active_; }
     /// The paths leaving the fragments of one pixel, seen from `eye`. Branches whose weight
@@ -67,6 +68,8 @@ private:
         Vec3 p, n, outward;
     };
     Start start_of(const Fragment& f, const Vec3& d) const;
+    /// `at`'s normal tilted as the fragment's bump or normal map tilts its own, for a camera ray along `d`.
+    Vec3 bumped(const Fragment& f, const Start& at, const Vec3& d) const;
     void follow(const Branch& b, PixelPaths& out, Counters& counters) const;
     /// Continues a branch that met a specular surface: its reflected and refracted branches.
     void split(const Branch& b, const Vec3& p, const Vec3& n, bool entering, const Material& m, float travelled,
@@ -77,6 +80,7 @@ private:
     const Scene& scene_;
     const SceneAccel& accel_;
     const DirectLighting& lighting_;
+    const Materials& materials_;
     bool active_ = false;
 };
 
