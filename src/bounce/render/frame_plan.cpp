@@ -17,12 +17,6 @@ int crop_margin(const Scene& scene) {
 
 namespace {
 
-/// From this many ranks on, a still's radiosity sides are baked at once, a share per rank, and
-/// exchanged before the gathering pass: each rank's gathers touch about half of them (Sponza:
-/// 66 k of 133 k sides at 2 ranks), so a share of a third or less costs less than baking what
-/// one's own gathers hit; at 2 ranks the two are equal (docs/parallel.md).
-constexpr int kSplitBakeRanks = 3;
-
 const char* name(VisibilityStep s) {
     switch (s) {
         case VisibilityStep::Trace: return "trace";
@@ -138,9 +132,12 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
     // between frames that keep parts for as many lights.
     const bool parts = scene.render.cache.light_parts;
     if (parts && plan.radiosity == RadiosityStep::Load) plan.radiosity = RadiosityStep::Bake;
-    // Not for a shot (its next frame re-bakes only the sides baked before, as one process does)
-    // nor for saved textures (which hold the sides one process would bake).
-    if (plan.radiosity == RadiosityStep::Bake && request.comm && request.comm->size() >= kSplitBakeRanks && !request.sequence)
+    // An MPI job's still bakes every side once, a share per rank, instead of each rank baking
+    // what its own gathers hit (about half the sides each on Sponza at 2 ranks, more as ranks
+    // grow; docs/parallel.md measures both). Not for a shot (its next frame re-bakes only the
+    // sides baked before, as one process does) nor for saved textures (Load: they hold the
+    // sides one process would bake).
+    if (plan.radiosity == RadiosityStep::Bake && request.comm && request.comm->size() > 1 && !request.sequence)
         plan.radiosity = RadiosityStep::BakeSplit;
     if (plan.radiosity != RadiosityStep::None && comparable && previous.radiosity && previous.radiosity->has_parts() == parts &&
         (!parts || previous.scene->lights.size() == scene.lights.size()))
