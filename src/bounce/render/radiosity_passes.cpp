@@ -64,8 +64,12 @@ RadiosityResult radiosity_pass(const FrameContext& ctx, const FramePlan& plan, c
 void share_radiosity_pass(const FrameContext& ctx, RadiosityTextures& rt) {
     if (ctx.comm.size() == 1) return;
     const std::vector<std::string> all = ctx.comm.allgather(rt.baked_bytes());
-    for (size_t r = 0; r < all.size(); ++r)
+    size_t bytes = 0;  // counted as exchange_bytes counts: what every rank sent
+    for (size_t r = 0; r < all.size(); ++r) {
+        bytes += all[r].size();
         if (static_cast<int>(r) != ctx.comm.rank()) rt.take_baked(all[r]);
+    }
+    ctx.stats.set("radiosity_sides_exchanged_bytes", static_cast<double>(bytes));
 }
 
 void save_radiosity_pass(const FrameContext& ctx, const RadiosityTextures& rt, size_t baked_before) {
