@@ -101,14 +101,7 @@ TEST(Mirror, ANormalMapTiltsWhatTheMirrorShowsByTwiceItsAngle) {
     test::TempDir d;
     const float tilt = 5 * kPi / 180;
     const std::string map = d.file("tilt.exr");
-    {
-        auto out = OIIO::ImageOutput::create(map);
-        ASSERT_TRUE(out);
-        const OIIO::ImageSpec spec(4, 4, 3, OIIO::TypeDesc::FLOAT);
-        std::vector<float> px;
-        for (int i = 0; i < 16; ++i) px.insert(px.end(), {(1 - std::sin(tilt)) / 2, 0.5f, (1 + std::cos(tilt)) / 2});
-        ASSERT_TRUE(out->open(map, spec) && out->write_image(OIIO::TypeDesc::FLOAT, px.data()) && out->close());
-    }
+    test::write_constant_image(map, 4, 4, {(1 - std::sin(tilt)) / 2, 0.5f, (1 + std::cos(tilt)) / 2});
     json j = mirror_scene();
     j["materials"]["mirror"]["normal_texture"] = map;
     const Image img = render_image(test::scene_from(j));

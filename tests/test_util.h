@@ -81,13 +81,21 @@ inline std::string bytes_of(const std::string& path) {
     return {std::istreambuf_iterator<char>(in), {}};
 }
 
-/// Writes a w x h image of `channels` channels, every value `v` (float EXR, else 8-bit).
-inline void write_constant_image(const std::string& path, int w, int h, int channels, float v) {
+/// Writes a w x h image whose every pixel is `pixel` (one value per channel; float EXR, else 8-bit).
+inline void write_constant_image(const std::string& path, int w, int h, const std::vector<float>& pixel) {
     auto out = OIIO::ImageOutput::create(path);
     ASSERT_TRUE(out);
+    const int channels = static_cast<int>(pixel.size());
     OIIO::ImageSpec spec(w, h, channels, path.ends_with(".exr") ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-    std::vector<float> px(static_cast<size_t>(w) * h * channels, v);
+    std::vector<float> px;
+    px.reserve(static_cast<size_t>(w) * h * channels);
+    for (int i = 0; i < w * h; ++i) px.insert(px.end(), pixel.begin(), pixel.end());
     ASSERT_TRUE(out->open(path, spec) && out->write_image(OIIO::TypeDesc::FLOAT, px.data()) && out->close());
+}
+
+/// Writes a w x h image of `channels` channels, every value `v` (float EXR, else 8-bit).
+inline void write_constant_image(const std::string& path, int w, int h, int channels, float v) {
+    write_constant_image(path, w, h, std::vector<float>(static_cast<size_t>(channels), v));
 }
 
 /// A large floor quad (y = 0, normal +y) as a JSON object list.
