@@ -48,6 +48,37 @@ TEST(MotionBlur, AMovingEdgeCoversEachPixelForTheShareOfTheShutterItSpendsThere)
     EXPECT_EQ(still[4 * 32 + 16], 0.0f);
 }
 
+TEST(MotionBlur, ACameraMovingInTheShutterBlursWhatItSeesByItsOwnMotion) {
+    // The moving edge above, the other way round: the quad stands still with its right edge at
+    // x = 0 and the camera slides from x = 0 to x = -10 over the shutter of frame 1 (position
+    // and look_at keyed), so in the camera's view the edge moves from 0 to 10.
+    json j = test::base_scene();
+    j["animation"] = {{"fps", 24}, {"frames", {1, 2}}};
+    j["camera"] = {{"position", {{"keys", {{1, {0, 0, 10}}, {2, {-10, 0, 10}}}}}},
+                   {"look_at", {{"keys", {{1, {0, 0, 0}}, {2, {-10, 0, 0}}}}}},
+                   {"fov", 90}, {"resolution", {32, 8}}, {"shutter", {0, 1}}};
+    j["render"] = {{"spp", 256}, {"light_samples", 1}};
+    j["objects"] = {{{"type", "quad"}, {"vertices", {{-100, -50, 0}, {0, -50, 0}, {0, 50, 0}, {-100, 50, 0}}}}};
+    j["lights"] = {{{"type", "distant"}, {"direction", {0, 0, -1}}}};
+    const Scene scene = test::scene_from(j);
+    EXPECT_TRUE(scene.camera.moves_in_shutter);
+    EXPECT_EQ(scene.camera.shutter_pose[1].position, Vec3(-10, 0, 10));
+    const std::vector<float> a = coverage(scene);
+    for (int px = 0; px < 32; ++px) {
+        const double centre = -40 + 2.5 * (px + 0.5);
+        const double want = std::clamp((10 - centre) / 10, 0.0, 1.0);
+        EXPECT_NEAR(a[static_cast<size_t>(4 * 32 + px)], want, 0.03) << "pixel " << px;
+    }
+    // A camera keyed but still over the shutter (both keys alike) does not blur.
+    j["camera"]["position"] = {{"keys", {{1, {0, 0, 10}}, {2, {0, 0, 10}}}}};
+    j["camera"]["look_at"] = {0, 0, 0};
+    const Scene still = test::scene_from(j);
+    EXPECT_FALSE(still.camera.moves_in_shutter);
+    const std::vector<float> b = coverage(still);
+    EXPECT_EQ(b[4 * 32 + 15], 1.0f);
+    EXPECT_EQ(b[4 * 32 + 16], 0.0f);
+}
+
 TEST(DepthOfField, APointOutOfFocusSpreadsOverItsCircleOfConfusion) {
     // Focused on z = 0 from z = 10; a ball of radius 0.5 at z = -10 (distance 20). With a lens
     // of diameter 4 its circle of confusion on the plane in focus is 4 x 10 / 20 = 2 units

@@ -6,32 +6,50 @@
 
 namespace bounce {
 
-CameraRays::CameraRays(const Camera& cam) : pos_(cam.position), width_(cam.width), height_(cam.height) {
-    forward_ = normalize(cam.look_at - cam.position);
-    right_ = normalize(cross(forward_, cam.up));
-    up_ = cross(right_, forward_);
-    scale_ = std::tan(cam.fov * kPi / 360.0f);
+CameraRays::View CameraRays::view_of(const Camera::Pose& pose) {
+    View v;
+    v.pos = pose.position;
+    v.forward = normalize(pose.look_at - pose.position);
+    v.right = normalize(cross(v.forward, pose.up));
+    v.up = cross(v.right, v.forward);
+    v.scale = std::tan(pose.fov * kPi / 360.0f);
+    return v;
+}
+
+CameraRays::CameraRays(const Camera& cam) : width_(cam.width), height_(cam.height) {
+    const View v = view_of(cam.pose());
+    pos_ = v.pos, forward_ = v.forward, right_ = v.right, up_ = v.up, scale_ = v.scale;
     aspect_ = static_cast<float>(cam.width) / static_cast<float>(cam.height);
     aperture_ = cam.aperture;
     focus_ = cam.focus_distance > 0 ? cam.focus_distance : length(cam.look_at - cam.position);
+    shutter_ = cam.shutter_pose;
+    moves_ = cam.moves_in_shutter;
 }
 
-Vec3 CameraRays::lens_ray(float px, float py, float lu, float lv, Vec3& dir) const {
-    const Vec3 d = direction(px, py);  // forward has unit length along the view: d reaches the plane at focus_ / 1
+Vec3 CameraRays::lens_ray(float px, float py, float lu, float lv, Vec3& dir, float time) const {
+    View v{pos_, forward_, right_, up_, scale_};
+    if (moves_) {
+        const Camera::Pose &a = shutter_[0], &b = shutter_[1];
+        const auto mix = [time](const Vec3& x, const Vec3& y) { return x + (y - x) * time; };
+        v = view_of({mix(a.position, b.position), mix(a.look_at, b.look_at), mix(a.up, b.up), a.fov + (b.fov - a.fov) * time});
+    }
+    const Vec3 d = direction(v, px, py);  // forward has unit length along the view: d reaches the plane at focus_ / 1
     if (aperture_ <= 0) {
         dir = normalize(d);
-        return pos_;
+        return v.pos;
     }
     const Vec2 disc = concentric_disc(lu, lv);
-    const Vec3 origin = pos_ + (right_ * disc.x + up_ * disc.y) * (0.5f * aperture_);
-    dir = normalize(pos_ + d * focus_ - origin);
+    const Vec3 origin = v.pos + (v.right * disc.x + v.up * disc.y) * (0.5f * aperture_);
+    dir = normalize(v.pos + d * focus_ - origin);
     return origin;
 }
 
-Vec3 CameraRays::direction(float px, float py) const {
-    float sx = (2 * px / static_cast<float>(width_) - 1) * aspect_ * scale_;
-    float sy = (1 - 2 * py / static_cast<float>(height_)) * scale_;
-    return forward_ + right_ * sx + up_ * sy;
+Vec3 CameraRays::direction(float px, float py) const { return direction({pos_, forward_, right_, up_, scale_}, px, py); }
+
+Vec3 CameraRays::direction(const View& v, float px, float py) const {
+    float sx = (2 * px / static_cast<float>(width_) - 1) * aspect_ * v.scale;
+    float sy = (1 - 2 * py / static_cast<float>(height_)) * v.scale;
+    return v.forward + v.right * sx + v.up * sy;
 }
 
 float CameraRays::footprint(const Vec3& d, float t, const Vec3& n) const {

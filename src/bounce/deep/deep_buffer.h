@@ -99,7 +99,9 @@ public:
     /// (uniform over the aperture's disc): it crosses the pinhole ray on the plane in focus.
     /// Returns the origin; `dir` gets the unit direction. A pinhole gives origin() and the
     /// pinhole direction.
-    Vec3 lens_ray(float px, float py, float lu, float lv, Vec3& dir) const;
+    /// `time` in [0, 1] over the shutter: a camera that moves in it (Camera::moves_in_shutter)
+    /// is where its pose, interpolated linearly between shutter open and close, puts it.
+    Vec3 lens_ray(float px, float py, float lu, float lv, Vec3& dir, float time = 0) const;
     Vec3 origin() const { return pos_; }
     /// World-space width of one pixel at a hit at distance t along unit direction d on a
     /// surface of normal n: the narrowest extent of the pixel's projection (from the ray
@@ -112,8 +114,17 @@ public:
     bool projects_into(const Vec3& p, const std::array<int, 4>& window) const;
 
 private:
+    /// A pose's frame: where rays leave and their directions' axes (forward has unit length).
+    struct View {
+        Vec3 pos, forward, right, up;
+        float scale = 1;  ///< tan(fov / 2)
+    };
+    static View view_of(const Camera::Pose& pose);
+    Vec3 direction(const View& v, float px, float py) const;
     Vec3 pos_, forward_, right_, up_;
     float scale_ = 1, aspect_ = 1;
+    std::array<Camera::Pose, 2> shutter_{};
+    bool moves_ = false;
     float aperture_ = 0, focus_ = 1;  ///< lens diameter and distance of the plane in focus
     int width_ = 1, height_ = 1;
 };

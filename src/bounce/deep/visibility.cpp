@@ -117,9 +117,9 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     // Depth of field: the ray leaves a point of the lens; motion blur: it sees the
                     // scene at its time in the shutter (strata in a scrambled order, so time does
                     // not follow the pixel strata). Shading stays at the frame's time.
-                    const Vec3 origin = camera.lens_ray(px, py, rng.get(su, kDimLensU), rng.get(su, kDimLensV), dn);
                     const int stratum = (s * stride + static_cast<int>(rng.bits(0, kDimTime) % static_cast<uint64_t>(spp))) % spp;
                     const float time = blur ? (static_cast<float>(stratum) + rng.get(su, kDimTime)) / static_cast<float>(spp) : 0.0f;
+                    const Vec3 origin = camera.lens_ray(px, py, rng.get(su, kDimLensU), rng.get(su, kDimLensV), dn, time);
                     ++counters.camera_rays;
                     Hit h = accel.fine().intersect(origin, dn, 0, INFINITY, time, kRayCamera);
                     if (!h.valid()) continue;

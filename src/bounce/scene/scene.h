@@ -29,6 +29,18 @@ struct Camera {
     float aperture = 0;        ///< lens diameter (depth of field); 0 = pinhole
     float focus_distance = 0;  ///< plane in focus along the view; 0 = the distance to look_at
     bool has_motion_blur() const { return shutter[1] > shutter[0]; }
+
+    /// The keyable placement of a camera.
+    struct Pose {
+        Vec3 position, look_at, up;
+        float fov = 45.0f;
+        bool operator==(const Pose&) const = default;
+    };
+    Pose pose() const { return {position, look_at, up, fov}; }
+    /// With motion blur: the pose at shutter open and close, when they differ (a keyed camera
+    /// that moves in the shutter); camera rays interpolate between them.
+    std::array<Pose, 2> shutter_pose{};
+    bool moves_in_shutter = false;
 };
 
 /// A float RGB lat-long image (the textured sky dome); +Y is up, u grows with azimuth.

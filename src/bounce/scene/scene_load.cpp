@@ -26,11 +26,22 @@ using nlohmann::json;
 
 namespace {
 
-/// Motion blur: the visible mesh of every object whose placement is keyed, at shutter open and
-/// close (its placement then, applied to its shape now).
+void read_params(const json& j, const std::string& section, Scene& scene, const JsonContext& ctx);
+void check_camera(const Camera& cam, const JsonContext& ctx);
+
+/// Motion blur: the camera's pose and the visible mesh of every object whose placement is keyed,
+/// at shutter open and close (an object's placement then, applied to its shape now).
 void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
     std::array<nlohmann::json, 2> docs;
     for (int k = 0; k < 2; ++k) docs[static_cast<size_t>(k)] = evaluate_keys(scene.keyed, scene.frame + scene.camera.shutter[static_cast<size_t>(k)], ctx);
+    for (size_t k = 0; k < 2 && scene.keyed.is_object(); ++k) {
+        Scene then;  // the camera section alone, checked as the frame's is
+        read_params(docs[k]["camera"], "camera", then, ctx);
+        check_camera(then.camera, ctx);
+        scene.camera.shutter_pose[k] = then.camera.pose();
+    }
+    scene.camera.moves_in_shutter = scene.keyed.is_object() && !(scene.camera.shutter_pose[0] == scene.camera.pose() &&
+                                      scene.camera.shutter_pose[1] == scene.camera.pose());
     for (size_t i = 0; i < scene.objects.size(); ++i) {
         Object& o = scene.objects[i];
         if (!o.moves || o.deforms) continue;
@@ -74,6 +85,11 @@ void read_params(const json& j, const std::string& section, Scene& scene, const 
     }
 }
 
+void check_camera(const Camera& cam, const JsonContext& ctx) {
+    if (length(cam.look_at - cam.position) == 0) ctx.fail("/camera/look_at", "look_at equals position");
+    if (length(cross(cam.look_at - cam.position, cam.up)) == 0) ctx.fail("/camera/up", "up is parallel to the view direction");
+}
+
 Scene build_scene(json doc, const std::string& path, const std::vector<Override>& overrides, const LoadOptions& options) {
     JsonContext ctx;
     ctx.file = path;
@@ -101,9 +117,8 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     if (root.has("render")) read_params(root.raw("render"), "render", scene, ctx);
     if (!root.has("camera")) root.fail("", "missing required key \"camera\"");
     read_params(root.raw("camera"), "camera", scene, ctx);
+    check_camera(scene.camera, ctx);
     const Camera& cam = scene.camera;
-    if (length(cam.look_at - cam.position) == 0) ctx.fail("/camera/look_at", "look_at equals position");
-    if (length(cross(cam.look_at - cam.position, cam.up)) == 0) ctx.fail("/camera/up", "up is parallel to the view direction");
     const CacheSettings& cs = scene.render.cache;
     if (cs.max_spacing < cs.min_spacing) ctx.fail("/render/max_spacing", "max_spacing is below min_spacing");
     const auto& crop = scene.render.visibility.crop;
@@ -241,6 +256,13 @@ uint64_t Scene::visibility_fingerprint() const {
     Scene copy;
     copy.inputs = inputs;
     copy.description = {{"camera", description.value("camera", json())}, {"objects", description.value("objects", json())}};
+    if (camera.moves_in_shutter && copy.description["camera"].is_object()) {
+        // A camera keyed to move in the shutter: the same pose at the frame can blur otherwise.
+        json poses = json::array();
+        for (const Camera::Pose& p : camera.shutter_pose)
+            poses.push_back({p.position.x, p.position.y, p.position.z, p.look_at.x, p.look_at.y, p.look_at.z, p.up.x, p.up.y, p.up.z, p.fov});
+        copy.description["camera"]["shutter poses"] = poses;
+    }
     for (auto& o : copy.description["objects"])
         if (o.is_object() && o.contains("fur") && o["fur"].is_object())
             for (const std::string& key : fur_lighting_keys()) o["fur"].erase(key);
