@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "bounce/render/render.h"
+#include "gltf_strip.h"
 #include "test_util.h"
 
 namespace bounce {
@@ -69,6 +70,10 @@ TEST(MotionBlur, ACameraMovingInTheShutterBlursWhatItSeesByItsOwnMotion) {
         const double want = std::clamp((10 - centre) / 10, 0.0, 1.0);
         EXPECT_NEAR(a[static_cast<size_t>(4 * 32 + px)], want, 0.03) << "pixel " << px;
     }
+    // A pose the shutter reaches is checked as the frame's: here look_at meets position at close.
+    json bad = j;
+    bad["camera"]["look_at"] = {{"keys", {{1, {0, 0, 0}}, {2, {-10, 0, 10}}}}};
+    test::expect_input_error([&] { test::scene_from(bad); }, {"inline.json", "/camera/look_at", "look_at equals position at shutter close (frame 2)"});
     // A camera keyed but still over the shutter (both keys alike) does not blur.
     j["camera"]["position"] = {{"keys", {{1, {0, 0, 10}}, {2, {0, 0, 10}}}}};
     j["camera"]["look_at"] = {0, 0, 0};
@@ -77,6 +82,68 @@ TEST(MotionBlur, ACameraMovingInTheShutterBlursWhatItSeesByItsOwnMotion) {
     const std::vector<float> b = coverage(still);
     EXPECT_EQ(b[4 * 32 + 15], 1.0f);
     EXPECT_EQ(b[4 * 32 + 16], 0.0f);
+}
+
+/// Whether (x, y) lies in triangle (a, b, c) of the plane z = 0.
+bool inside(const Vec3& a, const Vec3& b, const Vec3& c, double x, double y) {
+    const auto side = [&](const Vec3& p, const Vec3& q) { return (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x); };
+    const double s0 = side(a, b), s1 = side(b, c), s2 = side(c, a);
+    return (s0 >= 0 && s1 >= 0 && s2 >= 0) || (s0 <= 0 && s1 <= 0 && s2 <= 0);
+}
+
+TEST(MotionBlur, ASkinThatMovesInTheShutterIsBlurredBetweenItsPosesAtOpenAndClose) {
+    // The skinned strip of gltf_strip.h (z = 0): over the shutter [0, 1] of frame 1 (1 fps) its
+    // tip turns 90 degrees, so (2, 0) -> (1, 1) and (2, 1) -> (0, 1). Motion blur sees its
+    // vertices moving in straight lines between the two poses: each pixel is covered for the
+    // share of the shutter (and of its area) that the strip, so interpolated, covers it.
+    test::TempDir d;
+    d.write("strip.gltf", test::skinned_strip().dump());
+    json j = test::base_scene();
+    j["animation"] = {{"fps", 1}, {"frames", {1, 2}}};
+    const int n = 32;
+    j["camera"] = {{"position", {1, 0.5, 6}}, {"look_at", {1, 0.5, 0}}, {"fov", 40}, {"resolution", {n, n}}, {"shutter", {0, 1}}};
+    j["render"] = {{"spp", 1024}, {"light_samples", 1}};
+    j["objects"] = {{{"type", "mesh"}, {"file", "strip.gltf"}, {"animation", "bend"}}};
+    j["lights"] = {{{"type", "distant"}, {"direction", {0, 0, -1}}}};
+    d.write("s.json", j.dump());
+    const Scene scene = load_scene(d.file("s.json"));
+    const Object& strip = scene.objects[0];
+    ASSERT_EQ(strip.shutter[1].size(), strip.coarse.positions.size());
+    const std::vector<float> a = coverage(scene);
+    // The expected coverage, integrated over 16 times and 32 x 32 points per pixel.
+    const double pixel = 2 * 6 * std::tan(20 * kPi / 180) / n;
+    double worst = 0, sum = 0, want_sum = 0;
+    for (int py = 0; py < n; ++py)
+        for (int px = 0; px < n; ++px) {
+            int hits = 0;
+            for (int t = 0; t < 16; ++t) {
+                const float time = (static_cast<float>(t) + 0.5f) / 16;
+                std::vector<Vec3> p;
+                for (size_t v = 0; v < strip.shutter[0].size(); ++v)
+                    p.push_back(strip.shutter[0][v] + (strip.shutter[1][v] - strip.shutter[0][v]) * time);
+                for (int s = 0; s < 1024; ++s) {
+                    const double x = 1 + (px + (s % 32 + 0.5) / 32 - n / 2.0) * pixel, y = 0.5 - (py + (s / 32 + 0.5) / 32 - n / 2.0) * pixel;
+                    bool in = false;
+                    for (size_t f = 0; f + 2 < strip.coarse.indices.size() && !in; f += 3)
+                        in = inside(p[strip.coarse.indices[f]], p[strip.coarse.indices[f + 1]], p[strip.coarse.indices[f + 2]], x, y);
+                    hits += in;
+                }
+            }
+            const double want = hits / (16.0 * 1024.0), got = a[static_cast<size_t>(py * n + px)];
+            worst = std::max(worst, std::abs(got - want));
+            sum += got, want_sum += want;
+        }
+    EXPECT_LT(worst, 0.03);
+    EXPECT_NEAR(sum, want_sum, 0.01 * want_sum);
+    // The strip swept part of its second cell away: less than its 2 units of area at rest.
+    EXPECT_LT(want_sum * pixel * pixel, 1.9);
+    // Without a shutter the strip is where frame 1 has it, its 2 units of area.
+    j["camera"]["shutter"] = {0, 0};
+    d.write("s.json", j.dump());
+    const std::vector<float> still = coverage(load_scene(d.file("s.json")));
+    double area = 0;
+    for (float c : still) area += c;
+    EXPECT_NEAR(area * pixel * pixel, 2.0, 0.02);
 }
 
 TEST(DepthOfField, APointOutOfFocusSpreadsOverItsCircleOfConfusion) {

@@ -94,8 +94,6 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
     CameraRays camera(cam);
     const int spp = rs.spp;
     const bool blur = cam.has_motion_blur();
-    int stride = 3;  // a step coprime to spp: s -> s * stride mod spp visits every time stratum once
-    while (std::gcd(stride, spp) != 1) ++stride;
     std::vector<std::vector<Fragment>> per_pixel(deep.pixel_count());
     Progress progress(sink, "visibility", static_cast<uint64_t>(deep.height));
 
@@ -103,22 +101,28 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
         Counters& counters = stats.local();
         std::vector<Accum> groups;
         std::vector<std::pair<Vec3, size_t>> subsamples;  // (point, group) of this pixel
+        std::vector<int> time_strata(static_cast<size_t>(spp));
         for (int wy = row0; wy < row1; ++wy) {
             for (int wx = 0; wx < deep.width; ++wx) {
                 int x = wx + deep.x0, y = wy + deep.y0;
                 RandomStream rng(rs.seed, static_cast<uint64_t>(y) * 65536u + static_cast<uint64_t>(x));
                 groups.clear();
                 subsamples.clear();
+                // Motion blur: every time stratum once, in an order shuffled per pixel, so a
+                // subsample's time says nothing of where in the pixel it lies.
+                if (blur) {
+                    std::iota(time_strata.begin(), time_strata.end(), 0);
+                    for (size_t i = time_strata.size(); i-- > 1;)
+                        std::swap(time_strata[i], time_strata[rng.bits(i, kDimTimeStratum) % (i + 1)]);
+                }
                 for (int s = 0; s < spp; ++s) {
                     const auto su = static_cast<uint64_t>(s);
                     Vec2 j = stratified_2d(s, spp, rng.get(su, kDimPixelX), rng.get(su, kDimPixelY));
                     const float px = static_cast<float>(x) + j.x, py = static_cast<float>(y) + j.y;
                     Vec3 d = camera.direction(px, py), dn;
                     // Depth of field: the ray leaves a point of the lens; motion blur: it sees the
-                    // scene at its time in the shutter (strata in a scrambled order, so time does
-                    // not follow the pixel strata). Shading stays at the frame's time.
-                    const int stratum = (s * stride + static_cast<int>(rng.bits(0, kDimTime) % static_cast<uint64_t>(spp))) % spp;
-                    const float time = blur ? (static_cast<float>(stratum) + rng.get(su, kDimTime)) / static_cast<float>(spp) : 0.0f;
+                    // scene at its time in the shutter. Shading stays at the frame's time.
+                    const float time = blur ? (static_cast<float>(time_strata[su]) + rng.get(su, kDimTime)) / static_cast<float>(spp) : 0.0f;
                     const Vec3 origin = camera.lens_ray(px, py, rng.get(su, kDimLensU), rng.get(su, kDimLensV), dn, time);
                     ++counters.camera_rays;
                     Hit h = accel.fine().intersect(origin, dn, 0, INFINITY, time, kRayCamera);

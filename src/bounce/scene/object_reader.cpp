@@ -163,6 +163,33 @@ const std::vector<std::string>& keys_of_type(const std::string& type, bool subdi
 
 }  // namespace
 
+namespace {
+/// The pose of a mesh object's file at `frame`: its "animation" clip, played from the shot's first frame.
+MeshPose mesh_pose(const JsonReader& r, const Scene& scene, double frame) {
+    MeshPose pose;
+    if (!r.has("animation")) return pose;
+    const nlohmann::json& a = r.raw("animation");
+    if (a.is_number_unsigned()) pose.clip = std::to_string(a.get<uint64_t>());
+    else if (a.is_string() && !a.get<std::string>().empty()) pose.clip = a.get<std::string>();
+    else r.fail("animation", "expected the name or the number of one of the file's animations");
+    pose.seconds = (frame - scene.shot.first) / scene.shot.fps;
+    return pose;
+}
+}  // namespace
+
+std::vector<Vec3> posed_visible_positions(const JsonReader& r, const Scene& scene, double frame) {
+    std::vector<Material> materials = scene.materials;  // the file's own are added to a copy
+    TriangleMesh mesh;
+    try {
+        mesh = load_mesh_file(r.file("file", true), "", materials, -1, nullptr, mesh_pose(r, scene, frame));
+    } catch (const InputError& e) {
+        r.fail(e.place() == "animations" ? "animation" : "file", e.what());
+    }
+    mesh.transform(read_transform(r));
+    const int fine = r.integer("fine_subdivisions", 0, 0, 6);
+    return fine > 0 ? subdivide_linear(mesh, fine).positions : mesh.positions;
+}
+
 void read_object(const JsonReader& r, Scene& scene, size_t index) {
     Object obj;
     obj.name = r.string("name", fmt::format("object{}", index));
@@ -202,15 +229,8 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         fine = r.integer("fine_subdivisions", 0, 0, 6);
         std::vector<std::string> read;
         // An animation of the file plays over the shot: from its start at the shot's first frame.
-        MeshPose pose;
-        if (r.has("animation")) {
-            const nlohmann::json& a = r.raw("animation");
-            if (a.is_number_unsigned()) pose.clip = std::to_string(a.get<uint64_t>());
-            else if (a.is_string() && !a.get<std::string>().empty()) pose.clip = a.get<std::string>();
-            else r.fail("animation", "expected the name or the number of one of the file's animations");
-            pose.seconds = (scene.frame - scene.shot.first) / scene.shot.fps;
-            obj.deforms = true;
-        }
+        const MeshPose pose = mesh_pose(r, scene, scene.frame);
+        obj.deforms = !pose.clip.empty();
         try {
             obj.coarse = load_mesh_file(file, obj.name, scene.materials, mat, &read, pose);
         } catch (const InputError& e) {

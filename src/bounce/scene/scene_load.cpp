@@ -27,27 +27,32 @@ using nlohmann::json;
 namespace {
 
 void read_params(const json& j, const std::string& section, Scene& scene, const JsonContext& ctx);
-void check_camera(const Camera& cam, const JsonContext& ctx);
+void check_camera(const Camera& cam, const JsonContext& ctx, const std::string& when = "");
 
 /// Motion blur: the camera's pose and the visible mesh of every object whose placement is keyed,
 /// at shutter open and close (an object's placement then, applied to its shape now).
 void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
-    std::array<nlohmann::json, 2> docs;
-    for (int k = 0; k < 2; ++k) docs[static_cast<size_t>(k)] = evaluate_keys(scene.keyed, scene.frame + scene.camera.shutter[static_cast<size_t>(k)], ctx);
-    for (size_t k = 0; k < 2 && scene.keyed.is_object(); ++k) {
+    std::array<nlohmann::json, 2> docs;  // the scene at shutter open and close (a file without keys: as it is)
+    for (size_t k = 0; k < 2; ++k) {
+        docs[k] = scene.keyed.is_object() ? evaluate_keys(scene.keyed, scene.frame + scene.camera.shutter[k], ctx) : scene.description;
         Scene then;  // the camera section alone, checked as the frame's is
         read_params(docs[k]["camera"], "camera", then, ctx);
-        check_camera(then.camera, ctx);
+        check_camera(then.camera, ctx, fmt::format(" at shutter {} (frame {:g})", k ? "close" : "open", scene.frame + scene.camera.shutter[k]));
         scene.camera.shutter_pose[k] = then.camera.pose();
     }
-    scene.camera.moves_in_shutter = scene.keyed.is_object() && !(scene.camera.shutter_pose[0] == scene.camera.pose() &&
-                                      scene.camera.shutter_pose[1] == scene.camera.pose());
+    scene.camera.moves_in_shutter = !(scene.camera.shutter_pose[0] == scene.camera.pose() && scene.camera.shutter_pose[1] == scene.camera.pose());
     for (size_t i = 0; i < scene.objects.size(); ++i) {
         Object& o = scene.objects[i];
-        if (!o.moves || o.deforms) continue;
+        if (!o.moves) continue;
         const Transform undo = o.placement.inverse();
         for (size_t k = 0; k < 2; ++k) {
             const JsonReader r(docs[k]["objects"][i], fmt::format("/objects/{}", i), ctx, object_keys());
+            if (o.deforms) {  // a skin or morph: posed again at the shutter's ends (same vertices)
+                o.shutter[k] = posed_visible_positions(r, scene, scene.frame + scene.camera.shutter[k]);
+                if (o.shutter[k].size() != o.visible().positions.size()) o.shutter = {};
+                if (o.shutter[0].empty()) break;
+                continue;
+            }
             const Transform move = read_transform(r) * undo;
             o.shutter[k].clear();
             for (const Vec3& p : o.visible().positions) o.shutter[k].push_back(move.point(p));
@@ -85,9 +90,9 @@ void read_params(const json& j, const std::string& section, Scene& scene, const 
     }
 }
 
-void check_camera(const Camera& cam, const JsonContext& ctx) {
-    if (length(cam.look_at - cam.position) == 0) ctx.fail("/camera/look_at", "look_at equals position");
-    if (length(cross(cam.look_at - cam.position, cam.up)) == 0) ctx.fail("/camera/up", "up is parallel to the view direction");
+void check_camera(const Camera& cam, const JsonContext& ctx, const std::string& when) {
+    if (length(cam.look_at - cam.position) == 0) ctx.fail("/camera/look_at", "look_at equals position" + when);
+    if (length(cross(cam.look_at - cam.position, cam.up)) == 0) ctx.fail("/camera/up", "up is parallel to the view direction" + when);
 }
 
 Scene build_scene(json doc, const std::string& path, const std::vector<Override>& overrides, const LoadOptions& options) {
