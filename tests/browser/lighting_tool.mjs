@@ -64,7 +64,7 @@ async function lighterFound() {
     const errs = [];
     a.on('pageerror', (e) => errs.push(e.message));
     a.on('console', (m) => { if (m.type() === 'error' && !m.text().startsWith('Failed to load resource')) errs.push(m.text()); });
-    await a.goto(glossyUrl);
+    await a.goto(glossyUrl, { timeout: 120000 });  // the server may be busy with its first render
     await a.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
     const done = async (page, minVersion) => {
       await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v,
@@ -104,7 +104,7 @@ async function lighterFound() {
     // connections under load; docs/lighting-tool.md).
     const other = await browser.newContext({ viewport: { width: 1400, height: 900 } });
     const b = await other.newPage();
-    await b.goto(glossyUrl);
+    await b.goto(glossyUrl, { timeout: 120000 });  // the server may be busy with its first render
     await b.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
     await cell(a, 'lights.0.intensity').fill('2000000');
     await cell(a, 'lights.0.intensity').dispatchEvent('change');
@@ -161,7 +161,7 @@ try {
   page.on('pageerror', (e) => errors.push(e.message));
   // three reports misuse (e.g. adding a non-Object3D) on the console, not as exceptions.
   page.on('console', (m) => { if (m.type() === 'error' && !m.text().startsWith('Failed to load resource')) errors.push(m.text()); });
-  await page.goto(url);
+  await page.goto(url, { timeout: 120000 });  // the server may be busy with its first render
   await page.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
   check(await page.isVisible('#hint') && (await page.textContent('#hint')).includes('Update'),
     'a page with nothing rendered says to press Update');
@@ -247,7 +247,7 @@ try {
   // 5. A shot: the frame slider renders another frame from what the last one left (its plan).
   let shotUrl;
   [shotServer, shotUrl] = await startLight(path.join(work, 'shots/cornell-rolling.json'), path.join(work, 'shot-out'));
-  await page.goto(shotUrl);
+  await page.goto(shotUrl, { timeout: 120000 });  // the server may be busy with its first render
   await page.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
   await page.click('#rasterize');
   s = await waitDone(1);

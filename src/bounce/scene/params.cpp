@@ -135,8 +135,9 @@ ParamTable make_table() {
         r.p.get = [](const Scene& s) -> json { return json::array({s.camera.shutter[0], s.camera.shutter[1]}); };
         r.p.set = [](Scene& s, const json& v) { s.camera.shutter = {v[0].get<float>(), v[1].get<float>()}; };
         rows.push_back(r.range(-1, 1).unit("frames")
-                           .doc("[open, close] around the frame's time: primary visibility is blurred over it, shading is "
-                                "at the frame's time; [0, 0] = no motion blur")
+                           .doc("[open, close] around the frame's time: primary visibility is blurred over it (keyed objects, "
+                                "meshes playing a clip and a keyed camera move in it), shading is at the frame's time; "
+                                "[0, 0] = no motion blur")
                            .id(deep).animate());
     }
     {
