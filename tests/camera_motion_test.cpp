@@ -62,7 +62,7 @@ TEST(MotionBlur, ACameraMovingInTheShutterBlursWhatItSeesByItsOwnMotion) {
     j["objects"] = {{{"type", "quad"}, {"vertices", {{-100, -50, 0}, {0, -50, 0}, {0, 50, 0}, {-100, 50, 0}}}}};
     j["lights"] = {{{"type", "distant"}, {"direction", {0, 0, -1}}}};
     const Scene scene = test::scene_from(j);
-    EXPECT_TRUE(scene.camera.moves_in_shutter);
+    EXPECT_TRUE(scene.camera.moves_in_shutter());
     EXPECT_EQ(scene.camera.shutter_pose[1].position, Vec3(-10, 0, 10));
     const std::vector<float> a = coverage(scene);
     for (int px = 0; px < 32; ++px) {
@@ -78,7 +78,7 @@ TEST(MotionBlur, ACameraMovingInTheShutterBlursWhatItSeesByItsOwnMotion) {
     j["camera"]["position"] = {{"keys", {{1, {0, 0, 10}}, {2, {0, 0, 10}}}}};
     j["camera"]["look_at"] = {0, 0, 0};
     const Scene still = test::scene_from(j);
-    EXPECT_FALSE(still.camera.moves_in_shutter);
+    EXPECT_FALSE(still.camera.moves_in_shutter());
     const std::vector<float> b = coverage(still);
     EXPECT_EQ(b[4 * 32 + 15], 1.0f);
     EXPECT_EQ(b[4 * 32 + 16], 0.0f);

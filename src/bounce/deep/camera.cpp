@@ -16,18 +16,16 @@ CameraRays::View CameraRays::view_of(const Camera::Pose& pose) {
     return v;
 }
 
-CameraRays::CameraRays(const Camera& cam) : width_(cam.width), height_(cam.height) {
-    const View v = view_of(cam.pose());
-    pos_ = v.pos, forward_ = v.forward, right_ = v.right, up_ = v.up, scale_ = v.scale;
+CameraRays::CameraRays(const Camera& cam) : view_(view_of(cam.pose())), width_(cam.width), height_(cam.height) {
     aspect_ = static_cast<float>(cam.width) / static_cast<float>(cam.height);
     aperture_ = cam.aperture;
     focus_ = cam.focus_distance > 0 ? cam.focus_distance : length(cam.look_at - cam.position);
     shutter_ = cam.shutter_pose;
-    moves_ = cam.moves_in_shutter;
+    moves_ = cam.moves_in_shutter();
 }
 
 Vec3 CameraRays::lens_ray(float px, float py, float lu, float lv, Vec3& dir, float time) const {
-    View v{pos_, forward_, right_, up_, scale_};
+    View v = view_;
     if (moves_) {
         const Camera::Pose &a = shutter_[0], &b = shutter_[1];
         const auto mix = [time](const Vec3& x, const Vec3& y) { return x + (y - x) * time; };
@@ -44,7 +42,7 @@ Vec3 CameraRays::lens_ray(float px, float py, float lu, float lv, Vec3& dir, flo
     return origin;
 }
 
-Vec3 CameraRays::direction(float px, float py) const { return direction({pos_, forward_, right_, up_, scale_}, px, py); }
+Vec3 CameraRays::direction(float px, float py) const { return direction(view_, px, py); }
 
 Vec3 CameraRays::direction(const View& v, float px, float py) const {
     float sx = (2 * px / static_cast<float>(width_) - 1) * aspect_ * v.scale;
@@ -53,8 +51,8 @@ Vec3 CameraRays::direction(const View& v, float px, float py) const {
 }
 
 float CameraRays::footprint(const Vec3& d, float t, const Vec3& n) const {
-    float s = 2 * scale_ / static_cast<float>(height_);
-    Vec3 dx = right_ * s, dy = up_ * -s;
+    float s = 2 * view_.scale / static_cast<float>(height_);
+    Vec3 dx = view_.right * s, dy = view_.up * -s;
     float nd = dot(n, d);
     nd = std::copysign(std::max(std::abs(nd), 0.05f * length(d)), nd);
     float tau = t / length(d);
@@ -66,12 +64,12 @@ float CameraRays::footprint(const Vec3& d, float t, const Vec3& n) const {
 }
 
 bool CameraRays::project(const Vec3& p, float& px, float& py) const {
-    Vec3 v = p - pos_;
-    float z = dot(v, forward_);
+    Vec3 v = p - view_.pos;
+    float z = dot(v, view_.forward);
     if (z <= 0) return false;
-    float sx = dot(v, right_) / z, sy = dot(v, up_) / z;
-    px = (sx / (aspect_ * scale_) + 1) * 0.5f * static_cast<float>(width_);
-    py = (1 - sy / scale_) * 0.5f * static_cast<float>(height_);
+    float sx = dot(v, view_.right) / z, sy = dot(v, view_.up) / z;
+    px = (sx / (aspect_ * view_.scale) + 1) * 0.5f * static_cast<float>(width_);
+    py = (1 - sy / view_.scale) * 0.5f * static_cast<float>(height_);
     return true;
 }
 

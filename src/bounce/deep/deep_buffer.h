@@ -99,10 +99,10 @@ public:
     /// (uniform over the aperture's disc): it crosses the pinhole ray on the plane in focus.
     /// Returns the origin; `dir` gets the unit direction. A pinhole gives origin() and the
     /// pinhole direction.
-    /// `time` in [0, 1] over the shutter: a camera that moves in it (Camera::moves_in_shutter)
+    /// `time` in [0, 1] over the shutter: a camera that moves in it (Camera::moves_in_shutter())
     /// is where its pose, interpolated linearly between shutter open and close, puts it.
     Vec3 lens_ray(float px, float py, float lu, float lv, Vec3& dir, float time = 0) const;
-    Vec3 origin() const { return pos_; }
+    Vec3 origin() const { return view_.pos; }
     /// World-space width of one pixel at a hit at distance t along unit direction d on a
     /// surface of normal n: the narrowest extent of the pixel's projection (from the ray
     /// differentials; grazing angles are capped).
@@ -121,8 +121,8 @@ private:
     };
     static View view_of(const Camera::Pose& pose);
     Vec3 direction(const View& v, float px, float py) const;
-    Vec3 pos_, forward_, right_, up_;
-    float scale_ = 1, aspect_ = 1;
+    View view_;  ///< the pose at the frame's time
+    float aspect_ = 1;
     std::array<Camera::Pose, 2> shutter_{};
     bool moves_ = false;
     float aperture_ = 0, focus_ = 1;  ///< lens diameter and distance of the plane in focus

@@ -37,10 +37,12 @@ struct Camera {
         bool operator==(const Pose&) const = default;
     };
     Pose pose() const { return {position, look_at, up, fov}; }
-    /// With motion blur: the pose at shutter open and close, when they differ (a keyed camera
-    /// that moves in the shutter); camera rays interpolate between them.
+    /// With motion blur: the pose at shutter open and close (set by the scene's loader).
     std::array<Pose, 2> shutter_pose{};
-    bool moves_in_shutter = false;
+    /// A keyed camera that moves in the shutter: camera rays interpolate between its poses.
+    bool moves_in_shutter() const {
+        return has_motion_blur() && !(shutter_pose[0] == pose() && shutter_pose[1] == pose());
+    }
 };
 
 /// A float RGB lat-long image (the textured sky dome); +Y is up, u grows with azimuth.

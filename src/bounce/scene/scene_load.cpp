@@ -26,40 +26,6 @@ using nlohmann::json;
 
 namespace {
 
-void read_params(const json& j, const std::string& section, Scene& scene, const JsonContext& ctx);
-void check_camera(const Camera& cam, const JsonContext& ctx, const std::string& when = "");
-
-/// Motion blur: the camera's pose and the visible mesh of every object whose placement is keyed,
-/// at shutter open and close (an object's placement then, applied to its shape now).
-void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
-    std::array<nlohmann::json, 2> docs;  // the scene at shutter open and close (a file without keys: as it is)
-    for (size_t k = 0; k < 2; ++k) {
-        docs[k] = scene.keyed.is_object() ? evaluate_keys(scene.keyed, scene.frame + scene.camera.shutter[k], ctx) : scene.description;
-        Scene then;  // the camera section alone, checked as the frame's is
-        read_params(docs[k]["camera"], "camera", then, ctx);
-        check_camera(then.camera, ctx, fmt::format(" at shutter {} (frame {:g})", k ? "close" : "open", scene.frame + scene.camera.shutter[k]));
-        scene.camera.shutter_pose[k] = then.camera.pose();
-    }
-    scene.camera.moves_in_shutter = !(scene.camera.shutter_pose[0] == scene.camera.pose() && scene.camera.shutter_pose[1] == scene.camera.pose());
-    for (size_t i = 0; i < scene.objects.size(); ++i) {
-        Object& o = scene.objects[i];
-        if (!o.moves) continue;
-        const Transform undo = o.placement.inverse();
-        for (size_t k = 0; k < 2; ++k) {
-            const JsonReader r(docs[k]["objects"][i], fmt::format("/objects/{}", i), ctx, object_keys());
-            if (o.deforms) {  // a skin or morph: posed again at the shutter's ends (same vertices)
-                o.shutter[k] = posed_visible_positions(r, scene, scene.frame + scene.camera.shutter[k]);
-                if (o.shutter[k].size() != o.visible().positions.size()) o.shutter = {};
-                if (o.shutter[0].empty()) break;
-                continue;
-            }
-            const Transform move = read_transform(r) * undo;
-            o.shutter[k].clear();
-            for (const Vec3& p : o.visible().positions) o.shutter[k].push_back(move.point(p));
-        }
-    }
-}
-
 /// Reads one section's rows of the parameter table ("camera", "render"): keys not in the table
 /// are errors with a suggestion, every value is checked as the type it is used in.
 void read_params(const json& j, const std::string& section, Scene& scene, const JsonContext& ctx) {
@@ -90,9 +56,39 @@ void read_params(const json& j, const std::string& section, Scene& scene, const 
     }
 }
 
-void check_camera(const Camera& cam, const JsonContext& ctx, const std::string& when) {
+void check_camera(const Camera& cam, const JsonContext& ctx, const std::string& when = "") {
     if (length(cam.look_at - cam.position) == 0) ctx.fail("/camera/look_at", "look_at equals position" + when);
     if (length(cross(cam.look_at - cam.position, cam.up)) == 0) ctx.fail("/camera/up", "up is parallel to the view direction" + when);
+}
+
+/// Motion blur: the camera's pose and the visible mesh of every object whose placement is keyed,
+/// at shutter open and close (an object's placement then, applied to its shape now).
+void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
+    std::array<nlohmann::json, 2> docs;  // the scene at shutter open and close (a file without keys: as it is)
+    for (size_t k = 0; k < 2; ++k) {
+        docs[k] = scene.keyed.is_object() ? evaluate_keys(scene.keyed, scene.frame + scene.camera.shutter[k], ctx) : scene.description;
+        Scene then;  // the camera section alone, checked as the frame's is
+        read_params(docs[k]["camera"], "camera", then, ctx);
+        check_camera(then.camera, ctx, fmt::format(" at shutter {} (frame {:g})", k ? "close" : "open", scene.frame + scene.camera.shutter[k]));
+        scene.camera.shutter_pose[k] = then.camera.pose();
+    }
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+        Object& o = scene.objects[i];
+        if (!o.moves) continue;
+        const Transform undo = o.placement.inverse();
+        for (size_t k = 0; k < 2; ++k) {
+            const JsonReader r(docs[k]["objects"][i], fmt::format("/objects/{}", i), ctx, object_keys());
+            if (o.deforms) {  // a skin or morph: posed again at the shutter's ends
+                o.shutter[k] = posed_visible_positions(r, scene, scene.frame + scene.camera.shutter[k]);
+                continue;
+            }
+            const Transform move = read_transform(r) * undo;
+            o.shutter[k].clear();
+            for (const Vec3& p : o.visible().positions) o.shutter[k].push_back(move.point(p));
+        }
+        const size_t n = o.visible().positions.size();  // a pose of other vertices is not blurred
+        if (o.shutter[0].size() != n || o.shutter[1].size() != n) o.shutter = {};
+    }
 }
 
 Scene build_scene(json doc, const std::string& path, const std::vector<Override>& overrides, const LoadOptions& options) {
@@ -261,7 +257,7 @@ uint64_t Scene::visibility_fingerprint() const {
     Scene copy;
     copy.inputs = inputs;
     copy.description = {{"camera", description.value("camera", json())}, {"objects", description.value("objects", json())}};
-    if (camera.moves_in_shutter && copy.description["camera"].is_object()) {
+    if (camera.moves_in_shutter() && copy.description["camera"].is_object()) {
         // A camera keyed to move in the shutter: the same pose at the frame can blur otherwise.
         json poses = json::array();
         for (const Camera::Pose& p : camera.shutter_pose)
