@@ -187,7 +187,7 @@ TEST(TemporalCache, AMovingCamerasRefinedFragmentsUseTheirOwnGathers) {
     EXPECT_EQ(used, own);
 }
 
-TEST(TemporalCache, RefinementBlendsEarlierGathersAndKeepsOnlyGathersForLater) {
+TEST(TemporalCache, RefinementReprojectsEarlierGathersAndKeepsOnlyGathersForLater) {
     // A slow camera: frame 2's fragments lie among frame 1's refinement gathers.
     json j = shot_scene();
     j["camera"]["position"] = {{"keys", {{1, {0, 3, 8}}, {3, {0.04, 3, 7.96}}}}};
@@ -201,21 +201,28 @@ TEST(TemporalCache, RefinementBlendsEarlierGathersAndKeepsOnlyGathersForLater) {
     const RenderResult& second = f.results[1];
     ASSERT_GT(first.fragment_records_new, 10u);
     EXPECT_EQ(first.gathers.size(), first.fragment_records_new);  // frame 1's gathers, all kept for later
-    // Frame 2 blends some fragments (records of 0 rays, used by their fragments) and gathers fewer.
-    size_t blended = 0;
+    const uint32_t full = first.gathers.front().rays;
+    // Frame 2 reprojects some fragments' gathers from frame 1's (records that trace fewer rays
+    // and keep no hits, used by their fragments) and gathers fewer in full.
+    size_t reprojected = 0;
+    uint64_t traced = 0;
     for (size_t i = 0; i < second.cache->fragment_record_count(); ++i) {
         const Record& k = second.cache->fragment_record_at(i);
-        if (k.gathered != 2 || k.rays > 0) continue;
-        ++blended;
+        if (k.gathered != 2 || k.hits) continue;
+        ++reprojected, traced += k.rays;
         EXPECT_EQ(second.cache->fragment_record(k.key, k.p), &k);
         EXPECT_GT(luminance(k.E), 0.0f);
     }
-    EXPECT_GT(blended, 0u);
+    EXPECT_GT(reprojected, 0u);
+    EXPECT_LT(traced, reprojected * full / 2);  // most of their rays are frame 1's
     EXPECT_LT(second.fragment_records_new, first.fragment_records_new);
     EXPECT_EQ(second.shading_misses, 0u);
-    // Only gathers serve later frames: frame 1's and frame 2's own, never a blend.
+    // Only gathers serve later frames: frame 1's and frame 2's own, never a reprojection.
     EXPECT_EQ(second.gathers.size(), first.gathers.size() + second.fragment_records_new);
-    for (const Record& g : f.results[2].gathers) EXPECT_GT(g.rays, 0u);
+    for (const Record& g : f.results[2].gathers) {
+        EXPECT_TRUE(g.hits);
+        EXPECT_EQ(g.rays, full);
+    }
 }
 
 TEST(TemporalCache, RecordsOnAMovingObjectTravelWithItAndTheRestUpdateOnlyWhatTheySee) {

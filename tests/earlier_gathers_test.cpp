@@ -1,5 +1,5 @@
-// Refinement's earlier gathers in frames of a shot (temporal.h, EarlierGathers): which gathers
-// a fragment may blend, the blend's exact value, and how long a gather serves.
+// Refinement's earlier gathers in frames of a shot (temporal.h, EarlierGathers): which gather
+// a fragment reuses the rays of, and how long a gather serves.
 #include <gtest/gtest.h>
 
 #include "bounce/cache/temporal.h"
@@ -8,13 +8,13 @@ using namespace bounce;
 
 namespace {
 
-/// A refinement gather at (x, 0, z) on the floor (normal +y), a pixel footprint of 0.1.
-Record gather_at(float x, float z, Color E, int frame = 1, uint64_t key = 0) {
+/// A refinement gather at (x, 0, z) on the floor (normal +y), a pixel footprint of 0.1, with hits.
+Record gather_at(float x, float z, int frame = 1, uint64_t key = 0) {
     Record r;
     r.p = r.origin = Vec3(x, 0, z), r.n = Vec3(0, 1, 0);
-    r.E = E, r.ao = 0.5f, r.bent = Vec3(0, 1, 0);
     r.footprint = r.radius = r.raw_radius = 0.1f;
     r.rays = 64, r.key = key, r.frame = r.gathered = frame;
+    r.hits = std::make_shared<GatherHits>();
     return r;
 }
 
@@ -27,43 +27,32 @@ Bounds box() {
 
 }  // namespace
 
-TEST(EarlierGathers, BlendsAgreeingGathersWithATentFilter) {
-    // Reach 1 pixel (0.1): gathers 0.05, 0.025 and 0.075 away weigh 1/2, 3/4 and 1/4.
-    const std::vector<Record> g = {gather_at(0.05f, 0, Color(1.0f)), gather_at(0, 0.025f, Color(1.04f)),
-                                   gather_at(-0.075f, 0, Color(0.96f)), gather_at(0.5f, 0, Color(9.0f))};
-    const EarlierGathers earlier(g, box(), 1, 0.1f, 1e-6f);
-    const std::optional<Record> b = earlier.blend(Vec3(0), Vec3(0, 1, 0), 0.1f);
-    ASSERT_TRUE(b.has_value());
-    const float expect = (0.5f * 1.0f + 0.75f * 1.04f + 0.25f * 0.96f) / 1.5f;
-    EXPECT_NEAR(b->E[0], expect, 1e-6f);
-    EXPECT_NEAR(b->ao, 0.5f, 1e-6f);
-    EXPECT_EQ(b->rays, 0u);  // a blend is never itself a gather
-}
-
-TEST(EarlierGathers, DisagreeingFewOrOtherSurfacesGatherTheirOwn) {
+TEST(EarlierGathers, AFragmentReusesTheNearestGatherOnItsSurface) {
     const Vec3 up(0, 1, 0);
-    // Three around, but across an edge of the light (luminance spread far above 0.1).
-    const std::vector<Record> edge = {gather_at(0.05f, 0, Color(1)), gather_at(-0.05f, 0, Color(1)), gather_at(0, 0.05f, Color(3))};
-    EXPECT_FALSE(EarlierGathers(edge, box(), 1, 0.1f, 1e-6f).blend(Vec3(0), up, 0.1f).has_value());
-    // Two are too few.
-    const std::vector<Record> two = {gather_at(0.05f, 0, Color(1)), gather_at(-0.05f, 0, Color(1))};
-    EXPECT_FALSE(EarlierGathers(two, box(), 1, 0.1f, 1e-6f).blend(Vec3(0), up, 0.1f).has_value());
-    // A step (off the fragment's plane) and another facing do not count.
-    std::vector<Record> other = two;
-    other.push_back(gather_at(0, 0.05f, Color(1)));
-    other.back().origin.y = 0.05f;
-    other.push_back(gather_at(0, -0.05f, Color(1)));
-    other.back().n = normalize(Vec3(0, 1, 1));
-    EXPECT_FALSE(EarlierGathers(other, box(), 1, 0.1f, 1e-6f).blend(Vec3(0), up, 0.1f).has_value());
-    // Beyond the reach.
-    const std::vector<Record> far = {gather_at(0.11f, 0, Color(1)), gather_at(-0.11f, 0, Color(1)), gather_at(0, 0.11f, Color(1))};
-    EXPECT_FALSE(EarlierGathers(far, box(), 1, 0.1f, 1e-6f).blend(Vec3(0), up, 0.1f).has_value());
-    EXPECT_TRUE(EarlierGathers(far, box(), 1.2f, 0.1f, 1e-6f).blend(Vec3(0), up, 0.1f).has_value());
+    std::vector<Record> g = {gather_at(0.05f, 0, 1, 1), gather_at(0, 0.03f, 1, 2), gather_at(-0.09f, 0, 1, 3)};
+    // Nearer, but a step (off the fragment's plane), another facing, or without hits: not these.
+    g.push_back(gather_at(0.01f, 0, 1, 4));
+    g.back().origin.y = 0.05f;
+    g.push_back(gather_at(0, 0.01f, 1, 5));
+    g.back().n = normalize(Vec3(0, 1, 1));
+    g.push_back(gather_at(-0.01f, 0, 1, 6));
+    g.back().hits.reset();
+    const EarlierGathers earlier(g, box(), 1);
+    const Record* r = earlier.nearest(Vec3(0), up, 0.1f);
+    ASSERT_NE(r, nullptr);
+    EXPECT_EQ(r->key, 2u);
+    // Beyond the reach (1 footprint): none; a reach of 1.2 footprints takes the one at 0.11.
+    const std::vector<Record> far = {gather_at(0.11f, 0, 1, 7)};
+    EXPECT_EQ(EarlierGathers(far, box(), 1).nearest(Vec3(0), up, 0.1f), nullptr);
+    ASSERT_NE(EarlierGathers(far, box(), 1.2f).nearest(Vec3(0), up, 0.1f), nullptr);
+    // Two at the same distance: the first in order (independent of the index's visiting order).
+    const std::vector<Record> tie = {gather_at(0.05f, 0, 1, 8), gather_at(-0.05f, 0, 1, 9)};
+    EXPECT_EQ(EarlierGathers(tie, box(), 1).nearest(Vec3(0), up, 0.1f)->key, 8u);
 }
 
 TEST(EarlierGathers, AGatherServesItsLifespanOfFrames) {
-    const std::vector<Record> g = {gather_at(0, 0, Color(1), 1, 7), gather_at(0, 0, Color(1), 5, 3)};
-    const EarlierGathers earlier(g, box(), 1, 0.1f, 1e-6f);
+    const std::vector<Record> g = {gather_at(0, 0, 1, 7), gather_at(0, 0, 5, 3)};
+    const EarlierGathers earlier(g, box(), 1);
     EXPECT_EQ(earlier.lasting(EarlierGathers::kLifespan).size(), 2u);
     const std::vector<Record> later = earlier.lasting(EarlierGathers::kLifespan + 1);
     ASSERT_EQ(later.size(), 1u);

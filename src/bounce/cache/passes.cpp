@@ -119,24 +119,25 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                     if (in.weight > 0 && (threshold <= 0 || in.spread <= threshold)) continue;
                 }
                 // An earlier frame's record of this very fragment is updated rather than gathered
-                // anew; else earlier gathers around it on its surface may be blended.
+                // anew.
                 if (options.stale)
                     if (auto it = options.stale->find(key); it != options.stale->end() && it->second.p == f.p) {
                         made.local().push_back(options.update(it->second, stats.local()));
                         continue;
                     }
-                if (options.earlier)
-                    if (std::optional<Record> b = options.earlier->blend(f.p, f.n, f.footprint)) {
-                        place_fragment_record(*b, f, key, frame);
-                        made.local().push_back(*b);
-                        ++reused.local();
-                        continue;
-                    }
-                // Gathered about the fragment's own (displaced) point and normal, as brute force does.
-                auto hits = options.keep_hits ? std::make_shared<GatherHits>() : nullptr;
-                const GatherResult g = refiner.gather(
-                    f.p, f.n, fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), stats.local(), 0,
-                    hits.get());
+                // Gathered about the fragment's own (displaced) point and normal, as brute force
+                // does; with an earlier gather near it on its surface, mostly from that one's rays
+                // (then it keeps no hits: never reused itself).
+                const RandomStream rng = fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k);
+                const Record* near = options.earlier ? options.earlier->nearest(f.p, f.n, f.footprint) : nullptr;
+                auto hits = options.keep_hits && !near ? std::make_shared<GatherHits>() : nullptr;
+                const GatherResult g =
+                    near ? refiner.reproject(f.p, f.n, rng,
+                                             {near->origin, near->n, record_stream(*near, scene.render.visibility.seed, scene.camera.width),
+                                              *near->hits},
+                                             stats.local())
+                         : refiner.gather(f.p, f.n, rng, stats.local(), 0, hits.get());
+                reused.local() += near != nullptr;
                 Record r;
                 r.hits = std::move(hits);
                 place_fragment_record(r, f, key, frame);

@@ -89,7 +89,7 @@ struct RefinementOptions {
     /// fragment is at exactly the same point) rather than gather anew, and how.
     const std::unordered_map<uint64_t, Record>* stale = nullptr;
     std::function<Record(const Record&, Counters&)> update;
-    /// ... and earlier gathers around a fragment, blended instead of a gather (temporal.h).
+    /// ... and earlier gathers near a fragment, whose rays it reuses (temporal.h).
     const EarlierGathers* earlier = nullptr;
     Communicator* comm = nullptr;  ///< as GatheringOptions::comm: each process refines its own tiles
 };

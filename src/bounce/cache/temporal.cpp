@@ -268,7 +268,7 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
         return anchored ? changes.objects[r.anchor].kind : ObjectMotion::Kind::Static;
     };
     // What a judged record is: one of the cache's, a fragment record of refinement (by key), or
-    // an earlier refinement gather that refinement may blend (EarlierGathers).
+    // an earlier refinement gather whose rays refinement may reuse (EarlierGathers).
     enum class Role : uint8_t { Record, Fragment, Gather };
     const auto judge = [&](Record r, Role role) {
         const ObjectMotion::Kind own = own_motion(r);
@@ -313,50 +313,30 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
     return out;
 }
 
-EarlierGathers::EarlierGathers(std::vector<Record> records, const Bounds& bounds, float reach, float max_spread,
-                               float floor)
-    : records_(std::move(records)), index_(bounds), reach_(reach), max_spread_(max_spread), floor_(floor) {
+EarlierGathers::EarlierGathers(std::vector<Record> records, const Bounds& bounds, float reach)
+    : records_(std::move(records)), index_(bounds), reach_(reach) {
     // By where each was gathered (a refinement gather's own point).
     for (size_t i = 0; i < records_.size(); ++i)
         index_.insert(static_cast<uint32_t>(i), records_[i].origin, 2 * reach_ * records_[i].footprint);
 }
 
-std::optional<Record> EarlierGathers::blend(const Vec3& p, const Vec3& n, float footprint) const {
+const Record* EarlierGathers::nearest(const Vec3& p, const Vec3& n, float footprint) const {
     const float reach = reach_ * footprint;
     const float cos_max = std::cos(10 * kPi / 180);
-    // Candidates in index order: the sums below do not depend on the octree's visiting order.
-    std::vector<std::pair<uint32_t, float>> near;
+    // The nearest, ties to the lowest index: independent of the octree's visiting order.
+    const Record* best = nullptr;
+    float best_dist = 0;
+    uint32_t best_id = 0;
     index_.visit(p, [&](uint32_t id) {
         const Record& r = records_[id];
         const Vec3 d = r.origin - p;
         const float dist = length(d);
         // On this fragment's surface: the same facing, and not off its plane (a step or a rim).
-        if (dist >= reach || dot(r.n, n) < cos_max || std::abs(dot(d, n)) > 0.25f * reach) return;
-        near.emplace_back(id, 1 - dist / reach);
+        if (!r.hits || dist >= reach || dot(r.n, n) < cos_max || std::abs(dot(d, n)) > 0.25f * reach) return;
+        if (best && (dist > best_dist || (dist == best_dist && id > best_id))) return;
+        best = &r, best_dist = dist, best_id = id;
     });
-    if (near.size() < kMinGathers) return std::nullopt;
-    std::sort(near.begin(), near.end());
-    double w = 0, l = 0, l2 = 0;
-    Record out = records_[near.front().first];
-    out.E = Color(0), out.ao = 0, out.bent = Vec3(0), out.dir = {};
-    for (const auto& [id, wi] : near) {
-        const Record& r = records_[id];
-        const double li = luminance(r.E);
-        w += wi, l += wi * li, l2 += wi * li * li;
-        out.E += r.E * wi, out.ao += r.ao * wi, out.bent += r.bent * wi;
-        for (size_t c = 0; c < 3; ++c) out.dir[c] += r.dir[c] * wi;
-    }
-    // Gathers that disagree more than refinement allows between records (an edge of the light
-    // between them) are not blended: the fragment gathers its own.
-    const double mean = l / w, spread = std::sqrt(std::max(0.0, l2 / w - mean * mean)) / std::max<double>(mean, floor_);
-    if (spread > max_spread_) return std::nullopt;
-    const auto inv = static_cast<float>(1 / w);
-    out.E = out.E * inv, out.ao *= inv;
-    for (size_t c = 0; c < 3; ++c) out.dir[c] = out.dir[c] * inv;
-    out.bent = dot(out.bent, out.bent) > 0 ? normalize(out.bent) : n;
-    out.rays = 0;  // made of other gathers: never one itself
-    out.hits.reset(), out.parts.reset();
-    return out;
+    return best;
 }
 
 std::vector<Record> EarlierGathers::lasting(int frame) const {

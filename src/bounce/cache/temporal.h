@@ -72,28 +72,27 @@ float solid_angle_bound(const Vec3& o, const Bounds& box);
 /// frame `full_width` pixels wide.
 RandomStream record_stream(const Record& r, uint64_t seed, int full_width);
 
-/// Earlier frames' refinement gathers (per-fragment records gathered, not blended), by where
+/// Earlier frames' refinement gathers (per-fragment records gathered, with their hits), by where
 /// they were gathered. A moving camera never puts a fragment on exactly the point of one
 /// before; with CacheSettings::temporal_refine_reuse, a fragment that refinement wants a gather
-/// for blends those on its surface within `reach` of its pixel footprints instead (a tent
-/// filter), when there are at least kMinGathers of them and they agree (the spread of their
-/// luminance within `max_spread`, refinement's own threshold). A gather serves kLifespan
-/// frames, then its fragment gathers again: the reuse cannot drift for a whole shot.
+/// for reuses the rays of the nearest of them on its surface within `reach` of its pixel
+/// footprints (Gatherer::reproject): only its near rays are traced again. A reprojected gather
+/// is never itself reused (it keeps no hits), and a gather serves kLifespan frames, then its
+/// neighbourhood gathers again: memory stays bounded over a shot.
 class EarlierGathers {
 public:
-    static constexpr size_t kMinGathers = 3;
     static constexpr int kLifespan = 12;
-    EarlierGathers(std::vector<Record> records, const Bounds& bounds, float reach, float max_spread, float floor);
-    /// The blend at (p, n) (E, AO, bent normal, directions; the rest from the first gather, rays
-    /// 0), or nothing.
-    std::optional<Record> blend(const Vec3& p, const Vec3& n, float footprint) const;
+    EarlierGathers(std::vector<Record> records, const Bounds& bounds, float reach);
+    /// The gather nearest (p, n) on its surface (the same facing within 10 degrees, off its plane
+    /// by at most a quarter of the reach), or null.
+    const Record* nearest(const Vec3& p, const Vec3& n, float footprint) const;
     /// The gathers that still serve at `frame`.
     std::vector<Record> lasting(int frame) const;
 
 private:
     std::vector<Record> records_;
     RecordOctree index_;
-    float reach_, max_spread_, floor_;
+    float reach_;
 };
 
 /// Stale records waiting for a new gather. The gathering pass asks which of them would cover a

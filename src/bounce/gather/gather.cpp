@@ -1,5 +1,6 @@
 #include "bounce/gather/gather.h"
 
+#include "bounce/gather/gather_cells.h"
 #include "bounce/gather/hessian.h"
 
 #include <vector>
@@ -107,31 +108,21 @@ Color Gatherer::hair_radiance(const Hit& h, const Vec3& at, const Vec3& d, const
     return lighting_.strand_radiance(h, at, d, hit_rng, settings_.hit_light_samples, counters, parts);
 }
 
+float Gatherer::unoccluded(float t) const {
+    if (settings_.ao_distance > 0 && t >= settings_.ao_distance) return 1;
+    return settings_.ao_falloff > 0 && settings_.ao_distance > 0 ? 1 - std::pow(1 - t / settings_.ao_distance, settings_.ao_falloff) : 0;
+}
+
 Color Gatherer::escaped_radiance(const Vec3& d, std::span<Color> parts) const {
     if (parts.empty()) return lighting_.background(d);
     lighting_.background_parts(d, parts);
     return part_sum(parts);
 }
 
-namespace {
-
-/// Per-cell scratch of the thread's current gather (trace or re-shade, then finish).
-struct Cells {
-    std::vector<Color> L, P;  ///< radiance per cell; with light parts, per cell and light (cell-major)
-    std::vector<float> R, U, cos_theta;
-    std::vector<Vec3> D;
-    std::vector<Hit> hits, packet_hits;
-    std::vector<Vec3> packet_dirs;
-    void resize(size_t s) {
-        L.assign(s, Color(0));
-        R.assign(s, INFINITY);
-        U.assign(s, 1.0f);
-        D.resize(s), cos_theta.resize(s), hits.resize(s), packet_dirs.resize(s), packet_hits.resize(s);
-    }
-};
+namespace detail {
 thread_local Cells cells;
-
-}  // namespace
+}  // namespace detail
+using detail::cells;
 
 void Gatherer::cell_directions(const Vec3& n, const RandomStream& rng) const {
     const int M = grid_.m, N = grid_.n;
@@ -376,10 +367,7 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
         if (h.valid()) {
             R[c] = h.t;
             inv_r_sum += 1.0 / std::max(h.t, 1e-20f);
-            if (settings_.ao_distance <= 0 || h.t < settings_.ao_distance)
-                u = settings_.ao_falloff > 0 && settings_.ao_distance > 0
-                        ? 1 - std::pow(1 - h.t / settings_.ao_distance, settings_.ao_falloff)
-                        : 0;
+            u = unoccluded(h.t);
             // Distance for the record radius: leave out rays that are grazing both where
             // they leave and where they land (slightly concave surfaces).
             if (h.hair) {

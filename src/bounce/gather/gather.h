@@ -83,6 +83,14 @@ struct GatherHits {
     size_t bytes() const { return t.size() * (3 * sizeof(float) + 2 * sizeof(uint32_t)); }
 };
 
+/// An earlier gather whose rays a nearby one may reuse (Gatherer::reproject): where it was made,
+/// about which normal, with which random stream, and what each ray hit.
+struct EarlierGather {
+    Vec3 p, n;
+    RandomStream rng;
+    const GatherHits& hits;
+};
+
 /// The cells of a gather (at p about n with `rng` and `grid`) whose rays, as `hits` recorded
 /// them, pass through any of `boxes` (an escaped ray: anywhere along it): the rays a moving
 /// object may now stop or let through. Appended to `out`.
@@ -138,6 +146,15 @@ public:
     /// updated, the rest keep their hits, and every hit is shaded with today's light.
     GatherResult update(const Vec3& p, const Vec3& n, const RandomStream& rng, GatherHits& hits, std::span<const uint32_t> cells,
                         Counters& counters, float near = 0) const;
+    /// A gather at (p, n) made mostly of an earlier one's rays (`from`, made nearby on the same
+    /// surface with the same settings; reproject.cpp says how): what lies farther from from.p
+    /// than kReprojectNear times the distance between the points (and the sky) is taken from its
+    /// hits, seen from p; the cells whose rays met anything nearer, and a margin around them,
+    /// are traced again from p with `rng` for what is near. `rays` in the result counts those.
+    /// E, AO, bent normal and light directions only (no gradients, no light parts).
+    GatherResult reproject(const Vec3& p, const Vec3& n, const RandomStream& rng, const EarlierGather& from,
+                           Counters& counters) const;
+    static constexpr float kReprojectNear = 16;
     const GatherSettings& settings() const { return settings_; }
     GatherGrid grid() const { return grid_; }
 
@@ -154,6 +171,8 @@ private:
     Color hair_radiance(const Hit& h, const Vec3& at, const Vec3& d, const RandomStream& rng, uint64_t ray, Counters& counters,
                         std::span<Color> parts) const;
     Color escaped_radiance(const Vec3& d, std::span<Color> parts) const;
+    /// A hit at distance t's share of AO's unoccluded fraction (ao_distance, ao_falloff).
+    float unoccluded(float t) const;
     /// The light-linear sums of the current gather over cell values L[c * stride]: E and light
     /// directions, and with `gradients` the rotational and translational gradients.
     LightPart light_part(const Color* L, size_t stride, const Frame& frame, float near, bool gradients) const;

@@ -257,12 +257,12 @@ std::function<Record(const Record&, Counters&)> fragment_update_function(const F
     };
 }
 
-/// The refinement gathers the next frame may blend: earlier ones that still serve and this
-/// frame's (made, not blended), by frame and key.
+/// The refinement gathers whose rays the next frame may reuse: earlier ones that still serve and
+/// this frame's (traced, not reprojected: those keep hits), by frame and key.
 std::vector<Record> gathers_to_keep(const EarlierGathers& earlier, const IrradianceCache& cache, int frame) {
     std::vector<Record> out = earlier.lasting(frame);
     for (size_t i = 0; i < cache.fragment_record_count(); ++i)
-        if (const Record& r = cache.fragment_record_at(i); r.gathered == frame && r.rays > 0) out.push_back(r);
+        if (const Record& r = cache.fragment_record_at(i); r.gathered == frame && r.hits) out.push_back(r);
     std::sort(out.begin(), out.end(), [](const Record& a, const Record& b) {
         return a.gathered != b.gathered ? a.gathered < b.gathered : a.key < b.key;
     });
@@ -315,7 +315,7 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
         // Over the frame's window only: the margin's fragments are never shaded.
         RefinementOptions ro;
         ro.frame = plan.frame;
-        ro.keep_hits = plan.keep_hits;
+        ro.keep_hits = plan.keep_hits || plan.keep_gathers;  // the next frames reuse refinement's rays
         ro.comm = &ctx.comm;
         if (!judged.fragment_stale.empty()) {
             ro.stale = &judged.fragment_stale;
@@ -324,8 +324,7 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
         std::unique_ptr<EarlierGathers> earlier;
         if (plan.keep_gathers) {
             earlier = std::make_unique<EarlierGathers>(std::move(judged.earlier_gathers), scene.bounds(),
-                                                       scene.render.cache.temporal_refine_reuse, scene.render.cache.refine,
-                                                       std::max(cache.luminance_floor(), 1e-12f));
+                                                       scene.render.cache.temporal_refine_reuse);
             ro.earlier = earlier.get();
         }
         out.fragment_records_new = refinement_pass(scene, deep.shaded(), refiner, cache, ctx.stats, ctx.progress, ro);

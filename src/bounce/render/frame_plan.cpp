@@ -145,8 +145,8 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
     // A shot in which anything moves keeps records' hits: a record is then updated (the rays a
     // moving object may meet traced again, every hit re-shaded) rather than gathered again.
     plan.keep_hits = request.sequence && scene.render.indirect.gi == GiMode::Cache && (lights_keyed(scene) || objects_move(scene));
-    // Refinement's gathers serve the next frames' blends (EarlierGathers; not with light parts,
-    // whose per-light sums a blend would not keep).
+    // Refinement's gathers lend their rays to the next frames' (EarlierGathers; not with light
+    // parts: per-light layers of a shot are not measured with it).
     plan.keep_gathers = request.sequence && plan.refine && scene.render.cache.temporal_refine_reuse > 0 && !parts;
     plan.preview = scene.render.parallel.preview && request.preview != nullptr;
     plan.threads = scene.render.parallel.threads > 0 ? scene.render.parallel.threads : tbb::this_task_arena::max_concurrency();

@@ -117,7 +117,7 @@ struct FramePlan {
     GatherStep gather = GatherStep::None;
     bool refine = false;      ///< per-fragment refinement after the gathering pass
     bool keep_hits = false;   ///< records keep their gather's hits: the shot's lights change, re-shading is cheaper
-    bool keep_gathers = false;  ///< refinement's gathers are kept for the next frames' blends (EarlierGathers)
+    bool keep_gathers = false;  ///< refinement's gathers are kept for the next frames to reuse (EarlierGathers)
     bool preview = false;     ///< progressive images through the request's callback
     int threads = 1;
     /// Frames of a shot: what changed since the previous frame (null otherwise).

@@ -278,9 +278,9 @@ ParamTable make_table() {
                             "when nothing it sees changed").flag());
     rows.push_back(row("temporal_refine_reuse", "cache", &R::cache, &CacheSettings::temporal_refine_reuse).range(0, 4)
                        .unit("pixels")
-                       .doc("frames of a shot: a fragment that refinement would gather for blends, instead, earlier "
-                            "frames' refinement gathers within this many pixel footprints of it on its surface, when at "
-                            "least 3 agree (docs/animation.md); 0 = off").flag());
+                       .doc("frames of a shot: a fragment that refinement gathers for reuses the rays of the nearest "
+                            "earlier frame's refinement gather within this many pixel footprints of it on its surface, "
+                            "tracing again only its near rays (docs/animation.md); 0 = off").flag());
     rows.push_back(row("temporal_filter", "cache", &R::cache, &CacheSettings::temporal_filter).range(0, 0.99)
                        .doc("frames of a shot: a record gathered again keeps this share of its previous value (an "
                             "exponential filter along its anchor: less flicker, some lag); 0 = off").flag());

@@ -1,0 +1,28 @@
+// Internal to gather/: the per-cell scratch of a thread's current gather (trace, re-shade or
+// reproject, then Gatherer::finish), shared by gather.cpp and reproject.cpp.
+#pragma once
+
+#include <cmath>
+#include <vector>
+
+#include "bounce/accel/accel.h"
+#include "bounce/core/math.h"
+
+namespace bounce::detail {
+
+struct Cells {
+    std::vector<Color> L, P;  ///< radiance per cell; with light parts, per cell and light (cell-major)
+    std::vector<float> R, U, cos_theta;
+    std::vector<Vec3> D;
+    std::vector<Hit> hits, packet_hits;
+    std::vector<Vec3> packet_dirs;
+    void resize(size_t s) {
+        L.assign(s, Color(0));
+        R.assign(s, INFINITY);
+        U.assign(s, 1.0f);
+        D.resize(s), cos_theta.resize(s), hits.resize(s), packet_dirs.resize(s), packet_hits.resize(s);
+    }
+};
+extern thread_local Cells cells;
+
+}  // namespace bounce::detail
