@@ -3,6 +3,7 @@
 // one, only where records are missing).
 #include <gtest/gtest.h>
 
+#include "bounce/core/communicator.h"
 #include "bounce/core/error.h"
 #include "bounce/render/render.h"
 #include "test_util.h"
@@ -109,6 +110,32 @@ TEST(FramePlan, AReshadeWithAStaleDeepBufferSaysSo) {
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("another scene or camera"), std::string::npos) << e.what();
     }
+}
+
+}  // namespace
+}  // namespace bounce
+
+namespace bounce {
+namespace {
+
+/// Rank 0 of two, for plans only (a plan asks how many processes there are, never exchanges).
+class TwoRanks : public SingleProcess {
+public:
+    int size() const override { return 2; }
+};
+
+TEST(FramePlan, RefinementsGathersAreKeptForReprojectionOnlyInAShotOfOneProcess) {
+    const Scene s = cornell({"render.temporal_refine_reuse=0.5"});
+    RenderRequest shot;
+    shot.sequence = true;
+    EXPECT_TRUE(plan_frame(s, {}, shot).keep_gathers);
+    EXPECT_FALSE(plan_frame(s, {}, {}).keep_gathers);  // a still has no next frame
+    EXPECT_FALSE(plan_frame(cornell(), {}, shot).keep_gathers);  // off by default
+    // An MPI job's gathers keep their hits on the rank that traced them: no rank could reuse
+    // what one process would.
+    TwoRanks two;
+    shot.comm = &two;
+    EXPECT_FALSE(plan_frame(s, {}, shot).keep_gathers);
 }
 
 }  // namespace
