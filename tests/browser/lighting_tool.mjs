@@ -118,7 +118,7 @@ async function lighterFound() {
     await a.fill('#filter', '');
     await a.locator('#view-panel').scrollIntoViewIfNeeded();
     // Once the page has rebuilt its handles for the edits so far (a rebuild re-attaches the gizmo).
-    await a.waitForFunction(() => window.bounce.status && window.bounce.editsShown === window.bounce.status.edits, null, { timeout: 15000 });
+    await a.waitForFunction(() => window.bounce.status && window.bounce.editsShown === window.bounce.status.edits, null, { timeout: 60000 });
     const was = await cell(a, 'lights.0.position').inputValue();
     // Up to three tries: under ThreadSanitizer a late reply can still rebuild the view mid-gesture.
     let moved = false;
@@ -147,7 +147,7 @@ async function lighterFound() {
     const after = await imageOf(a);
     check(after.length === shown.length && after.every((x, i) => x === shown[i]), 'after Stop the page shows the image from before the render');
     check(errs.length === 0, `no page errors on the glossy box${errs.length ? ': ' + errs.join('; ') : ''}`);
-    await a.screenshot({ path: path.join(outDir, '6-lighter-found.png'), fullPage: true });
+    await a.screenshot({ path: path.join(outDir, '6-lighter-found.png'), fullPage: true, timeout: 120000 });
     await a.close();
   } finally {
     glossy.kill();
@@ -175,7 +175,7 @@ try {
     const c = document.getElementById('image');
     return Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data);
   });
-  const shot = (name) => page.screenshot({ path: path.join(outDir, name), fullPage: true });
+  const shot = (name) => page.screenshot({ path: path.join(outDir, name), fullPage: true, timeout: 120000 });
 
   // 1. The first render: a new deep file and cache.
   await page.click('#rasterize');
