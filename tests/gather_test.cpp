@@ -406,6 +406,21 @@ TEST(Reproject, FromItsOwnPointItIsTheGatherItReuses) {
     const ReprojectMeans m = reproject_means(rig, 512, p, n, p, n, 4);
     EXPECT_EQ(m.rays, 0);  // nothing is nearer than 16 x 0
     EXPECT_NEAR(m.reprojected, m.from, 1e-5 * m.from);  // every hit seen again from where it was seen
+    // AO mode: occlusion alone, as a gather gives it (no light shaded at the hits).
+    GatherSettings ao;
+    ao.rays = 512, ao.ao = true, ao.ao_distance = 200;
+    Gatherer g(rig.scene, rig.accel, rig.materials, rig.lighting, nullptr, ao);
+    Counters c;
+    GatherHits hits;
+    const RandomStream a(3, 1);
+    const GatherResult own = g.gather(p, n, a, c, 0, &hits);
+    const uint64_t shadow_rays = c.shadow_rays;
+    const GatherResult r = g.reproject(p, n, a, {p, n, a, hits}, c);
+    EXPECT_EQ(r.irradiance, Color(0));
+    EXPECT_NEAR(r.ao, own.ao, 1e-5f);
+    EXPECT_GT(own.ao, 0.0f);
+    EXPECT_LT(own.ao, 1.0f);
+    EXPECT_EQ(c.shadow_rays, shadow_rays);
 }
 
 TEST(Reproject, InsideAUniformlyLitSphereItKeepsTheClosedForm) {

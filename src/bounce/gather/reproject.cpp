@@ -91,6 +91,13 @@ GatherResult Gatherer::reproject(const Vec3& p, const Vec3& n, const RandomStrea
     const auto S = static_cast<size_t>(grid_.rays());
     if (kept.t.size() != S || kept.m != grid_.m || lights_) return gather(p, n, rng, counters);
     const float near = kReprojectNear * length(p - from.p);
+    // What a ray brings, as finish() shades it (AO mode: nothing; occlusion alone).
+    const auto radiance = [&](const Hit& h, const SurfacePoint* sp, const Vec3& d, uint64_t ray) {
+        if (settings_.ao) return Color(0);
+        if (!h.valid()) return escaped_radiance(d, {});
+        if (h.hair) return hair_radiance(h, p + d * h.t, d, rng, ray, counters, {});
+        return hit_radiance(h, sp ? *sp : surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v), d, rng, ray, counters, {});
+    };
     Sums sums;
     // Cells of p's gather traced again: those about the earlier gather's near hits, widened.
     thread_local std::vector<uint8_t> again;
@@ -110,7 +117,7 @@ GatherResult Gatherer::reproject(const Vec3& p, const Vec3& n, const RandomStrea
         if (object == kNoHit) {  // the sky, along the same direction
             const Vec3& d = cells.D[c];
             const float cos_now = dot(d, n);
-            if (cos_now > 0 && !traced_again(d)) sums.add(d, escaped_radiance(d, {}), 1, std::min(cos_now / cos_then, kMaxWeight));
+            if (cos_now > 0 && !traced_again(d)) sums.add(d, radiance(Hit{}, nullptr, d, c), 1, std::min(cos_now / cos_then, kMaxWeight));
             continue;
         }
         if ((object & GatherHits::kHairBit) || kept.t[c] < near) continue;
@@ -125,7 +132,7 @@ GatherResult Gatherer::reproject(const Vec3& p, const Vec3& n, const RandomStrea
         const float w = std::min(cos_now * std::abs(cos_x_now) * t * t / std::max(cos_then * std::abs(cos_x_then) * r * r, 1e-20f),
                                  kMaxWeight);
         const Hit h{r, object, kept.prim[c], kept.u[c], kept.v[c], false};
-        sums.add(d, hit_radiance(h, sp, d, rng, c, counters, {}), unoccluded(r), w);
+        sums.add(d, radiance(h, &sp, d, c), unoccluded(r), w);
     }
     // The cells traced again, from p: all they meet counts.
     cell_directions(n, rng);
@@ -140,15 +147,7 @@ GatherResult Gatherer::reproject(const Vec3& p, const Vec3& n, const RandomStrea
     counters.gather_rays += dirs.size();
     for (size_t i = 0; i < ids.size(); ++i) {
         const Hit& h = traced[i];
-        const Vec3& d = dirs[i];
-        Color L;
-        if (!h.valid())
-            L = escaped_radiance(d, {});
-        else if (h.hair)
-            L = hair_radiance(h, p + d * h.t, d, rng, ids[i], counters, {});
-        else
-            L = hit_radiance(h, surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v), d, rng, ids[i], counters, {});
-        sums.add(d, L, h.valid() ? unoccluded(h.t) : 1, 1);
+        sums.add(dirs[i], radiance(h, nullptr, dirs[i], ids[i]), h.valid() ? unoccluded(h.t) : 1, 1);
     }
     GatherResult res;
     const float scale = kPi / static_cast<float>(S);
