@@ -138,7 +138,12 @@ async function refreshStatus() {
   // A page that has never rendered is black: say how to start.
   $('hint').hidden = s.image.layers.length > 0 || s.state === 'running';
   if (s.state !== 'running') {
-    if (state.running) { showStats(s.stats); loadRecords(); loadCacheFiles(); }
+    // Keyed on the finished render's version, not on seeing it run: the once-a-second listener's
+    // status can arrive after a render started and still say "done" (the render before it).
+    if (state.running || s.image.version !== state.recordsOf) {
+      state.recordsOf = s.image.version;
+      showStats(s.stats); loadRecords(); loadCacheFiles();
+    }
     state.running = false;
   }
   state.status = s;
@@ -270,7 +275,9 @@ async function loadRecords() {
   // says how many the cache holds).
   const limit = $('record-shape').value === 'discs' ? 20000 : 200000;
   let r;
+  const ask = (state.recordsAsked = (state.recordsAsked || 0) + 1);
   try { ({ data: r } = await api(`/api/records?limit=${limit}${file}`)); } catch { $('record-count').textContent = 'records: 0'; return; }
+  if (ask !== state.recordsAsked) return;  // a later request is on its way: answers may come out of order
   if (view.records) view.scene.remove(view.records);
   const ao = $('record-colour').value === 'ao';
   let max = 1e-9;
