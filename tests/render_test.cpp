@@ -106,6 +106,35 @@ TEST(DeepBuffer, FragmentsLieOnTheSurfaceAtARidge) {
     EXPECT_GE(merged, 8) << "the ridge's pixels should merge subsamples of both faces";
 }
 
+TEST(DeepBuffer, FragmentsLieWhereTheCameraSeesThemAroundACorner) {
+    // A card just above the floor hides its quadrant x < 0, z < 0. Where the card's corner is
+    // in a pixel, what the pixel sees of the floor is an L, whose centroid can lie under the
+    // card: a gather there sees the card's underside (a dark speck beside a light's corner in
+    // shot B's brute-force frames). Every floor fragment must lie where the floor is seen.
+    const float pixel = 2 * std::tan(20 * kPi / 180) * 10 / 16;
+    int shared = 0;
+    for (float ox : {0.1f, 0.3f})
+        for (float oz : {0.15f, 0.35f}) {
+            nlohmann::json j = test::base_scene();
+            j["objects"].push_back({{"type", "quad"}, {"vertices", {{-5, 0.01, -5}, {-5, 0.01, 0}, {0, 0.01, 0}, {0, 0.01, -5}}}});
+            j["camera"]["position"] = {ox * pixel, 10, oz * pixel + 0.001f};
+            j["camera"]["look_at"] = {ox * pixel, 0, oz * pixel};
+            j["render"] = {{"spp", 16}};
+            RenderResult r = render_quiet(test::scene_from(j));
+            for (int y = 0; y < r.deep.height; ++y)
+                for (int x = 0; x < r.deep.width; ++x) {
+                    auto frags = r.deep.pixel(x, y);
+                    shared += frags.size() > 1;
+                    for (const Fragment& f : frags) {
+                        if (f.object != 0) continue;
+                        ASSERT_FALSE(f.p.x < -1e-4f && f.p.z < -1e-4f)
+                            << "offset " << ox << "," << oz << " pixel " << x << "," << y << ": (" << f.p.x << ", " << f.p.z << ")";
+                    }
+                }
+        }
+    EXPECT_GE(shared, 8) << "pixels should see both the card and the floor";
+}
+
 TEST(DeepBuffer, FootprintIsPixelWidthOnAFrontalPlane) {
     // Back wall of the Cornell box (z = 559.2) seen head-on from z = -800: one pixel spans
     // 2 tan(fov/2) * distance / height.

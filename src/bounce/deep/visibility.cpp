@@ -188,12 +188,14 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     const Accum& a = groups[gi];
                     auto c = static_cast<float>(a.count);
                     Fragment f;
-                    // A planar group sits at its centroid. Otherwise the centroid can lie off
-                    // every surface (inside a convex ridge, between offset faces), where a
-                    // gather sees only the inside of the model: take the subsample nearest it.
+                    // A planar group alone in its pixel sits at its centroid. Otherwise the
+                    // centroid can lie off every surface (inside a convex ridge, between offset
+                    // faces), or on its plane but behind another surface of the pixel (what is
+                    // seen of a ceiling around a light's corner is not convex), where a gather
+                    // sees only the back of what hides it: take the subsample nearest it.
                     const Vec3 centroid = a.p / c;
                     f.p = centroid;
-                    if (a.off_plane > 1e-3f) {
+                    if (a.off_plane > 1e-3f || groups.size() > 1) {
                         float best = INFINITY;
                         for (const auto& [q, group] : subsamples) {
                             const float dist = length(q - centroid);
