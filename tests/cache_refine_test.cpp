@@ -1,10 +1,12 @@
 // Per-fragment refinement: fragments whose records disagree get gathers of their own.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "bounce/cache/cache_file.h"
 #include "bounce/cache/irradiance_cache.h"
+#include "bounce/cache/sites.h"
 #include "bounce/render/render.h"
 #include "bounce/scene/scene_load.h"
 #include "test_util.h"
@@ -100,6 +102,38 @@ TEST(Refine, RefinedFragmentsAreStoredInTheCacheAndAReshadeGathersNothing) {
     EXPECT_EQ(s2.to_json()["fragment_records_used"].get<double>(), made);
     EXPECT_TRUE(first.image.find("indirect")->data == second.image.find("indirect")->data);
     EXPECT_TRUE(first.image.find("refined")->data == second.image.find("refined")->data);
+}
+
+TEST(Refine, InsideTheBandAFragmentBlendsItsGatherWithTheInterpolationInProportion) {
+    // The same records three ways: interpolated only, refined with a hard switch, refined with
+    // refine_band 3. A refined fragment whose records spread by s_r shows the share
+    // (s_r - refine) / (2 refine), at most 1, of its own gather (the hard switch's value) and
+    // the rest of the interpolation.
+    Stats s0, s1, s2;
+    RenderResult interpolated = render(cornell({"render.gi=\"cache\"", "render.refine=0"}), {}, s0, nullptr);
+    RenderResult hard = render(cornell({"render.gi=\"cache\"", "render.refine=0.05"}), {}, s1, nullptr);
+    const Scene scene = cornell({"render.gi=\"cache\"", "render.refine=0.05", "render.refine_band=3"});
+    RenderResult band = render(scene, {}, s2, nullptr);
+    ASSERT_EQ(interpolated.cache->size(), band.cache->size());
+    ASSERT_EQ(s1.to_json()["refined_fragments"], s2.to_json()["refined_fragments"]);  // the same gathers
+    const Layer &i0 = *interpolated.image.find("indirect"), &i1 = *hard.image.find("indirect"), &i2 = *band.image.find("indirect");
+    const Layer& mask = *band.image.find("refined");
+    int partial = 0, whole = 0;
+    for (int y = 0; y < 40; ++y)
+        for (int x = 0; x < 40; ++x) {
+            const auto i = static_cast<size_t>(y * 40 + x);
+            if (mask.data[i] != 1.0f || band.deep.pixel(x, y).size() != 1) continue;
+            const Fragment& f = band.deep.pixel(x, y)[0];
+            const Interpolated in = interpolate_at(*band.cache, f, record_site(scene, f, band.cache->settings()));
+            const float share = std::clamp((in.spread - 0.05f) / 0.1f, 0.0f, 1.0f);
+            partial += share < 1, whole += share == 1;
+            for (size_t c = 0; c < 3; ++c) {
+                const float want = share * i1.data[3 * i + c] + (1 - share) * i0.data[3 * i + c];
+                ASSERT_NEAR(i2.data[3 * i + c], want, 1e-4f * std::max(1.0f, std::abs(want))) << x << "," << y << " share " << share;
+            }
+        }
+    EXPECT_GT(partial, 20);
+    EXPECT_GT(whole, 20);
 }
 
 TEST(Refine, AFragmentRecordServesOnlyItsKeyAtItsExactPoint) {

@@ -40,37 +40,72 @@ namespace {
 
 enum class Source { Records, Own, Missed };
 
-/// The light at fragment k of window pixel (wx, wy): its own record if per-fragment
-/// refinement gave it one, else the interpolation.
-Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
-                     Source& src) {
-    const Fragment& f = deep.pixel(wx, wy)[k];
-    if (!needs_bounce_light(scene, f)) {
-        src = Source::Records;  // nothing to look up: not a miss
-        return {};
-    }
-    if (cache.fragment_record_count() > 0)
-        if (const Record* r = cache.fragment_record(candidate_key(deep, wx, wy, k), f.p)) {
-            src = Source::Own;
-            return {r->E, r->ao, r->bent, r->dir};
-        }
-    Interpolated in = interpolate_at(cache, f, record_site(scene, f, cache.settings()));
-    src = in.weight > 0 ? Source::Records : Source::Missed;
-    return {in.E, in.ao, in.bent, in.dir};
+/// Interpolation about the un-displaced normal cannot stand for a hemisphere tilted far from it
+/// (docs/displacement.md): such fragments gather their own, whatever their records say.
+bool tilted_off_records(const CacheSettings& cs, const Fragment& f) {
+    return cs.displaced_records == RecordSurface::Undisplaced && cs.refine_tilt > 0 &&
+           dot(f.n, f.n_base) < std::cos(cs.refine_tilt * kPi / 180);
 }
 
-/// Each light's share of what indirect_at gave fragment k (from `src`), into `out`.
-void shares_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
-               Source src, std::span<Color> out) {
+/// How much of a refined fragment's own gather it shows (CacheSettings::refine_band): all of it
+/// where no record applies, its normal tilts off the records', or they disagree by refine_band x
+/// refine; in proportion between refine and that, so that crossing the threshold is gradual.
+float own_share(const CacheSettings& cs, const Fragment& f, const Interpolated& in) {
+    if (cs.refine_band <= 1 || cs.refine <= 0 || in.weight <= 0 || tilted_off_records(cs, f)) return 1;
+    return std::clamp((in.spread - cs.refine) / ((cs.refine_band - 1) * cs.refine), 0.0f, 1.0f);
+}
+
+/// Where a fragment's light came from: the records, its own gather (`own` of it, the rest
+/// interpolated) or nowhere.
+struct Origin {
+    Source src = Source::Records;
+    float own = 0;
+};
+
+/// The light at fragment k of window pixel (wx, wy): its own record if per-fragment
+/// refinement gave it one (blended with the interpolation inside the refine band), else the
+/// interpolation.
+Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
+                     Origin& from) {
     const Fragment& f = deep.pixel(wx, wy)[k];
-    if (src == Source::Missed || !needs_bounce_light(scene, f)) return;
-    if (src == Source::Own) {
-        const Record& r = *cache.fragment_record(candidate_key(deep, wx, wy, k), f.p);
-        for (size_t i = 0; i < out.size(); ++i) out[i] = r.parts->light[i].E * cache.light_scales()[i];
-        normalise_shares(out);
-        return;
+    from = {};
+    if (!needs_bounce_light(scene, f)) return {};  // nothing to look up: not a miss
+    const CacheSettings& cs = cache.settings();
+    const Record* r = cache.fragment_record_count() > 0 ? cache.fragment_record(candidate_key(deep, wx, wy, k), f.p) : nullptr;
+    if (r && cs.refine_band <= 1) {
+        from = {Source::Own, 1};
+        return {r->E, r->ao, r->bent, r->dir};
     }
-    light_shares_at(cache, f, record_site(scene, f, cache.settings()), out);
+    const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cs));
+    if (!r) {
+        from.src = in.weight > 0 ? Source::Records : Source::Missed;
+        return {in.E, in.ao, in.bent, in.dir};
+    }
+    const float s = own_share(cs, f, in);
+    from = {Source::Own, s};
+    const Vec3 bent = r->bent * s + in.bent * (1 - s);
+    Indirect out{r->E * s + in.E * (1 - s), r->ao * s + in.ao * (1 - s), dot(bent, bent) > 0 ? normalize(bent) : r->bent, {}};
+    for (size_t c = 0; c < 3; ++c) out.light_dir[c] = r->dir[c] * s + in.dir[c] * (1 - s);
+    return out;
+}
+
+/// Each light's share of what indirect_at gave fragment k (`from`), into `out`.
+void shares_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
+               const Origin& from, std::span<Color> out) {
+    const Fragment& f = deep.pixel(wx, wy)[k];
+    if (from.src == Source::Missed || !needs_bounce_light(scene, f)) return;
+    const Site site = record_site(scene, f, cache.settings());
+    if (from.src == Source::Records) return light_shares_at(cache, f, site, out);
+    const Record& r = *cache.fragment_record(candidate_key(deep, wx, wy, k), f.p);
+    for (size_t i = 0; i < out.size(); ++i) out[i] = r.parts->light[i].E * cache.light_scales()[i] * from.own;
+    if (from.own < 1) {
+        // Inside the refine band: each light's light of the blend, in proportion.
+        std::vector<Color> interpolated(out.size());
+        light_shares_at(cache, f, site, interpolated);
+        const Color e = interpolate_at(cache, f, site).E * (1 - from.own);
+        for (size_t i = 0; i < out.size(); ++i) out[i] += interpolated[i] * e;
+    }
+    normalise_shares(out);
 }
 
 /// A per-fragment record belongs to fragment `f` (its point, normal and key), made at `frame`.
@@ -95,8 +130,6 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
     const int frame = options.frame;
     const CacheSettings& cs = cache.settings();
     const float threshold = cs.refine;
-    const bool tilt_signal = cs.displaced_records == RecordSurface::Undisplaced && cs.refine_tilt > 0;
-    const float tilt_cos = std::cos(cs.refine_tilt * kPi / 180);
     tbb::enumerable_thread_specific<std::vector<Record>> made;
     tbb::enumerable_thread_specific<size_t> reused(0);
     {
@@ -111,10 +144,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                 if (!needs_bounce_light(scene, f)) continue;
                 const uint64_t key = candidate_key(deep, wx, wy, k);
                 if (cache.fragment_record(key, f.p)) continue;  // refined by an earlier render
-                // Interpolation about the un-displaced normal cannot stand for a hemisphere
-                // tilted far from it (docs/displacement.md): those fragments gather their own.
-                const bool tilted = tilt_signal && dot(f.n, f.n_base) < tilt_cos;
-                if (!tilted) {
+                if (!tilted_off_records(cs, f)) {
                     const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cs));
                     if (in.weight > 0 && (threshold <= 0 || in.spread <= threshold)) continue;
                 }
@@ -191,15 +221,15 @@ InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep,
     for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "interpolate", [&](int wx, int wy, size_t first) {
         auto frags = deep.pixel(wx, wy);
         for (uint32_t k = 0; k < frags.size(); ++k) {
-            Source src;
-            out.light[first + k] = indirect_at(scene, cache, deep, wx, wy, k, src);
-            if (per_light) shares_at(scene, cache, deep, wx, wy, k, src, out.shares.at(first + k));
+            Origin from;
+            out.light[first + k] = indirect_at(scene, cache, deep, wx, wy, k, from);
+            if (per_light) shares_at(scene, cache, deep, wx, wy, k, from, out.shares.at(first + k));
             ++lookups.local();
-            if (src == Source::Own) {
+            if (from.src == Source::Own) {
                 ++own.local();
                 out.refined[first + k] = 1;
             }
-            misses.local() += src == Source::Missed;
+            misses.local() += from.src == Source::Missed;
         }
     }, scene.render.parallel.tile_order);
     uint64_t m = 0, l = 0, o = 0;
@@ -234,7 +264,7 @@ std::vector<Indirect> preview_indirect(const Scene& scene, const DeepBuffer& dee
             size_t first = deep.offsets[static_cast<size_t>(wy) * deep.width + wx];
             auto frags = deep.pixel(wx, wy);
             const auto n = static_cast<uint32_t>(deep.pixel(lx, ly).size());
-            Source unused;
+            Origin unused;
             for (uint32_t k = 0; k < frags.size(); ++k) out[first + k] = indirect_at(scene, cache, deep, lx, ly, std::min(k, n - 1), unused);
         }
     });

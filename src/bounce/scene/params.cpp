@@ -258,6 +258,11 @@ ParamTable make_table() {
     rows.push_back(row("refine", "cache", &R::cache, &CacheSettings::refine).range(0, 100)
                        .doc("per-fragment refinement: a fragment whose covering records' extrapolated values spread "
                             "(weighted relative standard deviation) above this gets a gather of its own; 0 = off").flag());
+    rows.push_back(row("refine_band", "cache", &R::cache, &CacheSettings::refine_band).range(1, 100)
+                       .doc("per-fragment refinement: a refined fragment's own gather replaces the interpolation wholly "
+                            "only once the records' spread reaches this many times `refine`; below that the two are "
+                            "blended in proportion, so a fragment crossing the threshold changes gradually (less "
+                            "popping in a shot, docs/animation.md); 1 = a hard switch").flag());
     rows.push_back(row("refine_rays", "cache", &R::cache, &CacheSettings::refine_rays).range(0, 1 << 20).unit("rays")
                        .doc("rays of a refined fragment's own gather; 0 = render.rays").flag());
     rows.push_back(row("displaced_records", "cache", &R::cache, &CacheSettings::displaced_records)
