@@ -68,7 +68,7 @@ async function lighterFound() {
     await a.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
     const done = async (page, minVersion) => {
       await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v,
-        minVersion, { timeout: 120000 });
+        minVersion, { timeout: 300000 });
       return page.evaluate(() => window.bounce.status);
     };
     const imageOf = (page) => page.evaluate(() => {
@@ -168,7 +168,7 @@ try {
 
   const waitDone = async (minVersion) => {
     await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v,
-      minVersion, { timeout: 120000 });
+      minVersion, { timeout: 300000 });
     return page.evaluate(() => window.bounce.status);
   };
   const pixels = () => page.evaluate(() => {
@@ -233,7 +233,7 @@ try {
   // still show the count of the render before it, so wait for the cache's count first.
   const info = JSON.parse(execFileSync(bin, ['cache', 'info', path.join(work, 'out/session.bic'), '--json']).toString());
   await page.waitForFunction((n) => +document.getElementById('record-count').dataset.count === n, info.records,
-                             { timeout: 20000 }).catch(() => {});
+                             { timeout: 60000 }).catch(() => {});
   const shown = await page.evaluate(() => +document.getElementById('record-count').dataset.count);
   check(shown === info.records, `the 3D view shows ${shown} records; the cache holds ${info.records}`);
   await page.selectOption('#record-shape', 'discs');
