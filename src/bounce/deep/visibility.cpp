@@ -85,6 +85,17 @@ DeepBuffer empty_window(const Scene& scene, const std::array<int, 4>& window) {
     return deep;
 }
 
+namespace {
+
+/// True when something the camera sees lies between its centre and `p` (at the frame's time).
+bool hidden(const SceneAccel& accel, const CameraRays& camera, const Vec3& p) {
+    const Vec3 o = camera.origin();
+    const float dist = length(p - o);
+    return dist > 0 && accel.fine().intersect(o, (p - o) / dist, 0, dist * (1 - 1e-5f), 0, kRayCamera).valid();
+}
+
+}  // namespace
+
 DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* sink,
                              const std::array<int, 4>& window) {
     const Camera& cam = scene.camera;
@@ -188,14 +199,15 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     const Accum& a = groups[gi];
                     auto c = static_cast<float>(a.count);
                     Fragment f;
-                    // A planar group alone in its pixel sits at its centroid. Otherwise the
-                    // centroid can lie off every surface (inside a convex ridge, between offset
-                    // faces), or on its plane but behind another surface of the pixel (what is
-                    // seen of a ceiling around a light's corner is not convex), where a gather
-                    // sees only the back of what hides it: take the subsample nearest it.
+                    // A planar group sits at its centroid. Otherwise the centroid can lie off
+                    // every surface (inside a convex ridge, between offset faces), or on its
+                    // plane but behind another surface of the pixel (what is seen of a ceiling
+                    // around a light's corner is not convex), where a gather sees only the back
+                    // of what hides it: take the subsample nearest it. (Not at every edge: the
+                    // subsample taken changes from frame to frame where the centroid does not.)
                     const Vec3 centroid = a.p / c;
                     f.p = centroid;
-                    if (a.off_plane > 1e-3f || groups.size() > 1) {
+                    if (a.off_plane > 1e-3f || (groups.size() > 1 && !a.hair && hidden(accel, camera, centroid))) {
                         float best = INFINITY;
                         for (const auto& [q, group] : subsamples) {
                             const float dist = length(q - centroid);
