@@ -55,11 +55,13 @@ float own_share(const CacheSettings& cs, const Fragment& f, const Interpolated& 
     return std::clamp((in.spread - cs.refine) / ((cs.refine_band - 1) * cs.refine), 0.0f, 1.0f);
 }
 
-/// Where a fragment's light came from: the records, its own gather (`own` of it, the rest
-/// interpolated) or nowhere.
+/// Where a fragment's light came from: the records, its own gather (`record`; `own` of it, the
+/// rest the interpolation's `interpolated`) or nowhere.
 struct Origin {
     Source src = Source::Records;
     float own = 0;
+    const Record* record = nullptr;
+    Color interpolated;
 };
 
 /// The light at fragment k of window pixel (wx, wy): its own record if per-fragment
@@ -73,7 +75,7 @@ Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const Dee
     const CacheSettings& cs = cache.settings();
     const Record* r = cache.fragment_record_count() > 0 ? cache.fragment_record(candidate_key(deep, wx, wy, k), f.p) : nullptr;
     if (r && cs.refine_band <= 1) {
-        from = {Source::Own, 1};
+        from = {Source::Own, 1, r, {}};
         return {r->E, r->ao, r->bent, r->dir};
     }
     const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cs));
@@ -82,7 +84,7 @@ Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const Dee
         return {in.E, in.ao, in.bent, in.dir};
     }
     const float s = own_share(cs, f, in);
-    from = {Source::Own, s};
+    from = {Source::Own, s, r, in.E};
     const Vec3 bent = r->bent * s + in.bent * (1 - s);
     Indirect out{r->E * s + in.E * (1 - s), r->ao * s + in.ao * (1 - s), dot(bent, bent) > 0 ? normalize(bent) : r->bent, {}};
     for (size_t c = 0; c < 3; ++c) out.light_dir[c] = r->dir[c] * s + in.dir[c] * (1 - s);
@@ -96,13 +98,12 @@ void shares_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffe
     if (from.src == Source::Missed || !needs_bounce_light(scene, f)) return;
     const Site site = record_site(scene, f, cache.settings());
     if (from.src == Source::Records) return light_shares_at(cache, f, site, out);
-    const Record& r = *cache.fragment_record(candidate_key(deep, wx, wy, k), f.p);
-    for (size_t i = 0; i < out.size(); ++i) out[i] = r.parts->light[i].E * cache.light_scales()[i] * from.own;
+    for (size_t i = 0; i < out.size(); ++i) out[i] = from.record->parts->light[i].E * cache.light_scales()[i] * from.own;
     if (from.own < 1) {
         // Inside the refine band: each light's light of the blend, in proportion.
         std::vector<Color> interpolated(out.size());
         light_shares_at(cache, f, site, interpolated);
-        const Color e = interpolate_at(cache, f, site).E * (1 - from.own);
+        const Color e = from.interpolated * (1 - from.own);
         for (size_t i = 0; i < out.size(); ++i) out[i] += interpolated[i] * e;
     }
     normalise_shares(out);
