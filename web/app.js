@@ -114,6 +114,9 @@ function showStats(stats) {
 
 async function refreshStatus() {
   const { data: s } = await api('/api/status');
+  // Answers can arrive out of order (the once-a-second listener's and a render's own polls): an
+  // older snapshot than the one shown would say a running render is done. The server numbers them.
+  if (state.status && s.serial <= state.status.serial) return state.status;
   // A light edit re-shaded over the old records: the bounce light is the old lights' until a re-gather.
   const stale = s.bounce_stale ? 'bounce light is stale: Re-gather to update it' : '';
   $('pending').textContent = [s.pending ? `pending: ${s.pending}` : '', stale].filter(Boolean).join(' · ');
@@ -200,8 +203,16 @@ function initView() {
   sun.position.set(1, 2, 1.5);
   view.scene.add(sun);
   view.renderer.domElement.addEventListener('click', pickLight);
-  const loop = () => { view.renderer.render(view.scene, view.camera); requestAnimationFrame(loop); };
-  loop();
+  // Drawn when something changed, not every frame: an idle page costs no CPU (a software-GL
+  // browser drawing continuously slowed the tool's own renders beside it).
+  view.orbit.addEventListener('change', redraw);
+  view.drag.addEventListener('change', redraw);
+  redraw();
+}
+
+function redraw() {
+  if (view.redrawing) return;
+  view.redrawing = requestAnimationFrame(() => { view.redrawing = 0; view.renderer.render(view.scene, view.camera); });
 }
 
 async function loadScene() {
@@ -222,6 +233,7 @@ async function loadScene() {
   if (!view.placed) {
     view.camera.position.set(...c.position); view.orbit.target.set(...c.look_at); view.orbit.update(); view.placed = true;
   }
+  redraw();  // one frame after this function's changes, the handles' too
   if (view.drag.dragging) return;  // the handles are rebuilt after the drag's own edit
   // Unmoved handles stay as they are: rebuilding them on an edit that moves no light (an
   // intensity) re-attached the gizmo and dropped a drag a lighter was starting.
@@ -251,7 +263,7 @@ function pickLight(e) {
   const ray = new THREE.Raycaster();
   ray.setFromCamera(new THREE.Vector2(((e.clientX - b.left) / b.width) * 2 - 1, -((e.clientY - b.top) / b.height) * 2 + 1), view.camera);
   const hit = ray.intersectObjects(view.lights || [])[0];
-  if (hit) view.drag.attach(hit.object);
+  if (hit) { view.drag.attach(hit.object); redraw(); }
 }
 
 async function moveLight(handle) {
@@ -305,6 +317,7 @@ async function loadRecords() {
   view.records.visible = $('show-records').checked;
   state.recordsDrawn = $('record-shape').value;
   view.scene.add(view.records);
+  redraw();
   $('record-count').textContent = `records: ${r.count} (frame ${r.frame})` + (r.in_region !== r.count ? `, ${r.in_region} in the sub-viewport` : '') +
     (r.shown < r.in_region ? `, ${r.shown} drawn` : '');
   $('record-count').dataset.count = r.count;
@@ -351,7 +364,9 @@ async function main() {
   $('layer').addEventListener('change', fetchImage);
   $('exposure').addEventListener('input', fetchImage);
   $('filter').addEventListener('input', filterRows);
-  $('show-records').addEventListener('change', () => { if (view.records) view.records.visible = $('show-records').checked; });
+  $('show-records').addEventListener('change', () => {
+    if (view.records) { view.records.visible = $('show-records').checked; redraw(); }
+  });
   $('record-colour').addEventListener('change', loadRecords);
   $('record-shape').addEventListener('change', loadRecords);
   $('play').addEventListener('click', () => {

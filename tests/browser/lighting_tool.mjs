@@ -35,6 +35,11 @@ fs.cpSync(path.join(root, 'scenes/cornell'), path.join(work, 'scene'), { recursi
 fs.cpSync(path.join(root, 'scenes/shots'), path.join(work, 'shots'), { recursive: true });
 fs.cpSync(path.join(root, 'scenes/cornell'), path.join(work, 'cornell'), { recursive: true });
 
+// Waits without a timeout of their own: under ThreadSanitizer on a loaded 2-core machine a
+// request the page makes after a render can take tens of seconds (30 s, Playwright's default,
+// was once too short for an edit's answer).
+const slowWait = 120000;
+
 /// `bounce light` on `scene` (small and quick); resolves to [server, url].
 async function startLight(scene, out) {
   const server = spawn(bin, ['light', scene, '--port', '0', '--out', out, '--threads', '2', '--set', 'camera.resolution=[160,120]',
@@ -61,6 +66,7 @@ async function lighterFound() {
   const [glossy, glossyUrl] = await startLight(path.join(work, 'cornell/glossy-bump.json'), path.join(work, 'glossy-out'));
   try {
     const a = await browser.newPage({ viewport: { width: 1400, height: 900 } });
+    a.setDefaultTimeout(slowWait);
     const errs = [];
     a.on('pageerror', (e) => errs.push(e.message));
     a.on('console', (m) => { if (m.type() === 'error' && !m.text().startsWith('Failed to load resource')) errs.push(m.text()); });
@@ -104,6 +110,7 @@ async function lighterFound() {
     // connections under load; docs/lighting-tool.md).
     const other = await browser.newContext({ viewport: { width: 1400, height: 900 } });
     const b = await other.newPage();
+    b.setDefaultTimeout(slowWait);
     await b.goto(glossyUrl, { timeout: 120000 });  // the server may be busy with its first render
     await b.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
     await cell(a, 'lights.0.intensity').fill('2000000');
@@ -157,6 +164,7 @@ async function lighterFound() {
 const browser = await chromium.launch({ executablePath: chromiumPath, args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader'] });
 try {
   const page = await browser.newPage({ viewport: { width: 1400, height: 900 } });
+  page.setDefaultTimeout(slowWait);
   const errors = [];
   page.on('pageerror', (e) => errors.push(e.message));
   // three reports misuse (e.g. adding a non-Object3D) on the console, not as exceptions.

@@ -400,6 +400,7 @@ json LightingSession::status() const {
     json layers = json::array();
     for (const Layer& l : image_.layers) layers.push_back(l.name);
     return {{"state", state_},
+            {"serial", ++status_serial_},
             {"edits", edit_count_},
             {"action", action_},
             {"message", message_},

@@ -163,6 +163,7 @@ private:
     std::shared_ptr<const RadiosityTextures> radiosity_;
     std::vector<Record> waiting_;
     uint64_t version_ = 0;
+    mutable uint64_t status_serial_ = 0;  ///< numbers status snapshots: a page drops one older than it holds
 };
 
 }  // namespace bounce
