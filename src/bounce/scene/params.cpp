@@ -101,7 +101,7 @@ json check_param(const Param& p, const json& v, const ParamFail& fail) {
                                      json_type_name(v), v.is_array() ? fmt::format(" of {}", v.size()) : ""));
             json out = json::array();
             for (size_t i = 0; i < n; ++i) {
-                std::string sub = "/" + std::to_string(i);
+                const std::string sub = fmt::format("/{}", i);  // not "/" + to_string: GCC 12 -Wrestrict false positive
                 if (floats) out.push_back(check_float(v[i], p.lo, p.hi, sub, fail));
                 else out.push_back(check_int(v[i], p.lo, p.hi, sub, fail));
             }
