@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "bounce/accel/accel.h"
 #include "bounce/cache/temporal.h"
 #include "bounce/core/error.h"
 #include "bounce/render/shot.h"
@@ -298,6 +299,21 @@ TEST(TemporalCache, SceneChangesTellRigidFromStaticAndSeeEmissiveObjectsAsLights
     j["materials"] = {{"glow", {{"emission", 3}}}};
     j["objects"][2]["material"] = "glow";
     EXPECT_TRUE(scene_changes(at(j, 1), at(j, 2)).lights);
+}
+
+TEST(TemporalCache, AutomaticDistancesDoNotChangeAsAnObjectMovesOutOfTheSet) {
+    // The ball leaves the floor's bounds: the scene's bounds grow from frame to frame, its size
+    // (what the ray offset, radiosity texel and AO distance are fractions of) must not.
+    json j = shot_scene();
+    j["objects"][2]["transform"] = {{"translate", {{"keys", {{1, {0, 0.5, 0}}, {3, {20, 0.5, 0}}}}}}};
+    const Scene a = at(j, 1), b = at(j, 3);
+    ASSERT_NE(length(a.bounds().diagonal()), length(b.bounds().diagonal()));
+    EXPECT_FLOAT_EQ(a.size(), std::sqrt(12.0f * 12 + 4 * 4 + 12 * 12));  // the floor and the wall
+    EXPECT_EQ(a.size(), b.size());
+    EXPECT_EQ(SceneAccel(a).ray_offset(), SceneAccel(b).ray_offset());
+    // When everything moves there is nothing else to measure: the bounds at the frame.
+    j["objects"] = {j["objects"][2]};
+    EXPECT_EQ(at(j, 3).size(), length(at(j, 3).bounds().diagonal()));
 }
 
 }  // namespace

@@ -226,7 +226,7 @@ SceneAccel::SceneAccel(const Scene& scene) {
 
     // Measure how far the fine surface strays from the coarse one: from each fine vertex,
     // along its normal both ways, to the nearest coarse surface of the same object.
-    float diag = length(scene.bounds().diagonal());
+    const float diag = scene.size();
     std::vector<float> gaps;
     for (size_t id = 0; id < scene.objects.size(); ++id) {
         const Object& o = scene.objects[id];

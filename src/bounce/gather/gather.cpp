@@ -452,7 +452,7 @@ GatherSettings gather_settings(const Scene& scene) {
     const IndirectSettings& r = scene.render.indirect;
     GatherSettings g;
     static_cast<IndirectSettings&>(g) = r;
-    g.ao_distance = r.ao_distance >= 0 ? r.ao_distance : 0.1f * length(scene.bounds().diagonal());
+    g.ao_distance = r.ao_distance >= 0 ? r.ao_distance : 0.1f * scene.size();
     g.light_parts = scene.render.cache.light_parts && r.gi == GiMode::Cache;
     return g;
 }

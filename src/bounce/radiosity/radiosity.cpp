@@ -28,7 +28,7 @@ inline uint32_t lattice_index(int i, int j, int n) {
 inline uint32_t lattice_count(int n) { return static_cast<uint32_t>((n + 1) * (n + 2) / 2); }
 
 float effective_texel(const Scene& scene, const RadiositySettings& s) {
-    return s.texel > 0 ? s.texel : length(scene.bounds().diagonal()) / 128.0f;
+    return s.texel > 0 ? s.texel : scene.size() / 128.0f;
 }
 
 int effective_light_samples(const Scene& scene, const RadiositySettings& s) {

@@ -89,7 +89,7 @@ void add_pipeline_rows(std::vector<Row>& rows) {
     rows.push_back(row("light_samples", "lighting", &R::lighting, &LightingSettings::light_samples).range(1, 65536).unit("samples")
                        .doc("stratified samples per area light, emissive mesh and sky, per fragment").flag());
     rows.push_back(row("ray_offset", "lighting", &R::lighting, &LightingSettings::ray_offset).automatic(-1).range(0, kMaxCoordinate)
-                       .unit("world").doc("ray-origin offsetting distance; auto = 4x the fine/coarse gap, >= 1e-4 x scene diagonal")
+                       .unit("world").doc("ray-origin offsetting distance; auto = 4x the fine/coarse gap, >= 1e-4 x the scene size (the diagonal of what does not move)")
                        .id(rad | cache).flag());
     // Radiosity textures.
     rows.push_back(row("radiosity", "radiosity", &R::radiosity, &RadiositySettings::enabled)
@@ -97,7 +97,7 @@ void add_pipeline_rows(std::vector<Row>& rows) {
     rows.push_back(row("radiosity_textures", "radiosity", &R::radiosity, &RadiositySettings::folder)
                        .doc("folder to reuse matching textures from, or to save new ones in; empty = bake in memory").flag());
     rows.push_back(row("radiosity_texel", "radiosity", &R::radiosity, &RadiositySettings::texel).automatic(0).range(0, kMaxCoordinate)
-                       .unit("world").doc("lattice spacing on every triangle; auto = scene diagonal / 128").id(rad | cache).flag());
+                       .unit("world").doc("lattice spacing on every triangle; auto = the scene size / 128").id(rad | cache).flag());
     rows.push_back(row("radiosity_light_samples", "radiosity", &R::radiosity, &RadiositySettings::light_samples).automatic(0).range(0, 65536)
                        .unit("samples").doc("light samples per lattice point when baking; auto = render.light_samples").id(rad | cache).flag());
     // The gather.
@@ -107,7 +107,7 @@ void add_pipeline_rows(std::vector<Row>& rows) {
     rows.push_back(row("rays", "gather", &R::indirect, &IndirectSettings::rays).range(1, 1 << 20).unit("rays")
                        .doc("rays per gather, an M x N cosine-stratified grid, M = round(sqrt(rays/pi))").id(cache).flag());
     rows.push_back(row("ao_distance", "gather", &R::indirect, &IndirectSettings::ao_distance).automatic(-1).range(0, kMaxCoordinate)
-                       .unit("world").doc("occluders farther than this do not count; auto = 10 % of the scene diagonal; 0 = unlimited")
+                       .unit("world").doc("occluders farther than this do not count; auto = 10 % of the scene size; 0 = unlimited")
                        .id(cache).flag());
     rows.push_back(row("ao_falloff", "gather", &R::indirect, &IndirectSettings::ao_falloff).range(0, 100)
                        .doc("occlusion of a hit at distance t is (1 - t/ao_distance)^falloff; 0 = full within the distance").id(cache).flag());

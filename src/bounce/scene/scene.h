@@ -164,6 +164,11 @@ struct Scene {
 
     Bounds bounds() const;          ///< of the coarse tessellation (what rays trace)
     Bounds visible_bounds() const;  ///< of everything the camera can see (fine surfaces, fur)
+    /// The length that automatic distances are fractions of (the ray offset, the radiosity texel,
+    /// the AO distance): the diagonal of the objects that do not move, or of all when every object
+    /// moves. A walking character that sticks out of its set would otherwise change them from
+    /// frame to frame, and with them every gather near a contact (flicker in the references too).
+    float size() const;
     /// 64-bit hash of the named top-level parts of the effective description ("camera",
     /// "objects" ...): the identity that deep and cache files are checked against.
     /// `without_surface_shading` leaves out the material keys that only change how a surface

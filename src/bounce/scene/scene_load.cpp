@@ -205,6 +205,13 @@ Bounds Scene::bounds() const {
     return b;
 }
 
+float Scene::size() const {
+    Bounds still;
+    for (const auto& o : objects)
+        if (!o.moves) still.extend(o.coarse.bounds());
+    return length((still.empty() ? bounds() : still).diagonal());
+}
+
 Bounds Scene::visible_bounds() const {
     Bounds b = bounds();
     for (const auto& o : objects) {
