@@ -2,6 +2,7 @@
 // the functions that add each stage's rows, so no one file holds the whole table.
 #pragma once
 
+#include <algorithm>
 #include <string>
 #include <tuple>
 #include <type_traits>

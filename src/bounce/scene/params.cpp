@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <cfloat>
 #include <cmath>
 
 #include "bounce/scene/json_reader.h"

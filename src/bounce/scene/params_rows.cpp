@@ -1,7 +1,5 @@
 // The camera's rows of the parameter table and those of the stages before and after the cache
 // (params.h; the cache's are in params_cache.cpp).
-#include <cfloat>
-
 #include "bounce/scene/param_rows.h"
 
 namespace bounce::param_rows {
