@@ -14,7 +14,19 @@ for target in cache_reader_fuzz:cache scene_parser_fuzz:scene render_fuzz:render
   cp fuzz/corpus/"$corpus"/* "$work"/
   echo "fuzz: $name for ${seconds}s"
   # An empty working directory: scene inputs cannot reach the project's mesh files.
-  (cd "$(mktemp -d)" && "$OLDPWD/build-fuzz/$name" "$work" -max_total_time="$seconds" -rss_limit_mb=4096 \
-     -max_len=65536 -print_final_stats=1 2>&1 | tail -n 12)
-  rm -rf "$work"
+  run=$(mktemp -d)
+  status=0
+  (cd "$run" && "$OLDPWD/build-fuzz/$name" "$work" -max_total_time="$seconds" -rss_limit_mb=4096 \
+     -max_len=65536 -print_final_stats=1 >log 2>&1) || status=$?
+  if [ "$status" -ne 0 ]; then
+    # The whole report and the input that failed, so a failure on another machine can be replayed
+    # here: base64 -d > unit && build-fuzz/$name unit
+    sed -n '/ERROR\|==[0-9]*==/,$p' "$run/log"
+    for unit in "$run"/crash-* "$run"/leak-* "$run"/timeout-* "$run"/oom-*; do
+      [ -f "$unit" ] && { echo "input $(basename "$unit") (base64):"; base64 "$unit"; }
+    done
+    exit "$status"
+  fi
+  tail -n 12 "$run/log"
+  rm -rf "$work" "$run"
 done

@@ -70,6 +70,34 @@ TEST(HostileDeep, EveryFieldOfACraftedDeepFileIsCheckedBeforeShading) {
     }
 }
 
+TEST(HostileExr, AHeaderOpenImageIoAbortsOnIsRefusedWhereverAnExrIsRead) {
+    // A deep file the fuzzer damaged: OpenImageIO 2.4 aborts the process on its channel list
+    // ("Unknown Imf::PixelType 3"); OpenEXR's core library names the bad pixel type.
+    const std::string bad = test::source_dir() + "/tests/data/hostile/oiio-abort-pixel-type.exr";
+    test::TempDir d;
+    const Scene s = load_scene(test::cornell_scene(), {"camera.resolution=[8,8]", "render.spp=1"});
+    RenderRequest in;
+    in.deep_in = bad;
+    Stats stats;
+    try {
+        render(s, in, stats, nullptr);
+        ADD_FAILURE() << "a damaged deep file was read";
+    } catch (const InputError& e) {
+        EXPECT_EQ(e.file(), bad);
+        EXPECT_NE(std::string(e.what()).find("damaged OpenEXR header: Invalid pixel type"), std::string::npos) << e.what();
+    }
+    std::filesystem::copy_file(bad, d.file("t.exr"));
+    json j = test::base_scene();
+    j["materials"] = {{"m", {{"color_texture", "t.exr"}}}};
+    j["objects"][0]["material"] = "m";
+    d.write("m.json", j.dump());
+    test::expect_refused(render_cmd(d.file("m.json"), d.file("o.exr")), {"m.json", "/materials/m/color_texture", "damaged OpenEXR header"});
+    j = test::base_scene();
+    j["lights"] = {{{"type", "sky"}, {"texture", "t.exr"}}};
+    d.write("sky.json", j.dump());
+    test::expect_refused(render_cmd(d.file("sky.json"), d.file("o.exr")), {"sky.json", "/lights/0/texture", "damaged OpenEXR header"});
+}
+
 TEST(HostileJson, NestingIsBoundedBeforeAnyParserRecurses) {
     test::TempDir d;
     // 10^6 nested arrays (2 MB) and 2 10^5 nested objects in the description used to segfault.

@@ -12,6 +12,7 @@
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
+#include "bounce/core/image_input.h"
 #include "bounce/core/parallel.h"
 
 namespace bounce {
@@ -172,8 +173,9 @@ Image assemble_tiles(const std::array<int, 4>& w, const std::vector<Image>& tile
 }
 
 std::string texture_problem(const std::string& path) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) return "not a readable image: " + OIIO::geterror();
+    std::string why;
+    auto in = open_image(path, why);
+    if (!in) return "not a readable image: " + why;
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) return "the image has no pixels";
     const bool mipmapped = in->seek_subimage(0, 1);

@@ -6,6 +6,7 @@
 
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
+#include "bounce/core/image_input.h"
 #include "bounce/core/files.h"
 #include "bounce/deep/deep_buffer.h"
 
@@ -163,8 +164,9 @@ const char* invalid_fragment_field(const Fragment& f) {
 
 DeepBuffer read_deep(const std::string& path) {
     check_input_file(path);
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw InputError(path, "", "not a readable deep file: " + OIIO::geterror());
+    std::string why;
+    auto in = open_image(path, why);
+    if (!in) throw InputError(path, "", "not a readable deep file: " + why);
     const OIIO::ImageSpec& spec = in->spec();
     if (!spec.deep) throw InputError(path, "", "not a deep image (expected an OpenEXR deep file from --deep-out)");
     int version = spec.get_int_attribute("bounce:deep_version", -1);

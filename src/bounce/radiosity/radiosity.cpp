@@ -9,6 +9,7 @@
 
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
+#include "bounce/core/image_input.h"
 #include "bounce/core/parallel.h"
 #include "bounce/core/random.h"
 
@@ -296,8 +297,9 @@ bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const R
             why = "no texture for object \"" + scene.objects[id].name + "\"";
             return false;
         }
-        auto in = OIIO::ImageInput::open(path);
-        if (!in) throw InputError(path, "", "cannot read radiosity texture: " + OIIO::geterror());
+        std::string unreadable;
+        auto in = open_image(path, unreadable);
+        if (!in) throw InputError(path, "", "cannot read radiosity texture: " + unreadable);
         const OIIO::ImageSpec& spec = in->spec();
         if (spec.get_int_attribute("bounce:radiosity_version", -1) != kRadiosityVersion) {
             why = "textures were written by another version of bounce";

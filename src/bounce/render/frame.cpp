@@ -14,6 +14,7 @@
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
+#include "bounce/core/image_input.h"
 
 namespace bounce {
 
@@ -82,8 +83,9 @@ void check_show_layer(const std::string& show, const Scene& scene, bool with_cac
 
 void check_base(const std::string& base, const Scene& scene) {
     check_input_file(base);
-    auto in = OIIO::ImageInput::open(base);
-    if (!in) throw InputError(base, "", "not a readable image: " + OIIO::geterror());
+    std::string why;
+    auto in = open_image(base, why);
+    if (!in) throw InputError(base, "", "not a readable image: " + why);
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.full_width != scene.camera.width || spec.full_height != scene.camera.height || spec.width != spec.full_width ||
         spec.height != spec.full_height)

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "bounce/core/image_input.h"
 #include "bounce/core/memory.h"
 #include "bounce/scene/link_reader.h"
 
@@ -30,8 +31,9 @@ namespace {
 std::shared_ptr<const UvMap> load_uv_map(const JsonReader& r, const std::string& key) {
     const std::string path = r.file(key, false);
     if (path.empty()) return nullptr;
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) r.fail(key, "cannot read image \"" + path + "\": " + OIIO::geterror());
+    std::string unreadable;
+    auto in = open_image(path, unreadable);
+    if (!in) r.fail(key, "cannot read image \"" + path + "\": " + unreadable);
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.width <= 0 || spec.height <= 0 || static_cast<int64_t>(spec.width) * spec.height > (int64_t{1} << 28))
         r.fail(key, fmt::format("image \"{}\" has an unusable size {}x{}", path, spec.width, spec.height));

@@ -8,6 +8,7 @@
 
 #include "bounce/core/error.h"
 #include "bounce/core/image.h"
+#include "bounce/core/image_input.h"
 #include "bounce/core/memory.h"
 
 namespace bounce {
@@ -55,8 +56,9 @@ namespace {
 /// look anywhere in it).
 std::shared_ptr<const LatLongMap> load_latlong(const std::string& path, const JsonReader& r,
                                                const std::string& key) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) r.fail(key, "cannot read image \"" + path + "\": " + OIIO::geterror());
+    std::string unreadable;
+    auto in = open_image(path, unreadable);
+    if (!in) r.fail(key, "cannot read image \"" + path + "\": " + unreadable);
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
         r.fail(key, fmt::format("image \"{}\" has an unusable size {}x{}", path, spec.width, spec.height));
