@@ -29,8 +29,8 @@ bool is_exr(const std::string& path) {
     return in && magic == std::array<unsigned char, 4>{0x76, 0x2f, 0x31, 0x01};
 }
 
-}  // namespace
-
+/// Why OpenEXR's core library rejects the headers of the OpenEXR file `path`; empty when it
+/// accepts them or the file is not OpenEXR (by its first four bytes).
 std::string exr_header_problem(const std::string& path) {
     if (!is_exr(path)) return "";
     std::string first;
@@ -43,6 +43,8 @@ std::string exr_header_problem(const std::string& path) {
     if (rv == EXR_ERR_SUCCESS) return "";
     return "damaged OpenEXR header: " + (first.empty() ? std::string(exr_get_default_error_message(rv)) : first);
 }
+
+}  // namespace
 
 std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path, std::string& error) {
     error = not_a_regular_file(path);

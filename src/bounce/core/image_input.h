@@ -14,8 +14,4 @@ namespace bounce {
 /// a regular file, an OpenEXR file's headers are damaged, or OpenImageIO cannot read it.
 std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path, std::string& error);
 
-/// Why OpenEXR's core library rejects the headers of the OpenEXR file `path`; empty when it
-/// accepts them or the file is not OpenEXR (by its first four bytes).
-std::string exr_header_problem(const std::string& path);
-
 }  // namespace bounce

@@ -6,8 +6,8 @@
 
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
-#include "bounce/core/image_input.h"
 #include "bounce/core/files.h"
+#include "bounce/core/image_input.h"
 #include "bounce/deep/deep_buffer.h"
 
 namespace bounce {
