@@ -2,12 +2,12 @@
 
 #include <fmt/format.h>
 
-#include <new>
-
-#include "bounce/core/memory.h"
-
 #include <algorithm>
+#include <new>
 #include <stdexcept>
+
+#include "bounce/accel/parts.h"
+#include "bounce/core/memory.h"
 
 namespace bounce {
 
@@ -18,17 +18,6 @@ void embree_error(void*, RTCError code, const char* str) {
     throw std::runtime_error(fmt::format("Embree error {}: {}", static_cast<int>(code), str ? str : ""));
 }
 
-RTCRayHit make_ray(const Vec3& o, const Vec3& d, float tnear, float tfar, unsigned mask) {
-    RTCRayHit rh{};
-    rh.ray.org_x = o.x, rh.ray.org_y = o.y, rh.ray.org_z = o.z;
-    rh.ray.dir_x = d.x, rh.ray.dir_y = d.y, rh.ray.dir_z = d.z;
-    rh.ray.tnear = tnear;
-    rh.ray.tfar = tfar;
-    rh.ray.mask = mask;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    return rh;
-}
 }  // namespace
 
 namespace {
@@ -48,139 +37,13 @@ unsigned fur_ray_mask(const Scene& scene, size_t index) {
     return o.fur ? ray_mask(scene, index, o.fur->params.visible_to) : 0u;
 }
 
-Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs,
-         const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion, const std::vector<unsigned>& masks,
-         const std::vector<unsigned>& fur_masks)
-    : mesh_count_(static_cast<unsigned>(meshes.size())) {
-    begin(device, meshes, motion, masks);
-    for (size_t id = 0; id < furs.size(); ++id) {
-        const Fur* f = furs[id];
-        if (!f || f->segment_count() == 0) continue;
-        // Ribbons facing the ray: strands are thinner than a pixel, so their round profile
-        // does not show, and flat curves intersect faster. The buffers are the fur's own.
-        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE);
-        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, f->vertices.data(), 0,
-                                   4 * sizeof(float), f->vertices.size() / 4);
-        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, f->segment_first.data(), 0,
-                                   sizeof(uint32_t), f->segment_count());
-        rtcSetGeometryMask(g, fur_masks.empty() ? kRayAll : fur_masks[id]);
-        rtcCommitGeometry(g);
-        rtcAttachGeometryByID(scene_, g, mesh_count_ + static_cast<unsigned>(id));
-        rtcReleaseGeometry(g);
-    }
-    rtcCommitScene(scene_);
+namespace {
+bool anything_moves(const Scene& scene) {
+    return std::any_of(scene.objects.begin(), scene.objects.end(), [](const Object& o) { return o.moves; });
 }
+}  // namespace
 
-Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const Bvh& fur,
-         const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion, const std::vector<unsigned>& masks)
-    : mesh_count_(static_cast<unsigned>(meshes.size())) {
-    begin(device, meshes, motion, masks);
-    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
-    rtcSetGeometryInstancedScene(g, fur.scene_);
-    const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
-    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
-    rtcSetGeometryMask(g, kRayAll);
-    rtcCommitGeometry(g);
-    // Past every mesh and fur id: hits report the instanced scene's own geometry ids.
-    rtcAttachGeometryByID(scene_, g, 2 * mesh_count_ + 1);
-    rtcReleaseGeometry(g);
-    rtcCommitScene(scene_);
-}
-
-void Bvh::begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes,
-                const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion, const std::vector<unsigned>& masks) {
-    scene_ = rtcNewScene(device);
-    rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
-    rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
-    for (size_t id = 0; id < meshes.size(); ++id) {
-        if (!meshes[id]) continue;  // an id held for fur only
-        const TriangleMesh& m = *meshes[id];
-        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        const auto* moving = id < motion.size() && motion[id] && !(*motion[id])[0].empty() ? motion[id] : nullptr;
-        if (moving) rtcSetGeometryTimeStepCount(g, 2);
-        for (unsigned slot = 0; slot < (moving ? 2u : 1u); ++slot) {
-            const std::vector<Vec3>& pos = moving ? (*moving)[slot] : m.positions;
-            auto* vb = static_cast<float*>(
-                rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, slot, RTC_FORMAT_FLOAT3, 3 * sizeof(float), pos.size()));
-            for (size_t i = 0; i < pos.size(); ++i) vb[3 * i] = pos[i].x, vb[3 * i + 1] = pos[i].y, vb[3 * i + 2] = pos[i].z;
-        }
-        auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
-            g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), m.triangle_count()));
-        std::copy(m.indices.begin(), m.indices.end(), ib);
-        if (id < masks.size()) rtcSetGeometryMask(g, masks[id]);
-        rtcCommitGeometry(g);
-        rtcAttachGeometryByID(scene_, g, static_cast<unsigned>(id));
-        rtcReleaseGeometry(g);
-    }
-}
-
-Bvh::~Bvh() {
-    if (scene_) rtcReleaseScene(scene_);
-}
-
-Hit Bvh::intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float time, unsigned mask) const {
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    RTCRayHit rh = make_ray(o, d, tnear, tfar, mask);
-    rh.ray.time = time;
-    rtcIntersect1(scene_, &ctx, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
-    return make_hit(rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v);
-}
-
-Hit Bvh::make_hit(unsigned geom, unsigned prim, float t, float u, float v) const {
-    Hit h;
-    h.t = t;
-    h.hair = geom >= mesh_count_;
-    h.object = h.hair ? geom - mesh_count_ : geom;
-    h.prim = prim;
-    h.u = u;
-    h.v = v;
-    return h;
-}
-
-void Bvh::intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear, Hit* out, unsigned mask) const {
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    constexpr size_t K = 16;
-    for (size_t base = 0; base < count; base += K) {
-        const size_t n = std::min(K, count - base);
-        alignas(64) RTCRayHit16 rh;
-        alignas(64) int valid[K];
-        for (size_t i = 0; i < K; ++i) {
-            const bool on = i < n;
-            valid[i] = on ? -1 : 0;
-            const Vec3& di = d[base + (on ? i : 0)];
-            rh.ray.org_x[i] = o.x, rh.ray.org_y[i] = o.y, rh.ray.org_z[i] = o.z;
-            rh.ray.dir_x[i] = di.x, rh.ray.dir_y[i] = di.y, rh.ray.dir_z[i] = di.z;
-            rh.ray.tnear[i] = tnear;
-            rh.ray.tfar[i] = INFINITY;
-            rh.ray.time[i] = 0;
-            rh.ray.mask[i] = mask;
-            rh.ray.id[i] = static_cast<unsigned>(i);
-            rh.ray.flags[i] = 0;
-            rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-            rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
-        }
-        rtcIntersect16(valid, scene_, &ctx, &rh);
-        for (size_t i = 0; i < n; ++i) {
-            out[base + i] = rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID
-                                ? Hit{}
-                                : make_hit(rh.hit.geomID[i], rh.hit.primID[i], rh.ray.tfar[i], rh.hit.u[i], rh.hit.v[i]);
-        }
-    }
-}
-
-bool Bvh::occluded(const Vec3& o, const Vec3& d, float tnear, float tfar, unsigned mask) const {
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    RTCRay r = make_ray(o, d, tnear, tfar, mask).ray;
-    rtcOccluded1(scene_, &ctx, &r);
-    return r.tfar < 0;  // Embree sets tfar to -inf on a hit
-}
-
-SceneAccel::SceneAccel(const Scene& scene) {
+SceneAccel::SceneAccel(const Scene& scene, const SceneAccel* previous) {
     // Refused before Embree allocates: about 100 bytes per triangle and 80 per fur segment
     // and BVH (measured on the ogre and the furry ball), the fine tessellation twice over.
     double triangles = 0, segments = 0;
@@ -190,14 +53,38 @@ SceneAccel::SceneAccel(const Scene& scene) {
     }
     check_memory(100 * triangles + 80 * segments, scene.path, "objects",
                  fmt::format("ray tracing {:.3g} triangles and {:.3g} fur segments", triangles, segments / 2));
-    device_ = rtcNewDevice("threads=0");
-    if (!device_) throw std::runtime_error("cannot create Embree device");
-    rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
+    const bool two_level = anything_moves(scene);
+    // Parts are the device's: a frame that takes over the previous frame's uses its device.
+    if (two_level && previous && previous->parts_) {
+        device_ = previous->device_;
+    } else {
+        RTCDevice device = rtcNewDevice("threads=0");
+        if (!device) throw std::runtime_error("cannot create Embree device");
+        rtcSetDeviceErrorFunction(device, embree_error, nullptr);
+        device_ = std::shared_ptr<RTCDeviceTy>(device, rtcReleaseDevice);
+    }
+    if (two_level) {
+        parts_ = std::make_unique<BvhParts>(device_.get(), scene, previous ? previous->parts_.get() : nullptr);
+        coarse_ = parts_->coarse(device_.get(), scene);
+        fine_ = parts_->fine(device_.get(), scene);
+        shadow_fur_ = parts_->shadow_fur();
+    } else {
+        build_flat(scene);
+    }
+    measure_offsets(scene);
+}
+
+BvhReuse SceneAccel::reuse() const { return parts_ ? parts_->reuse() : BvhReuse{}; }
+
+bool SceneAccel::current() const { return !parts_ || parts_->current(); }
+
+void SceneAccel::build_flat(const Scene& scene) {
+    RTCDevice device = device_.get();
     std::vector<const TriangleMesh*> coarse, fine;
     // Fur (FurParams::visible_to): in the fine BVH when the camera sees it; in the coarse one,
     // with its mask, when gathers or mirrors do; else in a shadow BVH of its own when it casts shadows.
     std::vector<const Fur*> visible_fur, indirect_fur, shadow_fur;
-    std::vector<const std::array<std::vector<Vec3>, 2>*> motion;  // camera rays see motion blur
+    std::vector<const ShutterPositions*> motion;  // camera rays see motion blur
     std::vector<unsigned> masks, fur_masks;  // which rays see each object, and its fur
     bool any_fine = false, any_fur = false, any_indirect = false, any_shadow = false;
     for (const auto& o : scene.objects) {
@@ -216,14 +103,16 @@ SceneAccel::SceneAccel(const Scene& scene) {
         any_indirect |= indirect_fur.back() != nullptr;
         any_shadow |= shadow_fur.back() != nullptr;
     }
-    coarse_ = std::make_unique<Bvh>(device_, coarse, any_indirect ? indirect_fur : std::vector<const Fur*>{},
-                                    std::vector<const std::array<std::vector<Vec3>, 2>*>{}, masks, fur_masks);
+    coarse_ = std::make_unique<Bvh>(device, coarse, any_indirect ? indirect_fur : std::vector<const Fur*>{},
+                                    std::vector<const ShutterPositions*>{}, masks, fur_masks);
     // Fur already in the coarse BVH shadows through it; the rest that casts shadows gets its own.
-    if (any_shadow) shadow_fur_ = std::make_unique<Bvh>(device_, std::vector<const TriangleMesh*>(scene.objects.size(), nullptr), shadow_fur);
+    if (any_shadow) shadow_fur_ = std::make_shared<Bvh>(device, std::vector<const TriangleMesh*>(scene.objects.size(), nullptr), shadow_fur);
     // The camera sees all fur: when that is the shadow BVH's, instance it rather than build it twice.
-    if (any_shadow && shadow_fur == visible_fur) fine_ = std::make_unique<Bvh>(device_, fine, *shadow_fur_, motion, masks);
-    else if (any_fine || any_fur) fine_ = std::make_unique<Bvh>(device_, fine, visible_fur, motion, masks);
+    if (any_shadow && shadow_fur == visible_fur) fine_ = std::make_unique<Bvh>(device, fine, *shadow_fur_, motion, masks);
+    else if (any_fine || any_fur) fine_ = std::make_unique<Bvh>(device, fine, visible_fur, motion, masks);
+}
 
+void SceneAccel::measure_offsets(const Scene& scene) {
     // Measure how far the fine surface strays from the coarse one: from each fine vertex,
     // along its normal both ways, to the nearest coarse surface of the same object.
     const float diag = scene.size();
@@ -263,12 +152,7 @@ float SceneAccel::self_epsilon(const Vec3& p) const {
     return std::max(1e-5f * m, min_epsilon_);
 }
 
-SceneAccel::~SceneAccel() {
-    shadow_fur_.reset();
-    fine_.reset();
-    coarse_.reset();
-    if (device_) rtcReleaseDevice(device_);
-}
+SceneAccel::~SceneAccel() = default;
 
 float SceneAccel::offset_start(const Vec3& p, const Vec3& d) const {
     const float delta = ray_offset_;

@@ -9,77 +9,32 @@
 #include <span>
 #include <vector>
 
+#include "bounce/accel/bvh.h"
 #include "bounce/core/math.h"
 #include "bounce/scene/scene.h"
 
 namespace bounce {
 
-inline constexpr uint32_t kNoHit = 0xffffffffu;
-
-/// Ray masks (Embree: a ray sees a geometry when their masks share a bit). Objects carry the
-/// bits of the rays that see them (Object::visible_to); a light with a shadow link has a bit
-/// of its own (kRayShadowLink << Light::shadow_slot) that only the objects casting its shadows hold.
-/// Mirror and glass rays take the top bit, above the shadow links' (kMaxShadowLinkedLights).
-inline constexpr unsigned kRayCamera = 1u, kRayShadow = 2u, kRayIndirect = 4u, kRayShadowLink = 8u, kRayReflect = 1u << 31,
-                          kRayAll = ~0u;
-static_assert((kRayShadowLink << (kMaxShadowLinkedLights - 1)) < kRayReflect);
-/// The mask of object `index`'s geometry.
-unsigned object_ray_mask(const Scene& scene, size_t index);
-/// The same for object `index`'s fur (FurParams::visible_to).
-unsigned fur_ray_mask(const Scene& scene, size_t index);
-/// The mask of a shadow ray towards `light`.
-inline unsigned shadow_ray_mask(const Light& light) {
-    return light.shadow_slot < 0 ? kRayShadow : kRayShadowLink << light.shadow_slot;
-}
-
-struct Hit {
-    float t = INFINITY;
-    uint32_t object = kNoHit;  ///< index into Scene::objects
-    uint32_t prim = 0;
-    float u = 0, v = 0;
-    bool hair = false;         ///< a fur segment of `object` (prim = segment, u along it)
-    bool valid() const { return object != kNoHit; }
+/// What a frame's BVHs took over from the previous frame's: parts whose content had not changed
+/// (the static set, a rigid mover's shape), parts refit (a deforming mesh), parts built.
+struct BvhReuse {
+    int kept = 0, refit = 0, built = 0;
 };
 
-/// One Embree scene over a list of meshes (geometry id = index in the list) and, optionally,
-/// fur: `furs[i]` (null = none) is object i's, traced as flat linear curves whose hits say
-/// `hair` and name object i.
-class Bvh {
-public:
-    /// `motion[i]` (if given and not null): mesh i's vertices at shutter open and close, traced
-    /// with Embree's motion blur (ray time 0 = open, 1 = close). `masks[i]` (if given): mesh
-    /// i's ray mask (else every ray sees it); `fur_masks[i]` likewise for fur i.
-    Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs = {},
-        const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion = {}, const std::vector<unsigned>& masks = {},
-        const std::vector<unsigned>& fur_masks = {});
-    /// Meshes plus an instance of `fur`, a BVH of fur only over as many mesh ids (so its hits
-    /// decode the same): fur traced by several BVHs is built once.
-    Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const Bvh& fur,
-        const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion = {}, const std::vector<unsigned>& masks = {});
-    ~Bvh();
-    Bvh(const Bvh&) = delete;
-    Bvh& operator=(const Bvh&) = delete;
-
-    /// `time` in [0, 1] over the shutter (meshes without motion are where they are).
-    Hit intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float time = 0, unsigned mask = kRayAll) const;
-    /// Closest hits of `count` rays sharing origin `o` (a gather's hemisphere), traced in
-    /// packets of 16: neighbouring strata are coherent enough for Embree's packet traversal.
-    void intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear, Hit* out, unsigned mask = kRayAll) const;
-    bool occluded(const Vec3& o, const Vec3& d, float tnear, float tfar, unsigned mask = kRayAll) const;
-
-private:
-    /// A new scene holding `meshes` (not committed).
-    void begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes,
-               const std::vector<const std::array<std::vector<Vec3>, 2>*>& motion, const std::vector<unsigned>& masks);
-    Hit make_hit(unsigned geom, unsigned prim, float t, float u, float v) const;
-    RTCScene scene_ = nullptr;
-    unsigned mesh_count_ = 0;
-};
+class BvhParts;
 
 /// Everything rays need from a scene: both BVHs and the offset distance.
+///
+/// A scene in which nothing moves has one BVH of each kind over all its objects. When objects
+/// move over a shot (Object::moves), each BVH is two-level: the static objects are one part,
+/// every mover has its own — a rigid mover's built before its placement and placed with it, a
+/// deforming one's refit when its triangles are the same — and fur is one more. A frame built
+/// from the previous frame's takes over every part whose content is unchanged; a frame built
+/// alone builds the same parts, so both trace alike, bit for bit.
 class SceneAccel {
 public:
-    explicit SceneAccel(const Scene& scene);
+    /// `previous`: the shot's frame before (null: none) whose parts may be taken over.
+    explicit SceneAccel(const Scene& scene, const SceneAccel* previous = nullptr);
     ~SceneAccel();
     SceneAccel(const SceneAccel&) = delete;
     SceneAccel& operator=(const SceneAccel&) = delete;
@@ -93,6 +48,11 @@ public:
     float ray_offset() const { return ray_offset_; }
     /// Largest measured distance between a fine-tessellation vertex and its coarse surface.
     float fine_coarse_gap() const { return gap_; }
+    /// What it took over from the previous frame's (all zero for one BVH of everything).
+    BvhReuse reuse() const;
+    /// False once a later frame refit a part it traces: then it no longer traces its own scene
+    /// and may not be kept (FramePlan builds instead).
+    bool current() const;
 
     /// Traces a gather ray (objects visible to indirect rays) that leaves the fine surface at `p` along unit `d`: the origin
     /// is moved to the coarse intersection closest to `p` within +-delta along the ray, and
@@ -119,9 +79,15 @@ private:
     /// The offset trace proper: from the coarse crossing nearest to p (t measured from p).
     Hit probed_trace(const Vec3& p, const Vec3& d, unsigned mask) const;
 
-    RTCDevice device_ = nullptr;
+    /// One BVH of each kind over every object.
+    void build_flat(const Scene& scene);
+    /// Measures the fine/coarse gap and sets the offset distances.
+    void measure_offsets(const Scene& scene);
+
+    std::shared_ptr<RTCDeviceTy> device_;  ///< shared with the shot's later frames, whose parts it made
     std::unique_ptr<Bvh> coarse_, fine_;
-    std::unique_ptr<Bvh> shadow_fur_;  ///< fur that casts shadows (null = none)
+    std::shared_ptr<const Bvh> shadow_fur_;  ///< fur that casts shadows (null = none)
+    std::unique_ptr<BvhParts> parts_;        ///< two-level BVHs: their parts (null = flat)
     float ray_offset_ = 0, gap_ = 0, min_epsilon_ = 0;
 };
 

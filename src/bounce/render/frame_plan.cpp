@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "bounce/accel/accel.h"
 #include "bounce/cache/passes.h"
 #include "bounce/core/error.h"
 #include "bounce/scene/keyframes.h"
@@ -116,7 +117,10 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
         plan.visibility = VisibilityStep::Trace;
     plan.deep_out = request.deep_out;
 
-    if (comparable && previous.accel && plan.changes->visible_geometry_same) plan.accel = AccelStep::Keep;
+    // A later frame that refit a part the previous BVHs trace (the tool going back) leaves them stale.
+    const bool accel_usable = previous.accel && previous.accel->current();
+    if (comparable && accel_usable && plan.changes->visible_geometry_same) plan.accel = AccelStep::Keep;
+    else if (request.sequence && accel_usable) plan.accel = AccelStep::Update;
     plan.cache = cache_start(scene, previous, request);
     if (plan.cache == CacheStart::Temporal && !comparable) plan.cache = CacheStart::Empty;  // other objects: nothing to keep
     if (plan.cache == CacheStart::File) plan.cache_in = request.cache_in;
@@ -161,7 +165,7 @@ nlohmann::json FramePlan::describe() const {
             {"gather_window", gather_window},
             {"visibility", name(visibility)},
             {"deep_out", !deep_out.empty()},
-            {"accel", accel == AccelStep::Keep ? "keep" : "build"},
+            {"accel", accel == AccelStep::Keep ? "keep" : accel == AccelStep::Update ? "update" : "build"},
             {"keep_hits", keep_hits},
             {"radiosity", name(radiosity)},
             {"cache", name(cache)},

@@ -75,7 +75,8 @@ enum class VisibilityStep : uint8_t {
 /// The ray-tracing structures.
 enum class AccelStep : uint8_t {
     Build,
-    Keep,  ///< the previous frame's: nothing rays or the camera see has moved
+    Keep,    ///< the previous frame's: nothing rays or the camera see has moved
+    Update,  ///< built from the previous frame's: unchanged parts taken over, movers placed, skins refit
 };
 /// Radiosity textures for the gather's hits.
 enum class RadiosityStep : uint8_t {

@@ -333,9 +333,11 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
             result.accel = previous.accel;
         } else {
             PhaseTimer t(stats, "build BVH");
-            result.accel = std::make_shared<const SceneAccel>(scene);
+            result.accel = std::make_shared<const SceneAccel>(scene, plan.accel == AccelStep::Update ? previous.accel.get() : nullptr);
         }
         const SceneAccel& accel = *result.accel;
+        if (const BvhReuse r = accel.reuse(); r.kept + r.refit + r.built > 0)
+            stats.set("bvh_parts", nlohmann::json{{"kept", r.kept}, {"refit", r.refit}, {"built", r.built}});
         stats.set("ray_offset", accel.ray_offset());
         Materials materials(scene);
         DirectLighting lighting(scene, accel);

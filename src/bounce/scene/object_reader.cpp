@@ -11,6 +11,7 @@
 #include "bounce/dice/subdivision.h"
 #include "bounce/scene/fur_reader.h"
 #include "bounce/scene/item_readers.h"
+#include "bounce/scene/keyframes.h"
 #include "bounce/scene/link_reader.h"
 #include "bounce/scene/mesh_import.h"
 
@@ -190,9 +191,28 @@ std::vector<Vec3> posed_visible_positions(const JsonReader& r, const Scene& scen
     return fine > 0 ? subdivide_linear(mesh, fine).positions : mesh.positions;
 }
 
+namespace {
+/// Whether object `index`'s transform is keyed in the scene file (before keys were taken at the frame).
+bool placement_keyed(const Scene& scene, size_t index) {
+    if (!scene.keyed.is_object() || !scene.keyed.contains("objects") || !scene.keyed["objects"].is_array()) return false;
+    const nlohmann::json& objects = scene.keyed["objects"];
+    if (index >= objects.size() || !objects[index].is_object() || !objects[index].contains("transform")) return false;
+    return has_keys(objects[index]["transform"]);
+}
+
+/// A rigid mover keeps its tessellations as they are before its placement: ray tracing places
+/// them with it (accel/bvh.h), so a shot's frames move it without building its BVH again.
+void keep_local(Object& obj, const TriangleMesh& coarse, const TriangleMesh* fine) {
+    if (!obj.moves || obj.deforms) return;
+    obj.local_coarse = std::make_shared<const TriangleMesh>(coarse);
+    if (fine) obj.local_fine = std::make_shared<const TriangleMesh>(*fine);
+}
+}  // namespace
+
 void read_object(const JsonReader& r, Scene& scene, size_t index) {
     Object obj;
     obj.name = r.string("name", fmt::format("object{}", index));
+    obj.moves = placement_keyed(scene, index);  // or, below, it plays an animation of its file
     std::string type = r.choice("type", r.has("file") ? "mesh" : "", {"mesh", "quad", "sphere"});
     const bool subdivided = type == "mesh" && r.has("subdivision") && r.raw("subdivision") != "none";
     r.only(keys_of_type(type, subdivided),
@@ -231,6 +251,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         // An animation of the file plays over the shot: from its start at the shot's first frame.
         const MeshPose pose = mesh_pose(r, scene, scene.frame);
         obj.deforms = !pose.clip.empty();
+        obj.moves = obj.moves || obj.deforms;
         try {
             obj.coarse = load_mesh_file(file, obj.name, scene.materials, mat, &read, pose);
         } catch (const InputError& e) {
@@ -238,6 +259,12 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         }
         record_inputs(r, "file", read);
         obj.placement = read_transform(r);
+        if (fine > 0 && obj.moves && !obj.deforms) {
+            const TriangleMesh local_fine = subdivide_linear(obj.coarse, fine);
+            keep_local(obj, obj.coarse, &local_fine);
+        } else {
+            keep_local(obj, obj.coarse, nullptr);
+        }
         obj.coarse.transform(obj.placement);
         if (fine > 0) obj.fine = subdivide_linear(obj.coarse, fine);
     } else if (type == "quad") {
@@ -249,6 +276,12 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         fine = r.integer("fine_subdivisions", 0, 0, 8);
         obj.coarse = make_quad(p[0], p[1], p[2], p[3], default_material());
         obj.placement = read_transform(r);
+        if (fine > 0 && obj.moves) {
+            const TriangleMesh local_fine = subdivide_linear(obj.coarse, fine);
+            keep_local(obj, obj.coarse, &local_fine);
+        } else {
+            keep_local(obj, obj.coarse, nullptr);
+        }
         obj.coarse.transform(obj.placement);
         if (fine > 0) obj.fine = subdivide_linear(obj.coarse, fine);
     } else {
@@ -260,11 +293,10 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         uint32_t m = default_material();
         obj.coarse = make_icosphere(c, radius, level, m);
         const Transform t = obj.placement = read_transform(r);
+        if (fine > 0) obj.fine = make_icosphere(c, radius, level + fine, m);
+        keep_local(obj, obj.coarse, fine > 0 ? &obj.fine : nullptr);
         obj.coarse.transform(t);
-        if (fine > 0) {
-            obj.fine = make_icosphere(c, radius, level + fine, m);
-            obj.fine.transform(t);
-        }
+        if (fine > 0) obj.fine.transform(t);
     }
     if (obj.coarse.triangle_count() == 0) r.fail(type == "mesh" ? "file" : "", "mesh has no triangles");
     for (const auto& p : obj.coarse.positions)

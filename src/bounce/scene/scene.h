@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -134,6 +135,12 @@ struct Object {
     /// With motion blur: the visible mesh's vertices at shutter open and close (empty when it
     /// does not move during the shutter); camera rays see it in between.
     std::array<std::vector<Vec3>, 2> shutter;
+    /// Rigid movers (placement keyed, not deforming; not subdivision surfaces): both
+    /// tessellations before `placement` (null fine = none). Ray tracing places them with it, so
+    /// a shot's frames move them without building their BVHs again (accel/bvh.h).
+    std::shared_ptr<const TriangleMesh> local_coarse, local_fine;
+    /// With motion blur, rigid movers with local tessellations: the placement at shutter open and close.
+    std::optional<std::array<Transform, 2>> shutter_placement;
     bool has_fine() const { return !fine.indices.empty(); }
     const TriangleMesh& visible() const { return has_fine() ? fine : coarse; }
 };

@@ -82,7 +82,11 @@ void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
                 o.shutter[k] = posed_visible_positions(r, scene, scene.frame + scene.camera.shutter[k]);
                 continue;
             }
-            const Transform move = read_transform(r) * undo;
+            const Transform then = read_transform(r), move = then * undo;
+            if (o.local_coarse) {
+                if (!o.shutter_placement) o.shutter_placement.emplace();
+                (*o.shutter_placement)[k] = then;
+            }
             o.shutter[k].clear();
             for (const Vec3& p : o.visible().positions) o.shutter[k].push_back(move.point(p));
         }
@@ -169,13 +173,6 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
             l.name = scene.objects[i].name;
             scene.lights.push_back(l);
         }
-    }
-    // Objects that move in the shot carry their records with them (cache/temporal.h).
-    for (size_t i = 0; i < scene.objects.size(); ++i) {
-        Object& o = scene.objects[i];
-        const nlohmann::json* keyed = scene.keyed.is_object() && scene.keyed.contains("objects") && i < scene.keyed["objects"].size()
-                                          ? &scene.keyed["objects"][i] : nullptr;
-        o.moves = o.deforms || (keyed && keyed->is_object() && keyed->contains("transform") && has_keys((*keyed)["transform"]));
     }
     if (scene.camera.has_motion_blur()) add_shutter_positions(scene, ctx);
     // What every file holds goes into the identities (deep and cache files).

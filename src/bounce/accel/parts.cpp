@@ -1,0 +1,229 @@
+#include "bounce/accel/parts.h"
+
+#include <OpenImageIO/hash.h>
+
+#include "bounce/core/random.h"
+
+namespace bounce {
+
+namespace {
+/// What a part is built from, hashed (xxHash): equal keys, equal parts.
+class PartKey {
+public:
+    explicit PartKey(uint64_t kind) : h_(mix64(kind + 1)) {}
+    PartKey& add(uint64_t v) {
+        h_ = hash_combine(h_, v);
+        return *this;
+    }
+    template <class T>
+    PartKey& add(const std::vector<T>& v) {
+        add(v.size());
+        h_ = OIIO::xxhash::XXH64(v.data(), v.size() * sizeof(T), h_);
+        return *this;
+    }
+    PartKey& add(const Transform& t) {
+        h_ = OIIO::xxhash::XXH64(t.m.data(), sizeof(t.m), h_);
+        return *this;
+    }
+    uint64_t value() const { return h_; }
+
+private:
+    uint64_t h_;
+};
+
+enum : uint64_t { kStill, kLocal, kWorld, kFur, kLayout };
+
+bool moving_in_shutter(const Object& o) {
+    return !o.shutter[0].empty() || (o.shutter_placement && !((*o.shutter_placement)[0] == (*o.shutter_placement)[1]));
+}
+
+/// Fur by the rays that see it, as the flat BVHs hold it (accel.cpp).
+struct FurLists {
+    std::vector<const Fur*> visible, indirect, shadow;
+    std::vector<unsigned> masks;
+    explicit FurLists(const Scene& scene) {
+        for (size_t i = 0; i < scene.objects.size(); ++i) {
+            const Object& o = scene.objects[i];
+            const Fur* f = o.fur && o.fur->segment_count() ? o.fur.get() : nullptr;
+            const RayVisibility to = f ? f->params.visible_to : RayVisibility{};
+            masks.push_back(fur_ray_mask(scene, i));
+            visible.push_back(f && to.camera ? f : nullptr);
+            indirect.push_back(f && (to.indirect || to.reflections) ? f : nullptr);
+            shadow.push_back(f && to.shadows && !indirect.back() ? f : nullptr);
+        }
+    }
+};
+
+uint64_t fur_key(const Scene& scene, const std::vector<const Fur*>& furs, const std::vector<unsigned>* masks) {
+    PartKey k(kFur);
+    for (size_t i = 0; i < furs.size(); ++i)
+        if (furs[i]) k.add(i).add(furs[i]->vertices).add(furs[i]->segment_first).add(masks ? (*masks)[i] : kRayAll);
+    return scene.objects.empty() ? 0 : k.value();
+}
+}  // namespace
+
+BvhPart BvhParts::take(const BvhPart* before, uint64_t key, uint64_t layout,
+                       const std::function<std::shared_ptr<Bvh>()>& build, const std::function<void(Bvh&)>& refit) {
+    // A part a later frame refit traces other positions than its key says: never taken.
+    if (before && before->bvh && before->bvh->refits() == before->refits) {
+        if (before->key == key) {
+            ++reuse_.kept;
+            return *before;
+        }
+        if (layout != 0 && before->layout == layout) {
+            refit(*before->bvh);
+            before->bvh->commit();
+            ++reuse_.refit;
+            return {before->bvh, key, layout, before->bvh->refits(), before->furs};
+        }
+    }
+    ++reuse_.built;
+    std::shared_ptr<Bvh> bvh = build();
+    return {bvh, key, layout, bvh ? bvh->refits() : 0, {}};
+}
+
+BvhParts::BvhParts(RTCDevice device, const Scene& scene, const BvhParts* before) {
+    take_still(device, scene, before);
+    take_movers(device, scene, before);
+    take_fur(device, scene, before);
+}
+
+void BvhParts::take_still(RTCDevice device, const Scene& scene, const BvhParts* before) {
+    const size_t n = scene.objects.size();
+    std::vector<const TriangleMesh*> coarse(n, nullptr), fine(n, nullptr);
+    std::vector<unsigned> masks(n, kRayAll);
+    PartKey coarse_key(kStill), fine_key(kStill);
+    bool any = false;
+    for (size_t i = 0; i < n; ++i) {
+        const Object& o = scene.objects[i];
+        if (o.moves) continue;
+        any = true;
+        coarse[i] = &o.coarse, fine[i] = &o.visible(), masks[i] = object_ray_mask(scene, i);
+        coarse_key.add(i).add(o.coarse.positions).add(o.coarse.indices).add(masks[i]);
+        fine_key.add(i).add(o.visible().positions).add(o.visible().indices).add(masks[i]);
+        needs_fine_ = needs_fine_ || o.has_fine();
+    }
+    if (!any) return;
+    auto build = [&](const std::vector<const TriangleMesh*>& meshes) {
+        return [&, meshes] { return std::make_shared<Bvh>(device, meshes, std::vector<const Fur*>{}, std::vector<const ShutterPositions*>{}, masks); };
+    };
+    auto none = [](Bvh&) {};
+    still_coarse_ = take(before ? &before->still_coarse_ : nullptr, coarse_key.value(), 0, build(coarse), none);
+    // Without finer tessellations the camera's part is the same part.
+    still_fine_ = fine_key.value() == coarse_key.value()
+                      ? still_coarse_
+                      : take(before ? &before->still_fine_ : nullptr, fine_key.value(), 0, build(fine), none);
+}
+
+void BvhParts::take_movers(RTCDevice device, const Scene& scene, const BvhParts* before) {
+    const size_t n = scene.objects.size();
+    coarse_.resize(n), fine_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        const Object& o = scene.objects[i];
+        if (!o.moves) continue;
+        const BvhPart* was_coarse = before && i < before->coarse_.size() ? &before->coarse_[i] : nullptr;
+        const BvhPart* was_fine = before && i < before->fine_.size() ? &before->fine_[i] : nullptr;
+        needs_fine_ = needs_fine_ || o.has_fine() || moving_in_shutter(o);
+        // Each mover's part holds its mesh alone, under its own id (so hits decode as the flat BVH's).
+        auto build = [&](const TriangleMesh& mesh, const ShutterPositions* motion, bool refittable) {
+            return [&, motion, refittable] {
+                std::vector<const TriangleMesh*> meshes(n, nullptr);
+                meshes[i] = &mesh;
+                std::vector<const ShutterPositions*> moving(n, nullptr);
+                moving[i] = motion;
+                return std::make_shared<Bvh>(device, meshes, std::vector<const Fur*>{}, moving, std::vector<unsigned>{},
+                                             std::vector<unsigned>{}, refittable);
+            };
+        };
+        if (o.local_coarse) {  // rigid: its shape before the placement, placed at every frame
+            const TriangleMesh &lc = *o.local_coarse, &lf = o.local_fine ? *o.local_fine : lc;
+            const uint64_t kc = PartKey(kLocal).add(lc.positions).add(lc.indices).value();
+            const uint64_t kf = PartKey(kLocal).add(lf.positions).add(lf.indices).value();
+            auto none = [](Bvh&) {};
+            coarse_[i] = take(was_coarse, kc, 0, build(lc, nullptr, false), none);
+            fine_[i] = kf == kc ? coarse_[i] : take(was_fine, kf, 0, build(lf, nullptr, false), none);
+            continue;
+        }
+        // Deforming (or a subdivision surface placed anew): where it is this frame; refit when
+        // its triangles are the ones of the frame before.
+        const TriangleMesh &c = o.coarse, &v = o.visible();
+        const ShutterPositions* motion = o.shutter[0].empty() ? nullptr : &o.shutter;
+        PartKey kc(kWorld), kf(kWorld);
+        kc.add(c.positions).add(c.indices);
+        kf.add(v.positions).add(v.indices);
+        if (motion) kf.add((*motion)[0]).add((*motion)[1]);
+        auto layout = [&](const TriangleMesh& m, bool moving) {
+            return o.deforms ? PartKey(kLayout).add(m.indices).add(m.positions.size()).add(moving ? 2 : 1).value() : 0;
+        };
+        coarse_[i] = take(was_coarse, kc.value(), layout(c, false), build(c, nullptr, o.deforms),
+                          [&](Bvh& b) { b.refit(static_cast<unsigned>(i), c, nullptr); });
+        fine_[i] = kf.value() == kc.value()
+                       ? coarse_[i]
+                       : take(was_fine, kf.value(), layout(v, motion != nullptr), build(v, motion, o.deforms),
+                              [&](Bvh& b) { b.refit(static_cast<unsigned>(i), v, motion); });
+    }
+}
+
+void BvhParts::take_fur(RTCDevice device, const Scene& scene, const BvhParts* before) {
+    const FurLists lists(scene);
+    const size_t n = scene.objects.size();
+    auto take_list = [&](BvhPart BvhParts::*slot, const std::vector<const Fur*>& furs, const std::vector<unsigned>* masks) {
+        if (std::all_of(furs.begin(), furs.end(), [](const Fur* f) { return f == nullptr; })) return;
+        BvhPart& part = this->*slot;
+        part = take(before ? &(before->*slot) : nullptr, fur_key(scene, furs, masks), 0,
+                    [&] {
+                        return std::make_shared<Bvh>(device, std::vector<const TriangleMesh*>(n, nullptr), furs,
+                                                     std::vector<const ShutterPositions*>{},
+                                                     std::vector<unsigned>{}, masks ? *masks : std::vector<unsigned>{});
+                    },
+                    [](Bvh&) {});
+        if (part.furs.empty())  // built now: it traces this scene's fur buffers, which must outlive it
+            for (size_t i = 0; i < n; ++i)
+                if (furs[i]) part.furs.push_back(scene.objects[i].fur);
+    };
+    take_list(&BvhParts::coarse_fur_, lists.indirect, &lists.masks);
+    take_list(&BvhParts::shadow_fur_, lists.shadow, nullptr);
+    // The camera sees all fur: when that is the shadow part's, the same part.
+    if (lists.visible == lists.shadow) fine_fur_ = shadow_fur_;
+    else take_list(&BvhParts::fine_fur_, lists.visible, nullptr);
+    needs_fine_ = needs_fine_ || fine_fur_.bvh != nullptr;
+}
+
+namespace {
+const std::array<Transform, 2> kIdentity{};
+
+/// Where object `o`'s part is placed: a rigid mover's placement (at shutter open and close for
+/// the camera's BVH when it moves in the shutter), else where it is.
+Bvh::Placed placed_mover(const Object& o, const std::shared_ptr<Bvh>& bvh, unsigned mask, bool camera) {
+    Bvh::Placed p{bvh, kIdentity, false, mask};
+    if (!o.local_coarse) return p;
+    p.at = {o.placement, o.placement};
+    if (camera && o.shutter_placement) p.at = *o.shutter_placement, p.moving = !(p.at[0] == p.at[1]);
+    return p;
+}
+}  // namespace
+
+std::unique_ptr<Bvh> BvhParts::coarse(RTCDevice device, const Scene& scene) const {
+    std::vector<Bvh::Placed> placed{{still_coarse_.bvh, kIdentity, false, kRayAll}};
+    for (size_t i = 0; i < coarse_.size(); ++i)
+        if (coarse_[i].bvh) placed.push_back(placed_mover(scene.objects[i], coarse_[i].bvh, object_ray_mask(scene, i), false));
+    placed.push_back({coarse_fur_.bvh, kIdentity, false, kRayAll});
+    return std::make_unique<Bvh>(device, placed, static_cast<unsigned>(scene.objects.size()));
+}
+
+std::unique_ptr<Bvh> BvhParts::fine(RTCDevice device, const Scene& scene) const {
+    if (!needs_fine_) return nullptr;
+    std::vector<Bvh::Placed> placed{{still_fine_.bvh, kIdentity, false, kRayAll}};
+    for (size_t i = 0; i < fine_.size(); ++i)
+        if (fine_[i].bvh) placed.push_back(placed_mover(scene.objects[i], fine_[i].bvh, object_ray_mask(scene, i), true));
+    placed.push_back({fine_fur_.bvh, kIdentity, false, kRayAll});
+    return std::make_unique<Bvh>(device, placed, static_cast<unsigned>(scene.objects.size()));
+}
+
+bool BvhParts::current() const {
+    auto ok = [](const BvhPart& p) { return !p.bvh || p.bvh->refits() == p.refits; };
+    return ok(still_coarse_) && ok(still_fine_) && ok(coarse_fur_) && ok(fine_fur_) && ok(shadow_fur_) &&
+           std::all_of(coarse_.begin(), coarse_.end(), ok) && std::all_of(fine_.begin(), fine_.end(), ok);
+}
+
+}  // namespace bounce

@@ -1,0 +1,53 @@
+// The parts of a two-level SceneAccel (accel.h): what each was built from, so that a shot's next
+// frame takes over the ones whose content did not change and refits deforming meshes.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "bounce/accel/accel.h"
+
+namespace bounce {
+
+/// One part and what it was built from.
+struct BvhPart {
+    std::shared_ptr<Bvh> bvh;  ///< null: nothing to trace
+    uint64_t key = 0;          ///< hash of everything it was built from
+    uint64_t layout = 0;       ///< what a refit keeps (triangles, time steps); 0: it cannot be refit
+    uint64_t refits = 0;       ///< bvh->refits() when this frame took it
+    std::vector<std::shared_ptr<const Fur>> furs;  ///< whose buffers it traces (shared, not copied)
+};
+
+class BvhParts {
+public:
+    /// The parts of `scene`'s BVHs; those of `before` (the previous frame's) are taken over
+    /// where their key matches, and refit where only positions changed.
+    BvhParts(RTCDevice device, const Scene& scene, const BvhParts* before);
+
+    /// The BVH secondary rays trace: every part placed.
+    std::unique_ptr<Bvh> coarse(RTCDevice device, const Scene& scene) const;
+    /// The one primary visibility traces; null when it would be the coarse one.
+    std::unique_ptr<Bvh> fine(RTCDevice device, const Scene& scene) const;
+    /// Fur that casts shadows but is not in the coarse BVH (null: none).
+    std::shared_ptr<const Bvh> shadow_fur() const { return shadow_fur_.bvh; }
+
+    const BvhReuse& reuse() const { return reuse_; }
+    /// No part it holds was refit since (by a later frame).
+    bool current() const;
+
+private:
+    BvhPart take(const BvhPart* before, uint64_t key, uint64_t layout, const std::function<std::shared_ptr<Bvh>()>& build,
+                 const std::function<void(Bvh&)>& refit);
+    void take_still(RTCDevice device, const Scene& scene, const BvhParts* before);
+    void take_movers(RTCDevice device, const Scene& scene, const BvhParts* before);
+    void take_fur(RTCDevice device, const Scene& scene, const BvhParts* before);
+
+    BvhPart still_coarse_, still_fine_;  ///< the objects that do not move
+    std::vector<BvhPart> coarse_, fine_;  ///< per object: the movers'
+    BvhPart coarse_fur_, fine_fur_, shadow_fur_;
+    bool needs_fine_ = false;
+    BvhReuse reuse_;
+};
+
+}  // namespace bounce

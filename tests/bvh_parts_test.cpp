@@ -1,0 +1,129 @@
+// Issue 26, geometry over time: a shot's static set is built once, rigid movers are placed
+// (Embree instances), deforming meshes are refit; and a frame traces as a fresh build would.
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cmath>
+
+#include "bounce/accel/accel.h"
+#include "bounce/core/random.h"
+#include "bounce/scene/scene_load.h"
+#include "gltf_strip.h"
+#include "test_util.h"
+
+namespace bounce {
+namespace {
+
+using nlohmann::json;
+
+/// A floor (static), a ball rolling across it (keyed translate and rotate; a finer tessellation
+/// for the camera), a second ball that gathers do not see, and the skinned strip bending
+/// (deforming); `shutter` > 0: motion blur over that much of a frame.
+struct Shot {
+    test::TempDir dir;
+    json scene = test::base_scene();
+    explicit Shot(double shutter) {
+        dir.write("strip.gltf", test::skinned_strip().dump());
+        scene["animation"] = {{"fps", 1}, {"frames", {1, 2}}};
+        scene["camera"] = {{"position", {0, 3, 8}}, {"look_at", {0, 0.5, 0}}, {"fov", 40}, {"resolution", {16, 16}}};
+        if (shutter > 0) scene["camera"]["shutter"] = {-shutter / 2, shutter / 2};
+        const json roll = {{"translate", {{"keys", {{1, {-2, 0.5, 0}}, {2, {2, 0.5, 0}}}}}},
+                           {"rotate", {{"keys", {{1, {0, 0, 0, 1}}, {2, {-229, 0, 0, 1}}}}}}};
+        const json hidden_roll = {{"translate", {{"keys", {{1, {-2, 0.5, 2}}, {2, {2, 0.5, 2}}}}}}};
+        scene["objects"] = {
+            {{"name", "floor"}, {"type", "quad"}, {"vertices", {{-6, 0, -6}, {-6, 0, 6}, {6, 0, 6}, {6, 0, -6}}}},
+            {{"name", "ball"}, {"type", "sphere"}, {"radius", 0.5}, {"subdivisions", 2}, {"fine_subdivisions", 1}, {"transform", roll}},
+            {{"name", "ghost"}, {"type", "sphere"}, {"radius", 0.5}, {"subdivisions", 2}, {"fine_subdivisions", 0},
+             {"transform", hidden_roll}, {"visible_to", {{"indirect", false}}}},
+            {{"name", "strip"}, {"type", "mesh"}, {"file", "strip.gltf"}, {"animation", "bend"},
+             {"transform", {{"translate", {0, 0, -2}}}}}};
+        dir.write("s.json", scene.dump());
+    }
+    Scene at(double frame) const {
+        LoadOptions o;
+        o.frame = frame;
+        return load_scene(dir.file("s.json"), {}, o);
+    }
+};
+
+bool same(const Hit& a, const Hit& b) {
+    return a.object == b.object && a.prim == b.prim && a.hair == b.hair && std::bit_cast<uint32_t>(a.t) == std::bit_cast<uint32_t>(b.t) &&
+           std::bit_cast<uint32_t>(a.u) == std::bit_cast<uint32_t>(b.u) && std::bit_cast<uint32_t>(a.v) == std::bit_cast<uint32_t>(b.v);
+}
+
+/// Rays from above the set towards it, in both BVHs of `a` and `b`: every hit the same, bit for
+/// bit. Returns the hits per object of `a`'s coarse BVH (indirect rays).
+std::vector<int> expect_same_hits(const SceneAccel& a, const SceneAccel& b, size_t objects) {
+    std::vector<int> hits(objects, 0);
+    for (uint32_t k = 0; k < 4000; ++k) {
+        const Vec3 o(-4 + 8 * to_unit_float(mix64(4 * k)), 2.5f, -4 + 8 * to_unit_float(mix64(4 * k + 1)));
+        const Vec3 target(-3 + 6 * to_unit_float(mix64(4 * k + 2)), 0.25f, -3 + 6 * to_unit_float(mix64(4 * k + 3)));
+        const Vec3 d = normalize(target - o);
+        const float time = to_unit_float(mix64(k + 99999));
+        const Hit ha = a.coarse().intersect(o, d, 0, INFINITY, 0, kRayIndirect), hb = b.coarse().intersect(o, d, 0, INFINITY, 0, kRayIndirect);
+        EXPECT_TRUE(same(ha, hb)) << "coarse ray " << k;
+        const Hit fa = a.fine().intersect(o, d, 0, INFINITY, time, kRayCamera), fb = b.fine().intersect(o, d, 0, INFINITY, time, kRayCamera);
+        EXPECT_TRUE(same(fa, fb)) << "fine ray " << k;
+        if (ha.valid()) ++hits[ha.object];
+    }
+    return hits;
+}
+
+TEST(BvhParts, AShotsNextFrameTakesOverTheStaticSetPlacesRigidMoversRefitsSkinsAndTracesAsAFreshBuild) {
+    for (double shutter : {0.0, 0.5}) {
+        SCOPED_TRACE(shutter);
+        const Shot shot(shutter);
+        const Scene first = shot.at(1), next = shot.at(1.5);
+        const SceneAccel a(first);
+        // Parts: the static floor (coarse and camera alike); each ball's shape before its
+        // placement (the ball's finer one for the camera too); the strip (and its shutter poses).
+        const int strip_parts = shutter > 0 ? 2 : 1;
+        EXPECT_EQ(a.reuse().built, 1 + 2 + 1 + strip_parts);
+        const SceneAccel b(next, &a), fresh(next);
+        EXPECT_EQ(b.reuse().kept, 1 + 2 + 1);
+        EXPECT_EQ(b.reuse().refit, strip_parts);
+        EXPECT_EQ(b.reuse().built, 0);
+        EXPECT_FALSE(a.current());  // its strip part now holds frame 1.5
+        EXPECT_TRUE(b.current());
+        const std::vector<int> hits = expect_same_hits(b, fresh, next.objects.size());
+        EXPECT_GT(hits[0], 1000);
+        EXPECT_GT(hits[1], 20);
+        EXPECT_EQ(hits[2], 0);  // the ghost is not seen by gathers, whatever its placement
+        EXPECT_GT(hits[3], 5);
+        // Where the parts are at frame 1.5: the ball's top at (0, 1, 0), the ghost's seen by shadows.
+        const Hit top = b.coarse().intersect({0, 3, 0}, {0, -1, 0}, 0, INFINITY, 0, kRayIndirect);
+        EXPECT_EQ(top.object, 1u);
+        EXPECT_NEAR(top.t, 2.0f, 0.02f);
+        const Hit ghost = b.coarse().intersect({0, 3, 2}, {0, -1, 0}, 0, INFINITY, 0, kRayShadow);
+        EXPECT_EQ(ghost.object, 2u);
+        EXPECT_NEAR(ghost.t, 2.0f, 0.02f);
+        // The strip's tip joint (at x = 1) has turned 45 degrees about z: its corners (2, 0) and
+        // (2, 1) went to (1 + c, c) and (1, 2c), c = cos 45; aim at the centre of that triangle.
+        const float c = std::sqrt(0.5f);
+        const Hit tip = b.coarse().intersect({(3 + c) / 3, c, 3}, {0, 0, -1}, 0, INFINITY, 0, kRayIndirect);
+        EXPECT_EQ(tip.object, 3u);
+        EXPECT_NEAR(tip.t, 5.0f, 1e-4f);
+    }
+}
+
+TEST(BvhParts, AStillHasOneBvhOfEverythingAndAFrameWhoseSkinWasRefitLaterIsNotKept) {
+    const Shot shot(0);
+    json still = shot.scene;
+    still.erase("animation");
+    for (json& o : still["objects"]) o.erase("animation"), o["transform"] = {{"translate", {0, 0, 0}}};
+    shot.dir.write("still.json", still.dump());
+    const SceneAccel flat(load_scene(shot.dir.file("still.json")));
+    EXPECT_EQ(flat.reuse().built, 0);  // no parts
+    EXPECT_TRUE(flat.current());
+    // Frames 1, 2, then 1 again from frame 1's BVHs (the tool going back): frame 1's strip part
+    // was refit to frame 2, so nothing of frame 1's is taken over as it was.
+    const Scene one = shot.at(1), two = shot.at(2);
+    const SceneAccel a(one), b(two, &a);
+    EXPECT_FALSE(a.current());
+    const SceneAccel again(one, &a), fresh(one);
+    EXPECT_EQ(again.reuse().refit, 0);
+    expect_same_hits(again, fresh, one.objects.size());
+}
+
+}  // namespace
+}  // namespace bounce
