@@ -85,6 +85,11 @@ TEST(BvhParts, AShotsNextFrameTakesOverTheStaticSetPlacesRigidMoversRefitsSkinsA
         EXPECT_EQ(b.reuse().built, 0);
         EXPECT_FALSE(a.current());  // its strip part now holds frame 1.5
         EXPECT_TRUE(b.current());
+        // The ray offset comes from the rolling ball's fine/coarse gap, measured before its
+        // placement: the same at every frame, to the bit (measured where it is, rounding moved it).
+        EXPECT_GT(a.ray_offset(), 1e-4f * first.size());
+        EXPECT_EQ(a.ray_offset(), b.ray_offset());
+        EXPECT_EQ(a.ray_offset(), SceneAccel(shot.at(1.9)).ray_offset());
         const std::vector<int> hits = expect_same_hits(b, fresh, next.objects.size());
         EXPECT_GT(hits[0], 1000);
         EXPECT_GT(hits[1], 20);

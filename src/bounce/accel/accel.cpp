@@ -120,15 +120,23 @@ void SceneAccel::measure_offsets(const Scene& scene) {
     for (size_t id = 0; id < scene.objects.size(); ++id) {
         const Object& o = scene.objects[id];
         if (!o.has_fine()) continue;
-        float reach = 0.05f * length(o.coarse.bounds().diagonal());
-        size_t step = std::max<size_t>(1, o.fine.positions.size() / 20000);
-        for (size_t i = 0; i < o.fine.positions.size(); i += step) {
-            Vec3 p = o.fine.positions[i];
-            Vec3 n = o.fine.normals.empty() ? Vec3(0, 0, 1) : o.fine.normals[i];
+        // A rigid mover is measured before its placement, against its own part: the same gap at
+        // every frame (measured where it is, float rounding moves it from frame to frame, and
+        // with it the offset of every ray in the scene). Scaled by its placement's largest stretch.
+        const Bvh* own = parts_ && o.local_fine ? parts_->coarse_part(id) : nullptr;
+        const TriangleMesh &fine = own ? *o.local_fine : o.fine, &coarse = own ? *o.local_coarse : o.coarse;
+        const Bvh& against = own ? *own : *coarse_;
+        // (A turn's rounding, a few 1e-8, is not a stretch: it would move the gap again.)
+        const float largest = own ? o.placement.largest_scale() : 1.0f, stretch = std::abs(largest - 1) < 1e-5f ? 1.0f : largest;
+        float reach = 0.05f * length(coarse.bounds().diagonal());
+        size_t step = std::max<size_t>(1, fine.positions.size() / 20000);
+        for (size_t i = 0; i < fine.positions.size(); i += step) {
+            Vec3 p = fine.positions[i];
+            Vec3 n = fine.normals.empty() ? Vec3(0, 0, 1) : fine.normals[i];
             if (dot(n, n) == 0) continue;
-            Hit a = coarse_->intersect(p, n, 0, reach), b = coarse_->intersect(p, -n, 0, reach);
+            Hit a = against.intersect(p, n, 0, reach), b = against.intersect(p, -n, 0, reach);
             float d = std::min(a.object == id ? a.t : INFINITY, b.object == id ? b.t : INFINITY);
-            if (std::isfinite(d)) gaps.push_back(d);
+            if (std::isfinite(d)) gaps.push_back(d * stretch);
         }
     }
     // The 99th percentile, not the largest: on a displaced surface a few fine vertices (in

@@ -220,6 +220,10 @@ std::unique_ptr<Bvh> BvhParts::fine(RTCDevice device, const Scene& scene) const 
     return std::make_unique<Bvh>(device, placed, static_cast<unsigned>(scene.objects.size()));
 }
 
+const Bvh* BvhParts::coarse_part(size_t id) const {
+    return id < coarse_.size() ? coarse_[id].bvh.get() : nullptr;
+}
+
 bool BvhParts::current() const {
     auto ok = [](const BvhPart& p) { return !p.bvh || p.bvh->refits() == p.refits; };
     return ok(still_coarse_) && ok(still_fine_) && ok(coarse_fur_) && ok(fine_fur_) && ok(shadow_fur_) &&

@@ -32,6 +32,8 @@ public:
     /// Fur that casts shadows but is not in the coarse BVH (null: none).
     std::shared_ptr<const Bvh> shadow_fur() const { return shadow_fur_.bvh; }
 
+    /// Mover `id`'s own coarse part (a rigid mover's is before its placement; null: not a mover).
+    const Bvh* coarse_part(size_t id) const;
     const BvhReuse& reuse() const { return reuse_; }
     /// No part it holds was refit since (by a later frame).
     bool current() const;

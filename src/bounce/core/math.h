@@ -132,6 +132,10 @@ struct Transform {
                 m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
                 m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
     }
+    /// The most it stretches a length (the longest image of a unit axis).
+    float largest_scale() const {
+        return std::max({length(vector({1, 0, 0})), length(vector({0, 1, 0})), length(vector({0, 0, 1}))});
+    }
     Vec3 vector(const Vec3& v) const {
         return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
                 m[8] * v.x + m[9] * v.y + m[10] * v.z};
