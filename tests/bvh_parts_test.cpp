@@ -130,5 +130,53 @@ TEST(BvhParts, AStillHasOneBvhOfEverythingAndAFrameWhoseSkinWasRefitLaterIsNotKe
     expect_same_hits(again, fresh, one.objects.size());
 }
 
+TEST(BvhParts, FurOnARigidMoverIsBlurredWithIt) {
+    // A furry ball crossing 4 units a frame, the shutter open a whole frame about frame 1.5: the
+    // camera sees each strand 2 units back at shutter open, where it is at the frame's time halfway,
+    // 2 units on at close; shadows and gathers see the strands at the frame's time.
+    test::TempDir dir;
+    json j = test::base_scene();
+    j["animation"] = {{"fps", 24}, {"frames", {1, 2}}};
+    j["camera"] = {{"position", {0, 3, 8}}, {"look_at", {0, 0.5, 0}}, {"resolution", {16, 16}}, {"shutter", {-0.5, 0.5}}};
+    j["objects"] = {{{"name", "ball"}, {"type", "sphere"}, {"radius", 0.5},
+                     {"transform", {{"translate", {{"keys", {{1, {-2, 0.5, 0}}, {2, {2, 0.5, 0}}}}}}}},
+                     {"fur", {{"count", 40}, {"length", 0.4}, {"width_root", 0.03}, {"width_tip", 0.03}, {"lean", 0}}}}};
+    dir.write("s.json", j.dump());
+    LoadOptions o;
+    o.frame = 1.5;
+    const Scene scene = load_scene(dir.file("s.json"), {}, o);
+    const SceneAccel accel(scene);
+    const Fur& fur = *scene.objects[0].fur;
+    const Vec3 x(1, 0, 0);
+    // Per strand, a ray across its middle (perpendicular to it and to the motion), 1 unit long,
+    // at a time and an offset along the motion: does it meet hair about where the strand would be?
+    auto meets = [&](float time, float shift, bool camera) {
+        int n = 0;
+        for (size_t s = 0; s < fur.strand_count(); ++s) {
+            const size_t first = s * static_cast<size_t>(fur.segments + 1);
+            const size_t mid = first + static_cast<size_t>(fur.segments / 2);
+            auto point = [&](size_t k) { return Vec3(fur.vertices[4 * k], fur.vertices[4 * k + 1], fur.vertices[4 * k + 2]); };
+            const Vec3 m = point(mid), t = normalize(point(mid + 1) - point(mid - 1)), d = normalize(cross(t, x));
+            const Vec3 target = m + x * shift;
+            if (!camera) {  // shadow rays: anything across the segment
+                n += accel.occluded(target - d, d, 2.0f, 0, kRayShadow);
+                continue;
+            }
+            const Hit h = accel.fine().intersect(target - d, d, 0, 2, time, kRayCamera);
+            n += h.valid() && h.hair && std::abs(h.t - 1) < 0.05f;
+        }
+        return n;
+    };
+    const int strands = static_cast<int>(fur.strand_count());
+    ASSERT_GE(strands, 30);
+    EXPECT_GE(meets(0.5f, 0, true), strands * 9 / 10);    // halfway: where the strands are
+    EXPECT_GE(meets(0.0f, -2, true), strands * 9 / 10);   // open: 2 units back
+    EXPECT_GE(meets(1.0f, 2, true), strands * 9 / 10);    // close: 2 units on
+    EXPECT_LE(meets(0.0f, 0, true), strands / 10);        // not where they are at the frame's time
+    EXPECT_LE(meets(1.0f, -2, true), strands / 10);
+    EXPECT_GE(meets(0, 0, false), strands * 9 / 10);      // shadows: at the frame's time
+    EXPECT_LE(meets(0, -2, false), strands / 10);
+}
+
 }  // namespace
 }  // namespace bounce

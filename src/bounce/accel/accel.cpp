@@ -80,36 +80,33 @@ bool SceneAccel::current() const { return !parts_ || parts_->current(); }
 
 void SceneAccel::build_flat(const Scene& scene) {
     RTCDevice device = device_.get();
-    std::vector<const TriangleMesh*> coarse, fine;
-    // Fur (FurParams::visible_to): in the fine BVH when the camera sees it; in the coarse one,
-    // with its mask, when gathers or mirrors do; else in a shadow BVH of its own when it casts shadows.
-    std::vector<const Fur*> visible_fur, indirect_fur, shadow_fur;
-    std::vector<const ShutterPositions*> motion;  // camera rays see motion blur
-    std::vector<unsigned> masks, fur_masks;  // which rays see each object, and its fur
-    bool any_fine = false, any_fur = false, any_indirect = false, any_shadow = false;
-    for (const auto& o : scene.objects) {
-        coarse.push_back(&o.coarse);
-        masks.push_back(object_ray_mask(scene, masks.size()));
-        fine.push_back(&o.visible());
-        motion.push_back(o.shutter[0].empty() ? nullptr : &o.shutter);
-        any_fine |= o.has_fine() || motion.back();
-        const Fur* f = o.fur && o.fur->segment_count() ? o.fur.get() : nullptr;
-        const RayVisibility to = f ? f->params.visible_to : RayVisibility{};
-        fur_masks.push_back(fur_ray_mask(scene, fur_masks.size()));
-        visible_fur.push_back(f && to.camera ? f : nullptr);
-        indirect_fur.push_back(f && (to.indirect || to.reflections) ? f : nullptr);
-        shadow_fur.push_back(f && to.shadows && !indirect_fur.back() ? f : nullptr);
-        any_fur |= visible_fur.back() != nullptr;
-        any_indirect |= indirect_fur.back() != nullptr;
-        any_shadow |= shadow_fur.back() != nullptr;
+    const FurLists fur(scene);
+    BvhGeometry coarse, fine;
+    bool any_fine = false;
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+        const Object& o = scene.objects[i];
+        coarse.meshes.push_back(&o.coarse);
+        coarse.masks.push_back(object_ray_mask(scene, i));
+        fine.meshes.push_back(&o.visible());
+        fine.motion.push_back(o.shutter[0].empty() ? nullptr : &o.shutter);  // camera rays see motion blur
+        any_fine |= o.has_fine() || fine.motion.back();
     }
-    coarse_ = std::make_unique<Bvh>(device, coarse, any_indirect ? indirect_fur : std::vector<const Fur*>{},
-                                    std::vector<const ShutterPositions*>{}, masks, fur_masks);
+    fine.masks = coarse.masks;
+    if (FurLists::any(fur.indirect)) coarse.furs = fur.indirect, coarse.fur_masks = fur.masks;
+    coarse_ = std::make_unique<Bvh>(device, coarse);
     // Fur already in the coarse BVH shadows through it; the rest that casts shadows gets its own.
-    if (any_shadow) shadow_fur_ = std::make_shared<Bvh>(device, std::vector<const TriangleMesh*>(scene.objects.size(), nullptr), shadow_fur);
+    if (FurLists::any(fur.shadow)) {
+        BvhGeometry shadow;
+        shadow.meshes.assign(scene.objects.size(), nullptr), shadow.furs = fur.shadow;
+        shadow_fur_ = std::make_shared<Bvh>(device, shadow);
+    }
     // The camera sees all fur: when that is the shadow BVH's, instance it rather than build it twice.
-    if (any_shadow && shadow_fur == visible_fur) fine_ = std::make_unique<Bvh>(device, fine, *shadow_fur_, motion, masks);
-    else if (any_fine || any_fur) fine_ = std::make_unique<Bvh>(device, fine, visible_fur, motion, masks);
+    if (shadow_fur_ && fur.shadow == fur.visible) {
+        fine_ = std::make_unique<Bvh>(device, fine, *shadow_fur_);
+    } else if (any_fine || FurLists::any(fur.visible)) {
+        fine.furs = fur.visible;
+        fine_ = std::make_unique<Bvh>(device, fine);
+    }
 }
 
 void SceneAccel::measure_offsets(const Scene& scene) {

@@ -23,39 +23,48 @@ void fill_vertices(RTCGeometry g, unsigned slot, const std::vector<Vec3>& pos) {
     for (size_t i = 0; i < pos.size(); ++i) vb[3 * i] = pos[i].x, vb[3 * i + 1] = pos[i].y, vb[3 * i + 2] = pos[i].z;
 }
 
-const ShutterPositions* motion_of(const std::vector<const ShutterPositions*>& motion, size_t id) {
-    return id < motion.size() && motion[id] && !(*motion[id])[0].empty() ? motion[id] : nullptr;
+template <class T>
+T at_or(const std::vector<T>& v, size_t i, T otherwise) {
+    return i < v.size() ? v[i] : otherwise;
 }
 }  // namespace
 
-Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs,
-         const std::vector<const ShutterPositions*>& motion, const std::vector<unsigned>& masks,
-         const std::vector<unsigned>& fur_masks, bool refittable)
-    : mesh_count_(static_cast<unsigned>(meshes.size())) {
-    begin(device, meshes, motion, masks, refittable);
-    for (size_t id = 0; id < furs.size(); ++id) {
-        const Fur* f = furs[id];
-        if (!f || f->segment_count() == 0) continue;
-        // Ribbons facing the ray: strands are thinner than a pixel, so their round profile
-        // does not show, and flat curves intersect faster. The buffers are the fur's own.
-        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE);
-        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, f->vertices.data(), 0,
-                                   4 * sizeof(float), f->vertices.size() / 4);
-        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, f->segment_first.data(), 0,
-                                   sizeof(uint32_t), f->segment_count());
-        rtcSetGeometryMask(g, fur_masks.empty() ? kRayAll : fur_masks[id]);
-        rtcCommitGeometry(g);
-        rtcAttachGeometryByID(scene_, g, mesh_count_ + static_cast<unsigned>(id));
-        rtcReleaseGeometry(g);
-        empty_ = false;
-    }
+Bvh::Bvh(RTCDevice device, const BvhGeometry& geometry) : mesh_count_(static_cast<unsigned>(geometry.meshes.size())) {
+    begin(device, geometry);
+    for (size_t id = 0; id < geometry.furs.size(); ++id) add_fur(device, geometry, id);
     rtcCommitScene(scene_);
 }
 
-Bvh::Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const Bvh& fur,
-         const std::vector<const ShutterPositions*>& motion, const std::vector<unsigned>& masks)
-    : mesh_count_(static_cast<unsigned>(meshes.size())) {
-    begin(device, meshes, motion, masks, false);
+void Bvh::add_fur(RTCDevice device, const BvhGeometry& geometry, size_t id) {
+    const Fur* f = geometry.furs[id];
+    if (!f || f->segment_count() == 0) return;
+    // Ribbons facing the ray: strands are thinner than a pixel, so their round profile does not
+    // show, and flat curves intersect faster. Still fur traces the fur's own buffers; fur that
+    // moves in the shutter, copies of its two poses.
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE);
+    const FurShutter* moving = at_or<const FurShutter*>(geometry.fur_motion, id, nullptr);
+    if (moving && (*moving)[0].size() != f->vertices.size()) moving = nullptr;
+    const size_t points = f->vertices.size() / 4;
+    if (moving) {
+        rtcSetGeometryTimeStepCount(g, 2);
+        for (unsigned slot = 0; slot < 2; ++slot) {
+            auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, slot, RTC_FORMAT_FLOAT4, 4 * sizeof(float), points));
+            std::copy((*moving)[slot].begin(), (*moving)[slot].end(), vb);
+        }
+    } else {
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, f->vertices.data(), 0, 4 * sizeof(float), points);
+    }
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, f->segment_first.data(), 0, sizeof(uint32_t),
+                               f->segment_count());
+    rtcSetGeometryMask(g, at_or(geometry.fur_masks, id, kRayAll));
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(scene_, g, mesh_count_ + static_cast<unsigned>(id));
+    rtcReleaseGeometry(g);
+    empty_ = false;
+}
+
+Bvh::Bvh(RTCDevice device, const BvhGeometry& meshes, const Bvh& fur) : mesh_count_(static_cast<unsigned>(meshes.meshes.size())) {
+    begin(device, meshes);
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(g, fur.scene_);
     const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
@@ -91,17 +100,18 @@ Bvh::Bvh(RTCDevice device, const std::vector<Placed>& placed, unsigned mesh_coun
     rtcCommitScene(scene_);
 }
 
-void Bvh::begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes,
-                const std::vector<const ShutterPositions*>& motion, const std::vector<unsigned>& masks, bool refittable) {
+void Bvh::begin(RTCDevice device, const BvhGeometry& geometry) {
+    const bool refittable = geometry.refittable;
     scene_ = rtcNewScene(device);
     rtcSetSceneBuildQuality(scene_, refittable ? RTC_BUILD_QUALITY_LOW : RTC_BUILD_QUALITY_HIGH);
     rtcSetSceneFlags(scene_, refittable ? RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC : RTC_SCENE_FLAG_ROBUST);
-    for (size_t id = 0; id < meshes.size(); ++id) {
-        if (!meshes[id]) continue;  // an id held for fur only
-        const TriangleMesh& m = *meshes[id];
+    for (size_t id = 0; id < geometry.meshes.size(); ++id) {
+        if (!geometry.meshes[id]) continue;  // an id held for fur only
+        const TriangleMesh& m = *geometry.meshes[id];
         RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
         if (refittable) rtcSetGeometryBuildQuality(g, RTC_BUILD_QUALITY_REFIT);
-        const ShutterPositions* moving = motion_of(motion, id);
+        const ShutterPositions* moving = at_or<const ShutterPositions*>(geometry.motion, id, nullptr);
+        if (moving && (*moving)[0].empty()) moving = nullptr;
         if (moving) rtcSetGeometryTimeStepCount(g, 2);
         for (unsigned slot = 0; slot < (moving ? 2u : 1u); ++slot) {
             const std::vector<Vec3>& pos = moving ? (*moving)[slot] : m.positions;
@@ -111,7 +121,7 @@ void Bvh::begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes
         auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
             g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), m.triangle_count()));
         std::copy(m.indices.begin(), m.indices.end(), ib);
-        if (id < masks.size()) rtcSetGeometryMask(g, masks[id]);
+        if (id < geometry.masks.size()) rtcSetGeometryMask(g, geometry.masks[id]);
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(scene_, g, static_cast<unsigned>(id));
         rtcReleaseGeometry(g);

@@ -45,24 +45,32 @@ struct Hit {
 
 /// Vertex positions at shutter open and close of a mesh that moves in the shutter.
 using ShutterPositions = std::array<std::vector<Vec3>, 2>;
+/// Fur control points (x, y, z, radius, as Fur::vertices) at shutter open and close.
+using FurShutter = std::array<std::vector<float>, 2>;
 
-/// One Embree scene over a list of meshes (geometry id = index in the list) and, optionally,
-/// fur: `furs[i]` (null = none) is object i's, traced as flat linear curves whose hits say
-/// `hair` and name object i. A BVH may instead place other BVHs (instances): hits report the
+/// What a BVH of meshes and fur holds, per id (an object's index); every list may be shorter
+/// than `meshes` (missing entries: none, still, every ray).
+struct BvhGeometry {
+    std::vector<const TriangleMesh*> meshes;      ///< geometry id = index (null: none)
+    std::vector<const ShutterPositions*> motion;  ///< mesh i at shutter open and close (Embree's motion blur)
+    std::vector<unsigned> masks;                  ///< mesh i's ray mask
+    std::vector<const Fur*> furs;                 ///< geometry id = meshes.size() + i: object i's fur
+    std::vector<const FurShutter*> fur_motion;    ///< fur i at shutter open and close
+    std::vector<unsigned> fur_masks;              ///< fur i's ray mask
+    /// Its meshes may later take new positions (`refit`); it holds its vertices itself.
+    bool refittable = false;
+};
+
+/// One Embree scene over meshes and fur (fur traced as flat linear curves whose hits say `hair`
+/// and name the object), or over other BVHs placed by a transform (instances): hits report the
 /// placed BVH's own geometry ids, so every BVH of a scene decodes its hits the same way.
+/// Motion blur: ray time 0 = shutter open, 1 = close; what does not move is where it is.
 class Bvh {
 public:
-    /// `motion[i]` (if given and not null): mesh i's vertices at shutter open and close, traced
-    /// with Embree's motion blur (ray time 0 = open, 1 = close). `masks[i]` (if given): mesh
-    /// i's ray mask (else every ray sees it); `fur_masks[i]` likewise for fur i. `refittable`:
-    /// its meshes may later take new positions (`refit`); such a BVH holds its vertices itself.
-    Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const std::vector<const Fur*>& furs = {},
-        const std::vector<const ShutterPositions*>& motion = {}, const std::vector<unsigned>& masks = {},
-        const std::vector<unsigned>& fur_masks = {}, bool refittable = false);
+    Bvh(RTCDevice device, const BvhGeometry& geometry);
     /// Meshes plus an instance of `fur`, a BVH of fur only over as many mesh ids (so its hits
     /// decode the same): fur traced by several BVHs is built once.
-    Bvh(RTCDevice device, const std::vector<const TriangleMesh*>& meshes, const Bvh& fur,
-        const std::vector<const ShutterPositions*>& motion = {}, const std::vector<unsigned>& masks = {});
+    Bvh(RTCDevice device, const BvhGeometry& meshes, const Bvh& fur);
     /// Other BVHs placed in this one (each over `mesh_count` mesh ids, as above).
     struct Placed {
         std::shared_ptr<const Bvh> bvh;
@@ -93,9 +101,9 @@ public:
     bool occluded(const Vec3& o, const Vec3& d, float tnear, float tfar, unsigned mask = kRayAll) const;
 
 private:
-    /// A new scene holding `meshes` (not committed).
-    void begin(RTCDevice device, const std::vector<const TriangleMesh*>& meshes,
-               const std::vector<const ShutterPositions*>& motion, const std::vector<unsigned>& masks, bool refittable);
+    /// A new scene holding `g`'s meshes (not committed).
+    void begin(RTCDevice device, const BvhGeometry& g);
+    void add_fur(RTCDevice device, const BvhGeometry& g, size_t id);
     Hit make_hit(unsigned geom, unsigned prim, float t, float u, float v) const;
     RTCScene scene_ = nullptr;
     unsigned mesh_count_ = 0;

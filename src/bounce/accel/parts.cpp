@@ -37,30 +37,33 @@ bool moving_in_shutter(const Object& o) {
     return !o.shutter[0].empty() || (o.shutter_placement && !((*o.shutter_placement)[0] == (*o.shutter_placement)[1]));
 }
 
-/// Fur by the rays that see it, as the flat BVHs hold it (accel.cpp).
-struct FurLists {
-    std::vector<const Fur*> visible, indirect, shadow;
-    std::vector<unsigned> masks;
-    explicit FurLists(const Scene& scene) {
-        for (size_t i = 0; i < scene.objects.size(); ++i) {
-            const Object& o = scene.objects[i];
-            const Fur* f = o.fur && o.fur->segment_count() ? o.fur.get() : nullptr;
-            const RayVisibility to = f ? f->params.visible_to : RayVisibility{};
-            masks.push_back(fur_ray_mask(scene, i));
-            visible.push_back(f && to.camera ? f : nullptr);
-            indirect.push_back(f && (to.indirect || to.reflections) ? f : nullptr);
-            shadow.push_back(f && to.shadows && !indirect.back() ? f : nullptr);
-        }
-    }
-};
-
-uint64_t fur_key(const Scene& scene, const std::vector<const Fur*>& furs, const std::vector<unsigned>* masks) {
+uint64_t fur_key(const BvhGeometry& g) {
     PartKey k(kFur);
-    for (size_t i = 0; i < furs.size(); ++i)
-        if (furs[i]) k.add(i).add(furs[i]->vertices).add(furs[i]->segment_first).add(masks ? (*masks)[i] : kRayAll);
-    return scene.objects.empty() ? 0 : k.value();
+    for (size_t i = 0; i < g.furs.size(); ++i) {
+        if (!g.furs[i]) continue;
+        k.add(i).add(g.furs[i]->vertices).add(g.furs[i]->segment_first).add(i < g.fur_masks.size() ? g.fur_masks[i] : kRayAll);
+        if (i < g.fur_motion.size() && g.fur_motion[i]) k.add((*g.fur_motion[i])[0]).add((*g.fur_motion[i])[1]);
+    }
+    return k.value();
 }
 }  // namespace
+
+FurLists::FurLists(const Scene& scene) {
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+        const Object& o = scene.objects[i];
+        const Fur* f = o.fur && o.fur->segment_count() ? o.fur.get() : nullptr;
+        const RayVisibility to = f ? f->params.visible_to : RayVisibility{};
+        masks.push_back(fur_ray_mask(scene, i));
+        visible.push_back(f && to.camera ? f : nullptr);
+        indirect.push_back(f && (to.indirect || to.reflections) ? f : nullptr);
+        shadow.push_back(f && to.shadows && !indirect.back() ? f : nullptr);
+        motion.push_back(f && !o.fur_shutter[0].empty() ? &o.fur_shutter : nullptr);
+    }
+}
+
+bool FurLists::any(const std::vector<const Fur*>& furs) {
+    return std::any_of(furs.begin(), furs.end(), [](const Fur* f) { return f != nullptr; });
+}
 
 BvhPart BvhParts::take(const BvhPart* before, uint64_t key, uint64_t layout,
                        const std::function<std::shared_ptr<Bvh>()>& build, const std::function<void(Bvh&)>& refit) {
@@ -90,22 +93,24 @@ BvhParts::BvhParts(RTCDevice device, const Scene& scene, const BvhParts* before)
 
 void BvhParts::take_still(RTCDevice device, const Scene& scene, const BvhParts* before) {
     const size_t n = scene.objects.size();
-    std::vector<const TriangleMesh*> coarse(n, nullptr), fine(n, nullptr);
-    std::vector<unsigned> masks(n, kRayAll);
+    BvhGeometry coarse;
+    coarse.meshes.assign(n, nullptr), coarse.masks.assign(n, kRayAll);
+    BvhGeometry fine = coarse;
     PartKey coarse_key(kStill), fine_key(kStill);
     bool any = false;
     for (size_t i = 0; i < n; ++i) {
         const Object& o = scene.objects[i];
         if (o.moves) continue;
         any = true;
-        coarse[i] = &o.coarse, fine[i] = &o.visible(), masks[i] = object_ray_mask(scene, i);
-        coarse_key.add(i).add(o.coarse.positions).add(o.coarse.indices).add(masks[i]);
-        fine_key.add(i).add(o.visible().positions).add(o.visible().indices).add(masks[i]);
+        const unsigned mask = coarse.masks[i] = fine.masks[i] = object_ray_mask(scene, i);
+        coarse.meshes[i] = &o.coarse, fine.meshes[i] = &o.visible();
+        coarse_key.add(i).add(o.coarse.positions).add(o.coarse.indices).add(mask);
+        fine_key.add(i).add(o.visible().positions).add(o.visible().indices).add(mask);
         needs_fine_ = needs_fine_ || o.has_fine();
     }
     if (!any) return;
-    auto build = [&](const std::vector<const TriangleMesh*>& meshes) {
-        return [&, meshes] { return std::make_shared<Bvh>(device, meshes, std::vector<const Fur*>{}, std::vector<const ShutterPositions*>{}, masks); };
+    auto build = [&](const BvhGeometry& g) {
+        return [&] { return std::make_shared<Bvh>(device, g); };
     };
     auto none = [](Bvh&) {};
     still_coarse_ = take(before ? &before->still_coarse_ : nullptr, coarse_key.value(), 0, build(coarse), none);
@@ -127,12 +132,10 @@ void BvhParts::take_movers(RTCDevice device, const Scene& scene, const BvhParts*
         // Each mover's part holds its mesh alone, under its own id (so hits decode as the flat BVH's).
         auto build = [&](const TriangleMesh& mesh, const ShutterPositions* motion, bool refittable) {
             return [&, motion, refittable] {
-                std::vector<const TriangleMesh*> meshes(n, nullptr);
-                meshes[i] = &mesh;
-                std::vector<const ShutterPositions*> moving(n, nullptr);
-                moving[i] = motion;
-                return std::make_shared<Bvh>(device, meshes, std::vector<const Fur*>{}, moving, std::vector<unsigned>{},
-                                             std::vector<unsigned>{}, refittable);
+                BvhGeometry g;
+                g.meshes.assign(n, nullptr), g.motion.assign(n, nullptr);
+                g.meshes[i] = &mesh, g.motion[i] = motion, g.refittable = refittable;
+                return std::make_shared<Bvh>(device, g);
             };
         };
         if (o.local_coarse) {  // rigid: its shape before the placement, placed at every frame
@@ -167,25 +170,24 @@ void BvhParts::take_movers(RTCDevice device, const Scene& scene, const BvhParts*
 void BvhParts::take_fur(RTCDevice device, const Scene& scene, const BvhParts* before) {
     const FurLists lists(scene);
     const size_t n = scene.objects.size();
-    auto take_list = [&](BvhPart BvhParts::*slot, const std::vector<const Fur*>& furs, const std::vector<unsigned>* masks) {
-        if (std::all_of(furs.begin(), furs.end(), [](const Fur* f) { return f == nullptr; })) return;
+    // Fur alone, over as many mesh ids as objects (so its hits decode as every part's).
+    auto take_list = [&](BvhPart BvhParts::*slot, const std::vector<const Fur*>& furs, const std::vector<unsigned>& masks,
+                         const std::vector<const FurShutter*>& motion) {
+        if (!FurLists::any(furs)) return;
+        BvhGeometry g;
+        g.meshes.assign(n, nullptr), g.furs = furs, g.fur_masks = masks, g.fur_motion = motion;
         BvhPart& part = this->*slot;
-        part = take(before ? &(before->*slot) : nullptr, fur_key(scene, furs, masks), 0,
-                    [&] {
-                        return std::make_shared<Bvh>(device, std::vector<const TriangleMesh*>(n, nullptr), furs,
-                                                     std::vector<const ShutterPositions*>{},
-                                                     std::vector<unsigned>{}, masks ? *masks : std::vector<unsigned>{});
-                    },
-                    [](Bvh&) {});
+        part = take(before ? &(before->*slot) : nullptr, fur_key(g), 0, [&] { return std::make_shared<Bvh>(device, g); }, [](Bvh&) {});
         if (part.furs.empty())  // built now: it traces this scene's fur buffers, which must outlive it
             for (size_t i = 0; i < n; ++i)
-                if (furs[i]) part.furs.push_back(scene.objects[i].fur);
+                if (g.furs[i]) part.furs.push_back(scene.objects[i].fur);
     };
-    take_list(&BvhParts::coarse_fur_, lists.indirect, &lists.masks);
-    take_list(&BvhParts::shadow_fur_, lists.shadow, nullptr);
-    // The camera sees all fur: when that is the shadow part's, the same part.
-    if (lists.visible == lists.shadow) fine_fur_ = shadow_fur_;
-    else take_list(&BvhParts::fine_fur_, lists.visible, nullptr);
+    take_list(&BvhParts::coarse_fur_, lists.indirect, lists.masks, {});
+    take_list(&BvhParts::shadow_fur_, lists.shadow, {}, {});
+    // The camera sees all fur, still: when that is the shadow part's, the same part.
+    const bool blurred = std::any_of(lists.motion.begin(), lists.motion.end(), [](const FurShutter* m) { return m != nullptr; });
+    if (lists.visible == lists.shadow && !blurred) fine_fur_ = shadow_fur_;
+    else take_list(&BvhParts::fine_fur_, lists.visible, {}, lists.motion);
     needs_fine_ = needs_fine_ || fine_fur_.bvh != nullptr;
 }
 

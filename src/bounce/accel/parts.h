@@ -19,6 +19,17 @@ struct BvhPart {
     std::vector<std::shared_ptr<const Fur>> furs;  ///< whose buffers it traces (shared, not copied)
 };
 
+/// A scene's fur by the rays that see it (FurParams::visible_to), per object (null: none): the
+/// camera's; gathers' and mirrors' (with `masks`, in the coarse BVH); shadows' where it is not
+/// in the coarse BVH. `motion`: each fur at shutter open and close, for the camera.
+struct FurLists {
+    explicit FurLists(const Scene& scene);
+    std::vector<const Fur*> visible, indirect, shadow;
+    std::vector<unsigned> masks;
+    std::vector<const FurShutter*> motion;
+    static bool any(const std::vector<const Fur*>& furs);
+};
+
 class BvhParts {
 public:
     /// The parts of `scene`'s BVHs; those of `before` (the previous frame's) are taken over

@@ -139,6 +139,9 @@ struct Object {
     /// tessellations before `placement` (null fine = none). Ray tracing places them with it, so
     /// a shot's frames move them without building their BVHs again (accel/bvh.h).
     std::shared_ptr<const TriangleMesh> local_coarse, local_fine;
+    /// With motion blur, a rigid mover's fur: its control points (as Fur::vertices) at shutter
+    /// open and close (empty otherwise; a deforming mesh's fur is not blurred).
+    std::array<std::vector<float>, 2> fur_shutter;
     /// With motion blur, rigid movers with local tessellations: the placement at shutter open and close.
     std::optional<std::array<Transform, 2>> shutter_placement;
     bool has_fine() const { return !fine.indices.empty(); }

@@ -61,6 +61,16 @@ void check_camera(const Camera& cam, const JsonContext& ctx, const std::string& 
     if (length(cross(cam.look_at - cam.position, cam.up)) == 0) ctx.fail("/camera/up", "up is parallel to the view direction" + when);
 }
 
+/// Fur control points moved rigidly (widths kept).
+std::vector<float> moved_fur(const Fur& fur, const Transform& move) {
+    std::vector<float> v = fur.vertices;
+    for (size_t i = 0; i + 3 < v.size(); i += 4) {
+        const Vec3 p = move.point({v[i], v[i + 1], v[i + 2]});
+        v[i] = p.x, v[i + 1] = p.y, v[i + 2] = p.z;
+    }
+    return v;
+}
+
 /// Motion blur: the camera's pose and the visible mesh of every object whose placement is keyed,
 /// at shutter open and close (an object's placement then, applied to its shape now).
 void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
@@ -89,6 +99,7 @@ void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
             }
             o.shutter[k].clear();
             for (const Vec3& p : o.visible().positions) o.shutter[k].push_back(move.point(p));
+            if (o.fur) o.fur_shutter[k] = moved_fur(*o.fur, move);
         }
         const size_t n = o.visible().positions.size();  // a pose of other vertices is not blurred
         if (o.shutter[0].size() != n || o.shutter[1].size() != n) o.shutter = {};
