@@ -130,6 +130,35 @@ TEST(BvhParts, AStillHasOneBvhOfEverythingAndAFrameWhoseSkinWasRefitLaterIsNotKe
     expect_same_hits(again, fresh, one.objects.size());
 }
 
+TEST(BvhParts, FurPartsAreNotTakenOverByAScenesWithOtherObjects) {
+    // Fur's geometry ids follow the objects (mesh ids first): a lawn's fur part made for two
+    // objects would name another object among three.
+    test::TempDir dir;
+    json j = test::base_scene();
+    j["animation"] = {{"fps", 24}, {"frames", {1, 2}}};
+    j["camera"] = {{"position", {0, 3, 3}}, {"look_at", {0, 0, 0}}, {"resolution", {16, 16}}};
+    const json lawn = {{"name", "lawn"}, {"type", "quad"}, {"vertices", {{-0.5, 0, -0.5}, {-0.5, 0, 0.5}, {0.5, 0, 0.5}, {0.5, 0, -0.5}}},
+                       {"fur", {{"count", 3000}, {"length", 0.1}, {"width_root", 0.004}, {"width_tip", 0.002}}}};
+    const json ball = {{"name", "ball"}, {"type", "sphere"}, {"radius", 0.2},
+                       {"transform", {{"translate", {{"keys", {{1, {-2, 0.5, 0}}, {2, {2, 0.5, 0}}}}}}}}};
+    j["objects"] = {lawn, ball};
+    dir.write("two.json", j.dump());
+    j["objects"].push_back({{"name", "wall"}, {"type", "quad"}, {"vertices", {{-3, 0, -3}, {3, 0, -3}, {3, 2, -3}, {-3, 2, -3}}}});
+    dir.write("three.json", j.dump());
+    const Scene two = load_scene(dir.file("two.json")), three = load_scene(dir.file("three.json"));
+    const SceneAccel a(two), b(three, &a);
+    int hair = 0, wrong = 0;
+    for (uint32_t k = 0; k < 200; ++k) {
+        // Across the lawn, low: through a metre of strands.
+        const Vec3 o(-1, 0.01f + 0.05f * to_unit_float(mix64(2 * k)), -0.4f + 0.8f * to_unit_float(mix64(2 * k + 1)));
+        const Hit h = b.fine().intersect(o, {1, 0, 0}, 0, INFINITY, 0.5f, kRayCamera);
+        hair += h.valid() && h.hair && h.object == 0;
+        wrong += h.valid() && !(h.hair && h.object == 0);
+    }
+    EXPECT_GT(hair, 180);
+    EXPECT_EQ(wrong, 0);
+}
+
 TEST(BvhParts, FurOnARigidMoverIsBlurredWithIt) {
     // A furry ball crossing 4 units a frame, the shutter open a whole frame about frame 1.5: the
     // camera sees each strand 2 units back at shutter open, where it is at the frame's time halfway,

@@ -7,10 +7,11 @@
 namespace bounce {
 
 namespace {
-/// What a part is built from, hashed (xxHash): equal keys, equal parts.
+/// What a part is built from, hashed (xxHash): equal keys, equal parts. Every key holds the
+/// number of objects: fur's geometry ids (and so its hits) depend on it.
 class PartKey {
 public:
-    explicit PartKey(uint64_t kind) : h_(mix64(kind + 1)) {}
+    PartKey(uint64_t kind, size_t objects) : h_(hash_combine(mix64(kind + 1), objects)) {}
     PartKey& add(uint64_t v) {
         h_ = hash_combine(h_, v);
         return *this;
@@ -19,10 +20,6 @@ public:
     PartKey& add(const std::vector<T>& v) {
         add(v.size());
         h_ = OIIO::xxhash::XXH64(v.data(), v.size() * sizeof(T), h_);
-        return *this;
-    }
-    PartKey& add(const Transform& t) {
-        h_ = OIIO::xxhash::XXH64(t.m.data(), sizeof(t.m), h_);
         return *this;
     }
     uint64_t value() const { return h_; }
@@ -38,7 +35,7 @@ bool moving_in_shutter(const Object& o) {
 }
 
 uint64_t fur_key(const BvhGeometry& g) {
-    PartKey k(kFur);
+    PartKey k(kFur, g.meshes.size());
     for (size_t i = 0; i < g.furs.size(); ++i) {
         if (!g.furs[i]) continue;
         k.add(i).add(g.furs[i]->vertices).add(g.furs[i]->segment_first).add(i < g.fur_masks.size() ? g.fur_masks[i] : kRayAll);
@@ -96,7 +93,7 @@ void BvhParts::take_still(RTCDevice device, const Scene& scene, const BvhParts* 
     BvhGeometry coarse;
     coarse.meshes.assign(n, nullptr), coarse.masks.assign(n, kRayAll);
     BvhGeometry fine = coarse;
-    PartKey coarse_key(kStill), fine_key(kStill);
+    PartKey coarse_key(kStill, n), fine_key(kStill, n);
     bool any = false;
     for (size_t i = 0; i < n; ++i) {
         const Object& o = scene.objects[i];
@@ -140,8 +137,8 @@ void BvhParts::take_movers(RTCDevice device, const Scene& scene, const BvhParts*
         };
         if (o.local_coarse) {  // rigid: its shape before the placement, placed at every frame
             const TriangleMesh &lc = *o.local_coarse, &lf = o.local_fine ? *o.local_fine : lc;
-            const uint64_t kc = PartKey(kLocal).add(lc.positions).add(lc.indices).value();
-            const uint64_t kf = PartKey(kLocal).add(lf.positions).add(lf.indices).value();
+            const uint64_t kc = PartKey(kLocal, n).add(i).add(lc.positions).add(lc.indices).value();
+            const uint64_t kf = PartKey(kLocal, n).add(i).add(lf.positions).add(lf.indices).value();
             auto none = [](Bvh&) {};
             coarse_[i] = take(was_coarse, kc, 0, build(lc, nullptr, false), none);
             fine_[i] = kf == kc ? coarse_[i] : take(was_fine, kf, 0, build(lf, nullptr, false), none);
@@ -151,12 +148,13 @@ void BvhParts::take_movers(RTCDevice device, const Scene& scene, const BvhParts*
         // its triangles are the ones of the frame before.
         const TriangleMesh &c = o.coarse, &v = o.visible();
         const ShutterPositions* motion = o.shutter[0].empty() ? nullptr : &o.shutter;
-        PartKey kc(kWorld), kf(kWorld);
+        PartKey kc(kWorld, n), kf(kWorld, n);
+        kc.add(i), kf.add(i);
         kc.add(c.positions).add(c.indices);
         kf.add(v.positions).add(v.indices);
         if (motion) kf.add((*motion)[0]).add((*motion)[1]);
         auto layout = [&](const TriangleMesh& m, bool moving) {
-            return o.deforms ? PartKey(kLayout).add(m.indices).add(m.positions.size()).add(moving ? 2 : 1).value() : 0;
+            return o.deforms ? PartKey(kLayout, n).add(i).add(m.indices).add(m.positions.size()).add(moving ? 2 : 1).value() : 0;
         };
         coarse_[i] = take(was_coarse, kc.value(), layout(c, false), build(c, nullptr, o.deforms),
                           [&](Bvh& b) { b.refit(static_cast<unsigned>(i), c, nullptr); });
