@@ -37,12 +37,6 @@ unsigned fur_ray_mask(const Scene& scene, size_t index) {
     return o.fur ? ray_mask(scene, index, o.fur->params.visible_to) : 0u;
 }
 
-namespace {
-bool anything_moves(const Scene& scene) {
-    return std::any_of(scene.objects.begin(), scene.objects.end(), [](const Object& o) { return o.moves; });
-}
-}  // namespace
-
 SceneAccel::SceneAccel(const Scene& scene, const SceneAccel* previous) {
     // Refused before Embree allocates: about 100 bytes per triangle and 80 per fur segment
     // and BVH (measured on the ogre and the furry ball), the fine tessellation twice over.
@@ -53,7 +47,7 @@ SceneAccel::SceneAccel(const Scene& scene, const SceneAccel* previous) {
     }
     check_memory(100 * triangles + 80 * segments, scene.path, "objects",
                  fmt::format("ray tracing {:.3g} triangles and {:.3g} fur segments", triangles, segments / 2));
-    const bool two_level = anything_moves(scene);
+    const bool two_level = scene.objects_move();
     // Parts are the device's: a frame that takes over the previous frame's uses its device.
     if (two_level && previous && previous->parts_) {
         device_ = previous->device_;

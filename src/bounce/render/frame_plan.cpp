@@ -86,10 +86,6 @@ bool lights_keyed(const Scene& scene) {
     return false;
 }
 
-bool objects_move(const Scene& scene) {
-    return std::any_of(scene.objects.begin(), scene.objects.end(), [](const Object& o) { return o.moves; });
-}
-
 }  // namespace
 
 FramePlan plan_frame(const Scene& scene, const FrameState& previous, const RenderRequest& request) {
@@ -148,7 +144,7 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
         plan.radiosity = RadiosityStep::Carry;
     // A shot in which anything moves keeps records' hits: a record is then updated (the rays a
     // moving object may meet traced again, every hit re-shaded) rather than gathered again.
-    plan.keep_hits = request.sequence && scene.render.indirect.gi == GiMode::Cache && (lights_keyed(scene) || objects_move(scene));
+    plan.keep_hits = request.sequence && scene.render.indirect.gi == GiMode::Cache && (lights_keyed(scene) || scene.objects_move());
     // Refinement's gathers lend their rays to the next frames' (EarlierGathers; not with light
     // parts: per-light layers of a shot are not measured with it; not in an MPI job: the hits
     // stay with the rank that traced them, and a process alone would reuse others').

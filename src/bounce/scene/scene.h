@@ -133,7 +133,8 @@ struct Object {
     /// A holdout: where the camera sees it, black with alpha 0, hiding what is behind it.
     bool matte = false;
     /// With motion blur: the visible mesh's vertices at shutter open and close (empty when it
-    /// does not move during the shutter); camera rays see it in between.
+    /// does not move during the shutter, and for rigid movers traced by `shutter_placement`);
+    /// camera rays see it in between.
     std::array<std::vector<Vec3>, 2> shutter;
     /// Rigid movers (placement keyed, not deforming; not subdivision surfaces): both
     /// tessellations before `placement` (null fine = none). Ray tracing places them with it, so
@@ -173,6 +174,7 @@ struct Scene {
     double frame = 1;   ///< the frame this scene is
 
     Bounds bounds() const;          ///< of the coarse tessellation (what rays trace)
+    bool objects_move() const;      ///< some object moves over the shot (Object::moves)
     Bounds visible_bounds() const;  ///< of everything the camera can see (fine surfaces, fur)
     /// The length that automatic distances are fractions of (the ray offset, the radiosity texel,
     /// the AO distance): the diagonal of the objects that do not move, or of all when every object

@@ -3,6 +3,7 @@
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -93,13 +94,14 @@ void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
                 continue;
             }
             const Transform then = read_transform(r), move = then * undo;
-            if (o.local_coarse) {
+            if (o.fur) o.fur_shutter[k] = moved_fur(*o.fur, move);
+            if (o.local_coarse) {  // traced as its local shape placed then: no moved copy of its vertices
                 if (!o.shutter_placement) o.shutter_placement.emplace();
                 (*o.shutter_placement)[k] = then;
+                continue;
             }
             o.shutter[k].clear();
             for (const Vec3& p : o.visible().positions) o.shutter[k].push_back(move.point(p));
-            if (o.fur) o.fur_shutter[k] = moved_fur(*o.fur, move);
         }
         const size_t n = o.visible().positions.size();  // a pose of other vertices is not blurred
         if (o.shutter[0].size() != n || o.shutter[1].size() != n) o.shutter = {};
@@ -211,6 +213,10 @@ Bounds Scene::bounds() const {
     Bounds b;
     for (const auto& o : objects) b.extend(o.coarse.bounds());
     return b;
+}
+
+bool Scene::objects_move() const {
+    return std::any_of(objects.begin(), objects.end(), [](const Object& o) { return o.moves; });
 }
 
 float Scene::size() const {
