@@ -1,6 +1,7 @@
 #include "bounce/geometry/fur.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <unordered_map>
@@ -23,7 +24,7 @@ float FurParams::falloff(float v) const {
 
 size_t FurParams::memory_bytes(uint64_t strands) const {
     const auto s = static_cast<size_t>(segments);
-    const size_t per_strand = (s + 1) * 4 * sizeof(float) + s * (sizeof(uint32_t) + 64) + 2 * sizeof(Vec3) + sizeof(Vec2);
+    const size_t per_strand = (s + 1) * 4 * sizeof(float) + s * (sizeof(uint32_t) + 64) + 2 * sizeof(Vec3) + 2 * sizeof(Vec2) + sizeof(uint32_t);
     return static_cast<size_t>(strands) * per_strand;
 }
 
@@ -82,6 +83,7 @@ Fur grow_fur(const TriangleMesh& surface, const FurParams& params) {
     const size_t per = static_cast<size_t>(params.segments) + 1;
     fur.vertices.reserve(params.count * per * 4);
     fur.root_p.reserve(params.count), fur.root_n.reserve(params.count), fur.root_uv.reserve(params.count);
+    fur.root_tri.reserve(params.count), fur.root_bary.reserve(params.count);
     const Vec3 down(0, -1, 0);
     for (uint64_t i = 0; i < params.count; ++i) {
         const RandomStream rng(params.seed, i);
@@ -122,10 +124,53 @@ Fur grow_fur(const TriangleMesh& surface, const FurParams& params) {
         fur.root_p.push_back(sp.p);
         fur.root_n.push_back(sp.n);
         fur.root_uv.push_back(sp.uv);
+        fur.root_tri.push_back(static_cast<uint32_t>(tri));
+        fur.root_bary.emplace_back(a, b);
     }
     if (params.clump > 0) clump(fur);
     fur.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return fur;
+}
+
+namespace {
+
+/// The frame a strand turns with: the root's normal, and its triangle's first edge made
+/// perpendicular to it. False where the pose folds the triangle to an edge or a point.
+bool root_frame(const TriangleMesh& m, uint32_t tri, const Vec3& n, std::array<Vec3, 3>& frame) {
+    const Vec3 e = m.positions[m.indices[3 * tri + 1]] - m.positions[m.indices[3 * tri]];
+    const Vec3 s = e - n * dot(e, n);
+    const float l = length(s);
+    if (!(l > 0) || !isfinite(n)) return false;
+    frame = {s / l, cross(n, s / l), n};
+    return true;
+}
+
+}  // namespace
+
+bool same_triangles(const TriangleMesh& from, const TriangleMesh& to) {
+    return from.indices == to.indices && from.positions.size() == to.positions.size();
+}
+
+Fur carry_fur(const Fur& fur, const TriangleMesh& from, const TriangleMesh& to) {
+    Fur out = fur;
+    if (from.positions == to.positions && from.normals == to.normals) return out;
+    const size_t per = static_cast<size_t>(fur.segments) + 1;
+    for (size_t s = 0; s < fur.strand_count(); ++s) {
+        const uint32_t tri = fur.root_tri[s];
+        const Vec2 b = fur.root_bary[s];
+        const SurfacePoint then = surface_point(from, tri, b.x, b.y), now = surface_point(to, tri, b.x, b.y);
+        std::array<Vec3, 3> f, g;
+        // A triangle folded flat keeps the strand's direction (nothing to turn it by).
+        const bool turn = root_frame(from, tri, then.n, f) && root_frame(to, tri, now.n, g);
+        for (size_t k = 0; k < per; ++k) {
+            float* q = &out.vertices[4 * (s * per + k)];
+            const Vec3 d = Vec3(q[0], q[1], q[2]) - fur.root_p[s];
+            const Vec3 p = now.p + (turn ? g[0] * dot(d, f[0]) + g[1] * dot(d, f[1]) + g[2] * dot(d, f[2]) : d);
+            q[0] = p.x, q[1] = p.y, q[2] = p.z;
+        }
+        out.root_p[s] = now.p, out.root_n[s] = now.n, out.root_uv[s] = now.uv;
+    }
+    return out;
 }
 
 Color kajiya_kay(const Vec3& t, const Vec3& wi, const Vec3& wo, const Color& albedo, float specular, float exponent) {

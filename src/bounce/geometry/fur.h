@@ -72,6 +72,10 @@ struct Fur {
     std::vector<uint32_t> segment_first;  ///< per segment: index of its first control point
     std::vector<Vec3> root_p, root_n;     ///< per strand, on the growing surface
     std::vector<Vec2> root_uv;
+    /// Per strand, where its root lies on the growing surface: a triangle and barycentrics
+    /// (Embree's u, v). A pose of the same surface carries the strand there (carry_fur).
+    std::vector<uint32_t> root_tri;
+    std::vector<Vec2> root_bary;
     double seconds = 0;              ///< generation time
 
     size_t strand_count() const { return root_p.size(); }
@@ -91,6 +95,16 @@ struct Fur {
 /// Grows `params.count` strands on `surface` (area-weighted, thinned by the density map),
 /// each a pure function of (seed, strand index): the same seed gives the same fur.
 Fur grow_fur(const TriangleMesh& surface, const FurParams& params);
+
+/// Whether `to` is the surface `from` in another pose: the same triangles over as many vertices.
+bool same_triangles(const TriangleMesh& from, const TriangleMesh& to);
+
+/// The strands of `fur`, grown on `from`, carried to `to` (same_triangles must hold): each root
+/// stays at its triangle and barycentrics, and the strand turns with the surface's frame there
+/// (the root's normal and its triangle's first edge), keeping its shape and length. A groom then
+/// follows a skin or a moving object strand for strand, where growing it again on each pose would
+/// place strands by that pose's areas and clump them by cells the pose moved through.
+Fur carry_fur(const Fur& fur, const TriangleMesh& from, const TriangleMesh& to);
 
 /// The Kajiya-Kay hair reflectance for direct light arriving from unit `wi` at a strand of
 /// unit tangent `t`, seen from unit `wo`, per unit of (radiance x solid angle): the diffuse

@@ -178,7 +178,7 @@ MeshPose mesh_pose(const JsonReader& r, const Scene& scene, double frame) {
 }
 }  // namespace
 
-std::vector<Vec3> posed_visible_positions(const JsonReader& r, const Scene& scene, double frame) {
+TriangleMesh posed_visible_mesh(const JsonReader& r, const Scene& scene, double frame) {
     std::vector<Material> materials = scene.materials;  // the file's own are added to a copy
     TriangleMesh mesh;
     try {
@@ -188,7 +188,7 @@ std::vector<Vec3> posed_visible_positions(const JsonReader& r, const Scene& scen
     }
     mesh.transform(read_transform(r));
     const int fine = r.integer("fine_subdivisions", 0, 0, 6);
-    return fine > 0 ? subdivide_linear(mesh, fine).positions : mesh.positions;
+    return fine > 0 ? subdivide_linear(mesh, fine) : mesh;
 }
 
 namespace {
@@ -206,6 +206,35 @@ void keep_local(Object& obj, const TriangleMesh& coarse, const TriangleMesh* fin
     if (!obj.moves || obj.deforms) return;
     obj.local_coarse = std::make_shared<const TriangleMesh>(coarse);
     if (fine) obj.local_fine = std::make_shared<const TriangleMesh>(*fine);
+}
+}  // namespace
+
+namespace {
+/// The visible surface of mover `obj` (object `index`, read from `r` at the frame) as it stands
+/// at the shot's first frame: the groom, which every frame's pose carries (fur.h, carry_fur).
+TriangleMesh groom_surface(const JsonReader& r, const Scene& scene, size_t index, const Object& obj) {
+    if (scene.frame == scene.shot.first) return obj.visible();
+    const json first = scene.keyed.is_object() ? evaluate_keys(scene.keyed, scene.shot.first, r.ctx()) : json();
+    const JsonReader then = first.is_object() ? JsonReader(first.at("objects").at(index), fmt::format("/objects/{}", index), r.ctx(), object_keys()) : r;
+    if (obj.deforms) {
+        TriangleMesh posed = posed_visible_mesh(then, scene, scene.shot.first);
+        return same_triangles(posed, obj.visible()) ? posed : obj.visible();
+    }
+    const Transform placed = read_transform(then);
+    TriangleMesh groom = obj.visible();
+    if (placed != obj.placement) groom.transform(placed * obj.placement.inverse());
+    return groom;
+}
+
+/// An object's fur: grown on its surface, or for a mover grown on its groom and carried to the
+/// frame's pose, so that a shot's frames show the same strands moving with the surface.
+void read_object_fur(const JsonReader& fur, const JsonReader& r, const Scene& scene, size_t index, Object& obj) {
+    if (!obj.moves) {
+        obj.fur = read_fur(fur, obj.visible(), scene);
+        return;
+    }
+    const TriangleMesh groom = groom_surface(r, scene, index, obj);
+    obj.fur = std::make_shared<const Fur>(carry_fur(*read_fur(fur, groom, scene), groom, obj.visible()));
 }
 }  // namespace
 
@@ -302,7 +331,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
     for (const auto& p : obj.coarse.positions)
         if (!isfinite(p) || std::fabs(p.x) > kMaxCoordinate || std::fabs(p.y) > kMaxCoordinate || std::fabs(p.z) > kMaxCoordinate)
             r.fail("", fmt::format("mesh has vertex positions that are not finite or beyond +-{:g} (after the transform)", kMaxCoordinate));
-    if (r.has("fur")) obj.fur = read_fur(JsonReader(r.raw("fur"), r.at("fur"), r.ctx(), fur_keys()), obj.visible(), scene);
+    if (r.has("fur")) read_object_fur(JsonReader(r.raw("fur"), r.at("fur"), r.ctx(), fur_keys()), r, scene, index, obj);
     read_object_visibility(r, obj);
     scene.objects.push_back(std::move(obj));
 }

@@ -19,9 +19,10 @@ const std::vector<std::string>& object_keys();
 /// Appends object number `index` (read from `r`) to `scene.objects`.
 void read_object(const JsonReader& r, Scene& scene, size_t index);
 
-/// Motion blur of a deforming mesh: the visible mesh's vertices of mesh object `r` (one that
-/// plays its file's animation) posed at `frame` and placed by `r`'s transform.
-std::vector<Vec3> posed_visible_positions(const JsonReader& r, const Scene& scene, double frame);
+/// The visible mesh of mesh object `r` (one that plays its file's animation) posed at `frame`
+/// and placed by `r`'s transform: a deforming mesh at shutter open and close (motion blur), and
+/// where its fur is groomed.
+TriangleMesh posed_visible_mesh(const JsonReader& r, const Scene& scene, double frame);
 
 /// Index of the material named `name`, or -1.
 int material_index(const Scene& scene, const std::string& name);

@@ -124,7 +124,9 @@ struct Object {
     int dicing_level = 0;       ///< subdivision surfaces: the fine tessellation's level (0 = not one)
     double dicing_seconds = 0;  ///< time the loader spent dicing it
     float displacement_bound = 0;  ///< largest distance displacement moves a point (0 = none)
-    std::shared_ptr<const Fur> fur;  ///< strands grown on the visible surface (null = none)
+    /// Strands grown on the visible surface (null = none); a mover's are grown as it stands at the
+    /// shot's first frame and carried to this frame's pose (carry_fur).
+    std::shared_ptr<const Fur> fur;
     std::shared_ptr<const SubdivSurface> surface;  ///< subdivision objects: what was diced (null = none)
     Transform placement;    ///< the scene file's transform, already applied to both tessellations
     bool deforms = false;   ///< its shape changes over the shot (a skin, morph targets), not only its placement
@@ -140,8 +142,8 @@ struct Object {
     /// tessellations before `placement` (null fine = none). Ray tracing places them with it, so
     /// a shot's frames move them without building their BVHs again (accel/bvh.h).
     std::shared_ptr<const TriangleMesh> local_coarse, local_fine;
-    /// With motion blur, a rigid mover's fur: its control points (as Fur::vertices) at shutter
-    /// open and close (empty otherwise; a deforming mesh's fur is not blurred).
+    /// With motion blur, a mover's fur: its control points (as Fur::vertices) at shutter open and
+    /// close (empty otherwise), the same strands moved with the object or carried by the skin.
     std::array<std::vector<float>, 2> fur_shutter;
     /// With motion blur, rigid movers with local tessellations: the placement at shutter open and close.
     std::optional<std::array<Transform, 2>> shutter_placement;

@@ -89,8 +89,10 @@ void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
         const Transform undo = o.placement.inverse();
         for (size_t k = 0; k < 2; ++k) {
             const JsonReader r(docs[k]["objects"][i], fmt::format("/objects/{}", i), ctx, object_keys());
-            if (o.deforms) {  // a skin or morph: posed again at the shutter's ends
-                o.shutter[k] = posed_visible_positions(r, scene, scene.frame + scene.camera.shutter[k]);
+            if (o.deforms) {  // a skin or morph: posed again at the shutter's ends, its fur carried there
+                const TriangleMesh then = posed_visible_mesh(r, scene, scene.frame + scene.camera.shutter[k]);
+                if (o.fur && same_triangles(o.visible(), then)) o.fur_shutter[k] = carry_fur(*o.fur, o.visible(), then).vertices;
+                o.shutter[k] = then.positions;
                 continue;
             }
             const Transform then = read_transform(r), move = then * undo;
@@ -105,6 +107,7 @@ void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
         }
         const size_t n = o.visible().positions.size();  // a pose of other vertices is not blurred
         if (o.shutter[0].size() != n || o.shutter[1].size() != n) o.shutter = {};
+        if (o.fur_shutter[0].size() != o.fur_shutter[1].size()) o.fur_shutter = {};
     }
 }
 
