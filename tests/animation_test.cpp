@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "bounce/accel/accel.h"
+#include "bounce/cache/sites.h"
 #include "bounce/cache/temporal.h"
 #include "bounce/core/error.h"
 #include "bounce/render/shot.h"
@@ -261,6 +262,45 @@ TEST(TemporalCache, RecordsOnAMovingObjectTravelWithItAndTheRestUpdateOnlyWhatTh
         ++updated;
     }
     EXPECT_GT(updated, 0u);
+}
+
+TEST(TemporalCache, AFragmentRefinedTheFrameBeforeStaysRefinedDownToTheHold) {
+    // A still camera and a sliding light: every record is re-shaded each frame and the records'
+    // spread at a fragment moves a little. With render.refine_hold h, frame 2 refines a fragment
+    // exactly when its spread is above refine, or above h x refine and frame 1 refined it.
+    auto run = [](float hold) {
+        json j = shot_scene();
+        j["lights"][0]["position"] = {{"keys", {{1, {1, 5, 4}}, {3, {1.6, 5, 3.4}}}}};
+        j["render"]["refine"] = 0.02;
+        j["render"]["refine_hold"] = hold;
+        auto f = std::make_unique<Frames>();
+        f->render(j, 1);
+        f->render(j, 2);
+        return f;
+    };
+    const auto held = run(0.5f), free = run(1.0f);
+    const RenderResult &one = held->results[0], &two = held->results[1];
+    const Layer &m1 = *one.image.find("refined"), &m2 = *two.image.find("refined"), &m2free = *free->results[1].image.find("refined");
+    EXPECT_EQ(m1.data, free->results[0].image.find("refined")->data);  // frame 1 has nothing to hold
+    const Scene& scene = *held->scenes[1];
+    size_t kept_by_hold = 0, refined = 0;
+    for (int y = 0; y < two.deep.height; ++y)
+        for (int x = 0; x < two.deep.width; ++x) {
+            if (two.deep.pixel(x, y).size() != 1 || one.deep.pixel(x, y).size() != 1) continue;
+            const Fragment& f = two.deep.pixel(x, y)[0];
+            if (!needs_bounce_light(scene, f)) continue;
+            const Interpolated in = interpolate_at(*two.cache, f, record_site(scene, f, two.cache->settings()));
+            const auto i = static_cast<size_t>(y * two.deep.width + x);
+            const bool before = m1.data[i] == 1, above = in.spread > 0.02f, above_hold = in.spread > 0.01f;
+            EXPECT_EQ(m2.data[i] == 1, in.weight <= 0 || above || (before && above_hold)) << x << "," << y << " spread " << in.spread;
+            if (before && above_hold && !above && in.weight > 0) {
+                ++kept_by_hold;
+                EXPECT_EQ(m2free.data[i], 0.0f) << x << "," << y;  // without the hold: the interpolation
+            }
+            refined += m2.data[i] == 1;
+        }
+    EXPECT_GT(kept_by_hold, 3u);
+    EXPECT_GT(refined, kept_by_hold);
 }
 
 TEST(Sequences, AFrameThatFailsStopsTheShotThereAndResumeSkipsWhatIsDone) {

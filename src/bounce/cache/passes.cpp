@@ -145,17 +145,22 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                 if (!needs_bounce_light(scene, f)) continue;
                 const uint64_t key = candidate_key(deep, wx, wy, k);
                 if (cache.fragment_record(key, f.p)) continue;  // refined by an earlier render
+                // The frame before's record of this very fragment, stale (what it saw changed).
+                const Record* before = nullptr;
+                if (options.stale)
+                    if (auto it = options.stale->find(key); it != options.stale->end() && it->second.p == f.p) before = &it->second;
                 if (!tilted_off_records(cs, f)) {
                     const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cs));
-                    if (in.weight > 0 && (threshold <= 0 || in.spread <= threshold)) continue;
+                    // Hysteresis: refined in the frame before, a fragment keeps its own gather
+                    // until its records agree within refine_hold x refine, so that a spread
+                    // hovering about the threshold does not switch it on and off frame by frame.
+                    const float at = before ? threshold * cs.refine_hold : threshold;
+                    if (in.weight > 0 && (threshold <= 0 || in.spread <= at)) continue;
                 }
-                // An earlier frame's record of this very fragment is updated rather than gathered
-                // anew.
-                if (options.stale)
-                    if (auto it = options.stale->find(key); it != options.stale->end() && it->second.p == f.p) {
-                        made.local().push_back(options.update(it->second, stats.local()));
-                        continue;
-                    }
+                if (before) {  // updated rather than gathered anew
+                    made.local().push_back(options.update(*before, stats.local()));
+                    continue;
+                }
                 // Gathered about the fragment's own (displaced) point and normal, as brute force
                 // does; with an earlier gather near it on its surface, mostly from that one's rays
                 // (then it keeps no hits: never reused itself).

@@ -60,6 +60,11 @@ void add_refinement_rows(std::vector<Row>& rows) {
                             "only once the records' spread reaches this many times `refine`; below that the two are "
                             "blended in proportion, so a fragment crossing the threshold changes gradually (less "
                             "popping in a shot, docs/animation.md); 1 = a hard switch").flag());
+    rows.push_back(row("refine_hold", "cache", &R::cache, &CacheSettings::refine_hold).range(0, 1)
+                       .doc("per-fragment refinement in a shot: a fragment refined in the frame before (a still camera's "
+                            "fragment on the same point) keeps its own gather until its records' spread falls below this "
+                            "share of `refine` (hysteresis: no switching on and off as the spread hovers about the "
+                            "threshold, docs/animation.md); 1 = none").flag());
     rows.push_back(row("refine_rays", "cache", &R::cache, &CacheSettings::refine_rays).range(0, 1 << 20).unit("rays")
                        .doc("rays of a refined fragment's own gather; 0 = render.rays").flag());
     rows.push_back(row("displaced_records", "cache", &R::cache, &CacheSettings::displaced_records)
