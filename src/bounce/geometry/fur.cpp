@@ -145,31 +145,47 @@ bool root_frame(const TriangleMesh& m, uint32_t tri, const Vec3& n, std::array<V
     return true;
 }
 
+/// Strand `s` of `fur` (on `from`) carried to `to`: its control points into `out` (which may be
+/// fur.vertices itself); returns where its root is now.
+SurfacePoint carry_strand(const Fur& fur, size_t s, const TriangleMesh& from, const TriangleMesh& to, std::vector<float>& out) {
+    const size_t per = static_cast<size_t>(fur.segments) + 1;
+    const uint32_t tri = fur.root_tri[s];
+    const Vec2 b = fur.root_bary[s];
+    const SurfacePoint then = surface_point(from, tri, b.x, b.y), now = surface_point(to, tri, b.x, b.y);
+    std::array<Vec3, 3> f, g;
+    // A triangle folded flat keeps the strand's direction (nothing to turn it by).
+    const bool turn = root_frame(from, tri, then.n, f) && root_frame(to, tri, now.n, g);
+    for (size_t k = 0; k < per; ++k) {
+        const size_t i = 4 * (s * per + k);
+        const Vec3 d = Vec3(fur.vertices[i], fur.vertices[i + 1], fur.vertices[i + 2]) - fur.root_p[s];
+        const Vec3 p = now.p + (turn ? g[0] * dot(d, f[0]) + g[1] * dot(d, f[1]) + g[2] * dot(d, f[2]) : d);
+        out[i] = p.x, out[i + 1] = p.y, out[i + 2] = p.z;
+    }
+    return now;
+}
+
+bool same_pose(const TriangleMesh& from, const TriangleMesh& to) {
+    return from.positions == to.positions && from.normals == to.normals;
+}
+
 }  // namespace
 
 bool same_triangles(const TriangleMesh& from, const TriangleMesh& to) {
     return from.indices == to.indices && from.positions.size() == to.positions.size();
 }
 
-Fur carry_fur(const Fur& fur, const TriangleMesh& from, const TriangleMesh& to) {
-    Fur out = fur;
-    if (from.positions == to.positions && from.normals == to.normals) return out;
-    const size_t per = static_cast<size_t>(fur.segments) + 1;
+void carry_fur(Fur& fur, const TriangleMesh& from, const TriangleMesh& to) {
+    if (same_pose(from, to)) return;
     for (size_t s = 0; s < fur.strand_count(); ++s) {
-        const uint32_t tri = fur.root_tri[s];
-        const Vec2 b = fur.root_bary[s];
-        const SurfacePoint then = surface_point(from, tri, b.x, b.y), now = surface_point(to, tri, b.x, b.y);
-        std::array<Vec3, 3> f, g;
-        // A triangle folded flat keeps the strand's direction (nothing to turn it by).
-        const bool turn = root_frame(from, tri, then.n, f) && root_frame(to, tri, now.n, g);
-        for (size_t k = 0; k < per; ++k) {
-            float* q = &out.vertices[4 * (s * per + k)];
-            const Vec3 d = Vec3(q[0], q[1], q[2]) - fur.root_p[s];
-            const Vec3 p = now.p + (turn ? g[0] * dot(d, f[0]) + g[1] * dot(d, f[1]) + g[2] * dot(d, f[2]) : d);
-            q[0] = p.x, q[1] = p.y, q[2] = p.z;
-        }
-        out.root_p[s] = now.p, out.root_n[s] = now.n, out.root_uv[s] = now.uv;
+        const SurfacePoint now = carry_strand(fur, s, from, to, fur.vertices);
+        fur.root_p[s] = now.p, fur.root_n[s] = now.n, fur.root_uv[s] = now.uv;
     }
+}
+
+std::vector<float> carried_vertices(const Fur& fur, const TriangleMesh& from, const TriangleMesh& to) {
+    std::vector<float> out = fur.vertices;
+    if (!same_pose(from, to))
+        for (size_t s = 0; s < fur.strand_count(); ++s) carry_strand(fur, s, from, to, out);
     return out;
 }
 

@@ -99,12 +99,15 @@ Fur grow_fur(const TriangleMesh& surface, const FurParams& params);
 /// Whether `to` is the surface `from` in another pose: the same triangles over as many vertices.
 bool same_triangles(const TriangleMesh& from, const TriangleMesh& to);
 
-/// The strands of `fur`, grown on `from`, carried to `to` (same_triangles must hold): each root
+/// Carries the strands of `fur`, grown on `from`, to `to` (same_triangles must hold): each root
 /// stays at its triangle and barycentrics, and the strand turns with the surface's frame there
 /// (the root's normal and its triangle's first edge), keeping its shape and length. A groom then
 /// follows a skin or a moving object strand for strand, where growing it again on each pose would
 /// place strands by that pose's areas and clump them by cells the pose moved through.
-Fur carry_fur(const Fur& fur, const TriangleMesh& from, const TriangleMesh& to);
+void carry_fur(Fur& fur, const TriangleMesh& from, const TriangleMesh& to);
+/// The control points (as Fur::vertices) that carry_fur would give `fur`, leaving it as it is:
+/// its strands at shutter open and close.
+std::vector<float> carried_vertices(const Fur& fur, const TriangleMesh& from, const TriangleMesh& to);
 
 /// The Kajiya-Kay hair reflectance for direct light arriving from unit `wi` at a strand of
 /// unit tangent `t`, seen from unit `wo`, per unit of (radiance x solid angle): the diffuse

@@ -59,7 +59,7 @@ std::shared_ptr<const UvMap> load_uv_map(const JsonReader& r, const std::string&
 
 }  // namespace
 
-std::shared_ptr<const Fur> read_fur(const JsonReader& r, const TriangleMesh& surface, const Scene& scene) {
+std::shared_ptr<Fur> read_fur(const JsonReader& r, const TriangleMesh& surface, const Scene& scene) {
     FurParams p;
     constexpr int kMaxStrands = 2'000'000'000;
     if (r.has("count") == r.has("density")) r.fail("", "fur needs one of \"count\" (strands) or \"density\" (strands per unit area)");
@@ -113,7 +113,7 @@ std::shared_ptr<const Fur> read_fur(const JsonReader& r, const TriangleMesh& sur
         r.fail(key, fmt::format("{} strands would take {:.1f} GiB, over render.memory_budget ({:g} GiB)", p.count,
                                 bytes / 1073741824.0, scene.render.dicing.memory_budget));
     if (std::string why = memory_shortfall(bytes, fmt::format("growing {} strands", p.count)); !why.empty()) r.fail(key, why);
-    return std::make_shared<const Fur>(grow_fur(surface, p));
+    return std::make_shared<Fur>(grow_fur(surface, p));
 }
 
 }  // namespace bounce

@@ -215,7 +215,8 @@ namespace {
 TriangleMesh groom_surface(const JsonReader& r, const Scene& scene, size_t index, const Object& obj) {
     if (scene.frame == scene.shot.first) return obj.visible();
     const json first = scene.keyed.is_object() ? evaluate_keys(scene.keyed, scene.shot.first, r.ctx()) : json();
-    const JsonReader then = first.is_object() ? JsonReader(first.at("objects").at(index), fmt::format("/objects/{}", index), r.ctx(), object_keys()) : r;
+    const bool keyed = first.is_object() && first.contains("objects") && first["objects"].is_array() && index < first["objects"].size();
+    const JsonReader then = keyed ? JsonReader(first["objects"][index], fmt::format("/objects/{}", index), r.ctx(), object_keys()) : r;
     if (obj.deforms) {
         TriangleMesh posed = posed_visible_mesh(then, scene, scene.shot.first);
         return same_triangles(posed, obj.visible()) ? posed : obj.visible();
@@ -234,7 +235,9 @@ void read_object_fur(const JsonReader& fur, const JsonReader& r, const Scene& sc
         return;
     }
     const TriangleMesh groom = groom_surface(r, scene, index, obj);
-    obj.fur = std::make_shared<const Fur>(carry_fur(*read_fur(fur, groom, scene), groom, obj.visible()));
+    std::shared_ptr<Fur> grown = read_fur(fur, groom, scene);
+    carry_fur(*grown, groom, obj.visible());
+    obj.fur = std::move(grown);
 }
 }  // namespace
 

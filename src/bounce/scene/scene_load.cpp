@@ -91,7 +91,7 @@ void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
             const JsonReader r(docs[k]["objects"][i], fmt::format("/objects/{}", i), ctx, object_keys());
             if (o.deforms) {  // a skin or morph: posed again at the shutter's ends, its fur carried there
                 const TriangleMesh then = posed_visible_mesh(r, scene, scene.frame + scene.camera.shutter[k]);
-                if (o.fur && same_triangles(o.visible(), then)) o.fur_shutter[k] = carry_fur(*o.fur, o.visible(), then).vertices;
+                if (o.fur && same_triangles(o.visible(), then)) o.fur_shutter[k] = carried_vertices(*o.fur, o.visible(), then);
                 o.shutter[k] = then.positions;
                 continue;
             }
