@@ -301,6 +301,23 @@ TEST(TemporalCache, AFragmentRefinedTheFrameBeforeStaysRefinedDownToTheHold) {
         }
     EXPECT_GT(kept_by_hold, 3u);
     EXPECT_GT(refined, kept_by_hold);
+    // Frame 2 rendered again after the light moved (as the lighting tool does): no hold within a
+    // frame, the fragments refined are those without it.
+    auto again = [](float hold) {
+        json j = shot_scene();
+        j["lights"][0]["position"] = {{"keys", {{1, {1, 5, 4}}, {3, {1.6, 5, 3.4}}}}};
+        j["render"]["refine"] = 0.02;
+        j["render"]["refine_hold"] = hold;
+        auto f = std::make_unique<Frames>();
+        f->render(j, 2);
+        j["lights"][0]["position"] = {1.9, 5, 3.1};
+        f->render(j, 2);
+        return f;
+    };
+    const auto a = again(0.5f), b = again(1.0f);
+    EXPECT_GT(a->results[1].temporal.light + a->results[1].temporal.kept + a->results[1].temporal.moved, 0u);
+    EXPECT_EQ(a->results[1].image.find("refined")->data, b->results[1].image.find("refined")->data);
+    EXPECT_EQ(a->results[1].image.find("indirect")->data, b->results[1].image.find("indirect")->data);
 }
 
 TEST(Sequences, AFrameThatFailsStopsTheShotThereAndResumeSkipsWhatIsDone) {

@@ -145,16 +145,18 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                 if (!needs_bounce_light(scene, f)) continue;
                 const uint64_t key = candidate_key(deep, wx, wy, k);
                 if (cache.fragment_record(key, f.p)) continue;  // refined by an earlier render
-                // The frame before's record of this very fragment, stale (what it saw changed).
+                // An earlier render's record of this very fragment, stale (what it saw changed).
                 const Record* before = nullptr;
                 if (options.stale)
                     if (auto it = options.stale->find(key); it != options.stale->end() && it->second.p == f.p) before = &it->second;
                 if (!tilted_off_records(cs, f)) {
                     const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cs));
-                    // Hysteresis: refined in the frame before, a fragment keeps its own gather
+                    // Hysteresis: refined in an earlier frame, a fragment keeps its own gather
                     // until its records agree within refine_hold x refine, so that a spread
                     // hovering about the threshold does not switch it on and off frame by frame.
-                    const float at = before ? threshold * cs.refine_hold : threshold;
+                    // (Not within a frame: the lighting tool re-rendering it shows what a
+                    // render of that frame gives.)
+                    const float at = before && before->gathered < frame ? threshold * cs.refine_hold : threshold;
                     if (in.weight > 0 && (threshold <= 0 || in.spread <= at)) continue;
                 }
                 if (before) {  // updated rather than gathered anew
