@@ -125,7 +125,7 @@ Fur grow_fur(const TriangleMesh& surface, const FurParams& params) {
         fur.root_n.push_back(sp.n);
         fur.root_uv.push_back(sp.uv);
         fur.root_tri.push_back(static_cast<uint32_t>(tri));
-        fur.root_bary.emplace_back(a, b);
+        fur.root_bary.push_back(Vec2{a, b});
     }
     if (params.clump > 0) clump(fur);
     fur.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
