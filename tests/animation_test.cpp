@@ -268,14 +268,17 @@ TEST(TemporalCache, AFragmentRefinedTheFrameBeforeStaysRefinedDownToTheHold) {
     // A still camera and a sliding light: every record is re-shaded each frame and the records'
     // spread at a fragment moves a little. With render.refine_hold h, frame 2 refines a fragment
     // exactly when its spread is above refine, or above h x refine and frame 1 refined it.
-    auto run = [](float hold) {
+    // The frames given (each scene then `edit`ed, if any), rendered with the hold at `hold`.
+    auto run = [](float hold, std::vector<int> frames = {1, 2}, const json& edit = json()) {
         json j = shot_scene();
         j["lights"][0]["position"] = {{"keys", {{1, {1, 5, 4}}, {3, {1.6, 5, 3.4}}}}};
         j["render"]["refine"] = 0.02;
         j["render"]["refine_hold"] = hold;
         auto f = std::make_unique<Frames>();
-        f->render(j, 1);
-        f->render(j, 2);
+        for (size_t k = 0; k < frames.size(); ++k) {
+            if (k > 0 && !edit.is_null()) j["lights"][0]["position"] = edit;
+            f->render(j, frames[k]);
+        }
         return f;
     };
     const auto held = run(0.5f), free = run(1.0f);
@@ -303,18 +306,8 @@ TEST(TemporalCache, AFragmentRefinedTheFrameBeforeStaysRefinedDownToTheHold) {
     EXPECT_GT(refined, kept_by_hold);
     // Frame 2 rendered again after the light moved (as the lighting tool does): no hold within a
     // frame, the fragments refined are those without it.
-    auto again = [](float hold) {
-        json j = shot_scene();
-        j["lights"][0]["position"] = {{"keys", {{1, {1, 5, 4}}, {3, {1.6, 5, 3.4}}}}};
-        j["render"]["refine"] = 0.02;
-        j["render"]["refine_hold"] = hold;
-        auto f = std::make_unique<Frames>();
-        f->render(j, 2);
-        j["lights"][0]["position"] = {1.9, 5, 3.1};
-        f->render(j, 2);
-        return f;
-    };
-    const auto a = again(0.5f), b = again(1.0f);
+    const json moved = {1.9, 5, 3.1};
+    const auto a = run(0.5f, {2, 2}, moved), b = run(1.0f, {2, 2}, moved);
     EXPECT_GT(a->results[1].temporal.light + a->results[1].temporal.kept + a->results[1].temporal.moved, 0u);
     EXPECT_EQ(a->results[1].image.find("refined")->data, b->results[1].image.find("refined")->data);
     EXPECT_EQ(a->results[1].image.find("indirect")->data, b->results[1].image.find("indirect")->data);
