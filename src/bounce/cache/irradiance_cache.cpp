@@ -76,6 +76,7 @@ bool IrradianceCache::has_light_parts(size_t lights) const {
 
 void IrradianceCache::set_values(Record& r, const GatherResult& g, bool gradients, float grad_t_scale) const {
     r.ao = g.ao;
+    r.noise = g.rel_stderr;
     r.bent = g.bent_normal;
     r.ao_grad_r = gradients ? g.ao_grad_rot : Vec3(0);
     r.ao_grad_t = gradients ? g.ao_grad_trans * grad_t_scale : Vec3(0);
@@ -107,7 +108,7 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
     bool first = true;
     Color base(0);
     float base_ao = 0;
-    double de[3] = {0, 0, 0}, dao = 0, wsum = 0, lsum = 0, l2sum = 0;
+    double de[3] = {0, 0, 0}, dao = 0, wsum = 0, lsum = 0, l2sum = 0, w2sum = 0, nsum = 0;
     Vec3 bent(0);
     std::array<Vec3, 3> dir{};
     octree_.visit(p, [&](uint32_t id) {
@@ -133,6 +134,8 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
         lsum += w * l;
         l2sum += w * l * l;
         wsum += w;
+        w2sum += static_cast<double>(w) * w;
+        nsum += w * (r.noise * l) * (r.noise * l);
         bent += r.bent * w;
         for (size_t c = 0; c < 3; ++c) dir[c] += r.dir[c] * w;
         ++out.records;
@@ -144,7 +147,11 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
     }
     for (int c = 0; c < 3; ++c) out.E[c] = base[c] + static_cast<float>(de[c] / wsum);
     out.ao = base_ao + static_cast<float>(dao / wsum);
-    const double mean = lsum / wsum, var = std::max(0.0, l2sum / wsum - mean * mean);
+    const double mean = lsum / wsum;
+    double var = std::max(0.0, l2sum / wsum - mean * mean);
+    // Less what the records' own noise alone would spread them by: the expected weighted sample
+    // variance of independent estimates of one value, sum(w s^2)/W (1 - sum(w^2)/W^2).
+    var = std::max(0.0, var - settings_.refine_noise * (nsum / wsum) * (1 - w2sum / (wsum * wsum)));
     const double floor = ao_only_ ? 1e-3 : std::max<double>(luminance_floor_, 1e-12);
     out.spread = static_cast<float>(std::sqrt(var) / std::max(mean, floor));
     auto inv = static_cast<float>(1 / wsum);

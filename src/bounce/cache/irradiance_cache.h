@@ -25,7 +25,8 @@ struct Interpolated {
     float weight = 0;  ///< sum of the weights (0 = no record applies)
     int records = 0;   ///< how many records contributed
     /// How much the contributing records disagree at this point: the weighted standard
-    /// deviation of their extrapolated luminance (AO in AO mode) over the weighted mean.
+    /// deviation of their extrapolated luminance (AO in AO mode) over the weighted mean, less
+    /// CacheSettings::refine_noise times what their own noise (Record::noise) would give.
     float spread = 0;
 };
 

@@ -37,6 +37,7 @@ struct Record {
     float support = 0;           ///< weights are zero beyond this distance (octree placement)
     uint64_t key = 0;            ///< creation key (pixel, fragment): deterministic order and its random stream
     uint32_t rays = 0;
+    float noise = 0;             ///< its gather's relative standard error (GatherResult::rel_stderr)
     int32_t frame = 0;           ///< frame it was created in (sequences: reused vs new)
     // Frames of a shot (temporal.h).
     Vec3 origin{0};              ///< where the gather's rays left from (world)

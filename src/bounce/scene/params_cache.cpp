@@ -55,6 +55,11 @@ void add_refinement_rows(std::vector<Row>& rows) {
     rows.push_back(row("refine", "cache", &R::cache, &CacheSettings::refine).range(0, 100)
                        .doc("per-fragment refinement: a fragment whose covering records' extrapolated values spread "
                             "(weighted relative standard deviation) above this gets a gather of its own; 0 = off").flag());
+    rows.push_back(row("refine_noise", "cache", &R::cache, &CacheSettings::refine_noise).range(0, 100)
+                       .doc("per-fragment refinement: the records' spread counts only beyond what their own gathers' "
+                            "noise explains (this many times their estimated variance): records that disagree only by "
+                            "noise give a fragment nothing its own gather, as noisy, would improve "
+                            "(docs/irradiance-cache.md); 0 = the raw spread").flag());
     rows.push_back(row("refine_band", "cache", &R::cache, &CacheSettings::refine_band).range(1, 100)
                        .doc("per-fragment refinement: a refined fragment's own gather replaces the interpolation wholly "
                             "only once the records' spread reaches this many times `refine`; below that the two are "

@@ -84,6 +84,7 @@ struct CacheSettings {
     int min_rays = 0;             ///< a record's first gather; more (render.rays) only if noisier than ray_noise; 0 = off
     float ray_noise = 0.02f;      ///< relative standard error a record's first gather must reach to stop there
     float refine = 0.1f;          ///< a fragment whose records disagree by more than this gets its own gather; 0 = off
+    float refine_noise = 2;       ///< the spread refine judges is what exceeds refine_noise x the records' own noise variance; 0 = raw
     float refine_band = 1;        ///< the gather replaces the interpolation wholly from refine_band x refine (blended below); 1 = hard
     float refine_hold = 0.5f;     ///< a shot's fragment refined the frame before stays refined down to refine_hold x refine; 1 = no hysteresis
     int refine_rays = 0;          ///< rays of such a gather; 0 = the gather's rays
