@@ -273,6 +273,7 @@ TEST(TemporalCache, AFragmentRefinedTheFrameBeforeStaysRefinedDownToTheHold) {
         json j = shot_scene();
         j["lights"][0]["position"] = {{"keys", {{1, {1, 5, 4}}, {3, {1.6, 5, 3.4}}}}};
         j["render"]["refine"] = 0.02;
+        j["render"]["refine_noise"] = 0;  // the raw spread: more fragments hover about this threshold
         j["render"]["refine_hold"] = hold;
         auto f = std::make_unique<Frames>();
         for (size_t k = 0; k < frames.size(); ++k) {

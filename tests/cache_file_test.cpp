@@ -42,6 +42,7 @@ Record random_record(uint64_t i) {
     r.key = (i * 7919) << 8;
     r.rays = 512;
     r.frame = static_cast<int32_t>(i % 3);
+    r.noise = rng.get(0, 49) * 0.3f;
     return r;
 }
 
@@ -97,7 +98,7 @@ TEST(CacheFile, RoundTripIsBitExactForEveryField) {
         ASSERT_TRUE(a.radius == b.radius && a.footprint == b.footprint && a.harmonic == b.harmonic);
         ASSERT_EQ(std::isinf(a.raw_radius), std::isinf(b.raw_radius));
         ASSERT_EQ(std::isinf(a.dmin), std::isinf(b.dmin));
-        ASSERT_TRUE(a.key == b.key && a.rays == b.rays && a.frame == b.frame);
+        ASSERT_TRUE(a.key == b.key && a.rays == b.rays && a.frame == b.frame && a.noise == b.noise);
         ASSERT_TRUE(same_bits(a, b));
     }
 }

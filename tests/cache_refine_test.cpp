@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "bounce/cache/cache_file.h"
 #include "bounce/cache/irradiance_cache.h"
@@ -42,11 +43,48 @@ TEST(Refine, SpreadIsTheWeightedRelativeDeviationOfTheRecords) {
     EXPECT_NEAR(luminance(in.E), 2.0f, 1e-5f);
 }
 
+TEST(Refine, TheSpreadLeavesOutWhatTheRecordsOwnNoiseExplains) {
+    // Values 1 and 3 at equal weights (mean 2, weighted variance 1), each record's gather with
+    // relative standard error s. Independent estimates of one value would spread by
+    // sum(w (s l)^2)/W (1 - sum(w^2)/W^2) = (s^2 + 9 s^2)/2 x 1/2 = 2.5 s^2; refinement judges
+    // the variance beyond refine_noise times that.
+    const auto spread = [](float noise, float refine_noise) {
+        CacheSettings cs;
+        cs.refine_noise = refine_noise;
+        IrradianceCache cache(Bounds{Vec3(-10), Vec3(10)}, cs, false);
+        cache.set_luminance_floor(1e-6f);
+        for (auto [x, e] : {std::pair{-0.5f, 1.0f}, std::pair{0.5f, 3.0f}}) {
+            Record r;
+            r.p = {x, 0, 0}, r.n = {0, 0, 1}, r.E = Color(e), r.noise = noise;
+            r.radius = r.raw_radius = 10, r.footprint = 1, r.support = 20;
+            cache.insert_loaded(r);
+        }
+        const Interpolated in = cache.lookup({0, 0, 0}, {0, 0, 1});
+        EXPECT_NEAR(luminance(in.E), 2.0f, 1e-5f);  // the value itself is untouched
+        return in.spread;
+    };
+    EXPECT_NEAR(spread(0.2f, 0), 0.5f, 1e-5f);                          // the raw spread
+    EXPECT_NEAR(spread(0.2f, 1), std::sqrt(1 - 0.1f) / 2, 1e-5f);       // 1 - 2.5 x 0.04
+    EXPECT_NEAR(spread(0.2f, 2), std::sqrt(1 - 0.2f) / 2, 1e-5f);       // the default
+    EXPECT_NEAR(spread(0, 2), 0.5f, 1e-5f);                             // noiseless records
+    EXPECT_EQ(spread(0.5f, 2), 0.0f);                                   // all of it noise: 1.25 > 1
+}
+
+TEST(Refine, ARecordKeepsItsGathersNoiseEstimate) {
+    IrradianceCache cache(Bounds{Vec3(-10), Vec3(10)}, CacheSettings{}, false);
+    GatherResult g;
+    g.irradiance = Color(2);
+    g.rel_stderr = 0.125f;
+    Record r;
+    cache.set_values(r, g);
+    EXPECT_EQ(r.noise, 0.125f);
+}
+
 TEST(Refine, RefinedFragmentsCarryTheirOwnGatherExactly) {
     Stats s1, s2;
     RenderResult brute = render(cornell({"render.gi=\"brute\""}), {}, s1, nullptr);
-    // A threshold this low refines every fragment whose records differ at all.
-    RenderResult refined = render(cornell({"render.gi=\"cache\"", "render.refine=1e-9"}), {}, s2, nullptr);
+    // A threshold this low, on the raw spread, refines every fragment whose records differ at all.
+    RenderResult refined = render(cornell({"render.gi=\"cache\"", "render.refine=1e-9", "render.refine_noise=0"}), {}, s2, nullptr);
     const Layer* mask = refined.image.find("refined");
     ASSERT_NE(mask, nullptr);
     const Layer& a = *brute.image.find("indirect");
