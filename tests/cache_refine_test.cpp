@@ -78,6 +78,12 @@ TEST(Refine, ARecordKeepsItsGathersNoiseEstimate) {
     Record r;
     cache.set_values(r, g);
     EXPECT_EQ(r.noise, 0.125f);
+    // Near darkness the estimate divides by almost nothing: capped, so a cache file keeps it.
+    for (float wild : {1e30f, INFINITY, NAN}) {
+        g.rel_stderr = wild;
+        cache.set_values(r, g);
+        EXPECT_EQ(r.noise, 1e3f) << wild;
+    }
 }
 
 TEST(Refine, RefinedFragmentsCarryTheirOwnGatherExactly) {

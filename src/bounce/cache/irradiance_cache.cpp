@@ -76,7 +76,9 @@ bool IrradianceCache::has_light_parts(size_t lights) const {
 
 void IrradianceCache::set_values(Record& r, const GatherResult& g, bool gradients, float grad_t_scale) const {
     r.ao = g.ao;
-    r.noise = g.rel_stderr;
+    // Capped (a record in near darkness divides by almost nothing): past 1000 % it is all
+    // noise anyway, and a cache file refuses values beyond 1e20.
+    r.noise = g.rel_stderr >= 0 && g.rel_stderr < 1e3f ? g.rel_stderr : 1e3f;
     r.bent = g.bent_normal;
     r.ao_grad_r = gradients ? g.ao_grad_rot : Vec3(0);
     r.ao_grad_t = gradients ? g.ao_grad_trans * grad_t_scale : Vec3(0);
