@@ -21,22 +21,24 @@ Scene cornell(std::vector<Override> extra) {
     return load_scene(test::cornell_scene(), o);
 }
 
-TEST(Refine, SpreadIsTheWeightedRelativeDeviationOfTheRecords) {
-    IrradianceCache cache(Bounds{Vec3(-10), Vec3(10)}, CacheSettings{}, false);
+/// The lookup midway between two records of values 1 and 3 (equal weights, no gradients), each
+/// gathered with relative standard error `noise`, in a cache of `refine_noise`.
+Interpolated between_two_records(float noise, float refine_noise) {
+    CacheSettings cs;
+    cs.refine_noise = refine_noise;
+    IrradianceCache cache(Bounds{Vec3(-10), Vec3(10)}, cs, false);
     cache.set_luminance_floor(1e-6f);
-    auto record = [](float x, float e) {
+    for (auto [x, e] : {std::pair{-0.5f, 1.0f}, std::pair{0.5f, 3.0f}}) {
         Record r;
-        r.p = {x, 0, 0};
-        r.n = {0, 0, 1};
-        r.E = Color(e);
-        r.radius = r.raw_radius = 10;
-        r.footprint = 1;
-        r.support = 20;
-        return r;
-    };
-    cache.insert_loaded(record(-0.5f, 1.0f));
-    cache.insert_loaded(record(0.5f, 3.0f));
-    Interpolated in = cache.lookup({0, 0, 0}, {0, 0, 1});
+        r.p = {x, 0, 0}, r.n = {0, 0, 1}, r.E = Color(e), r.noise = noise;
+        r.radius = r.raw_radius = 10, r.footprint = 1, r.support = 20;
+        cache.insert_loaded(r);
+    }
+    return cache.lookup({0, 0, 0}, {0, 0, 1});
+}
+
+TEST(Refine, SpreadIsTheWeightedRelativeDeviationOfTheRecords) {
+    const Interpolated in = between_two_records(0, CacheSettings{}.refine_noise);
     // Equal weights at the midpoint; gradients are zero: values 1 and 3, mean 2, deviation 1.
     ASSERT_EQ(in.records, 2);
     EXPECT_NEAR(in.spread, 0.5f, 1e-5f);
@@ -49,17 +51,7 @@ TEST(Refine, TheSpreadLeavesOutWhatTheRecordsOwnNoiseExplains) {
     // sum(w (s l)^2)/W (1 - sum(w^2)/W^2) = (s^2 + 9 s^2)/2 x 1/2 = 2.5 s^2; refinement judges
     // the variance beyond refine_noise times that.
     const auto spread = [](float noise, float refine_noise) {
-        CacheSettings cs;
-        cs.refine_noise = refine_noise;
-        IrradianceCache cache(Bounds{Vec3(-10), Vec3(10)}, cs, false);
-        cache.set_luminance_floor(1e-6f);
-        for (auto [x, e] : {std::pair{-0.5f, 1.0f}, std::pair{0.5f, 3.0f}}) {
-            Record r;
-            r.p = {x, 0, 0}, r.n = {0, 0, 1}, r.E = Color(e), r.noise = noise;
-            r.radius = r.raw_radius = 10, r.footprint = 1, r.support = 20;
-            cache.insert_loaded(r);
-        }
-        const Interpolated in = cache.lookup({0, 0, 0}, {0, 0, 1});
+        const Interpolated in = between_two_records(noise, refine_noise);
         EXPECT_NEAR(luminance(in.E), 2.0f, 1e-5f);  // the value itself is untouched
         return in.spread;
     };
