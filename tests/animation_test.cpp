@@ -314,6 +314,35 @@ TEST(TemporalCache, AFragmentRefinedTheFrameBeforeStaysRefinedDownToTheHold) {
     EXPECT_EQ(a->results[1].image.find("indirect")->data, b->results[1].image.find("indirect")->data);
 }
 
+TEST(TemporalCache, EveryStaleRecordThatCoversAFragmentIsRedoneSoAPointBlendsTheSameRecords) {
+    // Every light twice as bright at frame 2, nothing else changes: each record is stale (its
+    // light changed) and re-shaded from its hits, to exactly twice its value. If only the
+    // records that fill a miss were redone, a point would blend another subset of them (which
+    // ones depends on the order of the misses) and its bounce light would not simply double.
+    json j = shot_scene();
+    j["lights"][0]["color"] = {{"keys", {{1, 30}, {3, 90}}}};
+    j["lights"][1]["color"] = {{"keys", {{1, 0.2}, {3, 0.6}}}};
+    j["camera"]["resolution"] = {64, 48};
+    Frames f;
+    f.render(j, 1);
+    f.render(j, 2);
+    const RenderResult &one = f.results[0], &two = f.results[1];
+    EXPECT_EQ(two.temporal.kept, 0u);
+    EXPECT_EQ(two.temporal.light, one.cache->size());
+    EXPECT_EQ(two.temporal.reshaded, one.cache->size());  // every record: each covers at least its own fragment
+    EXPECT_TRUE(two.waiting.empty());
+    EXPECT_EQ(two.records_new, 0u);
+    EXPECT_EQ(two.cache->size(), one.cache->size());
+    const Layer &a = *one.image.find("indirect"), &b = *two.image.find("indirect");
+    ASSERT_EQ(a.data.size(), b.data.size());
+    size_t lit = 0;
+    for (size_t i = 0; i < a.data.size(); ++i) {
+        ASSERT_NEAR(b.data[i], 2 * a.data[i], 1e-5f * (1 + a.data[i])) << "value " << i;
+        lit += a.data[i] > 0;
+    }
+    EXPECT_GT(lit, a.data.size() / 2);
+}
+
 TEST(Sequences, AFrameThatFailsStopsTheShotThereAndResumeSkipsWhatIsDone) {
     test::TempDir d;
     json j = shot_scene(4);

@@ -1,5 +1,5 @@
 // The gathering pass (passes.h): hierarchical sub-passes that make records where lookups miss,
-// or, in a frame of a shot, redo the earlier frames' stale records that would cover the miss.
+// and, in a frame of a shot, redo the earlier frames' stale records that cover a fragment.
 #include <tbb/enumerable_thread_specific.h>
 
 #include <algorithm>
@@ -25,7 +25,7 @@ struct Candidate {
 /// What one sub-pass collected, per tile.
 struct TileWork {
     std::vector<Record> made;            ///< new records
-    std::vector<uint32_t> requests;      ///< stale records that would cover a miss
+    std::vector<uint32_t> requests;      ///< stale records that cover a fragment
     std::vector<Candidate> deferred;     ///< misses waiting for those to be redone
 };
 
@@ -106,18 +106,20 @@ void Gathering::judge_tile(const SubPass& sp, const Tile& t) {
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 if (!needs_bounce_light(scene_, frags[k])) continue;
                 const Site site = record_site(scene_, frags[k], cache_.settings());
+                covering.clear();
+                if (o_.stale) {
+                    // Every earlier frame's record that covers the point is redone, not only those
+                    // that would fill a miss: which records cover a miss depends on the order of
+                    // the misses, so the point would blend another subset of them each frame.
+                    o_.stale->covering(site.p, site.n, covering);
+                    w.requests.insert(w.requests.end(), covering.begin(), covering.end());
+                }
                 if (!cache_.misses(site.p, site.n, per_tile_ ? std::span<const Record>(w.made) : std::span<const Record>(),
                                    o_.own_weight, o_.min_weight))
                     continue;
-                if (o_.stale) {
-                    // An earlier frame's record that would cover it is redone rather than a new one made.
-                    covering.clear();
-                    o_.stale->covering(site.p, site.n, covering);
-                    if (!covering.empty()) {
-                        w.requests.insert(w.requests.end(), covering.begin(), covering.end());
-                        w.deferred.push_back({wx, wy, k});
-                        continue;
-                    }
+                if (!covering.empty()) {  // a miss that redone records may fill: judged again after them
+                    w.deferred.push_back({wx, wy, k});
+                    continue;
                 }
                 Record r = gather_at({wx, wy, k}, counters);
                 if (per_tile_) {

@@ -45,9 +45,9 @@ struct GatheringOptions {
     /// CacheSettings::min_rays: a record gathers with it first and with the full gatherer only
     /// when that estimate's relative standard error exceeds CacheSettings::ray_noise.
     const Gatherer* first = nullptr;
-    /// Records of earlier frames that need a new gather (temporal.h): where a lookup misses and
-    /// one of them would cover the point, it is redone (in place, its own random stream)
-    /// instead of a new record being made.
+    /// Records of earlier frames that need a new gather (temporal.h): every one that covers a
+    /// fragment's point is redone (in place, its own random stream), and a miss they cover waits
+    /// for them instead of making a new record.
     StaleRecords* stale = nullptr;
     bool keep_hits = false;  ///< new records keep their gather's hits (re-shading in later frames)
     /// A record whose weight at a point reaches this covers it alone (IrradianceCache::misses).

@@ -95,8 +95,8 @@ private:
     float reach_;
 };
 
-/// Stale records waiting for a new gather. The gathering pass asks which of them would cover a
-/// point its lookup misses; those are redone (by `redo`) rather than a new record made.
+/// Stale records waiting for a new gather. The gathering pass asks which of them cover each
+/// fragment's point; those are redone (by `redo`), and a miss they cover makes no new record.
 class StaleRecords {
 public:
     using Redo = std::function<Record(const Record&, StaleReason, Counters&)>;
