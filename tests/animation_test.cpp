@@ -376,6 +376,10 @@ TEST(TemporalCache, SceneChangesTellRigidFromStaticAndSeeEmissiveObjectsAsLights
     EXPECT_EQ(c.objects[2].kind, ObjectMotion::Kind::Rigid);
     EXPECT_NEAR(c.objects[2].delta.point(Vec3(0)).x, 1, 1e-5);
     EXPECT_FALSE(c.lights);
+    EXPECT_FALSE(c.camera);
+    json moving = j;
+    moving["camera"]["position"] = {{"keys", {{1, {0, 3, 8}}, {3, {0, 3, 6}}}}};
+    EXPECT_TRUE(scene_changes(at(moving, 1), at(moving, 2)).camera);
     j["materials"] = {{"glow", {{"emission", 3}}}};
     j["objects"][2]["material"] = "glow";
     EXPECT_TRUE(scene_changes(at(j, 1), at(j, 2)).lights);

@@ -252,10 +252,6 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
     }
     const CacheSettings& s = previous.settings();
     const CameraRays camera(now.camera);
-    // A still camera leaves a still record's reach as it was: its footprint for this view is
-    // the one it was made with (the fragment's), which the camera's own estimate only nears.
-    const bool camera_moved = !(before.camera.pose() == now.camera.pose()) || before.camera.width != now.camera.width ||
-                              before.camera.height != now.camera.height;
     const FrameChange change(now, changes, light, brightest, std::max(previous.luminance_floor(), 1e-12f), s, previous.ao_only());
     // Moves a record with its object; false when it cannot follow (dropped).
     const auto follow = [&](Record& r, ObjectMotion::Kind own) {
@@ -286,7 +282,9 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
             out.stale.push_back(r), out.why.push_back(StaleReason::Moved), ++out.moved;
             return;
         }
-        if (role == Role::Record && camera_moved) respace(r, camera, s);
+        // A still camera leaves a still record's reach as it was: its footprint for this view is
+        // the one it was made with (the fragment's), which the camera's own estimate only nears.
+        if (role == Role::Record && changes.camera) respace(r, camera, s);
         const Verdict v = change.verdict(r);
         if (v == Verdict::Keep) {
             if (role == Role::Gather) return out.earlier_gathers.push_back(r);

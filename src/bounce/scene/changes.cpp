@@ -56,6 +56,8 @@ bool json_differs(const nlohmann::json& a, const nlohmann::json& b, const char* 
 
 SceneChanges scene_changes(const Scene& before, const Scene& now) {
     SceneChanges c;
+    c.camera = !(before.camera.pose() == now.camera.pose()) || before.camera.width != now.camera.width ||
+               before.camera.height != now.camera.height;
     c.comparable = before.objects.size() == now.objects.size() && before.materials.size() == now.materials.size();
     for (size_t i = 0; c.comparable && i < now.objects.size(); ++i)
         c.comparable = before.objects[i].name == now.objects[i].name && same_topology(before.objects[i].coarse, now.objects[i].coarse);
