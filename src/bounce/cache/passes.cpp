@@ -156,7 +156,9 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                     // hovering about the threshold does not switch it on and off frame by frame.
                     // (Not within a frame: the lighting tool re-rendering it shows what a
                     // render of that frame gives.)
-                    const float at = before && before->gathered < frame ? threshold * cs.refine_hold : threshold;
+                    const bool held = before ? before->gathered < frame
+                                             : options.refined_before && options.refined_before->nearest(f.p, f.n, f.footprint);
+                    const float at = held ? threshold * cs.refine_hold : threshold;
                     if (in.weight > 0 && (threshold <= 0 || in.spread <= at)) continue;
                 }
                 if (before) {  // updated rather than gathered anew

@@ -91,6 +91,9 @@ struct RefinementOptions {
     std::function<Record(const Record&, Counters&)> update;
     /// ... and earlier gathers near a fragment, whose rays it reuses (temporal.h).
     const EarlierGathers* earlier = nullptr;
+    /// ... and where refinement gathered in the frame before, for a moving camera: a fragment
+    /// near one on its surface keeps CacheSettings::refine_hold.
+    const EarlierGathers* refined_before = nullptr;
     Communicator* comm = nullptr;  ///< as GatheringOptions::comm: each process refines its own tiles
 };
 

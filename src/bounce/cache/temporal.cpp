@@ -315,8 +315,8 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
     return out;
 }
 
-EarlierGathers::EarlierGathers(std::vector<Record> records, const Bounds& bounds, float reach)
-    : records_(std::move(records)), index_(bounds), reach_(reach) {
+EarlierGathers::EarlierGathers(std::vector<Record> records, const Bounds& bounds, float reach, bool need_hits)
+    : records_(std::move(records)), index_(bounds), reach_(reach), need_hits_(need_hits) {
     // By where each was gathered (a refinement gather's own point).
     for (size_t i = 0; i < records_.size(); ++i)
         index_.insert(static_cast<uint32_t>(i), records_[i].origin, 2 * reach_ * records_[i].footprint);
@@ -334,7 +334,7 @@ const Record* EarlierGathers::nearest(const Vec3& p, const Vec3& n, float footpr
         const Vec3 d = r.origin - p;
         const float dist = length(d);
         // On this fragment's surface: the same facing, and not off its plane (a step or a rim).
-        if (!r.hits || dist >= reach || dot(r.n, n) < cos_max || std::abs(dot(d, n)) > 0.25f * reach) return;
+        if ((need_hits_ && !r.hits) || dist >= reach || dot(r.n, n) < cos_max || std::abs(dot(d, n)) > 0.25f * reach) return;
         if (best && (dist > best_dist || (dist == best_dist && id > best_id))) return;
         best = &r, best_dist = dist, best_id = id;
     });

@@ -82,7 +82,8 @@ RandomStream record_stream(const Record& r, uint64_t seed, int full_width);
 class EarlierGathers {
 public:
     static constexpr int kLifespan = 12;
-    EarlierGathers(std::vector<Record> records, const Bounds& bounds, float reach);
+    /// With `need_hits` false, any record in reach counts (refinement's hold: docs/animation.md).
+    EarlierGathers(std::vector<Record> records, const Bounds& bounds, float reach, bool need_hits = true);
     /// The gather nearest (p, n) on its surface (the same facing within 10 degrees, off its plane
     /// by at most a quarter of the reach), or null.
     const Record* nearest(const Vec3& p, const Vec3& n, float footprint) const;
@@ -93,6 +94,7 @@ private:
     std::vector<Record> records_;
     RecordOctree index_;
     float reach_;
+    bool need_hits_;
 };
 
 /// Stale records waiting for a new gather. The gathering pass asks which of them cover each

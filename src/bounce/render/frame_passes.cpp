@@ -273,6 +273,23 @@ std::vector<Record> gathers_to_keep(const EarlierGathers& earlier, const Irradia
     return out;
 }
 
+/// Where refinement gathered in the frame before, for a moving camera's hold (its fragments
+/// never land on those points): this frame's fragment near one keeps CacheSettings::refine_hold.
+/// Null when there is no hold.
+std::unique_ptr<EarlierGathers> refined_the_frame_before(const IrradianceCache& cache, const TemporalJudgement& judged,
+                                                         const Scene& scene, int frame) {
+    const CacheSettings& cs = scene.render.cache;
+    if (cs.refine_hold_reach <= 0 || cs.refine_hold >= 1) return nullptr;
+    std::vector<Record> last;
+    for (size_t i = 0; i < cache.fragment_record_count(); ++i)
+        if (const Record& r = cache.fragment_record_at(i); r.gathered == frame - 1) last.push_back(r);
+    for (const auto& [key, r] : judged.fragment_stale)
+        if (r.gathered == frame - 1) last.push_back(r);
+    // By key: the index's order (and so the nearest's ties) is the same whatever the hash map's.
+    std::sort(last.begin(), last.end(), [](const Record& a, const Record& b) { return a.key < b.key; });
+    return std::make_unique<EarlierGathers>(std::move(last), scene.bounds(), cs.refine_hold_reach, false);
+}
+
 }  // namespace
 
 GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep,
@@ -330,6 +347,11 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
             earlier = std::make_unique<EarlierGathers>(std::move(judged.earlier_gathers), scene.bounds(),
                                                        scene.render.cache.temporal_refine_reuse);
             ro.earlier = earlier.get();
+        }
+        std::unique_ptr<EarlierGathers> refined_before;
+        if (plan.cache == CacheStart::Temporal && plan.changes && plan.changes->camera) {
+            refined_before = refined_the_frame_before(cache, judged, scene, plan.frame);
+            ro.refined_before = refined_before.get();
         }
         out.fragment_records_new = refinement_pass(scene, deep.shaded(), refiner, cache, ctx.stats, ctx.progress, ro);
         if (earlier) out.gathers = gathers_to_keep(*earlier, cache, plan.frame);

@@ -146,10 +146,9 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
     // moving object may meet traced again, every hit re-shaded) rather than gathered again.
     plan.keep_hits = request.sequence && scene.render.indirect.gi == GiMode::Cache && (lights_keyed(scene) || scene.objects_move());
     // Refinement's gathers lend their rays to the next frames' (EarlierGathers; not with light
-    // parts: per-light layers of a shot are not measured with it; not in an MPI job: the hits
-    // stay with the rank that traced them, and a process alone would reuse others').
-    const bool alone = !request.comm || request.comm->size() <= 1;
-    plan.keep_gathers = request.sequence && plan.refine && scene.render.cache.temporal_refine_reuse > 0 && !parts && alone;
+    // parts: per-light layers of a shot are not measured with it). In an MPI job every process
+    // takes every process's gathers with their hits (refinement_pass), so each reuses the same.
+    plan.keep_gathers = request.sequence && plan.refine && scene.render.cache.temporal_refine_reuse > 0 && !parts;
     plan.preview = scene.render.parallel.preview && request.preview != nullptr;
     plan.threads = scene.render.parallel.threads > 0 ? scene.render.parallel.threads : tbb::this_task_arena::max_concurrency();
     return plan;

@@ -70,6 +70,11 @@ void add_refinement_rows(std::vector<Row>& rows) {
                             "fragment on the same point) keeps its own gather until its records' spread falls below this "
                             "share of `refine` (hysteresis: no switching on and off as the spread hovers about the "
                             "threshold, docs/animation.md); 1 = none").flag());
+    rows.push_back(row("refine_hold_reach", "cache", &R::cache, &CacheSettings::refine_hold_reach).range(0, 16).unit("pixels")
+                       .doc("per-fragment refinement in a shot with a moving camera, whose fragments never land on the "
+                            "points of the frame before: a fragment within this many pixel footprints, on its surface, of a "
+                            "point refined in the frame before keeps `refine_hold` (docs/animation.md); 0 = the hold only "
+                            "for a still camera").flag());
     rows.push_back(row("refine_rays", "cache", &R::cache, &CacheSettings::refine_rays).range(0, 1 << 20).unit("rays")
                        .doc("rays of a refined fragment's own gather; 0 = render.rays").flag());
     rows.push_back(row("displaced_records", "cache", &R::cache, &CacheSettings::displaced_records)

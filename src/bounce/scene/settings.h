@@ -87,12 +87,13 @@ struct CacheSettings {
     float refine_noise = 2;       ///< the spread refine judges is what exceeds refine_noise x the records' own noise variance; 0 = raw
     float refine_band = 1;        ///< the gather replaces the interpolation wholly from refine_band x refine (blended below); 1 = hard
     float refine_hold = 0.5f;     ///< a shot's fragment refined the frame before stays refined down to refine_hold x refine; 1 = no hysteresis
+    float refine_hold_reach = 3;  ///< ... a moving camera's: near (pixel footprints) a point refined the frame before; 0 = only a still camera's
     int refine_rays = 0;          ///< rays of such a gather; 0 = the gather's rays
     RecordSurface displaced_records = RecordSurface::Undisplaced;  ///< where records of displaced surfaces live
     float displacement_near = 10;  ///< un-displaced records: hits within this many displacement bounds do not shrink them
     float refine_tilt = 20;       ///< un-displaced records: a fragment whose normal tilts more than this (degrees) is refined; 0 = off
     float temporal_tolerance = 0.02f;  ///< frames of a shot: a kept record is redone once its irradiance may have moved by this fraction
-    float temporal_refine_reuse = 0;  ///< frames of a shot: refinement takes an earlier frame's gather this many pixels away (0 = off)
+    float temporal_refine_reuse = 0.35f;  ///< frames of a shot: refinement takes an earlier frame's gather this many pixels away (0 = off)
     float temporal_filter = 0;    ///< frames of a shot: a redone record keeps this share of its previous value (0 = off)
     /// Records keep their bounce light per light, each light's colour and intensity factored out,
     /// and are placed as if every light were white at intensity 1: an edit of a light's colour or
