@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 
 #include "bounce/accel/accel.h"
 #include "bounce/cache/sites.h"
@@ -172,6 +173,7 @@ TEST(TemporalCache, AMovingCamerasRefinedFragmentsUseTheirOwnGathers) {
     json j = shot_scene();
     j["camera"]["position"] = {{"keys", {{1, {0, 3, 8}}, {3, {0.4, 3, 7.4}}}}};
     j["render"]["refine"] = 0.01;  // many fragments refine
+    j["render"]["temporal_refine_reuse"] = 0;  // each gathers its own
     Frames f;
     f.render(j, 1);
     f.render(j, 2);
@@ -312,6 +314,57 @@ TEST(TemporalCache, AFragmentRefinedTheFrameBeforeStaysRefinedDownToTheHold) {
     EXPECT_GT(a->results[1].temporal.light + a->results[1].temporal.kept + a->results[1].temporal.moved, 0u);
     EXPECT_EQ(a->results[1].image.find("refined")->data, b->results[1].image.find("refined")->data);
     EXPECT_EQ(a->results[1].image.find("indirect")->data, b->results[1].image.find("indirect")->data);
+}
+
+TEST(TemporalCache, AMovingCamerasFragmentNearAPointRefinedTheFrameBeforeKeepsTheHold) {
+    // A moving camera's fragments never land on the points of the frame before, so the hold
+    // reaches those within render.refine_hold_reach pixel footprints of a point refined then.
+    // The frames' records are the same with any reach (only refinement reads it), so frame 2
+    // refines what it refines without the reach, and besides exactly the fragments whose spread
+    // lies between hold x refine and refine, near (on their surface) a point frame 1 refined.
+    auto run = [](float reach) {
+        json j = shot_scene();
+        j["camera"]["position"] = {{"keys", {{1, {0, 3, 8}}, {3, {0.1, 3, 7.9}}}}};
+        j["camera"]["resolution"] = {48, 32};
+        j["render"]["refine"] = 0.02;
+        j["render"]["refine_noise"] = 0;
+        j["render"]["temporal_refine_reuse"] = 0;  // every refined fragment gathers its own
+        j["render"]["refine_hold_reach"] = reach;
+        auto f = std::make_unique<Frames>();
+        f->render(j, 1);
+        f->render(j, 2);
+        return f;
+    };
+    const auto near = run(3), none = run(0);
+    const auto refined_at = [](const RenderResult& r, int frame) {
+        std::map<uint64_t, Vec3> keys;
+        for (size_t i = 0; i < r.cache->fragment_record_count(); ++i)
+            if (const Record& k = r.cache->fragment_record_at(i); k.gathered == frame) keys.emplace(k.key, k.p);
+        return keys;
+    };
+    const RenderResult& two = near->results[1];
+    const auto first = refined_at(near->results[0], 1), with = refined_at(two, 2), without = refined_at(none->results[1], 2);
+    ASSERT_EQ(first, refined_at(none->results[0], 1));  // frame 1 holds nothing
+    ASSERT_GT(first.size(), 10u);
+    for (const auto& [key, p] : without) EXPECT_EQ(with.count(key), 1u) << key;
+    const Scene& scene = *near->scenes[1];
+    size_t held = 0;
+    for (int y = 0; y < two.deep.height; ++y)
+        for (int x = 0; x < two.deep.width; ++x)
+            for (uint32_t k = 0; k < two.deep.pixel(x, y).size(); ++k) {
+                const Fragment& f = two.deep.pixel(x, y)[k];
+                const uint64_t key = candidate_key(two.deep, x, y, k);
+                if (!with.count(key) || without.count(key)) continue;
+                ++held;
+                const Interpolated in = interpolate_at(*two.cache, f, record_site(scene, f, two.cache->settings()));
+                EXPECT_GT(in.spread, 0.01f) << x << "," << y;
+                EXPECT_LE(in.spread, 0.02f) << x << "," << y;
+                float nearest = 1e30f;
+                for (const auto& [k1, p1] : first) nearest = std::min(nearest, length(p1 - f.p));
+                EXPECT_LT(nearest, 3 * f.footprint) << x << "," << y;
+            }
+    EXPECT_GT(held, 3u);
+    EXPECT_EQ(with.size(), without.size() + held);
 }
 
 TEST(TemporalCache, EveryStaleRecordThatCoversAFragmentIsRedoneSoAPointBlendsTheSameRecords) {

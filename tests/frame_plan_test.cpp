@@ -124,18 +124,17 @@ public:
     int size() const override { return 2; }
 };
 
-TEST(FramePlan, RefinementsGathersAreKeptForReprojectionOnlyInAShotOfOneProcess) {
-    const Scene s = cornell({"render.temporal_refine_reuse=0.5"});
+TEST(FramePlan, RefinementsGathersAreKeptForReprojectionInAShot) {
     RenderRequest shot;
     shot.sequence = true;
-    EXPECT_TRUE(plan_frame(s, {}, shot).keep_gathers);
-    EXPECT_FALSE(plan_frame(s, {}, {}).keep_gathers);  // a still has no next frame
-    EXPECT_FALSE(plan_frame(cornell(), {}, shot).keep_gathers);  // off by default
-    // An MPI job's gathers keep their hits on the rank that traced them: no rank could reuse
-    // what one process would.
+    EXPECT_TRUE(plan_frame(cornell(), {}, shot).keep_gathers);  // on by default
+    EXPECT_FALSE(plan_frame(cornell(), {}, {}).keep_gathers);  // a still has no next frame
+    EXPECT_FALSE(plan_frame(cornell({"render.temporal_refine_reuse=0"}), {}, shot).keep_gathers);
+    // An MPI job's processes all hold every gather's hits (refinement_pass): each reuses what
+    // one process would (Mpi.AMovingCamerasShotReprojectsTheSameGathersAtAnyRankCount).
     TwoRanks two;
     shot.comm = &two;
-    EXPECT_FALSE(plan_frame(s, {}, shot).keep_gathers);
+    EXPECT_TRUE(plan_frame(cornell(), {}, shot).keep_gathers);
 }
 
 }  // namespace

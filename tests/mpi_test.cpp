@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstring>
+#include <fstream>
 #include <map>
 #include <thread>
 
@@ -151,6 +152,34 @@ TEST(Mpi, BruteForceAndTheFramesOfAShotAreByteIdentical) {
         expect_same_layers(d.file(fmt::format("s1.{:04d}.exr", f)), d.file(fmt::format("s3.{:04d}.exr", f)));
         EXPECT_EQ(test::bytes_of(d.file(fmt::format("s1.{:04d}.bic", f))), test::bytes_of(d.file(fmt::format("s3.{:04d}.bic", f)))) << f;
     }
+}
+
+TEST(Mpi, AMovingCamerasShotReprojectsTheSameGathersAtAnyRankCount) {
+    SKIP_UNDER_SANITIZER();
+    // The Cornell box as a shot with a dollying camera: refinement's fragments reuse earlier
+    // frames' gathers (render.temporal_refine_reuse) and keep the hold near the points refined
+    // the frame before (render.refine_hold_reach); every process holds every gather's hits, so
+    // each reuses what one process would.
+    test::TempDir d;
+    const std::string dir = test::source_dir() + "/scenes/cornell/";
+    nlohmann::json j = nlohmann::json::parse(test::bytes_of(dir + "cornell.json"));
+    for (auto& o : j["objects"])
+        if (o.contains("file")) o["file"] = dir + o["file"].get<std::string>();
+    j["animation"] = {{"fps", 24}, {"frames", {1, 48}}};
+    j["camera"]["position"] = {{"keys", {{1, {278, 273, -800}}, {48, {258, 283, -560}}}}};
+    std::ofstream(d.file("dolly.json")) << j.dump();
+    const std::string shot = d.file("dolly.json") + " --res 48x48 --gi cache -q --frames 1-4 --refine 0.02";
+    ASSERT_EQ(test::run_bounce(fmt::format("render {} -o {} --stats-json {} --threads 2", shot, d.file("s1.####.exr"),
+                                           d.file("s1.####.json"))),
+              0);
+    std::string err;
+    ASSERT_EQ(run_mpi(2, fmt::format("render {} -o {} --threads 1", shot, d.file("s2.####.exr")), &err), 0) << err;
+    double reprojected = 0;
+    for (int f = 1; f <= 4; ++f) {
+        expect_same_layers(d.file(fmt::format("s1.{:04d}.exr", f)), d.file(fmt::format("s2.{:04d}.exr", f)));
+        reprojected += nlohmann::json::parse(test::bytes_of(d.file(fmt::format("s1.{:04d}.json", f))))["refined_from_earlier_gathers"].get<double>();
+    }
+    EXPECT_GT(reprojected, 10);  // the case is tested, not skipped
 }
 
 /// The pid of rank `rank` of a running job whose command line contains `marker`, or 0.
