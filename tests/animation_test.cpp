@@ -227,6 +227,32 @@ TEST(TemporalCache, RefinementReprojectsEarlierGathersAndKeepsOnlyGathersForLate
         EXPECT_TRUE(g.hits);
         EXPECT_EQ(g.rays, full);
     }
+    // Judged for frame 3, frame 2's cache keeps a moving camera's fragment records of frame 2
+    // only (for the hold, by their place: without hits; reprojection's gathers keep theirs), so
+    // a shot holds the hits of its gathers alone, not of every pixel ever refined.
+    // (Frame 2 refined every pixel frame 1 did: one of frame 1's is put back under a free key.)
+    std::unique_ptr<IrradianceCache> copy = second.cache->clone();
+    Record old = first.gathers.front();
+    old.key = ~uint64_t(0), old.gathered = 1;
+    copy->insert_fragment_record(old);
+    const IrradianceCache& cache2 = *copy;
+    const SceneChanges changes = scene_changes(*f.scenes[1], *f.scenes[2]);
+    ASSERT_TRUE(changes.camera);
+    const TemporalJudgement judged = judge_records(cache2, {}, {}, *f.scenes[1], *f.scenes[2], changes, {}, 0);
+    size_t of_two = 0, of_one = 0;
+    for (size_t i = 0; i < cache2.fragment_record_count(); ++i) {
+        of_two += cache2.fragment_record_at(i).gathered == 2;
+        of_one += cache2.fragment_record_at(i).gathered == 1;
+    }
+    ASSERT_GT(of_two, 0u);
+    ASSERT_EQ(of_one, 1u);
+    EXPECT_GE(judged.dropped, 1u);
+    EXPECT_EQ(judged.fragment_valid.size() + judged.fragment_stale.size(), of_two);
+    for (const Record& k : judged.fragment_valid) {
+        EXPECT_EQ(k.gathered, 2);
+        EXPECT_FALSE(k.hits);
+    }
+    for (const auto& [key, k] : judged.fragment_stale) EXPECT_FALSE(k.hits);
 }
 
 TEST(TemporalCache, RecordsOnAMovingObjectTravelWithItAndTheRestUpdateOnlyWhatTheySee) {

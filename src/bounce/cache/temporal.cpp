@@ -271,6 +271,12 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
     // an earlier refinement gather whose rays refinement may reuse (EarlierGathers).
     enum class Role : uint8_t { Record, Fragment, Gather };
     const auto judge = [&](Record r, Role role) {
+        // A moving camera's fragments never land on an earlier frame's points again: its
+        // fragment records serve only refinement's hold in the next frame, by where they are.
+        if (role == Role::Fragment && changes.camera && r.gathered + 1 < now.frame) {
+            ++out.dropped;
+            return;
+        }
         const ObjectMotion::Kind own = own_motion(r);
         if (own != ObjectMotion::Kind::Static) {
             // Refinement's records and gathers stay where their fragments were: dropped.
@@ -286,6 +292,8 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
         // the one it was made with (the fragment's), which the camera's own estimate only nears.
         if (role == Role::Record && changes.camera) respace(r, camera, s);
         const Verdict v = change.verdict(r);
+        // ... so without their hits (reprojection's gathers keep their own: EarlierGathers).
+        if (role == Role::Fragment && changes.camera) r.hits.reset();
         if (v == Verdict::Keep) {
             if (role == Role::Gather) return out.earlier_gathers.push_back(r);
             ++out.kept;
