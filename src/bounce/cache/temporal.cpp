@@ -292,11 +292,13 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
         // the one it was made with (the fragment's), which the camera's own estimate only nears.
         if (role == Role::Record && changes.camera) respace(r, camera, s);
         const Verdict v = change.verdict(r);
-        // ... so without their hits (reprojection's gathers keep their own: EarlierGathers).
-        if (role == Role::Fragment && changes.camera) r.hits.reset();
         if (v == Verdict::Keep) {
             if (role == Role::Gather) return out.earlier_gathers.push_back(r);
             ++out.kept;
+            // ... so kept without their hits (reprojection's gathers keep their own:
+            // EarlierGathers). A stale one keeps them: refinement updates it from them should a
+            // fragment land on its very point after all, and it lives only through this frame.
+            if (role == Role::Fragment && changes.camera) r.hits.reset();
             (role == Role::Fragment ? out.fragment_valid : out.valid).push_back(r);
         } else if (role == Role::Fragment && v == Verdict::Update) {
             out.fragment_stale.emplace(r.key, r);  // updated where refinement still wants it
