@@ -74,6 +74,12 @@ TEST(MotionBlur, ACameraMovingInTheShutterBlursWhatItSeesByItsOwnMotion) {
     json bad = j;
     bad["camera"]["look_at"] = {{"keys", {{1, {0, 0, 0}}, {2, {-10, 0, 10}}}}};
     test::expect_input_error([&] { test::scene_from(bad); }, {"inline.json", "/camera/look_at", "look_at equals position at shutter close (frame 2)"});
+    // A shutter that closes before it opens is refused, also where a key makes it so.
+    json reversed = j;
+    reversed["camera"]["shutter"] = {0.5, -0.5};
+    test::expect_input_error([&] { test::scene_from(reversed); }, {"inline.json", "/camera/shutter", "the shutter closes (-0.5) before it opens (0.5)"});
+    reversed["camera"]["shutter"] = {{"keys", {{1, {0.25, 0}}, {2, {0, 1}}}}};
+    test::expect_input_error([&] { test::scene_from(reversed); }, {"inline.json", "/camera/shutter", "the shutter closes (0) before it opens (0.25)"});
     // A camera keyed but still over the shutter (both keys alike) does not blur.
     j["camera"]["position"] = {{"keys", {{1, {0, 0, 10}}, {2, {0, 0, 10}}}}};
     j["camera"]["look_at"] = {0, 0, 0};

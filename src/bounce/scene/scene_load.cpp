@@ -60,6 +60,9 @@ void read_params(const json& j, const std::string& section, Scene& scene, const 
 void check_camera(const Camera& cam, const JsonContext& ctx, const std::string& when = "") {
     if (length(cam.look_at - cam.position) == 0) ctx.fail("/camera/look_at", "look_at equals position" + when);
     if (length(cross(cam.look_at - cam.position, cam.up)) == 0) ctx.fail("/camera/up", "up is parallel to the view direction" + when);
+    // A reversed interval would blur over the same times; refused as the typo it most likely is.
+    if (cam.shutter[1] < cam.shutter[0])
+        ctx.fail("/camera/shutter", fmt::format("the shutter closes ({:g}) before it opens ({:g}){}", cam.shutter[1], cam.shutter[0], when));
 }
 
 /// Fur control points moved rigidly (widths kept).
