@@ -52,7 +52,7 @@ void add_camera_rows(std::vector<Row>& rows) {
         "shutter", ParamType::FloatList, 2, [](const Scene& s) -> json { return json::array({s.camera.shutter[0], s.camera.shutter[1]}); },
         [](Scene& s, const json& v) { s.camera.shutter = {v[0].get<float>(), v[1].get<float>()}; });
     rows.push_back(shutter.range(-1, 1).unit("frames")
-                       .doc("[open, close] around the frame's time: primary visibility is blurred over it (keyed objects, "
+                       .doc("[open, close] around the frame's time (close not before open): primary visibility is blurred over it (keyed objects, "
                             "meshes playing a clip and a keyed camera move in it), shading is at the frame's time; "
                             "[0, 0] = no motion blur")
                        .animate());
