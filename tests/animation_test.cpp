@@ -446,6 +446,27 @@ TEST(Sequences, AFrameThatFailsStopsTheShotThereAndResumeSkipsWhatIsDone) {
     EXPECT_TRUE(std::filesystem::exists(d.file("f.0004.exr")));
 }
 
+TEST(Sequences, ARangePastTheShotOrASubframeOntoAFramePatternIsRefusedBeforeAnyFrameRenders) {
+    test::TempDir d;
+    d.write("s.json", shot_scene(4).dump());
+    const std::string scene = "render " + d.file("s.json") + " -q --res 8x8 ";
+    // Frames 3 and 4 exist in the shot; 5 does not: nothing is rendered (it used to render 3
+    // and 4 before failing at 5).
+    test::expect_refused(scene + "-o " + d.file("f.####.exr") + " --frames 3-5",
+                         {"command line", "--frames 3-5", "frame 5 is outside the shot, frames 1 to 4"});
+    EXPECT_FALSE(std::filesystem::exists(d.file("f.0003.exr")));
+    // A subframe would write frame 3's names (and overwrite its files); with a plain name it renders.
+    test::expect_refused(scene + "-o " + d.file("f.####.exr") + " --frame 2.5", {"--frame 2.5", "a #### file name needs a whole frame number"});
+    test::expect_refused(scene + "-o " + d.file("sub.exr") + " --stats-json " + d.file("f.####.json") + " --frame 2.5",
+                         {"--frame 2.5", "a #### file name needs a whole frame number"});
+    EXPECT_FALSE(std::filesystem::exists(d.file("f.0003.exr")));
+    EXPECT_FALSE(std::filesystem::exists(d.file("sub.exr")));
+    EXPECT_EQ(test::run_bounce(scene + "-o " + d.file("sub.exr") + " --frame 2.5"), 0);
+    EXPECT_TRUE(std::filesystem::exists(d.file("sub.exr")));
+    EXPECT_EQ(test::run_bounce(scene + "-o " + d.file("f.####.exr") + " --frame 3"), 0);
+    EXPECT_TRUE(std::filesystem::exists(d.file("f.0003.exr")));
+}
+
 TEST(TemporalCache, SceneChangesTellRigidFromStaticAndSeeEmissiveObjectsAsLights) {
     json j = shot_scene();
     j["objects"][2]["transform"] = {{"translate", {{"keys", {{1, {0, 0.5, 0}}, {3, {2, 0.5, 0}}}}}}};

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -120,6 +122,14 @@ int render_frame(const RenderArgs& a, const FrameFiles& files) {
     return 0;
 }
 
+/// A range that runs past the end of the shot is refused before any frame renders (the first
+/// frame's scene says where the shot ends; its start was checked as that frame loaded).
+void check_range_in_shot(const RenderArgs& a, const Scene& scene, int last) {
+    if (scene.shot.animated && !scene.shot.contains(last))
+        throw InputError("command line", "--frames " + a.frames,
+                         fmt::format("frame {} is outside the shot, frames {} to {}", last, scene.shot.first, scene.shot.last));
+}
+
 /// Every output of a frame is there (each is written by rename: there means complete).
 bool outputs_complete(const FrameFiles& f) {
     for (const std::string& path : {f.output, f.png(), f.deep_out, f.cache_out, f.stats_json})
@@ -143,6 +153,7 @@ int render_sequence(const RenderArgs& a, int first, int last, int shot_first, Co
         }
         auto scene = std::make_shared<const Scene>(load_render_scene(a, f));
         if (f == first && comm) check_ranks(a, *scene);
+        check_range_in_shot(a, *scene, last);
         if (writes(comm)) check_frame(a, files, *scene);
         // A resumed shot starts from the cache the frame before left, when there is one.
         const std::string before = f > shot_first && !a.files.cache_out.empty() ? expand_frame_pattern(a.files.cache_out, f - 1) : "";
@@ -167,7 +178,9 @@ int render_sequence(const RenderArgs& a, int first, int last, int shot_first, Co
 /// from the cache file of the frame before it only if that file was there before any rank
 /// started (a file another rank writes meanwhile would make the result depend on timing).
 int render_frame_chunks(const RenderArgs& a, int first, int last) {
-    check_ranks(a, load_render_scene(a, first));  // every rank's chunk is of the same shot
+    const Scene scene = load_render_scene(a, first);
+    check_ranks(a, scene);  // every rank's chunk is of the same shot
+    check_range_in_shot(a, scene, last);
     const int ranks = a.comm->size(), r = a.comm->rank(), n = last - first + 1;
     const int lo = first + static_cast<int>(static_cast<int64_t>(n) * r / ranks);
     const int hi = first + static_cast<int>(static_cast<int64_t>(n) * (r + 1) / ranks) - 1;
@@ -188,7 +201,14 @@ std::unique_ptr<ProgressSink> make_progress(bool quiet) {
 int run_render(const RenderArgs& a) {
     if (a.frames.empty()) {
         if (a.resume) throw InputError("command line", "--resume", "goes with --frames");
-        return render_frame(a, expand_frame(a.files, a.frame ? static_cast<int>(std::lround(*a.frame)) : 0));
+        const int whole = a.frame ? static_cast<int>(std::lround(*a.frame)) : 0;
+        // A subframe's #### would be a neighbouring frame's name, and overwrite its files.
+        const FrameFiles& f = a.files;
+        const bool patterned = std::ranges::any_of(std::array{&f.output, &f.deep_in, &f.deep_out, &f.cache_in, &f.cache_out, &f.stats_json, &f.base},
+                                                   [](const std::string* name) { return name->find('#') != std::string::npos; });
+        if (a.frame && *a.frame != whole && patterned)
+            throw InputError("command line", fmt::format("--frame {:g}", *a.frame), "a #### file name needs a whole frame number");
+        return render_frame(a, expand_frame(a.files, whole));
     }
     if (a.frame) throw InputError("command line", "--frame", "give --frame or --frames, not both");
     if (a.distribute != "tiles" && a.distribute != "frames")
