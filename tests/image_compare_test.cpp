@@ -1,5 +1,6 @@
 // Image error metrics (bounce compare) on images with known differences, and brute-force
 // renders through the command line.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "bounce/core/image.h"
@@ -159,6 +160,20 @@ TEST(SequenceCompare, AStaticSequenceHasNoFlickerAndAKnownPerturbationItsKnownVa
     const auto moving = [](int t) { return flat(8, 4, 1.0f + 0.1f * static_cast<float>(t)); };
     const auto offset = [](int t) { return flat(8, 4, 1.05f + 0.1f * static_cast<float>(t)); };
     EXPECT_NEAR(compare_sequences(offset, moving, 1, 5, "indirect", name).flicker, 0.0, 1e-6);
+}
+
+TEST(SequenceCompare, TheStripIsAPngThatOverwritesNoFrameItReads) {
+    test::TempDir d;
+    ASSERT_EQ(test::run_bounce("render " + test::cornell_scene() + " -o " + d.file("f.####.exr") + " --frames 1-2 --res 8x8 --spp 1 --gi brute --rays 8 -q"), 0);
+    for (int t : {1, 2}) std::filesystem::copy_file(d.file(fmt::format("f.{:04d}.exr", t)), d.file(fmt::format("r.{:04d}.png", t)));
+    const std::string cmd = "compare --sequence " + d.file("f.####.exr") + " " + d.file("r.####.png") + " --frames 1-2 --strip ";
+    const std::string frame = test::bytes_of(d.file("f.0001.exr")), ref = test::bytes_of(d.file("r.0002.png"));
+    test::expect_refused(cmd + d.file("f.0001.exr"), {"--strip", "the strip is a PNG file (.png)"});
+    test::expect_refused(cmd + d.file("r.0002.png"), {"r.0002.png", "output names an input"});
+    EXPECT_EQ(test::bytes_of(d.file("f.0001.exr")), frame);
+    EXPECT_EQ(test::bytes_of(d.file("r.0002.png")), ref);
+    EXPECT_EQ(test::run_bounce(cmd + d.file("strip.png")), 0);
+    EXPECT_GT(test::bytes_of(d.file("strip.png")).size(), 100u);
 }
 
 }  // namespace

@@ -138,7 +138,12 @@ int run_compare_sequence(const CompareArgs& a) {
     const auto name = [&](int t) { return expand_frame_pattern(a.test, t); };
     const auto test = [&](int t) { return read_exr(name(t)); };
     const auto ref = [&](int t) { return read_exr(expand_frame_pattern(a.reference, t)); };
-    if (!a.strip.empty()) check_output_file(a.strip, {});
+    if (!a.strip.empty()) {
+        if (!a.strip.ends_with(".png")) throw InputError("command line", "--strip " + a.strip, "the strip is a PNG file (.png)");
+        std::vector<std::string> inputs;  // every frame read: the strip must not overwrite one
+        for (int t = first; t <= last; ++t) inputs.push_back(name(t)), inputs.push_back(expand_frame_pattern(a.reference, t));
+        check_output_file(a.strip, inputs);
+    }
     const SequenceError e = compare_sequences(test, ref, first, last, layer, name);
     if (!a.strip.empty()) {
         int w = 0, h = 0;
