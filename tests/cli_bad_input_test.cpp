@@ -169,7 +169,13 @@ TEST(BadInput, CompareAndCacheToolsRefuseWhatTheyUsedToAccept) {
     ASSERT_EQ(std::system(cmd.c_str()), 0);
     std::ifstream in(d.file("c.json"));
     EXPECT_TRUE(nlohmann::json::parse(in)["indirect"]["rel_rmse"].is_null());  // not "0 %"
-    refused("compare " + d.file("a.exr") + " " + d.file("b.exr") + " --diff " + d.file("a.exr"), {"a.exr", "names an input"});
+    refused("compare " + d.file("a.exr") + " " + d.file("b.exr") + " --diff " + d.file("a.exr"), {"--diff", "is a PNG file (.png)"});
+    refused("compare " + d.file("a.exr") + " " + d.file("b.png") + " --diff " + d.file("b.png"), {"b.png", "names an input"});
+    // The default difference image (a.diff.png beside the test) must not overwrite a reference of that name.
+    std::filesystem::copy_file(d.file("b.exr"), d.file("a.diff.png"), std::filesystem::copy_options::overwrite_existing);
+    const std::string reference = test::bytes_of(d.file("a.diff.png"));
+    refused("compare " + d.file("a.exr") + " " + d.file("a.diff.png"), {"a.diff.png", "names an input"});
+    EXPECT_EQ(test::bytes_of(d.file("a.diff.png")), reference);
     refused("cache merge " + d.file("gi.bic") + " " + d.file("ao.bic") + " -o " + d.file("m.bic"), {"ao.bic", "holds AO"});
     refused("cache filter " + d.file("gi.bic") + " -o " + d.file("f.bic") + " --sphere nan,0,0,1", {"--sphere", "not a finite"});
     refused("cache filter " + d.file("gi.bic") + " -o " + d.file("f.bic") + " --sphere 0,0,0,-1", {"--sphere", "radius must be > 0"});

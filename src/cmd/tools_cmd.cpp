@@ -165,15 +165,17 @@ int run_compare_sequence(const CompareArgs& a) {
 
 int run_compare(const CompareArgs& a) {
     if (a.sequence) return run_compare_sequence(a);
-    if (!a.diff.empty()) check_output_file(a.diff, {a.test, a.reference});
-    Image test = read_exr(a.test), ref = read_exr(a.reference);
-    std::vector<LayerError> errors = compare_images(test, ref, a.layer, a.test, a.reference);
-    std::string diff_layer = a.layer.empty() ? (ref.find("indirect") ? "indirect" : "beauty") : a.layer;
     std::string diff = a.diff;
     if (diff.empty()) {
         std::filesystem::path p = a.test;
         diff = (p.parent_path() / (p.stem().string() + ".diff.png")).string();
+    } else if (!diff.ends_with(".png")) {
+        throw InputError("command line", "--diff " + diff, "the difference image is a PNG file (.png)");
     }
+    check_output_file(diff, {a.test, a.reference});  // the default name too: it may be the reference's
+    Image test = read_exr(a.test), ref = read_exr(a.reference);
+    std::vector<LayerError> errors = compare_images(test, ref, a.layer, a.test, a.reference);
+    std::string diff_layer = a.layer.empty() ? (ref.find("indirect") ? "indirect" : "beauty") : a.layer;
     double range = 0.1;
     for (const auto& e : errors)
         if (e.layer == diff_layer) range = std::max(1e-12, 0.1 * e.mean_ref);
