@@ -352,6 +352,12 @@ TEST(LightingToolHttp, BadRequestsGetAStatusAndAMessage) {
     EXPECT_EQ(r->status, 400);
     EXPECT_NE(r->body.find("byte"), std::string::npos);
     EXPECT_EQ(post("/api/edit", "[1, 2]")->status, 400);
+    // A number past a double is the client's fault (it was a 500).
+    for (const char* path : {"/api/edit", "/api/frame"}) {
+        r = post(path, R"({"key": "render.rays", "value": 1e999, "frame": 1e999})");
+        EXPECT_EQ(r->status, 400) << path;
+        EXPECT_NE(r->body.find("not finite"), std::string::npos) << r->body;
+    }
     EXPECT_EQ(post("/api/render", R"({"action": "explode"})")->status, 400);
     EXPECT_EQ(post("/api/render", R"({"action": "reshade", "crop": [0, 10, 0, 10]})")->status, 400);  // nothing rendered yet
     EXPECT_EQ(post("/api/render", R"({"action": "reshade", "crop": [0, "a", 0, 10]})")->status, 400);

@@ -34,6 +34,8 @@ json body_object(const httplib::Request& req) {
         j = json::parse(req.body);
     } catch (const json::parse_error& e) {
         throw InputError("request body", fmt::format("byte {}", e.byte), "malformed JSON");
+    } catch (const json::out_of_range&) {  // a number past a double (1e999): HTTP 400, not 500
+        throw InputError("request body", "", "a number is not finite");
     }
     if (!j.is_object()) throw InputError("request body", "", "a JSON object is expected");
     return j;
