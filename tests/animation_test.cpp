@@ -463,6 +463,11 @@ TEST(Sequences, ARangePastTheShotOrASubframeOntoAFramePatternIsRefusedBeforeAnyF
     EXPECT_FALSE(std::filesystem::exists(d.file("sub.exr")));
     EXPECT_EQ(test::run_bounce(scene + "-o " + d.file("sub.exr") + " --frame 2.5"), 0);
     EXPECT_TRUE(std::filesystem::exists(d.file("sub.exr")));
+    // Not a frame at all, in a shot or a still.
+    for (const std::string& file : {d.file("s.json"), test::cornell_scene()})
+        for (const char* frame : {"nan", "1e39", "-inf"})
+            test::expect_refused("render " + file + " -q --res 8x8 -o " + d.file("n.####.exr") + " --frame " + frame,
+                                 {"--frame", "a frame must be a finite number within +-1e+06"});
     EXPECT_EQ(test::run_bounce(scene + "-o " + d.file("f.####.exr") + " --frame 3"), 0);
     EXPECT_TRUE(std::filesystem::exists(d.file("f.0003.exr")));
 }

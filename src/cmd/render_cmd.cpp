@@ -201,6 +201,9 @@ std::unique_ptr<ProgressSink> make_progress(bool quiet) {
 int run_render(const RenderArgs& a) {
     if (a.frames.empty()) {
         if (a.resume) throw InputError("command line", "--resume", "goes with --frames");
+        // The range a key's frame may have (a still has no shot to refuse the frame otherwise).
+        if (a.frame && !(std::isfinite(*a.frame) && std::abs(*a.frame) <= 1e6))
+            throw InputError("command line", fmt::format("--frame {:g}", *a.frame), "a frame must be a finite number within +-1e+06");
         const int whole = a.frame ? static_cast<int>(std::lround(*a.frame)) : 0;
         // A subframe's #### would be a neighbouring frame's name, and overwrite its files.
         const FrameFiles& f = a.files;
