@@ -3,8 +3,6 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
-#include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -126,8 +124,7 @@ int render_frame(const RenderArgs& a, const FrameFiles& files) {
 /// frame's scene says where the shot ends; its start was checked as that frame loaded).
 void check_range_in_shot(const RenderArgs& a, const Scene& scene, int last) {
     if (scene.shot.animated && !scene.shot.contains(last))
-        throw InputError("command line", "--frames " + a.frames,
-                         fmt::format("frame {} is outside the shot, frames {} to {}", last, scene.shot.first, scene.shot.last));
+        throw InputError("command line", "--frames " + a.frames, scene.shot.outside(last));
 }
 
 /// Every output of a frame is there (each is written by rename: there means complete).
@@ -202,14 +199,11 @@ int run_render(const RenderArgs& a) {
     if (a.frames.empty()) {
         if (a.resume) throw InputError("command line", "--resume", "goes with --frames");
         // The range a key's frame may have (a still has no shot to refuse the frame otherwise).
-        if (a.frame && !(std::isfinite(*a.frame) && std::abs(*a.frame) <= 1e6))
-            throw InputError("command line", fmt::format("--frame {:g}", *a.frame), "a frame must be a finite number within +-1e+06");
+        if (a.frame && !is_frame_number(*a.frame))
+            throw InputError("command line", fmt::format("--frame {:g}", *a.frame), fmt::format("a frame must be a finite number within +-{:g}", kMaxFrame));
         const int whole = a.frame ? static_cast<int>(std::lround(*a.frame)) : 0;
         // A subframe's #### would be a neighbouring frame's name, and overwrite its files.
-        const FrameFiles& f = a.files;
-        const bool patterned = std::ranges::any_of(std::array{&f.output, &f.deep_in, &f.deep_out, &f.cache_in, &f.cache_out, &f.stats_json, &f.base},
-                                                   [](const std::string* name) { return name->find('#') != std::string::npos; });
-        if (a.frame && *a.frame != whole && patterned)
+        if (a.frame && *a.frame != whole && a.files.patterned())
             throw InputError("command line", fmt::format("--frame {:g}", *a.frame), "a #### file name needs a whole frame number");
         return render_frame(a, expand_frame(a.files, whole));
     }

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <fstream>
 
 #include "bounce/cache/cache_file.h"
@@ -43,10 +44,23 @@ void FrameFiles::check(const Scene& loaded) const {
     for (const auto& [flag, path] : outputs) remove_stale_temporaries(path);
 }
 
+namespace {
+
+/// The names a frame number expands in.
+template <typename Files>
+auto frame_names(Files& f) {
+    return std::array{&f.output, &f.deep_in, &f.deep_out, &f.cache_in, &f.cache_out, &f.stats_json, &f.base};
+}
+
+}  // namespace
+
+bool FrameFiles::patterned() const {
+    return std::ranges::any_of(frame_names(*this), [](const std::string* s) { return s->find('#') != std::string::npos; });
+}
+
 FrameFiles expand_frame(const FrameFiles& p, int frame) {
     FrameFiles f = p;
-    for (std::string* s : {&f.output, &f.deep_in, &f.deep_out, &f.cache_in, &f.cache_out, &f.stats_json, &f.base})
-        *s = expand_frame_pattern(*s, frame);
+    for (std::string* s : frame_names(f)) *s = expand_frame_pattern(*s, frame);
     return f;
 }
 

@@ -21,6 +21,8 @@ struct FrameFiles {
     std::string base;        ///< with a crop: an earlier full-frame EXR the crop is pasted over
     /// The PNG written beside `output`.
     std::string png() const;
+    /// Whether any file name holds a #### frame pattern (expand_frame expands them).
+    bool patterned() const;
     /// Refuses (InputError) outputs that are not regular files or new names, that name an input
     /// (this frame's files, and every file `loaded` reads: meshes, textures, maps, the sky) or
     /// each other, that lie in a folder it reads (radiosity textures) or in a folder

@@ -14,8 +14,6 @@ using nlohmann::json;
 
 namespace {
 
-constexpr double kMaxFrame = 1e6;
-
 bool is_keyed(const json& v) { return v.is_object() && v.contains("keys"); }
 
 enum class Interp { Linear, Smooth, Step };
@@ -46,7 +44,7 @@ Track read_track(const json& keyed, const std::string& ptr, const JsonContext& c
         const std::string kp = fmt::format("{}/keys/{}", ptr, k);
         const json& key = keys[k];
         if (!key.is_array() || key.size() != 2) ctx.fail(kp, "expected [frame, value]");
-        if (!key[0].is_number() || !std::isfinite(key[0].get<double>()) || std::fabs(key[0].get<double>()) > kMaxFrame)
+        if (!key[0].is_number() || !is_frame_number(key[0].get<double>()))
             ctx.fail(kp + "/0", fmt::format("a key's frame must be a finite number within +-{:g}", kMaxFrame));
         const double t = key[0].get<double>();
         if (!tr.t.empty() && t <= tr.t.back())

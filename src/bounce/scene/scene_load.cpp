@@ -129,7 +129,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     scene.frame = options.frame.value_or(scene.shot.first);
     if (scene.shot.animated && !scene.shot.contains(scene.frame))
         throw InputError(options.frame_origin.empty() ? path : "command line", options.frame_origin.empty() ? "/animation/frames" : options.frame_origin,
-                         fmt::format("frame {:g} is outside the shot, frames {} to {}", scene.frame, scene.shot.first, scene.shot.last));
+                         scene.shot.outside(scene.frame));
     if (has_keys(doc)) {
         scene.keyed = doc;
         doc = evaluate_keys(doc, scene.frame, ctx);

@@ -231,7 +231,7 @@ json LightingSession::set_frame(double frame) {
         std::lock_guard lock(mutex_);
         if (!scene_.shot.animated) throw InputError("request", "frame", "the scene has no shot (no \"animation\" block)");
         if (!std::isfinite(frame) || !scene_.shot.contains(frame))
-            throw InputError("request", "frame", fmt::format("{} is outside the shot, frames {} to {}", frame, scene_.shot.first, scene_.shot.last));
+            throw InputError("request", "frame", scene_.shot.outside(frame));
         LoadOptions at;
         at.frame = frame;
         scene_ = load_scene(options_.scene, overrides_locked(), at);
