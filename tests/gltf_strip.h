@@ -63,4 +63,35 @@ inline nlohmann::json skinned_strip(int joint_of_tip = 1, float tip_weight = 1) 
     return g;
 }
 
+/// A unit quad at x in [3, 4], y in [0, 1] with one morph target that lifts its top edge by 1,
+/// its weight animated from 0 to 1 over 1 second (clip "rise"). The node is "blob"; the mesh is
+/// named `mesh_name` (empty: unnamed), which glTF does not tie to the node's name.
+inline nlohmann::json morphed_quad(const std::string& mesh_name = "") {
+    std::string b;
+    put<float>(b, {3, 0, 0, 4, 0, 0, 4, 1, 0, 3, 1, 0});        // 4 positions: 48 bytes
+    put<uint16_t>(b, {0, 1, 2, 0, 2, 3});                      // 6 indices: 12 bytes
+    put<float>(b, {0, 0, 0, 0, 0, 0, 0, 1, 0.5f, 0, 1, 0.5f});  // the target's displacements: 48 bytes
+    put<float>(b, {0, 1});                                      // 8 bytes: key times
+    put<float>(b, {0, 1});                                      // 8 bytes: the weight at each key
+    using nlohmann::json;
+    json g = {{"asset", {{"version", "2.0"}}}, {"scene", 0}, {"scenes", {{{"nodes", {0}}}}}};
+    g["buffers"] = {{{"byteLength", b.size()}, {"uri", "data:application/octet-stream;base64," + base64(b)}}};
+    const auto view = [](int offset, int length) { return json{{"buffer", 0}, {"byteOffset", offset}, {"byteLength", length}}; };
+    g["bufferViews"] = {view(0, 48), view(48, 12), view(60, 48), view(108, 8), view(116, 8)};
+    g["accessors"] = {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {3, 0, 0}}, {"max", {4, 1, 0}}},
+                      {{"bufferView", 1}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}},
+                      {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {0, 0, 0}}, {"max", {0, 1, 0.5}}},
+                      {{"bufferView", 3}, {"componentType", 5126}, {"count", 2}, {"type", "SCALAR"}, {"min", {0}}, {"max", {1}}},
+                      {{"bufferView", 4}, {"componentType", 5126}, {"count", 2}, {"type", "SCALAR"}}};
+    json primitive = {{"attributes", {{"POSITION", 0}}}, {"indices", 1}, {"targets", json::array({json{{"POSITION", 2}}})}};
+    json mesh = {{"primitives", json::array({primitive})}, {"weights", {0}}};
+    if (!mesh_name.empty()) mesh["name"] = mesh_name;
+    g["meshes"] = json::array({mesh});
+    g["nodes"] = {{{"name", "blob"}, {"mesh", 0}}};
+    json sampler = {{"input", 3}, {"output", 4}, {"interpolation", "LINEAR"}};
+    json channel = {{"sampler", 0}, {"target", {{"node", 0}, {"path", "weights"}}}};
+    g["animations"] = json::array({json{{"name", "rise"}, {"samplers", json::array({sampler})}, {"channels", json::array({channel})}}});
+    return g;
+}
+
 }  // namespace bounce::test

@@ -125,6 +125,15 @@ RadiosityTextures::~RadiosityTextures() = default;
 RadiosityTextures::RadiosityTextures(RadiosityTextures&&) noexcept = default;
 RadiosityTextures& RadiosityTextures::operator=(RadiosityTextures&&) noexcept = default;
 
+RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, int max_level) const {
+    RadiosityMap m = lay_out(scene.objects[id].coarse, texel_size_, max_level);
+    if (has_parts()) {
+        m.lights = static_cast<uint32_t>(scene.lights.size());
+        m.front_parts.assign(m.front.size() * m.lights, Color(0)), m.back_parts.assign(m.back.size() * m.lights, Color(0));
+    }
+    return m;
+}
+
 RadiosityTextures RadiosityTextures::lazy(const Scene& scene, const Materials& materials, const DirectLighting& lighting,
                                           const RadiositySettings& settings) {
     RadiosityTextures rt;
@@ -133,12 +142,7 @@ RadiosityTextures RadiosityTextures::lazy(const Scene& scene, const Materials& m
     rt.sources_ = std::make_unique<Sources>(Sources{&scene, &materials, &lighting, effective_light_samples(scene, settings), {}});
     if (scene.render.cache.light_parts) rt.sources_->scales = light_scales(scene);
     for (size_t id = 0; id < scene.objects.size(); ++id) {
-        rt.maps_.push_back(lay_out(scene.objects[id].coarse, rt.texel_size_, settings.max_level));
-        RadiosityMap& m = rt.maps_.back();
-        if (rt.has_parts()) {
-            m.lights = static_cast<uint32_t>(scene.lights.size());
-            m.front_parts.assign(m.front.size() * m.lights, Color(0)), m.back_parts.assign(m.back.size() * m.lights, Color(0));
-        }
+        rt.maps_.push_back(rt.laid_out(scene, id, settings.max_level));
         const size_t n = 2 * scene.objects[id].coarse.triangle_count();
         rt.state_.push_back(std::make_unique<std::atomic<uint8_t>[]>(n));
         for (size_t i = 0; i < n; ++i) rt.state_.back()[i].store(0, std::memory_order_relaxed);

@@ -83,7 +83,9 @@ public:
                      std::string& why);
 
     /// The previous frame's textures carried to this frame's `scene` (docs/animation.md): the same
-    /// layout (texel size and levels, so texels keep their place) and values; each side baked
+    /// layout (texel size and levels, so texels keep their place) and values, but for deforming
+    /// objects, laid out anew for their shape and baked lazily, as a frame rendered alone
+    /// would (a stretched triangle gets another level); each side baked
     /// before is baked again now, in parallel, when `changes` says its direct light may differ:
     /// its object moved or deformed, its material or any light changed, or a moving object's
     /// swept bounds come between it and a light. Sides never baked stay lazy. `changed` receives
@@ -125,6 +127,8 @@ private:
         int light_samples;  ///< resolved (never 0)
         std::vector<Color> scales;  ///< light_parts: every light's (light_scales); else empty
     };
+    /// Object `id`'s map laid out for its shape in `scene`, nothing baked (with room for light parts).
+    RadiosityMap laid_out(const Scene& scene, size_t id, int max_level) const;
     void bake_side(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
     void ensure_baked(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
 

@@ -34,11 +34,13 @@ bool may_shadow(const Light& light, const Vec3& a, const Vec3& b, const Vec3& c,
             break;
         case LightType::Sky:
         case LightType::Mesh:
-            // Anything in front of the side may hide part of the sky (or an emissive mesh).
+            // Anything above the side's plane may hide part of the sky (or an emissive mesh): the
+            // hemisphere reaches along every axis but the one straight behind it (a floor's sky is
+            // hidden by a wall beside it, not only by what is overhead).
             for (const Vec3& p : {a, b, c})
                 for (const Vec3& d : {Vec3{far, 0, 0}, Vec3{-far, 0, 0}, Vec3{0, far, 0}, Vec3{0, -far, 0}, Vec3{0, 0, far},
                                       Vec3{0, 0, -far}})
-                    if (dot(d, n) > 0) hull.extend(p + d);
+                    if (dot(d, n) > -0.9999f * far) hull.extend(p + d);
             break;
     }
     return boxes_overlap(hull, box);
@@ -79,6 +81,12 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
         rt.state_.push_back(std::make_unique<std::atomic<uint8_t>[]>(n));
         const TriangleMesh& m = scene.objects[id].coarse;
         const bool moved = changes.objects[id].kind != ObjectMotion::Kind::Static;
+        if (changes.objects[id].kind == ObjectMotion::Kind::Deforming) {
+            // Its triangles changed size: lay it out as this frame alone would, every side lazy.
+            rt.maps_[id] = rt.laid_out(scene, id, scene.render.radiosity.max_level);
+            for (size_t s = 0; s < n; ++s) rt.state_.back()[s].store(0, std::memory_order_relaxed);
+            continue;
+        }
         for (size_t s = 0; s < n; ++s) {
             const uint8_t was = previous.state_[id][s].load(std::memory_order_relaxed) == 2 ? 2 : 0;
             rt.state_.back()[s].store(was, std::memory_order_relaxed);

@@ -46,6 +46,17 @@ double ticks(const aiAnimation* a, double seconds) {
 
 Vec3 to_vec3(const aiVector3D& v) { return {v.x, v.y, v.z}; }
 
+/// Whether the node named `node` (a morph channel's target: glTF animates a node's weights)
+/// draws `mesh`. The binding is glTF's node -> mesh reference, not a match of names: a mesh may
+/// be unnamed or named unlike its node.
+bool node_shows(const aiScene* s, const aiString& node, const aiMesh* mesh) {
+    const aiNode* n = s->mRootNode->FindNode(node);
+    if (!n) return false;
+    for (unsigned i = 0; i < n->mNumMeshes; ++i)
+        if (n->mMeshes[i] < s->mNumMeshes && s->mMeshes[n->mMeshes[i]] == mesh) return true;
+    return false;
+}
+
 }  // namespace
 
 int find_clip(const aiScene* s, const std::string& name, const std::string& path) {
@@ -105,7 +116,7 @@ void pose_mesh(const aiScene* s, const aiMesh* mesh, const MeshTime& t, const ai
             const aiAnimation* a = s->mAnimations[t.clip];
             for (unsigned c = 0; c < a->mNumMorphMeshChannels; ++c) {
                 const aiMeshMorphAnim* m = a->mMorphMeshChannels[c];
-                if (m->mNumKeys == 0 || std::string(m->mName.C_Str()).rfind(mesh->mName.C_Str(), 0) != 0) continue;
+                if (m->mNumKeys == 0 || !node_shows(s, m->mName, mesh)) continue;
                 const auto [i, f] = bracket(m->mKeys, m->mNumKeys, ticks(a, t.seconds));
                 for (unsigned v = 0; v < m->mKeys[i].mNumValuesAndWeights; ++v) {
                     const unsigned target = m->mKeys[i].mValues[v];

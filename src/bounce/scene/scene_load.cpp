@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -280,6 +281,27 @@ uint64_t Scene::inputs_hash(const std::string& part, bool without_surface_shadin
     return h;
 }
 
+namespace {
+
+uint64_t hash_floats(uint64_t h, const float* v, size_t n) {
+    static_assert(sizeof(Vec3) == 3 * sizeof(float));
+    for (size_t i = 0; i < n; ++i) h = hash_combine(h, std::bit_cast<uint32_t>(v[i]));
+    return hash_combine(h, n);
+}
+
+/// The shape a deforming object has at the frame: what the camera sees (and its shutter's
+/// open and close poses, and its fur).
+uint64_t pose_hash(const Object& o) {
+    const TriangleMesh& m = o.visible();
+    uint64_t h = hash_floats(0x9e3779b97f4a7c15ULL, reinterpret_cast<const float*>(m.positions.data()), m.positions.size() * 3);
+    for (const std::vector<Vec3>& s : o.shutter) h = hash_floats(h, reinterpret_cast<const float*>(s.data()), s.size() * 3);
+    if (o.fur) h = hash_floats(h, o.fur->vertices.data(), o.fur->vertices.size());
+    for (const std::vector<float>& f : o.fur_shutter) h = hash_floats(h, f.data(), f.size());
+    return h;
+}
+
+}  // namespace
+
 uint64_t Scene::visibility_fingerprint() const {
     Scene copy;
     copy.inputs = inputs;
@@ -294,6 +316,12 @@ uint64_t Scene::visibility_fingerprint() const {
     for (auto& o : copy.description["objects"])
         if (o.is_object() && o.contains("fur") && o["fur"].is_object())
             for (const std::string& key : fur_lighting_keys()) o["fur"].erase(key);
+    // A skin or morph targets: the file and its clip name are the same at every frame, the
+    // shape the camera sees is not. Each deforming object's pose is part of the identity.
+    json poses = json::array();
+    for (const Object& o : objects)
+        if (o.deforms) poses.push_back(fmt::format("{:016x}", pose_hash(o)));
+    if (!poses.empty()) copy.description["objects"] = {{"list", copy.description["objects"]}, {"poses", poses}};
     // Subdivision surfaces are diced from the camera by render.dicing and fragments name their
     // micropolygons: a deep file of another dicing would shade the wrong ones. ("per-edge": the
     // dicing rule, so files of the earlier uniform dicing are not taken for this one.)
