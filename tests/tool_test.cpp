@@ -335,6 +335,7 @@ struct Served {
     int port = server.bind();
     std::thread thread{[this] { server.listen(); }};
     httplib::Client client{"127.0.0.1", port};
+    Served() { client.set_default_headers({{"Authorization", "token " + server.token()}}); }
     ~Served() {
         server.stop();
         thread.join();
@@ -422,6 +423,100 @@ TEST(LightingToolHttp, OnlyLoopbackAddressesAreServed) {
     EXPECT_TRUE(is_loopback_host("::1"));
     EXPECT_FALSE(is_loopback_host("127.0.0.1.evil.com"));
     EXPECT_FALSE(is_loopback_host("10.0.0.1"));
+}
+
+/// The attacker's requests of issue 50: each gets 403 with a message, and changes nothing.
+TEST(LightingToolHttp, OnlyThePageOfThePrintedUrlDrivesTheTool) {
+    Served s;
+    const std::string edit = R"({"key": "render.min_spacing", "value": 2.5})";
+    const auto spacing = [&] {
+        for (const json& row : json::parse(s.client.Get("/api/params")->body))
+            if (row["key"] == "render.min_spacing") return row["value"];
+        return json();
+    };
+    const json before = spacing();
+    ASSERT_FALSE(before.is_null());
+    httplib::Client bare{"127.0.0.1", s.port};  // no token
+    const std::string token = s.server.token();
+    const auto refused = [&](const httplib::Result& r, const char* why) {
+        ASSERT_TRUE(r) << why;
+        EXPECT_EQ(r->status, 403) << why;
+        EXPECT_FALSE(json::parse(r->body)["error"].get<std::string>().empty()) << why;
+    };
+    // A cross-origin "simple" POST (text/plain needs no preflight), with the right token even.
+    refused(s.client.Post("/api/edit", httplib::Headers{{"Origin", "http://evil.example"}}, edit, "text/plain"), "foreign origin");
+    refused(s.client.Post("/api/edit", httplib::Headers{{"Origin", "http://127.0.0.1:" + std::to_string(s.port + 1)}}, edit, "application/json"),
+            "another port of this machine");
+    refused(s.client.Post("/api/edit", httplib::Headers{{"Origin", "null"}}, edit, "application/json"), "an opaque origin");
+    refused(s.client.Post("/api/edit", edit, "text/plain"), "a state change without JSON");
+    // DNS rebinding: a foreign Host, even with the token.
+    refused(s.client.Get("/api/params", httplib::Headers{{"Host", "evil.example"}}), "foreign Host");
+    refused(s.client.Get("/api/params", httplib::Headers{{"Host", "127.0.0.1.evil.example:" + std::to_string(s.port)}}), "look-alike Host");
+    refused(s.client.Get("/api/params", httplib::Headers{{"Host", "127.0.0.1:1"}}), "another port in Host");
+    // No token, a wrong one, the page itself without one.
+    refused(bare.Post("/api/edit", edit, "application/json"), "no token");
+    refused(bare.Get("/api/params"), "no token, reading");
+    refused(bare.Get("/index.html"), "the page without a token");
+    refused(bare.Post("/api/edit", httplib::Headers{{"Authorization", "token " + token + "x"}}, edit, "application/json"), "wrong token");
+    refused(bare.Post("/api/edit", httplib::Headers{{"Cookie", "bounce-token-" + std::to_string(s.port + 1) + "=" + token}}, edit, "application/json"),
+            "another tool's cookie name");
+    refused(bare.Post("/api/render", R"({"action": "rasterize"})", "application/json"), "a render without a token");
+    EXPECT_EQ(spacing(), before);
+    EXPECT_EQ(s.session.status()["state"], "idle");
+    // The printed URL's token gives the page its cookie; the cookie (or the header) then serves.
+    auto r = bare.Get("/api/params?token=" + token);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200);
+    const std::string cookie = r->get_header_value("Set-Cookie");
+    EXPECT_NE(cookie.find("SameSite=Strict"), std::string::npos) << cookie;
+    EXPECT_NE(cookie.find("HttpOnly"), std::string::npos) << cookie;
+    const std::string pair = cookie.substr(0, cookie.find(';'));
+    EXPECT_EQ(pair, "bounce-token-" + std::to_string(s.port) + "=" + token);
+    r = bare.Post("/api/edit", httplib::Headers{{"Cookie", "other=1; " + pair}, {"Origin", "http://127.0.0.1:" + std::to_string(s.port)}}, edit,
+                  "application/json; charset=utf-8");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200) << r->body;
+    EXPECT_EQ(spacing(), 2.5);
+    EXPECT_EQ(s.server.url(), "http://127.0.0.1:" + std::to_string(s.port) + "/?token=" + token);
+}
+
+TEST(LightingToolHttp, TheGuardReadsHostOriginTokenAndTypeAsAWholeHeader) {
+    RequestGuard g("secret");
+    g.bind(8123);
+    RequestFacts ok{"POST", "127.0.0.1:8123", "", "application/json", "token secret", "", ""};
+    EXPECT_EQ(g.check(ok).refusal, Refusal::None);
+    const auto with = [&](auto change) {
+        RequestFacts f = ok;
+        change(f);
+        return g.check(f).refusal;
+    };
+    EXPECT_EQ(with([](RequestFacts& f) { f.host = "localhost:8123"; }), Refusal::None);
+    EXPECT_EQ(with([](RequestFacts& f) { f.host = "[::1]:8123"; }), Refusal::None);
+    EXPECT_EQ(with([](RequestFacts& f) { f.host = "LOCALHOST:8123"; }), Refusal::None);
+    EXPECT_EQ(with([](RequestFacts& f) { f.host = ""; }), Refusal::Host);
+    EXPECT_EQ(with([](RequestFacts& f) { f.host = "localhost"; }), Refusal::Host);  // port 80
+    EXPECT_EQ(with([](RequestFacts& f) { f.host = "localhost:81234"; }), Refusal::Host);
+    EXPECT_EQ(with([](RequestFacts& f) { f.host = "[::1"; }), Refusal::Host);
+    EXPECT_EQ(with([](RequestFacts& f) { f.host = "10.0.0.1:8123"; }), Refusal::Host);
+    EXPECT_EQ(with([](RequestFacts& f) { f.origin = "http://localhost:8123"; }), Refusal::None);
+    EXPECT_EQ(with([](RequestFacts& f) { f.origin = "https://127.0.0.1:8123"; }), Refusal::Origin);
+    EXPECT_EQ(with([](RequestFacts& f) { f.origin = "http://127.0.0.1:8124"; }), Refusal::Origin);
+    EXPECT_EQ(with([](RequestFacts& f) { f.authorization = ""; }), Refusal::Token);
+    EXPECT_EQ(with([](RequestFacts& f) { f.authorization = "token secre"; }), Refusal::Token);
+    EXPECT_EQ(with([](RequestFacts& f) { f.authorization = "token "; }), Refusal::Token);
+    EXPECT_EQ(with([](RequestFacts& f) { f.authorization = "", f.cookie = "bounce-token-8123=secret"; }), Refusal::None);
+    EXPECT_EQ(with([](RequestFacts& f) { f.authorization = "", f.cookie = "xbounce-token-8123=secret"; }), Refusal::Token);
+    EXPECT_EQ(with([](RequestFacts& f) { f.authorization = "", f.query_token = "secret"; }), Refusal::None);
+    EXPECT_EQ(with([](RequestFacts& f) { f.content_type = "text/plain"; }), Refusal::ContentType);
+    EXPECT_EQ(with([](RequestFacts& f) { f.content_type = ""; }), Refusal::ContentType);
+    EXPECT_EQ(with([](RequestFacts& f) { f.method = "GET", f.content_type = ""; }), Refusal::None);
+    RequestFacts by_url = ok;
+    by_url.authorization = "", by_url.query_token = "secret";
+    EXPECT_TRUE(g.check(by_url).set_cookie);
+    EXPECT_FALSE(g.check(ok).set_cookie);
+    // Two sessions never share a token.
+    EXPECT_NE(RequestGuard().token(), RequestGuard().token());
+    EXPECT_EQ(RequestGuard().token().size(), 32u);
 }
 
 }  // namespace

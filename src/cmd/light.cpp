@@ -15,9 +15,9 @@ int run_light(const LightArgs& a) {
     opts.host = a.bind, opts.port = a.port, opts.web_dir = BOUNCE_WEB_DIR, opts.three_dir = BOUNCE_THREE_DIR;
     LightingSession session(so);  // refuses a bad scene, deep or cache file before serving
     LightingServer server(session, opts);
-    const int port = server.bind();
-    std::printf("bounce light: http://%s:%d/  (scene %s, files in %s; Ctrl-C stops)\n",
-                a.bind == "::1" ? "[::1]" : a.bind.c_str(), port, a.scene.c_str(), a.out_dir.c_str());
+    server.bind();
+    // The token in the URL is the page's key: only a page opened from it may drive the tool.
+    std::printf("bounce light: %s  (scene %s, files in %s; Ctrl-C stops)\n", server.url().c_str(), a.scene.c_str(), a.out_dir.c_str());
     std::fflush(stdout);
     server.listen();
     return 0;

@@ -8,6 +8,7 @@
 // BOUNCE_REQUIRE_BROWSER=1 (CI), which makes that a failure.
 import { spawn, execFileSync } from 'node:child_process';
 import fs from 'node:fs';
+import http from 'node:http';
 import path from 'node:path';
 import os from 'node:os';
 import { fileURLToPath } from 'node:url';
@@ -46,7 +47,7 @@ async function startLight(scene, out) {
     '--set', 'render.spp=1', '--set', 'render.rays=128', '--set', 'render.light_samples=2'], { stdio: ['ignore', 'pipe', 'inherit'] });
   const url = await new Promise((resolve, reject) => {
     let text = '';
-    server.stdout.on('data', (d) => { text += d; const m = text.match(/http:\/\/[^ ]+\//); if (m) resolve(m[0]); });
+    server.stdout.on('data', (d) => { text += d; const m = text.match(/(http:\/\/\S+)\s/); if (m) resolve(m[1]); });
     server.on('exit', (code) => reject(new Error(`bounce light exited with ${code}`)));
     setTimeout(() => reject(new Error('bounce light printed no URL')), 120000);  // a loaded machine under TSan
   });
@@ -161,6 +162,43 @@ async function lighterFound() {
   }
 }
 
+/// Issue 50: only the page the printed URL opened drives the tool. Another origin's page (here
+/// another port of this machine: the same site, so the tool's SameSite cookie goes with its
+/// requests) posts an edit as a CSRF page would, with a "simple" request that needs no
+/// preflight; a browser without the token opens the tool. Both are refused; nothing changes.
+async function attackers(page) {
+  const tool = new URL(url).origin;
+  const edit = JSON.stringify({ key: 'render.min_spacing', value: 2.5 });
+  const evil = http.createServer((req, res) => {
+    res.writeHead(200, { 'Content-Type': 'text/html' });
+    res.end(`<!doctype html><script>
+      const post = (type) => fetch(${JSON.stringify(tool)} + '/api/edit', { method: 'POST', mode: 'no-cors', credentials: 'include',
+        headers: { 'Content-Type': type }, body: ${JSON.stringify(edit)} }).then(() => 'sent', () => 'failed');
+      window.tries = Promise.all([post('text/plain'), post('application/x-www-form-urlencoded')]);
+    </script>`);
+  });
+  await new Promise((resolve) => evil.listen(0, '127.0.0.1', resolve));
+  try {
+    const evilPage = await page.context().newPage();
+    await evilPage.goto(`http://127.0.0.1:${evil.address().port}/`);
+    const sent = await evilPage.evaluate(() => window.tries);
+    await evilPage.close();
+    const rows = await page.evaluate(() => fetch('/api/params').then((r) => r.json()));
+    const spacing = rows.find((r) => r.key === 'render.min_spacing');
+    check(sent.length === 2 && spacing && spacing.value !== 2.5,
+      `another origin's page posted an edit (${sent.join(', ')}) and the tool did not apply it (min_spacing ${spacing && spacing.value})`);
+  } finally {
+    evil.close();
+  }
+  const stranger = await browser.newContext();
+  const answer = await (await stranger.newPage()).goto(tool + '/', { timeout: 120000 });
+  const body = await answer.text();
+  check(answer.status() === 403 && body.includes('token'), `a browser without the token is refused (${answer.status()}: ${body.slice(0, 80)})`);
+  const api = await (await stranger.newPage()).goto(tool + '/api/params?token=wrong' + new URL(url).searchParams.get('token'));
+  check(api.status() === 403, `a wrong token is refused (${api.status()})`);
+  await stranger.close();
+}
+
 const browser = await chromium.launch({ executablePath: chromiumPath, args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader'] });
 try {
   const page = await browser.newPage({ viewport: { width: 1400, height: 900 } });
@@ -173,6 +211,7 @@ try {
   await page.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
   check(await page.isVisible('#hint') && (await page.textContent('#hint')).includes('Update'),
     'a page with nothing rendered says to press Update');
+  await attackers(page);
 
   const waitDone = async (minVersion) => {
     await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v,

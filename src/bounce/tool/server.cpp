@@ -74,7 +74,7 @@ float float_param(const httplib::Request& req, const char* key, float def) {
 }  // namespace
 
 LightingServer::LightingServer(LightingSession& session, ServerOptions options)
-    : session_(session), options_(std::move(options)), http_(std::make_unique<httplib::Server>()) {
+    : session_(session), options_(std::move(options)), guard_(options_.token), http_(std::make_unique<httplib::Server>()) {
     if (!is_loopback_host(options_.host))
         throw InputError("command line", "--bind", fmt::format("'{}' is not a loopback address; the tool serves this machine only", options_.host));
     if (options_.port < 0 || options_.port > 65535) throw InputError("command line", "--port", "must be in [0, 65535]");
@@ -91,6 +91,7 @@ int LightingServer::bind() {
     const int port = options_.port == 0 ? http_->bind_to_any_port(options_.host)
                                         : (http_->bind_to_port(options_.host, options_.port) ? options_.port : -1);
     if (port <= 0) throw InputError("command line", "--port", fmt::format("cannot listen on {}:{}", options_.host, options_.port));
+    guard_.bind(port);
     return port;
 }
 
@@ -112,6 +113,19 @@ void LightingServer::routes() {
         } catch (...) {
             reply(res, 500, {{"error", "unknown error"}});
         }
+    });
+    // Before any route or file: only the page the printed URL opened (guard.h). A refused
+    // request changes nothing and learns nothing but why.
+    s.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+        const Verdict v = guard_.check({req.method, req.get_header_value("Host"), req.get_header_value("Origin"),
+                                        req.get_header_value("Content-Type"), req.get_header_value("Authorization"),
+                                        req.get_header_value("Cookie"), req.has_param("token") ? req.get_param_value("token") : ""});
+        if (v.refusal != Refusal::None) {
+            reply(res, 403, {{"error", v.message}});
+            return httplib::Server::HandlerResponse::Handled;
+        }
+        if (v.set_cookie) res.set_header("Set-Cookie", guard_.cookie());
+        return httplib::Server::HandlerResponse::Unhandled;
     });
     s.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
         if (res.body.empty())

@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "bounce/tool/guard.h"
 #include "bounce/tool/session.h"
 
 namespace httplib {
@@ -21,6 +22,7 @@ struct ServerOptions {
     std::string web_dir;             ///< the page (index.html, app.js, style.css)
     std::string three_dir;           ///< node_modules/three (served as /vendor/three)
     size_t max_body = 4u << 20;      ///< larger request bodies are refused (413)
+    std::string token;               ///< the session token (empty: a new random one)
 };
 
 class LightingServer {
@@ -32,11 +34,15 @@ public:
     int bind();
     void listen();  ///< serves until stop()
     void stop();
+    /// The URL to open (with the session token), once bound.
+    std::string url() const { return guard_.url(options_.host); }
+    const std::string& token() const { return guard_.token(); }
 
 private:
     void routes();
     LightingSession& session_;
     ServerOptions options_;
+    RequestGuard guard_;  ///< every request passes it first (guard.h)
     std::unique_ptr<httplib::Server> http_;
 };
 
