@@ -124,6 +124,45 @@ TEST(LightingTool, EditsMayNotReadOrWriteFilesOutsideTheSceneAndOutputFolders) {
     std::filesystem::copy_file(mesh, d.path() / "scene" / "mine.obj");
     EXPECT_EQ(s.edit("objects.6.file", "mine.obj")["key"], "objects.6.file");
     EXPECT_EQ(s.edit("render.radiosity_textures", d.file("out/textures"))["key"], "render.radiosity_textures");
+    // A relative folder is the scene folder's, as the saved scene will read it (it was taken
+    // as the working directory's and refused as outside).
+    std::filesystem::create_directories(d.path() / "scene" / "textures");
+    EXPECT_EQ(s.edit("render.radiosity_textures", "textures")["key"], "render.radiosity_textures");
+    refused("render.radiosity_textures", "../../" + elsewhere.path().filename().string(), elsewhere.path().filename().string());
+}
+
+TEST(LightingTool, TheFilesAMeshNamesAreConfinedAsTheMeshItself) {
+    // A mesh inside the scene folder whose MTL, texture, or glTF buffer lies outside both
+    // folders: refused with that file's name before anything opens it.
+    test::TempDir d, elsewhere;
+    LightingSession s(small_session(d));
+    elsewhere.write("evil.mtl", "newmtl m\nKd 1 0 0\n");
+    const std::string outside = elsewhere.path().string();
+    const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    d.write("scene/mtl.obj", "mtllib " + outside + "/evil.mtl\nusemtl m\n" + tri);
+    std::filesystem::create_directories(d.path() / "scene" / "sub");
+    const std::string up = std::string("../../") + elsewhere.path().filename().string();
+    d.write("scene/sub/rel.obj", "mtllib ../" + up + "/evil.mtl\nusemtl m\n" + tri);
+    elsewhere.write("tex.png", "not read");
+    d.write("scene/tex.mtl", "newmtl t\nKd 1 1 1\nmap_Kd " + outside + "/tex.png\n");
+    d.write("scene/tex.obj", "mtllib tex.mtl\nusemtl t\n" + tri);
+    elsewhere.write("tri.bin", std::string(36, '\0'));
+    json gltf = {{"asset", {{"version", "2.0"}}}, {"buffers", {{{"byteLength", 36}, {"uri", outside + "/tri.bin"}}}}};
+    d.write("scene/far.gltf", gltf.dump());
+    for (const auto& [file, named] : std::vector<std::pair<std::string, std::string>>{
+             {"mtl.obj", "evil.mtl"}, {"sub/rel.obj", "evil.mtl"}, {"tex.obj", "tex.png"}, {"far.gltf", "tri.bin"}}) {
+        try {  // the whole object, without a material: the file's own are read
+            s.edit("objects.6", json{{"name", "short_block"}, {"type", "mesh"}, {"file", file}});
+            ADD_FAILURE() << file << " was taken";
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(named + "' is outside the scene's folder and the output folder"), std::string::npos) << file << ": " << what;
+        }
+    }
+    // The same mesh with its MTL beside it is taken.
+    d.write("scene/ok.mtl", "newmtl m\nKd 1 0 0\n");
+    d.write("scene/ok.obj", "mtllib ok.mtl\nusemtl m\n" + tri);
+    EXPECT_EQ(s.edit("objects.6", json{{"name", "short_block"}, {"type", "mesh"}, {"file", "ok.obj"}})["key"], "objects.6");
 }
 
 TEST(LightingTool, ALightEditReshadesWithoutNewRecordsOrVisibility) {
@@ -362,6 +401,11 @@ TEST(LightingToolHttp, BadRequestsGetAStatusAndAMessage) {
     EXPECT_EQ(post("/api/render", R"({"action": "explode"})")->status, 400);
     EXPECT_EQ(post("/api/render", R"({"action": "reshade", "crop": [0, 10, 0, 10]})")->status, 400);  // nothing rendered yet
     EXPECT_EQ(post("/api/render", R"({"action": "reshade", "crop": [0, "a", 0, 10]})")->status, 400);
+    for (const char* empty : {R"({"action": "regather", "crop": [10, 0, 0, 10]})", R"({"action": "regather", "crop": [4, 4, 4, 4]})"}) {
+        r = post("/api/render", empty);
+        EXPECT_EQ(r->status, 400) << empty;
+        EXPECT_NE(r->body.find("empty region"), std::string::npos) << r->body;
+    }
     for (const char* name : {"../secret.bic", "/etc/passwd", "a/../../b.bic"})
         EXPECT_EQ(s.client.Get("/api/records", httplib::Params{{"file", name}}, httplib::Headers{})->status, 400) << name;
     EXPECT_EQ(post("/api/save-scene", R"({"name": "../escape.json"})")->status, 400);

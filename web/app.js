@@ -393,9 +393,12 @@ async function main() {
     const seq = JSON.parse($('frame').dataset.files || '[]');
     if (seq.length) { $('cache-file').value = seq[+$('frame').value]; loadRecords(); }
   });
-  const post = (path, body) => api(path, body).then(({ data }) => { showError(''); return data; }).catch((e) => showError(e.message));
-  $('save-scene').addEventListener('click', () => post('/api/save-scene', { name: $('save-scene-name').value || 'edited.json' }));
-  $('save-cache').addEventListener('click', () => post('/api/save-cache', { name: $('save-cache-name').value || 'shot.bic' }).then(loadCacheFiles));
+  const post = (path, body) => api(path, body).then(({ data }) => { showError(''); return data; })
+    .catch((e) => { showError(e.message); $('saved').textContent = ''; return null; });
+  // A save says where the file went (the server answers with its path).
+  const saved = (data) => { if (data) $('saved').textContent = `saved ${data.saved}`; return data; };
+  $('save-scene').addEventListener('click', () => post('/api/save-scene', { name: $('save-scene-name').value || 'edited.json' }).then(saved));
+  $('save-cache').addEventListener('click', () => post('/api/save-cache', { name: $('save-cache-name').value || 'shot.bic' }).then(saved).then(loadCacheFiles));
   $('load-cache').addEventListener('click', () => post('/api/load-cache', { file: $('cache-file').value || $('save-cache-name').value }).then(loadRecords));
   setupRegion();
   initView();

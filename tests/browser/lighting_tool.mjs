@@ -166,7 +166,12 @@ async function lighterFound() {
 /// another port of this machine: the same site, so the tool's SameSite cookie goes with its
 /// requests) posts an edit as a CSRF page would, with a "simple" request that needs no
 /// preflight; a browser without the token opens the tool. Both are refused; nothing changes.
-async function attackers(page) {
+async function attackers() {
+  // The lighter's own page in a context of its own (a page made by browser.newPage cannot share
+  // its context): it holds the tool's cookie when the attacker's page opens beside it.
+  const lighter = await browser.newContext();
+  const page = await lighter.newPage();
+  await page.goto(url, { timeout: 120000 });
   const tool = new URL(url).origin;
   const edit = JSON.stringify({ key: 'render.min_spacing', value: 2.5 });
   const evil = http.createServer((req, res) => {
@@ -179,7 +184,7 @@ async function attackers(page) {
   });
   await new Promise((resolve) => evil.listen(0, '127.0.0.1', resolve));
   try {
-    const evilPage = await page.context().newPage();
+    const evilPage = await lighter.newPage();
     await evilPage.goto(`http://127.0.0.1:${evil.address().port}/`);
     const sent = await evilPage.evaluate(() => window.tries);
     await evilPage.close();
@@ -189,6 +194,7 @@ async function attackers(page) {
       `another origin's page posted an edit (${sent.join(', ')}) and the tool did not apply it (min_spacing ${spacing && spacing.value})`);
   } finally {
     evil.close();
+    await lighter.close();
   }
   const stranger = await browser.newContext();
   const answer = await (await stranger.newPage()).goto(tool + '/', { timeout: 120000 });
@@ -211,7 +217,7 @@ try {
   await page.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
   check(await page.isVisible('#hint') && (await page.textContent('#hint')).includes('Update'),
     'a page with nothing rendered says to press Update');
-  await attackers(page);
+  await attackers();
 
   const waitDone = async (minVersion) => {
     await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v,

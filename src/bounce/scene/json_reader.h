@@ -22,6 +22,9 @@ struct Override {
     std::string assignment;
     std::string origin;
     std::string source = "command line";
+    /// A relative folder it sets is the scene folder's (an edit in the lighting tool, saved into
+    /// the scene), not the working directory's (a flag or --set in a shell).
+    bool scene_relative = false;
     Override(std::string a) : assignment(std::move(a)), origin("--set " + assignment) {}  // NOLINT: implicit by design
     Override(const char* a) : Override(std::string(a)) {}                                 // NOLINT
     Override(std::string a, std::string o) : assignment(std::move(a)), origin(std::move(o)) {}
@@ -40,7 +43,11 @@ struct JsonContext {
 
     /// Throws InputError at `ptr`, blaming the override's source when one set it.
     [[noreturn]] void fail(const std::string& ptr, const std::string& msg) const;
-    bool from_override(const std::string& ptr) const { return overridden.count(ptr) > 0; }
+    /// A relative path at `ptr` is the working directory's: a --set or flag set it.
+    bool relative_to_working_dir(const std::string& ptr) const {
+        const auto it = overridden.find(ptr);
+        return it != overridden.end() && !it->second.scene_relative;
+    }
 };
 
 /// The text of a regular file; "is a directory" / "not a regular file" (FIFOs, devices) are

@@ -46,11 +46,12 @@ const unsigned kAssimpFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVer
                               aiProcess_SortByPType | aiProcess_ValidateDataStructure;
 
 /// Reads `path` through Assimp after mesh_checks.h's checks; the files it names (a glTF's
-/// buffers and images, an OBJ's MTL files) are appended to `files_read`.
-const aiScene* import_file(Assimp::Importer& imp, const std::string& path, unsigned flags, std::vector<std::string>* files_read) {
+/// buffers and images, an OBJ's MTL files) pass `files_read` before Assimp opens them.
+const aiScene* import_file(Assimp::Importer& imp, const std::string& path, unsigned flags, MeshInputs* files_read) {
     imp.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     const std::vector<std::string> named = check_mesh_file(path);
-    if (files_read) files_read->insert(files_read->end(), named.begin(), named.end());
+    if (files_read)
+        for (const std::string& f : named) files_read->add(f);
     const aiScene* s = imp.ReadFile(path, flags);
     if (!s) throw InputError(path, "", std::string("cannot load mesh: ") + imp.GetErrorString());
     return s;
@@ -190,7 +191,7 @@ json describe_mesh_file(const std::string& path) {
 /// for all: the scene index of each of the file's materials.
 std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path, const std::string& prefix,
                                        std::vector<Material>& materials, int override_material,
-                                       std::vector<std::string>* files_read) {
+                                       MeshInputs* files_read) {
     std::vector<uint32_t> mat_map(s->mNumMaterials);
     if (override_material < 0) {
         for (unsigned i = 0; i < s->mNumMaterials; ++i) {
@@ -237,10 +238,10 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
                 for (aiTextureType type : types) {
                     if (am->GetTexture(type, 0, &tex) != AI_SUCCESS || tex.C_Str()[0] == '*') continue;
                     const std::string t = (fs::path(path).parent_path() / tex.C_Str()).lexically_normal().string();
+                    if (files_read) files_read->add(t);  // confined before anything opens it
                     std::string why = not_a_regular_file(t);
                     if (why.empty()) why = texture_problem(t);
                     if (!why.empty()) throw InputError(path, where, fmt::format("texture \"{}\": {}", t, why));
-                    if (files_read) files_read->push_back(t);
                     return t;
                 }
                 return "";
@@ -260,7 +261,7 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
 }
 
 TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                            int override_material, std::vector<std::string>* files_read, const MeshPose& pose) {
+                            int override_material, MeshInputs* files_read, const MeshPose& pose) {
     Assimp::Importer imp;
     const aiScene* s = import_file(imp, path, kAssimpFlags, files_read);
     const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material, files_read);
@@ -292,7 +293,7 @@ TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, 
 }
 
 ControlMesh load_control_mesh(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                              int override_material, const Transform& transform, std::vector<std::string>* files_read) {
+                              int override_material, const Transform& transform, MeshInputs* files_read) {
     // Faces stay polygons; vertices are welded by position here (Assimp keeps uv seams apart,
     // which would cut the subdivision surface) and uvs become face-varying values.
     Assimp::Importer imp;

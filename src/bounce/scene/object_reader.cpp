@@ -35,10 +35,17 @@ int material_index(const Scene& scene, const std::string& name) {
 
 namespace {
 
+/// What a mesh file named by `key` pulls in is confined as the mesh itself (check_path).
+MeshInputs mesh_inputs(const JsonReader& r, const std::string& key) {
+    MeshInputs in;
+    if (r.ctx().check_path) in.check = [check = r.ctx().check_path, at = r.at(key)](const std::string& f) { check(f, at); };
+    return in;
+}
+
 /// Files a mesh file pulled in, recorded as inputs under the key that named the mesh.
-void record_inputs(const JsonReader& r, const std::string& key, const std::vector<std::string>& files) {
+void record_inputs(const JsonReader& r, const std::string& key, const MeshInputs& read) {
     if (r.ctx().inputs)
-        for (const std::string& f : files) r.ctx().inputs->push_back({f, r.at(key)});
+        for (const std::string& f : read.files) r.ctx().inputs->push_back({f, r.at(key)});
 }
 
 /// Most micropolygons one object may be diced into (~150 bytes each with its BVH).
@@ -75,7 +82,7 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
                         ? SubdivBoundary::EdgeOnly : SubdivBoundary::EdgeAndCorner;
     if (r.has("fine_subdivisions")) r.fail("fine_subdivisions", "a subdivision surface is diced by render.dicing, not fine_subdivisions");
     const std::string file = r.file("file", true);
-    std::vector<std::string> read;
+    MeshInputs read = mesh_inputs(r, "file");
     try {
         obj.placement = read_transform(r);
         surf.control = load_control_mesh(file, obj.name, scene.materials, mat, obj.placement, &read);
@@ -279,7 +286,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
     } else if (type == "mesh") {
         std::string file = r.file("file", true);
         fine = r.integer("fine_subdivisions", 0, 0, 6);
-        std::vector<std::string> read;
+        MeshInputs read = mesh_inputs(r, "file");
         // An animation of the file plays over the shot: from its start at the shot's first frame.
         const MeshPose pose = mesh_pose(r, scene, scene.frame);
         obj.deforms = !pose.clip.empty();

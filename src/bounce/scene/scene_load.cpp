@@ -45,7 +45,7 @@ void read_params(const json& j, const std::string& section, Scene& scene, const 
         const std::string ptr = r.at(p.name());
         json v = check_param(p, r.raw(p.name()), [&](const std::string& sub, const std::string& msg) { ctx.fail(ptr + sub, msg); });
         if (p.type == ParamType::Path && !v.get<std::string>().empty()) {
-            if (fs::path(v.get<std::string>()).is_relative() && !ctx.from_override(ptr)) v = (ctx.dir / v.get<std::string>()).string();
+            if (fs::path(v.get<std::string>()).is_relative() && !ctx.relative_to_working_dir(ptr)) v = (ctx.dir / v.get<std::string>()).string();
             if (ctx.check_path) ctx.check_path(v.get<std::string>(), ptr);
             // A folder the render reads and writes: a file of that name is refused now, not after the render.
             std::error_code ec;

@@ -151,6 +151,8 @@ void LightingServer::routes() {
                 if (v < 0 || v > 1 << 20) throw InputError("request body", fmt::format("crop/{}", i), "out of range");
                 (*crop)[i] = static_cast<int>(v);
             }
+            if ((*crop)[0] >= (*crop)[1] || (*crop)[2] >= (*crop)[3])
+                throw InputError("request body", "crop", "an empty region: x0 < x1 and y0 < y1 are required");
         }
         session_.start(action, crop);
         reply(res, 202, {{"started", session_action_name(action)}});

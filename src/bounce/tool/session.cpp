@@ -47,7 +47,9 @@ namespace {
 /// An edit request as an override: its errors name the tool's edit, not the command line.
 Override edit_override(const std::string& key, const json& value) {
     const std::string assignment = key + "=" + value.dump();
-    return {assignment, "edit " + assignment, "lighting tool"};
+    Override o{assignment, "edit " + assignment, "lighting tool"};
+    o.scene_relative = true;  // the edit is saved into the scene: its folders are the scene's
+    return o;
 }
 
 /// The least action that shows a change of a parameter with identity `identity`.
