@@ -33,9 +33,9 @@ const Field kFields[] = {
     {"radius_long", "f32", 1}, {"axis", "f32", 3},    {"key", "u64", 1},       {"rays", "u32", 1},      {"frame", "i32", 1},
     {"origin", "f32", 3},    {"reach", "f32", kReachBins}, {"anchor", "u32", 1}, {"anchor_p", "f32", 3},  {"anchor_n", "f32", 3},
     {"gathered", "i32", 1},  {"drift", "f32", 1},       {"near", "f32", 1},        {"anchor_prim", "u32", 1},
-    {"noise", "f32", 1},
+    {"noise", "f32", 1},     {"bins", "f32", 3 * kReachBins},
 };
-constexpr size_t kFloats = 3 + 3 + 3 + 1 + 3 + 9 + 9 + 9 + 3 + 3 + 6 + 4 + 3 + kReachBins + 3 + 3 + 1 + 1 + 1;
+constexpr size_t kFloats = 3 + 3 + 3 + 1 + 3 + 9 + 9 + 9 + 3 + 3 + 6 + 4 + 3 + kReachBins + 3 + 3 + 1 + 1 + 1 + 3 * kReachBins;
 constexpr size_t kRecordBytes = kFloats * 4 + 8 + 4 + 4 + 4 + 4 + 4;
 
 uint64_t fnv1a(const char* data, size_t n) {
@@ -67,6 +67,7 @@ void write_record(std::string& out, const Record& r) {
     for (float d : r.reach) put(out, d);
     put(out, r.anchor), put_vec(out, r.anchor_p), put_vec(out, r.anchor_n), put(out, r.gathered), put(out, r.drift);
     put(out, r.near), put(out, r.anchor_prim), put(out, r.noise);
+    for (const Color& b : r.bins) put_vec(out, b);
 }
 
 /// Sequential reader over the file's bytes with bounds checks.
@@ -121,6 +122,7 @@ Record read_record(Cursor& c) {
     r.anchor = c.get<uint32_t>("anchor"), r.anchor_p = c.vec("anchor_p"), r.anchor_n = c.vec("anchor_n");
     r.gathered = c.get<int32_t>("gathered"), r.drift = c.get<float>("drift"), r.near = c.get<float>("near");
     r.anchor_prim = c.get<uint32_t>("anchor_prim"), r.noise = c.get<float>("noise");
+    for (Color& b : r.bins) b = c.vec("bins");
     return r;
 }
 
@@ -156,6 +158,9 @@ const char* record_problem(const Record& r) {
     if (!(r.drift >= 0 && r.drift <= kMaxRadiometric)) return "drift is not in [0, 1e20]";
     if (!(r.near >= 0 && r.near <= kMaxCoordinate)) return "near distance is not in [0, 1e18]";
     if (!(r.noise >= 0 && r.noise <= kMaxRadiometric)) return "noise is not in [0, 1e20]";
+    for (const Color& b : r.bins)
+        if (!(b.x >= 0 && b.y >= 0 && b.z >= 0 && b.x <= kMaxRadiometric && b.y <= kMaxRadiometric && b.z <= kMaxRadiometric))
+            return "direction bins outside [0, 1e20]";
     return nullptr;
 }
 

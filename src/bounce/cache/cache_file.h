@@ -36,7 +36,7 @@ struct CacheFile {
 
 /// 2: records carry their gather's origin, view summary (reach), anchor, last gather frame and drift.
 /// 3: ... and their gather's noise (Record::noise, for refinement's spread).
-inline constexpr uint32_t kCacheFileVersion = 3;
+inline constexpr uint32_t kCacheFileVersion = 4;
 
 /// Writes `file` to `path` (temporary name, then rename).
 void write_cache_file(const std::string& path, const CacheFile& file);

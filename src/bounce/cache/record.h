@@ -42,6 +42,9 @@ struct Record {
     // Frames of a shot (temporal.h).
     Vec3 origin{0};              ///< where the gather's rays left from (world)
     std::array<float, kReachBins> reach{};  ///< farthest hit per direction bin (INFINITY: a ray escaped)
+    /// Mean radiance per direction bin (GatherResult::bins; unoccluded fraction in AO mode): the
+    /// record's prediction for a fragment's correction rays (control_variate.h).
+    std::array<Color, kReachBins> bins{};
     uint32_t anchor = kNoAnchor; ///< the moving object whose surface carries it, or kNoAnchor (static)
     /// Rigid objects: p and n in the object's own space (before its placement). Deforming
     /// objects: the triangle of its visible mesh (anchor_prim) and p's barycentrics (anchor_p.x, .y).

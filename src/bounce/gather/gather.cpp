@@ -38,6 +38,15 @@ GatherGrid gather_grid(int rays) {
     return g;
 }
 
+int direction_bin(const Vec3& local) {
+    const float sin2 = std::clamp(1 - local.z * local.z, 0.0f, 1.0f);
+    float phi = std::atan2(local.y, local.x);
+    if (phi < 0) phi += 2 * kPi;
+    const int band = std::min(kReachBands - 1, static_cast<int>(sin2 * kReachBands));
+    const int sector = std::min(kReachSectors - 1, static_cast<int>(phi * (kReachSectors / (2 * kPi))));
+    return band * kReachSectors + sector;
+}
+
 Vec3 gather_cell_direction(const GatherGrid& grid, int j, int k, float u, float v) {
     float sin2 = (static_cast<float>(j) + u) / static_cast<float>(grid.m);
     float phi = 2 * kPi * (static_cast<float>(k) + v) / static_cast<float>(grid.n);
@@ -345,6 +354,23 @@ TangentHessian cells_hessian(const GatherGrid& grid, const Vec3& p, const Vec3& 
 
 }  // namespace
 
+namespace {
+
+/// GatherResult::bins: each bin's mean over the cells whose directions fall in it.
+void set_bins(GatherResult& res, const Frame& frame, std::span<const float> ao, const std::vector<Color>& L, const std::vector<Vec3>& D) {
+    std::array<int, kReachBins> count{};
+    Color all(0);
+    for (size_t c = 0; c < D.size(); ++c) {
+        const Color v = ao.empty() ? L[c] : Color(ao[c]);
+        const auto b = static_cast<size_t>(direction_bin(frame.to_local(D[c])));
+        res.bins[b] += v, ++count[b], all += v;
+    }
+    all = all / static_cast<float>(std::max<size_t>(1, D.size()));
+    for (size_t b = 0; b < res.bins.size(); ++b) res.bins[b] = count[b] ? res.bins[b] / static_cast<float>(count[b]) : all;
+}
+
+}  // namespace
+
 GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const {
     const int M = grid_.m, N = grid_.n, S = M * N;
     std::vector<Color>& L = cells.L;
@@ -414,6 +440,7 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
             const size_t bin = static_cast<size_t>((j * kReachBands / M) * kReachSectors + k * kReachSectors / N);
             res.reach[bin] = std::max(res.reach[bin], R[static_cast<size_t>(j * N + k)]);
         }
+    set_bins(res, frame, settings_.ao ? std::span<const float>(U) : std::span<const float>(), L, D);
     if (settings_.hessian) {
         const TangentHessian th = cells_hessian(grid_, p, n, far_, settings_.ao, L, U, R, D);
         res.hess_axis = th.axis, res.hess_slow = th.slow, res.hess_fast = th.fast;

@@ -72,6 +72,10 @@ std::vector<uint32_t> gather_packet_order(const GatherGrid& grid);
 /// kReachBands bands, its azimuth strata in kReachSectors sectors. Frames of a shot test moving
 /// geometry and changed light against them (cache/temporal.h).
 inline constexpr int kReachBands = 4, kReachSectors = 8, kReachBins = kReachBands * kReachSectors;
+/// The bin of a direction `local` in a gather's frame (z = its normal; z > 0): band by sin^2
+/// of its elevation in quarters, sector by azimuth in eighths. Every bin holds 1/32 of the
+/// cosine-weighted hemisphere (pi/32 of its cosine-weighted measure).
+int direction_bin(const Vec3& local);
 
 /// A gather's ray hits, per cell: what a re-shade traces again for free when only the light its
 /// rays found has changed (Gatherer::reshade).
@@ -119,6 +123,10 @@ struct GatherResult {
     float hess_slow = 0, hess_fast = 0;
     /// With record_terms: the farthest hit per direction bin (INFINITY where a ray escaped).
     std::array<float, kReachBins> reach{};
+    /// With record_terms: the mean radiance per direction bin (direction_bin; the unoccluded
+    /// fraction, grey, in AO mode; a bin no ray fell in takes the mean over all): what a record
+    /// predicts a nearby fragment's rays will see (cache/control_variate.h).
+    std::array<Color, kReachBins> bins{};
     std::shared_ptr<LightParts> parts;  ///< GatherSettings::light_parts: per light
 };
 

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "bounce/cache/control_variate.h"
 #include "bounce/cache/passes.h"
 #include "bounce/core/error.h"
 #include "bounce/gather/gather.h"
@@ -398,6 +399,13 @@ ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const 
         ctx.stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         interpolated = std::move(light.light);
         shares = std::move(light.shares);
+        if (scene.render.cache.correction_rays > 0) {  // records as a control variate (FramePlan::correct)
+            PhaseTimer timer(ctx.stats, "correction");
+            GatherSettings gs = frame_gather_settings(ctx, false);
+            gs.rays = scene.render.cache.correction_rays;
+            const Gatherer gatherer(scene, ctx.accel, ctx.materials, ctx.lighting, radiosity, gs);
+            correction_pass(scene, deep, *cache, gatherer, interpolated, ctx.stats, progress);
+        }
         out.refined = fragment_mask(deep, light.refined);
         out.shading_misses = light.misses + sites.misses;
         if (specular.any()) ctx.stats.set("shading_misses", static_cast<double>(out.shading_misses));

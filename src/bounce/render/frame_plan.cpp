@@ -125,6 +125,7 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
     plan.cache_reuse = request.cache_reuse;
     plan.gather = gather_step(scene, plan.cache, request);
     plan.refine = (plan.gather == GatherStep::Cache || plan.gather == GatherStep::WhereMissing) && refinement_runs(scene);
+    plan.correct = scene.render.indirect.any() && scene.render.indirect.gi == GiMode::Cache && scene.render.cache.correction_rays > 0;
     const IndirectSettings& ind = scene.render.indirect;
     if (plan.gather != GatherStep::None && scene.render.radiosity.enabled && !ind.ao)
         plan.radiosity = scene.render.radiosity.folder.empty() ? RadiosityStep::Bake : RadiosityStep::Load;
@@ -167,6 +168,7 @@ nlohmann::json FramePlan::describe() const {
             {"flush_crop", flush_crop},
             {"gather", name(gather)},
             {"refine", refine},
+            {"correct", correct},
             {"keep_gathers", keep_gathers},
             {"threads", threads}};
 }

@@ -117,6 +117,7 @@ struct FramePlan {
     CacheReuse cache_reuse = CacheReuse::Strict;
     GatherStep gather = GatherStep::None;
     bool refine = false;      ///< per-fragment refinement after the gathering pass
+    bool correct = false;     ///< every fragment's own rays correct the records' prediction (cache.correction_rays)
     bool keep_hits = false;   ///< records keep their gather's hits: the shot's lights change, re-shading is cheaper
     bool keep_gathers = false;  ///< refinement's gathers are kept for the next frames to reuse (EarlierGathers)
     bool preview = false;     ///< progressive images through the request's callback

@@ -77,6 +77,11 @@ void add_refinement_rows(std::vector<Row>& rows) {
                             "for a still camera").flag());
     rows.push_back(row("refine_rays", "cache", &R::cache, &CacheSettings::refine_rays).range(0, 1 << 20).unit("rays")
                        .doc("rays of a refined fragment's own gather; 0 = render.rays").flag());
+    rows.push_back(row("correction_rays", "cache", &R::cache, &CacheSettings::correction_rays).range(0, 1 << 16).unit("rays")
+                       .doc("records as a control variate: every fragment gathers this many rays and adds to the records' "
+                            "prediction (their direction bins, blended) the rays' measured difference from it: unbiased "
+                            "whatever the records say, brute force at these rays where none covers it (docs/gather.md); "
+                            "0 = interpolation alone").flag());
     rows.push_back(row("displaced_records", "cache", &R::cache, &CacheSettings::displaced_records)
                        .choices({"undisplaced", "displaced"})
                        .doc("where records of displaced surfaces live: on the un-displaced surface (rays still leave the "

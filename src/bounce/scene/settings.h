@@ -89,6 +89,9 @@ struct CacheSettings {
     float refine_hold = 0.5f;     ///< a shot's fragment refined the frame before stays refined down to refine_hold x refine; 1 = no hysteresis
     float refine_hold_reach = 3;  ///< ... a moving camera's: near (pixel footprints) a point refined the frame before; 0 = only a still camera's
     int refine_rays = 0;          ///< rays of such a gather; 0 = the gather's rays
+    /// Records as a control variate (docs/gather.md): every fragment traces this many rays of its
+    /// own and adds their unbiased correction of the records' directional prediction; 0 = off.
+    int correction_rays = 0;
     RecordSurface displaced_records = RecordSurface::Undisplaced;  ///< where records of displaced surfaces live
     float displacement_near = 10;  ///< un-displaced records: hits within this many displacement bounds do not shrink them
     float refine_tilt = 20;       ///< un-displaced records: a fragment whose normal tilts more than this (degrees) is refined; 0 = off

@@ -1,0 +1,108 @@
+#include "bounce/cache/control_variate.h"
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include <cmath>
+
+#include "bounce/cache/sites.h"
+#include "bounce/core/random.h"
+
+namespace bounce {
+
+namespace {
+
+/// The centre direction of each bin, in the bins' frame (z up).
+const std::array<Vec3, kReachBins>& bin_centres() {
+    static const std::array<Vec3, kReachBins> centres = [] {
+        std::array<Vec3, kReachBins> c{};
+        for (int band = 0; band < kReachBands; ++band)
+            for (int sector = 0; sector < kReachSectors; ++sector) {
+                const float sin2 = (static_cast<float>(band) + 0.5f) / kReachBands;
+                const float phi = 2 * kPi * (static_cast<float>(sector) + 0.5f) / kReachSectors;
+                const float s = std::sqrt(sin2);
+                c[static_cast<size_t>(band * kReachSectors + sector)] = {s * std::cos(phi), s * std::sin(phi), std::sqrt(1 - sin2)};
+            }
+        return c;
+    }();
+    return centres;
+}
+
+}  // namespace
+
+BinPrediction predict_bins(const IrradianceCache& cache, const Vec3& p, const Vec3& n, const Vec3& gather_n) {
+    BinPrediction out;
+    std::array<float, kReachBins> weight{};
+    const Frame frame(gather_n);
+    const auto& centres = bin_centres();
+    cache.visit_weights(p, n, [&](uint32_t id, float w) {
+        if (!(w > 0)) return;
+        const Record& r = cache.record(id);
+        ++out.records;
+        if (r.n == gather_n) {  // the same frame: bin for bin (planar surfaces, the common case)
+            for (size_t b = 0; b < out.bin.size(); ++b) out.bin[b] += r.bins[b] * w, weight[b] += w;
+            return;
+        }
+        const Frame rf(r.n);
+        for (size_t b = 0; b < out.bin.size(); ++b) {
+            const Vec3 local = rf.to_local(frame.to_world(centres[b]));
+            if (local.z <= 0) continue;  // below the record's horizon: it saw nothing there
+            out.bin[b] += r.bins[static_cast<size_t>(direction_bin(local))] * w, weight[b] += w;
+        }
+    });
+    for (size_t b = 0; b < out.bin.size(); ++b) out.bin[b] = weight[b] > 0 ? out.bin[b] / weight[b] : Color(0);
+    return out;
+}
+
+Color prediction_correction(const BinPrediction& prediction, std::span<const Vec3> local, float scale) {
+    if (prediction.records == 0 || local.empty()) return Color(0);
+    Color integral(0), along(0);
+    for (const Color& c : prediction.bin) integral += c;
+    for (const Vec3& d : local) along += prediction.bin[static_cast<size_t>(direction_bin(d))];
+    return (integral / static_cast<float>(kReachBins) - along / static_cast<float>(local.size())) * scale;
+}
+
+void gather_local_directions(const GatherGrid& grid, const RandomStream& rng, std::vector<Vec3>& out) {
+    out.resize(static_cast<size_t>(grid.rays()));
+    for (int j = 0; j < grid.m; ++j)
+        for (int k = 0; k < grid.n; ++k) {
+            const auto c = static_cast<size_t>(j * grid.n + k);
+            out[c] = gather_cell_direction(grid, j, k, rng.get(c, kDimGather), rng.get(c, kDimGather + 1));
+        }
+}
+
+void correction_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache, const Gatherer& gatherer,
+                     std::vector<Indirect>& light, Stats& stats, ProgressSink* progress) {
+    const bool ao = scene.render.indirect.ao;
+    tbb::enumerable_thread_specific<std::vector<Vec3>> directions;
+    tbb::enumerable_thread_specific<uint64_t> fragments(0), predicted(0);
+    for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, progress, "correct", [&](int wx, int wy, size_t first) {
+        Counters& counters = stats.local();
+        std::vector<Vec3>& local = directions.local();
+        auto frags = deep.pixel(wx, wy);
+        for (uint32_t k = 0; k < frags.size(); ++k) {
+            const Fragment& f = frags[k];
+            if (!needs_bounce_light(scene, f)) continue;
+            // The gather brute force makes here (the same point, normal and stream) ...
+            const HairSite at = f.is_hair() ? hair_site(scene, f) : HairSite{f.p, f.n};
+            const RandomStream rng = fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k);
+            const GatherResult g = gatherer.gather(at.p, at.n, rng, counters);
+            // ... corrected by the records' prediction about the site they are looked up at.
+            const Site site = record_site(scene, f, cache.settings());
+            const BinPrediction pred = predict_bins(cache, site.p, site.n, at.n);
+            gather_local_directions(gatherer.grid(), rng, local);
+            const Color c = prediction_correction(pred, local, ao ? 1.0f : kPi);
+            Indirect& out = light[first + k];
+            if (ao) out.ao = g.ao + c.x;
+            else out.irradiance = g.irradiance + c;
+            ++fragments.local();
+            predicted.local() += pred.records > 0;
+        }
+    });
+    uint64_t n = 0, p = 0;
+    for (uint64_t v : fragments) n += v;
+    for (uint64_t v : predicted) p += v;
+    stats.set("correction_fragments", static_cast<double>(n));
+    stats.set("correction_predicted", static_cast<double>(p));
+}
+
+}  // namespace bounce

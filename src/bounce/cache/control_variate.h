@@ -1,0 +1,52 @@
+// Records as a control variate for a per-fragment gather (issue 47; docs/gather.md, "Records as
+// a control variate"). The records that cover a fragment predict, per direction, the radiance
+// its rays will meet (their direction bins, GatherResult::bins, blended with their
+// interpolation weights); the prediction is piecewise constant over the fragment's own 32 bins,
+// each 1/32 of the cosine-weighted hemisphere, so its integral is known exactly. A fragment's
+// estimate is its own N-ray gather plus that integral minus the prediction's N-ray estimate
+// along the same rays: unbiased for any prediction, brute force itself when the prediction is
+// 0, and without variance where the prediction is the truth.
+#pragma once
+
+#include <array>
+#include <span>
+#include <vector>
+
+#include "bounce/cache/irradiance_cache.h"
+#include "bounce/core/stats.h"
+#include "bounce/deep/deep_buffer.h"
+#include "bounce/gather/gather.h"
+
+namespace bounce {
+
+/// The prediction at one fragment: a value per bin of its gather's frame.
+struct BinPrediction {
+    std::array<Color, kReachBins> bin{};
+    int records = 0;  ///< records that made it (0: the prediction is 0)
+};
+
+/// The records of `cache` covering (p, n) (weighed as interpolation weighs them), each centre
+/// of the bins of Frame(gather_n) looked up in every record's bins and blended with the
+/// records' weights (a record whose hemisphere does not hold the direction leaves it to the
+/// others). gather_n: the normal the fragment's rays are gathered about (a displaced
+/// fragment's own, where its records lie on the un-displaced surface).
+BinPrediction predict_bins(const IrradianceCache& cache, const Vec3& p, const Vec3& n, const Vec3& gather_n);
+
+/// What the control variate adds to a gather's value: `scale` x (the mean of the prediction
+/// over the bins minus its mean over the gather's rays), `local`: the rays' directions in the
+/// gather's frame. `scale` is pi for irradiance (E = pi/S sum L), 1 for AO (a mean).
+Color prediction_correction(const BinPrediction& prediction, std::span<const Vec3> local, float scale);
+
+/// The local directions of a gather's rays about its normal: those Gatherer::gather traces
+/// with `rng` on `grid`.
+void gather_local_directions(const GatherGrid& grid, const RandomStream& rng, std::vector<Vec3>& out);
+
+/// The correction pass: every fragment that uses the bounce light gathers `gatherer`'s rays
+/// (CacheSettings::correction_rays) at its own point and seed, as brute force does, and its
+/// irradiance (AO in AO mode) becomes that gather corrected by the records' prediction; its bent
+/// normal and light directions stay the interpolation's. `light`: the interpolation pass's
+/// result, parallel to deep.fragments. Sets the stats correction_fragments, correction_predicted.
+void correction_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache, const Gatherer& gatherer,
+                     std::vector<Indirect>& light, Stats& stats, ProgressSink* progress);
+
+}  // namespace bounce
