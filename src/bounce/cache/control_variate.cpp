@@ -70,6 +70,39 @@ void gather_local_directions(const GatherGrid& grid, const RandomStream& rng, st
         }
 }
 
+namespace {
+
+/// The cell of `grid` that holds local direction d (the stratum its sample was drawn in).
+size_t cell_of(const GatherGrid& grid, const Vec3& d) {
+    const float sin2 = std::clamp(1 - d.z * d.z, 0.0f, 1.0f);
+    float phi = std::atan2(d.y, d.x);
+    if (phi < 0) phi += 2 * kPi;
+    const int j = std::min(grid.m - 1, static_cast<int>(sin2 * static_cast<float>(grid.m)));
+    const int k = std::min(grid.n - 1, static_cast<int>(phi * (static_cast<float>(grid.n) / (2 * kPi))));
+    return static_cast<size_t>(j * grid.n + k);
+}
+
+}  // namespace
+
+Color plane_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& n, std::span<const Vec3> local, float scale,
+                       int& records) {
+    Color integral(0), along(0);
+    float wsum = 0;
+    records = 0;
+    cache.visit_weights(p, n, [&](uint32_t id, float w) {
+        const Record& r = cache.record(id);
+        if (!(w > 0) || !r.cells || !(r.n == n)) return;
+        ++records;
+        Color sum(0);
+        for (const Color& c : *r.cells) sum += c;
+        integral += sum * (w / static_cast<float>(r.cells->size()));
+        for (const Vec3& d : local) along += (*r.cells)[cell_of(r.grid, d)] * (w / static_cast<float>(local.size()));
+        wsum += w;
+    });
+    if (records == 0) return Color(0);
+    return (integral - along) * (scale / wsum);
+}
+
 void correction_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache, const Gatherer& gatherer,
                      std::vector<Indirect>& light, Stats& stats, ProgressSink* progress) {
     const bool ao = scene.render.indirect.ao;
@@ -88,9 +121,15 @@ void correction_pass(const Scene& scene, const DeepBuffer& deep, const Irradianc
             const GatherResult g = gatherer.gather(at.p, at.n, rng, counters);
             // ... corrected by the records' prediction about the site they are looked up at.
             const Site site = record_site(scene, f, cache.settings());
-            const BinPrediction pred = predict_bins(cache, site.p, site.n, at.n);
             gather_local_directions(gatherer.grid(), rng, local);
-            const Color c = prediction_correction(pred, local, ao ? 1.0f : kPi);
+            int plane = 0;
+            Color c = plane_correction(cache, site.p, at.n, local, ao ? 1.0f : kPi, plane);
+            BinPrediction pred;
+            pred.records = plane;
+            if (plane == 0) {
+                pred = predict_bins(cache, site.p, site.n, at.n);
+                c = prediction_correction(pred, local, ao ? 1.0f : kPi);
+            }
             Indirect& out = light[first + k];
             if (ao) out.ao = g.ao + c.x;
             else out.irradiance = g.irradiance + c;

@@ -37,6 +37,12 @@ BinPrediction predict_bins(const IrradianceCache& cache, const Vec3& p, const Ve
 /// gather's frame. `scale` is pi for irradiance (E = pi/S sum L), 1 for AO (a mean).
 Color prediction_correction(const BinPrediction& prediction, std::span<const Vec3> local, float scale);
 
+/// The same from the records on the fragment's own plane (normal `n` to the bit) that keep
+/// their every cell: a ray's prediction is the radiance of the cell of each record's grid it
+/// falls in, blended; the integral is each record's own mean. `records`: how many.
+Color plane_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& n, std::span<const Vec3> local, float scale,
+                       int& records);
+
 /// The local directions of a gather's rays about its normal: those Gatherer::gather traces
 /// with `rng` on `grid`.
 void gather_local_directions(const GatherGrid& grid, const RandomStream& rng, std::vector<Vec3>& out);

@@ -77,6 +77,7 @@ bool IrradianceCache::has_light_parts(size_t lights) const {
 void IrradianceCache::set_values(Record& r, const GatherResult& g, bool gradients, float grad_t_scale) const {
     r.ao = g.ao;
     r.bins = g.bins;  // with light parts, the signal's (every light at scale 1)
+    r.cells = g.cells, r.grid = g.grid;
     // Capped (a record in near darkness divides by almost nothing): past 1000 % it is all
     // noise anyway, and a cache file refuses values beyond 1e20.
     r.noise = g.rel_stderr >= 0 && g.rel_stderr < 1e3f ? g.rel_stderr : 1e3f;

@@ -45,6 +45,10 @@ struct Record {
     /// Mean radiance per direction bin (GatherResult::bins; unoccluded fraction in AO mode): the
     /// record's prediction for a fragment's correction rays (control_variate.h).
     std::array<Color, kReachBins> bins{};
+    /// Its gather's every cell (GatherResult::cells; not in files): the prediction for fragments
+    /// on its own plane.
+    std::shared_ptr<const std::vector<Color>> cells;
+    GatherGrid grid;
     uint32_t anchor = kNoAnchor; ///< the moving object whose surface carries it, or kNoAnchor (static)
     /// Rigid objects: p and n in the object's own space (before its placement). Deforming
     /// objects: the triangle of its visible mesh (anchor_prim) and p's barycentrics (anchor_p.x, .y).

@@ -441,6 +441,12 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
             res.reach[bin] = std::max(res.reach[bin], R[static_cast<size_t>(j * N + k)]);
         }
     set_bins(res, frame, settings_.ao ? std::span<const float>(U) : std::span<const float>(), L, D);
+    {
+        auto all = std::make_shared<std::vector<Color>>(L);
+        if (settings_.ao)
+            for (size_t c = 0; c < all->size(); ++c) (*all)[c] = Color(U[c]);
+        res.cells = std::move(all), res.grid = grid_;
+    }
     if (settings_.hessian) {
         const TangentHessian th = cells_hessian(grid_, p, n, far_, settings_.ao, L, U, R, D);
         res.hess_axis = th.axis, res.hess_slow = th.slow, res.hess_fast = th.fast;

@@ -127,6 +127,10 @@ struct GatherResult {
     /// fraction, grey, in AO mode; a bin no ray fell in takes the mean over all): what a record
     /// predicts a nearby fragment's rays will see (cache/control_variate.h).
     std::array<Color, kReachBins> bins{};
+    /// With record_terms: every cell's radiance (unoccluded fraction in AO mode), cell j * n + k
+    /// of the gather's grid: a finer prediction for fragments on the record's own plane.
+    std::shared_ptr<const std::vector<Color>> cells;
+    GatherGrid grid;
     std::shared_ptr<LightParts> parts;  ///< GatherSettings::light_parts: per light
 };
 
