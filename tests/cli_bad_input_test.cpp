@@ -151,7 +151,7 @@ TEST(BadInput, SceneFilesThatLie) {
     nlohmann::json j = test::base_scene();
     j["objects"] = {{{"file", "short.ply"}}};
     d.write("ply.json", j.dump());
-    refused(render_cmd(d.file("ply.json"), d.file("x.exr")), {"/objects/0/file", "declares 101 elements", "4 lines"});
+    refused(render_cmd(d.file("ply.json"), d.file("x.exr")), {"/objects/0/file", "line 13", "vertex 3: 4 values where its properties take 3"});
 }
 
 TEST(BadInput, CompareAndCacheToolsRefuseWhatTheyUsedToAccept) {

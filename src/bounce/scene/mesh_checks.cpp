@@ -27,16 +27,6 @@ std::string lower_extension(const std::string& path) {
     return ext;
 }
 
-/// Bytes of one value of a PLY scalar type; 0 for an unknown name.
-uint64_t ply_type_size(const std::string& t) {
-    static const std::map<std::string, uint64_t> sizes = {
-        {"char", 1},  {"uchar", 1},  {"int8", 1},   {"uint8", 1},   {"short", 2},   {"ushort", 2},   {"int16", 2},
-        {"uint16", 2}, {"int", 4},   {"uint", 4},   {"int32", 4},   {"uint32", 4},  {"float", 4},    {"float32", 4},
-        {"double", 8}, {"float64", 8}};
-    auto it = sizes.find(t);
-    return it == sizes.end() ? 0 : it->second;
-}
-
 /// The JSON of a .gltf file or a .glb's JSON chunk; InputError for a truncated or foreign .glb.
 std::string gltf_json_text(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
@@ -196,59 +186,6 @@ std::vector<std::string> check_obj(const std::string& path) {
 }
 
 }  // namespace
-
-void check_ply_counts(const std::string& path) {
-    if (lower_extension(path) != ".ply") return;
-    std::ifstream in(path, std::ios::binary);
-    std::string line, format, elements;
-    uint64_t declared = 0, min_bytes = 0, count = 0;
-    size_t header_lines = 0;
-    while (std::getline(in, line)) {
-        ++header_lines;
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        std::istringstream ls(line);
-        std::string word;
-        ls >> word;
-        if (word == "format") {
-            ls >> format;
-        } else if (word == "element") {
-            std::string name;
-            ls >> name >> count;
-            if (!ls) throw InputError(path, fmt::format("line {}", header_lines), "malformed element line");
-            declared += count;
-            elements += fmt::format("{}{} {}", elements.empty() ? "" : ", ", count, name);
-        } else if (word == "property") {
-            std::string type;
-            ls >> type;
-            // A list stores at least its length; a scalar its own size.
-            if (type == "list") ls >> type;
-            const uint64_t size = ply_type_size(type);
-            if (size == 0) throw InputError(path, fmt::format("line {}", header_lines), "unknown property type \"" + type + "\"");
-            if (count > 0 && size > (UINT64_MAX - min_bytes) / count)
-                throw InputError(path, fmt::format("line {}", header_lines), "element counts overflow");
-            min_bytes += count * size;
-        } else if (word == "end_header") {
-            break;
-        }
-        if (header_lines > 10000) throw InputError(path, "header", "no end_header in the first 10000 lines");
-    }
-    const auto body_start = static_cast<uint64_t>(in.tellg());
-    std::error_code ec;
-    const uint64_t size = fs::file_size(path, ec);
-    if (format != "ascii") {
-        if (!ec && min_bytes > size - std::min(size, body_start))
-            throw InputError(path, "header",
-                             fmt::format("corrupted: the header declares {} (at least {} bytes); the file holds {}", elements,
-                                         min_bytes, size - std::min(size, body_start)));
-        return;
-    }
-    uint64_t body = 0;
-    while (std::getline(in, line))
-        if (line.find_first_not_of(" \t\r") != std::string::npos) ++body;
-    if (body < declared)
-        throw InputError(path, fmt::format("line {}", header_lines + body + 1),
-                         fmt::format("the header declares {} elements but the file holds {} lines of data", declared, body));
-}
 
 std::vector<std::string> check_mesh_file(const std::string& path) {
     const std::string ext = lower_extension(path);

@@ -1,0 +1,159 @@
+// PLY files before Assimp reads them (mesh_checks.h): the header's elements against the
+// body. A binary body must be long enough for what the header declares; an ASCII body is read
+// line by line against it, since Assimp's ASCII reader takes a vertex line for a face (and then
+// aborts in its triangulation) or a list count of 255 with three indices.
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <vector>
+
+#include "bounce/core/error.h"
+#include "bounce/scene/mesh_checks.h"
+
+namespace bounce {
+
+namespace {
+
+/// Bytes of one value of a PLY scalar type; 0 for an unknown name.
+uint64_t ply_type_size(const std::string& t) {
+    static const std::map<std::string, uint64_t> sizes = {
+        {"char", 1},  {"uchar", 1},  {"int8", 1},   {"uint8", 1},   {"short", 2},   {"ushort", 2},   {"int16", 2},
+        {"uint16", 2}, {"int", 4},   {"uint", 4},   {"int32", 4},   {"uint32", 4},  {"float", 4},    {"float32", 4},
+        {"double", 8}, {"float64", 8}};
+    auto it = sizes.find(t);
+    return it == sizes.end() ? 0 : it->second;
+}
+
+bool is_integer_type(const std::string& t) { return t != "float" && t != "float32" && t != "double" && t != "float64"; }
+
+struct PlyProperty {
+    std::string name, type;   ///< a list's item type
+    std::string count_type;   ///< a list's count type (empty: a scalar)
+};
+struct PlyElement {
+    std::string name;
+    uint64_t count = 0;
+    std::vector<PlyProperty> properties;
+};
+/// Most values one ASCII list may hold (a polygon's corners).
+constexpr uint64_t kMaxListCount = 1u << 16;
+
+/// One ASCII value of type `type`; false when it is not a number of that type.
+bool read_value(const std::string& token, const std::string& type, double& out) {
+    errno = 0;
+    char* end = nullptr;
+    out = std::strtod(token.c_str(), &end);
+    if (end == token.c_str() || *end != '\0' || errno == ERANGE || !std::isfinite(out)) return false;
+    return !is_integer_type(type) || out == std::floor(out);
+}
+
+/// The ASCII body, element by element, line by line (blank lines skipped).
+void check_ascii_body(std::istream& in, const std::string& path, size_t line_no, const std::vector<PlyElement>& elements) {
+    std::string line;
+    uint64_t vertices = 0;
+    for (const PlyElement& e : elements)
+        if (e.name == "vertex") vertices = e.count;
+    for (const PlyElement& e : elements)
+        for (uint64_t i = 0; i < e.count; ++i) {
+            do {
+                if (!std::getline(in, line))
+                    throw InputError(path, fmt::format("line {}", line_no + 1),
+                                     fmt::format("the header declares {} {} elements; the file ends at {} {}", e.count, e.name, e.name, i));
+                ++line_no;
+            } while (line.find_first_not_of(" \t\r") == std::string::npos);
+            std::istringstream ls(line);
+            std::vector<std::string> tokens;
+            for (std::string t; ls >> t;) tokens.push_back(t);
+            const std::string where = fmt::format("line {}", line_no);
+            const std::string what = fmt::format("{} {}", e.name, i);
+            size_t at = 0;
+            for (const PlyProperty& p : e.properties) {
+                double v = 0;
+                uint64_t n = 1;
+                if (!p.count_type.empty()) {
+                    if (at >= tokens.size() || !read_value(tokens[at], p.count_type, v) || v < 0 || v > static_cast<double>(kMaxListCount))
+                        throw InputError(path, where, fmt::format("{}: '{}' is not a list count of {} (0 to {})", what,
+                                                                  at < tokens.size() ? tokens[at] : "", p.name, kMaxListCount));
+                    n = static_cast<uint64_t>(v), ++at;
+                }
+                for (uint64_t k = 0; k < n; ++k, ++at) {
+                    if (at >= tokens.size())
+                        throw InputError(path, where, fmt::format("{}: {} values, fewer than its properties need", what, tokens.size()));
+                    if (!read_value(tokens[at], p.type, v))
+                        throw InputError(path, where, fmt::format("{}: '{}' is not a {} ({})", what, tokens[at], p.type, p.name));
+                    const bool index = e.name == "face" && !p.count_type.empty();
+                    if (index && (v < 0 || v >= static_cast<double>(vertices)))
+                        throw InputError(path, where, fmt::format("{}: vertex index {} outside the {} vertices", what, tokens[at], vertices));
+                }
+            }
+            if (at != tokens.size())
+                throw InputError(path, where, fmt::format("{}: {} values where its properties take {}", what, tokens.size(), at));
+        }
+    while (std::getline(in, line)) {
+        ++line_no;
+        if (line.find_first_not_of(" \t\r") != std::string::npos)
+            throw InputError(path, fmt::format("line {}", line_no), "data past the elements the header declares");
+    }
+}
+
+}  // namespace
+
+void check_ply_counts(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".ply") return;
+    std::ifstream in(path, std::ios::binary);
+    std::string line, format, declared_list;
+    uint64_t min_bytes = 0;
+    std::vector<PlyElement> elements;
+    size_t header_lines = 0;
+    while (std::getline(in, line)) {
+        ++header_lines;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        std::istringstream ls(line);
+        std::string word;
+        ls >> word;
+        const std::string where = fmt::format("line {}", header_lines);
+        if (word == "format") {
+            ls >> format;
+        } else if (word == "element") {
+            PlyElement e;
+            ls >> e.name >> e.count;
+            if (!ls) throw InputError(path, where, "malformed element line");
+            declared_list += fmt::format("{}{} {}", declared_list.empty() ? "" : ", ", e.count, e.name);
+            elements.push_back(e);
+        } else if (word == "property") {
+            if (elements.empty()) throw InputError(path, where, "a property before any element");
+            PlyProperty p;
+            ls >> p.type;
+            // A list stores at least its length; a scalar its own size.
+            if (p.type == "list") ls >> p.count_type >> p.type;
+            ls >> p.name;
+            const uint64_t size = ply_type_size(p.count_type.empty() ? p.type : p.count_type);
+            if (size == 0 || ply_type_size(p.type) == 0) throw InputError(path, where, "unknown property type \"" + p.type + "\"");
+            const uint64_t count = elements.back().count;
+            if (count > 0 && size > (UINT64_MAX - min_bytes) / count) throw InputError(path, where, "element counts overflow");
+            min_bytes += count * size;
+            elements.back().properties.push_back(p);
+        } else if (word == "end_header") {
+            break;
+        }
+        if (header_lines > 10000) throw InputError(path, "header", "no end_header in the first 10000 lines");
+    }
+    if (format == "ascii") return check_ascii_body(in, path, header_lines, elements);
+    const auto body_start = static_cast<uint64_t>(in.tellg());
+    std::error_code ec;
+    const uint64_t size = std::filesystem::file_size(path, ec);
+    if (!ec && min_bytes > size - std::min(size, body_start))
+        throw InputError(path, "header",
+                         fmt::format("corrupted: the header declares {} (at least {} bytes); the file holds {}", declared_list, min_bytes,
+                                     size - std::min(size, body_start)));
+}
+
+}  // namespace bounce
