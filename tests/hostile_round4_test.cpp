@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -62,6 +63,44 @@ TEST(HostilePly, AsciiBodiesAreReadAgainstTheirHeader) {
     for (const Case& c : cases) refused(render_cmd(ply_scene(d, c.body), d.file("o.exr")), c.expect);
     // The same file, well formed, renders.
     EXPECT_EQ(test::run_bounce(render_cmd(ply_scene(d, std::string(kPlyHeader) + "0 0 0\n1 0 0\n\n0 0 1\n3 0 1 2\n"), d.file("o.exr"))), 0);
+}
+
+}  // namespace
+}  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(HostileOutputs, CacheToolsWriteOnlyTheKindOfFileTheyMake) {
+    // `cache export cb.bic -o cb.json` overwrote the scene with a PLY.
+    test::TempDir d;
+    const std::string scene = d.write("cb.json", test::bytes_of(test::cornell_scene()));
+    for (const char* f : {"short_block.obj", "tall_block.obj"})
+        std::filesystem::copy_file(test::source_dir() + "/scenes/cornell/" + f, d.file(f));
+    ASSERT_EQ(test::run_bounce("render " + scene + " -q --res 16x16 --gi cache --rays 16 -o " + d.file("cb.exr") + " --cache-out " + d.file("cb.bic")), 0);
+    const std::string before = test::bytes_of(scene);
+    refused("cache export " + d.file("cb.bic") + " -o " + scene, {"-o " + scene, "the exported point cloud is written as a .ply file"});
+    refused("cache filter " + d.file("cb.bic") + " --sphere 0,0,0,1 -o " + scene, {"the filtered cache is written as a .bic file"});
+    refused("cache merge " + d.file("cb.bic") + " " + d.file("cb.bic") + " -o " + d.file("cb.exr"), {"the merged cache is written as a .bic file"});
+    EXPECT_EQ(test::bytes_of(scene), before);
+    EXPECT_EQ(test::run_bounce("cache export " + d.file("cb.bic") + " -o " + d.file("cb.PLY")), 0);
+}
+
+TEST(HostileOutputs, ResumeRendersAgainAFrameWhoseFilesAreCutShort) {
+    test::TempDir d;
+    const std::string scene = test::source_dir() + "/scenes/shots/cornell-rolling.json";
+    const std::string args = "render " + scene + " --res 16x16 --gi cache --rays 16 --frames 1-3 -o " + d.file("s.####.exr") +
+                             " --cache-out " + d.file("s.####.bic");
+    ASSERT_EQ(test::run_bounce(args + " -q"), 0);
+    std::filesystem::resize_file(d.file("s.0002.exr"), 1000);
+    std::filesystem::resize_file(d.file("s.0003.bic"), 500);
+    std::string err;
+    ASSERT_EQ(test::run_bounce(args + " --resume", &err), 0) << err;
+    EXPECT_NE(err.find("frame 1: outputs complete, skipped"), std::string::npos) << err;
+    EXPECT_EQ(err.find("frame 2: outputs complete"), std::string::npos) << err;
+    EXPECT_EQ(err.find("frame 3: outputs complete"), std::string::npos) << err;
+    EXPECT_GT(std::filesystem::file_size(d.file("s.0002.exr")), 1000u);
+    EXPECT_GT(std::filesystem::file_size(d.file("s.0003.bic")), 500u);
 }
 
 }  // namespace

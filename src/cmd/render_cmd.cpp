@@ -9,6 +9,9 @@
 
 #include "bounce/core/error.h"
 #include "bounce/core/image.h"
+#include "bounce/core/image_input.h"
+#include "bounce/deep/deep_buffer.h"
+#include "bounce/scene/json_reader.h"
 #include "bounce/dist/mpi.h"
 #include "bounce/cache/cache_file.h"
 #include "bounce/render/render.h"
@@ -127,11 +130,36 @@ void check_range_in_shot(const RenderArgs& a, const Scene& scene, int last) {
         throw InputError("command line", "--frames " + a.frames, scene.shot.outside(last));
 }
 
-/// Every output of a frame is there (each is written by rename: there means complete).
+/// Whether `read` reads `path` back whole (a file cut short, or overwritten by something else,
+/// throws on the way).
+template <typename Read>
+bool reads_back(const std::string& path, Read&& read) {
+    if (path.empty()) return true;
+    if (!std::filesystem::is_regular_file(path)) return false;
+    try {
+        read(path);
+        return true;
+    } catch (const std::exception&) {
+        return false;
+    }
+}
+
+/// Every output of a frame is there and reads back whole: each is written by rename, but a
+/// disk that filled or a copy cut short leaves a file that is there and is not the frame.
 bool outputs_complete(const FrameFiles& f) {
-    for (const std::string& path : {f.output, f.png(), f.deep_out, f.cache_out, f.stats_json})
-        if (!path.empty() && !std::filesystem::is_regular_file(path)) return false;
-    return true;
+    const auto image = [](const std::string& p) { (void)read_exr(p); };
+    const auto png = [](const std::string& p) {
+        std::string error;
+        auto in = open_image(p, error);
+        if (!in) throw std::runtime_error(error);
+        std::vector<unsigned char> pixels(static_cast<size_t>(in->spec().image_bytes()));
+        if (!in->read_image(0, 0, 0, -1, OIIO::TypeDesc::UINT8, pixels.data())) throw std::runtime_error(in->geterror());
+    };
+    const auto json = [](const std::string& p) {
+        if (nlohmann::json::parse(read_text_file(p)).is_discarded()) throw std::runtime_error(p);
+    };
+    return reads_back(f.output, image) && reads_back(f.png(), png) && reads_back(f.deep_out, [](const std::string& p) { (void)read_deep(p); }) &&
+           reads_back(f.cache_out, [](const std::string& p) { (void)read_cache_file(p); }) && reads_back(f.stats_json, json);
 }
 
 /// Frames `first`..`last` of a shot that starts at `shot_first`, in order, each starting from

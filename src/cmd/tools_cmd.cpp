@@ -224,7 +224,17 @@ int run_cache_info(const CacheArgs& a) {
     return 0;
 }
 
+namespace {
+/// A tool's output of the kind it writes: a scene or an image named by mistake is never overwritten.
+void check_output_kind(const std::string& path, const char* extension, const char* what) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != extension) throw InputError("command line", "-o " + path, fmt::format("{} is written as a {} file", what, extension));
+}
+}  // namespace
+
 int run_cache_merge(const CacheArgs& a) {
+    check_output_kind(a.output, ".bic", "the merged cache");
     check_output_file(a.output, a.inputs);
     if (a.inputs.size() < 2) throw InputError("command line", "cache merge", "give at least two caches to merge");
     CacheFile out = read_cache_file(a.inputs[0]);
@@ -235,6 +245,7 @@ int run_cache_merge(const CacheArgs& a) {
 }
 
 int run_cache_filter(const CacheArgs& a) {
+    check_output_kind(a.output, ".bic", "the filtered cache");
     check_output_file(a.output, a.inputs);
     RecordFilter filter;
     if (!a.box.empty()) {
@@ -263,6 +274,7 @@ int run_cache_filter(const CacheArgs& a) {
 }
 
 int run_cache_export(const CacheArgs& a) {
+    check_output_kind(a.output, ".ply", "the exported point cloud");
     check_output_file(a.output, a.inputs);
     CacheFile f = read_cache_file(a.inputs.at(0));
     export_ply(f, a.output);
