@@ -465,9 +465,10 @@ TEST(Sequences, ARangePastTheShotOrASubframeOntoAFramePatternIsRefusedBeforeAnyF
     EXPECT_TRUE(std::filesystem::exists(d.file("sub.exr")));
     // Not a frame at all, in a shot or a still.
     for (const std::string& file : {d.file("s.json"), test::cornell_scene()})
-        for (const char* frame : {"nan", "1e39", "-inf"})
+        for (const char* frame : {"nan", "1e39", "-inf", "0x2", "''"})
             test::expect_refused("render " + file + " -q --res 8x8 -o " + d.file("n.####.exr") + " --frame " + frame,
-                                 {"--frame", "a frame must be a finite number within +-1e+06"});
+                                 {"--frame", std::string(frame) == "1e39" ? "a frame must be a finite number within +-1e+06"
+                                                                          : "is not a decimal frame number"});
     EXPECT_EQ(test::run_bounce(scene + "-o " + d.file("f.####.exr") + " --frame 3"), 0);
     EXPECT_TRUE(std::filesystem::exists(d.file("f.0003.exr")));
 }

@@ -2,7 +2,11 @@
 // input or were accepted silently. Each exits 2 with the file and the place.
 #include <gtest/gtest.h>
 
+#include <OpenImageIO/deepdata.h>
+#include <OpenImageIO/imageio.h>
+
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -101,6 +105,55 @@ TEST(HostileOutputs, ResumeRendersAgainAFrameWhoseFilesAreCutShort) {
     EXPECT_EQ(err.find("frame 3: outputs complete"), std::string::npos) << err;
     EXPECT_GT(std::filesystem::file_size(d.file("s.0002.exr")), 1000u);
     EXPECT_GT(std::filesystem::file_size(d.file("s.0003.bic")), 500u);
+}
+
+}  // namespace
+}  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(HostileValues, CropsFramesDistributionAndHeadersOutOfRange) {
+    test::TempDir d;
+    const std::string cornell = "render " + test::cornell_scene() + " -q --res 16x16 -o " + d.file("o.exr");
+    // An empty crop is not the full frame.
+    refused(cornell + " --crop 4,4,4,4", {"/render/crop", "crop [4, 4, 4, 4] is empty"});
+    // --distribute: its two values, and frames only with --frames.
+    refused(cornell + " --distribute pixels", {"--distribute pixels", "is tiles or frames"});
+    refused(cornell + " --distribute frames", {"--distribute frames", "goes with --frames"});
+    // A cache whose header's frame is past any frame (1e39 read as -2147483648).
+    ASSERT_EQ(test::run_bounce(cornell + " --gi cache --rays 16 --cache-out " + d.file("c.bic")), 0);
+    // Rewrite the header with "frame": 1e39 and its checksum, as a crafted file would.
+    const std::string bytes = test::bytes_of(d.file("c.bic"));
+    uint32_t length = 0;
+    std::memcpy(&length, bytes.data() + 12, 4);
+    nlohmann::json header = nlohmann::json::parse(bytes.substr(16, length));
+    header["frame"] = 1e39;
+    const std::string text = header.dump();
+    uint64_t h = 0xcbf29ce484222325ULL;
+    for (char c : text) h = (h ^ static_cast<uint8_t>(c)) * 0x100000001b3ULL;
+    std::string crafted = bytes.substr(0, 12);
+    const auto n = static_cast<uint32_t>(text.size());
+    crafted.append(reinterpret_cast<const char*>(&n), 4).append(text).append(reinterpret_cast<const char*>(&h), 8);
+    crafted += bytes.substr(16 + length + 8);
+    d.write("big.bic", crafted);
+    refused("cache info " + d.file("big.bic"), {"big.bic", "header/frame", "1e+39 is not a whole frame number"});
+    refused(cornell + " --gi cache --cache-in " + d.file("big.bic"), {"big.bic", "header/frame"});
+    // A deep file whose bounce:spp is 2e9 (0 and -5 were refused; the range is 1 .. 4096).
+    ASSERT_EQ(test::run_bounce(cornell + " --deep-out " + d.file("f.deep.exr")), 0);
+    {
+        auto in = OIIO::ImageInput::open(d.file("f.deep.exr"));
+        ASSERT_TRUE(in);
+        OIIO::ImageSpec spec = in->spec();
+        OIIO::DeepData deep;
+        ASSERT_TRUE(in->read_native_deep_image(0, 0, deep));
+        in->close();
+        spec.attribute("bounce:spp", 2000000000);
+        auto out = OIIO::ImageOutput::create(d.file("spp.deep.exr"));
+        ASSERT_TRUE(out && out->open(d.file("spp.deep.exr"), spec) && out->write_deep_image(deep));
+        out->close();
+    }
+    refused(cornell + " --deep-in " + d.file("spp.deep.exr"), {"spp.deep.exr", "bounce:spp", "2000000000 samples per pixel is outside 1 .. 4096"});
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <regex>
 
 #include "bounce/core/error.h"
 #include "bounce/core/image.h"
@@ -224,8 +225,11 @@ std::unique_ptr<ProgressSink> make_progress(bool quiet) {
 }
 
 int run_render(const RenderArgs& a) {
+    if (a.distribute != "tiles" && a.distribute != "frames")
+        throw InputError("command line", "--distribute " + a.distribute, "is tiles or frames");
     if (a.frames.empty()) {
         if (a.resume) throw InputError("command line", "--resume", "goes with --frames");
+        if (a.distribute == "frames") throw InputError("command line", "--distribute frames", "goes with --frames");
         // The range a key's frame may have (a still has no shot to refuse the frame otherwise).
         if (a.frame && !is_frame_number(*a.frame))
             throw InputError("command line", fmt::format("--frame {:g}", *a.frame), fmt::format("a frame must be a finite number within +-{:g}", kMaxFrame));
@@ -236,8 +240,6 @@ int run_render(const RenderArgs& a) {
         return render_frame(a, expand_frame(a.files, whole));
     }
     if (a.frame) throw InputError("command line", "--frame", "give --frame or --frames, not both");
-    if (a.distribute != "tiles" && a.distribute != "frames")
-        throw InputError("command line", "--distribute " + a.distribute, "is tiles or frames");
     auto [first, last] = parse_frame_range(a.frames, "--frames " + a.frames);
     std::vector<std::pair<const char*, std::string>> patterns{{"-o", a.files.output}};
     for (auto [flag, path] : {std::pair{"--cache-out", a.files.cache_out}, std::pair{"--deep-out", a.files.deep_out},
@@ -261,7 +263,14 @@ void add_render_options(CLI::App& render, RenderArgs& ra) {
                     "keep a --cache-in gathered with other settings, gather only where it misses (the stats say so)");
     render.add_flag("--force", ra.force, "use a cache made for another scene or camera");
     render.add_option("--base", ra.files.base, "with --crop: an earlier full-frame EXR to paste the crop over");
-    render.add_option("--frame", ra.frame, "render this frame of the shot (keyed values taken then; expands #### in file names)");
+    // A decimal number only: strtod also reads "0x2" as 2, and an empty value left frame 1.
+    render.add_option("--frame", ra.frame, "render this frame of the shot (keyed values taken then; expands #### in file names)")
+        ->check(CLI::Validator(
+            [](const std::string& v) {
+                static const std::regex decimal(R"([+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?)");
+                return std::regex_match(v, decimal) ? std::string() : "'" + v + "' is not a decimal frame number";
+            },
+            "FRAME"));
     render.add_option("--frames", ra.frames, "render frames FIRST-LAST of the shot, each starting from what the one before left");
     render.add_flag("--resume", ra.resume, "with --frames: skip frames whose outputs are all there");
     render.add_option("--distribute", ra.distribute,

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
+#include "bounce/scene/shot.h"
 
 namespace bounce {
 
@@ -303,7 +305,11 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
             f.info.geometry_fingerprint = std::stoull(h.at("geometry_fingerprint").get<std::string>(), nullptr, 16);
         f.info.parameters = h.at("parameters");
         f.info.luminance_floor = h.at("luminance_floor").get<float>();
-        f.info.frame = h.at("frame").get<int>();
+        // A frame number is an integer within the shots' bound (1e39 was read as -2147483648).
+        const nlohmann::json& frame = h.at("frame");
+        if (!frame.is_number_integer() || std::abs(frame.get<double>()) > kMaxFrame)
+            throw InputError(name, "header/frame", fmt::format("{} is not a whole frame number within +-{}", frame.dump(), kMaxFrame));
+        f.info.frame = frame.get<int>();
         f.records.reserve(count);
         while (f.records.size() < count) {
             size_t block_at = c.pos();

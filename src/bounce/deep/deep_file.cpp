@@ -200,6 +200,8 @@ DeepBuffer read_deep(const std::string& path) {
     } catch (const std::exception&) {
         throw InputError(path, "header", "missing or malformed bounce:seed / bounce:scene_fingerprint");
     }
+    // render.spp's range (1 .. 4096): a crafted 2e9 would size every later buffer by it.
+    if (deep.spp > 4096) throw InputError(path, "header/bounce:spp", fmt::format("{} samples per pixel is outside 1 .. 4096", deep.spp));
     if (deep.spp <= 0 || deep.width <= 0 || deep.height <= 0 || deep.x0 < 0 || deep.y0 < 0 ||
         deep.x0 + deep.width > deep.full_width || deep.y0 + deep.height > deep.full_height)
         throw InputError(path, "header", "inconsistent image window or sample count");

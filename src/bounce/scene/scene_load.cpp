@@ -147,7 +147,9 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     const CacheSettings& cs = scene.render.cache;
     if (cs.max_spacing < cs.min_spacing) ctx.fail("/render/max_spacing", "max_spacing is below min_spacing");
     const auto& crop = scene.render.visibility.crop;
-    if (scene.render.visibility.has_crop() &&
+    // Only all zeros means the full frame: [4, 4, 4, 4] is an empty window, not no crop.
+    const bool crop_given = crop[0] != 0 || crop[1] != 0 || crop[2] != 0 || crop[3] != 0;
+    if (crop_given &&
         (crop[0] >= crop[1] || crop[2] >= crop[3] || crop[1] > cam.width || crop[3] > cam.height))
         ctx.fail("/render/crop", fmt::format("crop [{}, {}, {}, {}] is empty or outside the {}x{} image",
                                             crop[0], crop[1], crop[2], crop[3], cam.width, cam.height));
