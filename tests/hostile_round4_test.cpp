@@ -158,3 +158,29 @@ TEST(HostileValues, CropsFramesDistributionAndHeadersOutOfRange) {
 
 }  // namespace
 }  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(HostileValues, SingularMatricesAndEmptyFileNamesAreRefused) {
+    test::TempDir d;
+    const auto scene_with = [&](const json& object, const json& materials = json::object()) {
+        json j = test::base_scene();
+        j["objects"].push_back(object);
+        if (!materials.empty()) j["materials"] = materials;
+        d.write("s.json", j.dump());
+        return "render " + d.file("s.json") + " -q --res 16x16 -o " + d.file("o.exr");
+    };
+    json zeros = json::array(), rank2 = {1, 0, 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 0, 0, 0, 1};
+    for (int i = 0; i < 16; ++i) zeros.push_back(0);
+    for (const json& m : {zeros, rank2})
+        refused(scene_with({{"type", "sphere"}, {"radius", 1}, {"transform", {{"matrix", m}}}}),
+                {"s.json", "/objects/1/transform/matrix", "singular"});
+    json scaled = {2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 1, 0, 0, 0, 1};
+    EXPECT_EQ(test::run_bounce(scene_with({{"type", "sphere"}, {"radius", 1}, {"transform", {{"matrix", scaled}}}})), 0);
+    refused(scene_with({{"type", "sphere"}, {"radius", 1}, {"material", "m"}}, {{"m", {{"color_texture", ""}}}}),
+            {"s.json", "/materials/m/color_texture", "an empty file name"});
+}
+
+}  // namespace
+}  // namespace bounce
