@@ -2,6 +2,7 @@
 // that pose it (glTF animation, motion blur of a deforming mesh).
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <initializer_list>
@@ -31,14 +32,15 @@ inline void put(std::string& b, std::initializer_list<T> values) {
 /// A strip from x = 0 to 2 (y from 0 to 1) in two cells, skinned to a root joint at the origin
 /// and a second joint at x = 1 whose rotation about z goes from 0 to 90 degrees over 1 second.
 /// Vertices at x = 2 follow the second joint alone; the rest the root.
-inline nlohmann::json skinned_strip(int joint_of_tip = 1, float tip_weight = 1) {
+/// `times`: the animation's two key times (seconds).
+inline nlohmann::json skinned_strip(int joint_of_tip = 1, float tip_weight = 1, std::array<float, 2> times = {0, 1}) {
     std::string b;
     put<float>(b, {0, 0, 0, 1, 0, 0, 2, 0, 0, 0, 1, 0, 1, 1, 0, 2, 1, 0});  // 6 positions: 72 bytes
     put<uint16_t>(b, {0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4});                 // 12 indices: 24 bytes
     for (int v = 0; v < 6; ++v) put<uint16_t>(b, {static_cast<uint16_t>(v % 3 == 2 ? joint_of_tip : 0), 0, 0, 0});  // 48 bytes
     for (int v = 0; v < 6; ++v) put<float>(b, {v % 3 == 2 ? tip_weight : 1.0f, 0, 0, 0});                           // 96 bytes
     put<float>(b, {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -1, 0, 0, 1});  // 128 bytes
-    put<float>(b, {0, 1});                                                       // 8 bytes: key times
+    put<float>(b, {times[0], times[1]});                                         // 8 bytes: key times
     const float h = std::sqrt(0.5f);
     put<float>(b, {0, 0, 0, 1, 0, 0, h, h});                                     // 32 bytes: quaternions (x, y, z, w)
     using nlohmann::json;

@@ -6,11 +6,13 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "gltf_strip.h"
 #include "test_util.h"
 
 namespace bounce {
@@ -180,6 +182,61 @@ TEST(HostileValues, SingularMatricesAndEmptyFileNamesAreRefused) {
     EXPECT_EQ(test::run_bounce(scene_with({{"type", "sphere"}, {"radius", 1}, {"transform", {{"matrix", scaled}}}})), 0);
     refused(scene_with({{"type", "sphere"}, {"radius", 1}, {"material", "m"}}, {{"m", {{"color_texture", ""}}}}),
             {"s.json", "/materials/m/color_texture", "an empty file name"});
+}
+
+}  // namespace
+}  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(HostileGltf, MorphTargetSkinAndSamplerCountsAndTimesAreChecked) {
+    test::TempDir d;
+    const auto play = [&](const std::string& file, const json& gltf, const std::string& clip) {
+        d.write(file, gltf.dump());
+        json j = test::base_scene();
+        j["animation"] = {{"fps", 1}, {"frames", {1, 2}}};
+        j["objects"].push_back({{"type", "mesh"}, {"file", file}, {"animation", clip}});
+        d.write("s.json", j.dump());
+        return "render " + d.file("s.json") + " -q --res 16x16 --frame 2 -o " + d.file("o.exr");
+    };
+    json blob = test::morphed_quad();
+    blob["accessors"][2]["count"] = 3;
+    refused(play("blob.gltf", blob, "rise"), {"blob.gltf", "/meshes/0/primitives/0/targets/0/POSITION", "3 elements for the primitive's 4 vertices"});
+    json strip = test::skinned_strip();
+    strip["accessors"][4]["count"] = 1;
+    refused(play("strip.gltf", strip, "bend"), {"strip.gltf", "/skins/0/inverseBindMatrices", "1 matrices for the skin's 2 joints"});
+    refused(play("strip.gltf", test::skinned_strip(1, 1, {0, NAN}), "bend"), {"strip.gltf", "animation 0 channel 0", "not finite"});
+    // Two keys out of order: Assimp's own validation refuses them (the last key is the clip's
+    // duration); longer tracks out of order reach check_clip.
+    refused(play("strip.gltf", test::skinned_strip(1, 1, {1, 0.5f}), "bend"), {"strip.gltf", "cannot load mesh"});
+    EXPECT_EQ(test::run_bounce(play("strip.gltf", test::skinned_strip(), "bend")), 0);
+    EXPECT_EQ(test::run_bounce(play("blob.gltf", test::morphed_quad(), "rise")), 0);
+}
+
+}  // namespace
+}  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(HostileValues, AFileValueAFlagReplacesIsStillChecked) {
+    // The same file fails in the lighting tool or on a farm that sets no flag.
+    test::TempDir d;
+    const auto with = [&](const json& render, const json& camera_extra, const std::string& flags) {
+        json j = test::base_scene();
+        j["render"] = render;
+        for (const auto& [k, v] : camera_extra.items()) j["camera"][k] = v;
+        if (camera_extra.contains("resolution") && camera_extra["resolution"].is_object()) j["animation"] = {{"fps", 24}, {"frames", {1, 2}}};
+        d.write("s.json", j.dump());
+        return "render " + d.file("s.json") + " -q -o " + d.file("o.exr") + " " + flags;
+    };
+    refused(with({{"spp", json::array()}}, json::object(), "--spp 1 --res 16x16"), {"s.json", "/render/spp"});
+    refused(with({{"threads", 18446744073709551615.0}}, json::object(), "--threads 1 --res 16x16"), {"s.json", "/render/threads"});
+    refused(with(json::object(), {{"resolution", {0, 0}}}, "--res 16x16"), {"s.json", "/camera/resolution"});
+    refused(with(json::object(), {{"resolution", {{"keys", {{1, {16, 16}}, {2, {0, 16}}}}}}}, "--res 16x16"),
+            {"s.json", "/camera/resolution/keys/1/1"});
+    EXPECT_EQ(test::run_bounce(with({{"spp", 2}}, json::object(), "--spp 1 --res 16x16")), 0);
 }
 
 }  // namespace

@@ -268,8 +268,9 @@ std::string JsonReader::choice(const std::string& key, const std::string& def, c
 
 std::string JsonReader::file(const std::string& key, bool required) const {
     std::string s = string(key, "", required);
-    // A key given with no name is a mistake (a texture left out by accident), not "none".
-    if (s.empty() && has(key)) ctx_.fail(at(key), "an empty file name (leave the key out for none)");
+    // A key written in the file with no name is a mistake (a texture left out by accident), not
+    // "none"; --set key="" is how a flag clears one.
+    if (s.empty() && has(key) && !ctx_.overridden.count(at(key))) ctx_.fail(at(key), "an empty file name (leave the key out for none)");
     if (s.empty()) return s;
     fs::path p = fs::path(s).is_absolute() ? fs::path(s) : ctx_.dir / s;
     if (ctx_.check_path) ctx_.check_path(p.lexically_normal().string(), at(key));

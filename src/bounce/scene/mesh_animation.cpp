@@ -59,11 +59,40 @@ bool node_shows(const aiScene* s, const aiString& node, const aiMesh* mesh) {
 
 }  // namespace
 
+namespace {
+
+/// Key times that are finite and increasing (glTF's sampler input; Assimp keeps NaN and
+/// decreasing times, which bracket() would search wrongly).
+template <typename Key>
+void check_times(const Key* keys, unsigned n, const std::string& path, const std::string& where) {
+    for (unsigned i = 0; i < n; ++i)
+        if (!std::isfinite(keys[i].mTime) || (i > 0 && !(keys[i].mTime > keys[i - 1].mTime)))
+            throw InputError(path, where, fmt::format("key {} time {} is not finite and after the key before", i, keys[i].mTime));
+}
+
+void check_clip(const aiAnimation* a, int clip, const std::string& path) {
+    for (unsigned c = 0; c < a->mNumChannels; ++c) {
+        const aiNodeAnim* ch = a->mChannels[c];
+        const std::string where = fmt::format("animation {} channel {} (node \"{}\")", clip, c, ch->mNodeName.C_Str());
+        check_times(ch->mPositionKeys, ch->mNumPositionKeys, path, where);
+        check_times(ch->mRotationKeys, ch->mNumRotationKeys, path, where);
+        check_times(ch->mScalingKeys, ch->mNumScalingKeys, path, where);
+    }
+    for (unsigned c = 0; c < a->mNumMorphMeshChannels; ++c)
+        check_times(a->mMorphMeshChannels[c]->mKeys, a->mMorphMeshChannels[c]->mNumKeys, path,
+                    fmt::format("animation {} morph channel {}", clip, c));
+}
+
+}  // namespace
+
 int find_clip(const aiScene* s, const std::string& name, const std::string& path) {
     std::vector<std::string> names;
     for (unsigned i = 0; i < s->mNumAnimations; ++i) {
         names.push_back(s->mAnimations[i]->mName.C_Str());
-        if (names.back() == name || std::to_string(i) == name) return static_cast<int>(i);
+        if (names.back() == name || std::to_string(i) == name) {
+            check_clip(s->mAnimations[i], static_cast<int>(i), path);
+            return static_cast<int>(i);
+        }
     }
     throw InputError(path, "animations", fmt::format("no animation \"{}\" (the file has {})", name,
                                                      names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", "))));

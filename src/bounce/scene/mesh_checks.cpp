@@ -143,6 +143,49 @@ void check_gltf_references(const json& j, const std::string& path) {
     }
 }
 
+/// The element count of accessor `index` (-1 when it or its count is not there: check_indices
+/// and Assimp speak of those).
+int64_t accessor_count(const json& j, const json& index) {
+    if (!index.is_number_unsigned() || !j.contains("accessors") || !j["accessors"].is_array()) return -1;
+    const auto i = index.get<size_t>();
+    if (i >= j["accessors"].size() || !j["accessors"][i].is_object()) return -1;
+    const json& count = j["accessors"][i].value("count", json());
+    return count.is_number_unsigned() ? count.get<int64_t>() : -1;
+}
+
+/// Counts that must agree: a morph target's elements with its primitive's vertices, a skin's
+/// inverse bind matrices with its joints (Assimp accepted fewer and read past them, or left
+/// the matrices out and failed later with no place).
+void check_gltf_counts(const json& j, const std::string& path) {
+    if (j.contains("meshes") && j["meshes"].is_array())
+        for (size_t m = 0; m < j["meshes"].size(); ++m) {
+            const json& prims = j["meshes"][m].is_object() ? j["meshes"][m].value("primitives", json()) : json();
+            for (size_t p = 0; prims.is_array() && p < prims.size(); ++p) {
+                if (!prims[p].is_object() || !prims[p].contains("attributes") || !prims[p].contains("targets")) continue;
+                const int64_t vertices = accessor_count(j, prims[p]["attributes"].value("POSITION", json()));
+                const json& targets = prims[p]["targets"];
+                for (size_t t = 0; vertices >= 0 && targets.is_array() && t < targets.size(); ++t) {
+                    if (!targets[t].is_object()) continue;
+                    for (const auto& [name, index] : targets[t].items()) {
+                        const int64_t n = accessor_count(j, index);
+                        if (n >= 0 && n != vertices)
+                            throw InputError(path, fmt::format("/meshes/{}/primitives/{}/targets/{}/{}", m, p, t, name),
+                                             fmt::format("{} elements for the primitive's {} vertices", n, vertices));
+                    }
+                }
+            }
+        }
+    if (!j.contains("skins") || !j["skins"].is_array()) return;
+    for (size_t s = 0; s < j["skins"].size(); ++s) {
+        const json& skin = j["skins"][s];
+        if (!skin.is_object() || !skin.contains("inverseBindMatrices") || !skin.contains("joints") || !skin["joints"].is_array()) continue;
+        const int64_t n = accessor_count(j, skin["inverseBindMatrices"]);
+        if (n >= 0 && n < static_cast<int64_t>(skin["joints"].size()))
+            throw InputError(path, fmt::format("/skins/{}/inverseBindMatrices", s),
+                             fmt::format("{} matrices for the skin's {} joints", n, skin["joints"].size()));
+    }
+}
+
 std::vector<std::string> check_gltf(const std::string& path) {
     const std::string text = gltf_json_text(path);
     check_json_nesting(text, path);
@@ -157,6 +200,7 @@ std::vector<std::string> check_gltf(const std::string& path) {
     if (!j.is_object()) throw InputError(path, "", "a glTF file holds a JSON object");
     if (j.contains("nodes")) gltf_node_depth(j["nodes"], path);
     check_gltf_references(j, path);
+    check_gltf_counts(j, path);
     return gltf_referenced_files(j, path);
 }
 

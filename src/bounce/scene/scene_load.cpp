@@ -115,12 +115,39 @@ void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
     }
 }
 
+/// The file's own value of every parameter a flag or --set replaces, checked as if no flag
+/// were given (each key's value too, for a keyed one): the same file must load in the tool and
+/// on a farm that sets no flag.
+void check_overridden_values(const json& doc, const std::vector<Override>& overrides, const JsonContext& ctx) {
+    for (const Override& o : overrides) {
+        const std::string key = o.assignment.substr(0, o.assignment.find('='));
+        const Param* p = find_param(scene_params(), key);
+        if (!p) continue;
+        std::string ptr = "/" + key;
+        std::replace(ptr.begin(), ptr.end(), '.', '/');
+        const json::json_pointer at(ptr);
+        if (!doc.contains(at)) continue;
+        const json& v = doc.at(at);
+        const auto fail = [&](const std::string& where) {
+            return [&ctx, where](const std::string& sub, const std::string& msg) { ctx.fail(where + sub, msg); };
+        };
+        if (!has_keys(v)) {
+            check_param(*p, v, fail(ptr));
+            continue;
+        }
+        const json& keys = v.value("keys", json());
+        for (size_t i = 0; keys.is_array() && i < keys.size(); ++i)
+            if (keys[i].is_array() && keys[i].size() == 2) check_param(*p, keys[i][1], fail(fmt::format("{}/keys/{}/1", ptr, i)));
+    }
+}
+
 Scene build_scene(json doc, const std::string& path, const std::vector<Override>& overrides, const LoadOptions& options) {
     JsonContext ctx;
     ctx.file = path;
     ctx.dir = fs::path(path).parent_path();
     ctx.check_path = options.check_path;
     if (!doc.is_object()) ctx.fail("", fmt::format("expected an object at the top of the scene, got {}", json_type_name(doc)));
+    check_overridden_values(doc, overrides, ctx);
     for (const auto& o : overrides) ctx.overridden.insert_or_assign(apply_override(doc, o), o);
 
     Scene scene;
