@@ -241,3 +241,37 @@ TEST(HostileValues, AFileValueAFlagReplacesIsStillChecked) {
 
 }  // namespace
 }  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(HostileTextures, AHugeLightTextureIsRefusedAtOnceAsAColourMapIs) {
+    test::TempDir d;
+    test::write_constant_image(d.file("huge.png"), 8200, 8200, 1, 0.5f);  // 20 000^2 as a sky: over 120 s
+    const std::vector<std::pair<json, std::string>> lights = {
+        {{{"type", "sky"}, {"texture", "huge.png"}}, "/lights/0/texture"},
+        {{{"type", "spot"}, {"position", {0, 5, 0}}, {"direction", {0, -1, 0}}, {"texture", "huge.png"}}, "/lights/0/texture"},
+        {{{"type", "quad"}, {"corner", {-1, 5, -1}}, {"edge_u", {2, 0, 0}}, {"edge_v", {0, 0, 2}}, {"texture", "huge.png"}}, "/lights/0/texture"}};
+    for (const auto& [light, where] : lights) {
+        json j = test::base_scene();
+        j["lights"] = {light};
+        d.write("l.json", j.dump());
+        refused("render " + d.file("l.json") + " -q --res 16x16 -o " + d.file("o.exr"), {"l.json", where, "8200x8200", "at most 8192x8192"});
+    }
+}
+
+TEST(HostileValues, MessagesSayWhatTheUserWroteAndWhen) {
+    test::TempDir d;
+    // bake-ao --distance 1e39 was echoed as "--distance inf".
+    const std::string displaced = test::source_dir() + "/scenes/displaced/displaced.json";
+    refused("bake-ao " + displaced + " --object rounded_cube --distance 1e39 -o " + d.file("ao.exr"), {"--distance 1e+39", "(0, 1e+18]"});
+    // A keyed fov that leaves its range at frame 3 says so.
+    json j = test::base_scene();
+    j["animation"] = {{"fps", 24}, {"frames", {1, 4}}};
+    j["camera"]["fov"] = {{"keys", {{1, 40}, {4, 250}}}};
+    d.write("k.json", j.dump());
+    refused("render " + d.file("k.json") + " -q --res 16x16 --frame 3 -o " + d.file("o.exr"), {"k.json", "/camera/fov", "at frame 3"});
+}
+
+}  // namespace
+}  // namespace bounce

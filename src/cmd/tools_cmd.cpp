@@ -85,7 +85,8 @@ int run_bake_ao(const BakeAoArgs& a) {
     if (!a.output.ends_with(".exr")) throw InputError("command line", "-o " + a.output, "the occlusion map is an OpenEXR file (.exr)");
     // Checked before any work: the distance as given, the map's memory, the file it replaces.
     if (a.distance && !(*a.distance > 0 && *a.distance <= kMaxCoordinate))
-        throw InputError("command line", fmt::format("--distance {}", *a.distance), "the occlusion distance must be a number > 0");
+        throw InputError("command line", fmt::format("--distance {:g}", *a.distance),
+                         fmt::format("the occlusion distance must be a number in (0, {:g}]", kMaxCoordinate));
     const double texels = static_cast<double>(a.resolution) * a.resolution;
     check_memory(texels * 3 * sizeof(float), "command line", fmt::format("--res {}", a.resolution), "the occlusion map");
     Scene scene = load_scene(a.scene);
@@ -103,7 +104,7 @@ int run_bake_ao(const BakeAoArgs& a) {
     bs.resolution = a.resolution;
     bs.rays = a.rays;
     // By default only occluders within a few displacement heights: the cache sees the rest.
-    bs.distance = a.distance ? *a.distance : 4 * scene.objects[id].displacement_bound;
+    bs.distance = a.distance ? static_cast<float>(*a.distance) : 4 * scene.objects[id].displacement_bound;
     if (!(bs.distance > 0))
         throw InputError("command line", "--distance", "object " + a.object + " is not displaced: give the occlusion distance");
     SceneAccel accel(scene);

@@ -10,7 +10,7 @@ namespace bounce {
 struct BakeAoArgs {
     std::string scene, object, output;
     int resolution = 1024, rays = 256;
-    std::optional<float> distance;  ///< not given: 4x the displacement bound
+    std::optional<double> distance;  ///< not given: 4x the displacement bound (double: 1e39 is shown as given, not as inf)
 };
 
 struct CompareArgs {

@@ -36,7 +36,9 @@ double available_memory_bytes() {
 std::string memory_shortfall(double bytes, const std::string& what, double share) {
     const double have = available_memory_bytes();
     if (!(bytes > share * have)) return "";
-    return fmt::format("{} needs about {:.2f} GiB; {:.2f} GiB are available", what, bytes / 1073741824.0, have / 1073741824.0);
+    // The budget, not only what is available: a need between the two read as "1.3 GiB; 1.3 GiB".
+    return fmt::format("{} needs about {:.2f} GiB; it may use {:.2f} GiB ({:.0f} % of the {:.2f} GiB available)", what,
+                       bytes / 1073741824.0, share * have / 1073741824.0, 100 * share, have / 1073741824.0);
 }
 
 void check_memory(double bytes, const std::string& file, const std::string& place, const std::string& what, double share) {

@@ -315,8 +315,9 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
     const double wait0 = request.comm ? request.comm->wait_s : 0;
     if (double need = estimate_render_bytes(scene), have = available_memory_bytes(); need > 0.8 * have)
         throw InputError(scene.path, "camera.resolution",
-                         fmt::format("a {}x{} frame needs about {:.1f} GiB; {:.1f} GiB are available (render a crop)",
-                                     scene.camera.width, scene.camera.height, need / 1073741824.0, have / 1073741824.0));
+                         fmt::format("a {}x{} frame needs about {:.2f} GiB; it may use {:.2f} GiB (80 % of the {:.2f} GiB available; "
+                                     "render a crop)", scene.camera.width, scene.camera.height, need / 1073741824.0,
+                                     0.8 * have / 1073741824.0, have / 1073741824.0));
     if (request.comm && request.comm->size() > 1 && scene.render.shading.deep_colour && !plan.deep_out.empty())
         throw InputError(scene.path, "render.deep_colour", "a deep file with colour is written by one process (not under MPI yet)");
     if (request.comm && request.comm->size() > 1 && scene.render.cache.light_parts && scene.render.indirect.gi == GiMode::Cache)

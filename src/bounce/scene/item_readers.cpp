@@ -63,6 +63,12 @@ std::shared_ptr<const LatLongMap> load_latlong(const std::string& path, const Js
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
         r.fail(key, fmt::format("image \"{}\" has an unusable size {}x{}", path, spec.width, spec.height));
     const double texels = static_cast<double>(spec.width) * spec.height;
+    // The bound colour, displacement and fur maps refuse at (texture_problem): a light's map is
+    // read whole and sampled by luminance, so no tiling lets a larger one through (a 20000^2 PNG
+    // of 1.2 MB took minutes).
+    if (texels > 8192.0 * 8192.0)
+        r.fail(key, fmt::format("image \"{}\" is {}x{}: a light's texture is read whole and must hold at most 8192x8192 pixels; "
+                                "resize it (e.g. OpenImageIO's oiiotool --resize)", path, spec.width, spec.height));
     if (std::string why = memory_shortfall(texels * (spec.nchannels + 3) * sizeof(float), "reading " + path); !why.empty())
         r.fail(key, why);
     auto map = std::make_shared<LatLongMap>();

@@ -19,6 +19,9 @@ using nlohmann::json;
 void JsonContext::fail(const std::string& ptr, const std::string& msg) const {
     for (const auto& [p, o] : overridden)
         if (ptr == p || ptr.rfind(p + "/", 0) == 0) throw InputError(o.source, o.origin + " (" + ptr + ")", msg);
+    for (const std::string& k : keyed)
+        if (ptr == k || ptr.rfind(k + "/", 0) == 0)
+            throw InputError(file, ptr, fmt::format("{} (the value its keys give at frame {:g})", msg, frame));
     throw InputError(file, ptr.empty() ? "/" : ptr, msg);
 }
 

@@ -41,6 +41,10 @@ struct JsonContext {
     /// LoadOptions::check_path: sees every file and folder path before it is used.
     std::function<void(const std::string& path, const std::string& pointer)> check_path;
 
+    /// Pointers whose value came from keys, and the frame they were taken at: an error there
+    /// names the frame (a keyed fov that leaves its range at frame 3).
+    std::vector<std::string> keyed;
+    double frame = 0;
     /// Throws InputError at `ptr`, blaming the override's source when one set it.
     [[noreturn]] void fail(const std::string& ptr, const std::string& msg) const;
     /// A relative path at `ptr` is the working directory's: a --set or flag set it.

@@ -115,6 +115,15 @@ void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
     }
 }
 
+/// The pointers of every keyed value in `j` (an object with a "keys" array).
+void collect_keyed(const json& j, const std::string& ptr, std::vector<std::string>& out) {
+    if (j.is_object() && j.contains("keys") && j["keys"].is_array()) return out.push_back(ptr);
+    if (j.is_object())
+        for (const auto& [k, v] : j.items()) collect_keyed(v, ptr + "/" + k, out);
+    else if (j.is_array())
+        for (size_t i = 0; i < j.size(); ++i) collect_keyed(j[i], ptr + "/" + std::to_string(i), out);
+}
+
 /// The file's own value of every parameter a flag or --set replaces, checked as if no flag
 /// were given (each key's value too, for a keyed one): the same file must load in the tool and
 /// on a farm that sets no flag.
@@ -161,6 +170,8 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     if (has_keys(doc)) {
         scene.keyed = doc;
         doc = evaluate_keys(doc, scene.frame, ctx);
+        collect_keyed(scene.keyed, "", ctx.keyed);
+        ctx.frame = scene.frame;
     }
     scene.description = doc;
     ctx.inputs = &scene.inputs;

@@ -1,0 +1,33 @@
+// libFuzzer target: a mesh file (issue 50) must become triangles or an InputError. The first
+// byte chooses what the rest is written as — an ASCII or binary PLY (bodies read against their
+// header before Assimp: counts, list lengths, indices), a glTF (skins, morph targets and their
+// counts, animation samplers with NaN or unordered times) or an OBJ — and, for a glTF, a clip
+// and a time to pose it at, so skinning and morphing run on what the checks let through.
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "bounce/core/error.h"
+#include "bounce/scene/mesh_import.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    if (size < 2 || size > 1 << 20) return 0;
+    static const char* const kinds[] = {".ply", ".gltf", ".obj"};
+    const char* ext = kinds[data[0] % 3];
+    // A file of this process's own in the working directory (the fuzzer runs in an empty one).
+    const std::string path = "fuzz-" + std::to_string(getpid()) + ext;
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(data + 2), static_cast<std::streamsize>(size - 2));
+    std::vector<bounce::Material> materials;
+    bounce::MeshPose pose;
+    if (data[0] % 3 == 1 && data[1] & 1) pose.clip = "0", pose.seconds = (data[1] >> 1) / 64.0;
+    try {
+        (void)bounce::load_mesh_file(path, "m", materials, -1, nullptr, pose);
+    } catch (const bounce::InputError&) {
+    }
+    std::remove(path.c_str());
+    return 0;
+}
