@@ -275,3 +275,28 @@ TEST(HostileValues, MessagesSayWhatTheUserWroteAndWhen) {
 
 }  // namespace
 }  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(HostilePly, BinaryListCountsAndIndicesAreReadBeforeAssimp) {
+    // A list count type uint with count 0xFFFFFFFF ended in "cannot load mesh: std::bad_alloc".
+    test::TempDir d;
+    const auto ply = [](uint32_t count, uint32_t index) {
+        std::string b = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                        "element face 1\nproperty list uint int vertex_indices\nend_header\n";
+        const float v[9] = {0, 0, 0, 1, 0, 0, 0, 0, 1};
+        b.append(reinterpret_cast<const char*>(v), sizeof(v));
+        b.append(reinterpret_cast<const char*>(&count), 4);
+        const int32_t idx[3] = {0, 1, static_cast<int32_t>(index)};
+        b.append(reinterpret_cast<const char*>(idx), sizeof(idx));
+        return b;
+    };
+    refused(render_cmd(ply_scene(d, ply(0xFFFFFFFFu, 2)), d.file("o.exr")), {"m.ply", "byte 36 of the body", "face 0: a list of 4.29497e+09"});
+    refused(render_cmd(ply_scene(d, ply(3, 9)), d.file("o.exr")), {"m.ply", "face 0: vertex index 9 outside the 3 vertices"});
+    refused(render_cmd(ply_scene(d, ply(4, 2)), d.file("o.exr")), {"m.ply", "the file ends inside face 0"});
+    EXPECT_EQ(test::run_bounce(render_cmd(ply_scene(d, ply(3, 2)), d.file("o.exr"))), 0);
+}
+
+}  // namespace
+}  // namespace bounce

@@ -4,7 +4,10 @@
 // aborts in its triangulation) or a list count of 255 with three indices.
 #include <fmt/format.h>
 
+#include <bit>
 #include <cerrno>
+#include <cstring>
+#include <iterator>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -102,6 +105,57 @@ void check_ascii_body(std::istream& in, const std::string& path, size_t line_no,
     }
 }
 
+/// A binary value of `type` at `p` as a double (`swap`: the file's byte order is not this machine's).
+double binary_value(const char* p, const std::string& type, bool swap) {
+    char b[8];
+    const uint64_t n = ply_type_size(type);
+    for (uint64_t i = 0; i < n; ++i) b[i] = p[swap ? n - 1 - i : i];
+    const auto as = [&b]<typename T>(T) { T v; std::memcpy(&v, b, sizeof(T)); return static_cast<double>(v); };
+    if (type == "char" || type == "int8") return as(int8_t{});
+    if (type == "uchar" || type == "uint8") return as(uint8_t{});
+    if (type == "short" || type == "int16") return as(int16_t{});
+    if (type == "ushort" || type == "uint16") return as(uint16_t{});
+    if (type == "int" || type == "int32") return as(int32_t{});
+    if (type == "uint" || type == "uint32") return as(uint32_t{});
+    if (type == "float" || type == "float32") return as(float{});
+    return as(double{});
+}
+
+/// A binary body, element by element: every list count within bounds and the file, every face
+/// index within the vertices (a uint count of 0xFFFFFFFF ended in std::bad_alloc in Assimp).
+void check_binary_body(const std::string& body, const std::string& path, const std::vector<PlyElement>& elements, bool swap) {
+    uint64_t vertices = 0, at = 0;
+    for (const PlyElement& e : elements)
+        if (e.name == "vertex") vertices = e.count;
+    const auto need = [&](uint64_t n, const PlyElement& e, uint64_t i) {
+        if (n > body.size() - at)
+            throw InputError(path, fmt::format("byte {} of the body", at), fmt::format("the file ends inside {} {}", e.name, i));
+    };
+    for (const PlyElement& e : elements)
+        for (uint64_t i = 0; i < e.count; ++i)
+            for (const PlyProperty& p : e.properties) {
+                if (p.count_type.empty()) {
+                    need(ply_type_size(p.type), e, i), at += ply_type_size(p.type);
+                    continue;
+                }
+                need(ply_type_size(p.count_type), e, i);
+                const double n = binary_value(body.data() + at, p.count_type, swap);
+                if (!(n >= 0 && n <= static_cast<double>(kMaxListCount)))
+                    throw InputError(path, fmt::format("byte {} of the body", at),
+                                     fmt::format("{} {}: a list of {:g} {} (at most {})", e.name, i, n, p.name, kMaxListCount));
+                at += ply_type_size(p.count_type);
+                const uint64_t size = ply_type_size(p.type), count = static_cast<uint64_t>(n);
+                need(count * size, e, i);
+                for (uint64_t k = 0; e.name == "face" && k < count; ++k) {
+                    const double v = binary_value(body.data() + at + k * size, p.type, swap);
+                    if (!(v >= 0 && v < static_cast<double>(vertices)))
+                        throw InputError(path, fmt::format("byte {} of the body", at + k * size),
+                                         fmt::format("face {}: vertex index {:g} outside the {} vertices", i, v, vertices));
+                }
+                at += count * size;
+            }
+}
+
 }  // namespace
 
 void check_ply_counts(const std::string& path) {
@@ -154,6 +208,9 @@ void check_ply_counts(const std::string& path) {
         throw InputError(path, "header",
                          fmt::format("corrupted: the header declares {} (at least {} bytes); the file holds {}", declared_list, min_bytes,
                                      size - std::min(size, body_start)));
+    if (format != "binary_little_endian" && format != "binary_big_endian") return;  // Assimp names what it does not read
+    const std::string body((std::istreambuf_iterator<char>(in)), {});
+    check_binary_body(body, path, elements, (format == "binary_big_endian") != (std::endian::native == std::endian::big));
 }
 
 }  // namespace bounce
