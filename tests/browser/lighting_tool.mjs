@@ -295,6 +295,12 @@ try {
     'the records drawn as discs of their radius: the same count');
   await page.locator('#view-panel').scrollIntoViewIfNeeded();
   await shot('4-view.png');
+  // Saving says where the file went (it said nothing).
+  await page.fill('#save-scene-name', 'saved-by-test.json');
+  await page.click('#save-scene');
+  const saved = await page.waitForFunction(() => document.getElementById('saved').textContent.includes('saved-by-test.json'), null,
+    { timeout: 30000 }).then(() => true).catch(() => false);
+  check(saved && fs.existsSync(path.join(work, 'scene/saved-by-test.json')), `the page confirms the saved scene (${await page.textContent('#saved')})`);
   check(errors.length === 0, `no page errors${errors.length ? ': ' + errors.join('; ') : ''}`);
 
   // 5. A shot: the frame slider renders another frame from what the last one left (its plan).
