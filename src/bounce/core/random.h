@@ -48,6 +48,7 @@ enum Dim : uint32_t {
     kDimTime = 4,   ///< motion blur: the subsample's time in the shutter
     kDimTimeStratum = 5,  ///< motion blur: which time stratum each of a pixel's subsamples takes
     kDimLight = 10,  ///< light i uses kDimLight + 16 i + (1, 2): far below kDimGather for any light count
+    kDimLightPick = (1u << 30) - 4096,  ///< many lights: the k-th light picked at a point (DirectLighting)
     kDimGather = 1u << 30,  ///< the gather uses kDimGather + {0, 1, 3}
 };
 

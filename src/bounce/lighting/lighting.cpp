@@ -1,5 +1,7 @@
 #include "bounce/lighting/lighting.h"
 
+#include <algorithm>
+
 namespace bounce {
 
 namespace {
@@ -49,9 +51,71 @@ Color DirectLighting::irradiance(const Vec3& p, const Vec3& n, uint32_t object, 
                                  int samples, Counters& counters, bool include_sky, const LightSampleFn* each,
                                  float hair_start) const {
     Color e(0);
+    const int pick = scene_.render.lighting.light_pick;
+    thread_local std::vector<size_t> pool;
+    pool.clear();
     for (size_t i = 0; i < scene_.lights.size(); ++i) {
         const Light& l = scene_.lights[i];
-        if ((include_sky || l.type != LightType::Sky) && l.lights(object)) e += sample_light(i, p, n, rng, samples, counters, each, hair_start);
+        if (!(include_sky || l.type != LightType::Sky) || !l.lights(object)) continue;
+        const bool pickable = l.type == LightType::Point || l.type == LightType::Spot || l.type == LightType::Quad;
+        if (pick > 0 && pickable) pool.push_back(i);
+        else e += sample_light(i, p, n, rng, samples, counters, each, hair_start);
+    }
+    if (pool.size() <= static_cast<size_t>(pick)) {  // few enough: every one, as always
+        for (size_t i : pool) e += sample_light(i, p, n, rng, samples, counters, each, hair_start);
+        return e;
+    }
+    return e + picked_irradiance(pool, p, n, rng, samples, counters, each, hair_start);
+}
+
+namespace {
+
+/// What light `l` may give a point at p facing n, unshadowed (the pick's importance; 0 only
+/// where it gives nothing).
+float unshadowed_estimate(const Light& l, const Vec3& p, const Vec3& n) {
+    const float power = std::max(0.0f, luminance(l.color));
+    Vec3 centre = l.position;
+    float area = 1;
+    if (l.type == LightType::Quad) centre = l.corner + (l.edge_u + l.edge_v) * 0.5f, area = length(cross(l.edge_u, l.edge_v));
+    const Vec3 to = centre - p;
+    const float r2 = std::max(dot(to, to), 1e-12f);
+    // A quad's centre may lie below the horizon while a corner does not: its share is kept by
+    // the even tenth of the pick, so only a point or spot light behind p gets nothing here.
+    const float cos_x = dot(n, to) / std::sqrt(r2);
+    const float facing = l.type == LightType::Quad ? std::max(cos_x, 0.05f) : std::max(cos_x, 0.0f);
+    return power * area * facing / r2;
+}
+
+}  // namespace
+
+Color DirectLighting::picked_irradiance(const std::vector<size_t>& pool, const Vec3& p, const Vec3& n, const RandomStream& rng,
+                                        int samples, Counters& counters, const LightSampleFn* each, float hair_start) const {
+    thread_local std::vector<double> cdf;
+    cdf.resize(pool.size());
+    double total = 0;
+    for (size_t k = 0; k < pool.size(); ++k) cdf[k] = total += unshadowed_estimate(scene_.lights[pool[k]], p, n);
+    const double even = 1.0 / static_cast<double>(pool.size());
+    const auto chance = [&](size_t k) {
+        const double own = total > 0 ? (cdf[k] - (k ? cdf[k - 1] : 0)) / total : even;
+        return 0.9 * own + 0.1 * even;
+    };
+    const int picks = scene_.render.lighting.light_pick;
+    Color e(0);
+    for (int j = 0; j < picks; ++j) {
+        // A tenth of the picks' chance is spread evenly, the rest follows the estimates.
+        const double u = rng.get(static_cast<uint64_t>(j), kDimLightPick);
+        size_t k = 0;
+        if (u < 0.1 || total <= 0) {
+            k = std::min(pool.size() - 1, static_cast<size_t>(u / 0.1 * static_cast<double>(pool.size())));
+            if (total <= 0) k = std::min(pool.size() - 1, static_cast<size_t>(u * static_cast<double>(pool.size())));
+        } else {
+            const double target = (u - 0.1) / 0.9 * total;
+            k = static_cast<size_t>(std::upper_bound(cdf.begin(), cdf.end(), target) - cdf.begin());
+            k = std::min(k, pool.size() - 1);
+        }
+        const float weight = static_cast<float>(1.0 / (static_cast<double>(picks) * chance(k)));
+        const LightSampleFn scaled = [&](size_t light, const Vec3& w, const Color& c) { (*each)(light, w, c * weight); };
+        e += sample_light(pool[k], p, n, rng, samples, counters, each ? &scaled : nullptr, hair_start) * weight;
     }
     return e;
 }

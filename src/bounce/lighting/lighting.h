@@ -69,6 +69,11 @@ public:
     const SceneAccel& accel() const { return accel_; }
 
 private:
+    /// irradiance() over more pickable lights than LightingSettings::light_pick: that many
+    /// picks among `pool`, each by its unshadowed contribution with a tenth spread evenly (so
+    /// every light that may light p can be chosen), weighed by one over its chance.
+    Color picked_irradiance(const std::vector<size_t>& pool, const Vec3& p, const Vec3& n, const RandomStream& rng, int samples,
+                            Counters& counters, const LightSampleFn* each, float hair_start) const;
     /// `unit`: with the light's scale (light_scales) factored out.
     Color sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng,
                        int samples, Counters& counters, const LightSampleFn* each, float hair_start, bool unit = false) const;

@@ -86,6 +86,10 @@ void add_pipeline_rows(std::vector<Row>& rows) {
                        .doc("memory generated geometry (fur strands and their BVH) may take; a scene asking for more is refused before growing it").flag());
     rows.push_back(row("light_samples", "lighting", &R::lighting, &LightingSettings::light_samples).range(1, 65536).unit("samples")
                        .doc("stratified samples per area light, emissive mesh and sky, per fragment").flag());
+    rows.push_back(row("light_pick", "lighting", &R::lighting, &LightingSettings::light_pick).range(0, 1 << 20).unit("lights")
+                       .doc("a point lit by more point, spot and quad lights than this samples this many of them, each "
+                            "chosen by its unshadowed contribution and weighed by its chance (unbiased: direct light and "
+                            "radiosity bakes cost the same for 10 000 lights as for this many); 0 = every light").flag());
     rows.push_back(row("ray_offset", "lighting", &R::lighting, &LightingSettings::ray_offset).automatic(-1).range(0, kMaxCoordinate)
                        .unit("world").doc("ray-origin offsetting distance; auto = 4x the fine/coarse gap, >= 1e-4 x the scene size (the diagonal of what does not move)")
                        .id(rad | cache).flag());

@@ -42,6 +42,9 @@ struct DicingSettings {
 struct LightingSettings {
     int light_samples = 16;  ///< stratified samples per area light / sky per fragment
     float ray_offset = -1;   ///< ray-origin offsetting distance; < 0 = automatic
+    /// A point linked to more point, spot and quad lights than this samples this many of them,
+    /// by their unshadowed contribution (unbiased); 0 = every light at every point.
+    int light_pick = 64;
 };
 
 /// Radiosity textures: direct light baked on every triangle for the gather's hits.
