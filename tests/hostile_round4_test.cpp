@@ -25,13 +25,7 @@ using nlohmann::json;
 
 std::string render_cmd(const std::string& scene, const std::string& out) { return "render " + scene + " -o " + out + " -q --res 16x16"; }
 
-/// Exit 2 with one line holding every one of `parts`.
-void refused(const std::string& args, const std::vector<std::string>& parts) {
-    std::string err;
-    EXPECT_EQ(test::run_bounce(args, &err), 2) << args << " -> " << err;
-    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
-    for (const auto& p : parts) EXPECT_NE(err.find(p), std::string::npos) << args << " -> " << err << " lacks " << p;
-}
+using test::expect_refused;
 
 const char* kPlyHeader =
     "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
@@ -69,7 +63,7 @@ TEST(HostilePly, AsciiBodiesAreReadAgainstTheirHeader) {
         {std::string(kPlyHeader) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n0 0 0\n", {"m.ply", "line 14", "data past the elements"}},
         {std::string(kPlyHeader) + "0 0 0\n1 0 0\n", {"m.ply", "line 12", "ends at vertex 2"}},
     };
-    for (const Case& c : cases) refused(render_cmd(ply_scene(d, c.body), d.file("o.exr")), c.expect);
+    for (const Case& c : cases) expect_refused(render_cmd(ply_scene(d, c.body), d.file("o.exr")), c.expect);
     // The same file, well formed, renders.
     EXPECT_EQ(test::run_bounce(render_cmd(ply_scene(d, std::string(kPlyHeader) + "0 0 0\n1 0 0\n\n0 0 1\n3 0 1 2\n"), d.file("o.exr"))), 0);
 }
@@ -88,9 +82,9 @@ TEST(HostileOutputs, CacheToolsWriteOnlyTheKindOfFileTheyMake) {
         std::filesystem::copy_file(test::source_dir() + "/scenes/cornell/" + f, d.file(f));
     ASSERT_EQ(test::run_bounce("render " + scene + " -q --res 16x16 --gi cache --rays 16 -o " + d.file("cb.exr") + " --cache-out " + d.file("cb.bic")), 0);
     const std::string before = test::bytes_of(scene);
-    refused("cache export " + d.file("cb.bic") + " -o " + scene, {"-o " + scene, "the exported point cloud is written as a .ply file"});
-    refused("cache filter " + d.file("cb.bic") + " --sphere 0,0,0,1 -o " + scene, {"the filtered cache is written as a .bic file"});
-    refused("cache merge " + d.file("cb.bic") + " " + d.file("cb.bic") + " -o " + d.file("cb.exr"), {"the merged cache is written as a .bic file"});
+    expect_refused("cache export " + d.file("cb.bic") + " -o " + scene, {"-o " + scene, "the exported point cloud is written as a .ply file"});
+    expect_refused("cache filter " + d.file("cb.bic") + " --sphere 0,0,0,1 -o " + scene, {"the filtered cache is written as a .bic file"});
+    expect_refused("cache merge " + d.file("cb.bic") + " " + d.file("cb.bic") + " -o " + d.file("cb.exr"), {"the merged cache is written as a .bic file"});
     EXPECT_EQ(test::bytes_of(scene), before);
     EXPECT_EQ(test::run_bounce("cache export " + d.file("cb.bic") + " -o " + d.file("cb.PLY")), 0);
 }
@@ -122,10 +116,10 @@ TEST(HostileValues, CropsFramesDistributionAndHeadersOutOfRange) {
     test::TempDir d;
     const std::string cornell = "render " + test::cornell_scene() + " -q --res 16x16 -o " + d.file("o.exr");
     // An empty crop is not the full frame.
-    refused(cornell + " --crop 4,4,4,4", {"/render/crop", "crop [4, 4, 4, 4] is empty"});
+    expect_refused(cornell + " --crop 4,4,4,4", {"/render/crop", "crop [4, 4, 4, 4] is empty"});
     // --distribute: its two values, and frames only with --frames.
-    refused(cornell + " --distribute pixels", {"--distribute pixels", "is tiles or frames"});
-    refused(cornell + " --distribute frames", {"--distribute frames", "goes with --frames"});
+    expect_refused(cornell + " --distribute pixels", {"--distribute pixels", "is tiles or frames"});
+    expect_refused(cornell + " --distribute frames", {"--distribute frames", "goes with --frames"});
     // A cache whose header's frame is past any frame (1e39 read as -2147483648).
     ASSERT_EQ(test::run_bounce(cornell + " --gi cache --rays 16 --cache-out " + d.file("c.bic")), 0);
     // Rewrite the header with "frame": 1e39 and its checksum, as a crafted file would.
@@ -142,8 +136,8 @@ TEST(HostileValues, CropsFramesDistributionAndHeadersOutOfRange) {
     crafted.append(reinterpret_cast<const char*>(&n), 4).append(text).append(reinterpret_cast<const char*>(&h), 8);
     crafted += bytes.substr(16 + length + 8);
     d.write("big.bic", crafted);
-    refused("cache info " + d.file("big.bic"), {"big.bic", "header/frame", "1e+39 is not a whole frame number"});
-    refused(cornell + " --gi cache --cache-in " + d.file("big.bic"), {"big.bic", "header/frame"});
+    expect_refused("cache info " + d.file("big.bic"), {"big.bic", "header/frame", "1e+39 is not a whole frame number"});
+    expect_refused(cornell + " --gi cache --cache-in " + d.file("big.bic"), {"big.bic", "header/frame"});
     // A deep file whose bounce:spp is 2e9 (0 and -5 were refused; the range is 1 .. 4096).
     ASSERT_EQ(test::run_bounce(cornell + " --deep-out " + d.file("f.deep.exr")), 0);
     {
@@ -158,7 +152,7 @@ TEST(HostileValues, CropsFramesDistributionAndHeadersOutOfRange) {
         ASSERT_TRUE(out && out->open(d.file("spp.deep.exr"), spec) && out->write_deep_image(deep));
         out->close();
     }
-    refused(cornell + " --deep-in " + d.file("spp.deep.exr"), {"spp.deep.exr", "bounce:spp", "2000000000 samples per pixel is outside 1 .. 4096"});
+    expect_refused(cornell + " --deep-in " + d.file("spp.deep.exr"), {"spp.deep.exr", "bounce:spp", "2000000000 samples per pixel is outside 1 .. 4096"});
 }
 
 }  // namespace
@@ -179,11 +173,11 @@ TEST(HostileValues, SingularMatricesAndEmptyFileNamesAreRefused) {
     json zeros = json::array(), rank2 = {1, 0, 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 0, 0, 0, 1};
     for (int i = 0; i < 16; ++i) zeros.push_back(0);
     for (const json& m : {zeros, rank2})
-        refused(scene_with({{"type", "sphere"}, {"radius", 1}, {"transform", {{"matrix", m}}}}),
+        expect_refused(scene_with({{"type", "sphere"}, {"radius", 1}, {"transform", {{"matrix", m}}}}),
                 {"s.json", "/objects/1/transform/matrix", "singular"});
     json scaled = {2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 1, 0, 0, 0, 1};
     EXPECT_EQ(test::run_bounce(scene_with({{"type", "sphere"}, {"radius", 1}, {"transform", {{"matrix", scaled}}}})), 0);
-    refused(scene_with({{"type", "sphere"}, {"radius", 1}, {"material", "m"}}, {{"m", {{"color_texture", ""}}}}),
+    expect_refused(scene_with({{"type", "sphere"}, {"radius", 1}, {"material", "m"}}, {{"m", {{"color_texture", ""}}}}),
             {"s.json", "/materials/m/color_texture", "an empty file name"});
 }
 
@@ -205,14 +199,14 @@ TEST(HostileGltf, MorphTargetSkinAndSamplerCountsAndTimesAreChecked) {
     };
     json blob = test::morphed_quad();
     blob["accessors"][2]["count"] = 3;
-    refused(play("blob.gltf", blob, "rise"), {"blob.gltf", "/meshes/0/primitives/0/targets/0/POSITION", "3 elements for the primitive's 4 vertices"});
+    expect_refused(play("blob.gltf", blob, "rise"), {"blob.gltf", "/meshes/0/primitives/0/targets/0/POSITION", "3 elements for the primitive's 4 vertices"});
     json strip = test::skinned_strip();
     strip["accessors"][4]["count"] = 1;
-    refused(play("strip.gltf", strip, "bend"), {"strip.gltf", "/skins/0/inverseBindMatrices", "1 matrices for the skin's 2 joints"});
-    refused(play("strip.gltf", test::skinned_strip(1, 1, {0, NAN}), "bend"), {"strip.gltf", "animation 0 channel 0", "not finite"});
+    expect_refused(play("strip.gltf", strip, "bend"), {"strip.gltf", "/skins/0/inverseBindMatrices", "1 matrices for the skin's 2 joints"});
+    expect_refused(play("strip.gltf", test::skinned_strip(1, 1, {0, NAN}), "bend"), {"strip.gltf", "animation 0 channel 0", "not finite"});
     // Two keys out of order: Assimp's own validation refuses them (the last key is the clip's
     // duration); longer tracks out of order reach check_clip.
-    refused(play("strip.gltf", test::skinned_strip(1, 1, {1, 0.5f}), "bend"), {"strip.gltf", "cannot load mesh"});
+    expect_refused(play("strip.gltf", test::skinned_strip(1, 1, {1, 0.5f}), "bend"), {"strip.gltf", "cannot load mesh"});
     EXPECT_EQ(test::run_bounce(play("strip.gltf", test::skinned_strip(), "bend")), 0);
     EXPECT_EQ(test::run_bounce(play("blob.gltf", test::morphed_quad(), "rise")), 0);
 }
@@ -234,10 +228,10 @@ TEST(HostileValues, AFileValueAFlagReplacesIsStillChecked) {
         d.write("s.json", j.dump());
         return "render " + d.file("s.json") + " -q -o " + d.file("o.exr") + " " + flags;
     };
-    refused(with({{"spp", json::array()}}, json::object(), "--spp 1 --res 16x16"), {"s.json", "/render/spp"});
-    refused(with({{"threads", 18446744073709551615.0}}, json::object(), "--threads 1 --res 16x16"), {"s.json", "/render/threads"});
-    refused(with(json::object(), {{"resolution", {0, 0}}}, "--res 16x16"), {"s.json", "/camera/resolution"});
-    refused(with(json::object(), {{"resolution", {{"keys", {{1, {16, 16}}, {2, {0, 16}}}}}}}, "--res 16x16"),
+    expect_refused(with({{"spp", json::array()}}, json::object(), "--spp 1 --res 16x16"), {"s.json", "/render/spp"});
+    expect_refused(with({{"threads", 18446744073709551615.0}}, json::object(), "--threads 1 --res 16x16"), {"s.json", "/render/threads"});
+    expect_refused(with(json::object(), {{"resolution", {0, 0}}}, "--res 16x16"), {"s.json", "/camera/resolution"});
+    expect_refused(with(json::object(), {{"resolution", {{"keys", {{1, {16, 16}}, {2, {0, 16}}}}}}}, "--res 16x16"),
             {"s.json", "/camera/resolution/keys/1/1"});
     EXPECT_EQ(test::run_bounce(with({{"spp", 2}}, json::object(), "--spp 1 --res 16x16")), 0);
 }
@@ -259,7 +253,7 @@ TEST(HostileTextures, AHugeLightTextureIsRefusedAtOnceAsAColourMapIs) {
         json j = test::base_scene();
         j["lights"] = {light};
         d.write("l.json", j.dump());
-        refused("render " + d.file("l.json") + " -q --res 16x16 -o " + d.file("o.exr"), {"l.json", where, "8200x8200", "at most 8192x8192"});
+        expect_refused("render " + d.file("l.json") + " -q --res 16x16 -o " + d.file("o.exr"), {"l.json", where, "8200x8200", "at most 8192x8192"});
     }
 }
 
@@ -267,13 +261,13 @@ TEST(HostileValues, MessagesSayWhatTheUserWroteAndWhen) {
     test::TempDir d;
     // bake-ao --distance 1e39 was echoed as "--distance inf".
     const std::string displaced = test::source_dir() + "/scenes/displaced/displaced.json";
-    refused("bake-ao " + displaced + " --object rounded_cube --distance 1e39 -o " + d.file("ao.exr"), {"--distance 1e+39", "(0, 1e+18]"});
+    expect_refused("bake-ao " + displaced + " --object rounded_cube --distance 1e39 -o " + d.file("ao.exr"), {"--distance 1e+39", "(0, 1e+18]"});
     // A keyed fov that leaves its range at frame 3 says so.
     json j = test::base_scene();
     j["animation"] = {{"fps", 24}, {"frames", {1, 4}}};
     j["camera"]["fov"] = {{"keys", {{1, 40}, {4, 250}}}};
     d.write("k.json", j.dump());
-    refused("render " + d.file("k.json") + " -q --res 16x16 --frame 3 -o " + d.file("o.exr"), {"k.json", "/camera/fov", "at frame 3"});
+    expect_refused("render " + d.file("k.json") + " -q --res 16x16 --frame 3 -o " + d.file("o.exr"), {"k.json", "/camera/fov", "at frame 3"});
 }
 
 }  // namespace
@@ -295,9 +289,9 @@ TEST(HostilePly, BinaryListCountsAndIndicesAreReadBeforeAssimp) {
         b.append(reinterpret_cast<const char*>(idx), sizeof(idx));
         return b;
     };
-    refused(render_cmd(ply_scene(d, ply(0xFFFFFFFFu, 2)), d.file("o.exr")), {"m.ply", "byte 36 of the body", "face 0: a list of 4.29497e+09"});
-    refused(render_cmd(ply_scene(d, ply(3, 9)), d.file("o.exr")), {"m.ply", "face 0: vertex index 9 outside the 3 vertices"});
-    refused(render_cmd(ply_scene(d, ply(4, 2)), d.file("o.exr")), {"m.ply", "the file ends inside face 0"});
+    expect_refused(render_cmd(ply_scene(d, ply(0xFFFFFFFFu, 2)), d.file("o.exr")), {"m.ply", "byte 36 of the body", "face 0: a list of 4.29497e+09"});
+    expect_refused(render_cmd(ply_scene(d, ply(3, 9)), d.file("o.exr")), {"m.ply", "face 0: vertex index 9 outside the 3 vertices"});
+    expect_refused(render_cmd(ply_scene(d, ply(4, 2)), d.file("o.exr")), {"m.ply", "the file ends inside face 0"});
     EXPECT_EQ(test::run_bounce(render_cmd(ply_scene(d, ply(3, 2)), d.file("o.exr"))), 0);
 }
 

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "bounce/core/error.h"
 #include "bounce/scene/scene_load.h"
@@ -68,7 +69,7 @@ inline int run_bounce_shell(const std::string& command, std::string* err = nullp
 }
 
 /// Runs bounce with `args`, expects exit 2 and every one of `parts` in its one-line message.
-inline void expect_refused(const std::string& args, std::initializer_list<std::string> parts) {
+inline void expect_refused(const std::string& args, const std::vector<std::string>& parts) {
     std::string err;
     EXPECT_EQ(run_bounce(args, &err), 2) << args << " -> " << err;
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
