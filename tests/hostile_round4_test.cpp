@@ -337,3 +337,23 @@ TEST(ManyLights, PickingSomeOfThemStaysUnbiasedAndFewerAreAllTaken) {
 
 }  // namespace
 }  // namespace bounce
+
+namespace bounce {
+namespace {
+
+TEST(HostileValues, AHundredThousandSpheresAreRefusedBeforeAnyIsTessellated) {
+    // They ran for minutes into 14 GB before "the camera sees no geometry".
+    test::TempDir d;
+    json j = test::base_scene();
+    for (int i = 0; i < 100000; ++i) j["objects"].push_back({{"type", "sphere"}, {"center", {i % 100 * 3, 1000 + i / 100 * 3, 0}}, {"radius", 1}});
+    d.write("s.json", j.dump());
+    expect_refused("render " + d.file("s.json") + " -q --res 16x16 -o " + d.file("o.exr"),
+                   {"s.json", "/objects", "100000 spheres would be tessellated into 2.18e+09 triangles", "render.memory_budget"});
+    // As 20-triangle spheres they fit, and render.
+    for (size_t i = 1; i < j["objects"].size(); ++i) j["objects"][i]["subdivisions"] = 0, j["objects"][i]["fine_subdivisions"] = 0;
+    d.write("s.json", j.dump());
+    EXPECT_EQ(test::run_bounce("render " + d.file("s.json") + " -q --res 16x16 -o " + d.file("o.exr")), 0);
+}
+
+}  // namespace
+}  // namespace bounce

@@ -248,6 +248,30 @@ void read_object_fur(const JsonReader& fur, const JsonReader& r, const Scene& sc
 }
 }  // namespace
 
+void check_generated_geometry(const JsonReader& root, const nlohmann::json& objects, const Scene& scene) {
+    // An icosphere of level L has 20 x 4^L triangles; with its vertices, normals and its share of
+    // a BVH, about 100 bytes each.
+    constexpr double kBytesPerTriangle = 100;
+    double triangles = 0;
+    size_t spheres = 0;
+    for (const nlohmann::json& o : objects) {
+        if (!o.is_object() || o.value("type", std::string()) != "sphere") continue;
+        const auto level = [&](const char* key, int def) {
+            const nlohmann::json& v = o.value(key, nlohmann::json(def));
+            return v.is_number_integer() ? std::clamp(v.get<int>(), 0, 8) : def;  // read_object names a bad one
+        };
+        const int coarse = level("subdivisions", 3), fine = level("fine_subdivisions", 2);
+        triangles += 20 * std::pow(4.0, coarse) + (fine > 0 ? 20 * std::pow(4.0, std::min(8, coarse + fine)) : 0);
+        ++spheres;
+    }
+    const double bytes = triangles * kBytesPerTriangle, budget = static_cast<double>(scene.render.dicing.memory_budget) * 1073741824.0;
+    if (bytes > budget)
+        root.fail("objects", fmt::format("{} spheres would be tessellated into {:.3g} triangles, about {:.1f} GiB, over "
+                                         "render.memory_budget ({:g} GiB); lower their subdivisions or fine_subdivisions",
+                                         spheres, triangles, bytes / 1073741824.0, scene.render.dicing.memory_budget));
+    if (std::string why = memory_shortfall(bytes, fmt::format("tessellating {} spheres", spheres)); !why.empty()) root.fail("objects", why);
+}
+
 void read_object(const JsonReader& r, Scene& scene, size_t index) {
     Object obj;
     obj.name = r.string("name", fmt::format("object{}", index));

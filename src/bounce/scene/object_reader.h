@@ -19,6 +19,11 @@ const std::vector<std::string>& object_keys();
 /// Appends object number `index` (read from `r`) to `scene.objects`.
 void read_object(const JsonReader& r, Scene& scene, size_t index);
 
+/// Before any object is read: the triangles the scene's spheres will be tessellated into (both
+/// levels), against render.memory_budget and free memory, with the estimate (100 000 spheres
+/// ran for minutes into 14 GB before the camera was found to see none of them).
+void check_generated_geometry(const JsonReader& root, const nlohmann::json& objects, const Scene& scene);
+
 /// The visible mesh of mesh object `r` (one that plays its file's animation) posed at `frame`
 /// and placed by `r`'s transform: a deforming mesh at shutter open and close (motion blur), and
 /// where its fur is groomed.

@@ -83,7 +83,7 @@ void add_pipeline_rows(std::vector<Row>& rows) {
                        .doc("cap on the fine tessellation: at most 2^max_level segments per control edge").id(deep | cache).flag());
     // Lighting.
     rows.push_back(row("memory_budget", "dicing", &R::dicing, &DicingSettings::memory_budget).range(0.001, 1e6).unit("GiB")
-                       .doc("memory generated geometry (fur strands and their BVH) may take; a scene asking for more is refused before growing it").flag());
+                       .doc("memory generated geometry (fur strands, tessellated spheres, and their BVHs) may take; a scene asking for more is refused before growing it").flag());
     rows.push_back(row("light_samples", "lighting", &R::lighting, &LightingSettings::light_samples).range(1, 65536).unit("samples")
                        .doc("stratified samples per area light, emissive mesh and sky, per fragment").flag());
     rows.push_back(row("light_pick", "lighting", &R::lighting, &LightingSettings::light_pick).range(0, 1 << 20).unit("lights")

@@ -206,6 +206,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     if (!root.has("objects")) root.fail("", "missing required key \"objects\"");
     const json& objs = root.raw("objects");
     if (!objs.is_array() || objs.empty()) root.fail("objects", "expected a non-empty array of objects");
+    check_generated_geometry(root, objs, scene);
     for (size_t i = 0; i < objs.size(); ++i) {
         JsonReader o(objs[i], fmt::format("/objects/{}", i), ctx, object_keys());
         read_object(o, scene, i);
