@@ -62,6 +62,9 @@ TEST(HostilePly, AsciiBodiesAreReadAgainstTheirHeader) {
         {std::string(kPlyHeader) + "0 0 0\n1 0 0\n0 1 0\n-3 0 1 2\n", {"m.ply", "line 13", "not a list count"}},
         {std::string(kPlyHeader) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n0 0 0\n", {"m.ply", "line 14", "data past the elements"}},
         {std::string(kPlyHeader) + "0 0 0\n1 0 0\n", {"m.ply", "line 12", "ends at vertex 2"}},
+        // No end_header (Assimp's reader never returned: found by the mesh fuzzer), no vertices.
+        {"ply\nformat ascii 1.0\n1 0 0\n0 0 1\n3 0 1 2\n", {"m.ply", "header", "no end_header"}},
+        {"ply\nformat ascii 1.0\nelement face 0\nend_header\n", {"m.ply", "header", "no vertex element"}},
     };
     for (const Case& c : cases) expect_refused(render_cmd(ply_scene(d, c.body), d.file("o.exr")), c.expect);
     // The same file, well formed, renders.

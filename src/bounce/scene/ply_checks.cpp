@@ -4,6 +4,7 @@
 // aborts in its triangulation) or a list count of 255 with three indices.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <bit>
 #include <cerrno>
 #include <cstring>
@@ -167,6 +168,7 @@ void check_ply_counts(const std::string& path) {
     uint64_t min_bytes = 0;
     std::vector<PlyElement> elements;
     size_t header_lines = 0;
+    bool ended = false;
     while (std::getline(in, line)) {
         ++header_lines;
         if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -196,10 +198,15 @@ void check_ply_counts(const std::string& path) {
             min_bytes += count * size;
             elements.back().properties.push_back(p);
         } else if (word == "end_header") {
+            ended = true;
             break;
         }
         if (header_lines > 10000) throw InputError(path, "header", "no end_header in the first 10000 lines");
     }
+    // Assimp's reader loops for ever on a header that never ends (found by the mesh fuzzer).
+    if (!ended) throw InputError(path, "header", "the header has no end_header line");
+    if (std::none_of(elements.begin(), elements.end(), [](const PlyElement& e) { return e.name == "vertex"; }))
+        throw InputError(path, "header", "no vertex element");
     if (format == "ascii") return check_ascii_body(in, path, header_lines, elements);
     const auto body_start = static_cast<uint64_t>(in.tellg());
     std::error_code ec;
