@@ -20,8 +20,8 @@ for target in cache_reader_fuzz:cache scene_parser_fuzz:scene render_fuzz:render
   # bytes on some glTF files it refuses: the mesh target does not count leaks (the others do).
   leaks=1
   [ "$name" = mesh_file_fuzz ] && leaks=0
-  (cd "$run" && "$OLDPWD/build-fuzz/$name" "$work" -max_total_time="$seconds" -rss_limit_mb=4096 -timeout=60 \
-     -detect_leaks=$leaks -max_len=65536 -print_final_stats=1 >log 2>&1) || status=$?
+  (cd "$run" && ASAN_OPTIONS="detect_leaks=$leaks" "$OLDPWD/build-fuzz/$name" "$work" -max_total_time="$seconds" \
+     -rss_limit_mb=4096 -timeout=60 -detect_leaks=$leaks -max_len=65536 -print_final_stats=1 >log 2>&1) || status=$?
   if [ "$status" -ne 0 ]; then
     # The whole report and the input that failed, so a failure on another machine can be replayed
     # here: base64 -d > unit && build-fuzz/$name unit
