@@ -201,17 +201,7 @@ TEST(HostileOutputs, MessagesNameWhatTheUserWrote) {
     // and blamed fragment_record_count). The header is rewritten with a valid checksum.
     ASSERT_EQ(test::run_bounce(quick(test::cornell_scene(), d.file("a.exr")) + " --gi cache --cache-out " + d.file("a.bic")), 0);
     const std::string bytes = test::bytes_of(d.file("a.bic"));
-    uint32_t hlen = 0;
-    std::memcpy(&hlen, bytes.data() + 12, 4);
-    json header = json::parse(bytes.substr(16, hlen));
-    header["record_count"] = -1;
-    const std::string text = header.dump();
-    uint64_t sum = 0xcbf29ce484222325ULL;  // FNV-1a, as the cache file's header checksum
-    for (char c : text) sum = (sum ^ static_cast<uint8_t>(c)) * 0x100000001b3ULL;
-    std::string bad = bytes.substr(0, 12);
-    const auto n = static_cast<uint32_t>(text.size());
-    bad.append(reinterpret_cast<const char*>(&n), 4).append(text).append(reinterpret_cast<const char*>(&sum), 8);
-    bad += bytes.substr(16 + hlen + 8);
+    const std::string bad = test::with_cache_header(bytes, [](json& h) { h["record_count"] = -1; });
     d.write("neg.bic", bad);
     test::expect_refused("cache info " + d.file("neg.bic"), {"neg.bic", "header/record_count", "-1 is not a record count"});
 }

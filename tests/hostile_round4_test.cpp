@@ -127,17 +127,7 @@ TEST(HostileValues, CropsFramesDistributionAndHeadersOutOfRange) {
     ASSERT_EQ(test::run_bounce(cornell + " --gi cache --rays 16 --cache-out " + d.file("c.bic")), 0);
     // Rewrite the header with "frame": 1e39 and its checksum, as a crafted file would.
     const std::string bytes = test::bytes_of(d.file("c.bic"));
-    uint32_t length = 0;
-    std::memcpy(&length, bytes.data() + 12, 4);
-    nlohmann::json header = nlohmann::json::parse(bytes.substr(16, length));
-    header["frame"] = 1e39;
-    const std::string text = header.dump();
-    uint64_t h = 0xcbf29ce484222325ULL;
-    for (char c : text) h = (h ^ static_cast<uint8_t>(c)) * 0x100000001b3ULL;
-    std::string crafted = bytes.substr(0, 12);
-    const auto n = static_cast<uint32_t>(text.size());
-    crafted.append(reinterpret_cast<const char*>(&n), 4).append(text).append(reinterpret_cast<const char*>(&h), 8);
-    crafted += bytes.substr(16 + length + 8);
+    const std::string crafted = test::with_cache_header(bytes, [](json& h) { h["frame"] = 1e39; });
     d.write("big.bic", crafted);
     expect_refused("cache info " + d.file("big.bic"), {"big.bic", "header/frame", "1e+39 is not a whole frame number"});
     expect_refused(cornell + " --gi cache --cache-in " + d.file("big.bic"), {"big.bic", "header/frame"});

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
+#include <functional>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -74,6 +76,22 @@ inline void expect_refused(const std::string& args, const std::vector<std::strin
     EXPECT_EQ(run_bounce(args, &err), 2) << args << " -> " << err;
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
     for (const auto& p : parts) EXPECT_NE(err.find(p), std::string::npos) << args << " -> " << err << " lacks " << p;
+}
+
+/// A cache file's bytes with its JSON header edited by `edit` and its checksum made valid again
+/// (FNV-1a, as cache_file.cpp writes it): what a crafted file would hold.
+inline std::string with_cache_header(const std::string& bytes, const std::function<void(nlohmann::json&)>& edit) {
+    uint32_t length = 0;
+    std::memcpy(&length, bytes.data() + 12, 4);
+    nlohmann::json header = nlohmann::json::parse(bytes.substr(16, length));
+    edit(header);
+    const std::string text = header.dump();
+    uint64_t sum = 0xcbf29ce484222325ULL;
+    for (char c : text) sum = (sum ^ static_cast<uint8_t>(c)) * 0x100000001b3ULL;
+    const auto n = static_cast<uint32_t>(text.size());
+    std::string out = bytes.substr(0, 12);
+    out.append(reinterpret_cast<const char*>(&n), 4).append(text).append(reinterpret_cast<const char*>(&sum), 8);
+    return out + bytes.substr(16 + length + 8);
 }
 
 /// The bytes of a file ("" if it cannot be read).
