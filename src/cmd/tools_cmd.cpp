@@ -228,9 +228,7 @@ int run_cache_info(const CacheArgs& a) {
 namespace {
 /// A tool's output of the kind it writes: a scene or an image named by mistake is never overwritten.
 void check_output_kind(const std::string& path, const char* extension, const char* what) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (ext != extension) throw InputError("command line", "-o " + path, fmt::format("{} is written as a {} file", what, extension));
+    if (lower_extension(path) != extension) throw InputError("command line", "-o " + path, fmt::format("{} is written as a {} file", what, extension));
 }
 }  // namespace
 

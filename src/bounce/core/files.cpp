@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -51,6 +52,12 @@ void check_output_folder(const std::string& path, const fs::path& dir) {
 }
 
 }  // namespace
+
+std::string lower_extension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
+}
 
 bool inside(const std::filesystem::path& path, const std::filesystem::path& folder) {
     std::error_code ec;

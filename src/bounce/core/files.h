@@ -20,6 +20,8 @@ void check_input_file(const std::string& path);
 /// (a read-only or pseudo file system such as /proc: a file is created there and removed).
 void check_output_file(const std::string& path, const std::vector<std::string>& inputs,
                        const std::vector<std::string>& input_folders = {});
+/// The extension of `path`, lower case (".PLY" -> ".ply"; "" for none).
+std::string lower_extension(const std::string& path);
 /// True when `path` is `folder` or lies under it, symlinks that exist resolved.
 bool inside(const std::filesystem::path& path, const std::filesystem::path& folder);
 /// A 64-bit hash of the file's whole content (xxHash), remembered per (path, size, mtime) for

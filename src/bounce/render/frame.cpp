@@ -24,9 +24,7 @@ namespace fs = std::filesystem;
 std::string FrameFiles::png() const { return fs::path(output).replace_extension(".png").string(); }
 
 void FrameFiles::check(const Scene& loaded) const {
-    std::string ext = fs::path(output).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-    if (ext != ".exr")
+    if (lower_extension(output) != ".exr")
         throw InputError("command line", "-o " + output, "the output is an OpenEXR file (.exr); its PNG is written beside it");
     std::vector<std::string> inputs = loaded.input_paths();
     inputs.insert(inputs.end(), {scene, deep_in, cache_in, base});

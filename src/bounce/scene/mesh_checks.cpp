@@ -21,12 +21,6 @@ using nlohmann::json;
 
 namespace {
 
-std::string lower_extension(const std::string& path) {
-    std::string ext = fs::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-    return ext;
-}
-
 /// The JSON of a .gltf file or a .glb's JSON chunk; InputError for a truncated or foreign .glb.
 std::string gltf_json_text(const std::string& path) {
     std::ifstream in(path, std::ios::binary);

@@ -89,8 +89,7 @@ struct GltfCamera {
 
 /// The first perspective camera of a .gltf/.glb file, read from its JSON.
 std::optional<GltfCamera> gltf_camera(const std::string& path) {
-    std::string ext = fs::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    const std::string ext = lower_extension(path);
     if (ext != ".gltf" && ext != ".glb") return std::nullopt;
     std::ifstream in(path, std::ios::binary);
     std::string text((std::istreambuf_iterator<char>(in)), {});

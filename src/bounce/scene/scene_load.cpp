@@ -250,9 +250,7 @@ Scene load_scene_text(const std::string& text, const std::string& path, const st
 }
 
 Scene load_scene(const std::string& path, const std::vector<Override>& overrides, const LoadOptions& options) {
-    std::string ext = fs::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-    if (ext == ".json") return load_scene_text(read_text_file(path), path, overrides, options);
+    if (lower_extension(path) == ".json") return load_scene_text(read_text_file(path), path, overrides, options);
     check_input_file(path);
     return build_scene(describe_mesh_file(path), path, overrides, options);
 }
