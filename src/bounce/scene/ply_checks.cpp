@@ -17,6 +17,7 @@
 #include <sstream>
 #include <vector>
 
+#include "bounce/core/files.h"
 #include "bounce/core/error.h"
 #include "bounce/scene/mesh_checks.h"
 
@@ -24,45 +25,61 @@ namespace bounce {
 
 namespace {
 
-/// Bytes of one value of a PLY scalar type; 0 for an unknown name.
-uint64_t ply_type_size(const std::string& t) {
-    static const std::map<std::string, uint64_t> sizes = {
-        {"char", 1},  {"uchar", 1},  {"int8", 1},   {"uint8", 1},   {"short", 2},   {"ushort", 2},   {"int16", 2},
-        {"uint16", 2}, {"int", 4},   {"uint", 4},   {"int32", 4},   {"uint32", 4},  {"float", 4},    {"float32", 4},
-        {"double", 8}, {"float64", 8}};
-    auto it = sizes.find(t);
-    return it == sizes.end() ? 0 : it->second;
+/// A PLY scalar type, decoded once from the header (the body's values are many).
+enum class Scalar : uint8_t { None, I8, U8, I16, U16, I32, U32, F32, F64 };
+
+Scalar scalar_of(const std::string& t) {
+    static const std::map<std::string, Scalar> kinds = {
+        {"char", Scalar::I8},    {"int8", Scalar::I8},     {"uchar", Scalar::U8},  {"uint8", Scalar::U8},   {"short", Scalar::I16},
+        {"int16", Scalar::I16},  {"ushort", Scalar::U16},  {"uint16", Scalar::U16}, {"int", Scalar::I32},   {"int32", Scalar::I32},
+        {"uint", Scalar::U32},   {"uint32", Scalar::U32},  {"float", Scalar::F32},  {"float32", Scalar::F32}, {"double", Scalar::F64},
+        {"float64", Scalar::F64}};
+    auto it = kinds.find(t);
+    return it == kinds.end() ? Scalar::None : it->second;
 }
 
-bool is_integer_type(const std::string& t) { return t != "float" && t != "float32" && t != "double" && t != "float64"; }
+/// Bytes of one value (0 for None).
+uint64_t size_of(Scalar s) {
+    switch (s) {
+        case Scalar::I8: case Scalar::U8: return 1;
+        case Scalar::I16: case Scalar::U16: return 2;
+        case Scalar::I32: case Scalar::U32: case Scalar::F32: return 4;
+        case Scalar::F64: return 8;
+        case Scalar::None: break;
+    }
+    return 0;
+}
+
+bool is_integer(Scalar s) { return s != Scalar::F32 && s != Scalar::F64; }
 
 struct PlyProperty {
-    std::string name, type;   ///< a list's item type
-    std::string count_type;   ///< a list's count type (empty: a scalar)
+    std::string name, type_name;  ///< a list's item type, as the header names it
+    Scalar type = Scalar::None;   ///< a list's item type
+    Scalar count = Scalar::None;  ///< a list's count type (None: a scalar)
 };
 struct PlyElement {
     std::string name;
     uint64_t count = 0;
     std::vector<PlyProperty> properties;
 };
+/// A face's list holds vertex indices (checked against the vertex count).
+bool indexes_vertices(const PlyElement& e, const PlyProperty& p) { return e.name == "face" && p.count != Scalar::None; }
 /// Most values one ASCII list may hold (a polygon's corners).
 constexpr uint64_t kMaxListCount = 1u << 16;
 
 /// One ASCII value of type `type`; false when it is not a number of that type.
-bool read_value(const std::string& token, const std::string& type, double& out) {
+bool read_value(const std::string& token, Scalar type, double& out) {
     errno = 0;
     char* end = nullptr;
     out = std::strtod(token.c_str(), &end);
     if (end == token.c_str() || *end != '\0' || errno == ERANGE || !std::isfinite(out)) return false;
-    return !is_integer_type(type) || out == std::floor(out);
+    return !is_integer(type) || out == std::floor(out);
 }
 
 /// The ASCII body, element by element, line by line (blank lines skipped).
-void check_ascii_body(std::istream& in, const std::string& path, size_t line_no, const std::vector<PlyElement>& elements) {
+void check_ascii_body(std::istream& in, const std::string& path, size_t line_no, const std::vector<PlyElement>& elements,
+                      uint64_t vertices) {
     std::string line;
-    uint64_t vertices = 0;
-    for (const PlyElement& e : elements)
-        if (e.name == "vertex") vertices = e.count;
     for (const PlyElement& e : elements)
         for (uint64_t i = 0; i < e.count; ++i) {
             do {
@@ -80,8 +97,8 @@ void check_ascii_body(std::istream& in, const std::string& path, size_t line_no,
             for (const PlyProperty& p : e.properties) {
                 double v = 0;
                 uint64_t n = 1;
-                if (!p.count_type.empty()) {
-                    if (at >= tokens.size() || !read_value(tokens[at], p.count_type, v) || v < 0 || v > static_cast<double>(kMaxListCount))
+                if (p.count != Scalar::None) {
+                    if (at >= tokens.size() || !read_value(tokens[at], p.count, v) || v < 0 || v > static_cast<double>(kMaxListCount))
                         throw InputError(path, where, fmt::format("{}: '{}' is not a list count of {} (0 to {})", what,
                                                                   at < tokens.size() ? tokens[at] : "", p.name, kMaxListCount));
                     n = static_cast<uint64_t>(v), ++at;
@@ -90,9 +107,8 @@ void check_ascii_body(std::istream& in, const std::string& path, size_t line_no,
                     if (at >= tokens.size())
                         throw InputError(path, where, fmt::format("{}: {} values, fewer than its properties need", what, tokens.size()));
                     if (!read_value(tokens[at], p.type, v))
-                        throw InputError(path, where, fmt::format("{}: '{}' is not a {} ({})", what, tokens[at], p.type, p.name));
-                    const bool index = e.name == "face" && !p.count_type.empty();
-                    if (index && (v < 0 || v >= static_cast<double>(vertices)))
+                        throw InputError(path, where, fmt::format("{}: '{}' is not a {} ({})", what, tokens[at], p.type_name, p.name));
+                    if (indexes_vertices(e, p) && (v < 0 || v >= static_cast<double>(vertices)))
                         throw InputError(path, where, fmt::format("{}: vertex index {} outside the {} vertices", what, tokens[at], vertices));
                 }
             }
@@ -107,27 +123,29 @@ void check_ascii_body(std::istream& in, const std::string& path, size_t line_no,
 }
 
 /// A binary value of `type` at `p` as a double (`swap`: the file's byte order is not this machine's).
-double binary_value(const char* p, const std::string& type, bool swap) {
+double binary_value(const char* p, Scalar type, bool swap) {
     char b[8];
-    const uint64_t n = ply_type_size(type);
+    const uint64_t n = size_of(type);
     for (uint64_t i = 0; i < n; ++i) b[i] = p[swap ? n - 1 - i : i];
     const auto as = [&b]<typename T>(T) { T v; std::memcpy(&v, b, sizeof(T)); return static_cast<double>(v); };
-    if (type == "char" || type == "int8") return as(int8_t{});
-    if (type == "uchar" || type == "uint8") return as(uint8_t{});
-    if (type == "short" || type == "int16") return as(int16_t{});
-    if (type == "ushort" || type == "uint16") return as(uint16_t{});
-    if (type == "int" || type == "int32") return as(int32_t{});
-    if (type == "uint" || type == "uint32") return as(uint32_t{});
-    if (type == "float" || type == "float32") return as(float{});
+    switch (type) {
+        case Scalar::I8: return as(int8_t{});
+        case Scalar::U8: return as(uint8_t{});
+        case Scalar::I16: return as(int16_t{});
+        case Scalar::U16: return as(uint16_t{});
+        case Scalar::I32: return as(int32_t{});
+        case Scalar::U32: return as(uint32_t{});
+        case Scalar::F32: return as(float{});
+        case Scalar::F64: case Scalar::None: break;
+    }
     return as(double{});
 }
 
 /// A binary body, element by element: every list count within bounds and the file, every face
 /// index within the vertices (a uint count of 0xFFFFFFFF ended in std::bad_alloc in Assimp).
-void check_binary_body(const std::string& body, const std::string& path, const std::vector<PlyElement>& elements, bool swap) {
-    uint64_t vertices = 0, at = 0;
-    for (const PlyElement& e : elements)
-        if (e.name == "vertex") vertices = e.count;
+void check_binary_body(const std::string& body, const std::string& path, const std::vector<PlyElement>& elements, uint64_t vertices,
+                       bool swap) {
+    uint64_t at = 0;
     const auto need = [&](uint64_t n, const PlyElement& e, uint64_t i) {
         if (n > body.size() - at)
             throw InputError(path, fmt::format("byte {} of the body", at), fmt::format("the file ends inside {} {}", e.name, i));
@@ -135,19 +153,19 @@ void check_binary_body(const std::string& body, const std::string& path, const s
     for (const PlyElement& e : elements)
         for (uint64_t i = 0; i < e.count; ++i)
             for (const PlyProperty& p : e.properties) {
-                if (p.count_type.empty()) {
-                    need(ply_type_size(p.type), e, i), at += ply_type_size(p.type);
+                if (p.count == Scalar::None) {
+                    need(size_of(p.type), e, i), at += size_of(p.type);
                     continue;
                 }
-                need(ply_type_size(p.count_type), e, i);
-                const double n = binary_value(body.data() + at, p.count_type, swap);
+                need(size_of(p.count), e, i);
+                const double n = binary_value(body.data() + at, p.count, swap);
                 if (!(n >= 0 && n <= static_cast<double>(kMaxListCount)))
                     throw InputError(path, fmt::format("byte {} of the body", at),
                                      fmt::format("{} {}: a list of {:g} {} (at most {})", e.name, i, n, p.name, kMaxListCount));
-                at += ply_type_size(p.count_type);
-                const uint64_t size = ply_type_size(p.type), count = static_cast<uint64_t>(n);
+                at += size_of(p.count);
+                const uint64_t size = size_of(p.type), count = static_cast<uint64_t>(n);
                 need(count * size, e, i);
-                for (uint64_t k = 0; e.name == "face" && k < count; ++k) {
+                for (uint64_t k = 0; indexes_vertices(e, p) && k < count; ++k) {
                     const double v = binary_value(body.data() + at + k * size, p.type, swap);
                     if (!(v >= 0 && v < static_cast<double>(vertices)))
                         throw InputError(path, fmt::format("byte {} of the body", at + k * size),
@@ -160,9 +178,7 @@ void check_binary_body(const std::string& body, const std::string& path, const s
 }  // namespace
 
 void check_ply_counts(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (ext != ".ply") return;
+    if (lower_extension(path) != ".ply") return;
     std::ifstream in(path, std::ios::binary);
     std::string line, format, declared_list;
     uint64_t min_bytes = 0;
@@ -187,12 +203,15 @@ void check_ply_counts(const std::string& path) {
         } else if (word == "property") {
             if (elements.empty()) throw InputError(path, where, "a property before any element");
             PlyProperty p;
-            ls >> p.type;
-            // A list stores at least its length; a scalar its own size.
-            if (p.type == "list") ls >> p.count_type >> p.type;
+            std::string count_name;
+            ls >> p.type_name;
+            if (p.type_name == "list") ls >> count_name >> p.type_name;
             ls >> p.name;
-            const uint64_t size = ply_type_size(p.count_type.empty() ? p.type : p.count_type);
-            if (size == 0 || ply_type_size(p.type) == 0) throw InputError(path, where, "unknown property type \"" + p.type + "\"");
+            p.type = scalar_of(p.type_name), p.count = count_name.empty() ? Scalar::None : scalar_of(count_name);
+            if (p.type == Scalar::None || (!count_name.empty() && p.count == Scalar::None))
+                throw InputError(path, where, "unknown property type \"" + (p.type == Scalar::None ? p.type_name : count_name) + "\"");
+            // A list stores at least its length; a scalar its own size.
+            const uint64_t size = size_of(count_name.empty() ? p.type : p.count);
             const uint64_t count = elements.back().count;
             if (count > 0 && size > (UINT64_MAX - min_bytes) / count) throw InputError(path, where, "element counts overflow");
             min_bytes += count * size;
@@ -205,9 +224,9 @@ void check_ply_counts(const std::string& path) {
     }
     // Assimp's reader loops for ever on a header that never ends (found by the mesh fuzzer).
     if (!ended) throw InputError(path, "header", "the header has no end_header line");
-    if (std::none_of(elements.begin(), elements.end(), [](const PlyElement& e) { return e.name == "vertex"; }))
-        throw InputError(path, "header", "no vertex element");
-    if (format == "ascii") return check_ascii_body(in, path, header_lines, elements);
+    const auto vertex = std::find_if(elements.rbegin(), elements.rend(), [](const PlyElement& e) { return e.name == "vertex"; });
+    if (vertex == elements.rend()) throw InputError(path, "header", "no vertex element");
+    if (format == "ascii") return check_ascii_body(in, path, header_lines, elements, vertex->count);
     const auto body_start = static_cast<uint64_t>(in.tellg());
     std::error_code ec;
     const uint64_t size = std::filesystem::file_size(path, ec);
@@ -217,7 +236,7 @@ void check_ply_counts(const std::string& path) {
                                      size - std::min(size, body_start)));
     if (format != "binary_little_endian" && format != "binary_big_endian") return;  // Assimp names what it does not read
     const std::string body((std::istreambuf_iterator<char>(in)), {});
-    check_binary_body(body, path, elements, (format == "binary_big_endian") != (std::endian::native == std::endian::big));
+    check_binary_body(body, path, elements, vertex->count, (format == "binary_big_endian") != (std::endian::native == std::endian::big));
 }
 
 }  // namespace bounce
