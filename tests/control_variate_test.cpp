@@ -16,7 +16,8 @@ namespace bounce {
 namespace {
 
 struct Cornell {
-    Scene scene = load_scene(test::cornell_scene(), {"camera.resolution=[32,24]", "render.spp=1", "render.rays=128"});
+    Scene scene = load_scene(test::cornell_scene(), {"camera.resolution=[32,24]", "render.spp=1", "render.rays=128", "render.gi=\"cache\"",
+                                                     "render.correction_rays=16"});  // records keep their prediction
     Stats stats;
     SceneAccel accel{scene};
     DeepBuffer deep = render_visibility(scene, accel, stats, nullptr);

@@ -61,29 +61,6 @@ Color prediction_correction(const BinPrediction& prediction, std::span<const Vec
     return (integral / static_cast<float>(kReachBins) - along / static_cast<float>(local.size())) * scale;
 }
 
-void gather_local_directions(const GatherGrid& grid, const RandomStream& rng, std::vector<Vec3>& out) {
-    out.resize(static_cast<size_t>(grid.rays()));
-    for (int j = 0; j < grid.m; ++j)
-        for (int k = 0; k < grid.n; ++k) {
-            const auto c = static_cast<size_t>(j * grid.n + k);
-            out[c] = gather_cell_direction(grid, j, k, rng.get(c, kDimGather), rng.get(c, kDimGather + 1));
-        }
-}
-
-namespace {
-
-/// The cell of `grid` that holds local direction d (the stratum its sample was drawn in).
-size_t cell_of(const GatherGrid& grid, const Vec3& d) {
-    const float sin2 = std::clamp(1 - d.z * d.z, 0.0f, 1.0f);
-    float phi = std::atan2(d.y, d.x);
-    if (phi < 0) phi += 2 * kPi;
-    const int j = std::min(grid.m - 1, static_cast<int>(sin2 * static_cast<float>(grid.m)));
-    const int k = std::min(grid.n - 1, static_cast<int>(phi * (static_cast<float>(grid.n) / (2 * kPi))));
-    return static_cast<size_t>(j * grid.n + k);
-}
-
-}  // namespace
-
 Color plane_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& n, std::span<const Vec3> local, float scale,
                        int& records) {
     Color integral(0), along(0);
@@ -96,7 +73,7 @@ Color plane_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& 
         Color sum(0);
         for (const Color& c : *r.cells) sum += c;
         integral += sum * (w / static_cast<float>(r.cells->size()));
-        for (const Vec3& d : local) along += (*r.cells)[cell_of(r.grid, d)] * (w / static_cast<float>(local.size()));
+        for (const Vec3& d : local) along += (*r.cells)[static_cast<size_t>(grid_cell(r.grid, d))] * (w / static_cast<float>(local.size()));
         wsum += w;
     });
     if (records == 0) return Color(0);
@@ -122,19 +99,17 @@ void correction_pass(const Scene& scene, const DeepBuffer& deep, const Irradianc
             // ... corrected by the records' prediction about the site they are looked up at.
             const Site site = record_site(scene, f, cache.settings());
             gather_local_directions(gatherer.grid(), rng, local);
-            int plane = 0;
-            Color c = plane_correction(cache, site.p, at.n, local, ao ? 1.0f : kPi, plane);
-            BinPrediction pred;
-            pred.records = plane;
-            if (plane == 0) {
-                pred = predict_bins(cache, site.p, site.n, at.n);
-                c = prediction_correction(pred, local, ao ? 1.0f : kPi);
+            int records = 0;  // the records on its own plane predict it, else the others' bins
+            Color c = plane_correction(cache, site.p, at.n, local, ao ? 1.0f : kPi, records);
+            if (records == 0) {
+                const BinPrediction pred = predict_bins(cache, site.p, site.n, at.n);
+                c = prediction_correction(pred, local, ao ? 1.0f : kPi), records = pred.records;
             }
             Indirect& out = light[first + k];
             if (ao) out.ao = g.ao + c.x;
             else out.irradiance = g.irradiance + c;
             ++fragments.local();
-            predicted.local() += pred.records > 0;
+            predicted.local() += records > 0;
         }
     });
     uint64_t n = 0, p = 0;

@@ -43,10 +43,6 @@ Color prediction_correction(const BinPrediction& prediction, std::span<const Vec
 Color plane_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& n, std::span<const Vec3> local, float scale,
                        int& records);
 
-/// The local directions of a gather's rays about its normal: those Gatherer::gather traces
-/// with `rng` on `grid`.
-void gather_local_directions(const GatherGrid& grid, const RandomStream& rng, std::vector<Vec3>& out);
-
 /// The correction pass: every fragment that uses the bounce light gathers `gatherer`'s rays
 /// (CacheSettings::correction_rays) at its own point and seed, as brute force does, and its
 /// irradiance (AO in AO mode) becomes that gather corrected by the records' prediction; its bent

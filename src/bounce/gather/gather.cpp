@@ -31,42 +31,6 @@ void normalise_shares(std::span<Color> parts) {
         for (int c = 0; c < 3; ++c) p[c] = sum[c] > 0 ? p[c] / sum[c] : 0.0f;
 }
 
-GatherGrid gather_grid(int rays) {
-    GatherGrid g;
-    g.m = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(rays) / kPi))));
-    g.n = std::max(1, static_cast<int>(std::lround(static_cast<double>(rays) / g.m)));
-    return g;
-}
-
-int direction_bin(const Vec3& local) {
-    const float sin2 = std::clamp(1 - local.z * local.z, 0.0f, 1.0f);
-    float phi = std::atan2(local.y, local.x);
-    if (phi < 0) phi += 2 * kPi;
-    const int band = std::min(kReachBands - 1, static_cast<int>(sin2 * kReachBands));
-    const int sector = std::min(kReachSectors - 1, static_cast<int>(phi * (kReachSectors / (2 * kPi))));
-    return band * kReachSectors + sector;
-}
-
-Vec3 gather_cell_direction(const GatherGrid& grid, int j, int k, float u, float v) {
-    float sin2 = (static_cast<float>(j) + u) / static_cast<float>(grid.m);
-    float phi = 2 * kPi * (static_cast<float>(k) + v) / static_cast<float>(grid.n);
-    float sin_t = std::sqrt(sin2), cos_t = std::sqrt(std::max(0.0f, 1 - sin2));
-    return {sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t};
-}
-
-std::vector<uint32_t> gather_packet_order(const GatherGrid& grid) {
-    // Packets of 16 rays are traversed together; 4x4 blocks of neighbouring (elevation,
-    // azimuth) cells point in nearby directions, a row segment of 16 azimuths does not.
-    std::vector<uint32_t> order;
-    order.reserve(static_cast<size_t>(grid.rays()));
-    for (int j0 = 0; j0 < grid.m; j0 += 4)
-        for (int k0 = 0; k0 < grid.n; k0 += 4)
-            for (int j = j0; j < std::min(j0 + 4, grid.m); ++j)
-                for (int k = k0; k < std::min(k0 + 4, grid.n); ++k)
-                    order.push_back(static_cast<uint32_t>(j * grid.n + k));
-    return order;
-}
-
 Gatherer::Gatherer(const Scene& scene, const SceneAccel& accel, const Materials& materials,
                    const DirectLighting& lighting, const RadiosityTextures* radiosity, GatherSettings settings)
     : scene_(scene),
@@ -140,7 +104,7 @@ void Gatherer::cell_directions(const Vec3& n, const RandomStream& rng) const {
     for (int j = 0; j < M; ++j)
         for (int k = 0; k < N; ++k) {
             const auto c = static_cast<size_t>(j * N + k);
-            const Vec3 local = gather_cell_direction(grid_, j, k, rng.get(c, kDimGather), rng.get(c, kDimGather + 1));
+            const Vec3 local = gather_cell_direction(grid_, j, k, rng);
             cells.cos_theta[c] = local.z;
             cells.D[c] = frame.to_world(local);
         }
@@ -202,35 +166,6 @@ GatherResult Gatherer::update(const Vec3& p, const Vec3& n, const RandomStream& 
         kept.object[c] = h.valid() && h.hair ? h.object | GatherHits::kHairBit : h.object;
     }
     return reshade(p, n, rng, kept, counters, near);
-}
-
-void cells_through(const GatherGrid& grid, const Vec3& p, const Vec3& n, const RandomStream& rng, const GatherHits& hits,
-                   std::span<const Bounds> boxes, std::vector<uint32_t>& out) {
-    const Frame frame(n);
-    for (int j = 0; j < grid.m; ++j)
-        for (int k = 0; k < grid.n; ++k) {
-            const auto c = static_cast<size_t>(j * grid.n + k);
-            const Vec3 d = frame.to_world(gather_cell_direction(grid, j, k, rng.get(c, kDimGather), rng.get(c, kDimGather + 1)));
-            const float end = hits.t[c];
-            for (const Bounds& b : boxes) {
-                // Slab test of the segment [0, end] from p along d against the box.
-                float t0 = 0, t1 = end;
-                for (int a = 0; a < 3 && t0 <= t1; ++a) {
-                    const float inv = 1 / d[a];
-                    float lo = (b.lo[a] - p[a]) * inv, hi = (b.hi[a] - p[a]) * inv;
-                    if (lo > hi) std::swap(lo, hi);
-                    if (std::isnan(lo) || std::isnan(hi)) {  // parallel to the slab: inside it or not
-                        if (p[a] < b.lo[a] || p[a] > b.hi[a]) t0 = INFINITY;
-                        continue;
-                    }
-                    t0 = std::max(t0, lo), t1 = std::min(t1, hi);
-                }
-                if (t0 <= t1) {
-                    out.push_back(static_cast<uint32_t>(c));
-                    break;
-                }
-            }
-        }
 }
 
 namespace {
@@ -440,8 +375,8 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
             const size_t bin = static_cast<size_t>((j * kReachBands / M) * kReachSectors + k * kReachSectors / N);
             res.reach[bin] = std::max(res.reach[bin], R[static_cast<size_t>(j * N + k)]);
         }
-    set_bins(res, frame, settings_.ao ? std::span<const float>(U) : std::span<const float>(), L, D);
-    {
+    if (settings_.prediction) {
+        set_bins(res, frame, settings_.ao ? std::span<const float>(U) : std::span<const float>(), L, D);
         auto all = std::make_shared<std::vector<Color>>(L);
         if (settings_.ao)
             for (size_t c = 0; c < all->size(); ++c) (*all)[c] = Color(U[c]);
@@ -487,6 +422,7 @@ GatherSettings gather_settings(const Scene& scene) {
     static_cast<IndirectSettings&>(g) = r;
     g.ao_distance = r.ao_distance >= 0 ? r.ao_distance : 0.1f * scene.size();
     g.light_parts = scene.render.cache.light_parts && r.gi == GiMode::Cache;
+    g.prediction = scene.render.cache.correction_rays > 0 && r.gi == GiMode::Cache;
     return g;
 }
 

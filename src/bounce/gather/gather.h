@@ -30,6 +30,10 @@ struct GatherSettings : IndirectSettings {
     /// every value of the result is its `signal` (every light at scale 1): what decides where
     /// records go and how many rays they take depends on no light's colour or intensity.
     bool light_parts = false;
+    /// With record_terms: also what a record predicts for a fragment's correction rays
+    /// (GatherResult::bins and cells; CacheSettings::correction_rays). Off, records carry
+    /// neither: a 512-ray record's cells alone are 6 KB.
+    bool prediction = false;
 };
 
 /// The part of a gather's (and its record's) values that is linear in the light: what one light (or all of them,
@@ -64,6 +68,13 @@ GatherGrid gather_grid(int rays);
 /// The direction, in the gather point's frame (z = normal), of the ray of cell (j, k) with
 /// jitter (u, v) in [0,1)^2: cosine-weighted, sin^2(theta) stratified by j and phi by k.
 Vec3 gather_cell_direction(const GatherGrid& grid, int j, int k, float u, float v);
+/// The same with the jitter a gather with stream `rng` draws for that cell.
+Vec3 gather_cell_direction(const GatherGrid& grid, int j, int k, const RandomStream& rng);
+/// Every cell's direction of a gather with `rng` (cell j * n + k), in its frame: the rays
+/// Gatherer::gather traces.
+void gather_local_directions(const GatherGrid& grid, const RandomStream& rng, std::vector<Vec3>& out);
+/// The cell (j * n + k) of `grid` whose stratum holds direction `local` (z > 0).
+int grid_cell(const GatherGrid& grid, const Vec3& local);
 /// The order in which a gather traces its grid's cells (index j * n + k): 4x4 blocks of
 /// neighbouring cells, so each packet of 16 rays points in nearby directions.
 std::vector<uint32_t> gather_packet_order(const GatherGrid& grid);
@@ -123,11 +134,11 @@ struct GatherResult {
     float hess_slow = 0, hess_fast = 0;
     /// With record_terms: the farthest hit per direction bin (INFINITY where a ray escaped).
     std::array<float, kReachBins> reach{};
-    /// With record_terms: the mean radiance per direction bin (direction_bin; the unoccluded
+    /// With prediction: the mean radiance per direction bin (direction_bin; the unoccluded
     /// fraction, grey, in AO mode; a bin no ray fell in takes the mean over all): what a record
     /// predicts a nearby fragment's rays will see (cache/control_variate.h).
     std::array<Color, kReachBins> bins{};
-    /// With record_terms: every cell's radiance (unoccluded fraction in AO mode), cell j * n + k
+    /// With prediction: every cell's radiance (unoccluded fraction in AO mode), cell j * n + k
     /// of the gather's grid: a finer prediction for fragments on the record's own plane.
     std::shared_ptr<const std::vector<Color>> cells;
     GatherGrid grid;
