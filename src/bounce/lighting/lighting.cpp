@@ -104,15 +104,12 @@ Color DirectLighting::picked_irradiance(const std::vector<size_t>& pool, const V
     for (int j = 0; j < picks; ++j) {
         // A tenth of the picks' chance is spread evenly, the rest follows the estimates.
         const double u = rng.get(static_cast<uint64_t>(j), kDimLightPick);
+        const auto count = static_cast<double>(pool.size());
         size_t k = 0;
-        if (u < 0.1 || total <= 0) {
-            k = std::min(pool.size() - 1, static_cast<size_t>(u / 0.1 * static_cast<double>(pool.size())));
-            if (total <= 0) k = std::min(pool.size() - 1, static_cast<size_t>(u * static_cast<double>(pool.size())));
-        } else {
-            const double target = (u - 0.1) / 0.9 * total;
-            k = static_cast<size_t>(std::upper_bound(cdf.begin(), cdf.end(), target) - cdf.begin());
-            k = std::min(k, pool.size() - 1);
-        }
+        if (total <= 0) k = static_cast<size_t>(u * count);  // nothing to go by: even
+        else if (u < 0.1) k = static_cast<size_t>(u / 0.1 * count);  // the even tenth
+        else k = static_cast<size_t>(std::upper_bound(cdf.begin(), cdf.end(), (u - 0.1) / 0.9 * total) - cdf.begin());
+        k = std::min(k, pool.size() - 1);
         const float weight = static_cast<float>(1.0 / (static_cast<double>(picks) * chance(k)));
         const LightSampleFn scaled = [&](size_t light, const Vec3& w, const Color& c) { (*each)(light, w, c * weight); };
         e += sample_light(pool[k], p, n, rng, samples, counters, each ? &scaled : nullptr, hair_start) * weight;

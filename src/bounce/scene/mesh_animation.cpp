@@ -57,10 +57,6 @@ bool node_shows(const aiScene* s, const aiString& node, const aiMesh* mesh) {
     return false;
 }
 
-}  // namespace
-
-namespace {
-
 /// Key times that are finite and increasing (glTF's sampler input; Assimp keeps NaN and
 /// decreasing times, which bracket() would search wrongly).
 template <typename Key>
