@@ -1,5 +1,6 @@
 #include "bounce/cache/irradiance_cache.h"
 
+#include "bounce/cache/record_filter.h"
 #include "bounce/core/parallel.h"
 
 #include <algorithm>
@@ -36,6 +37,22 @@ void IrradianceCache::rescale_lights(std::vector<Color> scales) {
     };
     rescale(records_);
     rescale(fragment_records_);
+    records_changed();
+}
+
+std::span<const FilteredValue> IrradianceCache::filtered_values() const {
+    if (!(settings_.record_filter > 0)) return {};
+    Filtered& f = *filtered_;
+    if (!f.ready.load(std::memory_order_acquire)) {
+        std::lock_guard lock(f.mutex);
+        if (!f.ready.load(std::memory_order_relaxed)) {
+            // Isolated: a thread of the filter's loop must not pick up an outer task (a tile
+            // of lookups) that would wait for this very lock.
+            tbb::this_task_arena::isolate([&] { f.values = filter_record_values(*this, settings_.record_filter); });
+            f.ready.store(true, std::memory_order_release);
+        }
+    }
+    return f.values;
 }
 
 bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Record> extra, float own, float min_weight) const {
@@ -52,22 +69,6 @@ bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Recor
     return sum < (min_weight > 0 ? min_weight : settings_.min_weight) && top < own;
 }
 
-namespace {
-
-/// A record's value E extrapolated by its gradients over dp (translation) and rot (n_i x n),
-/// clamped to [0, 4 E] per channel.
-Color extrapolated(const Color& E, const std::array<Vec3, 3>& grad_t, const std::array<Vec3, 3>& grad_r, const Vec3& dp,
-                   const Vec3& rot) {
-    Color e = E;
-    for (int c = 0; c < 3; ++c) {
-        auto k = static_cast<size_t>(c);
-        float v = E[c] + dot(dp, grad_t[k]) + dot(rot, grad_r[k]);
-        e[c] = std::clamp(v, 0.0f, 4 * E[c]);  // extrapolation clamp [0, 4 E_i]
-    }
-    return e;
-}
-
-}  // namespace
 
 bool IrradianceCache::has_light_parts(size_t lights) const {
     const auto has = [lights](const Record& r) { return r.parts && r.parts->light.size() == lights; };
@@ -115,21 +116,25 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
     double de[3] = {0, 0, 0}, dao = 0, wsum = 0, lsum = 0, l2sum = 0, w2sum = 0, nsum = 0;
     Vec3 bent(0);
     std::array<Vec3, 3> dir{};
+    // The shading pass reads the records' filtered values (record_filter.h) when there are.
+    const std::span<const FilteredValue> filtered = shading ? filtered_values() : std::span<const FilteredValue>();
     octree_.visit(p, [&](uint32_t id) {
         const Record& r = records_[id];
         float w = record_weight(r, p, n, s);
         if (w <= 0) return;
-        Color ei = r.E;
-        float ai = r.ao;
+        const Color& E = filtered.empty() ? r.E : filtered[id].E;
+        const float ao = filtered.empty() ? r.ao : filtered[id].ao;
+        Color ei = E;
+        float ai = ao;
         // The spread decides refinement: with light parts it is the signal's, which no light's
         // colour or intensity changes.
         const LightPart* signal = r.parts ? &r.parts->signal : nullptr;
         Color si = signal ? signal->E : Color(0);
         if (settings_.gradients) {
             const Vec3 dp = (at_p ? *at_p : p) - r.p, rot = cross(r.n, at_n ? *at_n : n);
-            ei = extrapolated(r.E, r.grad_t, r.grad_r, dp, rot);
+            ei = extrapolated(E, r.grad_t, r.grad_r, dp, rot);
             if (signal) si = extrapolated(signal->E, signal->grad_t, signal->grad_r, dp, rot);
-            ai = std::clamp(r.ao + dot(dp, r.ao_grad_t) + dot(rot, r.ao_grad_r), 0.0f, 1.0f);
+            ai = std::clamp(ao + dot(dp, r.ao_grad_t) + dot(rot, r.ao_grad_r), 0.0f, 1.0f);
         }
         if (first) base = ei, base_ao = ai, first = false;
         for (int c = 0; c < 3; ++c) de[c] += static_cast<double>(w) * (ei[c] - base[c]);
@@ -260,6 +265,7 @@ uint32_t IrradianceCache::insert(Record r) {
 }
 
 uint32_t IrradianceCache::insert_loaded(const Record& r) {
+    records_changed();
     Record copy = r;
     copy.support = support(copy);
     auto id = static_cast<uint32_t>(records_.size());

@@ -3,8 +3,10 @@
 // any number of threads while nobody inserts; the passes (passes.h) insert between sub-passes.
 #pragma once
 
+#include <atomic>
 #include <deque>
 #include <memory>
+#include <mutex>
 #include <shared_mutex>
 #include <span>
 #include <unordered_map>
@@ -64,11 +66,18 @@ public:
     /// divided per channel by the lights' sum, so the shares sum to 1 (0 where there is no
     /// light). `out`: one entry per light.
     void light_shares(const Vec3& p, const Vec3& n, bool shading, const Vec3* at_p, const Vec3* at_n, std::span<Color> out) const;
-    /// Calls f(id, weight) for every record whose support holds p (weight 0 when rejected).
+    /// Calls f(id, weight) for every record whose support holds p (weight 0 when rejected);
+    /// `shading`: the shading pass's weights (CacheSettings::shading_reach).
     template <typename F>
-    void visit_weights(const Vec3& p, const Vec3& n, F&& f) const {
-        octree_.visit(p, [&](uint32_t id) { f(id, record_weight(records_[id], p, n, settings_)); });
+    void visit_weights(const Vec3& p, const Vec3& n, F&& f, bool shading = false) const {
+        const CacheSettings& s = shading ? shading_settings_ : settings_;
+        octree_.visit(p, [&](uint32_t id) { f(id, record_weight(records_[id], p, n, s)); });
     }
+    /// The records' values as the shading pass reads them: filtered in record space
+    /// (CacheSettings::record_filter, record_filter.h), made on the first call after the
+    /// records last changed; empty when the filter is off. Call it once before a parallel
+    /// loop of lookups (the first call filters every record).
+    std::span<const FilteredValue> filtered_values() const;
     /// True when a lookup at (p, n) would miss: the weights of this cache's records and of
     /// `extra` (a tile's private records) sum below min_weight, and none of them sits at p.
     /// `own` (default 0.99): a record whose weight reaches it sits at p and covers it alone;
@@ -140,6 +149,14 @@ private:
     float luminance_floor_ = -1;  ///< Weber floor, fixed from the first record batch
     std::vector<Color> light_scales_;  ///< light_parts: per scene light
     std::unique_ptr<std::shared_mutex> mutex_ = std::make_unique<std::shared_mutex>();  // keeps the cache movable
+    /// filtered_values(): made once per state of the records (reset by every change).
+    struct Filtered {
+        std::mutex mutex;
+        std::atomic<bool> ready{false};
+        std::vector<FilteredValue> values;
+    };
+    std::unique_ptr<Filtered> filtered_ = std::make_unique<Filtered>();
+    void records_changed() { filtered_->ready = false; }
 };
 
 }  // namespace bounce

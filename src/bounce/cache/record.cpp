@@ -1,5 +1,6 @@
 #include "bounce/cache/record.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace bounce {
@@ -21,6 +22,17 @@ void apply_light_scales(Record& r, std::span<const Color> scales) {
     if (!r.parts) return;
     const LightPart v = combine_parts(*r.parts, scales);
     r.E = v.E, r.dir = v.dir, r.grad_r = v.grad_r, r.grad_t = v.grad_t;
+}
+
+Color extrapolated(const Color& E, const std::array<Vec3, 3>& grad_t, const std::array<Vec3, 3>& grad_r, const Vec3& dp,
+                   const Vec3& rot) {
+    Color e = E;
+    for (int c = 0; c < 3; ++c) {
+        auto k = static_cast<size_t>(c);
+        float v = E[c] + dot(dp, grad_t[k]) + dot(rot, grad_r[k]);
+        e[c] = std::clamp(v, 0.0f, 4 * E[c]);  // extrapolation clamp [0, 4 E_i]
+    }
+    return e;
 }
 
 MetricTerms metric_terms(const Record& r, const Vec3& p, const Vec3& n, const CacheSettings& s) {

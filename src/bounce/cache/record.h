@@ -61,8 +61,20 @@ struct Record {
     std::shared_ptr<const LightParts> parts; ///< CacheSettings::light_parts only (not in files)
 };
 
+/// A record's irradiance and AO as the shading pass reads them when records are filtered in
+/// record space (CacheSettings::record_filter, record_filter.h).
+struct FilteredValue {
+    Color E{0};
+    float ao = 1;
+};
+
 /// Sets r's irradiance, directions and gradients from its light parts at `scales` (no parts: as it is).
 void apply_light_scales(Record& r, std::span<const Color> scales);
+
+/// A record's value E extrapolated by its gradients over dp (translation) and rot (n_i x n),
+/// clamped to [0, 4 E] per channel.
+Color extrapolated(const Color& E, const std::array<Vec3, 3>& grad_t, const std::array<Vec3, 3>& grad_r, const Vec3& dp,
+                   const Vec3& rot);
 
 /// Normalised error terms of record `r` at (p, n); each reaches 1 exactly at its bound.
 struct MetricTerms {

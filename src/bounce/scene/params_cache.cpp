@@ -106,6 +106,13 @@ void add_refinement_rows(std::vector<Row>& rows) {
     rows.push_back(row("temporal_filter", "cache", &R::cache, &CacheSettings::temporal_filter).range(0, 0.99)
                        .doc("frames of a shot: a record gathered again keeps this share of its previous value (an "
                             "exponential filter along its anchor: less flicker, some lag); 0 = off").flag());
+    rows.push_back(row("record_filter", "cache", &R::cache, &CacheSettings::record_filter).range(0, 100)
+                       .unit("noise widths")
+                       .doc("records filtered in record space before the shading pass interpolates them: each record's "
+                            "irradiance (AO) becomes the mean of its neighbours' values extrapolated to it with their "
+                            "gradients, weighed as interpolation weighs them and by how far each differs from its own "
+                            "in this many widths of the two records' estimated noise, so differences noise explains "
+                            "are averaged and edges are kept (docs/irradiance-cache.md); 0 = off").flag());
     rows.push_back(row("shading_reach", "cache", &R::cache, &CacheSettings::shading_reach).range(1, 10)
                        .doc("the shading pass lets records reach this much farther (kappa / reach)").flag());
 }

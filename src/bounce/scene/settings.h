@@ -100,6 +100,9 @@ struct CacheSettings {
     float refine_tilt = 20;       ///< un-displaced records: a fragment whose normal tilts more than this (degrees) is refined; 0 = off
     float temporal_tolerance = 0.02f;  ///< frames of a shot: a kept record is redone once its irradiance may have moved by this fraction
     float temporal_refine_reuse = 0.35f;  ///< frames of a shot: refinement takes an earlier frame's gather this many pixels away (0 = off)
+    /// Records' values filtered with their neighbours' before the shading pass interpolates them:
+    /// the range kernel's width in the records' estimated noise (record_filter.h); 0 = off.
+    float record_filter = 0;
     float temporal_filter = 0;    ///< frames of a shot: a redone record keeps this share of its previous value (0 = off)
     /// Records keep their bounce light per light, each light's colour and intensity factored out,
     /// and are placed as if every light were white at intensity 1: an edit of a light's colour or
