@@ -176,6 +176,36 @@ TEST(CacheGradients, MatchFiniteDifferencesOfGathers) {
     EXPECT_NEAR(predicted, fdr, 0.15 * fdr);
 }
 
+TEST(CacheGradients, AoWithACutoffMatchesFiniteDifferences) {
+    // The wall 0.6 and 0.2 away with ao_distance 1: where the cutoff sphere cuts the wall the
+    // occlusion boundary moves with the wall's distance, not as an edge (gather/ao_cutoff.h).
+    // The edge form alone gave -0.33 against -0.51 at 0.6.
+    Scene s = wall_scene();
+    SceneAccel accel(s);
+    Materials materials(s);
+    DirectLighting lighting(s, accel);
+    GatherSettings gs;
+    gs.rays = 16384, gs.ao = true, gs.ao_distance = 1;
+    Gatherer gatherer(s, accel, materials, lighting, nullptr, gs);
+    Counters c;
+    auto A = [&](const Vec3& p, uint64_t key) { return gatherer.gather(p, {0, 1, 0}, RandomStream(3, key), c); };
+    for (float x : {0.4f, 0.8f}) {
+        const Vec3 p{x, 0, 0.1f};
+        const float h = 0.02f;
+        double fd = 0, grad = 0, grad_z = 0;
+        const int runs = 4;
+        for (uint64_t k = 0; k < runs; ++k) {
+            fd += (A(p + Vec3(h, 0, 0), k).ao - A(p - Vec3(h, 0, 0), k).ao) / (2 * h) / runs;
+            GatherResult g = A(p, k);
+            grad += g.ao_grad_trans.x / runs;
+            grad_z += g.ao_grad_trans.z / runs;
+        }
+        ASSERT_LT(fd, -0.4);  // darker towards the wall
+        EXPECT_NEAR(grad, fd, 0.06 * std::abs(fd)) << x;
+        EXPECT_NEAR(grad_z, 0.0, 0.01) << x;  // along the wall nothing changes
+    }
+}
+
 Scene facing_plane(float min_spacing, float max_spacing, float min_weight) {
     json j = test::base_scene();
     j["camera"] = {{"position", {0, 0, 10}}, {"look_at", {0, 0, 0}}, {"fov", 30}, {"resolution", {96, 96}}};

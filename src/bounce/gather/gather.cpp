@@ -1,5 +1,7 @@
 #include "bounce/gather/gather.h"
 
+#include "bounce/gather/ao_cutoff.h"
+
 #include "bounce/gather/gather_cells.h"
 #include "bounce/gather/hessian.h"
 
@@ -176,9 +178,13 @@ float chan(const Color& v, int c) { return v[c]; }
 /// Rotational gradient (cell-centre angles): sum_k t(phi_k) sum_j tan(theta_j) L_jk, and the
 /// translational one, Ward-Heckbert over cell boundaries with min distances (docs/gather.md has
 /// the derivation and the sign convention), of the values L[c * stride] (C channels), unscaled.
-template <class V, size_t C>
+/// A pair of cells `skip` names moves no boundary (AO's pairs on one surface: ao_cutoff.h).
+struct NoSkip {
+    bool operator()(size_t, size_t) const { return false; }
+};
+template <class V, size_t C, class Skip = NoSkip>
 void gradient_sums(const GatherGrid& grid, const Frame& frame, float near, const float* R, const V* L, size_t stride,
-                   std::array<Vec3, C>& gr, std::array<Vec3, C>& gt) {
+                   std::array<Vec3, C>& gr, std::array<Vec3, C>& gt, const Skip& skip = {}) {
     const int M = grid.m, N = grid.n;
     const auto fM = static_cast<float>(M);
     const auto at = [&](int j, int k) -> const V& { return L[static_cast<size_t>(j * N + k) * stride]; };
@@ -199,13 +205,13 @@ void gradient_sums(const GatherGrid& grid, const Frame& frame, float near, const
             if (j >= 1) {  // boundary between rows j-1 and j moves radially
                 const auto cp = static_cast<size_t>((j - 1) * N + k);
                 float rmin = std::max(near, std::min(R[c], R[cp]));
-                if (std::isfinite(rmin) && rmin > 0)  // a hit at 0 (a fold of a displaced surface) moves nothing
+                if (std::isfinite(rmin) && rmin > 0 && !skip(cp, c))  // a hit at 0 (a fold of a displaced surface) moves nothing
                     radial += (at(j, k) - at(j - 1, k)) * (sin_lo * (1 - sin_lo * sin_lo) / rmin);
             }
             // boundary between columns k-1 and k moves in azimuth
             const auto cq = static_cast<size_t>(j * N + kprev);
             float rmin = std::max(near, std::min(R[c], R[cq]));
-            if (std::isfinite(rmin) && rmin > 0) azim += (at(j, k) - at(j, kprev)) * ((sin_hi - sin_lo) / rmin);
+            if (std::isfinite(rmin) && rmin > 0 && !skip(cq, c)) azim += (at(j, k) - at(j, kprev)) * ((sin_hi - sin_lo) / rmin);
         }
         const float dphi = 2 * kPi / static_cast<float>(N);
         for (size_t ch = 0; ch < C; ++ch) {
@@ -325,6 +331,7 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
         const std::span<Color> parts = lights_ ? std::span<Color>(cells.P.data() + c * lights_, lights_) : std::span<Color>();
         Color l(0);
         float u = 1;
+        cells.NH[c] = Vec3(0);
         if (h.valid()) {
             R[c] = h.t;
             inv_r_sum += 1.0 / std::max(h.t, 1e-20f);
@@ -337,6 +344,7 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
                 if (!settings_.ao) l = hair_radiance(h, p + d * h.t, d, rng, c, counters, parts);
             } else if (settings_.record_terms || !settings_.ao) {
                 const SurfacePoint sp = surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v);
+                cells.NH[c] = sp.ng;
                 if (settings_.record_terms) {
                     bool grazing = cos_theta[c] < cos_concave_ && std::abs(dot(sp.ng, d)) < cos_concave_;
                     if (!grazing && h.t >= near) res.min_distance = std::min(res.min_distance, h.t);
@@ -389,10 +397,18 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
 
     res.grad_rot = sums.grad_r, res.grad_trans = sums.grad_t;
     std::array<Vec3, 1> agr{}, agt{};
-    gradient_sums(grid_, frame, near, R.data(), U.data(), 1, agr, agt);
     // AO is a mean (1/S), not pi/S times a sum.
+    if (settings_.ao_distance > 0) {
+        // Where the cutoff cuts a surface, the boundary moves with its distance (ao_cutoff.h).
+        const detail::CutoffCells cut{D, R, U, cells.NH};
+        const detail::SurfacePairs pairs(grid_, cut);
+        gradient_sums(grid_, frame, near, R.data(), U.data(), 1, agr, agt, pairs);
+        res.ao_grad_trans = agt[0] * kInvPi + pairs.gradient();
+    } else {
+        gradient_sums(grid_, frame, near, R.data(), U.data(), 1, agr, agt);
+        res.ao_grad_trans = agt[0] * kInvPi;
+    }
     res.ao_grad_rot = agr[0] / static_cast<float>(S);
-    res.ao_grad_trans = agt[0] * kInvPi;
     return res;
 }
 
