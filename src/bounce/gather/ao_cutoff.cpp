@@ -28,26 +28,30 @@ Vec3 distance_rate(const CutoffCells& c, size_t i) {
 }  // namespace
 
 SurfacePairs::SurfacePairs(const GatherGrid& grid, const CutoffCells& cells)
-    : grid_(grid), cells_(cells), next_k_(static_cast<size_t>(grid.rays()), 0), next_j_(static_cast<size_t>(grid.rays()), 0) {
-    for (int j = 0; j < grid.m; ++j)
-        for (int k = 0; k < grid.n; ++k) {
-            const size_t c = cell(j, k);
-            next_k_[c] = on_one_surface(cells, c, cell(j, k + 1));
-            if (j + 1 < grid.m) next_j_[c] = on_one_surface(cells, c, cell(j + 1, k));
-        }
+    : grid_(grid), cells_(cells), next_k_(static_cast<size_t>(grid.rays()), -1), next_j_(static_cast<size_t>(grid.rays()), -1) {}
+
+bool SurfacePairs::next(size_t c, bool radial) const {
+    int8_t& known = radial ? next_j_[c] : next_k_[c];
+    if (known < 0) {
+        const auto n = static_cast<size_t>(grid_.n);
+        const size_t j = c / n, k = c % n;
+        known = radial ? (j + 1 < static_cast<size_t>(grid_.m) && on_one_surface(cells_, c, c + n))
+                       : on_one_surface(cells_, c, j * n + (k + 1) % n);
+    }
+    return known;
 }
 
 bool SurfacePairs::operator()(size_t a, size_t b) const {
     if (a > b) std::swap(a, b);
     const auto n = static_cast<size_t>(grid_.n);
-    if (b - a == n) return next_j_[a];
-    if (b - a == 1 && b % n != 0) return next_k_[a];
-    return a % n == 0 && b == a + n - 1 && next_k_[b];  // the seam: k = n - 1 and k = 0
+    if (b - a == n) return next(a, true);
+    if (b - a == 1 && b % n != 0) return next(a, false);
+    return a % n == 0 && b == a + n - 1 && next(b, false);  // the seam: k = n - 1 and k = 0
 }
 
 float SurfacePairs::step(int j, int k, bool radial) const {
     const size_t a = cell(j, k), b = radial ? cell(j + 1, k) : cell(j, k + 1);
-    return (radial ? next_j_[a] : next_k_[a]) ? cells_.R[b] - cells_.R[a] : 0.0f;
+    return next(a, radial) ? cells_.R[b] - cells_.R[a] : 0.0f;
 }
 
 Vec3 SurfacePairs::gradient() const {
@@ -60,18 +64,18 @@ Vec3 SurfacePairs::gradient() const {
     const auto azimuthal_rate = [&](int j, int k) { return 0.5f * (step(j, k - 1, false) + step(j, k, false)); };
     Vec3 g(0);
     // A pair (a, b) with the rate `across` it: (U_b - U_a) a / (a^2 + across^2) times g.
-    const auto add = [&](size_t a, size_t b, bool same_surface, float across) {
+    const auto add = [&](size_t a, size_t b, bool radial, const auto& across) {
         const CutoffCells& c = cells_;
-        if (!same_surface || c.U[a] == c.U[b]) return;
-        const float along = c.R[b] - c.R[a], norm = along * along + across * across;
+        if (c.U[a] == c.U[b] || !next(a, radial)) return;
+        const float along = c.R[b] - c.R[a], rate = across(), norm = along * along + rate * rate;
         if (!(norm > 0)) return;
         g += (distance_rate(c, a) + distance_rate(c, b)) * (0.5f * (c.U[b] - c.U[a]) * along / norm);
     };
     for (int j = 0; j < M; ++j)
         for (int k = 0; k < grid_.n; ++k) {
             const size_t here = cell(j, k);
-            add(here, cell(j, k + 1), next_k_[here], 0.5f * (radial_rate(j, k) + radial_rate(j, k + 1)));
-            if (j + 1 < M) add(here, cell(j + 1, k), next_j_[here], 0.5f * (azimuthal_rate(j, k) + azimuthal_rate(j + 1, k)));
+            add(here, cell(j, k + 1), false, [&] { return 0.5f * (radial_rate(j, k) + radial_rate(j, k + 1)); });
+            if (j + 1 < M) add(here, cell(j + 1, k), true, [&] { return 0.5f * (azimuthal_rate(j, k) + azimuthal_rate(j + 1, k)); });
         }
     return g / static_cast<float>(grid_.rays());
 }

@@ -45,8 +45,11 @@ public:
 private:
     GatherGrid grid_;
     const CutoffCells& cells_;
-    std::vector<uint8_t> next_k_, next_j_;  ///< cell c with its azimuthal (k + 1) and radial (j + 1) neighbour
+    /// Cell c with its azimuthal (k + 1) and radial (j + 1) neighbour: 1 one surface, 0 not,
+    /// -1 not asked yet (most pairs never are: both sums read only pairs near a boundary).
+    mutable std::vector<int8_t> next_k_, next_j_;
     size_t cell(int j, int k) const { return static_cast<size_t>(j * grid_.n + ((k + grid_.n) % grid_.n)); }
+    bool next(size_t c, bool radial) const;
     /// t_b - t_a between neighbours on one surface, else 0.
     float step(int j, int k, bool radial) const;
 };

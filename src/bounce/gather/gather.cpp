@@ -368,7 +368,8 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
             parts->light.push_back(light_part(cells.P.data() + i, lights_, frame, near, settings_.record_terms));
         parts->signal = combine_parts(*parts, unit_scales_);
     }
-    const LightPart sums = parts ? parts->signal : light_part(L.data(), 1, frame, near, settings_.record_terms);
+    // AO mode's radiance is all 0: no gradients to sum.
+    const LightPart sums = parts ? parts->signal : light_part(L.data(), 1, frame, near, settings_.record_terms && !settings_.ao);
     res.irradiance = sums.E, res.light_dir = sums.dir;
     res.parts = std::move(parts);
     res.ao = sum_u / static_cast<float>(S);
