@@ -137,32 +137,50 @@ Scene wall_scene() {
     return test::scene_from(j);
 }
 
-TEST(CacheGradients, MatchFiniteDifferencesOfGathers) {
+/// Towards the wall (+x) at p: the central difference of `value` over gathers with the same
+/// jitter, and the mean of `gradient` (x and z), over 4 random streams.
+struct Slope {
+    double fd = 0, grad = 0, grad_z = 0;
+};
+template <typename Gather, typename Value, typename Gradient>
+Slope slope_towards_wall(const Gather& gather, const Vec3& p, Value value, Gradient gradient) {
+    const float h = 0.02f;
+    const int runs = 4;
+    Slope s;
+    for (uint64_t k = 0; k < runs; ++k) {
+        s.fd += (value(gather(p + Vec3(h, 0, 0), k)) - value(gather(p - Vec3(h, 0, 0), k))) / (2 * h) / runs;
+        const Vec3 g = gradient(gather(p, k));
+        s.grad += g.x / runs, s.grad_z += g.z / runs;
+    }
+    return s;
+}
+
+/// wall_scene() ready to gather in.
+struct Wall {
     Scene s = wall_scene();
-    SceneAccel accel(s);
-    Materials materials(s);
-    DirectLighting lighting(s, accel);
+    SceneAccel accel{s};
+    Materials materials{s};
+    DirectLighting lighting{s, accel};
+};
+
+TEST(CacheGradients, MatchFiniteDifferencesOfGathers) {
+    Wall w;
     Stats stats;
-    RadiosityTextures rt = RadiosityTextures::bake(s, materials, lighting, RadiositySettings{}, stats, nullptr);
+    RadiosityTextures rt = RadiosityTextures::bake(w.s, w.materials, w.lighting, RadiositySettings{}, stats, nullptr);
     GatherSettings gs;
     gs.rays = 16384;
-    Gatherer gatherer(s, accel, materials, lighting, &rt, gs);
+    Gatherer gatherer(w.s, w.accel, w.materials, w.lighting, &rt, gs);
     Counters c;
     auto E = [&](const Vec3& p, const Vec3& n, uint64_t key) { return gatherer.gather(p, n, RandomStream(3, key), c); };
     const Vec3 p{0.4f, 0, 0.1f}, up{0, 1, 0};
-    // Translational, towards the wall: central differences of gathers with the same jitter.
-    const float h = 0.02f;
-    double fd = 0, grad = 0, grad_z = 0;
+    // Translational, towards the wall.
+    const Slope t = slope_towards_wall([&](const Vec3& q, uint64_t k) { return E(q, up, k); }, p,
+                                       [](const GatherResult& g) { return g.irradiance.x; },
+                                       [](const GatherResult& g) { return g.grad_trans[0]; });
+    ASSERT_GT(t.fd, 0.05);  // brighter towards the wall
+    EXPECT_NEAR(t.grad, t.fd, 0.1 * t.fd);
+    EXPECT_NEAR(t.grad_z, 0.0, 0.05 * t.fd);  // the wall is long: no change along it
     const int runs = 4;
-    for (uint64_t k = 0; k < runs; ++k) {
-        fd += (E(p + Vec3(h, 0, 0), up, k).irradiance.x - E(p - Vec3(h, 0, 0), up, k).irradiance.x) / (2 * h) / runs;
-        GatherResult g = E(p, up, k);
-        grad += g.grad_trans[0].x / runs;
-        grad_z += g.grad_trans[0].z / runs;
-    }
-    ASSERT_GT(fd, 0.05);  // brighter towards the wall
-    EXPECT_NEAR(grad, fd, 0.1 * fd);
-    EXPECT_NEAR(grad_z, 0.0, 0.05 * fd);  // the wall is long: no change along it
     // Rotational: tilting the normal towards the wall raises E.
     const float a = 0.03f;
     Vec3 tilt = normalize(Vec3(std::sin(a), std::cos(a), 0));
@@ -180,29 +198,18 @@ TEST(CacheGradients, AoWithACutoffMatchesFiniteDifferences) {
     // The wall 0.6 and 0.2 away with ao_distance 1: where the cutoff sphere cuts the wall the
     // occlusion boundary moves with the wall's distance, not as an edge (gather/ao_cutoff.h).
     // The edge form alone gave -0.33 against -0.51 at 0.6.
-    Scene s = wall_scene();
-    SceneAccel accel(s);
-    Materials materials(s);
-    DirectLighting lighting(s, accel);
+    Wall w;
     GatherSettings gs;
     gs.rays = 16384, gs.ao = true, gs.ao_distance = 1;
-    Gatherer gatherer(s, accel, materials, lighting, nullptr, gs);
+    Gatherer gatherer(w.s, w.accel, w.materials, w.lighting, nullptr, gs);
     Counters c;
     auto A = [&](const Vec3& p, uint64_t key) { return gatherer.gather(p, {0, 1, 0}, RandomStream(3, key), c); };
     for (float x : {0.4f, 0.8f}) {
-        const Vec3 p{x, 0, 0.1f};
-        const float h = 0.02f;
-        double fd = 0, grad = 0, grad_z = 0;
-        const int runs = 4;
-        for (uint64_t k = 0; k < runs; ++k) {
-            fd += (A(p + Vec3(h, 0, 0), k).ao - A(p - Vec3(h, 0, 0), k).ao) / (2 * h) / runs;
-            GatherResult g = A(p, k);
-            grad += g.ao_grad_trans.x / runs;
-            grad_z += g.ao_grad_trans.z / runs;
-        }
-        ASSERT_LT(fd, -0.4);  // darker towards the wall
-        EXPECT_NEAR(grad, fd, 0.06 * std::abs(fd)) << x;
-        EXPECT_NEAR(grad_z, 0.0, 0.01) << x;  // along the wall nothing changes
+        const Slope t = slope_towards_wall(A, Vec3(x, 0, 0.1f), [](const GatherResult& g) { return g.ao; },
+                                           [](const GatherResult& g) { return g.ao_grad_trans; });
+        ASSERT_LT(t.fd, -0.4);  // darker towards the wall
+        EXPECT_NEAR(t.grad, t.fd, 0.06 * std::abs(t.fd)) << x;
+        EXPECT_NEAR(t.grad_z, 0.0, 0.01) << x;  // along the wall nothing changes
     }
 }
 
