@@ -11,6 +11,7 @@
 
 #include "bounce/cache/irradiance_cache.h"
 #include "bounce/cache/record_filter.h"
+#include "bounce/core/parallel.h"
 
 namespace bounce {
 namespace {
@@ -150,6 +151,20 @@ TEST(RecordFilter, OnlyTheShadingPassReadsFilteredValuesAndOffChangesNothing) {
     ASSERT_EQ(g.size(), on.size());
     for (size_t i = 0; i + 1 < g.size(); ++i) EXPECT_EQ(g[i].E, f[i].E);
     EXPECT_EQ(g.back().E, far.E);
+}
+
+TEST(RecordFilter, LookupsFromManyThreadsFilterOnceAndAgree) {
+    // The first shading lookups of a parallel loop race to filter: one filters (the others
+    // wait), and every lookup reads the same values as one thread's.
+    std::mt19937 rng(19);
+    std::normal_distribution<float> noise(0, 0.1f);
+    IrradianceCache cache(box(), filtering(2), false), serial(box(), filtering(2), false);
+    fill(cache, [&](const Vec3&) { return Color(1 + noise(rng)); }, 0.1f, 9);
+    rng.seed(19);
+    fill(serial, [&](const Vec3&) { return Color(1 + noise(rng)); }, 0.1f, 9);
+    std::vector<Color> got(cache.size());
+    parallel_for_each_index(size_t(0), got.size(), [&](size_t i) { got[i] = cache.lookup(cache.record(i).p, {0, 1, 0}, true).E; });
+    for (size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i], serial.lookup(serial.record(i).p, {0, 1, 0}, true).E);
 }
 
 }  // namespace
