@@ -343,10 +343,13 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
                 if (settings_.record_terms && h.t >= near) res.min_distance = std::min(res.min_distance, h.t);
                 if (!settings_.ao) l = hair_radiance(h, p + d * h.t, d, rng, c, counters, parts);
             } else if (settings_.record_terms || !settings_.ao) {
-                const SurfacePoint sp = surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v);
-                cells.NH[c] = sp.ng;
+                const TriangleMesh& mesh = scene_.objects[h.object].coarse;
+                // AO needs only the plane, on either side: the face's normal, not a shading point.
+                const SurfacePoint sp = settings_.ao ? SurfacePoint{} : surface_point(mesh, h.prim, h.u, h.v);
+                const Vec3 ng = settings_.ao ? face_normal(mesh, h.prim) : sp.ng;
+                cells.NH[c] = ng;
                 if (settings_.record_terms) {
-                    bool grazing = cos_theta[c] < cos_concave_ && std::abs(dot(sp.ng, d)) < cos_concave_;
+                    bool grazing = cos_theta[c] < cos_concave_ && std::abs(dot(ng, d)) < cos_concave_;
                     if (!grazing && h.t >= near) res.min_distance = std::min(res.min_distance, h.t);
                 }
                 if (!settings_.ao) l = hit_radiance(h, sp, d, rng, c, counters, parts);

@@ -179,13 +179,18 @@ std::pair<Vec3, Vec3> base_point(const TriangleMesh& m, uint32_t prim, float u, 
     return {p, normalize(n)};
 }
 
+Vec3 face_normal(const TriangleMesh& m, uint32_t prim) {
+    const Vec3& a = m.positions[m.indices[3 * prim]];
+    return normalize(cross(m.positions[m.indices[3 * prim + 1]] - a, m.positions[m.indices[3 * prim + 2]] - a));
+}
+
 SurfacePoint surface_point(const TriangleMesh& m, uint32_t prim, float u, float v) {
     uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];
     float w = 1 - u - v;
     SurfacePoint sp;
     const Vec3 &a = m.positions[i0], &b = m.positions[i1], &c = m.positions[i2];
     sp.p = a * w + b * u + c * v;
-    sp.ng = normalize(cross(b - a, c - a));
+    sp.ng = face_normal(m, prim);
     sp.n = sp.ng;
     if (!m.normals.empty()) {
         Vec3 n = m.normals[i0] * w + m.normals[i1] * u + m.normals[i2] * v;

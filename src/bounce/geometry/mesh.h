@@ -63,6 +63,9 @@ struct SurfacePoint {
 /// Evaluates triangle `prim` of `mesh` at barycentrics (u, v) (Embree's convention:
 /// p = (1-u-v) v0 + u v1 + v v2).
 SurfacePoint surface_point(const TriangleMesh& mesh, uint32_t prim, float u, float v);
+/// Triangle `prim`'s unit normal by its winding (surface_point's ng may face the other way):
+/// what needs only the plane reads three positions, not the normals and uvs.
+Vec3 face_normal(const TriangleMesh& mesh, uint32_t prim);
 
 /// The un-displaced position and (unit, not oriented) normal at barycentrics (u, v) of a
 /// displaced mesh's triangle `prim` (mesh.displaced() must hold).
