@@ -134,7 +134,7 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
             const Vec3 dp = (at_p ? *at_p : p) - r.p, rot = cross(r.n, at_n ? *at_n : n);
             ei = extrapolated(E, r.grad_t, r.grad_r, dp, rot);
             if (signal) si = extrapolated(signal->E, signal->grad_t, signal->grad_r, dp, rot);
-            ai = std::clamp(ao + dot(dp, r.ao_grad_t) + dot(rot, r.ao_grad_r), 0.0f, 1.0f);
+            ai = extrapolated_ao(ao, r.ao_grad_t, r.ao_grad_r, dp, rot);
         }
         if (first) base = ei, base_ao = ai, first = false;
         for (int c = 0; c < 3; ++c) de[c] += static_cast<double>(w) * (ei[c] - base[c]);

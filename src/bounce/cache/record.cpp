@@ -35,6 +35,10 @@ Color extrapolated(const Color& E, const std::array<Vec3, 3>& grad_t, const std:
     return e;
 }
 
+float extrapolated_ao(float ao, const Vec3& grad_t, const Vec3& grad_r, const Vec3& dp, const Vec3& rot) {
+    return std::clamp(ao + dot(dp, grad_t) + dot(rot, grad_r), 0.0f, 1.0f);
+}
+
 MetricTerms metric_terms(const Record& r, const Vec3& p, const Vec3& n, const CacheSettings& s) {
     MetricTerms m;
     Vec3 d = p - r.p;

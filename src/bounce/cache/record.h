@@ -76,6 +76,9 @@ void apply_light_scales(Record& r, std::span<const Color> scales);
 Color extrapolated(const Color& E, const std::array<Vec3, 3>& grad_t, const std::array<Vec3, 3>& grad_r, const Vec3& dp,
                    const Vec3& rot);
 
+/// A record's AO extrapolated the same way, clamped to [0, 1].
+float extrapolated_ao(float ao, const Vec3& grad_t, const Vec3& grad_r, const Vec3& dp, const Vec3& rot);
+
 /// Normalised error terms of record `r` at (p, n); each reaches 1 exactly at its bound.
 struct MetricTerms {
     float position = 0;  ///< |p - p_i| / R_i

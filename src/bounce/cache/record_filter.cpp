@@ -24,7 +24,7 @@ FilteredValue filtered_record(const IrradianceCache& cache, uint32_t id, float w
             const Record& rj = cache.record(j);
             const Vec3 dp = ri.p - rj.p, rot = cross(rj.n, ri.n);
             const Color e = j == id ? rj.E : extrapolated(rj.E, rj.grad_t, rj.grad_r, dp, rot);
-            const float a = j == id ? rj.ao : std::clamp(rj.ao + dot(dp, rj.ao_grad_t) + dot(rot, rj.ao_grad_r), 0.0f, 1.0f);
+            const float a = j == id ? rj.ao : extrapolated_ao(rj.ao, rj.ao_grad_t, rj.ao_grad_r, dp, rot);
             float k = w;
             if (j != id) {
                 // The range kernel: the difference in units of what the two records' noise

@@ -63,19 +63,21 @@ Vec3 SurfacePairs::gradient() const {
     };
     const auto azimuthal_rate = [&](int j, int k) { return 0.5f * (step(j, k - 1, false) + step(j, k, false)); };
     Vec3 g(0);
-    // A pair (a, b) with the rate `across` it: (U_b - U_a) a / (a^2 + across^2) times g.
-    const auto add = [&](size_t a, size_t b, bool radial, const auto& across) {
+    // The pair of cell (j, k) and its next one, with the distance's rate `along` it (0: not one
+    // surface, or no change) and `across` it: (U_b - U_a) along / (along^2 + across^2) times g.
+    const auto add = [&](int j, int k, bool radial, const auto& across) {
+        const size_t a = cell(j, k), b = radial ? cell(j + 1, k) : cell(j, k + 1);
         const CutoffCells& c = cells_;
-        if (c.U[a] == c.U[b] || !next(a, radial)) return;
-        const float along = c.R[b] - c.R[a], rate = across(), norm = along * along + rate * rate;
-        if (!(norm > 0)) return;
-        g += (distance_rate(c, a) + distance_rate(c, b)) * (0.5f * (c.U[b] - c.U[a]) * along / norm);
+        if (c.U[a] == c.U[b]) return;
+        const float along = step(j, k, radial);
+        if (along == 0) return;
+        const float rate = across();
+        g += (distance_rate(c, a) + distance_rate(c, b)) * (0.5f * (c.U[b] - c.U[a]) * along / (along * along + rate * rate));
     };
     for (int j = 0; j < M; ++j)
         for (int k = 0; k < grid_.n; ++k) {
-            const size_t here = cell(j, k);
-            add(here, cell(j, k + 1), false, [&] { return 0.5f * (radial_rate(j, k) + radial_rate(j, k + 1)); });
-            if (j + 1 < M) add(here, cell(j + 1, k), true, [&] { return 0.5f * (azimuthal_rate(j, k) + azimuthal_rate(j + 1, k)); });
+            add(j, k, false, [&] { return 0.5f * (radial_rate(j, k) + radial_rate(j, k + 1)); });
+            if (j + 1 < M) add(j, k, true, [&] { return 0.5f * (azimuthal_rate(j, k) + azimuthal_rate(j + 1, k)); });
         }
     return g / static_cast<float>(grid_.rays());
 }

@@ -30,7 +30,8 @@ struct CutoffCells {
 
 /// Which neighbouring cells of a gather hit one continuous surface: each hit lies near the
 /// other's tangent plane. Such a pair's difference in occlusion comes from distance alone (the
-/// cutoff or the falloff), not from an edge. Decided once per gather, read by both sums.
+/// cutoff or the falloff), not from an edge. Each pair is judged at most once per gather, when
+/// one of the two sums first asks.
 class SurfacePairs {
 public:
     SurfacePairs(const GatherGrid& grid, const CutoffCells& cells);

@@ -1,7 +1,6 @@
 #include "bounce/gather/gather.h"
 
 #include "bounce/gather/ao_cutoff.h"
-
 #include "bounce/gather/gather_cells.h"
 #include "bounce/gather/hessian.h"
 

@@ -14,14 +14,14 @@ struct Cells {
     std::vector<Color> L, P;  ///< radiance per cell; with light parts, per cell and light (cell-major)
     std::vector<float> R, U, cos_theta;
     std::vector<Vec3> D;
-    std::vector<Vec3> NH;  ///< hits' geometric normals (0: escaped or fur; ao_cutoff.h)
+    std::vector<Vec3> NH;  ///< hits' geometric normals, set by Gatherer::finish (0: escaped or fur; ao_cutoff.h)
     std::vector<Hit> hits, packet_hits;
     std::vector<Vec3> packet_dirs;
     void resize(size_t s) {
         L.assign(s, Color(0));
         R.assign(s, INFINITY);
         U.assign(s, 1.0f);
-        D.resize(s), NH.assign(s, Vec3(0)), cos_theta.resize(s), hits.resize(s), packet_dirs.resize(s), packet_hits.resize(s);
+        D.resize(s), NH.resize(s), cos_theta.resize(s), hits.resize(s), packet_dirs.resize(s), packet_hits.resize(s);
     }
 };
 extern thread_local Cells cells;
