@@ -311,6 +311,20 @@ void set_bins(GatherResult& res, const Frame& frame, std::span<const float> ao, 
 
 }  // namespace
 
+Color Gatherer::cell_radiance(const Vec3& p, size_t c, const RandomStream& rng, Counters& counters, std::span<Color> parts) const {
+    const Vec3& d = cells.D[c];
+    const Hit& h = cells.hits[c];
+    cells.NH[c] = Vec3(0);
+    if (!h.valid()) return settings_.ao ? Color(0) : escaped_radiance(d, parts);
+    if (h.hair) return settings_.ao ? Color(0) : hair_radiance(h, p + d * h.t, d, rng, c, counters, parts);
+    if (!settings_.record_terms && settings_.ao) return Color(0);
+    const TriangleMesh& mesh = scene_.objects[h.object].coarse;
+    // AO needs only the plane, on either side: the face's normal, not a shading point.
+    const SurfacePoint sp = settings_.ao ? SurfacePoint{} : surface_point(mesh, h.prim, h.u, h.v);
+    cells.NH[c] = settings_.ao ? face_normal(mesh, h.prim) : sp.ng;
+    return settings_.ao ? Color(0) : hit_radiance(h, sp, d, rng, c, counters, parts);
+}
+
 GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const {
     const int M = grid_.m, N = grid_.n, S = M * N;
     std::vector<Color>& L = cells.L;
@@ -328,33 +342,17 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
         const Vec3& d = D[c];
         const Hit& h = hits[c];
         const std::span<Color> parts = lights_ ? std::span<Color>(cells.P.data() + c * lights_, lights_) : std::span<Color>();
-        Color l(0);
+        const Color l = cell_radiance(p, c, rng, counters, parts);
         float u = 1;
-        cells.NH[c] = Vec3(0);
         if (h.valid()) {
             R[c] = h.t;
             inv_r_sum += 1.0 / std::max(h.t, 1e-20f);
             u = unoccluded(h.t);
             // Distance for the record radius: leave out rays that are grazing both where
-            // they leave and where they land (slightly concave surfaces).
-            if (h.hair) {
-                // Fur that gathers see (its visible_to.indirect).
-                if (settings_.record_terms && h.t >= near) res.min_distance = std::min(res.min_distance, h.t);
-                if (!settings_.ao) l = hair_radiance(h, p + d * h.t, d, rng, c, counters, parts);
-            } else if (settings_.record_terms || !settings_.ao) {
-                const TriangleMesh& mesh = scene_.objects[h.object].coarse;
-                // AO needs only the plane, on either side: the face's normal, not a shading point.
-                const SurfacePoint sp = settings_.ao ? SurfacePoint{} : surface_point(mesh, h.prim, h.u, h.v);
-                const Vec3 ng = settings_.ao ? face_normal(mesh, h.prim) : sp.ng;
-                cells.NH[c] = ng;
-                if (settings_.record_terms) {
-                    bool grazing = cos_theta[c] < cos_concave_ && std::abs(dot(ng, d)) < cos_concave_;
-                    if (!grazing && h.t >= near) res.min_distance = std::min(res.min_distance, h.t);
-                }
-                if (!settings_.ao) l = hit_radiance(h, sp, d, rng, c, counters, parts);
-            }
-        } else if (!settings_.ao) {
-            l = escaped_radiance(d, parts);
+            // they leave and where they land (slightly concave surfaces). Fur (that gathers
+            // see: its visible_to.indirect) always counts.
+            const bool grazing = !h.hair && cos_theta[c] < cos_concave_ && std::abs(dot(cells.NH[c], d)) < cos_concave_;
+            if (settings_.record_terms && !grazing && h.t >= near) res.min_distance = std::min(res.min_distance, h.t);
         }
         L[c] = l;
         U[c] = u;
@@ -417,8 +415,6 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
 
 }  // namespace bounce
 
-#include <tbb/parallel_for.h>
-
 namespace bounce {
 
 HairSite hair_site(const Scene& scene, const Fragment& f) {
@@ -443,26 +439,6 @@ GatherSettings gather_settings(const Scene& scene) {
     g.light_parts = scene.render.cache.light_parts && r.gi == GiMode::Cache;
     g.prediction = scene.render.cache.correction_rays > 0 && r.gi == GiMode::Cache;
     return g;
-}
-
-std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
-                                            Stats& stats, ProgressSink* sink) {
-    std::vector<Indirect> out(deep.fragments.size());
-    for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "gather", [&](int wx, int wy, size_t first) {
-        Counters& counters = stats.local();
-        auto frags = deep.pixel(wx, wy);
-        for (uint32_t k = 0; k < frags.size(); ++k) {
-            // The true surface: the displaced point and normal (the cache's un-displaced
-            // hemisphere is its approximation, measured against this). Hair: its site.
-            const Fragment& f = frags[k];
-            if (!needs_bounce_light(scene, f)) continue;
-            const HairSite site = f.is_hair() ? hair_site(scene, f) : HairSite{f.p, f.n};
-            GatherResult g = gatherer.gather(site.p, site.n,
-                                             fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k), counters);
-            out[first + k] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
-        }
-    });
-    return out;
 }
 
 }  // namespace bounce

@@ -112,6 +112,8 @@ struct EarlierGather {
 void cells_through(const GatherGrid& grid, const Vec3& p, const Vec3& n, const RandomStream& rng, const GatherHits& hits,
                    std::span<const Bounds> boxes, std::vector<uint32_t>& out);
 
+struct DirectionGuide;
+
 /// What a gather returns; gradients follow Ward-Heckbert (rotational) and Ward-Heckbert with
 /// Krivanek's occlusion-aware distances (translational), see docs/gather.md.
 struct GatherResult {
@@ -178,7 +180,20 @@ public:
     GatherResult reproject(const Vec3& p, const Vec3& n, const RandomStream& rng, const EarlierGather& from,
                            Counters& counters) const;
     static constexpr float kReprojectNear = 16;
+    /// A plain gather that also reports, per direction bin of n's frame, how much its cells'
+    /// values varied there: the guide of nearby guided gathers (guide.h).
+    DirectionGuide pilot(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters) const;
+    /// A gather of the same number of rays spread over the direction bins by `guide` (its
+    /// share GatherSettings::guided; guide.h): E, AO, bent normal and light directions only.
+    GatherResult gather_guided(const Vec3& p, const Vec3& n, const RandomStream& rng, const DirectionGuide& guide,
+                               Counters& counters) const;
     const GatherSettings& settings() const { return settings_; }
+    /// The same gatherer with `rays` rays per gather.
+    Gatherer with_rays(int rays) const {
+        GatherSettings s = settings_;
+        s.rays = rays;
+        return Gatherer(scene_, accel_, materials_, lighting_, radiosity_, s);
+    }
     GatherGrid grid() const { return grid_; }
 
 private:
@@ -186,6 +201,9 @@ private:
     void cell_directions(const Vec3& n, const RandomStream& rng) const;
     /// Everything a gather computes from its cells' directions and hits (thread-local arrays).
     GatherResult finish(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const;
+    /// The radiance cell c of the current gather brings (its hit's or the sky's; 0 in AO mode),
+    /// setting the cell's hit normal (Cells::NH) where a record's terms or AO need it.
+    Color cell_radiance(const Vec3& p, size_t c, const RandomStream& rng, Counters& counters, std::span<Color> parts) const;
     /// Radiance leaving a hit towards the gather point (direction -d). With `parts` (one per
     /// light): per light, scales factored out, and their sum is returned (the signal).
     Color hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray,
@@ -253,8 +271,9 @@ bool needs_bounce_light(const Scene& scene, const Fragment& f);
 /// The gather settings a scene's render settings ask for (resolves the automatic AO distance).
 GatherSettings gather_settings(const Scene& scene);
 
-/// Brute force: gathers at every fragment of `deep` (tiles in parallel); the result is
-/// parallel to deep.fragments and independent of thread count.
+/// Brute force: gathers at every fragment of `deep` (tiles in parallel; guided by pilot gathers
+/// with GatherSettings::guided, guide.h); the result is parallel to deep.fragments and
+/// independent of thread count.
 std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
                                             Stats& stats, ProgressSink* progress);
 
