@@ -8,6 +8,8 @@
 #include <cmath>
 #include <numeric>
 
+#include "bounce/cache/control_variate.h"
+#include "bounce/cache/passes.h"
 #include "bounce/gather/guide.h"
 #include "bounce/render/render.h"
 #include "test_util.h"
@@ -168,6 +170,39 @@ TEST(Guide, GuidedBruteForceIsIndependentOfTheWindow) {
                 guided_differs += !(whole[at].irradiance == plain[at].irradiance);
             }
     EXPECT_GT(guided_differs, i / 2);  // the guide was used
+}
+
+TEST(Guide, RecordsKeepTheirGuideAndRefinementGathersFollowIt) {
+    // With render.guided every record keeps how its cells varied per bin; a refinement gather
+    // (no gradients) is guided by the records that cover its fragment: the same fragments are
+    // refined, with other (guided) values.
+    Cornell c;
+    c.scene.render.indirect.gi = GiMode::Cache;
+    GatherSettings gs = gather_settings(c.scene);
+    gs.guided = 0.5f;
+    std::array<IrradianceCache, 2> caches{IrradianceCache(c.scene.bounds(), c.scene.render.cache, false),
+                                          IrradianceCache(c.scene.bounds(), c.scene.render.cache, false)};
+    std::array<size_t, 2> refined{};
+    for (size_t i = 0; i < 2; ++i) {
+        gathering_pass(c.scene, c.deep, Gatherer(c.scene, c.accel, c.materials, c.lighting, nullptr, gs), caches[i], c.stats, nullptr);
+        GatherSettings own = gs;
+        own.record_terms = false, own.guided = i == 0 ? 0.5f : 0.0f;
+        const Gatherer refiner(c.scene, c.accel, c.materials, c.lighting, nullptr, own);
+        refined[i] = refinement_pass(c.scene, c.deep, refiner, caches[i], c.stats, nullptr, {});
+    }
+    size_t guides = 0;
+    for (size_t r = 0; r < caches[0].size(); ++r) guides += caches[0].record(r).guide != nullptr;
+    EXPECT_EQ(guides, caches[0].size());
+    const Fragment& f = c.deep.fragments[c.deep.fragments.size() / 2];
+    const auto guide = guide_from_records(caches[0], f.p, f.n, f.n);
+    ASSERT_TRUE(guide.has_value());
+    EXPECT_GT(std::accumulate(guide->spread.begin(), guide->spread.end(), 0.0f), 0.0f);
+    ASSERT_GT(refined[0], 0u);
+    EXPECT_EQ(refined[0], refined[1]);
+    size_t differ = 0;
+    for (size_t r = 0; r < caches[0].fragment_record_count(); ++r)
+        differ += !(caches[0].fragment_record_at(r).E == caches[1].fragment_record_at(r).E);
+    EXPECT_GT(differ, refined[0] / 2);
 }
 
 }  // namespace

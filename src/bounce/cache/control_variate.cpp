@@ -27,29 +27,51 @@ const std::array<Vec3, kReachBins>& bin_centres() {
     return centres;
 }
 
+/// The covering records' per-bin values (`values(record)`: its 32, or null to skip it) looked
+/// up at the centres of the bins of Frame(gather_n) and blended with their weights (a record
+/// whose hemisphere does not hold a direction leaves it to the others). Returns how many
+/// records took part.
+template <class T, class Values>
+int blend_bins(const IrradianceCache& cache, const Vec3& p, const Vec3& n, const Vec3& gather_n, const Values& values,
+               std::array<T, kReachBins>& out) {
+    std::array<float, kReachBins> weight{};
+    const Frame frame(gather_n);
+    const auto& centres = bin_centres();
+    int records = 0;
+    cache.visit_weights(p, n, [&](uint32_t id, float w) {
+        if (!(w > 0)) return;
+        const Record& r = cache.record(id);
+        const std::array<T, kReachBins>* v = values(r);
+        if (!v) return;
+        ++records;
+        if (r.n == gather_n) {  // the same frame: bin for bin (planar surfaces, the common case)
+            for (size_t b = 0; b < out.size(); ++b) out[b] += (*v)[b] * w, weight[b] += w;
+            return;
+        }
+        const Frame rf(r.n);
+        for (size_t b = 0; b < out.size(); ++b) {
+            const Vec3 local = rf.to_local(frame.to_world(centres[b]));
+            if (local.z <= 0) continue;  // below the record's horizon: it saw nothing there
+            out[b] += (*v)[static_cast<size_t>(direction_bin(local))] * w, weight[b] += w;
+        }
+    });
+    for (size_t b = 0; b < out.size(); ++b) out[b] = weight[b] > 0 ? out[b] / weight[b] : T(0);
+    return records;
+}
+
 }  // namespace
 
 BinPrediction predict_bins(const IrradianceCache& cache, const Vec3& p, const Vec3& n, const Vec3& gather_n) {
     BinPrediction out;
-    std::array<float, kReachBins> weight{};
-    const Frame frame(gather_n);
-    const auto& centres = bin_centres();
-    cache.visit_weights(p, n, [&](uint32_t id, float w) {
-        if (!(w > 0)) return;
-        const Record& r = cache.record(id);
-        ++out.records;
-        if (r.n == gather_n) {  // the same frame: bin for bin (planar surfaces, the common case)
-            for (size_t b = 0; b < out.bin.size(); ++b) out.bin[b] += r.bins[b] * w, weight[b] += w;
-            return;
-        }
-        const Frame rf(r.n);
-        for (size_t b = 0; b < out.bin.size(); ++b) {
-            const Vec3 local = rf.to_local(frame.to_world(centres[b]));
-            if (local.z <= 0) continue;  // below the record's horizon: it saw nothing there
-            out.bin[b] += r.bins[static_cast<size_t>(direction_bin(local))] * w, weight[b] += w;
-        }
-    });
-    for (size_t b = 0; b < out.bin.size(); ++b) out.bin[b] = weight[b] > 0 ? out.bin[b] / weight[b] : Color(0);
+    out.records = blend_bins(cache, p, n, gather_n, [](const Record& r) { return &r.bins; }, out.bin);
+    return out;
+}
+
+std::optional<DirectionGuide> guide_from_records(const IrradianceCache& cache, const Vec3& p, const Vec3& n, const Vec3& gather_n) {
+    DirectionGuide out;
+    out.n = gather_n;
+    const auto spread = [](const Record& r) { return r.guide ? &r.guide->spread : nullptr; };
+    if (blend_bins(cache, p, n, gather_n, spread, out.spread) == 0) return std::nullopt;
     return out;
 }
 

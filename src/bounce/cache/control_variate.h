@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include "bounce/core/stats.h"
 #include "bounce/deep/deep_buffer.h"
 #include "bounce/gather/gather.h"
+#include "bounce/gather/guide.h"
 
 namespace bounce {
 
@@ -31,6 +33,11 @@ struct BinPrediction {
 /// others). gather_n: the normal the fragment's rays are gathered about (a displaced
 /// fragment's own, where its records lie on the un-displaced surface).
 BinPrediction predict_bins(const IrradianceCache& cache, const Vec3& p, const Vec3& n, const Vec3& gather_n);
+
+/// The guide of a refinement gather at (p, n) about gather_n (render.guided, gather/guide.h):
+/// the covering records' spreads (Record::guide) blended as predict_bins blends their bins;
+/// none when no covering record kept one.
+std::optional<DirectionGuide> guide_from_records(const IrradianceCache& cache, const Vec3& p, const Vec3& n, const Vec3& gather_n);
 
 /// What the control variate adds to a gather's value: `scale` x (the mean of the prediction
 /// over the bins minus its mean over the gather's rays), `local`: the rays' directions in the

@@ -79,6 +79,7 @@ void IrradianceCache::set_values(Record& r, const GatherResult& g, bool gradient
     r.ao = g.ao;
     r.bins = g.bins;  // with light parts, the signal's (every light at scale 1)
     r.cells = g.cells, r.grid = g.grid;
+    r.guide = g.guide;
     // Capped (a record in near darkness divides by almost nothing): past 1000 % it is all
     // noise anyway, and a cache file refuses values beyond 1e20.
     r.noise = g.rel_stderr >= 0 && g.rel_stderr < 1e3f ? g.rel_stderr : 1e3f;

@@ -1,6 +1,7 @@
 #include "bounce/cache/passes.h"
 
 #include "bounce/cache/cache_file.h"
+#include "bounce/cache/control_variate.h"
 #include "bounce/cache/sites.h"
 #include "bounce/cache/temporal.h"
 
@@ -126,6 +127,14 @@ bool refinement_runs(const Scene& scene) {
     return std::any_of(scene.objects.begin(), scene.objects.end(), [](const Object& o) { return o.displacement_bound > 0; });
 }
 
+namespace {
+/// The guide of fragment f's refinement gather from the records about its record site.
+std::optional<DirectionGuide> records_guide(const IrradianceCache& cache, const Scene& scene, const Fragment& f) {
+    const Site site = record_site(scene, f, cache.settings());
+    return guide_from_records(cache, site.p, site.n, f.n);
+}
+}  // namespace
+
 size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,
                        Stats& stats, ProgressSink* sink, const RefinementOptions& options) {
     const int frame = options.frame;
@@ -171,12 +180,17 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                 const RandomStream rng = fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k);
                 const Record* near = options.earlier ? options.earlier->nearest(f.p, f.n, f.footprint) : nullptr;
                 auto hits = options.keep_hits && !near ? std::make_shared<GatherHits>() : nullptr;
+                // Guided by the records that cover it where they kept a guide (render.guided),
+                // unless its hits are to be kept (a guided gather has no grid to re-shade).
+                const std::optional<DirectionGuide> guide =
+                    !near && !hits && refiner.settings().guided > 0 ? records_guide(cache, scene, f) : std::nullopt;
                 const GatherResult g =
                     near ? refiner.reproject(f.p, f.n, rng,
                                              {near->origin, near->n, record_stream(*near, scene.render.visibility.seed, scene.camera.width),
                                               *near->hits},
                                              stats.local())
-                         : refiner.gather(f.p, f.n, rng, stats.local(), 0, hits.get());
+                    : guide ? refiner.gather_guided(f.p, f.n, rng, *guide, stats.local())
+                            : refiner.gather(f.p, f.n, rng, stats.local(), 0, hits.get());
                 reused.local() += near != nullptr;
                 Record r;
                 r.hits = std::move(hits);

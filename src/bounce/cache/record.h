@@ -59,6 +59,9 @@ struct Record {
     float drift = 0;             ///< bound on how far its irradiance may have moved since (relative to E)
     std::shared_ptr<const GatherHits> hits;  ///< kept only when a shot may re-shade it (not in files)
     std::shared_ptr<const LightParts> parts; ///< CacheSettings::light_parts only (not in files)
+    /// render.guided only (not in files): how its gather's cells varied per direction bin, the
+    /// guide of the refinement gathers of fragments it covers (guide.h).
+    std::shared_ptr<const DirectionGuide> guide;
 };
 
 /// A record's irradiance and AO as the shading pass reads them when records are filtered in

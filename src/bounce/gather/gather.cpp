@@ -2,6 +2,7 @@
 
 #include "bounce/gather/ao_cutoff.h"
 #include "bounce/gather/gather_cells.h"
+#include "bounce/gather/guide.h"
 #include "bounce/gather/hessian.h"
 
 #include <vector>
@@ -391,6 +392,7 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
             for (size_t c = 0; c < all->size(); ++c) (*all)[c] = Color(U[c]);
         res.cells = std::move(all), res.grid = grid_;
     }
+    if (settings_.guided > 0) res.guide = std::make_shared<const DirectionGuide>(cells_guide(n));
     if (settings_.hessian) {
         const TangentHessian th = cells_hessian(grid_, p, n, far_, settings_.ao, L, U, R, D);
         res.hess_axis = th.axis, res.hess_slow = th.slow, res.hess_fast = th.fast;

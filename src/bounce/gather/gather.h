@@ -145,6 +145,9 @@ struct GatherResult {
     std::shared_ptr<const std::vector<Color>> cells;
     GatherGrid grid;
     std::shared_ptr<LightParts> parts;  ///< GatherSettings::light_parts: per light
+    /// With record_terms and GatherSettings::guided: how its cells varied per direction bin,
+    /// the guide of nearby guided gathers (refinement's; guide.h).
+    std::shared_ptr<const DirectionGuide> guide;
 };
 
 /// Gathers at `p` (on the fine surface) over the hemisphere of unit normal `n`.
@@ -184,7 +187,8 @@ public:
     /// values varied there: the guide of nearby guided gathers (guide.h).
     DirectionGuide pilot(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters) const;
     /// A gather of the same number of rays spread over the direction bins by `guide` (its
-    /// share GatherSettings::guided; guide.h): E, AO, bent normal and light directions only.
+    /// share GatherSettings::guided; guide.h): E, AO, bent normal, light directions and the
+    /// harmonic distance (no gradients). With light parts it is the plain gather.
     GatherResult gather_guided(const Vec3& p, const Vec3& n, const RandomStream& rng, const DirectionGuide& guide,
                                Counters& counters) const;
     const GatherSettings& settings() const { return settings_; }
@@ -201,6 +205,8 @@ private:
     void cell_directions(const Vec3& n, const RandomStream& rng) const;
     /// Everything a gather computes from its cells' directions and hits (thread-local arrays).
     GatherResult finish(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const;
+    /// The current gather's cells' spread per direction bin of n's frame (DirectionGuide).
+    DirectionGuide cells_guide(const Vec3& n) const;
     /// The radiance cell c of the current gather brings (its hit's or the sky's; 0 in AO mode),
     /// setting the cell's hit normal (Cells::NH) where a record's terms or AO need it.
     Color cell_radiance(const Vec3& p, size_t c, const RandomStream& rng, Counters& counters, std::span<Color> parts) const;

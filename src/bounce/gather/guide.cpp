@@ -69,6 +69,10 @@ using detail::cells;
 
 DirectionGuide Gatherer::pilot(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters) const {
     gather(p, n, rng, counters);
+    return cells_guide(n);
+}
+
+DirectionGuide Gatherer::cells_guide(const Vec3& n) const {
     // Neighbouring cells of a row within one bin: each pair's squared difference estimates twice
     // the variance a stratified ray meets there (smooth change within the bin costs little).
     DirectionGuide guide;
@@ -94,6 +98,7 @@ DirectionGuide Gatherer::pilot(const Vec3& p, const Vec3& n, const RandomStream&
 
 GatherResult Gatherer::gather_guided(const Vec3& p, const Vec3& n, const RandomStream& rng, const DirectionGuide& guide,
                                      Counters& counters) const {
+    if (lights_) return gather(p, n, rng, counters);  // per-light parts are sums over the grid's cells
     if (settings_.cancel) settings_.cancel->check();
     thread_local GuidedRays rays;
     guided_rays(guided_allocation(guide, grid_.rays(), settings_.guided), rng, rays);
@@ -107,10 +112,13 @@ GatherResult Gatherer::gather_guided(const Vec3& p, const Vec3& n, const RandomS
     res.rays = static_cast<int>(S);
     Vec3 sum_u_dir(0);
     float sum_u = 0;
+    double inv_r = 0;
     for (size_t c = 0; c < S; ++c) {
         const float w = rays.weight[c];
+        const Hit& h = cells.hits[c];
         const Color l = cell_radiance(p, c, rng, counters, {}) * w;
-        const float u = cells.hits[c].valid() ? unoccluded(cells.hits[c].t) * w : w;
+        const float u = h.valid() ? unoccluded(h.t) * w : w;
+        if (h.valid()) inv_r += w / std::max(h.t, 1e-20f);
         res.irradiance += l;
         for (int ch = 0; ch < 3; ++ch) res.light_dir[static_cast<size_t>(ch)] += cells.D[c] * l[ch];
         sum_u += u, sum_u_dir += cells.D[c] * u;
@@ -118,6 +126,7 @@ GatherResult Gatherer::gather_guided(const Vec3& p, const Vec3& n, const RandomS
     res.irradiance = res.irradiance * kPi;
     for (Vec3& d : res.light_dir) d = d * kPi;
     res.ao = sum_u;
+    res.harmonic_distance = inv_r > 0 ? static_cast<float>(1 / inv_r) : INFINITY;
     res.bent_normal = dot(sum_u_dir, sum_u_dir) > 0 ? normalize(sum_u_dir) : n;
     return res;
 }

@@ -118,7 +118,8 @@ void add_pipeline_rows(std::vector<Row>& rows) {
     rows.push_back(row("concave_angle", "gather", &R::indirect, &IndirectSettings::concave_angle).range(0, 90).unit("degrees")
                        .doc("a gather ray this far from the normal at both ends does not shrink the record radius (TL04)").id(cache).flag());
     rows.push_back(row("guided", "gather", &R::indirect, &IndirectSettings::guided).range(0, 0.95)
-                       .doc("brute force: share of each gather's rays spread over 32 direction bins by a pilot gather per 8x8 pixels; 0 = even")
+                       .doc("per-fragment gathers (brute force, cache refinement): share of their rays spread over 32 direction bins "
+                            "by a guide (brute force: a pilot gather per 8x8 pixels; refinement: the covering records); 0 = even")
                        .flag());
 }
 

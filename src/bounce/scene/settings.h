@@ -65,7 +65,7 @@ struct IndirectSettings {
     float ao_falloff = 0;
     int hit_light_samples = 1;    ///< shadow samples at gather hits without radiosity textures
     float concave_angle = 80;     ///< degrees (TL04 distance filter)
-    float guided = 0;             ///< share of a per-fragment gather's rays placed by a pilot's guide (gather/guide.h); 0 = off
+    float guided = 0;             ///< share of a per-fragment gather's rays placed by a guide (gather/guide.h); 0 = off
     bool any() const { return gi != GiMode::None || ao; }
 };
 
