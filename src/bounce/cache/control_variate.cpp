@@ -107,32 +107,26 @@ void correction_pass(const Scene& scene, const DeepBuffer& deep, const Irradianc
     const bool ao = scene.render.indirect.ao;
     tbb::enumerable_thread_specific<std::vector<Vec3>> directions;
     tbb::enumerable_thread_specific<uint64_t> fragments(0), predicted(0);
-    for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, progress, "correct", [&](int wx, int wy, size_t first) {
+    for_each_bounce_fragment(scene, deep, progress, "correct", [&](const BounceFragment& b) {
         Counters& counters = stats.local();
         std::vector<Vec3>& local = directions.local();
-        auto frags = deep.pixel(wx, wy);
-        for (uint32_t k = 0; k < frags.size(); ++k) {
-            const Fragment& f = frags[k];
-            if (!needs_bounce_light(scene, f)) continue;
-            // The gather brute force makes here (the same point, normal and stream) ...
-            const HairSite at = f.is_hair() ? hair_site(scene, f) : HairSite{f.p, f.n};
-            const RandomStream rng = fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k);
-            const GatherResult g = gatherer.gather(at.p, at.n, rng, counters);
-            // ... corrected by the records' prediction about the site they are looked up at.
-            const Site site = record_site(scene, f, cache.settings());
-            gather_local_directions(gatherer.grid(), rng, local);
-            int records = 0;  // the records on its own plane predict it, else the others' bins
-            Color c = plane_correction(cache, site.p, at.n, local, ao ? 1.0f : kPi, records);
-            if (records == 0) {
-                const BinPrediction pred = predict_bins(cache, site.p, site.n, at.n);
-                c = prediction_correction(pred, local, ao ? 1.0f : kPi), records = pred.records;
-            }
-            Indirect& out = light[first + k];
-            if (ao) out.ao = g.ao + c.x;
-            else out.irradiance = g.irradiance + c;
-            ++fragments.local();
-            predicted.local() += records > 0;
+        // The gather brute force makes here (the same point, normal and stream) ...
+        const HairSite& at = b.site;
+        const GatherResult g = gatherer.gather(at.p, at.n, b.rng, counters);
+        // ... corrected by the records' prediction about the site they are looked up at.
+        const Site site = record_site(scene, b.f, cache.settings());
+        gather_local_directions(gatherer.grid(), b.rng, local);
+        int records = 0;  // the records on its own plane predict it, else the others' bins
+        Color c = plane_correction(cache, site.p, at.n, local, ao ? 1.0f : kPi, records);
+        if (records == 0) {
+            const BinPrediction pred = predict_bins(cache, site.p, site.n, at.n);
+            c = prediction_correction(pred, local, ao ? 1.0f : kPi), records = pred.records;
         }
+        Indirect& out = light[b.index];
+        if (ao) out.ao = g.ao + c.x;
+        else out.irradiance = g.irradiance + c;
+        ++fragments.local();
+        predicted.local() += records > 0;
     });
     uint64_t n = 0, p = 0;
     for (uint64_t v : fragments) n += v;

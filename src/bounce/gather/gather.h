@@ -274,6 +274,31 @@ HairSite hair_site(const Scene& scene, const Fragment& f);
 /// skip the others (no records, no gathers; their indirect layers are 0 and their AO 1).
 bool needs_bounce_light(const Scene& scene, const Fragment& f);
 
+/// A fragment that takes bounce light, as the per-fragment passes (brute force, the control
+/// variate's correction) gather it: its index in deep.fragments, its window pixel, the site of
+/// its hemisphere (hair: HairSite) and its random stream (fragment_stream).
+struct BounceFragment {
+    size_t index;
+    int wx, wy;
+    const Fragment& f;
+    HairSite site;
+    RandomStream rng;
+};
+/// fn(const BounceFragment&) for every fragment of `deep` that needs_bounce_light, tiles in
+/// parallel under progress `name`.
+template <class Fn>
+void for_each_bounce_fragment(const Scene& scene, const DeepBuffer& deep, ProgressSink* sink, const char* name, Fn&& fn) {
+    for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, name, [&](int wx, int wy, size_t first) {
+        auto frags = deep.pixel(wx, wy);
+        for (uint32_t k = 0; k < frags.size(); ++k) {
+            const Fragment& f = frags[k];
+            if (!needs_bounce_light(scene, f)) continue;
+            fn(BounceFragment{first + k, wx, wy, f, f.is_hair() ? hair_site(scene, f) : HairSite{f.p, f.n},
+                              fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k)});
+        }
+    });
+}
+
 /// The gather settings a scene's render settings ask for (resolves the automatic AO distance).
 GatherSettings gather_settings(const Scene& scene);
 

@@ -182,24 +182,17 @@ std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer
     const std::vector<Pilot> pilots = gatherer.settings().guided > 0 ? make_pilots(scene, deep, gatherer, stats) : std::vector<Pilot>();
     const int bx0 = deep.x0 / kGuideBlock, by0 = deep.y0 / kGuideBlock, bw = blocks_across(deep);
     std::vector<Indirect> out(deep.fragments.size());
-    for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "gather", [&](int wx, int wy, size_t first) {
+    // The true surface: the displaced point and normal (the cache's un-displaced hemisphere is
+    // its approximation, measured against this). Hair: its site.
+    for_each_bounce_fragment(scene, deep, sink, "gather", [&](const BounceFragment& b) {
         Counters& counters = stats.local();
         const Pilot* pilot = pilots.empty() ? nullptr
-                                            : &pilots[static_cast<size_t>((deep.y0 + wy) / kGuideBlock - by0) * static_cast<size_t>(bw) +
-                                                      static_cast<size_t>((deep.x0 + wx) / kGuideBlock - bx0)];
-        auto frags = deep.pixel(wx, wy);
-        for (uint32_t k = 0; k < frags.size(); ++k) {
-            // The true surface: the displaced point and normal (the cache's un-displaced
-            // hemisphere is its approximation, measured against this). Hair: its site.
-            const Fragment& f = frags[k];
-            if (!needs_bounce_light(scene, f)) continue;
-            const HairSite site = f.is_hair() ? hair_site(scene, f) : HairSite{f.p, f.n};
-            const RandomStream rng = fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k);
-            const GatherResult g = pilot && pilot->made && dot(pilot->guide.n, site.n) >= kGuideCos
-                                       ? gatherer.gather_guided(site.p, site.n, rng, pilot->guide, counters)
-                                       : gatherer.gather(site.p, site.n, rng, counters);
-            out[first + k] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
-        }
+                                            : &pilots[static_cast<size_t>((deep.y0 + b.wy) / kGuideBlock - by0) * static_cast<size_t>(bw) +
+                                                      static_cast<size_t>((deep.x0 + b.wx) / kGuideBlock - bx0)];
+        const GatherResult g = pilot && pilot->made && dot(pilot->guide.n, b.site.n) >= kGuideCos
+                                   ? gatherer.gather_guided(b.site.p, b.site.n, b.rng, pilot->guide, counters)
+                                   : gatherer.gather(b.site.p, b.site.n, b.rng, counters);
+        out[b.index] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
     });
     return out;
 }
