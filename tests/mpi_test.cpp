@@ -154,6 +154,20 @@ TEST(Mpi, BruteForceAndTheFramesOfAShotAreByteIdentical) {
     }
 }
 
+TEST(Mpi, GuidedBruteForceIsByteIdenticalAndTilesOffThePilotsGridAreRefused) {
+    SKIP_UNDER_SANITIZER();
+    test::TempDir d;
+    // Tiles of 32 (a 40x40 image: windows at 0 and 32) follow the pilots' 8-pixel grid.
+    const std::string cornell = test::cornell_scene() + " --res 40x40 -q --gi brute --rays 64 --guided 0.5";
+    ASSERT_EQ(test::run_bounce(fmt::format("render {} -o {} --threads 2", cornell, d.file("g1.exr"))), 0);
+    std::string err;
+    ASSERT_EQ(run_mpi(3, fmt::format("render {} -o {} --threads 1", cornell, d.file("g3.exr")), &err), 0) << err;
+    expect_same_layers(d.file("g1.exr"), d.file("g3.exr"));
+    EXPECT_EQ(run_mpi(2, fmt::format("render {} -o {} --tile-size 12", cornell, d.file("g12.exr")), &err), 2) << err;
+    EXPECT_NE(err.find("render.tile_size"), std::string::npos) << err;
+    EXPECT_FALSE(std::filesystem::exists(d.file("g12.exr")));
+}
+
 TEST(Mpi, AMovingCamerasShotReprojectsTheSameGathersAtAnyRankCount) {
     SKIP_UNDER_SANITIZER();
     // The Cornell box as a shot with a dollying camera: refinement's fragments reuse earlier

@@ -1,5 +1,7 @@
 #include "bounce/render/render.h"
 
+#include "bounce/gather/guide.h"
+
 #include <fmt/format.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -322,6 +324,10 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
         throw InputError(scene.path, "render.deep_colour", "a deep file with colour is written by one process (not under MPI yet)");
     if (request.comm && request.comm->size() > 1 && scene.render.cache.light_parts && scene.render.indirect.gi == GiMode::Cache)
         throw InputError(scene.path, "render.light_parts", "records with light parts are made by one process (the lighting tool's; not under MPI)");
+    // A rank's tiles find the pilots one process would only where tiles follow the pilots' grid.
+    if (request.comm && request.comm->size() > 1 && scene.render.indirect.guided > 0 && scene.render.parallel.tile_size % kGuideBlock != 0)
+        throw InputError(scene.path, "render.tile_size",
+                         fmt::format("guided gathers under MPI need tiles of a multiple of {} pixels", kGuideBlock));
     tbb::task_arena arena(plan.threads);
     stats.set("threads", plan.threads);
     report_dicing(scene, stats);
