@@ -7,6 +7,8 @@
 
 #include <vector>
 
+#include <tbb/enumerable_thread_specific.h>
+
 #include "bounce/core/sampling.h"
 
 namespace bounce {
@@ -46,7 +48,8 @@ Gatherer::Gatherer(const Scene& scene, const SceneAccel& accel, const Materials&
       packet_order_(gather_packet_order(grid_)),
       far_(10 * std::max(1e-6f, length(scene.bounds().diagonal()))),
       lights_(settings.light_parts && !settings.ao ? scene.lights.size() : 0),
-      unit_scales_(lights_, Color(1)) {
+      unit_scales_(lights_, Color(1)),
+      scratch_(std::make_shared<Scratch>()) {
     if (lights_ && radiosity_ && !radiosity_->has_parts())
         throw std::logic_error("gather: light parts need radiosity textures baked with parts");
 }
@@ -94,12 +97,13 @@ Color Gatherer::escaped_radiance(const Vec3& d, std::span<Color> parts) const {
     return part_sum(parts);
 }
 
-namespace detail {
-thread_local Cells cells;
-}  // namespace detail
-using detail::cells;
+struct Gatherer::Scratch {
+    tbb::enumerable_thread_specific<detail::Cells> per_thread;
+};
 
-void Gatherer::cell_directions(const Vec3& n, const RandomStream& rng) const {
+detail::Cells& Gatherer::scratch() const { return scratch_->per_thread.local(); }
+
+void Gatherer::cell_directions(detail::Cells& cells, const Vec3& n, const RandomStream& rng) const {
     const int M = grid_.m, N = grid_.n;
     cells.resize(static_cast<size_t>(M * N));
     const Frame frame(n);
@@ -115,9 +119,10 @@ void Gatherer::cell_directions(const Vec3& n, const RandomStream& rng) const {
 GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near,
                               GatherHits* keep) const {
     if (settings_.cancel) settings_.cancel->check();
+    detail::Cells& cells = scratch();
     // Directions first (stratified, cosine-weighted), then one packet trace of all of them:
     // neighbouring cells of a row are coherent, so Embree traverses them together.
-    cell_directions(n, rng);
+    cell_directions(cells, n, rng);
     const size_t S = cells.D.size();
     for (size_t i = 0; i < packet_order_.size(); ++i) cells.packet_dirs[i] = cells.D[packet_order_[i]];
     accel_.trace_many(p, cells.packet_dirs, cells.packet_hits);
@@ -132,13 +137,14 @@ GatherResult Gatherer::gather(const Vec3& p, const Vec3& n, const RandomStream& 
             keep->object[c] = h.valid() && h.hair ? h.object | GatherHits::kHairBit : h.object;
         }
     }
-    return finish(p, n, rng, counters, near);
+    return finish(cells, p, n, rng, counters, near);
 }
 
 GatherResult Gatherer::reshade(const Vec3& p, const Vec3& n, const RandomStream& rng, const GatherHits& kept, Counters& counters,
                                float near) const {
     if (settings_.cancel) settings_.cancel->check();
-    cell_directions(n, rng);
+    detail::Cells& cells = scratch();
+    cell_directions(cells, n, rng);
     const size_t S = cells.D.size();
     if (kept.t.size() != S) return gather(p, n, rng, counters, near);  // made with other settings: trace again
     for (size_t c = 0; c < S; ++c) {
@@ -147,13 +153,14 @@ GatherResult Gatherer::reshade(const Vec3& p, const Vec3& n, const RandomStream&
         h.hair = kept.object[c] != kNoHit && (kept.object[c] & GatherHits::kHairBit);
         h.object = kept.object[c] == kNoHit ? kNoHit : kept.object[c] & ~GatherHits::kHairBit;
     }
-    return finish(p, n, rng, counters, near);
+    return finish(cells, p, n, rng, counters, near);
 }
 
 GatherResult Gatherer::update(const Vec3& p, const Vec3& n, const RandomStream& rng, GatherHits& kept, std::span<const uint32_t> redo,
                               Counters& counters, float near) const {
     if (settings_.cancel) settings_.cancel->check();
-    cell_directions(n, rng);
+    detail::Cells& cells = scratch();
+    cell_directions(cells, n, rng);
     const size_t S = cells.D.size();
     if (kept.t.size() != S) return gather(p, n, rng, counters, near, &kept);
     std::vector<Vec3> dirs;
@@ -223,7 +230,8 @@ void gradient_sums(const GatherGrid& grid, const Frame& frame, float near, const
 
 }  // namespace
 
-LightPart Gatherer::light_part(const Color* L, size_t stride, const Frame& frame, float near, bool gradients) const {
+LightPart Gatherer::light_part(const detail::Cells& cells, const Color* L, size_t stride, const Frame& frame, float near,
+                               bool gradients) const {
     const size_t S = static_cast<size_t>(grid_.rays());
     Color sum(0);
     std::array<Vec3, 3> dir{};
@@ -312,7 +320,8 @@ void set_bins(GatherResult& res, const Frame& frame, std::span<const float> ao, 
 
 }  // namespace
 
-Color Gatherer::cell_radiance(const Vec3& p, size_t c, const RandomStream& rng, Counters& counters, std::span<Color> parts) const {
+Color Gatherer::cell_radiance(detail::Cells& cells, const Vec3& p, size_t c, const RandomStream& rng, Counters& counters,
+                              std::span<Color> parts) const {
     const Vec3& d = cells.D[c];
     const Hit& h = cells.hits[c];
     cells.NH[c] = Vec3(0);
@@ -326,7 +335,8 @@ Color Gatherer::cell_radiance(const Vec3& p, size_t c, const RandomStream& rng, 
     return settings_.ao ? Color(0) : hit_radiance(h, sp, d, rng, c, counters, parts);
 }
 
-GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const {
+GatherResult Gatherer::finish(detail::Cells& cells, const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters,
+                              float near) const {
     const int M = grid_.m, N = grid_.n, S = M * N;
     std::vector<Color>& L = cells.L;
     std::vector<float>&R = cells.R, &U = cells.U, &cos_theta = cells.cos_theta;
@@ -343,7 +353,7 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
         const Vec3& d = D[c];
         const Hit& h = hits[c];
         const std::span<Color> parts = lights_ ? std::span<Color>(cells.P.data() + c * lights_, lights_) : std::span<Color>();
-        const Color l = cell_radiance(p, c, rng, counters, parts);
+        const Color l = cell_radiance(cells, p, c, rng, counters, parts);
         float u = 1;
         if (h.valid()) {
             R[c] = h.t;
@@ -366,11 +376,11 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
     if (lights_) {
         parts = std::make_shared<LightParts>();
         for (size_t i = 0; i < lights_; ++i)
-            parts->light.push_back(light_part(cells.P.data() + i, lights_, frame, near, settings_.record_terms));
+            parts->light.push_back(light_part(cells, cells.P.data() + i, lights_, frame, near, settings_.record_terms));
         parts->signal = combine_parts(*parts, unit_scales_);
     }
     // AO mode's radiance is all 0: no gradients to sum.
-    const LightPart sums = parts ? parts->signal : light_part(L.data(), 1, frame, near, settings_.record_terms && !settings_.ao);
+    const LightPart sums = parts ? parts->signal : light_part(cells, L.data(), 1, frame, near, settings_.record_terms && !settings_.ao);
     res.irradiance = sums.E, res.light_dir = sums.dir;
     res.parts = std::move(parts);
     res.ao = sum_u / static_cast<float>(S);
@@ -392,7 +402,7 @@ GatherResult Gatherer::finish(const Vec3& p, const Vec3& n, const RandomStream& 
             for (size_t c = 0; c < all->size(); ++c) (*all)[c] = Color(U[c]);
         res.cells = std::move(all), res.grid = grid_;
     }
-    if (settings_.guided > 0) res.guide = std::make_shared<const DirectionGuide>(cells_guide(n));
+    if (settings_.guided > 0) res.guide = std::make_shared<const DirectionGuide>(cells_guide(cells, n));
     if (settings_.hessian) {
         const TangentHessian th = cells_hessian(grid_, p, n, far_, settings_.ao, L, U, R, D);
         res.hess_axis = th.axis, res.hess_slow = th.slow, res.hess_fast = th.fast;

@@ -113,6 +113,9 @@ void cells_through(const GatherGrid& grid, const Vec3& p, const Vec3& n, const R
                    std::span<const Bounds> boxes, std::vector<uint32_t>& out);
 
 struct DirectionGuide;
+namespace detail {
+struct Cells;
+}
 
 /// What a gather returns; gradients follow Ward-Heckbert (rotational) and Ward-Heckbert with
 /// Krivanek's occlusion-aware distances (translational), see docs/gather.md.
@@ -201,15 +204,20 @@ public:
     GatherGrid grid() const { return grid_; }
 
 private:
-    /// The directions of the gather's cells (stratified, cosine-weighted) about n.
-    void cell_directions(const Vec3& n, const RandomStream& rng) const;
-    /// Everything a gather computes from its cells' directions and hits (thread-local arrays).
-    GatherResult finish(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const;
+    /// This thread's scratch of the current gather: the cells' directions, hits and values, which
+    /// every entry point fills and hands to the steps below (a pool per gatherer, one per thread).
+    detail::Cells& scratch() const;
+    /// The directions of the gather's cells (stratified, cosine-weighted) about n, into `cells`.
+    void cell_directions(detail::Cells& cells, const Vec3& n, const RandomStream& rng) const;
+    /// Everything a gather computes from its cells' directions and hits.
+    GatherResult finish(detail::Cells& cells, const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters,
+                        float near) const;
     /// The current gather's cells' spread per direction bin of n's frame (DirectionGuide).
-    DirectionGuide cells_guide(const Vec3& n) const;
+    DirectionGuide cells_guide(const detail::Cells& cells, const Vec3& n) const;
     /// The radiance cell c of the current gather brings (its hit's or the sky's; 0 in AO mode),
     /// setting the cell's hit normal (Cells::NH) where a record's terms or AO need it.
-    Color cell_radiance(const Vec3& p, size_t c, const RandomStream& rng, Counters& counters, std::span<Color> parts) const;
+    Color cell_radiance(detail::Cells& cells, const Vec3& p, size_t c, const RandomStream& rng, Counters& counters,
+                        std::span<Color> parts) const;
     /// Radiance leaving a hit towards the gather point (direction -d). With `parts` (one per
     /// light): per light, scales factored out, and their sum is returned (the signal).
     Color hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray,
@@ -222,7 +230,7 @@ private:
     float unoccluded(float t) const;
     /// The light-linear sums of the current gather over cell values L[c * stride]: E and light
     /// directions, and with `gradients` the rotational and translational gradients.
-    LightPart light_part(const Color* L, size_t stride, const Frame& frame, float near, bool gradients) const;
+    LightPart light_part(const detail::Cells& cells, const Color* L, size_t stride, const Frame& frame, float near, bool gradients) const;
 
     const Scene& scene_;
     const SceneAccel& accel_;
@@ -236,6 +244,8 @@ private:
     float far_;  ///< where a ray that leaves the scene is taken to end, for the Hessian's mesh
     size_t lights_;  ///< GatherSettings::light_parts: the scene's lights (0: no parts)
     std::vector<Color> unit_scales_;  ///< every light at scale 1 (the signal)
+    struct Scratch;
+    std::shared_ptr<Scratch> scratch_;  ///< per thread (copies of a gatherer share it)
 };
 
 }  // namespace bounce

@@ -1,5 +1,5 @@
 // Internal to gather/: the per-cell scratch of a thread's current gather (trace, re-shade or
-// reproject, then Gatherer::finish), shared by gather.cpp and reproject.cpp.
+// reproject, then Gatherer::finish), handed explicitly from step to step (Gatherer::scratch).
 #pragma once
 
 #include <cmath>
@@ -24,6 +24,5 @@ struct Cells {
         D.resize(s), NH.resize(s), cos_theta.resize(s), hits.resize(s), packet_dirs.resize(s), packet_hits.resize(s);
     }
 };
-extern thread_local Cells cells;
 
 }  // namespace bounce::detail

@@ -65,14 +65,12 @@ void guided_rays(const std::array<int, kReachBins>& allocation, const RandomStre
     }
 }
 
-using detail::cells;
-
 DirectionGuide Gatherer::pilot(const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters) const {
     gather(p, n, rng, counters);
-    return cells_guide(n);
+    return cells_guide(scratch(), n);  // the cells that gather left
 }
 
-DirectionGuide Gatherer::cells_guide(const Vec3& n) const {
+DirectionGuide Gatherer::cells_guide(const detail::Cells& cells, const Vec3& n) const {
     // Neighbouring cells of a row within one bin: each pair's squared difference estimates twice
     // the variance a stratified ray meets there (smooth change within the bin costs little).
     DirectionGuide guide;
@@ -104,6 +102,7 @@ GatherResult Gatherer::gather_guided(const Vec3& p, const Vec3& n, const RandomS
     guided_rays(guided_allocation(guide, grid_.rays(), settings_.guided), rng, rays);
     const size_t S = rays.local.size();
     const Frame frame(n);
+    detail::Cells& cells = scratch();
     cells.resize(S);
     for (size_t c = 0; c < S; ++c) cells.D[c] = frame.to_world(rays.local[c]), cells.cos_theta[c] = rays.local[c].z;
     accel_.trace_many(p, cells.D, cells.hits);  // bin by bin: neighbouring directions already
@@ -116,7 +115,7 @@ GatherResult Gatherer::gather_guided(const Vec3& p, const Vec3& n, const RandomS
     for (size_t c = 0; c < S; ++c) {
         const float w = rays.weight[c];
         const Hit& h = cells.hits[c];
-        const Color l = cell_radiance(p, c, rng, counters, {}) * w;
+        const Color l = cell_radiance(cells, p, c, rng, counters, {}) * w;
         const float u = h.valid() ? unoccluded(h.t) * w : w;
         if (h.valid()) inv_r += w / std::max(h.t, 1e-20f);
         res.irradiance += l;

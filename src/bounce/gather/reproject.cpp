@@ -19,7 +19,6 @@
 
 namespace bounce {
 
-using detail::cells;
 
 namespace {
 
@@ -108,7 +107,8 @@ GatherResult Gatherer::reproject(const Vec3& p, const Vec3& n, const RandomStrea
             for (uint32_t b : around[c]) again[b] = 1;
     // The other directions from the earlier gather's far hits (its directions about its own
     // normal), each where p sees it, if that is not a cell traced again.
-    cell_directions(from.n, from.rng);
+    detail::Cells& cells = scratch();
+    cell_directions(cells, from.n, from.rng);
     const Frame frame(n);
     const auto traced_again = [&](const Vec3& d) { return again[cell_of(grid_, frame.to_local(d))] != 0; };
     for (size_t c = 0; c < S; ++c) {
@@ -135,7 +135,7 @@ GatherResult Gatherer::reproject(const Vec3& p, const Vec3& n, const RandomStrea
         sums.add(d, radiance(h, &sp, d, c), unoccluded(r), w);
     }
     // The cells traced again, from p: all they meet counts.
-    cell_directions(n, rng);
+    cell_directions(cells, n, rng);
     thread_local std::vector<uint32_t> ids;
     thread_local std::vector<Vec3> dirs;
     thread_local std::vector<Hit> traced;
