@@ -122,8 +122,12 @@ void check_gltf_references(const json& j, const std::string& path) {
             const json& skin = j["skins"][s];
             if (!skin.is_object()) continue;
             if (skin.contains("joints")) check_indices(skin["joints"], fmt::format("/skins/{}/joints", s), nodes, "node", path);
-            if (skin.contains("inverseBindMatrices"))
-                check_indices(skin["inverseBindMatrices"], fmt::format("/skins/{}/inverseBindMatrices", s), accessors, "accessor", path);
+            // glTF lets a skin leave them out (identity), but Assimp 5.2 then reads through a null
+            // accessor and crashes (found by mesh_file_fuzz): refused, naming the fix.
+            if (!skin.contains("inverseBindMatrices"))
+                throw InputError(path, fmt::format("/skins/{}", s),
+                                 "a skin without inverseBindMatrices cannot be read (Assimp 5 crashes on it); write identity matrices");
+            check_indices(skin["inverseBindMatrices"], fmt::format("/skins/{}/inverseBindMatrices", s), accessors, "accessor", path);
         }
     if (!j.contains("animations") || !j["animations"].is_array()) return;
     for (size_t a = 0; a < j["animations"].size(); ++a) {
