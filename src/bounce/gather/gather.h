@@ -277,6 +277,9 @@ struct HairSite {
     Vec3 p, n;
 };
 HairSite hair_site(const Scene& scene, const Fragment& f);
+/// Where a per-fragment gather (brute force, a pilot, a correction) is made: a hair fragment's
+/// hair_site, any other fragment's own point and normal.
+inline HairSite gather_site(const Scene& scene, const Fragment& f) { return f.is_hair() ? hair_site(scene, f) : HairSite{f.p, f.n}; }
 
 /// Whether fragment f's image uses the bounce light at all: not a holdout's (matte), nor a
 /// perfect mirror's or a clear glass's (base share 0 at every angle: it shows only what its
@@ -303,7 +306,7 @@ void for_each_bounce_fragment(const Scene& scene, const DeepBuffer& deep, Progre
         for (uint32_t k = 0; k < frags.size(); ++k) {
             const Fragment& f = frags[k];
             if (!needs_bounce_light(scene, f)) continue;
-            fn(BounceFragment{first + k, wx, wy, f, f.is_hair() ? hair_site(scene, f) : HairSite{f.p, f.n},
+            fn(BounceFragment{first + k, wx, wy, f, gather_site(scene, f),
                               fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k)});
         }
     });

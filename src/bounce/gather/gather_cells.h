@@ -7,6 +7,7 @@
 
 #include "bounce/accel/accel.h"
 #include "bounce/core/math.h"
+#include "bounce/gather/guide.h"
 
 namespace bounce::detail {
 
@@ -17,6 +18,7 @@ struct Cells {
     std::vector<Vec3> NH;  ///< hits' geometric normals, set by Gatherer::finish (0: escaped or fur; ao_cutoff.h)
     std::vector<Hit> hits, packet_hits;
     std::vector<Vec3> packet_dirs;
+    GuidedRays guided;  ///< a guided gather's rays and their shares (Gatherer::gather_guided)
     void resize(size_t s) {
         L.assign(s, Color(0));
         R.assign(s, INFINITY);

@@ -98,11 +98,11 @@ GatherResult Gatherer::gather_guided(const Vec3& p, const Vec3& n, const RandomS
                                      Counters& counters) const {
     if (lights_) return gather(p, n, rng, counters);  // per-light parts are sums over the grid's cells
     if (settings_.cancel) settings_.cancel->check();
-    thread_local GuidedRays rays;
+    detail::Cells& cells = scratch();
+    GuidedRays& rays = cells.guided;
     guided_rays(guided_allocation(guide, grid_.rays(), settings_.guided), rng, rays);
     const size_t S = rays.local.size();
     const Frame frame(n);
-    detail::Cells& cells = scratch();
     cells.resize(S);
     for (size_t c = 0; c < S; ++c) cells.D[c] = frame.to_world(rays.local[c]), cells.cos_theta[c] = rays.local[c].z;
     accel_.trace_many(p, cells.D, cells.hits);  // bin by bin: neighbouring directions already
@@ -132,64 +132,61 @@ GatherResult Gatherer::gather_guided(const Vec3& p, const Vec3& n, const RandomS
 
 namespace {
 
-/// A block's pilot: where it gathered and what it saw (none: the centre pixel takes no bounce light).
-struct Pilot {
-    bool made = false;
-    DirectionGuide guide;
-};
-
 /// The site of the first fragment of full-image pixel (x, y) that takes bounce light, and its index.
 std::optional<std::pair<HairSite, uint32_t>> first_site(const Scene& scene, const DeepBuffer& deep, int x, int y) {
     const auto frags = deep.pixel(x - deep.x0, y - deep.y0);
     for (uint32_t k = 0; k < frags.size(); ++k)
-        if (needs_bounce_light(scene, frags[k]))
-            return std::pair{frags[k].is_hair() ? hair_site(scene, frags[k]) : HairSite{frags[k].p, frags[k].n}, k};
+        if (needs_bounce_light(scene, frags[k])) return std::pair{gather_site(scene, frags[k]), k};
     return std::nullopt;
 }
 
-/// Blocks across the window (on the full image's grid of kGuideBlock pixels).
-int blocks_across(const DeepBuffer& deep) {
-    return deep.width > 0 ? (deep.x0 + deep.width - 1) / kGuideBlock - deep.x0 / kGuideBlock + 1 : 0;
-}
+/// The pilots of a window's blocks, which sit on the full image's grid of kGuideBlock pixels,
+/// so a window (a tile of another rank, a crop) finds the pilots the whole image would where its
+/// edges follow the grid: each block's centre pixel, clamped into the window. A block whose
+/// centre pixel takes no bounce light has none.
+class Pilots {
+public:
+    Pilots(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, Stats& stats)
+        : bx0_(deep.x0 / kGuideBlock), by0_(deep.y0 / kGuideBlock), bw_(blocks(deep.x0, deep.width)) {
+        guides_.resize(static_cast<size_t>(bw_) * static_cast<size_t>(blocks(deep.y0, deep.height)));
+        const uint64_t seed = hash_combine(scene.render.visibility.seed, 0x9170e5ULL);  // the pilots' own streams
+        // At least kPilotRays, so that each bin's spread rests on a few dozen cells.
+        const Gatherer pilot = gatherer.with_rays(std::max(gatherer.grid().rays(), kPilotRays));
+        parallel_for_each_index(size_t{0}, guides_.size(), [&](size_t i) {
+            const int bx = bx0_ + static_cast<int>(i % static_cast<size_t>(bw_)), by = by0_ + static_cast<int>(i / static_cast<size_t>(bw_));
+            const int x = std::clamp(bx * kGuideBlock + kGuideBlock / 2, deep.x0, deep.x0 + deep.width - 1);
+            const int y = std::clamp(by * kGuideBlock + kGuideBlock / 2, deep.y0, deep.y0 + deep.height - 1);
+            if (const auto site = first_site(scene, deep, x, y))
+                guides_[i] = pilot.pilot(site->first.p, site->first.n, fragment_stream(seed, x, y, site->second), stats.local());
+        });
+    }
+    /// The guide of full-image pixel (x, y)'s block (null: its pilot was not made).
+    const DirectionGuide* at(int x, int y) const {
+        const auto& g = guides_[static_cast<size_t>(y / kGuideBlock - by0_) * static_cast<size_t>(bw_) + static_cast<size_t>(x / kGuideBlock - bx0_)];
+        return g ? &*g : nullptr;
+    }
 
-/// Every block's pilot, row by row. Blocks sit on the full image's grid, so a window (a tile of
-/// another rank, a crop) finds the pilots the whole image would where its edges follow the
-/// grid: the block's centre pixel, clamped into the window.
-std::vector<Pilot> make_pilots(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, Stats& stats) {
-    const int bx0 = deep.x0 / kGuideBlock, by0 = deep.y0 / kGuideBlock, bw = blocks_across(deep);
-    const int bh = deep.height > 0 ? (deep.y0 + deep.height - 1) / kGuideBlock - by0 + 1 : 0;
-    std::vector<Pilot> pilots(static_cast<size_t>(bw) * static_cast<size_t>(bh));
-    const uint64_t seed = hash_combine(scene.render.visibility.seed, 0x9170e5ULL);  // the pilots' own streams
-    // At least kPilotRays, so that each bin's spread rests on a few dozen cells.
-    const Gatherer pilot_gatherer = gatherer.with_rays(std::max(gatherer.grid().rays(), kPilotRays));
-    parallel_for_each_index(size_t{0}, pilots.size(), [&](size_t i) {
-        const int bx = bx0 + static_cast<int>(i % static_cast<size_t>(bw)), by = by0 + static_cast<int>(i / static_cast<size_t>(bw));
-        const int x = std::clamp(bx * kGuideBlock + kGuideBlock / 2, deep.x0, deep.x0 + deep.width - 1);
-        const int y = std::clamp(by * kGuideBlock + kGuideBlock / 2, deep.y0, deep.y0 + deep.height - 1);
-        const auto site = first_site(scene, deep, x, y);
-        if (!site) return;
-        pilots[i].guide = pilot_gatherer.pilot(site->first.p, site->first.n, fragment_stream(seed, x, y, site->second), stats.local());
-        pilots[i].made = true;
-    });
-    return pilots;
-}
+private:
+    /// Blocks over [from, from + size) pixels.
+    static int blocks(int from, int size) { return size > 0 ? (from + size - 1) / kGuideBlock - from / kGuideBlock + 1 : 0; }
+    int bx0_, by0_, bw_;
+    std::vector<std::optional<DirectionGuide>> guides_;
+};
 
 }  // namespace
 
 std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
                                             Stats& stats, ProgressSink* sink) {
-    const std::vector<Pilot> pilots = gatherer.settings().guided > 0 ? make_pilots(scene, deep, gatherer, stats) : std::vector<Pilot>();
-    const int bx0 = deep.x0 / kGuideBlock, by0 = deep.y0 / kGuideBlock, bw = blocks_across(deep);
+    const std::optional<Pilots> pilots =
+        gatherer.settings().guided > 0 ? std::optional<Pilots>(std::in_place, scene, deep, gatherer, stats) : std::nullopt;
     std::vector<Indirect> out(deep.fragments.size());
     // The true surface: the displaced point and normal (the cache's un-displaced hemisphere is
     // its approximation, measured against this). Hair: its site.
     for_each_bounce_fragment(scene, deep, sink, "gather", [&](const BounceFragment& b) {
         Counters& counters = stats.local();
-        const Pilot* pilot = pilots.empty() ? nullptr
-                                            : &pilots[static_cast<size_t>((deep.y0 + b.wy) / kGuideBlock - by0) * static_cast<size_t>(bw) +
-                                                      static_cast<size_t>((deep.x0 + b.wx) / kGuideBlock - bx0)];
-        const GatherResult g = pilot && pilot->made && dot(pilot->guide.n, b.site.n) >= kGuideCos
-                                   ? gatherer.gather_guided(b.site.p, b.site.n, b.rng, pilot->guide, counters)
+        const DirectionGuide* guide = pilots ? pilots->at(deep.x0 + b.wx, deep.y0 + b.wy) : nullptr;
+        const GatherResult g = guide && dot(guide->n, b.site.n) >= kGuideCos
+                                   ? gatherer.gather_guided(b.site.p, b.site.n, b.rng, *guide, counters)
                                    : gatherer.gather(b.site.p, b.site.n, b.rng, counters);
         out[b.index] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
     });
