@@ -51,26 +51,6 @@ struct ShotFiles {
     }
 };
 
-/// Every channel of every layer of `a` equals `b`'s, bit for bit; returns how many differ.
-size_t differing_values(const Image& a, const Image& b) {
-    size_t n = 0;
-    EXPECT_EQ(a.layers.size(), b.layers.size());
-    for (const Layer& la : a.layers) {
-        const Layer* lb = b.find(la.name);
-        if (!lb || lb->data.size() != la.data.size()) {
-            ADD_FAILURE() << "layer " << la.name << " differs in shape";
-            ++n;
-            continue;
-        }
-        size_t here = 0;
-        for (size_t i = 0; i < la.data.size(); ++i)
-            here += std::memcmp(&la.data[i], &lb->data[i], sizeof(float)) != 0;
-        if (here) std::printf("layer %s: %zu values differ\n", la.name.c_str(), here);
-        n += here;
-    }
-    return n;
-}
-
 void expect_sequence_equals_stills(const std::string& gi, bool keyed) {
     ShotFiles f(keyed);
     ASSERT_EQ(test::run_bounce(f.render("--frames 1-4", "s.####.exr", gi)), 0);
@@ -78,12 +58,12 @@ void expect_sequence_equals_stills(const std::string& gi, bool keyed) {
         const std::string alone = "alone" + std::to_string(frame) + ".exr";
         ASSERT_EQ(test::run_bounce(f.render("--frame " + std::to_string(frame), alone, gi)), 0);
         const Image seq = read_exr(f.d.file("s.000" + std::to_string(frame) + ".exr"));
-        EXPECT_EQ(differing_values(seq, read_exr(f.d.file(alone))), 0u) << "--gi " << gi << ", frame " << frame << (keyed ? ", keyed" : "");
+        EXPECT_EQ(test::differing_values(seq, read_exr(f.d.file(alone))), 0u) << "--gi " << gi << ", frame " << frame << (keyed ? ", keyed" : "");
     }
     // The frames differ from each other where the strip bends and the quad rises (the frozen
     // first pose gave depth and normals equal to frame 1's).
     const Image first = read_exr(f.d.file("s.0001.exr")), last = read_exr(f.d.file("s.0004.exr"));
-    EXPECT_GT(differing_values(first, last), 100u);
+    EXPECT_GT(test::differing_values(first, last), 100u);
 }
 
 TEST(SequenceEqualsStills, WithoutIndirectLightEveryLayerBitForBit) {

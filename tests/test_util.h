@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "bounce/core/error.h"
+#include "bounce/core/image.h"
 #include "bounce/scene/scene_load.h"
 
 namespace bounce::test {
@@ -145,6 +146,26 @@ void expect_input_error(F f, const std::vector<std::string>& parts) {
         for (const auto& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << "missing \"" << p << "\" in: " << msg;
         EXPECT_EQ(msg.find('\n'), std::string::npos) << "not one line: " << msg;
     }
+}
+
+/// Every channel of every layer of `a` equals `b`'s, bit for bit; returns how many differ.
+inline size_t differing_values(const Image& a, const Image& b) {
+    size_t n = 0;
+    EXPECT_EQ(a.layers.size(), b.layers.size());
+    for (const Layer& la : a.layers) {
+        const Layer* lb = b.find(la.name);
+        if (!lb || lb->data.size() != la.data.size()) {
+            ADD_FAILURE() << "layer " << la.name << " differs in shape";
+            ++n;
+            continue;
+        }
+        size_t here = 0;
+        for (size_t i = 0; i < la.data.size(); ++i)
+            here += std::memcmp(&la.data[i], &lb->data[i], sizeof(float)) != 0;
+        if (here) std::printf("layer %s: %zu values differ\n", la.name.c_str(), here);
+        n += here;
+    }
+    return n;
 }
 
 }  // namespace bounce::test

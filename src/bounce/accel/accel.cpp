@@ -40,14 +40,19 @@ unsigned fur_ray_mask(const Scene& scene, size_t index) {
 SceneAccel::SceneAccel(const Scene& scene, const SceneAccel* previous) {
     // Refused before Embree allocates: about 100 bytes per triangle and 80 per fur segment
     // and BVH (measured on the ogre and the furry ball), the fine tessellation twice over.
-    double triangles = 0, segments = 0;
+    // A prototype's triangles count once, each placement about 200 bytes of Embree instance.
+    double triangles = 0, segments = 0, instances = 0;
     for (const auto& o : scene.objects) {
-        triangles += static_cast<double>(o.coarse.triangle_count() + (o.has_fine() ? o.fine.triangle_count() : 0));
+        const TriangleMesh& fine = o.visible_mesh();
+        triangles += static_cast<double>(o.instance ? 0 : o.coarse_mesh().triangle_count() + (o.has_fine() ? fine.triangle_count() : 0));
+        if (o.prototype) triangles += 2.0 * static_cast<double>(o.local_coarse->triangle_count() + (o.local_fine ? o.local_fine->triangle_count() : 0));
+        instances += o.instance ? 1 : 0;
         if (o.fur) segments += 2.0 * static_cast<double>(o.fur->segment_count());
     }
-    check_memory(100 * triangles + 80 * segments, scene.path, "objects",
-                 fmt::format("ray tracing {:.3g} triangles and {:.3g} fur segments", triangles, segments / 2));
-    const bool two_level = scene.objects_move();
+    check_memory(100 * triangles + 80 * segments + 400 * instances, scene.path, "objects",
+                 fmt::format("ray tracing {:.3g} triangles, {:.3g} fur segments and {:.3g} instances", triangles, segments / 2, instances));
+    // Instances are placements of their prototype's BVH: two levels, as for movers.
+    const bool two_level = scene.objects_move() || instances > 0;
     // Parts are the device's: a frame that takes over the previous frame's uses its device.
     if (two_level && previous && previous->parts_) {
         device_ = previous->device_;
@@ -79,9 +84,9 @@ void SceneAccel::build_flat(const Scene& scene) {
     bool any_fine = false;
     for (size_t i = 0; i < scene.objects.size(); ++i) {
         const Object& o = scene.objects[i];
-        coarse.meshes.push_back(&o.coarse);
+        coarse.meshes.push_back(o.placed() ? &o.coarse : nullptr);
         coarse.masks.push_back(object_ray_mask(scene, i));
-        fine.meshes.push_back(&o.visible());
+        fine.meshes.push_back(o.placed() ? &o.visible() : nullptr);
         fine.motion.push_back(o.shutter[0].empty() ? nullptr : &o.shutter);  // camera rays see motion blur
         any_fine |= o.has_fine() || fine.motion.back();
     }
@@ -103,32 +108,54 @@ void SceneAccel::build_flat(const Scene& scene) {
     }
 }
 
+namespace {
+/// From each fine vertex (a sample of them), along its normal both ways, the distance to the
+/// nearest coarse surface of mesh `id` in `against`, times `stretch`.
+void measure_gaps(const TriangleMesh& fine, const TriangleMesh& coarse, const Bvh& against, uint32_t id, float stretch,
+                  std::vector<float>& gaps) {
+    float reach = 0.05f * length(coarse.bounds().diagonal());
+    size_t step = std::max<size_t>(1, fine.positions.size() / 20000);
+    for (size_t i = 0; i < fine.positions.size(); i += step) {
+        Vec3 p = fine.positions[i];
+        Vec3 n = fine.normals.empty() ? Vec3(0, 0, 1) : fine.normals[i];
+        if (dot(n, n) == 0) continue;
+        Hit a = against.intersect(p, n, 0, reach), b = against.intersect(p, -n, 0, reach);
+        float d = std::min(a.object == id ? a.t : INFINITY, b.object == id ? b.t : INFINITY);
+        if (std::isfinite(d)) gaps.push_back(d * stretch);
+    }
+}
+
+const std::vector<BvhParts::Prototype> kNoPrototypes;
+
+/// A placement's largest stretch; a turn's rounding (a few 1e-8) is not one: it would move
+/// the gap, and with it every ray's offset, from frame to frame.
+float stretch_of(const Transform& t) {
+    const float largest = t.largest_scale();
+    return std::abs(largest - 1) < 1e-5f ? 1.0f : largest;
+}
+}  // namespace
+
 void SceneAccel::measure_offsets(const Scene& scene) {
-    // Measure how far the fine surface strays from the coarse one: from each fine vertex,
-    // along its normal both ways, to the nearest coarse surface of the same object.
+    // Measure how far the fine surface strays from the coarse one, per object.
     const float diag = scene.size();
     std::vector<float> gaps;
     for (size_t id = 0; id < scene.objects.size(); ++id) {
         const Object& o = scene.objects[id];
-        if (!o.has_fine()) continue;
+        if (!o.has_fine() || o.instance) continue;
         // A rigid mover is measured before its placement, against its own part: the same gap at
         // every frame (measured where it is, float rounding moves it from frame to frame, and
         // with it the offset of every ray in the scene). Scaled by its placement's largest stretch.
         const Bvh* own = parts_ && o.local_fine ? parts_->coarse_part(id) : nullptr;
         const TriangleMesh &fine = own ? *o.local_fine : o.fine, &coarse = own ? *o.local_coarse : o.coarse;
-        const Bvh& against = own ? *own : *coarse_;
-        // (A turn's rounding, a few 1e-8, is not a stretch: it would move the gap again.)
-        const float largest = own ? o.placement.largest_scale() : 1.0f, stretch = std::abs(largest - 1) < 1e-5f ? 1.0f : largest;
-        float reach = 0.05f * length(coarse.bounds().diagonal());
-        size_t step = std::max<size_t>(1, fine.positions.size() / 20000);
-        for (size_t i = 0; i < fine.positions.size(); i += step) {
-            Vec3 p = fine.positions[i];
-            Vec3 n = fine.normals.empty() ? Vec3(0, 0, 1) : fine.normals[i];
-            if (dot(n, n) == 0) continue;
-            Hit a = against.intersect(p, n, 0, reach), b = against.intersect(p, -n, 0, reach);
-            float d = std::min(a.object == id ? a.t : INFINITY, b.object == id ? b.t : INFINITY);
-            if (std::isfinite(d)) gaps.push_back(d * stretch);
-        }
+        measure_gaps(fine, coarse, own ? *own : *coarse_, static_cast<uint32_t>(id), own ? stretch_of(o.placement) : 1.0f, gaps);
+    }
+    // A prototype once, against its own BVH (mesh id 0), stretched as its most stretched placement.
+    for (const BvhParts::Prototype& p : parts_ ? parts_->prototypes() : kNoPrototypes) {
+        const Object& first = scene.objects[p.instances.front()];
+        if (!first.local_fine) continue;
+        float stretch = 0;
+        for (uint32_t i : p.instances) stretch = std::max(stretch, stretch_of(scene.objects[i].placement));
+        measure_gaps(*first.local_fine, *first.local_coarse, *p.coarse.bvh, 0, stretch, gaps);
     }
     // The 99th percentile, not the largest: on a displaced surface a few fine vertices (in
     // folds, at open borders) find the coarse surface only far away, and an offset that large

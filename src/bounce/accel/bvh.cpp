@@ -92,8 +92,10 @@ Bvh::Bvh(RTCDevice device, const std::vector<Placed>& placed, unsigned mesh_coun
             rtcSetGeometryTransform(g, k, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, p.at[k].m.data());
         rtcSetGeometryMask(g, p.mask);
         rtcCommitGeometry(g);
-        rtcAttachGeometry(scene_, g);
+        const unsigned id = rtcAttachGeometry(scene_, g);
         rtcReleaseGeometry(g);
+        if (object_of_.size() <= id) object_of_.resize(id + 1, kNoHit);
+        object_of_[id] = p.object;
         placed_.push_back(p.bvh);
         empty_ = false;
     }
@@ -155,14 +157,15 @@ Hit Bvh::intersect(const Vec3& o, const Vec3& d, float tnear, float tfar, float 
     rh.ray.time = time;
     rtcIntersect1(scene_, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
-    return make_hit(rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v);
+    return make_hit(rh.hit.geomID, rh.hit.instID[0], rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v);
 }
 
-Hit Bvh::make_hit(unsigned geom, unsigned prim, float t, float u, float v) const {
+Hit Bvh::make_hit(unsigned geom, unsigned instance, unsigned prim, float t, float u, float v) const {
     Hit h;
     h.t = t;
-    h.hair = geom >= mesh_count_;
-    h.object = h.hair ? geom - mesh_count_ : geom;
+    const uint32_t placed = instance < object_of_.size() ? object_of_[instance] : kNoHit;
+    h.hair = placed == kNoHit && geom >= mesh_count_;
+    h.object = placed != kNoHit ? placed : h.hair ? geom - mesh_count_ : geom;
     h.prim = prim;
     h.u = u;
     h.v = v;
@@ -197,7 +200,7 @@ void Bvh::intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear
         for (size_t i = 0; i < n; ++i) {
             out[base + i] = rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID
                                 ? Hit{}
-                                : make_hit(rh.hit.geomID[i], rh.hit.primID[i], rh.ray.tfar[i], rh.hit.u[i], rh.hit.v[i]);
+                                : make_hit(rh.hit.geomID[i], rh.hit.instID[0][i], rh.hit.primID[i], rh.ray.tfar[i], rh.hit.u[i], rh.hit.v[i]);
         }
     }
 }

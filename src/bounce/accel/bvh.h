@@ -77,6 +77,8 @@ public:
         std::array<Transform, 2> at;  ///< where it is at shutter open and close
         bool moving = false;          ///< at[1] differs from at[0]: Embree's motion blur
         unsigned mask = kRayAll;      ///< the rays that see it (and then its own geometry's masks)
+        /// Hits in it report this object (an instance of a prototype's BVH); kNoHit: its own ids.
+        uint32_t object = kNoHit;
     };
     Bvh(RTCDevice device, const std::vector<Placed>& placed, unsigned mesh_count);
     ~Bvh();
@@ -104,12 +106,14 @@ private:
     /// A new scene holding `g`'s meshes (not committed).
     void begin(RTCDevice device, const BvhGeometry& g);
     void add_fur(RTCDevice device, const BvhGeometry& g, size_t id);
-    Hit make_hit(unsigned geom, unsigned prim, float t, float u, float v) const;
+    /// `instance`: the placed BVH the hit is in (RTC_INVALID_GEOMETRY_ID: none).
+    Hit make_hit(unsigned geom, unsigned instance, unsigned prim, float t, float u, float v) const;
     RTCScene scene_ = nullptr;
     unsigned mesh_count_ = 0;
     bool empty_ = true;
     uint64_t refits_ = 0;
     std::vector<std::shared_ptr<const Bvh>> placed_;  ///< kept alive while this one traces them
+    std::vector<uint32_t> object_of_;                  ///< per placed geometry id: Placed::object
 };
 
 }  // namespace bounce

@@ -2,6 +2,8 @@
 
 #include <OpenImageIO/hash.h>
 
+#include <unordered_map>
+
 #include "bounce/core/random.h"
 
 namespace bounce {
@@ -28,7 +30,7 @@ private:
     uint64_t h_;
 };
 
-enum : uint64_t { kStill, kLocal, kWorld, kFur, kLayout };
+enum : uint64_t { kStill, kLocal, kWorld, kFur, kLayout, kPrototype };
 
 bool moving_in_shutter(const Object& o) {
     return !o.shutter[0].empty() || (o.shutter_placement && !((*o.shutter_placement)[0] == (*o.shutter_placement)[1]));
@@ -86,6 +88,7 @@ BvhParts::BvhParts(RTCDevice device, const Scene& scene, const BvhParts* before)
     take_still(device, scene, before);
     take_movers(device, scene, before);
     take_fur(device, scene, before);
+    take_prototypes(device, scene, before);
 }
 
 void BvhParts::take_still(RTCDevice device, const Scene& scene, const BvhParts* before) {
@@ -97,7 +100,7 @@ void BvhParts::take_still(RTCDevice device, const Scene& scene, const BvhParts* 
     bool any = false;
     for (size_t i = 0; i < n; ++i) {
         const Object& o = scene.objects[i];
-        if (o.moves) continue;
+        if (o.moves || o.instance || !o.placed()) continue;
         any = true;
         const unsigned mask = coarse.masks[i] = fine.masks[i] = object_ray_mask(scene, i);
         coarse.meshes[i] = &o.coarse, fine.meshes[i] = &o.visible();
@@ -189,6 +192,50 @@ void BvhParts::take_fur(RTCDevice device, const Scene& scene, const BvhParts* be
     needs_fine_ = needs_fine_ || fine_fur_.bvh != nullptr;
 }
 
+void BvhParts::take_prototypes(RTCDevice device, const Scene& scene, const BvhParts* before) {
+    std::unordered_map<const TriangleMesh*, size_t> seen;  // instances share their prototype's meshes
+    const auto was = [&](uint64_t key, BvhPart Prototype::*part) -> const BvhPart* {
+        if (before)
+            for (const Prototype& p : before->prototypes_)
+                if ((p.*part).key == key) return &(p.*part);
+        return nullptr;
+    };
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+        const Object& o = scene.objects[i];
+        if (!o.instance) continue;
+        const auto [it, fresh] = seen.emplace(o.local_coarse.get(), prototypes_.size());
+        if (!fresh) {
+            prototypes_[it->second].instances.push_back(static_cast<uint32_t>(i));
+            continue;
+        }
+        const TriangleMesh &c = *o.local_coarse, &f = o.local_fine ? *o.local_fine : c;
+        const uint64_t kc = PartKey(kPrototype, 1).add(c.positions).add(c.indices).value();
+        const uint64_t kf = PartKey(kPrototype, 1).add(f.positions).add(f.indices).value();
+        const auto build = [&](const TriangleMesh& mesh) {
+            return [&] {
+                BvhGeometry g;
+                g.meshes = {&mesh};
+                return std::make_shared<Bvh>(device, g);
+            };
+        };
+        const auto none = [](Bvh&) {};
+        Prototype p;
+        p.coarse = take(was(kc, &Prototype::coarse), kc, 0, build(c), none);
+        p.fine = kf == kc ? p.coarse : take(was(kf, &Prototype::fine), kf, 0, build(f), none);
+        p.instances.push_back(static_cast<uint32_t>(i));
+        prototypes_.push_back(std::move(p));
+        needs_fine_ = needs_fine_ || o.local_fine;
+    }
+}
+
+void BvhParts::place_instances(const Scene& scene, bool fine, std::vector<Bvh::Placed>& placed) const {
+    for (const Prototype& p : prototypes_)
+        for (uint32_t i : p.instances) {
+            const Transform& at = scene.objects[i].placement;
+            placed.push_back({(fine ? p.fine : p.coarse).bvh, {at, at}, false, object_ray_mask(scene, i), i});
+        }
+}
+
 namespace {
 const std::array<Transform, 2> kIdentity{};
 
@@ -208,6 +255,7 @@ std::unique_ptr<Bvh> BvhParts::coarse(RTCDevice device, const Scene& scene) cons
     for (size_t i = 0; i < coarse_.size(); ++i)
         if (coarse_[i].bvh) placed.push_back(placed_mover(scene.objects[i], coarse_[i].bvh, object_ray_mask(scene, i), false));
     placed.push_back({coarse_fur_.bvh, kIdentity, false, kRayAll});
+    place_instances(scene, false, placed);
     return std::make_unique<Bvh>(device, placed, static_cast<unsigned>(scene.objects.size()));
 }
 
@@ -217,6 +265,7 @@ std::unique_ptr<Bvh> BvhParts::fine(RTCDevice device, const Scene& scene) const 
     for (size_t i = 0; i < fine_.size(); ++i)
         if (fine_[i].bvh) placed.push_back(placed_mover(scene.objects[i], fine_[i].bvh, object_ray_mask(scene, i), true));
     placed.push_back({fine_fur_.bvh, kIdentity, false, kRayAll});
+    place_instances(scene, true, placed);
     return std::make_unique<Bvh>(device, placed, static_cast<unsigned>(scene.objects.size()));
 }
 
@@ -227,6 +276,7 @@ const Bvh* BvhParts::coarse_part(size_t id) const {
 bool BvhParts::current() const {
     auto ok = [](const BvhPart& p) { return !p.bvh || p.bvh->refits() == p.refits; };
     return ok(still_coarse_) && ok(still_fine_) && ok(coarse_fur_) && ok(fine_fur_) && ok(shadow_fur_) &&
+           std::all_of(prototypes_.begin(), prototypes_.end(), [&](const Prototype& p) { return ok(p.coarse) && ok(p.fine); }) &&
            std::all_of(coarse_.begin(), coarse_.end(), ok) && std::all_of(fine_.begin(), fine_.end(), ok);
 }
 

@@ -45,6 +45,13 @@ public:
 
     /// Mover `id`'s own coarse part (a rigid mover's is before its placement; null: not a mover).
     const Bvh* coarse_part(size_t id) const;
+
+    /// A prototype's BVHs, built once for all its instances (its only mesh has id 0).
+    struct Prototype {
+        BvhPart coarse, fine;
+        std::vector<uint32_t> instances;  ///< the objects that place it
+    };
+    const std::vector<Prototype>& prototypes() const { return prototypes_; }
     const BvhReuse& reuse() const { return reuse_; }
     /// No part it holds was refit since (by a later frame).
     bool current() const;
@@ -55,10 +62,14 @@ private:
     void take_still(RTCDevice device, const Scene& scene, const BvhParts* before);
     void take_movers(RTCDevice device, const Scene& scene, const BvhParts* before);
     void take_fur(RTCDevice device, const Scene& scene, const BvhParts* before);
+    void take_prototypes(RTCDevice device, const Scene& scene, const BvhParts* before);
+    /// The instances' placements in the coarse or the fine BVH.
+    void place_instances(const Scene& scene, bool fine, std::vector<Bvh::Placed>& placed) const;
 
     BvhPart still_coarse_, still_fine_;  ///< the objects that do not move
     std::vector<BvhPart> coarse_, fine_;  ///< per object: the movers'
     BvhPart coarse_fur_, fine_fur_, shadow_fur_;
+    std::vector<Prototype> prototypes_;
     bool needs_fine_ = false;
     BvhReuse reuse_;
 };

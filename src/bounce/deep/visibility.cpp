@@ -141,7 +141,7 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     const Object& obj = scene.objects[h.object];
                     const uint32_t prim = h.hair ? obj.fur->strand_of(h.prim) : h.prim;
                     SurfacePoint sp = h.hair ? hair_point(*obj.fur, h, origin, dn, obj.visible())
-                                             : surface_point(obj.visible(), h.prim, h.u, h.v);
+                                             : obj.visible_point(h.prim, h.u, h.v);
                     // Face the camera (all surfaces are two-sided).
                     if (dot(sp.ng, dn) > 0) sp.ng = -sp.ng, sp.n = -sp.n;
                     if (dot(sp.n, dn) > 0) sp.n = normalize(sp.n - dn * (2 * dot(sp.n, dn)));

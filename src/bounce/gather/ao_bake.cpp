@@ -54,6 +54,8 @@ Coverage rasterize_uvs(const TriangleMesh& m, int res) {
 std::vector<float> bake_ao(const Scene& scene, const SceneAccel& accel, uint32_t id, const AoBakeSettings& s, Stats& stats,
                            ProgressSink* sink) {
     const TriangleMesh& m = scene.objects[id].visible();
+    if (scene.objects[id].instance || scene.objects[id].prototype)  // its uvs are every placement's
+        throw InputError(scene.path, "object " + scene.objects[id].name, "is an instance or a prototype: its uvs are shared by every placement, its occlusion is not");
     if (m.uvs.empty()) throw InputError(scene.path, "object " + scene.objects[id].name, "has no uvs to bake occlusion into");
     const int res = s.resolution;
     const Coverage cov = rasterize_uvs(m, res);

@@ -328,10 +328,10 @@ Color Gatherer::cell_radiance(detail::Cells& cells, const Vec3& p, size_t c, con
     if (!h.valid()) return settings_.ao ? Color(0) : escaped_radiance(d, parts);
     if (h.hair) return settings_.ao ? Color(0) : hair_radiance(h, p + d * h.t, d, rng, c, counters, parts);
     if (!settings_.record_terms && settings_.ao) return Color(0);
-    const TriangleMesh& mesh = scene_.objects[h.object].coarse;
+    const Object& hit = scene_.objects[h.object];
     // AO needs only the plane, on either side: the face's normal, not a shading point.
-    const SurfacePoint sp = settings_.ao ? SurfacePoint{} : surface_point(mesh, h.prim, h.u, h.v);
-    cells.NH[c] = settings_.ao ? face_normal(mesh, h.prim) : sp.ng;
+    const SurfacePoint sp = settings_.ao ? SurfacePoint{} : hit.coarse_point(h.prim, h.u, h.v);
+    cells.NH[c] = settings_.ao ? face_normal(hit.coarse_mesh(), hit.to_world(), h.prim) : sp.ng;
     return settings_.ao ? Color(0) : hit_radiance(h, sp, d, rng, c, counters, parts);
 }
 

@@ -95,7 +95,7 @@ GatherResult Gatherer::reproject(const Vec3& p, const Vec3& n, const RandomStrea
         if (settings_.ao) return Color(0);
         if (!h.valid()) return escaped_radiance(d, {});
         if (h.hair) return hair_radiance(h, p + d * h.t, d, rng, ray, counters, {});
-        return hit_radiance(h, sp ? *sp : surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v), d, rng, ray, counters, {});
+        return hit_radiance(h, sp ? *sp : scene_.objects[h.object].coarse_point(h.prim, h.u, h.v), d, rng, ray, counters, {});
     };
     Sums sums;
     // Cells of p's gather traced again: those about the earlier gather's near hits, widened.
@@ -121,7 +121,7 @@ GatherResult Gatherer::reproject(const Vec3& p, const Vec3& n, const RandomStrea
             continue;
         }
         if ((object & GatherHits::kHairBit) || kept.t[c] < near) continue;
-        const SurfacePoint sp = surface_point(scene_.objects[object].coarse, kept.prim[c], kept.u[c], kept.v[c]);
+        const SurfacePoint sp = scene_.objects[object].coarse_point(kept.prim[c], kept.u[c], kept.v[c]);
         const Vec3 to = sp.p - p;
         const float r = length(to);
         const Vec3 d = to / r;

@@ -184,16 +184,33 @@ Vec3 face_normal(const TriangleMesh& m, uint32_t prim) {
     return normalize(cross(m.positions[m.indices[3 * prim + 1]] - a, m.positions[m.indices[3 * prim + 2]] - a));
 }
 
-SurfacePoint surface_point(const TriangleMesh& m, uint32_t prim, float u, float v) {
+std::array<Vec3, 3> triangle_vertices(const TriangleMesh& m, const Transform* to_world, uint32_t prim) {
+    std::array<Vec3, 3> p;
+    for (size_t k = 0; k < 3; ++k) {
+        const Vec3& q = m.positions[m.indices[3 * prim + k]];
+        p[k] = to_world ? to_world->point(q) : q;
+    }
+    return p;
+}
+
+Vec3 face_normal(const TriangleMesh& m, const Transform* to_world, uint32_t prim) {
+    const auto [a, b, c] = triangle_vertices(m, to_world, prim);
+    return normalize(cross(b - a, c - a));
+}
+
+SurfacePoint surface_point(const TriangleMesh& m, uint32_t prim, float u, float v) { return surface_point(m, nullptr, prim, u, v); }
+
+SurfacePoint surface_point(const TriangleMesh& m, const Transform* to_world, uint32_t prim, float u, float v) {
     uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];
     float w = 1 - u - v;
     SurfacePoint sp;
-    const Vec3 &a = m.positions[i0], &b = m.positions[i1], &c = m.positions[i2];
+    const auto [a, b, c] = triangle_vertices(m, to_world, prim);
     sp.p = a * w + b * u + c * v;
-    sp.ng = face_normal(m, prim);
+    sp.ng = normalize(cross(b - a, c - a));
     sp.n = sp.ng;
     if (!m.normals.empty()) {
-        Vec3 n = m.normals[i0] * w + m.normals[i1] * u + m.normals[i2] * v;
+        const auto normal = [&](uint32_t i) { return to_world ? to_world->normal(m.normals[i]) : m.normals[i]; };
+        Vec3 n = normal(i0) * w + normal(i1) * u + normal(i2) * v;
         if (dot(n, n) > 1e-12f) {
             sp.n = normalize(n);
             if (dot(sp.n, sp.ng) < 0) sp.ng = -sp.ng;  // geometric normal follows the authored side

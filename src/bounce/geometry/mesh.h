@@ -2,6 +2,7 @@
 // rays trace and the fine one that primary visibility sees.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -63,9 +64,17 @@ struct SurfacePoint {
 /// Evaluates triangle `prim` of `mesh` at barycentrics (u, v) (Embree's convention:
 /// p = (1-u-v) v0 + u v1 + v v2).
 SurfacePoint surface_point(const TriangleMesh& mesh, uint32_t prim, float u, float v);
+/// The same for a mesh placed by `to_world` (an instance's shared prototype; null = in place):
+/// the triangle's vertices and normals are moved as TriangleMesh::transform moves them, then
+/// interpolated, so a placed mesh's points equal those of the same mesh transformed, bit for bit.
+SurfacePoint surface_point(const TriangleMesh& mesh, const Transform* to_world, uint32_t prim, float u, float v);
+/// Triangle `prim`'s three vertices, placed by `to_world` (null = in place).
+std::array<Vec3, 3> triangle_vertices(const TriangleMesh& mesh, const Transform* to_world, uint32_t prim);
 /// Triangle `prim`'s unit normal by its winding (surface_point's ng may face the other way):
 /// what needs only the plane reads three positions, not the normals and uvs.
 Vec3 face_normal(const TriangleMesh& mesh, uint32_t prim);
+/// The same for a mesh placed by `to_world` (null = in place).
+Vec3 face_normal(const TriangleMesh& mesh, const Transform* to_world, uint32_t prim);
 
 /// The un-displaced position and (unit, not oriented) normal at barycentrics (u, v) of a
 /// displaced mesh's triangle `prim` (mesh.displaced() must hold).

@@ -126,7 +126,9 @@ SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t p
     s.roughness = m.roughness;
     s.normal = n;
     Vec3 dpdu, dpdv;
-    const bool tangents = triangle_tangents(scene_.objects[object].visible(), prim, dpdu, dpdv);
+    const Object& o = scene_.objects[object];
+    const bool tangents = triangle_tangents(o.visible_mesh(), prim, dpdu, dpdv);
+    if (tangents && o.to_world()) dpdu = o.to_world()->vector(dpdu), dpdv = o.to_world()->vector(dpdv);
     // Filter width in uv: the pixel's footprint over the length of the tangents.
     float du = 0, dv = 0;
     if (tangents) {

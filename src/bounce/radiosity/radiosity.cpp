@@ -43,14 +43,17 @@ std::string file_name(size_t id, const std::string& name) {
 }
 
 /// A map with every triangle's lattice level and offset set and zeroed values.
-RadiosityMap lay_out(const TriangleMesh& m, float texel, int max_level) {
+/// Object `o`'s lattices (an instance's each its own: texels follow its placement's scale and
+/// its lighting; a prototype, never placed, has none).
+RadiosityMap lay_out(const Object& o, float texel, int max_level) {
     RadiosityMap map;
+    if (!o.placed()) return map;
+    const TriangleMesh& m = o.coarse_mesh();
     map.level.resize(m.triangle_count());
     map.offset.resize(m.triangle_count());
     uint32_t off = 0;
-    for (size_t t = 0; t < m.triangle_count(); ++t) {
-        const Vec3 &a = m.positions[m.indices[3 * t]], &b = m.positions[m.indices[3 * t + 1]],
-                   &c = m.positions[m.indices[3 * t + 2]];
+    for (uint32_t t = 0; t < m.triangle_count(); ++t) {
+        const auto [a, b, c] = triangle_vertices(m, o.to_world(), t);
         int n = radiosity_level(std::max({length(b - a), length(c - b), length(a - c)}), texel, max_level);
         map.level[t] = static_cast<uint8_t>(n);
         map.offset[t] = off;
@@ -126,7 +129,7 @@ RadiosityTextures::RadiosityTextures(RadiosityTextures&&) noexcept = default;
 RadiosityTextures& RadiosityTextures::operator=(RadiosityTextures&&) noexcept = default;
 
 RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, int max_level) const {
-    RadiosityMap m = lay_out(scene.objects[id].coarse, texel_size_, max_level);
+    RadiosityMap m = lay_out(scene.objects[id], texel_size_, max_level);
     if (has_parts()) {
         m.lights = static_cast<uint32_t>(scene.lights.size());
         m.front_parts.assign(m.front.size() * m.lights, Color(0)), m.back_parts.assign(m.back.size() * m.lights, Color(0));
@@ -143,7 +146,7 @@ RadiosityTextures RadiosityTextures::lazy(const Scene& scene, const Materials& m
     if (scene.render.cache.light_parts) rt.sources_->scales = light_scales(scene);
     for (size_t id = 0; id < scene.objects.size(); ++id) {
         rt.maps_.push_back(rt.laid_out(scene, id, settings.max_level));
-        const size_t n = 2 * scene.objects[id].coarse.triangle_count();
+        const size_t n = 2 * rt.maps_.back().level.size();
         rt.state_.push_back(std::make_unique<std::atomic<uint8_t>[]>(n));
         for (size_t i = 0; i < n; ++i) rt.state_.back()[i].store(0, std::memory_order_relaxed);
         rt.names_.push_back(scene.objects[id].name);
@@ -153,13 +156,13 @@ RadiosityTextures RadiosityTextures::lazy(const Scene& scene, const Materials& m
 
 void RadiosityTextures::bake_side(uint32_t id, uint32_t t, bool front, Counters& counters) const {
     const Sources& src = *sources_;
-    const TriangleMesh& m = src.scene->objects[id].coarse;
+    const Object& o = src.scene->objects[id];
     RadiosityMap& map = maps_[id];
     const int n = map.level[t];
     for (int j = 0; j <= n; ++j)
         for (int i = 0; i + j <= n; ++i) {
             float u = static_cast<float>(i) / static_cast<float>(n), v = static_cast<float>(j) / static_cast<float>(n);
-            SurfacePoint sp = surface_point(m, t, u, v);
+            SurfacePoint sp = o.coarse_point(t, u, v);
             Color albedo = src.materials->secondary_albedo(sp.material, sp.uv) * kInvPi;
             uint32_t k = map.offset[t] + lattice_index(i, j, n);
             // Random numbers keyed by (object, triangle, point): the textures depend on the

@@ -79,7 +79,7 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
     for (size_t id = 0; id < previous.state_.size(); ++id) {
         const size_t n = 2 * previous.maps_[id].level.size();
         rt.state_.push_back(std::make_unique<std::atomic<uint8_t>[]>(n));
-        const TriangleMesh& m = scene.objects[id].coarse;
+        const Object& obj = scene.objects[id];
         const bool moved = changes.objects[id].kind != ObjectMotion::Kind::Static;
         if (changes.objects[id].kind == ObjectMotion::Kind::Deforming) {
             // Its triangles changed size: lay it out as this frame alone would, every side lazy.
@@ -92,9 +92,9 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
             rt.state_.back()[s].store(was, std::memory_order_relaxed);
             if (was != 2) continue;
             const size_t t = s / 2;
-            bool again = changes.lights || moved || changes.materials[m.face_materials[t]];
+            bool again = changes.lights || moved || changes.materials[obj.material_of(static_cast<uint32_t>(t))];
             if (!again && changes.moving()) {
-                const Vec3 &a = m.positions[m.indices[3 * t]], &b = m.positions[m.indices[3 * t + 1]], &c = m.positions[m.indices[3 * t + 2]];
+                const auto [a, b, c] = triangle_vertices(obj.coarse_mesh(), obj.to_world(), static_cast<uint32_t>(t));
                 const Vec3 ng = normalize(cross(b - a, c - a)) * (s % 2 == 0 ? 1.0f : -1.0f);
                 for (size_t o = 0; o < changes.objects.size() && !again; ++o)
                     if (o != id && changes.objects[o].kind != ObjectMotion::Kind::Static)
@@ -119,9 +119,9 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
             for (uint32_t k = now.offset[t]; k < now.offset[t] + count; ++k)
                 delta = std::max({delta, std::abs(vn[k].x - vw[k].x), std::abs(vn[k].y - vw[k].y), std::abs(vn[k].z - vw[k].z)});
             if (delta <= 0) continue;
-            const TriangleMesh& m = scene.objects[id].coarse;
+            const Object& o = scene.objects[id];
             Bounds b;
-            for (int v = 0; v < 3; ++v) b.extend(m.positions[m.indices[3 * t + static_cast<uint32_t>(v)]]);
+            for (const Vec3& v : triangle_vertices(o.coarse_mesh(), o.to_world(), t)) b.extend(v);
             found[i] = {b, delta, id, t};
         }
     });

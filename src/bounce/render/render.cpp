@@ -49,7 +49,7 @@ void validate_deep_for_scene(const DeepBuffer& deep, const Scene& scene, const s
             throw InputError(path, fmt::format("fragment {}", i), "material or object id out of range for this scene");
         if (f.is_hair() && !scene.objects[f.object].fur)
             throw InputError(path, fmt::format("fragment {}", i), "a hair fragment of an object without fur");
-        if (!f.is_hair() && f.prim >= scene.objects[f.object].visible().triangle_count())
+        if (!f.is_hair() && f.prim >= scene.objects[f.object].visible_mesh().triangle_count())
             throw InputError(path, fmt::format("fragment {}", i), "triangle id out of range for this scene");
     }
 }
@@ -95,6 +95,22 @@ void report_dicing(const Scene& scene, Stats& stats) {
     stats.set("dicing_level", level);
     stats.set("micropolygons", micropolygons);
     stats.set("ray_triangles", ray_triangles);
+}
+
+/// Instances: how many placements, of how many prototypes, place how many triangles (what a
+/// flat scene would have held; the BVHs hold only the prototypes').
+void report_instances(const Scene& scene, Stats& stats) {
+    double instances = 0, prototypes = 0, placed = 0;
+    for (const Object& o : scene.objects) {
+        prototypes += o.prototype ? 1 : 0;
+        if (!o.instance) continue;
+        ++instances;
+        placed += static_cast<double>(o.coarse_mesh().triangle_count());
+    }
+    if (instances == 0) return;
+    stats.set("instances", instances);
+    stats.set("prototypes", prototypes);
+    stats.set("instanced_triangles", placed);
 }
 
 /// Forwards progress to the caller's sink (if any) and carries the request's cancel token.
@@ -331,6 +347,7 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
     tbb::task_arena arena(plan.threads);
     stats.set("threads", plan.threads);
     report_dicing(scene, stats);
+    report_instances(scene, stats);
     CancellableSink sink(progress, request.cancel);
     ProgressSink* const ps = progress || request.cancel ? &sink : nullptr;
     RenderResult result;

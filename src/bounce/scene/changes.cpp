@@ -23,14 +23,32 @@ bool same_fur(const Object& a, const Object& b) {
 
 /// Object bounds including its fine tessellation and fur.
 Bounds object_bounds(const Object& o) {
-    Bounds b = o.coarse.bounds();
-    if (o.has_fine()) b.extend(o.fine.bounds());
+    Bounds b = o.coarse_bounds();
+    if (o.has_fine()) b.extend(o.visible_mesh_bounds());
     if (o.fur)
         for (size_t i = 0; i + 2 < o.fur->vertices.size(); i += 4) b.extend(Vec3{o.fur->vertices[i], o.fur->vertices[i + 1], o.fur->vertices[i + 2]});
     return b;
 }
 
+/// How an instance moved: its shared shape (compared once per prototype would do; the vectors
+/// are the same when shared) and its placement.
+ObjectMotion instance_motion(const Object& before, const Object& now) {
+    ObjectMotion m;
+    const bool same_shape = before.instance && now.instance && same_positions(*before.local_coarse, *now.local_coarse) &&
+                            (before.local_fine == nullptr) == (now.local_fine == nullptr) &&
+                            (!now.local_fine || same_positions(*before.local_fine, *now.local_fine));
+    const bool same_material = before.material_override == now.material_override;
+    if (same_shape && same_material && before.placement == now.placement) return m;
+    m.swept = object_bounds(before);
+    m.swept.extend(object_bounds(now));
+    // Another material is handled as a new surface: its radiosity is laid out and baked anew.
+    m.kind = same_shape && same_material ? ObjectMotion::Kind::Rigid : ObjectMotion::Kind::Deforming;
+    m.delta = now.placement * before.placement.inverse();
+    return m;
+}
+
 ObjectMotion motion_of(const Object& before, const Object& now) {
+    if (before.instance || now.instance) return instance_motion(before, now);
     ObjectMotion m;
     if (same_positions(before.coarse, now.coarse) && same_fur(before, now)) return m;
     m.swept = object_bounds(before);
@@ -60,14 +78,16 @@ SceneChanges scene_changes(const Scene& before, const Scene& now) {
                before.camera.height != now.camera.height;
     c.comparable = before.objects.size() == now.objects.size() && before.materials.size() == now.materials.size();
     for (size_t i = 0; c.comparable && i < now.objects.size(); ++i)
-        c.comparable = before.objects[i].name == now.objects[i].name && same_topology(before.objects[i].coarse, now.objects[i].coarse);
+        c.comparable = before.objects[i].name == now.objects[i].name && before.objects[i].instance == now.objects[i].instance &&
+                       same_topology(before.objects[i].coarse_mesh(), now.objects[i].coarse_mesh());
     if (!c.comparable) return c;
     c.visible_geometry_same = true;
     for (size_t i = 0; i < now.objects.size(); ++i) {
         const Object &a = before.objects[i], &b = now.objects[i];
         c.objects.push_back(motion_of(a, b));
         c.visible_geometry_same = c.visible_geometry_same && c.objects.back().kind == ObjectMotion::Kind::Static &&
-                                  same_positions(a.fine, b.fine) && a.fine.indices == b.fine.indices;
+                                  same_positions(a.visible_mesh(), b.visible_mesh()) && a.visible_mesh().indices == b.visible_mesh().indices &&
+                                  a.material_override == b.material_override;
     }
     // Lights and the sky: their JSON and the files they read (a sky texture).
     c.lights = json_differs(before.description, now.description, "lights") || before.inputs_hash("lights") != now.inputs_hash("lights");

@@ -137,7 +137,10 @@ json light_defaults(const std::string& type) {
 
 Transform read_transform(const JsonReader& obj) {
     if (!obj.has("transform")) return {};
-    JsonReader t(obj.raw("transform"), obj.at("transform"), obj.ctx(), {"translate", "rotate", "scale", "matrix"});
+    return read_transform_keys(JsonReader(obj.raw("transform"), obj.at("transform"), obj.ctx(), {"translate", "rotate", "scale", "matrix"}));
+}
+
+Transform read_transform_keys(const JsonReader& t) {
     if (t.has("matrix")) {
         if (t.has("translate") || t.has("rotate") || t.has("scale"))
             t.fail("matrix", "\"matrix\" cannot be combined with translate/rotate/scale");

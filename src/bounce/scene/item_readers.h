@@ -28,5 +28,7 @@ Material read_material(const JsonReader& m, const std::string& name);
 Light read_light(const JsonReader& r);
 /// An object's "transform": {translate, rotate [deg, axis], scale} or {matrix}; identity if absent.
 Transform read_transform(const JsonReader& obj);
+/// The same read from the transform's own keys (`t` allows translate, rotate, scale, matrix).
+Transform read_transform_keys(const JsonReader& t);
 
 }  // namespace bounce

@@ -23,7 +23,7 @@ const std::vector<std::string>& object_keys() {
     static const std::vector<std::string> keys = {"name",     "type",        "file",     "material",     "transform",
                                                   "fine_subdivisions", "vertices", "center", "radius", "subdivisions",
                                                   "subdivision", "boundary", "displacement", "fur", "animation",
-                                                  "visible_to", "matte"};
+                                                  "visible_to", "matte", "prototype", "instances"};
     return keys;
 }
 
@@ -31,6 +31,17 @@ int material_index(const Scene& scene, const std::string& name) {
     for (size_t i = 0; i < scene.materials.size(); ++i)
         if (scene.materials[i].name == name) return static_cast<int>(i);
     return -1;
+}
+
+int read_material_name(const JsonReader& r, const std::string& key, const Scene& scene) {
+    if (!r.has(key)) return -1;
+    const std::string name = r.string(key, "");
+    const int mat = material_index(scene, name);
+    if (mat >= 0) return mat;
+    std::vector<std::string> names;
+    for (const auto& m : scene.materials) names.push_back(m.name);
+    const std::string hint = closest_match(name, names);
+    r.fail(key, fmt::format("unknown material \"{}\"{}", name, hint.empty() ? "" : " (did you mean \"" + hint + "\"?)"));
 }
 
 namespace {
@@ -160,7 +171,7 @@ const std::vector<std::string>& keys_of_type(const std::string& type, bool subdi
     static const std::vector<std::string> sphere = {"name", "type", "center", "radius", "subdivisions", "fine_subdivisions", "material", "transform", "fur"};
     // Every type also takes the lighter's controls (link_reader.h).
     static const auto with_controls = [](std::vector<std::string> keys) {
-        keys.insert(keys.end(), {"visible_to", "matte"});
+        keys.insert(keys.end(), {"visible_to", "matte", "prototype"});
         return keys;
     };
     static const std::vector<std::string> mesh_c = with_controls(mesh), subdiv_c = with_controls(subdiv),
@@ -208,9 +219,11 @@ bool placement_keyed(const Scene& scene, size_t index) {
 }
 
 /// A rigid mover keeps its tessellations as they are before its placement: ray tracing places
-/// them with it (accel/bvh.h), so a shot's frames move it without building its BVH again.
+/// them with it (accel/bvh.h), so a shot's frames move it without building its BVH again. So
+/// does a prototype: its instances place them with their placement times its own.
+bool keeps_local(const Object& obj) { return (obj.moves && !obj.deforms) || obj.prototype; }
 void keep_local(Object& obj, const TriangleMesh& coarse, const TriangleMesh* fine) {
-    if (!obj.moves || obj.deforms) return;
+    if (!keeps_local(obj)) return;
     obj.local_coarse = std::make_shared<const TriangleMesh>(coarse);
     if (fine) obj.local_fine = std::make_shared<const TriangleMesh>(*fine);
 }
@@ -248,6 +261,25 @@ void read_object_fur(const JsonReader& fur, const JsonReader& r, const Scene& sc
 }
 }  // namespace
 
+namespace {
+/// Object `obj` (read from `r`) kept only to be placed by instances: its tessellations become
+/// the shared ones every instance traces. What instances cannot share is refused here.
+void make_prototype(const JsonReader& r, const Scene& scene, Object& obj) {
+    const auto refuse = [&](const std::string& key, const std::string& why) {
+        r.fail(key, fmt::format("a prototype (\"prototype\": true) {}: instances share one tessellation, still, "
+                                "placed as it is (docs/scene-format.md, \"Instances\")", why));
+    };
+    if (obj.surface) refuse("subdivision", "cannot be a subdivision surface (it is diced for where it stands)");
+    if (obj.fur) refuse("fur", "cannot grow fur");
+    if (obj.deforms) refuse("animation", "cannot play an animation");
+    if (obj.moves) refuse("transform", "cannot have a keyed transform");
+    for (uint32_t m : obj.coarse.face_materials)
+        if (scene.materials[m].is_emissive()) refuse("", fmt::format("cannot emit light (material \"{}\")", scene.materials[m].name));
+    // Its tessellations before its placement were kept (keep_local): the world ones go.
+    obj.coarse = {}, obj.fine = {};
+}
+}  // namespace
+
 void check_generated_geometry(const JsonReader& root, const nlohmann::json& objects, const Scene& scene) {
     // An icosphere of level L has 20 x 4^L triangles; with its vertices, normals and its share of
     // a BVH, about 100 bytes each.
@@ -276,22 +308,12 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
     Object obj;
     obj.name = r.string("name", fmt::format("object{}", index));
     obj.moves = placement_keyed(scene, index);  // or, below, it plays an animation of its file
+    obj.prototype = r.boolean("prototype", false);
     std::string type = r.choice("type", r.has("file") ? "mesh" : "", {"mesh", "quad", "sphere"});
     const bool subdivided = type == "mesh" && r.has("subdivision") && r.raw("subdivision") != "none";
     r.only(keys_of_type(type, subdivided),
            type != "mesh" ? "a " + type : subdivided ? "a subdivision surface" : "a mesh without \"subdivision\"");
-    int mat = -1;
-    if (r.has("material")) {
-        std::string name = r.string("material", "");
-        mat = material_index(scene, name);
-        if (mat < 0) {
-            std::vector<std::string> names;
-            for (const auto& m : scene.materials) names.push_back(m.name);
-            std::string hint = closest_match(name, names);
-            r.fail("material", fmt::format("unknown material \"{}\"{}", name,
-                                           hint.empty() ? "" : " (did you mean \"" + hint + "\"?)"));
-        }
-    }
+    const int mat = read_material_name(r, "material", scene);
     auto default_material = [&]() {
         if (mat >= 0) return static_cast<uint32_t>(mat);
         int d = material_index(scene, "default");
@@ -322,7 +344,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         }
         record_inputs(r, "file", read);
         obj.placement = read_transform(r);
-        if (fine > 0 && obj.moves && !obj.deforms) {
+        if (fine > 0 && keeps_local(obj)) {
             const TriangleMesh local_fine = subdivide_linear(obj.coarse, fine);
             keep_local(obj, obj.coarse, &local_fine);
         } else {
@@ -339,7 +361,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         fine = r.integer("fine_subdivisions", 0, 0, 8);
         obj.coarse = make_quad(p[0], p[1], p[2], p[3], default_material());
         obj.placement = read_transform(r);
-        if (fine > 0 && obj.moves) {
+        if (fine > 0 && keeps_local(obj)) {
             const TriangleMesh local_fine = subdivide_linear(obj.coarse, fine);
             keep_local(obj, obj.coarse, &local_fine);
         } else {
@@ -367,6 +389,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
             r.fail("", fmt::format("mesh has vertex positions that are not finite or beyond +-{:g} (after the transform)", kMaxCoordinate));
     if (r.has("fur")) read_object_fur(JsonReader(r.raw("fur"), r.at("fur"), r.ctx(), fur_keys()), r, scene, index, obj);
     read_object_visibility(r, obj);
+    if (obj.prototype) make_prototype(r, scene, obj);
     scene.objects.push_back(std::move(obj));
 }
 }  // namespace bounce

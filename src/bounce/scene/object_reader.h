@@ -31,5 +31,7 @@ TriangleMesh posed_visible_mesh(const JsonReader& r, const Scene& scene, double 
 
 /// Index of the material named `name`, or -1.
 int material_index(const Scene& scene, const std::string& name);
+/// The material `r` names under `key` (-1: no such key); an unknown name fails with the closest one.
+int read_material_name(const JsonReader& r, const std::string& key, const Scene& scene);
 
 }  // namespace bounce

@@ -147,8 +147,44 @@ struct Object {
     std::array<std::vector<float>, 2> fur_shutter;
     /// With motion blur, rigid movers with local tessellations: the placement at shutter open and close.
     std::optional<std::array<Transform, 2>> shutter_placement;
-    bool has_fine() const { return !fine.indices.empty(); }
-    const TriangleMesh& visible() const { return has_fine() ? fine : coarse; }
+    /// An instance (scene file "instances"): it places another object's tessellations, shared
+    /// with every placement of it (`local_coarse`, `local_fine`), with `placement`. Its own
+    /// `coarse` and `fine` stay empty, so memory grows with prototypes, not placements: read its
+    /// triangles through coarse_mesh() / visible_mesh() and its points through to_world().
+    bool instance = false;
+    /// Loaded only to be placed by instances (scene file "prototype": true): no ray sees it, and
+    /// it neither sizes the scene nor holds radiosity.
+    bool prototype = false;
+    /// An instance's material for every face (its "material"); -1 = the prototype's own.
+    int material_override = -1;
+    /// An instance's world bounds: of its coarse and of its visible tessellation, placed.
+    Bounds instance_bounds, instance_visible_bounds;
+    bool has_fine() const { return instance ? local_fine != nullptr : !fine.indices.empty(); }
+    /// The tessellation in world space (empty for an instance: use the placed accessors below).
+    const TriangleMesh& visible() const { return has_fine() && !instance ? fine : coarse; }
+    /// The triangles a hit's `prim` indexes: what secondary rays trace, and what the camera sees.
+    const TriangleMesh& coarse_mesh() const { return instance ? *local_coarse : coarse; }
+    const TriangleMesh& visible_mesh() const { return instance ? (local_fine ? *local_fine : *local_coarse) : visible(); }
+    /// What places coarse_mesh() and visible_mesh() in the world (null: they are in place).
+    const Transform* to_world() const { return instance ? &placement : nullptr; }
+    /// Points of the two tessellations in world space, with an instance's material override.
+    SurfacePoint coarse_point(uint32_t prim, float u, float v) const { return with_material(surface_point(coarse_mesh(), to_world(), prim, u, v)); }
+    SurfacePoint visible_point(uint32_t prim, float u, float v) const { return with_material(surface_point(visible_mesh(), to_world(), prim, u, v)); }
+    /// Triangle `prim`'s material (coarse tessellation).
+    uint32_t material_of(uint32_t prim) const {
+        return material_override >= 0 ? static_cast<uint32_t>(material_override) : coarse_mesh().face_materials[prim];
+    }
+    /// Rays may see it (prototypes are only placed).
+    bool placed() const { return !prototype; }
+    /// World bounds of its coarse and of its visible tessellation.
+    Bounds coarse_bounds() const { return instance ? instance_bounds : coarse.bounds(); }
+    Bounds visible_mesh_bounds() const { return instance ? instance_visible_bounds : visible().bounds(); }
+
+private:
+    SurfacePoint with_material(SurfacePoint sp) const {
+        if (material_override >= 0) sp.material = static_cast<uint32_t>(material_override);
+        return sp;
+    }
 };
 
 /// A file a scene reads and the key that named it ("/objects/2/file", "/materials/wood/color_texture");

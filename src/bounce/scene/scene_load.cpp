@@ -18,6 +18,7 @@
 #include "bounce/scene/json_reader.h"
 #include "bounce/scene/keyframes.h"
 #include "bounce/scene/mesh_import.h"
+#include "bounce/scene/instance_reader.h"
 #include "bounce/scene/object_reader.h"
 #include "bounce/scene/params.h"
 
@@ -207,10 +208,13 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     const json& objs = root.raw("objects");
     if (!objs.is_array() || objs.empty()) root.fail("objects", "expected a non-empty array of objects");
     check_generated_geometry(root, objs, scene);
+    // Instancers last (their prototypes may come after them), each holding its index meanwhile.
     for (size_t i = 0; i < objs.size(); ++i) {
-        JsonReader o(objs[i], fmt::format("/objects/{}", i), ctx, object_keys());
-        read_object(o, scene, i);
+        if (places_instances(objs[i])) scene.objects.emplace_back().instance = true;
+        else read_object(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), scene, i);
     }
+    for (size_t i = 0; i < objs.size(); ++i)
+        if (places_instances(objs[i])) read_instances(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), objs, scene, i);
 
     // Lights: explicit ones, then one mesh light per object with emissive faces.
     if (root.has("lights")) {
@@ -225,8 +229,8 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
         }
     }
     for (size_t i = 0; i < scene.objects.size(); ++i) {
-        bool emits = false;
-        for (uint32_t m : scene.objects[i].coarse.face_materials) emits |= scene.materials[m].is_emissive();
+        bool emits = false;  // (an instance may not emit: instance_reader refuses it; a prototype is not placed)
+        for (uint32_t m : scene.objects[i].placed() ? scene.objects[i].coarse.face_materials : std::vector<uint32_t>{}) emits |= scene.materials[m].is_emissive();
         if (emits) {
             Light l;
             l.type = LightType::Mesh;
@@ -257,7 +261,8 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
 
 Bounds Scene::bounds() const {
     Bounds b;
-    for (const auto& o : objects) b.extend(o.coarse.bounds());
+    for (const auto& o : objects)
+        if (o.placed()) b.extend(o.coarse_bounds());
     return b;
 }
 
@@ -268,14 +273,14 @@ bool Scene::objects_move() const {
 float Scene::size() const {
     Bounds still;
     for (const auto& o : objects)
-        if (!o.moves) still.extend(o.coarse.bounds());
+        if (!o.moves && o.placed()) still.extend(o.coarse_bounds());
     return length((still.empty() ? bounds() : still).diagonal());
 }
 
 Bounds Scene::visible_bounds() const {
     Bounds b = bounds();
     for (const auto& o : objects) {
-        if (o.has_fine()) b.extend(o.fine.bounds());
+        if (o.has_fine() && o.placed()) b.extend(o.visible_mesh_bounds());
         if (!o.fur) continue;
         const std::vector<float>& v = o.fur->vertices;
         for (size_t i = 0; i + 3 < v.size() + 1; i += 4) b.extend(Vec3{v[i], v[i + 1], v[i + 2]});

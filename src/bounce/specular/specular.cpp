@@ -64,11 +64,11 @@ SpecularTracer::Start SpecularTracer::start_of(const Fragment& f, const Vec3& d)
     const float reach = 2 * std::max(accel_.ray_offset(), f.footprint);
     const Hit h = accel_.coarse().intersect(f.p - d * reach, d, 0, 2 * reach);
     if (h.valid() && !h.hair && h.object == f.object) {
-        const SurfacePoint sp = surface_point(scene_.objects[h.object].coarse, h.prim, h.u, h.v);
+        const SurfacePoint sp = scene_.objects[h.object].coarse_point(h.prim, h.u, h.v);
         return {sp.p, sp.n, sp.ng};
     }
     // The authored outside: the triangle's normal on its shading normals' side.
-    const Vec3 outward = surface_point(scene_.objects[f.object].visible(), f.prim, 1.0f / 3, 1.0f / 3).ng;
+    const Vec3 outward = scene_.objects[f.object].visible_point(f.prim, 1.0f / 3, 1.0f / 3).ng;
     return {f.p, dot(f.n, outward) < 0 ? -f.n : f.n, outward};
 }
 
@@ -150,7 +150,7 @@ void SpecularTracer::follow(const Branch& b, PixelPaths& out, Counters& counters
         return;
     }
     const Object& obj = scene_.objects[h.object];
-    const SurfacePoint sp = surface_point(obj.coarse, h.prim, h.u, h.v);
+    const SurfacePoint sp = obj.coarse_point(h.prim, h.u, h.v);
     const Material& m = scene_.materials[sp.material];
     const bool entering = dot(b.d, sp.ng) < 0;
     const Vec3 n = entering ? sp.n : -sp.n, ng = entering ? sp.ng : -sp.ng;

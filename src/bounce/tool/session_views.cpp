@@ -119,17 +119,15 @@ json LightingSession::scene_view(size_t max_triangles) const {
         lights.push_back(j);
     }
     size_t total = 0;
-    for (const Object& o : scene_.objects) total += o.coarse.triangle_count();
+    for (const Object& o : scene_.objects) total += o.placed() ? o.coarse_mesh().triangle_count() : 0;
     const size_t stride = std::max<size_t>(1, (total + max_triangles - 1) / std::max<size_t>(max_triangles, 1));
     json tris = json::array();
     size_t t = 0;
     for (const Object& o : scene_.objects)
-        for (size_t i = 0; i < o.coarse.triangle_count(); ++i, ++t) {
+        for (uint32_t i = 0; o.placed() && i < o.coarse_mesh().triangle_count(); ++i, ++t) {
             if (t % stride) continue;
-            for (int k = 0; k < 3; ++k) {
-                const Vec3& v = o.coarse.positions[o.coarse.indices[3 * i + static_cast<size_t>(k)]];
+            for (const Vec3& v : triangle_vertices(o.coarse_mesh(), o.to_world(), i))
                 for (float x : {v.x, v.y, v.z}) tris.push_back(x);
-            }
         }
     const Bounds b = scene_.bounds();
     return {{"camera", cam}, {"lights", lights}, {"triangles", tris}, {"triangles_total", total},

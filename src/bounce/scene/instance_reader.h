@@ -1,0 +1,22 @@
+// Instances: one prototype placed many times ("instances": {"of": "chair", "transforms": [...]}).
+// Every placement is an Object of its own (its name, material override, visibility and light
+// links are an object's), sharing the prototype's tessellations: memory grows with prototypes,
+// not placements, and ray tracing places one BVH per prototype (accel/parts.h).
+#pragma once
+
+#include <cstddef>
+
+#include "bounce/scene/json_reader.h"
+#include "bounce/scene/scene.h"
+
+namespace bounce {
+
+/// Whether a scene file's object entry places instances.
+bool places_instances(const nlohmann::json& entry);
+
+/// Reads instancer number `index` (read from `r`): its first placement takes `scene.objects[index]`
+/// (held empty for it while the other objects were read, so every entry keeps its index), the
+/// others are appended. Its prototype must be read already; `entries` are the scene file's objects.
+void read_instances(const JsonReader& r, const nlohmann::json& entries, Scene& scene, size_t index);
+
+}  // namespace bounce

@@ -1,0 +1,197 @@
+// Instances ("instances": {"of": prototype, "transforms": [...]}): placements render as the same
+// geometry written out flat (bit for bit where the placement rounds nothing: identity, mirrors;
+// to float rounding under any other), share one prototype's triangles and BVH, report their own
+// object in hits, take overrides and light links by name, and hostile instancers are refused.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "bounce/accel/accel.h"
+#include "bounce/core/image.h"
+#include "bounce/render/render.h"
+#include "test_util.h"
+
+namespace bounce {
+namespace {
+
+using nlohmann::json;
+
+/// A floor and a back wall under a point light; a ball prototype (centre (2.5, 1, 0.5), so
+/// that mirrors move it) and `extra` objects.
+json room(const json& extra, const json& ball_keys = json::object()) {
+    json ball = {{"name", "ball"}, {"type", "sphere"}, {"center", {2.5, 1, 0.5}}, {"radius", 1}, {"subdivisions", 2},
+                 {"fine_subdivisions", 0}, {"material", "white"}, {"prototype", true}};
+    ball.update(ball_keys);
+    json j = {{"camera", {{"position", {0, 2, -9}}, {"look_at", {0, 1, 0}}, {"fov", 50}, {"resolution", {40, 30}}}},
+              {"render", {{"spp", 2}, {"light_samples", 2}, {"seed", 3}, {"rays", 16}}},
+              {"materials", {{"white", {{"color", 0.7}}}, {"red", {{"color", {0.7, 0.1, 0.1}}}}, {"blue", {{"color", {0.1, 0.2, 0.8}}}}}},
+              {"lights", {{{"type", "point"}, {"position", {1, 5, -2}}, {"color", 40}}}},
+              {"objects",
+               {{{"name", "floor"}, {"type", "quad"}, {"material", "white"}, {"vertices", {{-8, 0, -8}, {-8, 0, 8}, {8, 0, 8}, {8, 0, -8}}}},
+                {{"name", "back"}, {"type", "quad"}, {"material", "red"}, {"vertices", {{-8, 0, 4}, {-8, 8, 4}, {8, 8, 4}, {8, 0, 4}}}},
+                ball}}};
+    for (const json& o : extra) j["objects"].push_back(o);
+    return j;
+}
+
+/// The instanced scene and the same placements written out as objects of their own, in the
+/// order the loader gives instances (the first at the instancer's index, the rest after).
+struct Pair {
+    json instanced, flat;
+};
+Pair instanced_and_flat(const json& transforms) {
+    Pair p{room(json::array({{{"name", "balls"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}})), {}};
+    json flat = json::array();
+    for (size_t k = 0; k < transforms.size(); ++k) {
+        json o = room(json::array())["objects"][2];
+        o.erase("prototype");
+        o["name"] = transforms[k].value("name", "balls/" + std::to_string(k));
+        if (transforms[k].contains("material")) o["material"] = transforms[k]["material"];
+        json t = transforms[k];
+        t.erase("name"), t.erase("material");
+        o["transform"] = t;
+        flat.push_back(o);
+    }
+    p.flat = room(flat);
+    return p;
+}
+
+Image render_with(const json& scene, const std::string& gi) {
+    Stats stats;
+    return render(test::scene_from(scene, {Override("render.gi=" + gi)}), {}, stats, nullptr).image;
+}
+
+const json kExact = json::array({json::object(), {{"scale", {-1, 1, 1}}, {"name", "mirrored"}},
+                                 {{"scale", {1, 1, -1}}, {"material", "blue"}}, {{"scale", {-1, 1, -1}}}});
+
+TEST(Instances, RenderAsTheSameGeometryWrittenOutFlatBitForBit) {
+    const Pair p = instanced_and_flat(kExact);
+    for (const std::string gi : {"none", "brute", "cache"}) {
+        const Image a = render_with(p.instanced, gi), b = render_with(p.flat, gi);
+        EXPECT_EQ(test::differing_values(a, b), 0u) << "--gi " << gi;
+        // Not vacuous: the balls are in the picture, the blue one too.
+        const Layer* albedo = a.find("albedo");
+        ASSERT_TRUE(albedo);
+        size_t blue = 0;
+        for (int y = 0; y < a.height; ++y)
+            for (int x = 0; x < a.width; ++x) blue += a.at(*albedo, x, y)[2] > 0.5f * 0.8f && a.at(*albedo, x, y)[0] < 0.2f;
+        EXPECT_GT(blue, 20u) << "--gi " << gi;
+    }
+}
+
+TEST(Instances, UnderAnyPlacementEqualTheFlatGeometryToFloatRounding) {
+    // Rays meet a placed prototype in its own space: rotations and translations round there.
+    const json moved = json::array({{{"rotate", {30, 0, 1, 0}}, {"translate", {-3, 0, 1}}},
+                                    {{"scale", 0.5}, {"translate", {0.25, 0, -2}}},
+                                    {{"matrix", {0, 0, 1, 0, 0, 1, 0, 0, -1, 0, 0, 0, 0, 0, 0, 1}}}});
+    const Pair p = instanced_and_flat(moved);
+    const Image a = render_with(p.instanced, "none"), b = render_with(p.flat, "none");
+    for (const char* name : {"depth", "N", "direct"}) {
+        const Layer *la = a.find(name), *lb = b.find(name);
+        ASSERT_TRUE(la && lb) << name;
+        // Where a ray grazes a silhouette or a faceted ball's terminator, rounding may send it
+        // elsewhere (at 40x30, 14 pixels of direct light; misplaced balls would be hundreds).
+        size_t off = 0;
+        double sum_a = 0, sum_b = 0;
+        for (size_t i = 0; i < la->data.size(); ++i) {
+            off += std::abs(la->data[i] - lb->data[i]) > 1e-4f * std::max(1.0f, std::abs(lb->data[i]));
+            sum_a += std::abs(la->data[i]), sum_b += std::abs(lb->data[i]);
+        }
+        EXPECT_LT(static_cast<double>(off), 0.03 * static_cast<double>(la->data.size())) << name;
+        EXPECT_NEAR(sum_a / sum_b, 1.0, 1e-3) << name;
+        EXPECT_GT(sum_b, 0) << name;
+    }
+}
+
+TEST(Instances, ShareOnePrototypesTrianglesAndReportTheirOwnObjectInHits) {
+    // A row of 50 balls along x, 3 units apart.
+    json transforms = json::array();
+    for (int k = 0; k < 50; ++k) transforms.push_back({{"translate", {3 * k, 0, 0}}});
+    const Scene s = test::scene_from(room(json::array({{{"name", "row"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}})));
+    ASSERT_EQ(s.objects.size(), 3u + 50u);
+    const Object& proto = s.objects[2];
+    EXPECT_TRUE(proto.prototype);
+    EXPECT_EQ(proto.coarse.triangle_count(), 0u);  // its triangles live only in the shared mesh
+    for (size_t i = 3; i < s.objects.size(); ++i) {
+        EXPECT_TRUE(s.objects[i].instance);
+        EXPECT_EQ(s.objects[i].coarse.positions.size(), 0u);
+        EXPECT_EQ(s.objects[i].local_coarse.get(), proto.local_coarse.get());
+    }
+    EXPECT_EQ(s.objects[3].name, "row/0");
+    EXPECT_EQ(s.objects[52].name, "row/49");
+    // Down onto ball k's top: its own object, at the sphere's top (an icosphere's vertex).
+    const SceneAccel accel(s);
+    for (int k : {0, 1, 17, 49}) {
+        const Hit h = accel.fine().intersect({2.5f + 3.0f * static_cast<float>(k), 10, 0.5f}, {0, -1, 0}, 0, INFINITY);
+        ASSERT_TRUE(h.valid()) << k;
+        EXPECT_EQ(h.object, k == 0 ? 3u : static_cast<uint32_t>(3 + k)) << k;
+        EXPECT_NEAR(h.t, 8.0f, 1e-3f) << k;
+        const SurfacePoint sp = s.objects[h.object].coarse_point(h.prim, h.u, h.v);
+        EXPECT_NEAR(sp.p.x, 2.5f + 3.0f * static_cast<float>(k), 1e-4f);
+        EXPECT_NEAR(sp.p.y, 2.0f, 1e-4f);
+    }
+    // Between the balls: the floor.
+    EXPECT_EQ(accel.fine().intersect({4, 10, 0.5f}, {0, -1, 0}, 0, INFINITY).object, 0u);
+    EXPECT_NEAR(s.bounds().hi.x, 2.5f + 3 * 49 + 1, 1e-3f);
+}
+
+TEST(Instances, TakeMaterialOverridesAndLightLinksByNameAndGlob) {
+    const json transforms = json::array({{{"translate", {-3, 0, 0}}}, {{"translate", {0, 0, 0}}, {"material", "blue"}}});
+    json j = room(json::array({{{"name", "balls"}, {"material", "red"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}}));
+    const Scene s = test::scene_from(j);
+    const auto material = [&](const Object& o) { return s.materials[static_cast<size_t>(o.material_override)].name; };
+    EXPECT_EQ(material(s.objects[3]), "red");  // the instancer's
+    EXPECT_EQ(material(s.objects[4]), "blue");  // the entry's own
+    EXPECT_EQ(s.objects[4].coarse_point(0, 0.2f, 0.2f).material, static_cast<uint32_t>(s.objects[4].material_override));
+    // Unlinked from the light by glob: no direct light on either ball, the floor still lit.
+    j["lights"][0]["light_link"] = {{"exclude", {"balls/*"}}};
+    const Scene linked = test::scene_from(j);
+    EXPECT_EQ(linked.lights[0].lit[3], 0);
+    EXPECT_EQ(linked.lights[0].lit[4], 0);
+    EXPECT_EQ(linked.lights[0].lit[0], 1);
+    const Image img = render_with(j, "none");
+    const Layer *direct = img.find("direct"), *albedo = img.find("albedo");
+    size_t ball_pixels = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x)
+            if (img.at(*albedo, x, y)[2] > 0.7f) {  // blue: the second ball
+                ++ball_pixels;
+                EXPECT_EQ(img.at(*direct, x, y)[2], 0.0f);
+            }
+    EXPECT_GT(ball_pixels, 10u);
+}
+
+TEST(Instances, HostileInstancersAreRefusedWithTheirPlace) {
+    const auto instancer = [](const json& instances, const json& extra = json::object()) {
+        json o = {{"name", "balls"}, {"instances", instances}};
+        o.update(extra);
+        return json::array({o});
+    };
+    const json one = json::array({{{"translate", {1, 0, 0}}}});
+    const auto refused = [](const json& j, const std::vector<std::string>& parts) {
+        test::expect_input_error([&] { test::scene_from(j); }, parts);
+    };
+    refused(room(instancer({{"of", "bal"}, {"transforms", one}})), {"/objects/3/instances/of", "no object is named \"bal\"", "\"ball\""});
+    refused(room(instancer({{"of", "floor"}, {"transforms", one}})), {"/objects/3/instances/of", "not a prototype"});
+    refused(room(instancer({{"of", "ball"}, {"transforms", json::array()}})), {"/objects/3/instances/transforms", "non-empty"});
+    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({1, 2})}})), {"/objects/3/instances/transforms/0", "transform object"});
+    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"translate", {1, 0, 0}}, {"colour", 1}}})}})),
+            {"/objects/3/instances/transforms/0", "colour"});
+    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"translate", {1e39, 0, 0}}}})}})), {"/objects/3/instances/transforms/0/translate"});
+    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"scale", 1e30}}})}})), {"/objects/3/instances/transforms/0", "beyond"});
+    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"material", "gold"}}})}})), {"/objects/3/instances/transforms/0/material", "unknown material"});
+    refused(room(instancer({{"of", "ball"}, {"transforms", one}}, {{"type", "sphere"}})), {"/objects/3", "type"});
+    refused(room(instancer({{"of", "ball"}, {"transforms", one}, {"count", 3}})), {"/objects/3/instances", "count"});
+    refused(room(json::array(), {{"fur", {{"density", 1}}}}), {"/objects/2", "prototype", "fur"});
+    json lamp = room(json::array());
+    lamp["materials"]["glow"] = {{"emission", 5}};
+    lamp["objects"][2]["material"] = "glow";
+    refused(lamp, {"/objects/2", "prototype", "emit light"});
+    // Instances of an instancer.
+    json nested = room(instancer({{"of", "ball"}, {"transforms", one}}));
+    nested["objects"].push_back({{"name", "more"}, {"instances", {{"of", "balls"}, {"transforms", one}}}});
+    refused(nested, {"/objects/4/instances/of", "not a prototype", "instances of instances"});
+}
+
+}  // namespace
+}  // namespace bounce
