@@ -9,6 +9,7 @@
 #include "bounce/accel/accel.h"
 #include "bounce/core/image.h"
 #include "bounce/render/render.h"
+#include "gltf_strip.h"
 #include "test_util.h"
 
 namespace bounce {
@@ -159,6 +160,72 @@ TEST(Instances, TakeMaterialOverridesAndLightLinksByNameAndGlob) {
                 EXPECT_EQ(img.at(*direct, x, y)[2], 0.0f);
             }
     EXPECT_GT(ball_pixels, 10u);
+}
+
+/// A glTF file of a floor quad and a unit cube placed by three nodes (translations `at`): one mesh
+/// the nodes share (`shared`), or three copies of it, one per node.
+json cube_nodes(bool shared) {
+    std::string b;
+    test::put<float>(b, {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1});  // 96 bytes
+    test::put<uint16_t>(b, {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 3, 7, 6, 3, 6, 2, 0, 4, 7, 0, 7, 3, 1, 2, 6, 1, 6, 5});  // 72
+    test::put<float>(b, {-5, 0, -5, 5, 0, -5, 5, 0, 5, -5, 0, 5});  // 48
+    test::put<uint16_t>(b, {0, 2, 1, 0, 3, 2});                    // 12
+    json g = {{"asset", {{"version", "2.0"}}}, {"scene", 0}};
+    g["buffers"] = {{{"byteLength", b.size()}, {"uri", "data:application/octet-stream;base64," + test::base64(b)}}};
+    const auto view = [](int offset, int length) { return json{{"buffer", 0}, {"byteOffset", offset}, {"byteLength", length}}; };
+    g["bufferViews"] = {view(0, 96), view(96, 72), view(168, 48), view(216, 12)};
+    g["accessors"] = {{{"bufferView", 0}, {"componentType", 5126}, {"count", 8}, {"type", "VEC3"}, {"min", {0, 0, 0}}, {"max", {1, 1, 1}}},
+                      {{"bufferView", 1}, {"componentType", 5123}, {"count", 36}, {"type", "SCALAR"}},
+                      {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {-5, 0, -5}}, {"max", {5, 0, 5}}},
+                      {{"bufferView", 3}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}};
+    const json cube = {{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}};
+    const json floor = {{"primitives", {{{"attributes", {{"POSITION", 2}}}, {"indices", 3}}}}};
+    const json at = {{0, 0, 0}, {2, 0, 0}, {-2, 0.5, 1}};
+    g["meshes"] = shared ? json{cube, floor} : json{cube, cube, cube, floor};
+    g["nodes"] = json::array();
+    for (int k = 0; k < 3; ++k) g["nodes"].push_back({{"name", "cube" + std::to_string(k)}, {"mesh", shared ? 0 : k}, {"translation", at[k]}});
+    g["nodes"].push_back({{"name", "floor"}, {"mesh", shared ? 1 : 3}});
+    g["scenes"] = {{{"nodes", {0, 1, 2, 3}}}};
+    return g;
+}
+
+TEST(Instances, AGltfsSharedMeshesLoadAsInstancesAndRenderAsItsCopies) {
+    test::TempDir d;
+    const auto scene = [&](bool shared) {
+        d.write(shared ? "shared.gltf" : "copies.gltf", cube_nodes(shared).dump());
+        json j = room(json::array());
+        j["objects"] = {{{"name", "set"}, {"file", d.file(shared ? "shared.gltf" : "copies.gltf")}, {"transform", {{"translate", {0, 0.5, 0}}}}}};
+        return j;
+    };
+    const Scene s = test::scene_from(scene(true));
+    ASSERT_EQ(s.objects.size(), 4u);  // the floor (used once), then the cube's three placements
+    EXPECT_FALSE(s.objects[0].instance);
+    EXPECT_EQ(s.objects[0].coarse.triangle_count(), 2u);
+    for (size_t i = 1; i < 4; ++i) {
+        EXPECT_TRUE(s.objects[i].instance);
+        EXPECT_EQ(s.objects[i].local_coarse.get(), s.objects[1].local_coarse.get());
+        EXPECT_EQ(s.objects[i].coarse_mesh().triangle_count(), 12u);
+    }
+    // Named by node, placed by the node's transform then the object's.
+    EXPECT_EQ(s.objects[1].name.rfind("set/cube", 0), 0u) << s.objects[1].name;
+    Bounds all;
+    for (size_t i = 1; i < 4; ++i) all.extend(s.objects[i].coarse_bounds());
+    EXPECT_NEAR(all.lo.x, -2, 1e-6f);
+    EXPECT_NEAR(all.hi.x, 3, 1e-6f);
+    EXPECT_NEAR(all.hi.y, 2, 1e-6f);
+    EXPECT_EQ(test::scene_from(scene(false)).objects.size(), 1u);  // nothing shared: one flat mesh, as before
+    // The same picture as the file with a copy per node (to the rounding of a placed ray).
+    const Image a = render_with(scene(true), "brute"), b = render_with(scene(false), "brute");
+    const Layer *da = a.find("depth"), *db = b.find("depth");
+    size_t off = 0;
+    for (size_t i = 0; i < da->data.size(); ++i) off += std::abs(da->data[i] - db->data[i]) > 1e-4f * std::max(1.0f, db->data[i]);
+    EXPECT_LT(off, da->data.size() / 100);
+    const auto mean = [](const Layer& l) {
+        double sum = 0;
+        for (float v : l.data) sum += v;
+        return sum / static_cast<double>(l.data.size());
+    };
+    EXPECT_NEAR(mean(*a.find("beauty")) / mean(*b.find("beauty")), 1.0, 2e-3);
 }
 
 TEST(Instances, HostileInstancersAreRefusedWithTheirPlace) {

@@ -65,13 +65,8 @@ struct Shared {
 /// Placement `k` of prototype `proto`, read from its entry `e` in "transforms": the entry's
 /// transform applied after the prototype's own.
 Object read_placement(const JsonReader& r, const JsonReader& e, const Scene& scene, const Shared& proto, size_t k) {
-    Object o;
-    o.instance = true;
-    o.name = e.string("name", fmt::format("{}/{}", r.string("name", ""), k));
-    o.placement = read_transform_keys(e) * proto.placement;
-    o.local_coarse = proto.coarse, o.local_fine = proto.fine;
-    o.instance_bounds = placed_bounds(e, *o.local_coarse, o.placement);
-    o.instance_visible_bounds = o.local_fine ? placed_bounds(e, *o.local_fine, o.placement) : o.instance_bounds;
+    Object o = make_instance(e, e.string("name", fmt::format("{}/{}", r.string("name", ""), k)), proto.coarse, proto.fine,
+                             read_transform_keys(e) * proto.placement);
     const int own = read_material_name(e, "material", scene);
     o.material_override = own >= 0 ? own : read_material_name(r, "material", scene);
     read_object_visibility(r, o);
@@ -79,6 +74,18 @@ Object read_placement(const JsonReader& r, const JsonReader& e, const Scene& sce
 }
 
 }  // namespace
+
+Object make_instance(const JsonReader& r, std::string name, std::shared_ptr<const TriangleMesh> coarse,
+                     std::shared_ptr<const TriangleMesh> fine, const Transform& placement) {
+    Object o;
+    o.instance = true;
+    o.name = std::move(name);
+    o.placement = placement;
+    o.local_coarse = std::move(coarse), o.local_fine = std::move(fine);
+    o.instance_bounds = placed_bounds(r, *o.local_coarse, o.placement);
+    o.instance_visible_bounds = o.local_fine ? placed_bounds(r, *o.local_fine, o.placement) : o.instance_bounds;
+    return o;
+}
 
 void read_instances(const JsonReader& r, const json& entries, Scene& scene, size_t index) {
     r.only({"name", "instances", "material", "visible_to", "matte"}, "an object that places instances");

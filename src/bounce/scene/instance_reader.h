@@ -5,6 +5,8 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
+#include <string>
 
 #include "bounce/scene/json_reader.h"
 #include "bounce/scene/scene.h"
@@ -13,6 +15,11 @@ namespace bounce {
 
 /// Whether a scene file's object entry places instances.
 bool places_instances(const nlohmann::json& entry);
+
+/// A placement of the shared tessellations `coarse` and `fine` (null: none) by `placement`,
+/// named `name`, with its world bounds; fails at `r` when a vertex lands beyond the coordinate limit.
+Object make_instance(const JsonReader& r, std::string name, std::shared_ptr<const TriangleMesh> coarse,
+                     std::shared_ptr<const TriangleMesh> fine, const Transform& placement);
 
 /// Reads instancer number `index` (read from `r`): its first placement takes `scene.objects[index]`
 /// (held empty for it while the other objects were read, so every entry keeps its index), the

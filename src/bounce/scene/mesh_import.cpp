@@ -71,16 +71,39 @@ void for_each_mesh_instance(const aiScene* s, Fn&& fn) {
     }
 }
 
-/// Calls fn(mesh, posed world transform) for every mesh instance of the node tree.
+/// Calls fn(node, mesh index) for every mesh a node of the tree uses.
 template <typename Fn>
-void for_each_posed_instance(const aiScene* s, const std::unordered_map<const aiNode*, aiMatrix4x4>& nodes, Fn&& fn) {
+void for_each_node_mesh(const aiScene* s, Fn&& fn) {
     std::vector<const aiNode*> stack{s->mRootNode};
     while (!stack.empty()) {
         const aiNode* node = stack.back();
         stack.pop_back();
         for (unsigned c = 0; c < node->mNumChildren; ++c) stack.push_back(node->mChildren[c]);
-        for (unsigned k = 0; k < node->mNumMeshes; ++k) fn(s->mMeshes[node->mMeshes[k]], nodes.at(node));
+        for (unsigned k = 0; k < node->mNumMeshes; ++k) fn(node, node->mMeshes[k]);
     }
+}
+
+/// Calls fn(mesh, posed world transform) for every mesh instance of the node tree.
+template <typename Fn>
+void for_each_posed_instance(const aiScene* s, const std::unordered_map<const aiNode*, aiMatrix4x4>& nodes, Fn&& fn) {
+    for_each_node_mesh(s, [&](const aiNode* node, unsigned mesh) { fn(s->mMeshes[mesh], nodes.at(node)); });
+}
+
+/// The triangles of `am` at `positions` and `normals` (posed), every face of material `mat`.
+TriangleMesh triangles_of(const aiMesh* am, const std::vector<Vec3>& positions, const std::vector<Vec3>& normals, uint32_t mat) {
+    TriangleMesh m;
+    for (unsigned v = 0; v < am->mNumVertices; ++v) {
+        m.positions.push_back(positions[v]);
+        if (am->mNormals) m.normals.push_back(normals[v]);
+        if (am->mTextureCoords[0]) m.uvs.push_back({am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y});
+    }
+    for (unsigned f = 0; f < am->mNumFaces; ++f) {
+        const aiFace& face = am->mFaces[f];
+        if (face.mNumIndices != 3) continue;
+        m.indices.insert(m.indices.end(), {face.mIndices[0], face.mIndices[1], face.mIndices[2]});
+        m.face_materials.push_back(mat);
+    }
+    return m;
 }
 
 struct GltfCamera {
@@ -272,22 +295,42 @@ TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, 
     for_each_posed_instance(s, nodes, [&](const aiMesh* am, const aiMatrix4x4& world) {
         if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) return;
         pose_mesh(s, am, time, world, nodes, posed, posed_normals, path);
-        TriangleMesh m;
-        for (unsigned v = 0; v < am->mNumVertices; ++v) {
-            m.positions.push_back(posed[v]);
-            if (am->mNormals) m.normals.push_back(posed_normals[v]);
-            if (am->mTextureCoords[0]) m.uvs.push_back({am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y});
-        }
-        const uint32_t mat = mat_map[am->mMaterialIndex];
-        for (unsigned f = 0; f < am->mNumFaces; ++f) {
-            const aiFace& face = am->mFaces[f];
-            if (face.mNumIndices != 3) continue;
-            m.indices.insert(m.indices.end(), {face.mIndices[0], face.mIndices[1], face.mIndices[2]});
-            m.face_materials.push_back(mat);
-        }
-        out.append(m);
+        out.append(triangles_of(am, posed, posed_normals, mat_map[am->mMaterialIndex]));
     });
     if (out.triangle_count() == 0) throw InputError(path, "", "mesh has no triangles");
+    return out;
+}
+
+MeshFileParts load_mesh_parts(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
+                              int override_material, MeshInputs* files_read) {
+    Assimp::Importer imp;
+    const aiScene* s = import_file(imp, path, kAssimpFlags, files_read);
+    const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material, files_read);
+    const MeshTime rest;
+    const auto nodes = posed_nodes(s, rest, path);
+    std::vector<int> uses(s->mNumMeshes, 0), slot(s->mNumMeshes, -1);
+    for_each_node_mesh(s, [&](const aiNode*, unsigned mesh) { ++uses[mesh]; });
+    MeshFileParts out;
+    std::vector<Vec3> posed, posed_normals;
+    for_each_node_mesh(s, [&](const aiNode* node, unsigned index) {
+        const aiMesh* am = s->mMeshes[index];
+        if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) return;
+        const uint32_t mat = mat_map[am->mMaterialIndex];
+        // Shared: used by several nodes, rigid (no skin, no morph targets) and not a light
+        // (mesh lights sample world triangles).
+        if (uses[index] < 2 || am->HasBones() || am->mNumAnimMeshes > 0 || materials[mat].is_emissive()) {
+            pose_mesh(s, am, rest, nodes.at(node), nodes, posed, posed_normals, path);
+            out.once.append(triangles_of(am, posed, posed_normals, mat));
+            return;
+        }
+        if (slot[index] < 0) {  // in its own space, once
+            slot[index] = static_cast<int>(out.shared.size());
+            pose_mesh(s, am, rest, aiMatrix4x4(), nodes, posed, posed_normals, path);
+            out.shared.push_back({triangles_of(am, posed, posed_normals, mat), {}});
+        }
+        out.shared[static_cast<size_t>(slot[index])].uses.push_back({node->mName.C_Str(), to_transform(nodes.at(node))});
+    });
+    if (out.once.triangle_count() == 0 && out.shared.empty()) throw InputError(path, "", "mesh has no triangles");
     return out;
 }
 

@@ -40,6 +40,25 @@ struct MeshPose {
 TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
                             int override_material, MeshInputs* files_read = nullptr, const MeshPose& pose = {});
 
+/// A still mesh file's triangles split for instancing (docs/instancing.md): the meshes its nodes
+/// use once, placed as load_mesh_file places them, and each mesh several nodes use (glTF shares
+/// meshes between nodes) once in its own space, with every using node's name and world
+/// transform. Skinned, morphed and emissive meshes are never shared.
+struct MeshFileParts {
+    struct Use {
+        std::string node;
+        Transform world;
+    };
+    struct Shared {
+        TriangleMesh mesh;
+        std::vector<Use> uses;
+    };
+    TriangleMesh once;
+    std::vector<Shared> shared;
+};
+MeshFileParts load_mesh_parts(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
+                              int override_material, MeshInputs* files_read = nullptr);
+
 /// Loads a mesh file's polygons as a subdivision control mesh (faces not triangulated,
 /// vertices welded by position, uvs face-varying), node transforms and then `transform`
 /// applied; materials as load_mesh_file.

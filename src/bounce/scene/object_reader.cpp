@@ -10,6 +10,7 @@
 #include "bounce/dice/displacement.h"
 #include "bounce/dice/subdivision.h"
 #include "bounce/scene/fur_reader.h"
+#include "bounce/scene/instance_reader.h"
 #include "bounce/scene/item_readers.h"
 #include "bounce/scene/keyframes.h"
 #include "bounce/scene/link_reader.h"
@@ -262,6 +263,24 @@ void read_object_fur(const JsonReader& fur, const JsonReader& r, const Scene& sc
 }  // namespace
 
 namespace {
+/// Instances of the meshes a mesh file's nodes share, named "<object>/<node>", placed by the
+/// node's world transform then the object's; `fine` levels of linear subdivision for the camera.
+/// Each takes the object's lighter's controls (visibility, matte).
+std::vector<Object> place_shared_meshes(const JsonReader& r, const Object& obj, std::vector<MeshFileParts::Shared>& shared, int fine) {
+    std::vector<Object> placed;
+    for (MeshFileParts::Shared& s : shared) {
+        auto local_fine = fine > 0 ? std::make_shared<const TriangleMesh>(subdivide_linear(s.mesh, fine)) : nullptr;
+        const auto local = std::make_shared<const TriangleMesh>(std::move(s.mesh));
+        for (size_t k = 0; k < s.uses.size(); ++k) {
+            const std::string node = s.uses[k].node.empty() ? fmt::format("node{}", placed.size()) : s.uses[k].node;
+            placed.push_back(make_instance(r, fmt::format("{}/{}", obj.name, node), local, local_fine,
+                                           obj.placement * s.uses[k].world));
+            placed.back().visible_to = obj.visible_to, placed.back().matte = obj.matte;
+        }
+    }
+    return placed;
+}
+
 /// Object `obj` (read from `r`) kept only to be placed by instances: its tessellations become
 /// the shared ones every instance traces. What instances cannot share is refused here.
 void make_prototype(const JsonReader& r, const Scene& scene, Object& obj) {
@@ -304,7 +323,7 @@ void check_generated_geometry(const JsonReader& root, const nlohmann::json& obje
     if (std::string why = memory_shortfall(bytes, fmt::format("tessellating {} spheres", spheres)); !why.empty()) root.fail("objects", why);
 }
 
-void read_object(const JsonReader& r, Scene& scene, size_t index) {
+void read_object(const JsonReader& r, Scene& scene, size_t index, std::vector<Object>& later) {
     Object obj;
     obj.name = r.string("name", fmt::format("object{}", index));
     obj.moves = placement_keyed(scene, index);  // or, below, it plays an animation of its file
@@ -326,6 +345,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         return static_cast<uint32_t>(d);
     };
     int fine = 0;
+    std::vector<MeshFileParts::Shared> shared;  // a mesh file's meshes that several of its nodes place
     const std::string subdivision = r.choice("subdivision", "none", {"none", "catmull-clark", "loop"});
     if (type == "mesh" && subdivision != "none") {
         read_subdivision_object(r, scene, mat, obj, subdivision == "loop" ? SubdivScheme::Loop : SubdivScheme::CatmullClark);
@@ -337,8 +357,17 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         const MeshPose pose = mesh_pose(r, scene, scene.frame);
         obj.deforms = !pose.clip.empty();
         obj.moves = obj.moves || obj.deforms;
+        // Meshes its nodes share become instances, unless it moves, grows fur or is a prototype
+        // (instances of instances): then every node's copy is flattened into its mesh, as before.
+        const bool may_share = !obj.moves && !obj.prototype && !r.has("fur");
         try {
-            obj.coarse = load_mesh_file(file, obj.name, scene.materials, mat, &read, pose);
+            if (may_share) {
+                MeshFileParts parts = load_mesh_parts(file, obj.name, scene.materials, mat, &read);
+                obj.coarse = std::move(parts.once);
+                shared = std::move(parts.shared);
+            } else {
+                obj.coarse = load_mesh_file(file, obj.name, scene.materials, mat, &read, pose);
+            }
         } catch (const InputError& e) {
             r.fail(r.has("animation") && e.place() == "animations" ? "animation" : "file", e.what());
         }
@@ -383,12 +412,18 @@ void read_object(const JsonReader& r, Scene& scene, size_t index) {
         obj.coarse.transform(t);
         if (fine > 0) obj.fine.transform(t);
     }
-    if (obj.coarse.triangle_count() == 0) r.fail(type == "mesh" ? "file" : "", "mesh has no triangles");
+    read_object_visibility(r, obj);  // (before its shared meshes are placed: they take its controls)
+    std::vector<Object> placed = place_shared_meshes(r, obj, shared, fine);
+    if (obj.coarse.triangle_count() == 0 && !placed.empty()) {  // the file's meshes are all shared
+        obj = std::move(placed.front());
+        placed.erase(placed.begin());
+    }
+    later.insert(later.end(), std::make_move_iterator(placed.begin()), std::make_move_iterator(placed.end()));
+    if (obj.coarse.triangle_count() == 0 && !obj.instance) r.fail(type == "mesh" ? "file" : "", "mesh has no triangles");
     for (const auto& p : obj.coarse.positions)
         if (!isfinite(p) || std::fabs(p.x) > kMaxCoordinate || std::fabs(p.y) > kMaxCoordinate || std::fabs(p.z) > kMaxCoordinate)
             r.fail("", fmt::format("mesh has vertex positions that are not finite or beyond +-{:g} (after the transform)", kMaxCoordinate));
     if (r.has("fur")) read_object_fur(JsonReader(r.raw("fur"), r.at("fur"), r.ctx(), fur_keys()), r, scene, index, obj);
-    read_object_visibility(r, obj);
     if (obj.prototype) make_prototype(r, scene, obj);
     scene.objects.push_back(std::move(obj));
 }

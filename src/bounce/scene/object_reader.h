@@ -16,8 +16,11 @@ namespace bounce {
 /// Every key any object type reads.
 const std::vector<std::string>& object_keys();
 
-/// Appends object number `index` (read from `r`) to `scene.objects`.
-void read_object(const JsonReader& r, Scene& scene, size_t index);
+/// Appends object number `index` (read from `r`) to `scene.objects`. A still mesh file whose
+/// nodes share meshes (glTF) places them as instances: those go to `later` (appended after the
+/// scene file's entries, which keep their indices), unless the file has nothing else, when the
+/// first takes the object's place.
+void read_object(const JsonReader& r, Scene& scene, size_t index, std::vector<Object>& later);
 
 /// Before any object is read: the triangles the scene's spheres will be tessellated into (both
 /// levels), against render.memory_budget and free memory, with the estimate (100 000 spheres

@@ -209,12 +209,14 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     if (!objs.is_array() || objs.empty()) root.fail("objects", "expected a non-empty array of objects");
     check_generated_geometry(root, objs, scene);
     // Instancers last (their prototypes may come after them), each holding its index meanwhile.
+    std::vector<Object> file_instances;  // meshes shared by a mesh file's nodes, after every entry
     for (size_t i = 0; i < objs.size(); ++i) {
         if (places_instances(objs[i])) scene.objects.emplace_back().instance = true;
-        else read_object(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), scene, i);
+        else read_object(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), scene, i, file_instances);
     }
     for (size_t i = 0; i < objs.size(); ++i)
         if (places_instances(objs[i])) read_instances(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), objs, scene, i);
+    for (Object& o : file_instances) scene.objects.push_back(std::move(o));
 
     // Lights: explicit ones, then one mesh light per object with emissive faces.
     if (root.has("lights")) {
