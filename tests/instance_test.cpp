@@ -4,7 +4,10 @@
 // object in hits, take overrides and light links by name, and hostile instancers are refused.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <cstring>
+#include <functional>
 
 #include "bounce/accel/accel.h"
 #include "bounce/core/image.h"
@@ -162,42 +165,84 @@ TEST(Instances, TakeMaterialOverridesAndLightLinksByNameAndGlob) {
     EXPECT_GT(ball_pixels, 10u);
 }
 
-/// A glTF file of a floor quad and a unit cube placed by three nodes (translations `at`): one mesh
-/// the nodes share (`shared`), or three copies of it, one per node.
-json cube_nodes(bool shared) {
+/// How a glTF file places its unit cube three times: a copy of the mesh per node, one mesh the
+/// three nodes share, or one node with EXT_mesh_gpu_instancing.
+enum class Cubes { Copies, Shared, GpuInstanced };
+
+/// A glTF file of a floor quad and a unit cube placed three times (translation, rotation about
+/// y, scale each), as `how` says.
+json cube_nodes(Cubes how) {
+    const float h = std::sqrt(0.5f);
+    const std::vector<std::array<float, 3>> at = {{0, 0, 0}, {2, 0, 0}, {-2, 0.5f, 1}}, scale = {{1, 1, 1}, {0.5f, 1, 0.5f}, {1, 1, 1}};
+    const std::vector<std::array<float, 4>> turn = {{0, 0, 0, 1}, {0, 0, 0, 1}, {0, h, 0, h}};
     std::string b;
     test::put<float>(b, {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1});  // 96 bytes
     test::put<uint16_t>(b, {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 3, 7, 6, 3, 6, 2, 0, 4, 7, 0, 7, 3, 1, 2, 6, 1, 6, 5});  // 72
     test::put<float>(b, {-5, 0, -5, 5, 0, -5, 5, 0, 5, -5, 0, 5});  // 48
     test::put<uint16_t>(b, {0, 2, 1, 0, 3, 2});                    // 12
+    for (const auto& t : at) test::put<float>(b, {t[0], t[1], t[2]});                // 36 at 228
+    for (const auto& q : turn) test::put<float>(b, {q[0], q[1], q[2], q[3]});       // 48 at 264
+    for (const auto& k : scale) test::put<float>(b, {k[0], k[1], k[2]});             // 36 at 312
     json g = {{"asset", {{"version", "2.0"}}}, {"scene", 0}};
     g["buffers"] = {{{"byteLength", b.size()}, {"uri", "data:application/octet-stream;base64," + test::base64(b)}}};
     const auto view = [](int offset, int length) { return json{{"buffer", 0}, {"byteOffset", offset}, {"byteLength", length}}; };
-    g["bufferViews"] = {view(0, 96), view(96, 72), view(168, 48), view(216, 12)};
+    g["bufferViews"] = {view(0, 96), view(96, 72), view(168, 48), view(216, 12), view(228, 36), view(264, 48), view(312, 36)};
+    const auto vec = [](int index, const char* type) { return json{{"bufferView", index}, {"componentType", 5126}, {"count", 3}, {"type", type}}; };
     g["accessors"] = {{{"bufferView", 0}, {"componentType", 5126}, {"count", 8}, {"type", "VEC3"}, {"min", {0, 0, 0}}, {"max", {1, 1, 1}}},
                       {{"bufferView", 1}, {"componentType", 5123}, {"count", 36}, {"type", "SCALAR"}},
                       {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {-5, 0, -5}}, {"max", {5, 0, 5}}},
-                      {{"bufferView", 3}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}};
+                      {{"bufferView", 3}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}},
+                      vec(4, "VEC3"), vec(5, "VEC4"), vec(6, "VEC3")};
     const json cube = {{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}};
     const json floor = {{"primitives", {{{"attributes", {{"POSITION", 2}}}, {"indices", 3}}}}};
-    const json at = {{0, 0, 0}, {2, 0, 0}, {-2, 0.5, 1}};
-    g["meshes"] = shared ? json{cube, floor} : json{cube, cube, cube, floor};
+    g["meshes"] = how == Cubes::Copies ? json{cube, cube, cube, floor} : json{cube, floor, floor, floor};
     g["nodes"] = json::array();
-    for (int k = 0; k < 3; ++k) g["nodes"].push_back({{"name", "cube" + std::to_string(k)}, {"mesh", shared ? 0 : k}, {"translation", at[k]}});
-    g["nodes"].push_back({{"name", "floor"}, {"mesh", shared ? 1 : 3}});
-    g["scenes"] = {{{"nodes", {0, 1, 2, 3}}}};
+    const int floor_mesh = how == Cubes::Copies ? 3 : 1;
+    if (how == Cubes::GpuInstanced) {
+        g["extensionsUsed"] = {"EXT_mesh_gpu_instancing"};
+        g["nodes"].push_back({{"name", "cubes"}, {"mesh", 0},
+                              {"extensions", {{"EXT_mesh_gpu_instancing", {{"attributes", {{"TRANSLATION", 4}, {"ROTATION", 5}, {"SCALE", 6}}}}}}}});
+    } else {
+        for (int k = 0; k < 3; ++k)
+            g["nodes"].push_back({{"name", "cube" + std::to_string(k)}, {"mesh", how == Cubes::Shared ? 0 : k},
+                                  {"translation", at[static_cast<size_t>(k)]}, {"rotation", turn[static_cast<size_t>(k)]},
+                                  {"scale", scale[static_cast<size_t>(k)]}});
+    }
+    g["nodes"].push_back({{"name", "floor"}, {"mesh", floor_mesh}});
+    g["scenes"] = {{{"nodes", json::array()}}};
+    for (size_t n = 0; n < g["nodes"].size(); ++n) g["scenes"][0]["nodes"].push_back(n);
     return g;
+}
+
+/// The room with the cubes' file as its only object (its name "set", lifted by 0.5).
+json cubes_scene(const test::TempDir& d, Cubes how, const json& extra = json::object()) {
+    const std::string name = how == Cubes::Copies ? "copies.gltf" : how == Cubes::Shared ? "shared.gltf" : "gpu.gltf";
+    d.write(name, cube_nodes(how).dump());
+    json o = {{"name", "set"}, {"file", d.file(name)}, {"transform", {{"translate", {0, 0.5, 0}}}}};
+    o.update(extra);
+    json j = room(json::array());
+    j["objects"] = {o};
+    return j;
+}
+
+/// The cubes' placements render as the file with a copy per node, to the rounding of a placed ray.
+void expect_renders_as_copies(const json& scene, const json& copies) {
+    const Image a = render_with(scene, "brute"), b = render_with(copies, "brute");
+    const Layer *da = a.find("depth"), *db = b.find("depth");
+    size_t off = 0;
+    for (size_t i = 0; i < da->data.size(); ++i) off += std::abs(da->data[i] - db->data[i]) > 1e-4f * std::max(1.0f, db->data[i]);
+    EXPECT_LT(off, da->data.size() / 100);
+    const auto mean = [](const Layer& l) {
+        double sum = 0;
+        for (float v : l.data) sum += v;
+        return sum / static_cast<double>(l.data.size());
+    };
+    EXPECT_NEAR(mean(*a.find("beauty")) / mean(*b.find("beauty")), 1.0, 2e-3);
 }
 
 TEST(Instances, AGltfsSharedMeshesLoadAsInstancesAndRenderAsItsCopies) {
     test::TempDir d;
-    const auto scene = [&](bool shared) {
-        d.write(shared ? "shared.gltf" : "copies.gltf", cube_nodes(shared).dump());
-        json j = room(json::array());
-        j["objects"] = {{{"name", "set"}, {"file", d.file(shared ? "shared.gltf" : "copies.gltf")}, {"transform", {{"translate", {0, 0.5, 0}}}}}};
-        return j;
-    };
-    const Scene s = test::scene_from(scene(true));
+    const Scene s = test::scene_from(cubes_scene(d, Cubes::Shared));
     ASSERT_EQ(s.objects.size(), 4u);  // the floor (used once), then the cube's three placements
     EXPECT_FALSE(s.objects[0].instance);
     EXPECT_EQ(s.objects[0].coarse.triangle_count(), 2u);
@@ -211,21 +256,49 @@ TEST(Instances, AGltfsSharedMeshesLoadAsInstancesAndRenderAsItsCopies) {
     Bounds all;
     for (size_t i = 1; i < 4; ++i) all.extend(s.objects[i].coarse_bounds());
     EXPECT_NEAR(all.lo.x, -2, 1e-6f);
-    EXPECT_NEAR(all.hi.x, 3, 1e-6f);
+    EXPECT_NEAR(all.hi.x, 2.5f, 1e-6f);  // (the middle cube, at x = 2, is half as wide)
     EXPECT_NEAR(all.hi.y, 2, 1e-6f);
-    EXPECT_EQ(test::scene_from(scene(false)).objects.size(), 1u);  // nothing shared: one flat mesh, as before
-    // The same picture as the file with a copy per node (to the rounding of a placed ray).
-    const Image a = render_with(scene(true), "brute"), b = render_with(scene(false), "brute");
-    const Layer *da = a.find("depth"), *db = b.find("depth");
-    size_t off = 0;
-    for (size_t i = 0; i < da->data.size(); ++i) off += std::abs(da->data[i] - db->data[i]) > 1e-4f * std::max(1.0f, db->data[i]);
-    EXPECT_LT(off, da->data.size() / 100);
-    const auto mean = [](const Layer& l) {
-        double sum = 0;
-        for (float v : l.data) sum += v;
-        return sum / static_cast<double>(l.data.size());
+    EXPECT_EQ(test::scene_from(cubes_scene(d, Cubes::Copies)).objects.size(), 1u);  // nothing shared: one flat mesh, as before
+    expect_renders_as_copies(cubes_scene(d, Cubes::Shared), cubes_scene(d, Cubes::Copies));
+}
+
+TEST(Instances, GltfGpuInstancesLoadAsInstancesAndFlattenWhereTheObjectCannotShare) {
+    test::TempDir d;
+    const Scene s = test::scene_from(cubes_scene(d, Cubes::GpuInstanced));
+    ASSERT_EQ(s.objects.size(), 4u);
+    for (size_t i = 1; i < 4; ++i) {
+        EXPECT_TRUE(s.objects[i].instance);
+        EXPECT_EQ(s.objects[i].name, "set/cubes/" + std::to_string(i - 1));
+    }
+    // The third instance turned a quarter about y: x in [-2, -1], z in [0, 1] (z = 1 - local x).
+    EXPECT_NEAR(s.objects[3].coarse_bounds().lo.x, -2, 1e-5f);
+    EXPECT_NEAR(s.objects[3].coarse_bounds().lo.z, 0, 1e-5f);
+    EXPECT_NEAR(s.objects[3].coarse_bounds().lo.y, 1, 1e-5f);
+    expect_renders_as_copies(cubes_scene(d, Cubes::GpuInstanced), cubes_scene(d, Cubes::Copies));
+    // An object that cannot share (a prototype) holds every copy in its own mesh.
+    json proto = cubes_scene(d, Cubes::GpuInstanced, {{"prototype", true}});
+    EXPECT_EQ(test::scene_from(proto).objects[0].local_coarse->triangle_count(), 3u * 12 + 2);
+}
+
+TEST(Instances, MalformedGpuInstancesAreRefusedWithTheirPlace) {
+    test::TempDir d;
+    const auto refused = [&](const std::function<void(json&)>& edit, const std::vector<std::string>& parts) {
+        json g = cube_nodes(Cubes::GpuInstanced);
+        edit(g);
+        d.write("bad.gltf", g.dump());
+        json j = room(json::array());
+        j["objects"] = {{{"name", "set"}, {"file", d.file("bad.gltf")}}};
+        test::expect_input_error([&] { test::scene_from(j); }, parts);
     };
-    EXPECT_NEAR(mean(*a.find("beauty")) / mean(*b.find("beauty")), 1.0, 2e-3);
+    const std::string at = "/nodes/0/extensions/EXT_mesh_gpu_instancing";
+    refused([](json& g) { g["accessors"][4]["count"] = 1000; }, {"bad.gltf", at + "/attributes/TRANSLATION", "do not fit"});
+    refused([](json& g) { g["accessors"][5]["count"] = 2; }, {at + "/attributes", "different counts"});
+    refused([](json& g) { g["accessors"][4]["componentType"] = 5123; }, {at + "/attributes/TRANSLATION", "floats"});
+    refused([](json& g) { g["accessors"][6]["type"] = "VEC4"; }, {at + "/attributes/SCALE", "VEC3"});
+    refused([](json& g) { g["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"] = json::object(); },
+            {at + "/attributes", "none of"});
+    refused([](json& g) { g["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["ROTATION"] = 99; },
+            {at + "/attributes/ROTATION", "not an accessor"});
 }
 
 TEST(Instances, HostileInstancersAreRefusedWithTheirPlace) {

@@ -19,9 +19,6 @@ namespace bounce {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-namespace {
-
-/// The JSON of a .gltf file or a .glb's JSON chunk; InputError for a truncated or foreign .glb.
 std::string gltf_json_text(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     std::string text((std::istreambuf_iterator<char>(in)), {});
@@ -40,6 +37,8 @@ std::string gltf_json_text(const std::string& path) {
         throw InputError(path, "byte 12", "truncated or malformed JSON chunk");
     return text.substr(20, len);
 }
+
+namespace {
 
 /// Depth of the node hierarchy, walked without recursion; a node reached twice (two parents
 /// or a cycle) or a child index out of range is an error.

@@ -18,6 +18,9 @@ inline constexpr int kMaxMtlMaterials = 65536;
 /// read too (a glTF's buffers and images, an OBJ's MTL files), resolved.
 std::vector<std::string> check_mesh_file(const std::string& path);
 
+/// The JSON text of a .gltf file or of a .glb's JSON chunk; InputError for a truncated or foreign .glb.
+std::string gltf_json_text(const std::string& path);
+
 /// A PLY whose header declares more elements than its body can hold is refused: ASCII by
 /// counting lines, binary by the bytes its elements need.
 void check_ply_counts(const std::string& path);

@@ -16,6 +16,7 @@
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
 #include "bounce/core/image.h"
+#include "bounce/scene/gltf_instances.h"
 #include "bounce/scene/mesh_animation.h"
 #include "bounce/scene/mesh_checks.h"
 
@@ -34,6 +35,11 @@ Transform to_transform(const aiMatrix4x4& a) {
     const float* src = &a.a1;
     for (int i = 0; i < 16; ++i) t.m[static_cast<size_t>(i)] = src[i];
     return t;
+}
+
+aiMatrix4x4 to_ai(const Transform& t) {
+    const auto& m = t.m;
+    return {m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8], m[9], m[10], m[11], m[12], m[13], m[14], m[15]};
 }
 
 aiMatrix4x4 node_world(const aiNode* n) {
@@ -87,6 +93,11 @@ void for_each_node_mesh(const aiScene* s, Fn&& fn) {
 template <typename Fn>
 void for_each_posed_instance(const aiScene* s, const std::unordered_map<const aiNode*, aiMatrix4x4>& nodes, Fn&& fn) {
     for_each_node_mesh(s, [&](const aiNode* node, unsigned mesh) { fn(s->mMeshes[mesh], nodes.at(node)); });
+}
+
+/// GPU instances of a skinned or morphed mesh are refused (the extension places rigid copies).
+void check_gpu_instanced(const aiMesh* am, const GpuInstances& g, const std::string& path) {
+    if (am->HasBones() || am->mNumAnimMeshes > 0) throw InputError(path, g.pointer, "instances of a skinned or morphed mesh are not supported");
 }
 
 /// The triangles of `am` at `positions` and `normals` (posed), every face of material `mat`.
@@ -290,12 +301,18 @@ TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, 
     // Posed (animation channels, skins, morph targets) or at rest.
     const MeshTime time{pose.clip.empty() ? -1 : find_clip(s, pose.clip, path), pose.seconds};
     const auto nodes = posed_nodes(s, time, path);
+    const auto gpu = gltf_gpu_instances(path, s);
     TriangleMesh out;
     std::vector<Vec3> posed, posed_normals;
-    for_each_posed_instance(s, nodes, [&](const aiMesh* am, const aiMatrix4x4& world) {
+    for_each_node_mesh(s, [&](const aiNode* node, unsigned index) {
+        const aiMesh* am = s->mMeshes[index];
         if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) return;
-        pose_mesh(s, am, time, world, nodes, posed, posed_normals, path);
-        out.append(triangles_of(am, posed, posed_normals, mat_map[am->mMaterialIndex]));
+        const auto it = gpu.find(node);
+        for (size_t i = 0; i < (it == gpu.end() ? 1 : it->second.at.size()); ++i) {  // (a GPU-instanced node's copies, flattened)
+            if (it != gpu.end()) check_gpu_instanced(am, it->second, path);
+            pose_mesh(s, am, time, it == gpu.end() ? nodes.at(node) : nodes.at(node) * to_ai(it->second.at[i]), nodes, posed, posed_normals, path);
+            out.append(triangles_of(am, posed, posed_normals, mat_map[am->mMaterialIndex]));
+        }
     });
     if (out.triangle_count() == 0) throw InputError(path, "", "mesh has no triangles");
     return out;
@@ -308,19 +325,34 @@ MeshFileParts load_mesh_parts(const std::string& path, const std::string& prefix
     const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material, files_read);
     const MeshTime rest;
     const auto nodes = posed_nodes(s, rest, path);
-    std::vector<int> uses(s->mNumMeshes, 0), slot(s->mNumMeshes, -1);
-    for_each_node_mesh(s, [&](const aiNode*, unsigned mesh) { ++uses[mesh]; });
+    const auto gpu = gltf_gpu_instances(path, s);
+    std::vector<size_t> uses(s->mNumMeshes, 0);
+    std::vector<int> slot(s->mNumMeshes, -1);
+    for_each_node_mesh(s, [&](const aiNode* node, unsigned mesh) {
+        const auto it = gpu.find(node);
+        uses[mesh] += it == gpu.end() ? 1 : it->second.at.size();
+    });
     MeshFileParts out;
     std::vector<Vec3> posed, posed_normals;
     for_each_node_mesh(s, [&](const aiNode* node, unsigned index) {
         const aiMesh* am = s->mMeshes[index];
         if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) return;
         const uint32_t mat = mat_map[am->mMaterialIndex];
-        // Shared: used by several nodes, rigid (no skin, no morph targets) and not a light
-        // (mesh lights sample world triangles).
+        // A node's placements: itself, or its GPU instances (in its space).
+        const auto it = gpu.find(node);
+        if (it != gpu.end()) check_gpu_instanced(am, it->second, path);
+        std::vector<MeshFileParts::Use> at;
+        for (size_t i = 0; i < (it == gpu.end() ? 1 : it->second.at.size()); ++i)
+            at.push_back(it == gpu.end() ? MeshFileParts::Use{node->mName.C_Str(), to_transform(nodes.at(node))}
+                                         : MeshFileParts::Use{fmt::format("{}/{}", node->mName.C_Str(), i),
+                                                              to_transform(nodes.at(node)) * it->second.at[i]});
+        // Shared: used more than once, rigid (no skin, no morph targets) and not a light (mesh
+        // lights sample world triangles).
         if (uses[index] < 2 || am->HasBones() || am->mNumAnimMeshes > 0 || materials[mat].is_emissive()) {
-            pose_mesh(s, am, rest, nodes.at(node), nodes, posed, posed_normals, path);
-            out.once.append(triangles_of(am, posed, posed_normals, mat));
+            for (const MeshFileParts::Use& u : at) {
+                pose_mesh(s, am, rest, to_ai(u.world), nodes, posed, posed_normals, path);
+                out.once.append(triangles_of(am, posed, posed_normals, mat));
+            }
             return;
         }
         if (slot[index] < 0) {  // in its own space, once
@@ -328,7 +360,8 @@ MeshFileParts load_mesh_parts(const std::string& path, const std::string& prefix
             pose_mesh(s, am, rest, aiMatrix4x4(), nodes, posed, posed_normals, path);
             out.shared.push_back({triangles_of(am, posed, posed_normals, mat), {}});
         }
-        out.shared[static_cast<size_t>(slot[index])].uses.push_back({node->mName.C_Str(), to_transform(nodes.at(node))});
+        auto& uses_of = out.shared[static_cast<size_t>(slot[index])].uses;
+        uses_of.insert(uses_of.end(), at.begin(), at.end());
     });
     if (out.once.triangle_count() == 0 && out.shared.empty()) throw InputError(path, "", "mesh has no triangles");
     return out;
