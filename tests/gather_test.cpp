@@ -274,7 +274,7 @@ TEST(Radiosity, LazyBakesEqualTheEagerBakeInAnyOrderAndPartialSavesResume) {
     for (uint32_t t = 0; t < tris; ++t) {
         const bool front = t % 2 == 0;
         for (uint32_t k = eager.offset[t]; k < eager.offset[t] + (eager.level[t] + 1u) * (eager.level[t] + 2u) / 2; ++k)
-            ASSERT_EQ(front ? lazy.object(0).front[k] : lazy.object(0).back[k], front ? eager.front[k] : eager.back[k]);
+            ASSERT_EQ(front ? lazy.object(0).front.value(k) : lazy.object(0).back.value(k), front ? eager.front.value(k) : eager.back.value(k));
     }
     // A partial save loads as partial; the rest bakes on demand to the same values.
     test::TempDir d;

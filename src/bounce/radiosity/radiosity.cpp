@@ -59,8 +59,8 @@ RadiosityMap lay_out(const Object& o, float texel, int max_level) {
         map.offset[t] = off;
         off += lattice_count(n);
     }
-    map.front.assign(off, Color(0));
-    map.back.assign(off, Color(0));
+    map.front.lay_out(map.offset, off, 1);
+    map.back.lay_out(map.offset, off, 1);
     return map;
 }
 
@@ -72,7 +72,7 @@ int radiosity_level(float edge, float texel, int max_level) {
 
 namespace {
 
-/// The three lattice points whose values are interpolated at (u, v) of triangle `prim`, and their weights.
+/// The three lattice points (within the triangle's run) whose values are interpolated at (u, v) of triangle `prim`, and their weights.
 struct LatticeBlend {
     uint32_t k[3];
     float w[3];
@@ -80,7 +80,6 @@ struct LatticeBlend {
 
 LatticeBlend lattice_blend(const RadiosityMap& m, uint32_t prim, float u, float v) {
     const int n = m.level[prim];
-    const uint32_t o = m.offset[prim];
     float fu = std::clamp(u, 0.0f, 1.0f) * static_cast<float>(n), fv = std::clamp(v, 0.0f, 1.0f) * static_cast<float>(n);
     int i = std::min(static_cast<int>(fu), n - 1), j = std::min(static_cast<int>(fv), n - 1);
     if (i + j > n - 1) {  // on the far edge of the triangle
@@ -89,22 +88,24 @@ LatticeBlend lattice_blend(const RadiosityMap& m, uint32_t prim, float u, float 
     }
     float a = fu - static_cast<float>(i), b = fv - static_cast<float>(j);
     if (a + b <= 1 || i + j >= n - 1)  // lower sub-triangle (i,j) (i+1,j) (i,j+1)
-        return {{o + lattice_index(i, j, n), o + lattice_index(i + 1, j, n), o + lattice_index(i, j + 1, n)}, {1 - a - b, a, b}};
+        return {{lattice_index(i, j, n), lattice_index(i + 1, j, n), lattice_index(i, j + 1, n)}, {1 - a - b, a, b}};
     // upper sub-triangle (i+1,j+1) (i,j+1) (i+1,j)
-    return {{o + lattice_index(i + 1, j + 1, n), o + lattice_index(i, j + 1, n), o + lattice_index(i + 1, j, n)},
+    return {{lattice_index(i + 1, j + 1, n), lattice_index(i, j + 1, n), lattice_index(i + 1, j, n)},
             {a + b - 1, 1 - a, 1 - b}};
 }
 
 }  // namespace
 
 Color RadiosityMap::lookup(uint32_t prim, float u, float v, bool front_side) const {
-    const Color* vals = front_side ? front.data() : back.data();
+    const Color* vals = (front_side ? front : back).run(prim, offset[prim]);
+    if (!vals) return Color(0);  // (never baked: lookups bake first)
     const LatticeBlend b = lattice_blend(*this, prim, u, v);
     return vals[b.k[0]] * b.w[0] + vals[b.k[1]] * b.w[1] + vals[b.k[2]] * b.w[2];
 }
 
 void RadiosityMap::lookup_parts(uint32_t prim, float u, float v, bool front_side, std::span<Color> out) const {
-    const Color* vals = front_side ? front_parts.data() : back_parts.data();
+    const Color* vals = (front_side ? front_parts : back_parts).run(prim, offset[prim]);
+    if (!vals) return std::fill(out.begin(), out.end(), Color(0));
     const LatticeBlend b = lattice_blend(*this, prim, u, v);
     for (size_t l = 0; l < lights; ++l)
         out[l] = vals[b.k[0] * lights + l] * b.w[0] + vals[b.k[1] * lights + l] * b.w[1] + vals[b.k[2] * lights + l] * b.w[2];
@@ -119,7 +120,13 @@ uint64_t RadiosityTextures::fingerprint(const Scene& scene, const RadiositySetti
 
 size_t RadiosityTextures::lattice_points() const {
     size_t n = 0;
-    for (const auto& m : maps_) n += m.front.size();
+    for (const auto& m : maps_) n += m.front.points();
+    return n;
+}
+
+size_t RadiosityTextures::allocated_bytes() const {
+    size_t n = 0;
+    for (const auto& m : maps_) n += m.front.allocated_bytes() + m.back.allocated_bytes() + m.front_parts.allocated_bytes() + m.back_parts.allocated_bytes();
     return n;
 }
 
@@ -132,7 +139,8 @@ RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, int max_
     RadiosityMap m = lay_out(scene.objects[id], texel_size_, max_level);
     if (has_parts()) {
         m.lights = static_cast<uint32_t>(scene.lights.size());
-        m.front_parts.assign(m.front.size() * m.lights, Color(0)), m.back_parts.assign(m.back.size() * m.lights, Color(0));
+        m.front_parts.lay_out(m.offset, static_cast<uint32_t>(m.front.points()), m.lights);
+        m.back_parts.lay_out(m.offset, static_cast<uint32_t>(m.back.points()), m.lights);
     }
     return m;
 }
@@ -159,6 +167,8 @@ void RadiosityTextures::bake_side(uint32_t id, uint32_t t, bool front, Counters&
     const Object& o = src.scene->objects[id];
     RadiosityMap& map = maps_[id];
     const int n = map.level[t];
+    Color* values = (front ? map.front : map.back).writable_run(t, map.offset[t]);
+    Color* part_values = map.lights ? (front ? map.front_parts : map.back_parts).writable_run(t, map.offset[t]) : nullptr;
     for (int j = 0; j <= n; ++j)
         for (int i = 0; i + j <= n; ++i) {
             float u = static_cast<float>(i) / static_cast<float>(n), v = static_cast<float>(j) / static_cast<float>(n);
@@ -172,13 +182,13 @@ void RadiosityTextures::bake_side(uint32_t id, uint32_t t, bool front, Counters&
             const RandomStream rng = front ? RandomStream(0, (static_cast<uint64_t>(id) << 40) | (static_cast<uint64_t>(t) << 12), k)
                                            : RandomStream(1, (static_cast<uint64_t>(id) << 40) | t, k);
             const Vec3 ng = front ? sp.ng : -sp.ng;
-            Color& value = front ? map.front[k] : map.back[k];
+            Color& value = values[k - map.offset[t]];
             if (src.scales.empty()) {
                 value = albedo * src.lighting->irradiance(sp.p, ng, id, rng, src.light_samples, counters);
                 continue;
             }
             // Per light, scales factored out; the value is their scaled sum (as records' are).
-            const std::span<Color> parts((front ? map.front_parts : map.back_parts).data() + size_t{k} * map.lights, map.lights);
+            const std::span<Color> parts(part_values + size_t{k - map.offset[t]} * map.lights, map.lights);
             src.lighting->irradiance_parts(sp.p, ng, id, rng, src.light_samples, counters, parts);
             value = Color(0);
             for (size_t l = 0; l < parts.size(); ++l) {
@@ -264,7 +274,7 @@ void RadiosityTextures::save(const std::string& dir) const {
         // Texels in lattice order, 1024 wide: RGB front, RGB back, and whether each side of
         // the point's triangle is baked (A = 1) or left for whoever loads the file.
         const int width = 1024;
-        size_t count = m.front.size();
+        size_t count = m.front.points();
         int height = static_cast<int>((count + width - 1) / width);
         OIIO::ImageSpec spec(width, std::max(1, height), 8, OIIO::TypeDesc::FLOAT);
         spec.channelnames = {"front.R", "front.G", "front.B", "back.R", "back.G", "back.B", "front.A", "back.A"};
@@ -279,8 +289,10 @@ void RadiosityTextures::save(const std::string& dir) const {
         for (size_t t = 0; t < m.level.size(); ++t) {
             const bool f = state_[id][2 * t].load(std::memory_order_acquire) == 2;
             const bool b = state_[id][2 * t + 1].load(std::memory_order_acquire) == 2;
-            for (uint32_t k = m.offset[t]; k < m.offset[t] + lattice_count(m.level[t]); ++k) {
-                for (int c = 0; c < 3; ++c) px[8 * k + c] = f ? m.front[k][c] : 0, px[8 * k + 3 + c] = b ? m.back[k][c] : 0;
+            const uint32_t first = m.offset[t];
+            const Color *fv = f ? m.front.run(static_cast<uint32_t>(t), first) : nullptr, *bv = b ? m.back.run(static_cast<uint32_t>(t), first) : nullptr;
+            for (uint32_t k = first; k < first + lattice_count(m.level[t]); ++k) {
+                for (int c = 0; c < 3; ++c) px[8 * k + c] = fv ? fv[k - first][c] : 0, px[8 * k + 3 + c] = bv ? bv[k - first][c] : 0;
                 px[8 * k + 6] = f, px[8 * k + 7] = b;
             }
         }
@@ -317,7 +329,7 @@ bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const R
             return false;
         }
         RadiosityMap& map = rt.maps_[id];
-        const auto off = static_cast<uint32_t>(map.front.size());
+        const auto off = static_cast<uint32_t>(map.front.points());
         if (spec.nchannels != 8 || spec.get_int_attribute("bounce:points", -1) != static_cast<int>(off) ||
             static_cast<size_t>(spec.width) * spec.height < off)
             throw InputError(path, "bounce:points", "texture size does not match the scene's triangles");
@@ -331,17 +343,21 @@ bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const R
             ch[c] = spec.channelindex(names[c]);
             if (ch[c] < 0) throw InputError(path, "channels", std::string("missing channel ") + names[c]);
         }
-        for (size_t k = 0; k < off; ++k) {
-            map.front[k] = {px[8 * k + ch[0]], px[8 * k + ch[1]], px[8 * k + ch[2]]};
-            map.back[k] = {px[8 * k + ch[3]], px[8 * k + ch[4]], px[8 * k + ch[5]]};
-            if (!isfinite(map.front[k]) || !isfinite(map.back[k]))
-                throw InputError(path, fmt::format("texel {}", k), "non-finite radiosity value");
-        }
-        for (size_t t = 0; t < map.level.size(); ++t) {  // a side is baked when its first point says so
-            const size_t k = map.offset[t];
-            if (px[8 * k + ch[6]] == 1) rt.state_[id][2 * t].store(2, std::memory_order_relaxed);
-            if (px[8 * k + ch[7]] == 1) rt.state_[id][2 * t + 1].store(2, std::memory_order_relaxed);
-        }
+        for (size_t k = 0; k < off; ++k)
+            for (int c = 0; c < 6; ++c)
+                if (!std::isfinite(px[8 * k + static_cast<size_t>(ch[c])]))
+                    throw InputError(path, fmt::format("texel {}", k), "non-finite radiosity value");
+        // A side is baked when its first point says so; only baked sides take values (and pages).
+        for (uint32_t t = 0; t < map.level.size(); ++t)
+            for (int side = 0; side < 2; ++side) {
+                const uint32_t first = map.offset[t];
+                if (px[8 * first + static_cast<size_t>(ch[6 + side])] != 1) continue;
+                Color* v = (side == 0 ? map.front : map.back).writable_run(t, first);
+                for (uint32_t k = first; k < first + lattice_count(map.level[t]); ++k)
+                    v[k - first] = {px[8 * k + static_cast<size_t>(ch[3 * side])], px[8 * k + static_cast<size_t>(ch[3 * side + 1])],
+                                    px[8 * k + static_cast<size_t>(ch[3 * side + 2])]};
+                rt.state_[id][2 * t + static_cast<size_t>(side)].store(2, std::memory_order_relaxed);
+            }
     }
     out = std::move(rt);
     return true;

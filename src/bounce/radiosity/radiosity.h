@@ -20,6 +20,7 @@
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
 #include "bounce/lighting/lighting.h"
+#include "bounce/radiosity/lattice.h"
 #include "bounce/scene/changes.h"
 #include "bounce/scene/scene.h"
 
@@ -29,10 +30,10 @@ namespace bounce {
 struct RadiosityMap {
     std::vector<uint8_t> level;     ///< per triangle lattice level n (>= 1)
     std::vector<uint32_t> offset;   ///< per triangle first lattice point
-    std::vector<Color> front, back; ///< radiosity per lattice point, on each side of ng
+    LatticeSide front, back;        ///< radiosity per lattice point, on each side of ng (sparse)
     /// CacheSettings::light_parts: per lattice point, `lights` unit parts (light_scales factored
     /// out) whose scaled sum is front / back.
-    std::vector<Color> front_parts, back_parts;
+    LatticeSide front_parts, back_parts;
     uint32_t lights = 0;
 
     /// Radiosity at barycentrics (u, v) of triangle `prim`, on the side `front_side`.
@@ -114,6 +115,8 @@ public:
     /// The baked map of object `id` (only the sides baked so far hold values).
     const RadiosityMap& object(uint32_t id) const { return maps_[id]; }
     size_t lattice_points() const;
+    /// Bytes of lattice values allocated so far (pages of baked sides, lattice.h).
+    size_t allocated_bytes() const;
     /// Triangle sides baked so far, and in all.
     size_t baked_sides() const;
     size_t sides() const;

@@ -55,9 +55,9 @@ float RadiosityTextures::brightest() const {
             for (int side = 0; side < 2; ++side) {
                 if (state_[id][2 * t + static_cast<size_t>(side)].load(std::memory_order_relaxed) != 2) continue;
                 const RadiosityMap& m = maps_[id];
-                const std::vector<Color>& v = side == 0 ? m.front : m.back;
+                const Color* v = (side == 0 ? m.front : m.back).run(static_cast<uint32_t>(t), m.offset[t]);
                 const uint32_t n = static_cast<uint32_t>((m.level[t] + 1) * (m.level[t] + 2) / 2);
-                for (uint32_t k = m.offset[t]; k < m.offset[t] + n; ++k) top = std::max(top, luminance(v[k]));
+                for (uint32_t k = 0; v && k < n; ++k) top = std::max(top, luminance(v[k]));
             }
     return top;
 }
@@ -113,10 +113,10 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
             const bool front = s % 2 == 0;
             rt.ensure_baked(id, t, front, counters);
             const RadiosityMap &now = rt.maps_[id], &was = previous.maps_[id];
-            const std::vector<Color>&vn = front ? now.front : now.back, &vw = front ? was.front : was.back;
+            const Color *vn = (front ? now.front : now.back).run(t, now.offset[t]), *vw = (front ? was.front : was.back).run(t, was.offset[t]);
             const uint32_t count = static_cast<uint32_t>((now.level[t] + 1) * (now.level[t] + 2) / 2);
             float delta = 0;
-            for (uint32_t k = now.offset[t]; k < now.offset[t] + count; ++k)
+            for (uint32_t k = 0; vn && vw && k < count; ++k)
                 delta = std::max({delta, std::abs(vn[k].x - vw[k].x), std::abs(vn[k].y - vw[k].y), std::abs(vn[k].z - vw[k].z)});
             if (delta <= 0) continue;
             const Object& o = scene.objects[id];
@@ -142,7 +142,7 @@ std::string RadiosityTextures::baked_bytes() const {
             const uint32_t t = s / 2, count = static_cast<uint32_t>((m.level[t] + 1) * (m.level[t] + 2) / 2);
             const uint32_t head[3] = {id, s, count};
             put(head, sizeof(head));
-            put((s % 2 == 0 ? m.front : m.back).data() + m.offset[t], count * sizeof(Color));
+            put((s % 2 == 0 ? m.front : m.back).run(t, m.offset[t]), count * sizeof(Color));
         }
     }
     return out;
@@ -157,7 +157,7 @@ void RadiosityTextures::take_baked(const std::string& bytes) {
         RadiosityMap& m = maps_.at(id);
         const uint32_t t = s / 2;
         if (state_[id][s].load(std::memory_order_acquire) != 2) {
-            std::memcpy(static_cast<void*>((s % 2 == 0 ? m.front : m.back).data() + m.offset.at(t)), bytes.data() + at, count * sizeof(Color));
+            std::memcpy(static_cast<void*>((s % 2 == 0 ? m.front : m.back).writable_run(t, m.offset.at(t))), bytes.data() + at, count * sizeof(Color));
             state_[id][s].store(2, std::memory_order_release);
         }
         at += count * sizeof(Color);

@@ -76,6 +76,7 @@ void save_radiosity_pass(const FrameContext& ctx, const RadiosityTextures& rt, s
     const size_t baked = rt.baked_sides();
     ctx.stats.set("radiosity_sides_baked", static_cast<double>(baked - baked_before));
     ctx.stats.set("radiosity_sides", static_cast<double>(rt.sides()));
+    ctx.stats.set("radiosity_bytes", static_cast<double>(rt.allocated_bytes()));
     const std::string& folder = ctx.scene.render.radiosity.folder;
     if (folder.empty() || baked == baked_before || ctx.comm.rank() != 0) return;  // rank 0 writes
     PhaseTimer t(ctx.stats, "radiosity save");
