@@ -11,6 +11,8 @@
 
 #include "bounce/accel/accel.h"
 #include "bounce/core/image.h"
+#include "bounce/lighting/materials.h"
+#include "bounce/radiosity/radiosity.h"
 #include "bounce/render/render.h"
 #include "gltf_strip.h"
 #include "test_util.h"
@@ -137,6 +139,31 @@ TEST(Instances, ShareOnePrototypesTrianglesAndReportTheirOwnObjectInHits) {
     // Between the balls: the floor.
     EXPECT_EQ(accel.fine().intersect({4, 10, 0.5f}, {0, -1, 0}, 0, INFINITY).object, 0u);
     EXPECT_NEAR(s.bounds().hi.x, 2.5f + 3 * 49 + 1, 1e-3f);
+}
+
+TEST(Instances, PlacementsOfEqualScaleShareTheirRadiosityLayoutAndBakeOnlyWhatIsHit) {
+    const json transforms = json::array({{{"translate", {-3, 0, 0}}}, {{"translate", {0, 0, 0}}, {"rotate", {40, 0, 1, 0}}},
+                                         {{"translate", {3, 0, 0}}}, {{"translate", {0, 0, 2}}, {"scale", 3}}});
+    const Scene s = test::scene_from(room(json::array({{{"name", "balls"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}})));
+    const SceneAccel accel(s);
+    const Materials materials(s);
+    const DirectLighting lighting(s, accel);
+    RadiosityTextures rt = RadiosityTextures::lazy(s, materials, lighting, s.render.radiosity);
+    // Placements 0-2 (objects 3, 4, 5) have the same edge lengths: one layout; the scaled one its own.
+    EXPECT_EQ(rt.object(3).level.shared(), rt.object(4).level.shared());
+    EXPECT_EQ(rt.object(3).offset.shared(), rt.object(5).offset.shared());
+    EXPECT_NE(rt.object(3).level.shared(), rt.object(6).level.shared());
+    EXPECT_GT(rt.object(6).front.points(), rt.object(3).front.points());
+    EXPECT_EQ(rt.object(2).level.size(), 0u);  // the prototype has none
+    // Values only where a lookup baked: one page of one side.
+    EXPECT_EQ(rt.allocated_bytes(), 0u);
+    Counters counters;
+    const Color c = rt.lookup(4, 7, 0.2f, 0.3f, true, counters);
+    EXPECT_TRUE(isfinite(c));
+    const size_t page = rt.object(4).front.allocated_bytes();
+    EXPECT_GT(page, 0u);
+    EXPECT_EQ(rt.allocated_bytes(), page);
+    EXPECT_EQ(rt.baked_sides(), 1u);
 }
 
 TEST(Instances, TakeMaterialOverridesAndLightLinksByNameAndGlob) {
@@ -299,6 +326,24 @@ TEST(Instances, MalformedGpuInstancesAreRefusedWithTheirPlace) {
             {at + "/attributes", "none of"});
     refused([](json& g) { g["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["ROTATION"] = 99; },
             {at + "/attributes/ROTATION", "not an accessor"});
+}
+
+TEST(Instances, TheBundledOrchardLoadsAndRendersItsPlacements) {
+    const Scene s = load_scene(test::source_dir() + "/scenes/instances/orchard.json", {Override("camera.resolution=[48,27]")});
+    size_t instances = 0, prototypes = 0;
+    for (const Object& o : s.objects) instances += o.instance, prototypes += o.prototype;
+    EXPECT_EQ(instances, 404u);
+    EXPECT_EQ(prototypes, 2u);
+    Stats stats;
+    const Image img = render(s, {}, stats, nullptr).image;
+    // Every placement's triangles, counted once per placement; the autumn trees' override seen.
+    EXPECT_EQ(stats.extra().value("instances", 0.0), 404.0);
+    EXPECT_EQ(stats.extra().value("instanced_triangles", 0.0), 200.0 * (1280 + 10) + 4 * 1280);
+    const Layer* albedo = img.find("albedo");
+    size_t autumn = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) autumn += std::abs(img.at(*albedo, x, y)[0] - 0.7f) < 1e-3f && std::abs(img.at(*albedo, x, y)[2] - 0.1f) < 1e-3f;
+    EXPECT_GT(autumn, 5u);
 }
 
 TEST(Instances, HostileInstancersAreRefusedWithTheirPlace) {

@@ -1,5 +1,6 @@
 #include "bounce/radiosity/radiosity.h"
 
+#include <OpenImageIO/hash.h>
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
@@ -42,26 +43,18 @@ std::string file_name(size_t id, const std::string& name) {
     return fmt::format("radiosity.{:04}.{}.exr", id, safe);
 }
 
-/// A map with every triangle's lattice level and offset set and zeroed values.
-/// Object `o`'s lattices (an instance's each its own: texels follow its placement's scale and
-/// its lighting; a prototype, never placed, has none).
-RadiosityMap lay_out(const Object& o, float texel, int max_level) {
-    RadiosityMap map;
-    if (!o.placed()) return map;
+/// Object `o`'s lattice levels (an instance's each its own: texels follow its placement's
+/// scale; a prototype, never placed, has none).
+std::vector<uint8_t> lattice_levels(const Object& o, float texel, int max_level) {
+    std::vector<uint8_t> level;
+    if (!o.placed()) return level;
     const TriangleMesh& m = o.coarse_mesh();
-    map.level.resize(m.triangle_count());
-    map.offset.resize(m.triangle_count());
-    uint32_t off = 0;
+    level.resize(m.triangle_count());
     for (uint32_t t = 0; t < m.triangle_count(); ++t) {
         const auto [a, b, c] = triangle_vertices(m, o.to_world(), t);
-        int n = radiosity_level(std::max({length(b - a), length(c - b), length(a - c)}), texel, max_level);
-        map.level[t] = static_cast<uint8_t>(n);
-        map.offset[t] = off;
-        off += lattice_count(n);
+        level[t] = static_cast<uint8_t>(radiosity_level(std::max({length(b - a), length(c - b), length(a - c)}), texel, max_level));
     }
-    map.front.lay_out(map.offset, off, 1);
-    map.back.lay_out(map.offset, off, 1);
-    return map;
+    return level;
 }
 
 }  // namespace
@@ -135,12 +128,27 @@ RadiosityTextures::~RadiosityTextures() = default;
 RadiosityTextures::RadiosityTextures(RadiosityTextures&&) noexcept = default;
 RadiosityTextures& RadiosityTextures::operator=(RadiosityTextures&&) noexcept = default;
 
-RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, int max_level) const {
-    RadiosityMap m = lay_out(scene.objects[id], texel_size_, max_level);
+RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, int max_level) {
+    std::vector<uint8_t> level = lattice_levels(scene.objects[id], texel_size_, max_level);
+    RadiosityMap m;
+    auto& alike = layouts_[OIIO::xxhash::XXH64(level.data(), level.size(), level.size())];
+    for (const auto& [l, o] : alike)
+        if (l.vec() == level) m.level = l, m.offset = o;
+    if (m.level.size() != level.size() || level.empty()) {  // a new layout
+        std::vector<uint32_t> offset(level.size());
+        uint32_t off = 0;
+        for (size_t t = 0; t < level.size(); ++t) offset[t] = off, off += lattice_count(level[t]);
+        m.level = SharedArray<uint8_t>(std::make_shared<const std::vector<uint8_t>>(std::move(level)));
+        m.offset = SharedArray<uint32_t>(std::make_shared<const std::vector<uint32_t>>(std::move(offset)));
+        alike.emplace_back(m.level, m.offset);
+    }
+    const uint32_t points = m.level.size() ? m.offset[m.level.size() - 1] + lattice_count(m.level[m.level.size() - 1]) : 0;
+    m.front.lay_out(m.offset.vec(), points, 1);
+    m.back.lay_out(m.offset.vec(), points, 1);
     if (has_parts()) {
         m.lights = static_cast<uint32_t>(scene.lights.size());
-        m.front_parts.lay_out(m.offset, static_cast<uint32_t>(m.front.points()), m.lights);
-        m.back_parts.lay_out(m.offset, static_cast<uint32_t>(m.back.points()), m.lights);
+        m.front_parts.lay_out(m.offset.vec(), points, m.lights);
+        m.back_parts.lay_out(m.offset.vec(), points, m.lights);
     }
     return m;
 }

@@ -10,6 +10,8 @@
 
 #include <cstdint>
 #include <string>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <atomic>
@@ -26,10 +28,27 @@
 
 namespace bounce {
 
+/// An array that maps share when their layouts are equal (instances of one prototype at
+/// similar scales: docs/instancing.md), read as a vector.
+template <class T>
+class SharedArray {
+public:
+    SharedArray() : v_(std::make_shared<const std::vector<T>>()) {}
+    explicit SharedArray(std::shared_ptr<const std::vector<T>> v) : v_(std::move(v)) {}
+    const T& operator[](size_t i) const { return (*v_)[i]; }
+    const T& at(size_t i) const { return v_->at(i); }
+    size_t size() const { return v_->size(); }
+    const std::vector<T>& vec() const { return *v_; }
+    const std::shared_ptr<const std::vector<T>>& shared() const { return v_; }
+
+private:
+    std::shared_ptr<const std::vector<T>> v_;
+};
+
 /// Baked radiosity of one object's coarse triangles.
 struct RadiosityMap {
-    std::vector<uint8_t> level;     ///< per triangle lattice level n (>= 1)
-    std::vector<uint32_t> offset;   ///< per triangle first lattice point
+    SharedArray<uint8_t> level;     ///< per triangle lattice level n (>= 1)
+    SharedArray<uint32_t> offset;   ///< per triangle first lattice point
     LatticeSide front, back;        ///< radiosity per lattice point, on each side of ng (sparse)
     /// CacheSettings::light_parts: per lattice point, `lights` unit parts (light_scales factored
     /// out) whose scaled sum is front / back.
@@ -130,14 +149,17 @@ private:
         int light_samples;  ///< resolved (never 0)
         std::vector<Color> scales;  ///< light_parts: every light's (light_scales); else empty
     };
-    /// Object `id`'s map laid out for its shape in `scene`, nothing baked (with room for light parts).
-    RadiosityMap laid_out(const Scene& scene, size_t id, int max_level) const;
+    /// Object `id`'s map laid out for its shape in `scene`, nothing baked (with room for light
+    /// parts); its level and offset arrays shared with an earlier map's when equal.
+    RadiosityMap laid_out(const Scene& scene, size_t id, int max_level);
     void bake_side(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
     void ensure_baked(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
 
     mutable std::vector<RadiosityMap> maps_;  ///< values written once per side, under its state flag
     std::vector<std::unique_ptr<std::atomic<uint8_t>[]>> state_;  ///< per object, 2 per triangle: 0 new, 1 baking, 2 baked
     std::vector<std::string> names_;
+    /// Layouts laid out so far, by a hash of their levels (placements share theirs).
+    std::unordered_map<uint64_t, std::vector<std::pair<SharedArray<uint8_t>, SharedArray<uint32_t>>>> layouts_;
     std::unique_ptr<Sources> sources_;
     uint64_t fingerprint_ = 0;
     float texel_size_ = 0;
