@@ -11,12 +11,9 @@ void LatticeSide::release() {
     pages_.reset();
 }
 
-void LatticeSide::lay_out(const std::vector<uint32_t>& offset, uint32_t total, uint32_t width) {
+void LatticeSide::lay_out(std::shared_ptr<const std::vector<uint32_t>> offset, uint32_t total, uint32_t width) {
     release();
-    width_ = width, total_ = total;
-    page_start_.clear();
-    for (size_t t = 0; t < offset.size(); t += kPage) page_start_.push_back(offset[t]);
-    page_start_.push_back(total);
+    width_ = width, total_ = total, offset_ = std::move(offset);
     pages_ = std::make_unique<std::atomic<Color*>[]>(pages());
     for (size_t p = 0; p < pages(); ++p) pages_[p].store(nullptr, std::memory_order_relaxed);
 }
@@ -26,7 +23,7 @@ LatticeSide::LatticeSide(const LatticeSide& other) { *this = other; }
 LatticeSide& LatticeSide::operator=(const LatticeSide& other) {
     if (this == &other) return *this;
     release();
-    page_start_ = other.page_start_, width_ = other.width_, total_ = other.total_;
+    offset_ = other.offset_, width_ = other.width_, total_ = other.total_;
     pages_ = std::make_unique<std::atomic<Color*>[]>(pages());
     for (size_t p = 0; p < pages(); ++p) {
         const Color* from = other.pages_[p].load(std::memory_order_acquire);
@@ -45,16 +42,16 @@ LatticeSide::LatticeSide(LatticeSide&& other) noexcept { *this = std::move(other
 LatticeSide& LatticeSide::operator=(LatticeSide&& other) noexcept {
     if (this == &other) return *this;
     release();
-    page_start_ = std::move(other.page_start_), pages_ = std::move(other.pages_);
+    offset_ = std::move(other.offset_), pages_ = std::move(other.pages_);
     width_ = other.width_, total_ = other.total_;
-    other.page_start_.clear(), other.total_ = 0;
+    other.offset_.reset(), other.total_ = 0;
     return *this;
 }
 
 const Color* LatticeSide::run(uint32_t tri, uint32_t first) const {
     const size_t p = tri / kPage;
     const Color* base = pages_[p].load(std::memory_order_acquire);
-    return base ? base + size_t{first - page_start_[p]} * width_ : nullptr;
+    return base ? base + size_t{first - page_start(p)} * width_ : nullptr;
 }
 
 Color* LatticeSide::writable_run(uint32_t tri, uint32_t first) {
@@ -65,17 +62,24 @@ Color* LatticeSide::writable_run(uint32_t tri, uint32_t first) {
         if (pages_[p].compare_exchange_strong(base, fresh, std::memory_order_acq_rel)) base = fresh;
         else delete[] fresh;  // another thread's page won
     }
-    return base + size_t{first - page_start_[p]} * width_;
+    return base + size_t{first - page_start(p)} * width_;
 }
 
 Color LatticeSide::value(uint32_t k) const {
-    const size_t p = static_cast<size_t>(std::upper_bound(page_start_.begin(), page_start_.end() - 1, k) - page_start_.begin()) - 1;
-    const Color* base = pages_[p].load(std::memory_order_acquire);
-    return base ? base[size_t{k - page_start_[p]} * width_] : Color(0);
+    // The page whose first point is the last at or before k (pages start at every kPage-th offset).
+    size_t lo = 0, hi = pages();
+    while (hi - lo > 1) {
+        const size_t mid = (lo + hi) / 2;
+        (page_start(mid) <= k ? lo : hi) = mid;
+    }
+    const Color* base = pages_[lo].load(std::memory_order_acquire);
+    return base ? base[size_t{k - page_start(lo)} * width_] : Color(0);
 }
 
 bool LatticeSide::operator==(const LatticeSide& other) const {
-    if (page_start_ != other.page_start_ || width_ != other.width_) return false;
+    if (pages() != other.pages() || total_ != other.total_ || width_ != other.width_) return false;
+    for (size_t p = 0; p < pages(); ++p)
+        if (page_start(p) != other.page_start(p)) return false;
     for (size_t p = 0; p < pages(); ++p) {
         const Color *a = pages_[p].load(std::memory_order_acquire), *b = other.pages_[p].load(std::memory_order_acquire);
         for (size_t i = 0; (a || b) && i < page_values(p); ++i)
@@ -89,6 +93,49 @@ size_t LatticeSide::allocated_bytes() const {
     for (size_t p = 0; p < pages(); ++p)
         if (pages_[p].load(std::memory_order_relaxed)) n += page_values(p) * sizeof(Color);
     return n;
+}
+
+SideStates::SideStates(size_t sides) : pages_(std::make_unique<std::atomic<std::atomic<uint8_t>*>[]>((sides + kSides - 1) / kSides)), sides_(sides) {
+    for (size_t p = 0; p < pages(); ++p) pages_[p].store(nullptr, std::memory_order_relaxed);
+}
+
+SideStates::~SideStates() { release(); }
+
+void SideStates::release() {
+    for (size_t p = 0; pages_ && p < pages(); ++p) delete[] pages_[p].load(std::memory_order_relaxed);
+    pages_.reset();
+}
+
+SideStates::SideStates(SideStates&& other) noexcept : pages_(std::move(other.pages_)), sides_(other.sides_) { other.sides_ = 0; }
+
+SideStates& SideStates::operator=(SideStates&& other) noexcept {
+    if (this == &other) return *this;
+    release();
+    pages_ = std::move(other.pages_), sides_ = other.sides_;
+    other.sides_ = 0;
+    return *this;
+}
+
+uint8_t SideStates::load(size_t i, std::memory_order order) const {
+    const std::atomic<uint8_t>* page = pages_[i / kSides].load(std::memory_order_acquire);
+    return page ? page[i % kSides].load(order) : 0;
+}
+
+std::atomic<uint8_t>& SideStates::at(size_t i) {
+    std::atomic<std::atomic<uint8_t>*>& slot = pages_[i / kSides];
+    std::atomic<uint8_t>* page = slot.load(std::memory_order_acquire);
+    if (!page) {
+        auto* fresh = new std::atomic<uint8_t>[kSides];
+        for (size_t k = 0; k < kSides; ++k) fresh[k].store(0, std::memory_order_relaxed);
+        if (slot.compare_exchange_strong(page, fresh, std::memory_order_acq_rel)) page = fresh;
+        else delete[] fresh;  // another thread's page won
+    }
+    return page[i % kSides];
+}
+
+void SideStates::store(size_t i, uint8_t v, std::memory_order order) {
+    if (v == 0 && !pages_[i / kSides].load(std::memory_order_acquire)) return;
+    at(i).store(v, order);
 }
 
 }  // namespace bounce

@@ -143,12 +143,12 @@ RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, int max_
         alike.emplace_back(m.level, m.offset);
     }
     const uint32_t points = m.level.size() ? m.offset[m.level.size() - 1] + lattice_count(m.level[m.level.size() - 1]) : 0;
-    m.front.lay_out(m.offset.vec(), points, 1);
-    m.back.lay_out(m.offset.vec(), points, 1);
+    m.front.lay_out(m.offset.shared(), points, 1);
+    m.back.lay_out(m.offset.shared(), points, 1);
     if (has_parts()) {
         m.lights = static_cast<uint32_t>(scene.lights.size());
-        m.front_parts.lay_out(m.offset.vec(), points, m.lights);
-        m.back_parts.lay_out(m.offset.vec(), points, m.lights);
+        m.front_parts.lay_out(m.offset.shared(), points, m.lights);
+        m.back_parts.lay_out(m.offset.shared(), points, m.lights);
     }
     return m;
 }
@@ -163,8 +163,7 @@ RadiosityTextures RadiosityTextures::lazy(const Scene& scene, const Materials& m
     for (size_t id = 0; id < scene.objects.size(); ++id) {
         rt.maps_.push_back(rt.laid_out(scene, id, settings.max_level));
         const size_t n = 2 * rt.maps_.back().level.size();
-        rt.state_.push_back(std::make_unique<std::atomic<uint8_t>[]>(n));
-        for (size_t i = 0; i < n; ++i) rt.state_.back()[i].store(0, std::memory_order_relaxed);
+        rt.state_.emplace_back(n);
         rt.names_.push_back(scene.objects[id].name);
     }
     return rt;
@@ -207,7 +206,7 @@ void RadiosityTextures::bake_side(uint32_t id, uint32_t t, bool front, Counters&
 }
 
 void RadiosityTextures::ensure_baked(uint32_t id, uint32_t tri, bool front, Counters& counters) const {
-    std::atomic<uint8_t>& st = state_[id][2 * tri + (front ? 0 : 1)];
+    std::atomic<uint8_t>& st = state_[id].at(2 * tri + (front ? 0 : 1));
     if (st.load(std::memory_order_acquire) == 2) return;
     uint8_t expected = 0;
     if (st.compare_exchange_strong(expected, 1, std::memory_order_acq_rel)) {
@@ -235,7 +234,7 @@ void RadiosityTextures::lookup_parts(uint32_t id, uint32_t prim, float u, float 
 size_t RadiosityTextures::baked_sides() const {
     size_t n = 0;
     for (size_t id = 0; id < state_.size(); ++id)
-        for (size_t i = 0; i < 2 * maps_[id].level.size(); ++i) n += state_[id][i].load(std::memory_order_relaxed) == 2;
+        for (size_t i = 0; i < 2 * maps_[id].level.size(); ++i) n += state_[id].load(i, std::memory_order_relaxed) == 2;
     return n;
 }
 
@@ -295,8 +294,8 @@ void RadiosityTextures::save(const std::string& dir) const {
         spec.attribute("bounce:texel_size", texel_size_);
         std::vector<float> px(static_cast<size_t>(width) * std::max(1, height) * 8, 0.0f);
         for (size_t t = 0; t < m.level.size(); ++t) {
-            const bool f = state_[id][2 * t].load(std::memory_order_acquire) == 2;
-            const bool b = state_[id][2 * t + 1].load(std::memory_order_acquire) == 2;
+            const bool f = state_[id].load(2 * t, std::memory_order_acquire) == 2;
+            const bool b = state_[id].load(2 * t + 1, std::memory_order_acquire) == 2;
             const uint32_t first = m.offset[t];
             const Color *fv = f ? m.front.run(static_cast<uint32_t>(t), first) : nullptr, *bv = b ? m.back.run(static_cast<uint32_t>(t), first) : nullptr;
             for (uint32_t k = first; k < first + lattice_count(m.level[t]); ++k) {
@@ -364,7 +363,7 @@ bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const R
                 for (uint32_t k = first; k < first + lattice_count(map.level[t]); ++k)
                     v[k - first] = {px[8 * k + static_cast<size_t>(ch[3 * side])], px[8 * k + static_cast<size_t>(ch[3 * side + 1])],
                                     px[8 * k + static_cast<size_t>(ch[3 * side + 2])]};
-                rt.state_[id][2 * t + static_cast<size_t>(side)].store(2, std::memory_order_relaxed);
+                rt.state_[id].store(2 * t + static_cast<size_t>(side), 2, std::memory_order_relaxed);
             }
     }
     out = std::move(rt);

@@ -156,7 +156,7 @@ private:
     void ensure_baked(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
 
     mutable std::vector<RadiosityMap> maps_;  ///< values written once per side, under its state flag
-    std::vector<std::unique_ptr<std::atomic<uint8_t>[]>> state_;  ///< per object, 2 per triangle: 0 new, 1 baking, 2 baked
+    mutable std::vector<SideStates> state_;  ///< per object, 2 per triangle: 0 new, 1 baking, 2 baked (lattice.h)
     std::vector<std::string> names_;
     /// Layouts laid out so far, by a hash of their levels (placements share theirs).
     std::unordered_map<uint64_t, std::vector<std::pair<SharedArray<uint8_t>, SharedArray<uint32_t>>>> layouts_;

@@ -2,6 +2,7 @@
 // direct light may have changed (docs/animation.md).
 #include <algorithm>
 #include <cstring>
+#include <stdexcept>
 
 #include "bounce/core/parallel.h"
 #include "bounce/radiosity/radiosity.h"
@@ -53,7 +54,7 @@ float RadiosityTextures::brightest() const {
     for (size_t id = 0; id < maps_.size(); ++id)
         for (size_t t = 0; t < maps_[id].level.size(); ++t)
             for (int side = 0; side < 2; ++side) {
-                if (state_[id][2 * t + static_cast<size_t>(side)].load(std::memory_order_relaxed) != 2) continue;
+                if (state_[id].load(2 * t + static_cast<size_t>(side), std::memory_order_relaxed) != 2) continue;
                 const RadiosityMap& m = maps_[id];
                 const Color* v = (side == 0 ? m.front : m.back).run(static_cast<uint32_t>(t), m.offset[t]);
                 const uint32_t n = static_cast<uint32_t>((m.level[t] + 1) * (m.level[t] + 2) / 2);
@@ -78,18 +79,18 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
     std::vector<std::pair<uint32_t, uint32_t>> redo;  // (object, 2 * triangle + side)
     for (size_t id = 0; id < previous.state_.size(); ++id) {
         const size_t n = 2 * previous.maps_[id].level.size();
-        rt.state_.push_back(std::make_unique<std::atomic<uint8_t>[]>(n));
+        rt.state_.emplace_back(n);
         const Object& obj = scene.objects[id];
         const bool moved = changes.objects[id].kind != ObjectMotion::Kind::Static;
         if (changes.objects[id].kind == ObjectMotion::Kind::Deforming) {
             // Its triangles changed size: lay it out as this frame alone would, every side lazy.
             rt.maps_[id] = rt.laid_out(scene, id, scene.render.radiosity.max_level);
-            for (size_t s = 0; s < n; ++s) rt.state_.back()[s].store(0, std::memory_order_relaxed);
+            for (size_t s = 0; s < n; ++s) rt.state_.back().store(s, 0, std::memory_order_relaxed);
             continue;
         }
         for (size_t s = 0; s < n; ++s) {
-            const uint8_t was = previous.state_[id][s].load(std::memory_order_relaxed) == 2 ? 2 : 0;
-            rt.state_.back()[s].store(was, std::memory_order_relaxed);
+            const uint8_t was = previous.state_[id].load(s, std::memory_order_relaxed) == 2 ? 2 : 0;
+            rt.state_.back().store(s, was, std::memory_order_relaxed);
             if (was != 2) continue;
             const size_t t = s / 2;
             bool again = changes.lights || moved || changes.materials[obj.material_of(static_cast<uint32_t>(t))];
@@ -103,7 +104,7 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
             if (again) redo.emplace_back(static_cast<uint32_t>(id), static_cast<uint32_t>(s));
         }
     }
-    for (auto [id, s] : redo) rt.state_[id][s].store(0, std::memory_order_relaxed);
+    for (auto [id, s] : redo) rt.state_[id].store(s, 0, std::memory_order_relaxed);
     std::vector<LightChange> found(redo.size());
     parallel_ranges(size_t{0}, redo.size(), size_t{16}, [&](size_t lo, size_t hi) {
         Counters& counters = stats.local();
@@ -138,7 +139,7 @@ std::string RadiosityTextures::baked_bytes() const {
     for (uint32_t id = 0; id < state_.size(); ++id) {
         const RadiosityMap& m = maps_[id];
         for (uint32_t s = 0; s < 2 * m.level.size(); ++s) {
-            if (state_[id][s].load(std::memory_order_acquire) != 2) continue;
+            if (state_[id].load(s, std::memory_order_acquire) != 2) continue;
             const uint32_t t = s / 2, count = static_cast<uint32_t>((m.level[t] + 1) * (m.level[t] + 2) / 2);
             const uint32_t head[3] = {id, s, count};
             put(head, sizeof(head));
@@ -156,9 +157,13 @@ void RadiosityTextures::take_baked(const std::string& bytes) {
         const auto [id, s, count] = head;
         RadiosityMap& m = maps_.at(id);
         const uint32_t t = s / 2;
-        if (state_[id][s].load(std::memory_order_acquire) != 2) {
+        // (Bytes from this build's ranks; a side that does not fit would write past its page.)
+        if (s >= state_[id].size() || count != static_cast<uint32_t>((m.level[t] + 1) * (m.level[t] + 2) / 2) ||
+            at + size_t{count} * sizeof(Color) > bytes.size())
+            throw std::runtime_error("radiosity exchange: a side that does not exist");
+        if (state_[id].load(s, std::memory_order_acquire) != 2) {
             std::memcpy(static_cast<void*>((s % 2 == 0 ? m.front : m.back).writable_run(t, m.offset.at(t))), bytes.data() + at, count * sizeof(Color));
-            state_[id][s].store(2, std::memory_order_release);
+            state_[id].store(s, 2, std::memory_order_release);
         }
         at += count * sizeof(Color);
     }
