@@ -190,6 +190,15 @@ TEST(Instances, TakeMaterialOverridesAndLightLinksByNameAndGlob) {
                 EXPECT_EQ(img.at(*direct, x, y)[2], 0.0f);
             }
     EXPECT_GT(ball_pixels, 10u);
+    // A placement's own visibility over the instancer's: the blue ball hidden from the camera.
+    j["objects"][3]["instances"]["transforms"][1]["visible_to"] = {{"camera", false}};
+    const Image hidden = render_with(j, "none");
+    size_t blue = 0;
+    for (int y = 0; y < hidden.height; ++y)
+        for (int x = 0; x < hidden.width; ++x) blue += hidden.at(*hidden.find("albedo"), x, y)[2] > 0.7f;
+    EXPECT_EQ(blue, 0u);
+    EXPECT_FALSE(test::scene_from(j).objects[4].visible_to.camera);
+    EXPECT_TRUE(test::scene_from(j).objects[3].visible_to.camera);
 }
 
 /// How a glTF file places its unit cube three times: a copy of the mesh per node, one mesh the

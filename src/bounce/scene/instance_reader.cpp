@@ -70,6 +70,7 @@ Object read_placement(const JsonReader& r, const JsonReader& e, const Scene& sce
     const int own = read_material_name(e, "material", scene);
     o.material_override = own >= 0 ? own : read_material_name(r, "material", scene);
     read_object_visibility(r, o);
+    read_object_visibility(e, o);  // the placement's own flags over the instancer's
     return o;
 }
 
@@ -104,7 +105,7 @@ void read_instances(const JsonReader& r, const json& entries, Scene& scene, size
     for (size_t k = 0; k < list.size(); ++k) {
         const std::string at = in.at("transforms") + "/" + std::to_string(k);
         if (!list[k].is_object()) r.ctx().fail(at, fmt::format("expected a transform object, got {}", json_type_name(list[k])));
-        const JsonReader e(list[k], at, r.ctx(), {"translate", "rotate", "scale", "matrix", "name", "material"});
+        const JsonReader e(list[k], at, r.ctx(), {"translate", "rotate", "scale", "matrix", "name", "material", "visible_to", "matte"});
         Object o = read_placement(r, e, scene, shared, k);
         if (k == 0) scene.objects[index] = std::move(o);
         else scene.objects.push_back(std::move(o));
