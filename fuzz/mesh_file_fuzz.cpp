@@ -2,7 +2,9 @@
 // byte chooses what the rest is written as — an ASCII or binary PLY (bodies read against their
 // header before Assimp: counts, list lengths, indices), a glTF (skins, morph targets and their
 // counts, animation samplers with NaN or unordered times) or an OBJ — and, for a glTF, a clip
-// and a time to pose it at, so skinning and morphing run on what the checks let through.
+// and a time to pose it at, so skinning and morphing run on what the checks let through; or, with
+// bit 1 of the second byte, loaded for instancing (meshes shared by nodes, EXT_mesh_gpu_instancing
+// accessors read by bounce itself).
 #include <unistd.h>
 
 #include <cstddef>
@@ -25,7 +27,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     bounce::MeshPose pose;
     if (data[0] % 3 == 1 && data[1] & 1) pose.clip = "0", pose.seconds = (data[1] >> 1) / 64.0;
     try {
-        (void)bounce::load_mesh_file(path, "m", materials, -1, nullptr, pose);
+        if (pose.clip.empty() && (data[1] & 2)) (void)bounce::load_mesh_parts(path, "m", materials, -1, nullptr);
+        else (void)bounce::load_mesh_file(path, "m", materials, -1, nullptr, pose);
     } catch (const bounce::InputError&) {
     }
     std::remove(path.c_str());

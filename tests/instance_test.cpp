@@ -329,6 +329,9 @@ TEST(Instances, MalformedGpuInstancesAreRefusedWithTheirPlace) {
     const std::string at = "/nodes/0/extensions/EXT_mesh_gpu_instancing";
     refused([](json& g) { g["accessors"][4]["count"] = 1000; }, {"bad.gltf", at + "/attributes/TRANSLATION", "do not fit"});
     refused([](json& g) { g["accessors"][5]["count"] = 2; }, {at + "/attributes", "different counts"});
+    refused([](json& g) { g["accessors"][4]["count"] = uint64_t{1} << 62; }, {at + "/attributes/TRANSLATION", "do not fit"});
+    refused([](json& g) { g["bufferViews"][4]["byteOffset"] = ~uint64_t{0} - 4; }, {at + "/attributes/TRANSLATION", "do not fit"});
+    refused([](json& g) { g["accessors"][4]["count"] = "three"; }, {"bad.gltf", "malformed glTF where EXT_mesh_gpu_instancing reads it"});
     refused([](json& g) { g["accessors"][4]["componentType"] = 5123; }, {at + "/attributes/TRANSLATION", "floats"});
     refused([](json& g) { g["accessors"][6]["type"] = "VEC4"; }, {at + "/attributes/SCALE", "VEC3"});
     refused([](json& g) { g["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"] = json::object(); },

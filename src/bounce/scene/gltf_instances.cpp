@@ -94,11 +94,14 @@ std::vector<float> read_accessor(const json& j, const json& index, int component
     if (!j.contains("bufferViews") || view_index >= j["bufferViews"].size()) return fail("its bufferView does not exist");
     const json& v = j["bufferViews"][view_index];
     const size_t element = size * static_cast<size_t>(components), stride = v.value("byteStride", element);
-    const size_t first = v.value("byteOffset", size_t{0}) + a.value("byteOffset", size_t{0}), span = v.value("byteLength", size_t{0});
+    const size_t view_offset = v.value("byteOffset", size_t{0}), own_offset = a.value("byteOffset", size_t{0});
+    const size_t span = v.value("byteLength", size_t{0});
     const std::string& bytes = buffers.get(v.value("buffer", size_t{0}));
-    if (count == 0 || stride < element || a.value("byteOffset", size_t{0}) + stride * (count - 1) + element > span ||
-        v.value("byteOffset", size_t{0}) + span > bytes.size())
+    // Each bound below the buffer's size first, so that no product or sum can overflow.
+    if (count == 0 || stride < element || view_offset > bytes.size() || span > bytes.size() - view_offset || own_offset > span ||
+        count > span || stride > span || stride * (count - 1) + element > span - own_offset)
         return fail(fmt::format("its {} elements do not fit in their bufferView and buffer", count));
+    const size_t first = view_offset + own_offset;
     std::vector<float> out;
     out.reserve(count * static_cast<size_t>(components));
     for (size_t e = 0; e < count; ++e)
@@ -106,7 +109,11 @@ std::vector<float> read_accessor(const json& j, const json& index, int component
             const char* p = bytes.data() + first + e * stride + c * size;
             float x = 0;
             if (size == 4) std::memcpy(&x, p, 4);
-            else if (size == 2) x = std::max(static_cast<float>(*reinterpret_cast<const int16_t*>(p)) / 32767.0f, -1.0f);
+            else if (size == 2) {
+                int16_t v16 = 0;
+                std::memcpy(&v16, p, 2);
+                x = std::max(static_cast<float>(v16) / 32767.0f, -1.0f);
+            }
             else x = std::max(static_cast<float>(static_cast<int8_t>(*p)) / 127.0f, -1.0f);
             if (!std::isfinite(x) || std::abs(x) > kMaxCoordinate) return fail(fmt::format("element {} is not finite or beyond +-{:g}", e, kMaxCoordinate));
             out.push_back(x);
@@ -165,6 +172,7 @@ std::unordered_map<size_t, const aiNode*> match_nodes(const json& j, const aiSce
     while (!stack.empty()) {
         const auto [node, ai] = stack.back();
         stack.pop_back();
+        if (node >= j["nodes"].size()) throw InputError(path, fmt::format("/scenes/{}/nodes", scene), "not a node index");
         const json children = j["nodes"][node].value("children", json::array());
         if (children.size() != ai->mNumChildren)
             throw InputError(path, fmt::format("/nodes/{}", node), "cannot match the file's nodes to the importer's (instances need them)");
@@ -174,15 +182,8 @@ std::unordered_map<size_t, const aiNode*> match_nodes(const json& j, const aiSce
     return out;
 }
 
-}  // namespace
-
-std::unordered_map<const aiNode*, GpuInstances> gltf_gpu_instances(const std::string& path, const aiScene* s) {
+std::unordered_map<const aiNode*, GpuInstances> read_gpu_instances(const std::string& path, const json& j, const aiScene* s) {
     std::unordered_map<const aiNode*, GpuInstances> out;
-    const std::string ext = lower_extension(path);
-    if (ext != ".gltf" && ext != ".glb") return out;
-    const std::string text = gltf_json_text(path);
-    if (text.find(kExtension) == std::string::npos) return out;
-    const json j = json::parse(text);  // (check_mesh_file parsed it already)
     if (!j.contains("nodes") || !j["nodes"].is_array()) return out;
     Buffers buffers(j, path);
     std::unordered_map<size_t, const aiNode*> nodes;
@@ -195,6 +196,22 @@ std::unordered_map<const aiNode*, GpuInstances> gltf_gpu_instances(const std::st
         out.emplace(it->second, node_instances(j, n, e[kExtension], buffers, path));
     }
     return out;
+}
+}  // namespace
+
+std::unordered_map<const aiNode*, GpuInstances> gltf_gpu_instances(const std::string& path, const aiScene* s) {
+    const std::string ext = lower_extension(path);
+    if (ext != ".gltf" && ext != ".glb") return {};
+    const std::string text = gltf_json_text(path);
+    if (text.find(kExtension) == std::string::npos) return {};
+    try {
+        return read_gpu_instances(path, json::parse(text), s);  // (check_mesh_file parsed it already)
+    } catch (const json::exception& e) {
+        // A count, offset, index or name of the wrong JSON type where the extension reads it.
+        std::string why = e.what();
+        const auto at = why.find("] ");
+        throw InputError(path, "", "malformed glTF where EXT_mesh_gpu_instancing reads it: " + (at == std::string::npos ? why : why.substr(at + 2)));
+    }
 }
 
 }  // namespace bounce
