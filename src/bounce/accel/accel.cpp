@@ -43,8 +43,7 @@ SceneAccel::SceneAccel(const Scene& scene, const SceneAccel* previous) {
     // A prototype's triangles count once, each placement about 200 bytes of Embree instance.
     double triangles = 0, segments = 0, instances = 0;
     for (const auto& o : scene.objects) {
-        const TriangleMesh& fine = o.visible_mesh();
-        triangles += static_cast<double>(o.instance ? 0 : o.coarse_mesh().triangle_count() + (o.has_fine() ? fine.triangle_count() : 0));
+        triangles += static_cast<double>(o.coarse.triangle_count() + o.fine.triangle_count());  // (none of their own: instances, prototypes)
         if (o.prototype) triangles += 2.0 * static_cast<double>(o.local_coarse->triangle_count() + (o.local_fine ? o.local_fine->triangle_count() : 0));
         instances += o.instance ? 1 : 0;
         if (o.fur) segments += 2.0 * static_cast<double>(o.fur->segment_count());

@@ -132,7 +132,6 @@ Record read_record(Cursor& c) {
 /// later sum, square and BVH bound still fits a float.
 const char* record_problem(const Record& r) {
     auto fin = [](const Vec3& v) { return isfinite(v); };
-    auto within = [](const Vec3& v, float m) { return std::fabs(v.x) <= m && std::fabs(v.y) <= m && std::fabs(v.z) <= m; };
     if (!fin(r.p) || !fin(r.n) || !fin(r.E) || !fin(r.bent) || !std::isfinite(r.ao)) return "non-finite values";
     if (!within(r.p, kMaxCoordinate)) return "position beyond +-1e18";
     for (int c = 0; c < 3; ++c) {

@@ -62,6 +62,8 @@ inline Vec3 vmin(const Vec3& a, const Vec3& b) {
 inline Vec3 vmax(const Vec3& a, const Vec3& b) {
     return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
 }
+/// Every coordinate within [-limit, limit] (false for NaN).
+inline bool within(const Vec3& v, float limit) { return std::fabs(v.x) <= limit && std::fabs(v.y) <= limit && std::fabs(v.z) <= limit; }
 inline bool isfinite(const Vec3& a) {
     return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }

@@ -27,7 +27,6 @@ inline uint32_t lattice_index(int i, int j, int n) {
     return static_cast<uint32_t>(j * (n + 1) - j * (j - 1) / 2 + i);
 }
 
-inline uint32_t lattice_count(int n) { return static_cast<uint32_t>((n + 1) * (n + 2) / 2); }
 
 float effective_texel(const Scene& scene, const RadiositySettings& s) {
     return s.texel > 0 ? s.texel : scene.size() / 128.0f;
@@ -133,8 +132,11 @@ RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, int max_
     RadiosityMap m;
     auto& alike = layouts_[OIIO::xxhash::XXH64(level.data(), level.size(), level.size())];
     for (const auto& [l, o] : alike)
-        if (l.vec() == level) m.level = l, m.offset = o;
-    if (m.level.size() != level.size() || level.empty()) {  // a new layout
+        if (l.vec() == level) {
+            m.level = l, m.offset = o;
+            break;
+        }
+    if (m.level.size() != level.size()) {  // a new layout (an empty one is the default)
         std::vector<uint32_t> offset(level.size());
         uint32_t off = 0;
         for (size_t t = 0; t < level.size(); ++t) offset[t] = off, off += lattice_count(level[t]);

@@ -165,6 +165,9 @@ private:
     float texel_size_ = 0;
 };
 
+/// Points of a triangle's lattice of level n.
+inline uint32_t lattice_count(int n) { return static_cast<uint32_t>((n + 1) * (n + 2) / 2); }
+
 /// The lattice level a triangle with longest edge `edge` gets for lattice spacing `texel`.
 int radiosity_level(float edge, float texel, int max_level);
 

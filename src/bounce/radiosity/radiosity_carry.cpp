@@ -57,7 +57,7 @@ float RadiosityTextures::brightest() const {
                 if (state_[id].load(2 * t + static_cast<size_t>(side), std::memory_order_relaxed) != 2) continue;
                 const RadiosityMap& m = maps_[id];
                 const Color* v = (side == 0 ? m.front : m.back).run(static_cast<uint32_t>(t), m.offset[t]);
-                const uint32_t n = static_cast<uint32_t>((m.level[t] + 1) * (m.level[t] + 2) / 2);
+                const uint32_t n = lattice_count(m.level[t]);
                 for (uint32_t k = 0; v && k < n; ++k) top = std::max(top, luminance(v[k]));
             }
     return top;
@@ -115,7 +115,7 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
             rt.ensure_baked(id, t, front, counters);
             const RadiosityMap &now = rt.maps_[id], &was = previous.maps_[id];
             const Color *vn = (front ? now.front : now.back).run(t, now.offset[t]), *vw = (front ? was.front : was.back).run(t, was.offset[t]);
-            const uint32_t count = static_cast<uint32_t>((now.level[t] + 1) * (now.level[t] + 2) / 2);
+            const uint32_t count = lattice_count(now.level[t]);
             float delta = 0;
             for (uint32_t k = 0; vn && vw && k < count; ++k)
                 delta = std::max({delta, std::abs(vn[k].x - vw[k].x), std::abs(vn[k].y - vw[k].y), std::abs(vn[k].z - vw[k].z)});
@@ -140,7 +140,7 @@ std::string RadiosityTextures::baked_bytes() const {
         const RadiosityMap& m = maps_[id];
         for (uint32_t s = 0; s < 2 * m.level.size(); ++s) {
             if (state_[id].load(s, std::memory_order_acquire) != 2) continue;
-            const uint32_t t = s / 2, count = static_cast<uint32_t>((m.level[t] + 1) * (m.level[t] + 2) / 2);
+            const uint32_t t = s / 2, count = lattice_count(m.level[t]);
             const uint32_t head[3] = {id, s, count};
             put(head, sizeof(head));
             put((s % 2 == 0 ? m.front : m.back).run(t, m.offset[t]), count * sizeof(Color));
@@ -158,7 +158,7 @@ void RadiosityTextures::take_baked(const std::string& bytes) {
         RadiosityMap& m = maps_.at(id);
         const uint32_t t = s / 2;
         // (Bytes from this build's ranks; a side that does not fit would write past its page.)
-        if (s >= state_[id].size() || count != static_cast<uint32_t>((m.level[t] + 1) * (m.level[t] + 2) / 2) ||
+        if (s >= state_[id].size() || count != lattice_count(m.level[t]) ||
             at + size_t{count} * sizeof(Color) > bytes.size())
             throw std::runtime_error("radiosity exchange: a side that does not exist");
         if (state_[id].load(s, std::memory_order_acquire) != 2) {

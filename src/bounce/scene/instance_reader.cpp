@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
 #include <memory>
 #include <utility>
 
@@ -18,7 +17,6 @@ namespace bounce {
 using nlohmann::json;
 
 bool places_instances(const json& entry) { return entry.is_object() && entry.contains("instances"); }
-
 
 namespace {
 
@@ -49,7 +47,7 @@ Bounds placed_bounds(const JsonReader& r, const TriangleMesh& mesh, const Transf
     Bounds b;
     for (const Vec3& p : mesh.positions) {
         const Vec3 q = t.point(p);
-        if (!isfinite(q) || std::fabs(q.x) > kMaxCoordinate || std::fabs(q.y) > kMaxCoordinate || std::fabs(q.z) > kMaxCoordinate)
+        if (!within(q, kMaxCoordinate))
             r.fail("", fmt::format("this placement moves vertices to non-finite positions or beyond +-{:g}", kMaxCoordinate));
         b.extend(q);
     }

@@ -424,7 +424,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index, std::vector<Ob
     later.insert(later.end(), std::make_move_iterator(placed.begin()), std::make_move_iterator(placed.end()));
     if (obj.coarse.triangle_count() == 0 && !obj.instance) r.fail(type == "mesh" ? "file" : "", "mesh has no triangles");
     for (const auto& p : obj.coarse.positions)
-        if (!isfinite(p) || std::fabs(p.x) > kMaxCoordinate || std::fabs(p.y) > kMaxCoordinate || std::fabs(p.z) > kMaxCoordinate)
+        if (!within(p, kMaxCoordinate))
             r.fail("", fmt::format("mesh has vertex positions that are not finite or beyond +-{:g} (after the transform)", kMaxCoordinate));
     if (r.has("fur")) read_object_fur(JsonReader(r.raw("fur"), r.at("fur"), r.ctx(), fur_keys()), r, scene, index, obj);
     if (obj.prototype) make_prototype(r, scene, obj);
