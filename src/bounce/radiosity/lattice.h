@@ -14,16 +14,59 @@
 
 namespace bounce {
 
+/// Pages of T made on first use, by whichever thread asks first (compare-and-swap); an absent
+/// page is all zeros to its users. What LatticeSide and SideStates share.
+template <class T>
+class LazyPages {
+public:
+    LazyPages() = default;
+    explicit LazyPages(size_t pages) : pages_(std::make_unique<std::atomic<T*>[]>(pages)), count_(pages) {
+        for (size_t p = 0; p < count_; ++p) pages_[p].store(nullptr, std::memory_order_relaxed);
+    }
+    ~LazyPages() { clear(); }
+    LazyPages(LazyPages&& other) noexcept { *this = std::move(other); }
+    LazyPages& operator=(LazyPages&& other) noexcept {
+        if (this != &other) {
+            clear();
+            pages_ = std::move(other.pages_), count_ = other.count_;
+            other.count_ = 0;
+        }
+        return *this;
+    }
+    LazyPages(const LazyPages&) = delete;
+    LazyPages& operator=(const LazyPages&) = delete;
+
+    size_t size() const { return count_; }
+    /// Page `p`, or null while nobody made it.
+    T* get(size_t p) const { return pages_[p].load(std::memory_order_acquire); }
+    /// Page `p`, made of `values` value-initialised (zero) elements if nobody made it yet.
+    T* make(size_t p, size_t values) {
+        T* page = get(p);
+        if (page) return page;
+        T* fresh = new T[values]();
+        if (pages_[p].compare_exchange_strong(page, fresh, std::memory_order_acq_rel)) return fresh;
+        delete[] fresh;  // another thread's page won
+        return page;
+    }
+
+private:
+    void clear() {
+        for (size_t p = 0; p < count_; ++p) delete[] pages_[p].load(std::memory_order_relaxed);
+        pages_.reset(), count_ = 0;
+    }
+    std::unique_ptr<std::atomic<T*>[]> pages_;
+    size_t count_ = 0;
+};
+
 class LatticeSide {
 public:
     static constexpr uint32_t kPage = 32;  ///< triangles per page
 
     LatticeSide() = default;
-    ~LatticeSide();
     LatticeSide(const LatticeSide& other);
     LatticeSide& operator=(const LatticeSide& other);
-    LatticeSide(LatticeSide&& other) noexcept;
-    LatticeSide& operator=(LatticeSide&& other) noexcept;
+    LatticeSide(LatticeSide&& other) noexcept = default;
+    LatticeSide& operator=(LatticeSide&& other) noexcept = default;
 
     /// Triangle t's lattice starts at point (*offset)[t] (shared with the map's layout, not
     /// copied); `total` points in all, `width` colours per point (1, or the number of lights for
@@ -43,11 +86,10 @@ public:
     size_t allocated_bytes() const;
 
 private:
-    void release();
     std::shared_ptr<const std::vector<uint32_t>> offset_;
-    std::unique_ptr<std::atomic<Color*>[]> pages_;
+    LazyPages<Color> pages_;
     uint32_t width_ = 1, total_ = 0;
-    size_t pages() const { return offset_ ? (offset_->size() + kPage - 1) / kPage : 0; }
+    size_t pages() const { return pages_.size(); }
     /// The first point of page `p` (p = pages(): the total).
     uint32_t page_start(size_t p) const { return p < pages() ? (*offset_)[p * kPage] : total_; }
     size_t page_values(size_t p) const { return size_t{page_start(p + 1) - page_start(p)} * width_; }
@@ -58,26 +100,24 @@ private:
 /// hits holds a pointer per page, not a byte per side.
 class SideStates {
 public:
-    explicit SideStates(size_t sides = 0);
-    ~SideStates();
-    SideStates(SideStates&& other) noexcept;
-    SideStates& operator=(SideStates&& other) noexcept;
-    SideStates(const SideStates&) = delete;
-    SideStates& operator=(const SideStates&) = delete;
+    explicit SideStates(size_t sides = 0) : pages_((sides + kSides - 1) / kSides), sides_(sides) {}
 
     size_t size() const { return sides_; }
     /// Side `i`'s state (0 while its page is not allocated).
-    uint8_t load(size_t i, std::memory_order order) const;
+    uint8_t load(size_t i, std::memory_order order) const {
+        const std::atomic<uint8_t>* page = pages_.get(i / kSides);
+        return page ? page[i % kSides].load(order) : 0;
+    }
     /// Side `i`'s state itself, allocating its page first if needed; safe from many threads.
-    std::atomic<uint8_t>& at(size_t i);
+    std::atomic<uint8_t>& at(size_t i) { return pages_.make(i / kSides, kSides)[i % kSides]; }
     /// Stores `v` (a 0 into a page not allocated allocates nothing).
-    void store(size_t i, uint8_t v, std::memory_order order);
+    void store(size_t i, uint8_t v, std::memory_order order) {
+        if (v != 0 || pages_.get(i / kSides)) at(i).store(v, order);
+    }
 
 private:
     static constexpr size_t kSides = 2 * LatticeSide::kPage;
-    size_t pages() const { return (sides_ + kSides - 1) / kSides; }
-    void release();
-    std::unique_ptr<std::atomic<std::atomic<uint8_t>*>[]> pages_;
+    LazyPages<std::atomic<uint8_t>> pages_;
     size_t sides_ = 0;
 };
 
