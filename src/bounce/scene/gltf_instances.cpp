@@ -39,7 +39,7 @@ std::string decode_base64(const std::string& in, const std::string& path, const 
 /// glTF, or a .glb's BIN chunk).
 class Buffers {
 public:
-    Buffers(const json& j, std::string path) : j_(j), path_(std::move(path)) {}
+    Buffers(const json& j, std::string path, std::string_view bin) : j_(j), path_(std::move(path)), bin_(bin) {}
     const std::string& get(size_t index) {
         if (auto it = loaded_.find(index); it != loaded_.end()) return it->second;
         const std::string at = fmt::format("/buffers/{}", index);
@@ -57,24 +57,16 @@ public:
             std::ifstream in(std::filesystem::path(path_).parent_path() / uri, std::ios::binary);
             bytes.assign(std::istreambuf_iterator<char>(in), {});
         } else {
-            bytes = glb_bin_chunk(at);
+            if (bin_.empty()) throw InputError(path_, at, "a buffer without a uri needs a .glb's BIN chunk");
+            bytes = bin_;
         }
         return loaded_.emplace(index, std::move(bytes)).first->second;
     }
 
 private:
-    std::string glb_bin_chunk(const std::string& at) const {
-        std::ifstream in(path_, std::ios::binary);
-        const std::string text((std::istreambuf_iterator<char>(in)), {});
-        uint32_t json_length = 0, length = 0, type = 0;
-        if (text.size() >= 20) std::memcpy(&json_length, text.data() + 12, 4);
-        const uint64_t bin = 20 + ((static_cast<uint64_t>(json_length) + 3) & ~uint64_t{3});
-        if (text.size() >= bin + 8) std::memcpy(&length, text.data() + bin, 4), std::memcpy(&type, text.data() + bin + 4, 4);
-        if (type != 0x004E4942u || bin + 8 + length > text.size()) throw InputError(path_, at, "a buffer without a uri needs a .glb's BIN chunk");
-        return text.substr(bin + 8, length);
-    }
     const json& j_;
     std::string path_;
+    std::string_view bin_;  ///< a .glb's BIN chunk (empty: none)
     std::unordered_map<size_t, std::string> loaded_;
 };
 
@@ -182,10 +174,11 @@ std::unordered_map<size_t, const aiNode*> match_nodes(const json& j, const aiSce
     return out;
 }
 
-std::unordered_map<const aiNode*, GpuInstances> read_gpu_instances(const std::string& path, const json& j, const aiScene* s) {
+std::unordered_map<const aiNode*, GpuInstances> read_gpu_instances(const std::string& path, const json& j, std::string_view bin,
+                                                                   const aiScene* s) {
     std::unordered_map<const aiNode*, GpuInstances> out;
     if (!j.contains("nodes") || !j["nodes"].is_array()) return out;
-    Buffers buffers(j, path);
+    Buffers buffers(j, path, bin);
     std::unordered_map<size_t, const aiNode*> nodes;
     for (size_t n = 0; n < j["nodes"].size(); ++n) {
         const json& e = j["nodes"][n].value("extensions", json::object());
@@ -202,10 +195,10 @@ std::unordered_map<const aiNode*, GpuInstances> read_gpu_instances(const std::st
 std::unordered_map<const aiNode*, GpuInstances> gltf_gpu_instances(const std::string& path, const aiScene* s) {
     const std::string ext = lower_extension(path);
     if (ext != ".gltf" && ext != ".glb") return {};
-    const std::string text = gltf_json_text(path);
-    if (text.find(kExtension) == std::string::npos) return {};
+    const GltfFile file = read_gltf_file(path);  // (once: its JSON and a .glb's BIN chunk)
+    if (file.json().find(kExtension) == std::string_view::npos) return {};
     try {
-        return read_gpu_instances(path, json::parse(text), s);  // (check_mesh_file parsed it already)
+        return read_gpu_instances(path, json::parse(file.json()), file.bin(), s);  // (check_mesh_file parsed it already)
     } catch (const json::exception& e) {
         // A count, offset, index or name of the wrong JSON type where the extension reads it.
         std::string why = e.what();

@@ -19,10 +19,13 @@ namespace bounce {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-std::string gltf_json_text(const std::string& path) {
+GltfFile read_gltf_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    std::string text((std::istreambuf_iterator<char>(in)), {});
-    if (lower_extension(path) != ".glb") return text;
+    GltfFile f;
+    std::string& text = f.bytes;
+    text.assign(std::istreambuf_iterator<char>(in), {});
+    f.json_size = text.size();
+    if (lower_extension(path) != ".glb") return f;
     if (text.size() < 20 || std::memcmp(text.data(), "glTF", 4) != 0)
         throw InputError(path, "byte 0", "not a binary glTF file (no glTF header)");
     uint32_t version = 0, total = 0, len = 0, type = 0;
@@ -35,8 +38,16 @@ std::string gltf_json_text(const std::string& path) {
         throw InputError(path, "byte 8", fmt::format("truncated: the header declares {} bytes, the file has {}", total, text.size()));
     if (type != 0x4E4F534Au || 20 + static_cast<uint64_t>(len) > text.size())
         throw InputError(path, "byte 12", "truncated or malformed JSON chunk");
-    return text.substr(20, len);
+    f.json_at = 20, f.json_size = len;
+    // The BIN chunk, if any, follows the JSON chunk (padded to 4 bytes).
+    const uint64_t bin = 20 + ((static_cast<uint64_t>(len) + 3) & ~uint64_t{3});
+    uint32_t bin_len = 0, bin_type = 0;
+    if (text.size() >= bin + 8) std::memcpy(&bin_len, text.data() + bin, 4), std::memcpy(&bin_type, text.data() + bin + 4, 4);
+    if (bin_type == 0x004E4942u && bin + 8 + bin_len <= text.size()) f.bin_at = bin + 8, f.bin_size = bin_len;
+    return f;
 }
+
+std::string gltf_json_text(const std::string& path) { return std::string(read_gltf_file(path).json()); }
 
 namespace {
 

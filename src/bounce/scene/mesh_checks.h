@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace bounce {
@@ -18,7 +19,16 @@ inline constexpr int kMaxMtlMaterials = 65536;
 /// read too (a glTF's buffers and images, an OBJ's MTL files), resolved.
 std::vector<std::string> check_mesh_file(const std::string& path);
 
-/// The JSON text of a .gltf file or of a .glb's JSON chunk; InputError for a truncated or foreign .glb.
+/// A .gltf file, or a .glb with its JSON and BIN chunks found (read once).
+struct GltfFile {
+    std::string bytes;
+    size_t json_at = 0, json_size = 0, bin_at = 0, bin_size = 0;  ///< bin_size 0: no BIN chunk
+    std::string_view json() const { return std::string_view(bytes).substr(json_at, json_size); }
+    std::string_view bin() const { return std::string_view(bytes).substr(bin_at, bin_size); }
+};
+/// Reads `path`; InputError for a truncated or foreign .glb.
+GltfFile read_gltf_file(const std::string& path);
+/// The JSON text of a .gltf file or of a .glb's JSON chunk; InputError as read_gltf_file.
 std::string gltf_json_text(const std::string& path);
 
 /// A PLY whose header declares more elements than its body can hold is refused: ASCII by

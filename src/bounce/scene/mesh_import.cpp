@@ -95,9 +95,18 @@ void for_each_posed_instance(const aiScene* s, const std::unordered_map<const ai
     for_each_node_mesh(s, [&](const aiNode* node, unsigned mesh) { fn(s->mMeshes[mesh], nodes.at(node)); });
 }
 
-/// GPU instances of a skinned or morphed mesh are refused (the extension places rigid copies).
-void check_gpu_instanced(const aiMesh* am, const GpuInstances& g, const std::string& path) {
-    if (am->HasBones() || am->mNumAnimMeshes > 0) throw InputError(path, g.pointer, "instances of a skinned or morphed mesh are not supported");
+/// Where `node` places its mesh `am`: at the node (its world transform `world`), or at each of
+/// its GPU instances, in its space, named "<node>/<i>". GPU instances of a skinned or morphed
+/// mesh are refused (the extension places rigid copies).
+std::vector<MeshFileParts::Use> node_placements(const aiNode* node, const aiMesh* am, const aiMatrix4x4& world,
+                                                const std::unordered_map<const aiNode*, GpuInstances>& gpu, const std::string& path) {
+    const auto it = gpu.find(node);
+    if (it == gpu.end()) return {{node->mName.C_Str(), to_transform(world)}};
+    if (am->HasBones() || am->mNumAnimMeshes > 0) throw InputError(path, it->second.pointer, "instances of a skinned or morphed mesh are not supported");
+    std::vector<MeshFileParts::Use> at;
+    for (size_t i = 0; i < it->second.at.size(); ++i)
+        at.push_back({fmt::format("{}/{}", node->mName.C_Str(), i), to_transform(world) * it->second.at[i]});
+    return at;
 }
 
 /// The triangles of `am` at `positions` and `normals` (posed), every face of material `mat`.
@@ -307,10 +316,8 @@ TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, 
     for_each_node_mesh(s, [&](const aiNode* node, unsigned index) {
         const aiMesh* am = s->mMeshes[index];
         if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) return;
-        const auto it = gpu.find(node);
-        for (size_t i = 0; i < (it == gpu.end() ? 1 : it->second.at.size()); ++i) {  // (a GPU-instanced node's copies, flattened)
-            if (it != gpu.end()) check_gpu_instanced(am, it->second, path);
-            pose_mesh(s, am, time, it == gpu.end() ? nodes.at(node) : nodes.at(node) * to_ai(it->second.at[i]), nodes, posed, posed_normals, path);
+        for (const MeshFileParts::Use& u : node_placements(node, am, nodes.at(node), gpu, path)) {  // (GPU instances flattened)
+            pose_mesh(s, am, time, to_ai(u.world), nodes, posed, posed_normals, path);
             out.append(triangles_of(am, posed, posed_normals, mat_map[am->mMaterialIndex]));
         }
     });
@@ -338,14 +345,7 @@ MeshFileParts load_mesh_parts(const std::string& path, const std::string& prefix
         const aiMesh* am = s->mMeshes[index];
         if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) return;
         const uint32_t mat = mat_map[am->mMaterialIndex];
-        // A node's placements: itself, or its GPU instances (in its space).
-        const auto it = gpu.find(node);
-        if (it != gpu.end()) check_gpu_instanced(am, it->second, path);
-        std::vector<MeshFileParts::Use> at;
-        for (size_t i = 0; i < (it == gpu.end() ? 1 : it->second.at.size()); ++i)
-            at.push_back(it == gpu.end() ? MeshFileParts::Use{node->mName.C_Str(), to_transform(nodes.at(node))}
-                                         : MeshFileParts::Use{fmt::format("{}/{}", node->mName.C_Str(), i),
-                                                              to_transform(nodes.at(node)) * it->second.at[i]});
+        const std::vector<MeshFileParts::Use> at = node_placements(node, am, nodes.at(node), gpu, path);
         // Shared: used more than once, rigid (no skin, no morph targets) and not a light (mesh
         // lights sample world triangles).
         if (uses[index] < 2 || am->HasBones() || am->mNumAnimMeshes > 0 || materials[mat].is_emissive()) {
