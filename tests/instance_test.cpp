@@ -14,6 +14,7 @@
 #include "bounce/lighting/materials.h"
 #include "bounce/radiosity/radiosity.h"
 #include "bounce/render/render.h"
+#include "bounce/scene/changes.h"
 #include "gltf_strip.h"
 #include "test_util.h"
 
@@ -164,6 +165,27 @@ TEST(Instances, PlacementsOfEqualScaleShareTheirRadiosityLayoutAndBakeOnlyWhatIs
     EXPECT_GT(page, 0u);
     EXPECT_EQ(rt.allocated_bytes(), page);
     EXPECT_EQ(rt.baked_sides(), 1u);
+}
+
+TEST(Instances, BetweenTwoFramesAMovedPlacementIsRigidAndARecolouredOneANewSurface) {
+    json transforms = json::array();
+    for (int k = 0; k < 20; ++k) transforms.push_back({{"translate", {3 * k, 0, 0}}});
+    const json was = room(json::array({{{"name", "row"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}}));
+    json now = was;
+    now["objects"][3]["instances"]["transforms"][5]["translate"] = {15, 1, 0};
+    now["objects"][3]["instances"]["transforms"][7]["material"] = "blue";
+    const Scene before = test::scene_from(was), after = test::scene_from(now);
+    const SceneChanges c = scene_changes(before, after);
+    ASSERT_TRUE(c.comparable);
+    EXPECT_FALSE(c.visible_geometry_same);
+    ASSERT_EQ(c.objects.size(), after.objects.size());
+    for (size_t i = 0; i < c.objects.size(); ++i) {
+        const ObjectMotion::Kind expected = after.objects[i].name == "row/5"   ? ObjectMotion::Kind::Rigid
+                                            : after.objects[i].name == "row/7" ? ObjectMotion::Kind::Deforming
+                                                                               : ObjectMotion::Kind::Static;
+        EXPECT_EQ(c.objects[i].kind, expected) << after.objects[i].name;
+    }
+    EXPECT_TRUE(scene_changes(before, test::scene_from(was)).visible_geometry_same);
 }
 
 TEST(Instances, TakeMaterialOverridesAndLightLinksByNameAndGlob) {

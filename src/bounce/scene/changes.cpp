@@ -1,5 +1,9 @@
 #include "bounce/scene/changes.h"
 
+#include <map>
+#include <optional>
+#include <utility>
+
 namespace bounce {
 
 bool SceneChanges::moving() const {
@@ -9,12 +13,6 @@ bool SceneChanges::moving() const {
 }
 
 namespace {
-
-bool same_positions(const TriangleMesh& a, const TriangleMesh& b) { return a.positions == b.positions; }
-
-bool same_topology(const TriangleMesh& a, const TriangleMesh& b) {
-    return a.indices == b.indices && a.positions.size() == b.positions.size();
-}
 
 bool same_fur(const Object& a, const Object& b) {
     if (!a.fur || !b.fur) return !a.fur && !b.fur;
@@ -30,13 +28,40 @@ Bounds object_bounds(const Object& o) {
     return b;
 }
 
-/// How an instance moved: its shared shape (compared once per prototype would do; the vectors
-/// are the same when shared) and its placement.
-ObjectMotion instance_motion(const Object& before, const Object& now) {
+/// Two frames' meshes compared once per pair: a prototype's thousands of placements share one
+/// pair of tessellations, which would otherwise be compared once per placement.
+class MeshComparisons {
+public:
+    bool same_positions(const TriangleMesh& a, const TriangleMesh& b) {
+        std::optional<bool>& same = known_[{&a, &b}].positions;
+        if (!same) same = a.positions == b.positions;
+        return *same;
+    }
+    bool same_indices(const TriangleMesh& a, const TriangleMesh& b) {
+        std::optional<bool>& same = known_[{&a, &b}].indices;
+        if (!same) same = a.indices == b.indices;
+        return *same;
+    }
+    bool same_topology(const TriangleMesh& a, const TriangleMesh& b) {
+        return same_indices(a, b) && a.positions.size() == b.positions.size();
+    }
+    /// Two frames' instances place the same shape.
+    bool same_shape(const Object& before, const Object& now) {
+        return before.instance && now.instance && same_positions(*before.local_coarse, *now.local_coarse) &&
+               (before.local_fine == nullptr) == (now.local_fine == nullptr) &&
+               (!now.local_fine || same_positions(*before.local_fine, *now.local_fine));
+    }
+
+private:
+    struct Same {
+        std::optional<bool> positions, indices;  ///< (each compared when first asked)
+    };
+    std::map<std::pair<const TriangleMesh*, const TriangleMesh*>, Same> known_;
+};
+
+/// How an instance moved: its shared shape (`same_shape`), material and placement.
+ObjectMotion instance_motion(const Object& before, const Object& now, bool same_shape) {
     ObjectMotion m;
-    const bool same_shape = before.instance && now.instance && same_positions(*before.local_coarse, *now.local_coarse) &&
-                            (before.local_fine == nullptr) == (now.local_fine == nullptr) &&
-                            (!now.local_fine || same_positions(*before.local_fine, *now.local_fine));
     const bool same_material = before.material_override == now.material_override;
     if (same_shape && same_material && before.placement == now.placement) return m;
     m.swept = object_bounds(before);
@@ -47,10 +72,10 @@ ObjectMotion instance_motion(const Object& before, const Object& now) {
     return m;
 }
 
-ObjectMotion motion_of(const Object& before, const Object& now) {
-    if (before.instance || now.instance) return instance_motion(before, now);
+ObjectMotion motion_of(const Object& before, const Object& now, MeshComparisons& meshes) {
+    if (before.instance || now.instance) return instance_motion(before, now, meshes.same_shape(before, now));
     ObjectMotion m;
-    if (same_positions(before.coarse, now.coarse) && same_fur(before, now)) return m;
+    if (meshes.same_positions(before.coarse, now.coarse) && same_fur(before, now)) return m;
     m.swept = object_bounds(before);
     m.swept.extend(object_bounds(now));
     // Rigid: the same shape under another placement (same vertices once both are undone).
@@ -77,17 +102,18 @@ SceneChanges scene_changes(const Scene& before, const Scene& now) {
     c.camera = !(before.camera.pose() == now.camera.pose()) || before.camera.width != now.camera.width ||
                before.camera.height != now.camera.height;
     c.comparable = before.objects.size() == now.objects.size() && before.materials.size() == now.materials.size();
+    MeshComparisons meshes;
     for (size_t i = 0; c.comparable && i < now.objects.size(); ++i)
         c.comparable = before.objects[i].name == now.objects[i].name && before.objects[i].instance == now.objects[i].instance &&
-                       same_topology(before.objects[i].coarse_mesh(), now.objects[i].coarse_mesh());
+                       meshes.same_topology(before.objects[i].coarse_mesh(), now.objects[i].coarse_mesh());
     if (!c.comparable) return c;
     c.visible_geometry_same = true;
     for (size_t i = 0; i < now.objects.size(); ++i) {
         const Object &a = before.objects[i], &b = now.objects[i];
-        c.objects.push_back(motion_of(a, b));
+        c.objects.push_back(motion_of(a, b, meshes));
         c.visible_geometry_same = c.visible_geometry_same && c.objects.back().kind == ObjectMotion::Kind::Static &&
-                                  same_positions(a.visible_mesh(), b.visible_mesh()) && a.visible_mesh().indices == b.visible_mesh().indices &&
-                                  a.material_override == b.material_override;
+                                  meshes.same_positions(a.visible_mesh(), b.visible_mesh()) &&
+                                  meshes.same_indices(a.visible_mesh(), b.visible_mesh()) && a.material_override == b.material_override;
     }
     // Lights and the sky: their JSON and the files they read (a sky texture).
     c.lights = json_differs(before.description, now.description, "lights") || before.inputs_hash("lights") != now.inputs_hash("lights");
