@@ -9,6 +9,7 @@ packages=(
   libosd-dev libcpp-httplib-dev chromium
   clang libclang-rt-dev python3-matplotlib
   libopenmpi-dev openmpi-bin
+  libopencolorio-dev
 )
 missing=()
 for p in "${packages[@]}"; do

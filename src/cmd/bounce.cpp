@@ -93,6 +93,7 @@ int run_command(int argc, char** argv, Communicator* comm) {
     light->add_option("--deep-in", la.deep_in, "start from this deep file");
     light->add_option("--cache-in", la.cache_in, "start from this irradiance cache");
     light->add_option("--threads", la.threads, "render threads (0 = all)")->check(CLI::Range(0, 4096));
+    add_display_options(*light, la.display);
     light->add_option("--set", la.sets, "start with this edit: key.path=value (render.gi defaults to cache)")->take_all();
 
     CompareArgs ca;

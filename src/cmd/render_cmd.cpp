@@ -5,7 +5,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <regex>
 
 #include "bounce/core/error.h"
@@ -113,7 +115,7 @@ int render_frame(const RenderArgs& a, const FrameFiles& files) {
     if (scene.render.parallel.preview && (!a.comm || a.comm->size() == 1))  // a preview needs every band
         request.preview = [&](const Image& img) {
             write_exr(files.output, img);
-            write_png(files.png(), img, "beauty");
+            write_png(files.png(), img, "beauty", files.display ? *files.display : srgb_display());
         };
     const FrameState none;  // a still, or a frame of a sequence that starts from cache files
     const FramePlan plan = plan_frame(scene, none, request);
@@ -224,7 +226,16 @@ std::unique_ptr<ProgressSink> make_progress(bool quiet) {
     return isatty(STDERR_FILENO) ? make_terminal_progress() : make_log_progress();
 }
 
-int run_render(const RenderArgs& a) {
+void add_display_options(CLI::App& command, DisplaySettings& display) {
+    command.add_option("--ocio-config", display.config,
+                       "OpenColorIO config for the PNG and the tool's view (default: $OCIO, else built-in sRGB); EXRs stay scene-linear");
+    command.add_option("--display", display.display, "the config's display (default: its default display)");
+    command.add_option("--view", display.view, "the display's view (default: its default view)");
+}
+
+int run_render(const RenderArgs& given) {
+    RenderArgs a = given;
+    a.files.display = std::make_shared<const DisplayTransform>(a.display, std::getenv("OCIO"));
     if (a.distribute != "tiles" && a.distribute != "frames")
         throw InputError("command line", "--distribute " + a.distribute, "is tiles or frames");
     if (a.frames.empty()) {
@@ -282,6 +293,7 @@ void add_render_options(CLI::App& render, RenderArgs& ra) {
     render.add_flag("--stats", ra.stats, "print statistics");
     render.add_option("--stats-json", ra.files.stats_json, "write statistics as JSON");
     render.add_flag("-q,--quiet", ra.quiet, "no progress output");
+    add_display_options(render, ra.display);
 }
 
 }  // namespace bounce

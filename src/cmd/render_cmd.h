@@ -26,12 +26,16 @@ struct RenderArgs {
     /// shared among them: "tiles" (every frame on every rank) or "frames" (a chunk per rank).
     Communicator* comm = nullptr;
     std::string distribute = "tiles";
+    DisplaySettings display;  ///< the PNG's OpenColorIO config, display and view
 };
 
 /// Adds the render command's options to `render`.
 void add_render_options(CLI::App& render, RenderArgs& a);
 /// Renders the frame or the frames the arguments ask for.
 int run_render(const RenderArgs& a);
+
+/// --ocio-config, --display, --view (render and light).
+void add_display_options(CLI::App& command, DisplaySettings& display);
 
 /// Progress on stderr: a bar on a terminal, log lines otherwise, nothing with -q.
 std::unique_ptr<ProgressSink> make_progress(bool quiet);

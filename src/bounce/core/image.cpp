@@ -54,6 +54,10 @@ void write_exr(const std::string& path, const Image& image) {
     for (size_t i = 0; i < names.size(); ++i)
         if (names[i] == "A") spec.alpha_channel = static_cast<int>(i);
     spec.attribute("compression", "zip");
+    // Scene-linear Rec.709 / sRGB primaries, D65 white (red, green, blue, white as x, y pairs):
+    // said in the file so a compositor's colour management need not assume it.
+    static constexpr float rec709[8] = {0.64f, 0.33f, 0.30f, 0.60f, 0.15f, 0.06f, 0.3127f, 0.3290f};
+    spec.attribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), rec709);
     spec.attribute("Software", "bounce " BOUNCE_VERSION " (" BOUNCE_GIT_REV ")");
     for (const auto& [k, v] : image.metadata) spec.attribute("bounce:" + k, v);
     std::vector<float> pixels(static_cast<size_t>(image.width) * image.height * names.size());
@@ -185,33 +189,43 @@ std::string texture_problem(const std::string& path) {
     return "";
 }
 
-std::vector<uint8_t> display_rgb8(const Image& image, const Layer& l, float exposure) {
+const DisplayTransform& srgb_display() {
+    static const DisplayTransform builtin;
+    return builtin;
+}
+
+std::vector<uint8_t> display_rgb8(const Image& image, const Layer& l, float exposure, const DisplayTransform& display) {
     const size_t n = static_cast<size_t>(image.width) * static_cast<size_t>(image.height), nc = l.channels.size();
     std::vector<uint8_t> rgb(3 * n);
     if (nc == 0) return rgb;
-    const float scale = std::exp2(exposure);
-    const bool direction = l.name == "N" || l.name == "bentnormal";
-    const bool depth = l.name == "depth";
-    float near = INFINITY, far = 0;
-    if (depth)
-        for (size_t p = 0; p < n; ++p)
-            if (const float z = l.data[p * nc]; z > 0 && std::isfinite(z)) near = std::min(near, z), far = std::max(far, z);
+    const auto byte = [](float v) { return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255)); };
+    std::vector<float> value(3 * n);
     for (size_t p = 0; p < n; ++p)
-        for (size_t c = 0; c < 3; ++c) {
-            const float x = l.data[p * nc + std::min(c, nc - 1)];
-            // Directions and depth are shown as values, not light: no exposure, no sRGB curve.
-            const auto byte = [](float v) { return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255)); };
-            if (direction) rgb[3 * p + c] = byte(0.5f + 0.5f * x);
-            else if (depth) rgb[3 * p + c] = byte(x > 0 && std::isfinite(x) ? 1 - 0.9f * (x - near) / std::max(far - near, 1e-30f) : 0);
-            else rgb[3 * p + c] = srgb8(scale * x);
+        for (size_t c = 0; c < 3; ++c) value[3 * p + c] = l.data[p * nc + std::min(c, nc - 1)];
+    // Directions and depth are shown as values, not light: no exposure, no display transform.
+    if (l.name == "N" || l.name == "bentnormal") {
+        for (size_t i = 0; i < 3 * n; ++i) rgb[i] = byte(0.5f + 0.5f * value[i]);
+    } else if (l.name == "depth") {
+        float near = INFINITY, far = 0;
+        for (const float z : value)
+            if (z > 0 && std::isfinite(z)) near = std::min(near, z), far = std::max(far, z);
+        for (size_t i = 0; i < 3 * n; ++i) {
+            const float z = value[i];
+            rgb[i] = byte(z > 0 && std::isfinite(z) ? 1 - 0.9f * (z - near) / std::max(far - near, 1e-30f) : 0);
         }
+    } else {
+        const float scale = std::exp2(exposure);
+        for (float& v : value) v *= scale;
+        display.apply(value.data(), n);
+        for (size_t i = 0; i < 3 * n; ++i) rgb[i] = byte(value[i]);
+    }
     return rgb;
 }
 
-void write_png(const std::string& path, const Image& image, const std::string& layer, float exposure) {
+void write_png(const std::string& path, const Image& image, const std::string& layer, const DisplayTransform& display) {
     const Layer* l = image.find(layer);
     if (!l) throw InputError(path, "", "the image has no layer \"" + layer + "\"");
-    write_png_rgb8(path, image.width, image.height, display_rgb8(image, *l, exposure));
+    write_png_rgb8(path, image.width, image.height, display_rgb8(image, *l, 0.0f, display));
 }
 
 }  // namespace bounce

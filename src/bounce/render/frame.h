@@ -5,10 +5,12 @@
 // starts from the previous frame's cache.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "bounce/core/display.h"
 #include "bounce/core/stats.h"
 #include "bounce/render/render.h"
 
@@ -19,6 +21,8 @@ struct FrameFiles {
     std::string output;      ///< the EXR; the PNG is written beside it
     std::string deep_in, deep_out, cache_in, cache_out, stats_json;
     std::string base;        ///< with a crop: an earlier full-frame EXR the crop is pasted over
+    /// How the PNG's colours are encoded (OpenColorIO display and view); null = built-in sRGB.
+    std::shared_ptr<const DisplayTransform> display;
     /// The PNG written beside `output`.
     std::string png() const;
     /// Whether any file name holds a #### frame pattern (expand_frame expands them).

@@ -39,6 +39,8 @@ struct SessionOptions {
     /// Unless the scene or `sets` say otherwise, records keep their bounce light per light
     /// (render.light_parts), so a light's colour or intensity edit updates it exactly.
     bool default_to_light_parts = true;
+    /// How the view's colours are encoded (OpenColorIO display and view); null = built-in sRGB.
+    std::shared_ptr<const DisplayTransform> display;
 };
 
 /// What a render request does, least work first.

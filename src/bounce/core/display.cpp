@@ -1,0 +1,82 @@
+#include "bounce/core/display.h"
+
+#include <OpenColorIO/OpenColorIO.h>
+#include <fmt/format.h>
+
+#include <vector>
+
+#include "bounce/core/error.h"
+#include "bounce/core/files.h"
+#include "bounce/core/image.h"
+
+namespace OCIO = OCIO_NAMESPACE;
+
+namespace bounce {
+
+struct DisplayTransform::Ocio {
+    OCIO::ConstCPUProcessorRcPtr cpu;
+};
+
+namespace {
+
+std::vector<std::string> names(int count, const auto& name_at) {
+    std::vector<std::string> out;
+    for (int i = 0; i < count; ++i) out.emplace_back(name_at(i));
+    return out;
+}
+
+/// `wanted` if the config lists it, its default when `wanted` is empty; InputError otherwise.
+std::string pick(const std::string& config, const std::string& what, const std::string& wanted, const char* fallback,
+                 const std::vector<std::string>& listed) {
+    if (wanted.empty()) {
+        if (!fallback || !*fallback) throw InputError(config, what, "the config has no default " + what);
+        return fallback;
+    }
+    for (const std::string& n : listed)
+        if (n == wanted) return wanted;
+    throw InputError(config, what, fmt::format("no {} '{}'; the config has: {}", what, wanted, fmt::join(listed, ", ")));
+}
+
+}  // namespace
+
+DisplayTransform::DisplayTransform() = default;
+DisplayTransform::~DisplayTransform() = default;
+DisplayTransform::DisplayTransform(DisplayTransform&&) noexcept = default;
+DisplayTransform& DisplayTransform::operator=(DisplayTransform&&) noexcept = default;
+
+DisplayTransform::DisplayTransform(const DisplaySettings& s, const char* env_ocio) {
+    const std::string config = !s.config.empty() ? s.config : env_ocio ? env_ocio : "";
+    if (config.empty()) {
+        if (!s.display.empty() || !s.view.empty())
+            throw InputError("command line", s.display.empty() ? "--view" : "--display",
+                             "names a display or view of an OpenColorIO config, but neither --ocio-config nor OCIO names one");
+        return;
+    }
+    check_input_file(config);
+    try {
+        const OCIO::ConstConfigRcPtr c = OCIO::Config::CreateFromFile(config.c_str());
+        const std::string display = pick(config, "display", s.display, c->getDefaultDisplay(),
+                                         names(c->getNumDisplays(), [&](int i) { return c->getDisplay(i); }));
+        const std::string view = pick(config, "view", s.view, c->getDefaultView(display.c_str()),
+                                      names(c->getNumViews(display.c_str()), [&](int i) { return c->getView(display.c_str(), i); }));
+        const OCIO::DisplayViewTransformRcPtr t = OCIO::DisplayViewTransform::Create();
+        t->setSrc(OCIO::ROLE_SCENE_LINEAR);
+        t->setDisplay(display.c_str());
+        t->setView(view.c_str());
+        ocio_ = std::make_unique<const Ocio>(Ocio{c->getProcessor(t)->getDefaultCPUProcessor()});
+        name_ = fmt::format("{}: {} / {}", config, display, view);
+    } catch (const OCIO::Exception& e) {
+        throw InputError(config, "", fmt::format("not a usable OpenColorIO config: {}", e.what()));
+    }
+}
+
+void DisplayTransform::apply(float* rgb, size_t count) const {
+    if (!ocio_) {
+        for (size_t i = 0; i < 3 * count; ++i) rgb[i] = srgb_encode(rgb[i]);
+        return;
+    }
+    OCIO::PackedImageDesc desc(rgb, static_cast<long>(count), 1, 3);
+    ocio_->cpu->apply(desc);
+}
+
+}  // namespace bounce
