@@ -1,11 +1,12 @@
 # The two commands of the README: `make render` and `make test`.
-# Both install the Debian dependencies (scripts/install-deps.sh), configure and build.
+# Both install the Debian dependencies (scripts/install-deps.sh) and configure; `make render`
+# builds only the renderer, `make test` everything (the test suite, benchmarks).
 BUILD ?= build
 JOBS ?= $(shell nproc)
 SCENE ?= scenes/cornell/cornell.json
 OUT ?= out/cornell.exr
 
-.PHONY: deps configure build render test clean
+.PHONY: deps configure build renderer render test clean
 
 deps:
 	./scripts/install-deps.sh
@@ -17,7 +18,10 @@ configure: deps
 build: configure
 	cmake --build $(BUILD) -j $(JOBS)
 
-render: build
+renderer: configure
+	cmake --build $(BUILD) -j $(JOBS) --target bounce
+
+render: renderer
 	mkdir -p $(dir $(OUT))
 	$(BUILD)/bounce render $(SCENE) -o $(OUT) --gi cache --rays 1024 --stats
 

@@ -317,5 +317,37 @@ TEST(Mpi, FramesAreDistributedInChunksAndAResumedJobRendersOnlyWhatIsMissing) {
     test::expect_refused(fmt::format("render {} --frames 1-2 --distribute rows {}", shot, files("x")), {"--distribute rows", "tiles or frames"});
 }
 
+/// docs/parallel.md's Slurm batch script, run as sbatch would on 2 tasks of 1 CPU: srun is
+/// stood in for by mpirun with Slurm's task count. Its frames equal one process's, and a
+/// resubmitted job renders only what is missing.
+TEST(Mpi, TheSlurmBatchScriptRendersAShotAsOneProcessDoes) {
+    SKIP_UNDER_SANITIZER();
+    test::TempDir d;
+    std::filesystem::create_directories(d.file("bin"));
+    d.write("bin/srun", "#!/bin/sh\nwhile [ \"${1#--}\" != \"$1\" ]; do shift; done\n"
+                        "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 exec mpirun --oversubscribe --bind-to none "
+                        "-np \"$SLURM_NTASKS\" \"$@\"\n");
+    std::filesystem::permissions(d.file("bin/srun"), std::filesystem::perms::owner_all);
+    const std::string shot = test::source_dir() + "/scenes/shots/cornell-rolling.json";
+    const std::string extra = " --res 40x40 --gi cache --rays 64";
+    ASSERT_EQ(test::run_bounce(fmt::format("render {} -o {} --frames 1-3 --threads 2 -q {}", shot, d.file("one.####.exr"), extra)), 0);
+    const std::string sbatch = fmt::format("PATH={}:$PATH SLURM_NTASKS=2 SLURM_CPUS_PER_TASK=1 BOUNCE={} bash {}/scripts/farm/shot.sbatch {} {} 1-3 {}",
+                                           d.file("bin"), BOUNCE_BINARY, test::source_dir(), shot, d.file("job.####.exr"), extra);
+    std::string err;
+    ASSERT_EQ(test::run_bounce_shell(sbatch, &err), 0) << err;
+    for (int f = 1; f <= 3; ++f) {
+        expect_same_layers(d.file(fmt::format("one.{:04d}.exr", f)), d.file(fmt::format("job.{:04d}.exr", f)));
+        EXPECT_TRUE(std::filesystem::exists(d.file(fmt::format("job.{:04d}.bic", f))));
+        EXPECT_EQ(nlohmann::json::parse(test::bytes_of(d.file(fmt::format("job.{:04d}.json", f))))["ranks"], 2) << f;
+    }
+    // Requeued after frame 1: frames 2 and 3 are rendered again (from frame 1's cache), frame 1 stays.
+    std::filesystem::remove(d.file("job.0002.exr"));
+    std::filesystem::remove(d.file("job.0003.exr"));
+    std::filesystem::last_write_time(d.file("job.0001.exr"), std::filesystem::file_time_type{});
+    ASSERT_EQ(test::run_bounce_shell(sbatch, &err), 0) << err;
+    EXPECT_EQ(std::filesystem::last_write_time(d.file("job.0001.exr")), std::filesystem::file_time_type{});
+    EXPECT_TRUE(std::filesystem::exists(d.file("job.0002.exr")) && std::filesystem::exists(d.file("job.0003.exr")));
+}
+
 }  // namespace
 }  // namespace bounce
