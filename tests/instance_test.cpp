@@ -398,6 +398,9 @@ TEST(Instances, HostileInstancersAreRefusedWithTheirPlace) {
             {"/objects/3/instances/transforms/0", "colour"});
     refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"translate", {1e39, 0, 0}}}})}})), {"/objects/3/instances/transforms/0/translate"});
     refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"scale", 1e30}}})}})), {"/objects/3/instances/transforms/0", "beyond"});
+    // Bounds are found in parallel; the first placement out of range is the one named.
+    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({json::object(), {{"scale", 1e30}}, {{"scale", -1e30}}})}})),
+            {"/objects/3/instances/transforms/1", "beyond"});
     refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"material", "gold"}}})}})), {"/objects/3/instances/transforms/0/material", "unknown material"});
     refused(room(instancer({{"of", "ball"}, {"transforms", one}}, {{"type", "sphere"}})), {"/objects/3", "type"});
     refused(room(instancer({{"of", "ball"}, {"transforms", one}, {"count", 3}})), {"/objects/3/instances", "count"});

@@ -2,11 +2,13 @@
 
 #include <fmt/format.h>
 
+#include <iterator>
 #include <memory>
 #include <utility>
 
 #include "bounce/core/error.h"
 #include "bounce/core/memory.h"
+#include "bounce/core/parallel.h"
 #include "bounce/scene/item_readers.h"
 #include "bounce/scene/keyframes.h"
 #include "bounce/scene/link_reader.h"
@@ -42,16 +44,14 @@ const Object& find_prototype(const JsonReader& in, const json& entries, const Sc
     in.fail("of", fmt::format("no object is named \"{}\"{}", of, hint.empty() ? "" : " (did you mean \"" + hint + "\"?)"));
 }
 
-/// World bounds of `mesh` placed by `t`, failing at `r` when a vertex lands beyond the coordinate limit.
-Bounds placed_bounds(const JsonReader& r, const TriangleMesh& mesh, const Transform& t) {
-    Bounds b;
+/// World bounds of `mesh` placed by `t`; false when a vertex lands beyond the coordinate limit.
+bool placed_bounds(const TriangleMesh& mesh, const Transform& t, Bounds& b) {
     for (const Vec3& p : mesh.positions) {
         const Vec3 q = t.point(p);
-        if (!within(q, kMaxCoordinate))
-            r.fail("", fmt::format("this placement moves vertices to non-finite positions or beyond +-{:g}", kMaxCoordinate));
+        if (!within(q, kMaxCoordinate)) return false;
         b.extend(q);
     }
-    return b;
+    return true;
 }
 
 /// What placements share of their prototype (copied: the prototype moves as objects are appended).
@@ -63,7 +63,7 @@ struct Shared {
 /// Placement `k` of prototype `proto`, read from its entry `e` in "transforms": the entry's
 /// transform applied after the prototype's own.
 Object read_placement(const JsonReader& r, const JsonReader& e, const Scene& scene, const Shared& proto, size_t k) {
-    Object o = make_instance(e, e.string("name", fmt::format("{}/{}", r.string("name", ""), k)), proto.coarse, proto.fine,
+    Object o = make_instance(e.string("name", fmt::format("{}/{}", r.string("name", ""), k)), proto.coarse, proto.fine,
                              read_transform_keys(e) * proto.placement);
     const int own = read_material_name(e, "material", scene);
     o.material_override = own >= 0 ? own : read_material_name(r, "material", scene);
@@ -74,16 +74,28 @@ Object read_placement(const JsonReader& r, const JsonReader& e, const Scene& sce
 
 }  // namespace
 
-Object make_instance(const JsonReader& r, std::string name, std::shared_ptr<const TriangleMesh> coarse,
-                     std::shared_ptr<const TriangleMesh> fine, const Transform& placement) {
+Object make_instance(std::string name, std::shared_ptr<const TriangleMesh> coarse, std::shared_ptr<const TriangleMesh> fine,
+                     const Transform& placement) {
     Object o;
     o.instance = true;
     o.name = std::move(name);
     o.placement = placement;
     o.local_coarse = std::move(coarse), o.local_fine = std::move(fine);
-    o.instance_bounds = placed_bounds(r, *o.local_coarse, o.placement);
-    o.instance_visible_bounds = o.local_fine ? placed_bounds(r, *o.local_fine, o.placement) : o.instance_bounds;
     return o;
+}
+
+void bound_instances(std::span<Object> placed, const std::function<const JsonReader(size_t)>& at) {
+    std::vector<uint8_t> beyond(placed.size(), 0);
+    parallel_for_each_index(size_t{0}, placed.size(), [&](size_t k) {
+        Object& o = placed[k];
+        o.instance_bounds = o.instance_visible_bounds = Bounds{};
+        bool ok = placed_bounds(*o.local_coarse, o.placement, o.instance_bounds);
+        if (!o.local_fine) o.instance_visible_bounds = o.instance_bounds;
+        else ok = ok && placed_bounds(*o.local_fine, o.placement, o.instance_visible_bounds);
+        beyond[k] = !ok;
+    });
+    for (size_t k = 0; k < placed.size(); ++k)
+        if (beyond[k]) at(k).fail("", fmt::format("this placement moves vertices to non-finite positions or beyond +-{:g}", kMaxCoordinate));
 }
 
 void read_instances(const JsonReader& r, const json& entries, Scene& scene, size_t index) {
@@ -100,14 +112,17 @@ void read_instances(const JsonReader& r, const json& entries, Scene& scene, size
     check_memory(static_cast<double>(list.size()) * (sizeof(Object) + 64), r.ctx().file, in.at("transforms"),
                  fmt::format("{} instances", list.size()));
     const Shared shared{proto.local_coarse, proto.local_fine, proto.placement};
-    for (size_t k = 0; k < list.size(); ++k) {
+    const auto entry = [&](size_t k) {
         const std::string at = in.at("transforms") + "/" + std::to_string(k);
         if (!list[k].is_object()) r.ctx().fail(at, fmt::format("expected a transform object, got {}", json_type_name(list[k])));
-        const JsonReader e(list[k], at, r.ctx(), {"translate", "rotate", "scale", "matrix", "name", "material", "visible_to", "matte"});
-        Object o = read_placement(r, e, scene, shared, k);
-        if (k == 0) scene.objects[index] = std::move(o);
-        else scene.objects.push_back(std::move(o));
-    }
+        return JsonReader(list[k], at, r.ctx(), {"translate", "rotate", "scale", "matrix", "name", "material", "visible_to", "matte"});
+    };
+    std::vector<Object> placed;
+    placed.reserve(list.size());
+    for (size_t k = 0; k < list.size(); ++k) placed.push_back(read_placement(r, entry(k), scene, shared, k));
+    bound_instances(placed, entry);
+    scene.objects[index] = std::move(placed[0]);
+    std::move(placed.begin() + 1, placed.end(), std::back_inserter(scene.objects));
 }
 
 }  // namespace bounce

@@ -5,7 +5,9 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <memory>
+#include <span>
 #include <string>
 
 #include "bounce/scene/json_reader.h"
@@ -17,9 +19,13 @@ namespace bounce {
 bool places_instances(const nlohmann::json& entry);
 
 /// A placement of the shared tessellations `coarse` and `fine` (null: none) by `placement`,
-/// named `name`, with its world bounds; fails at `r` when a vertex lands beyond the coordinate limit.
-Object make_instance(const JsonReader& r, std::string name, std::shared_ptr<const TriangleMesh> coarse,
-                     std::shared_ptr<const TriangleMesh> fine, const Transform& placement);
+/// named `name`; its world bounds are bound_instances' work.
+Object make_instance(std::string name, std::shared_ptr<const TriangleMesh> coarse, std::shared_ptr<const TriangleMesh> fine,
+                     const Transform& placement);
+/// Sets every placement's world bounds, in parallel (each places all its prototype's vertices:
+/// most of a big instanced scene's load). Fails at `at(k)` for the first placement `k` that
+/// moves a vertex beyond the coordinate limit, as a serial loop would.
+void bound_instances(std::span<Object> placed, const std::function<const JsonReader(size_t)>& at);
 
 /// Reads instancer number `index` (read from `r`): its first placement takes `scene.objects[index]`
 /// (held empty for it while the other objects were read, so every entry keeps its index), the

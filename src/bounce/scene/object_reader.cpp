@@ -276,11 +276,11 @@ std::vector<Object> place_shared_meshes(const JsonReader& r, const Object& obj, 
         const auto local = std::make_shared<const TriangleMesh>(std::move(s.mesh));
         for (size_t k = 0; k < s.uses.size(); ++k) {
             const std::string node = s.uses[k].node.empty() ? fmt::format("node{}", placed.size()) : s.uses[k].node;
-            placed.push_back(make_instance(r, fmt::format("{}/{}", obj.name, node), local, local_fine,
-                                           obj.placement * s.uses[k].world));
+            placed.push_back(make_instance(fmt::format("{}/{}", obj.name, node), local, local_fine, obj.placement * s.uses[k].world));
             placed.back().visible_to = obj.visible_to, placed.back().matte = obj.matte;
         }
     }
+    bound_instances(placed, [&](size_t) { return r; });
     return placed;
 }
 
