@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <httplib.h>
 
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <thread>
@@ -447,9 +448,32 @@ TEST(LightingToolHttp, AnEditAndARenderThroughTheApi) {
     EXPECT_EQ(left["in_region"].get<size_t>() + right["in_region"].get<size_t>(), whole["in_region"].get<size_t>());
     EXPECT_GT(left["in_region"].get<size_t>(), 0u);
     EXPECT_EQ(s.client.Get("/api/records?region=1,2,3")->status, 400);
+    // The page's binary form holds the same floats, bit for bit, laid out as X-Meta says; and
+    // nothing is compressed, whatever the client accepts (docs/lighting-tool.md).
+    r = s.client.Get("/api/records?format=binary", httplib::Headers{{"Accept-Encoding", "gzip, deflate, br"}});
+    ASSERT_EQ(r->status, 200);
+    EXPECT_EQ(r->get_header_value("Content-Encoding"), "");
+    const json meta = json::parse(r->get_header_value("X-Meta"));
+    EXPECT_EQ(meta["count"], rec["count"]);
+    size_t at = 0;
+    for (const json& a : meta["arrays"]) {
+        const json& numbers = rec[a[0].get<std::string>()];
+        ASSERT_EQ(a[1].get<size_t>(), numbers.size()) << a;
+        for (size_t i = 0; i < numbers.size(); ++i, at += 4) {
+            float v;
+            std::memcpy(&v, r->body.data() + at, 4);
+            EXPECT_EQ(v, numbers[i].get<float>()) << a[0] << " " << i;
+        }
+    }
+    EXPECT_EQ(at, r->body.size());
+    EXPECT_EQ(s.client.Get("/api/records", httplib::Headers{{"Accept-Encoding", "br"}})->get_header_value("Content-Encoding"), "");
+    EXPECT_EQ(s.client.Get("/api/records?format=xml")->status, 400);
     const json view = json::parse(s.client.Get("/api/scene?max_triangles=10")->body);
     EXPECT_LE(view["triangles"].size(), 9u * 12u);
     EXPECT_EQ(view["camera"]["width"], 48);
+    r = s.client.Get("/api/scene?max_triangles=10&format=binary");
+    EXPECT_EQ(r->body.size(), 4 * view["triangles"].size());
+    EXPECT_EQ(json::parse(r->get_header_value("X-Meta"))["arrays"], json::array({json::array({"triangles", view["triangles"].size()})}));
     r = s.client.Post("/api/save-scene", R"({"name": "edited-by-test.json"})", "application/json");
     ASSERT_EQ(r->status, 200) << r->body;
     const Scene back = load_scene(s.dir.file("scene/edited-by-test.json"));

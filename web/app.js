@@ -19,6 +19,16 @@ async function api(path, body) {
   return { data, res };
 }
 
+/// View arrays (records, triangles) as float32 bytes, not JSON numbers: Sponza's records are
+/// 4 MB so, against 18.7 MB of JSON the server gzipped for over half a minute. The layout comes in X-Meta.
+async function arrays(path) {
+  const { data, res } = await api(path + (path.includes('?') ? '&' : '?') + 'format=binary');
+  const meta = JSON.parse(res.headers.get('X-Meta'));
+  let at = 0;
+  for (const [name, length] of meta.arrays) { meta[name] = new Float32Array(data, at, length); at += 4 * length; }
+  return meta;
+}
+
 // ---- spreadsheet ----
 function shown(v) { return v === null || v === undefined ? '' : typeof v === 'string' ? v : JSON.stringify(v); }
 function parsed(text) { try { return JSON.parse(text); } catch { return text; } }
@@ -182,6 +192,43 @@ function setupRegion() {
 
 // ---- 3D view ----
 const view = {};
+// Level of detail while the camera moves: software WebGL (the browser test's SwiftShader) takes
+// ~0.3 s for a full frame of Sponza (66 k triangles, 93 k records), so a moving view draws half
+// the resolution, at most this many triangles and records, and the full view once it stops.
+const kMoving = { triangles: 6000, records: 8000, pixelRatio: 0.35 };
+
+/// An order of n items whose every prefix is spread evenly over them (a stride coprime to n), so
+/// a draw range of the first k is a decimated view of all.
+function evenOrder(n) {
+  let step = Math.max(1, Math.round(n * 0.6180339887));
+  const gcd = (a, b) => (b ? gcd(b, a % b) : a);
+  while (n > 1 && gcd(step, n) !== 1) step++;
+  return Uint32Array.from({ length: n }, (_, k) => (k * step) % n);
+}
+
+/// Milliseconds per frame of `n` frames drawn as the orbit moves the camera (bench/tool-open.mjs):
+/// each waits for the GPU (one pixel read back), as the next frame on screen would.
+state.timeFrames = (n, moving) => {
+  setMoving(moving);
+  const gl = view.renderer.getContext(), px = new Uint8Array(4), t0 = performance.now();
+  for (let i = 0; i < n; i++) {
+    view.camera.position.applyAxisAngle(new THREE.Vector3(0, 1, 0), 0.02);
+    view.camera.lookAt(view.orbit.target);
+    view.renderer.render(view.scene, view.camera);
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
+  }
+  const ms = (performance.now() - t0) / n;
+  setMoving(false);
+  return ms;
+};
+
+function setMoving(moving) {
+  view.moving = moving;
+  view.renderer.setPixelRatio(window.devicePixelRatio * (moving ? kMoving.pixelRatio : 1));
+  if (view.geometry) view.geometry.geometry.setDrawRange(0, moving ? 3 * kMoving.triangles : Infinity);
+  if (view.records && view.records.isPoints) view.records.geometry.setDrawRange(0, moving ? kMoving.records : Infinity);
+  redraw();
+}
 
 function initView() {
   const el = $('view');
@@ -206,6 +253,8 @@ function initView() {
   // Drawn when something changed, not every frame: an idle page costs no CPU (a software-GL
   // browser drawing continuously slowed the tool's own renders beside it).
   view.orbit.addEventListener('change', redraw);
+  view.orbit.addEventListener('start', () => setMoving(true));
+  view.orbit.addEventListener('end', () => setMoving(false));
   view.drag.addEventListener('change', redraw);
   redraw();
 }
@@ -216,11 +265,13 @@ function redraw() {
 }
 
 async function loadScene() {
-  const { data: s } = await api('/api/scene?max_triangles=100000');
+  const s = await arrays('/api/scene?max_triangles=100000');
   $('scene-name').textContent = state.status ? state.status.scene : '';
   if (view.geometry) view.scene.remove(view.geometry);
-  const g = new THREE.BufferGeometry();
-  g.setAttribute('position', new THREE.Float32BufferAttribute(s.triangles, 3));
+  const g = new THREE.BufferGeometry(), order = evenOrder(s.triangles.length / 9);
+  const tris = new Float32Array(s.triangles.length);
+  order.forEach((t, k) => tris.set(s.triangles.subarray(9 * t, 9 * t + 9), 9 * k));
+  g.setAttribute('position', new THREE.Float32BufferAttribute(tris, 3));
   g.computeVertexNormals();
   view.geometry = new THREE.Mesh(g, new THREE.MeshLambertMaterial({ color: 0x888888, side: THREE.DoubleSide, transparent: true, opacity: 0.55 }));
   view.scene.add(view.geometry);
@@ -288,7 +339,7 @@ async function loadRecords() {
   const limit = $('record-shape').value === 'discs' ? 20000 : 200000;
   let r;
   const ask = (state.recordsAsked = (state.recordsAsked || 0) + 1);
-  try { ({ data: r } = await api(`/api/records?limit=${limit}${file}`)); } catch { $('record-count').textContent = 'records: 0'; return; }
+  try { r = await arrays(`/api/records?limit=${limit}${file}`); } catch { $('record-count').textContent = 'records: 0'; return; }
   if (ask !== state.recordsAsked) return;  // a later request is on its way: answers may come out of order
   if (view.records) view.scene.remove(view.records);
   const ao = $('record-colour').value === 'ao';
@@ -307,10 +358,10 @@ async function loadRecords() {
     }
     view.records = mesh;
   } else {
-    const g = new THREE.BufferGeometry();
-    g.setAttribute('position', new THREE.Float32BufferAttribute(r.p, 3));
-    const colours = new Float32Array(r.shown * 3);
-    for (let i = 0; i < r.shown; i++) for (let c = 0; c < 3; c++) colours[3 * i + c] = colour(i, c);
+    const g = new THREE.BufferGeometry(), order = evenOrder(r.shown);
+    const points = new Float32Array(r.shown * 3), colours = new Float32Array(r.shown * 3);
+    order.forEach((i, k) => { for (let c = 0; c < 3; c++) points[3 * k + c] = r.p[3 * i + c], colours[3 * k + c] = colour(i, c); });
+    g.setAttribute('position', new THREE.Float32BufferAttribute(points, 3));
     g.setAttribute('color', new THREE.Float32BufferAttribute(colours, 3));
     view.records = new THREE.Points(g, new THREE.PointsMaterial({ size: 4, sizeAttenuation: false, vertexColors: true }));
   }

@@ -13,6 +13,8 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "bounce/cache/irradiance_cache.h"
 #include "bounce/core/image.h"
@@ -24,6 +26,19 @@
 #include "bounce/scene/scene.h"
 
 namespace bounce {
+
+/// What the 3D view draws: metadata and named float arrays. Sent as one JSON object (the arrays
+/// as numbers), or for the page as bytes: the arrays' float32 values one after the other, the
+/// metadata (with each array's name and length) beside them (server.h).
+struct ViewArrays {
+    nlohmann::json meta;
+    std::vector<std::pair<std::string, std::vector<float>>> arrays;
+    nlohmann::json to_json() const;
+    /// The arrays' values, little-endian float32, in order.
+    std::string bytes() const;
+    /// `meta` with "arrays": [[name, length], ...].
+    nlohmann::json layout() const;
+};
 
 struct SessionOptions {
     std::string scene;     ///< scene file
@@ -97,14 +112,14 @@ public:
     /// The current image, every layer in float (tests and benches compare it).
     Image image() const;
     /// Records of a cache file (the session's when `file` is empty; else a path confined to
-    /// the allowed folders): {file, count, frame, p, n, r, E, ao} as flat arrays, at most `limit`;
-    /// with `region` (x0, x1, y0, y1 in pixels) only the records the camera sees inside it.
-    nlohmann::json records(const std::string& file, size_t limit, std::optional<std::array<int, 4>> region = std::nullopt) const;
+    /// the allowed folders): {file, count, frame, ...} and the arrays p, n, r, E, ao, at most
+    /// `limit` records; with `region` (x0, x1, y0, y1 in pixels) only those the camera sees inside it.
+    ViewArrays records(const std::string& file, size_t limit, std::optional<std::array<int, 4>> region = std::nullopt) const;
     /// Cache files in the allowed folders (for the 3D view's frame slider).
     nlohmann::json cache_files() const;
-    /// What the 3D view draws: camera, lights (with their parameter keys), and at most
-    /// `max_triangles` triangles of the ray-traced tessellation.
-    nlohmann::json scene_view(size_t max_triangles) const;
+    /// What the 3D view draws: camera, lights (with their parameter keys), and the array
+    /// `triangles`: at most `max_triangles` triangles of the ray-traced tessellation.
+    ViewArrays scene_view(size_t max_triangles) const;
 
     /// Writes the scene with every edit applied, atomically, into the scene's folder.
     std::string save_scene(const std::string& name) const;

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <fstream>
 
@@ -55,7 +56,7 @@ fs::path LightingSession::confined(const std::string& name, const std::string& w
     throw InputError("request", what, fmt::format("'{}' is not inside the scene or output folder", name));
 }
 
-json LightingSession::records(const std::string& file, size_t limit, std::optional<std::array<int, 4>> region) const {
+ViewArrays LightingSession::records(const std::string& file, size_t limit, std::optional<std::array<int, 4>> region) const {
     const fs::path path = file.empty() ? cache_path_ : confined(file, "file");
     CacheFile f = read_cache_file(path.string());
     const size_t all = f.records.size();
@@ -69,18 +70,39 @@ json LightingSession::records(const std::string& file, size_t limit, std::option
         std::erase_if(f.records, [&](const Record& r) { return !rays.projects_into(r.p, *region); });
     }
     const size_t n = std::min(limit, f.records.size());
-    json p = json::array(), nn = json::array(), r = json::array(), e = json::array(), ao = json::array();
+    std::vector<float> p, nn, r, e, ao;
     // An even subset when the cache holds more than the view asked for.
     for (size_t k = 0; k < n; ++k) {
         const Record& rec = f.records[k * f.records.size() / std::max<size_t>(n, 1)];
-        for (float v : {rec.p.x, rec.p.y, rec.p.z}) p.push_back(v);
-        for (float v : {rec.n.x, rec.n.y, rec.n.z}) nn.push_back(v);
+        p.insert(p.end(), {rec.p.x, rec.p.y, rec.p.z});
+        nn.insert(nn.end(), {rec.n.x, rec.n.y, rec.n.z});
         r.push_back(rec.radius);
-        for (float v : {rec.E.x, rec.E.y, rec.E.z}) e.push_back(v);
+        e.insert(e.end(), {rec.E.x, rec.E.y, rec.E.z});
         ao.push_back(rec.ao);
     }
-    return {{"file", path.filename().string()}, {"count", all}, {"in_region", f.records.size()}, {"fragment_records", f.fragment_records.size()},
-            {"shown", n}, {"frame", f.info.frame}, {"p", p}, {"n", nn}, {"r", r}, {"E", e}, {"ao", ao}};
+    return {{{"file", path.filename().string()}, {"count", all}, {"in_region", f.records.size()}, {"fragment_records", f.fragment_records.size()},
+             {"shown", n}, {"frame", f.info.frame}},
+            {{"p", std::move(p)}, {"n", std::move(nn)}, {"r", std::move(r)}, {"E", std::move(e)}, {"ao", std::move(ao)}}};
+}
+
+json ViewArrays::to_json() const {
+    json out = meta;
+    for (const auto& [name, values] : arrays) out[name] = values;
+    return out;
+}
+
+std::string ViewArrays::bytes() const {
+    static_assert(std::endian::native == std::endian::little, "the page reads little-endian float32");
+    std::string out;
+    for (const auto& [name, values] : arrays) out.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(float));
+    return out;
+}
+
+json ViewArrays::layout() const {
+    json out = meta;
+    out["arrays"] = json::array();
+    for (const auto& [name, values] : arrays) out["arrays"].push_back({name, values.size()});
+    return out;
 }
 
 json LightingSession::cache_files() const {
@@ -92,7 +114,7 @@ json LightingSession::cache_files() const {
     return out;
 }
 
-json LightingSession::scene_view(size_t max_triangles) const {
+ViewArrays LightingSession::scene_view(size_t max_triangles) const {
     std::lock_guard lock(mutex_);
     const json values = param_values(scene_, ~0u);
     json cam = {{"position", values["camera.position"]}, {"look_at", values["camera.look_at"]}, {"up", values["camera.up"]},
@@ -121,17 +143,16 @@ json LightingSession::scene_view(size_t max_triangles) const {
     size_t total = 0;
     for (const Object& o : scene_.objects) total += o.placed() ? o.coarse_mesh().triangle_count() : 0;
     const size_t stride = std::max<size_t>(1, (total + max_triangles - 1) / std::max<size_t>(max_triangles, 1));
-    json tris = json::array();
+    std::vector<float> tris;
     size_t t = 0;
     for (const Object& o : scene_.objects)
         for (uint32_t i = 0; o.placed() && i < o.coarse_mesh().triangle_count(); ++i, ++t) {
             if (t % stride) continue;
-            for (const Vec3& v : triangle_vertices(o.coarse_mesh(), o.to_world(), i))
-                for (float x : {v.x, v.y, v.z}) tris.push_back(x);
+            for (const Vec3& v : triangle_vertices(o.coarse_mesh(), o.to_world(), i)) tris.insert(tris.end(), {v.x, v.y, v.z});
         }
     const Bounds b = scene_.bounds();
-    return {{"camera", cam}, {"lights", lights}, {"triangles", tris}, {"triangles_total", total},
-            {"bounds", {{b.lo.x, b.lo.y, b.lo.z}, {b.hi.x, b.hi.y, b.hi.z}}}};
+    return {{{"camera", cam}, {"lights", lights}, {"triangles_total", total}, {"bounds", {{b.lo.x, b.lo.y, b.lo.z}, {b.hi.x, b.hi.y, b.hi.z}}}},
+            {{"triangles", std::move(tris)}}};
 }
 
 std::string LightingSession::save_scene(const std::string& name) const {
