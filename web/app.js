@@ -155,7 +155,7 @@ async function refreshStatus() {
     // status can arrive after a render started and still say "done" (the render before it).
     if (state.running || s.image.version !== state.recordsOf) {
       state.recordsOf = s.image.version;
-      showStats(s.stats); loadRecords(); loadCacheFiles();
+      showStats(s.stats); state.recordsLoading = Promise.all([loadRecords(), loadCacheFiles()]);
     }
     state.running = false;
   }
@@ -454,7 +454,8 @@ async function main() {
   setupRegion();
   initView();
   await refreshStatus();
-  await Promise.all([loadParams(), loadScene(), loadRecords(), loadCacheFiles()]);
+  // The status has asked for the records unless a render is running (then the last ones are shown).
+  await Promise.all([loadParams(), loadScene(), state.recordsLoading || Promise.all([loadRecords(), loadCacheFiles()])]);
   listen();
   state.ready = true;
 }
