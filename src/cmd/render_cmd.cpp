@@ -115,7 +115,7 @@ int render_frame(const RenderArgs& a, const FrameFiles& files) {
     if (scene.render.parallel.preview && (!a.comm || a.comm->size() == 1))  // a preview needs every band
         request.preview = [&](const Image& img) {
             write_exr(files.output, img);
-            write_png(files.png(), img, "beauty", files.display ? *files.display : srgb_display());
+            write_png(files.png(), img, "beauty", *files.display);
         };
     const FrameState none;  // a still, or a frame of a sequence that starts from cache files
     const FramePlan plan = plan_frame(scene, none, request);

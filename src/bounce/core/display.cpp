@@ -3,6 +3,7 @@
 #include <OpenColorIO/OpenColorIO.h>
 #include <fmt/format.h>
 
+#include <memory>
 #include <vector>
 
 #include "bounce/core/error.h"
@@ -68,6 +69,11 @@ DisplayTransform::DisplayTransform(const DisplaySettings& s, const char* env_oci
     } catch (const OCIO::Exception& e) {
         throw InputError(config, "", fmt::format("not a usable OpenColorIO config: {}", e.what()));
     }
+}
+
+const std::shared_ptr<const DisplayTransform>& srgb_display() {
+    static const auto builtin = std::make_shared<const DisplayTransform>();
+    return builtin;
 }
 
 void DisplayTransform::apply(float* rgb, size_t count) const {

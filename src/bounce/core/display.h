@@ -41,4 +41,7 @@ private:
     std::string name_ = "sRGB (built-in)";
 };
 
+/// The built-in sRGB transform, one shared instance (the default of every holder of a transform).
+const std::shared_ptr<const DisplayTransform>& srgb_display();
+
 }  // namespace bounce

@@ -189,11 +189,6 @@ std::string texture_problem(const std::string& path) {
     return "";
 }
 
-const DisplayTransform& srgb_display() {
-    static const DisplayTransform builtin;
-    return builtin;
-}
-
 std::vector<uint8_t> display_rgb8(const Image& image, const Layer& l, float exposure, const DisplayTransform& display) {
     const size_t n = static_cast<size_t>(image.width) * static_cast<size_t>(image.height), nc = l.channels.size();
     std::vector<uint8_t> rgb(3 * n);

@@ -52,16 +52,13 @@ Image assemble_tiles(const std::array<int, 4>& w, const std::vector<Image>& tile
 void write_exr(const std::string& path, const Image& image);
 /// Reads an EXR written by write_exr (or any EXR: channels grouped by their prefix).
 Image read_exr(const std::string& path);
-/// The built-in sRGB display transform, shared.
-const DisplayTransform& srgb_display();
 /// Layer `l` of `image` as 8-bit RGB for a screen: colours through `display` after `exposure`
 /// stops; directions (N, bentnormal) as 0.5 + 0.5 x; depth as a grey ramp from the nearest
 /// (white) to the farthest (dark) surface, pixels that see nothing black; one channel as grey.
 std::vector<uint8_t> display_rgb8(const Image& image, const Layer& l, float exposure,
-                                  const DisplayTransform& display = srgb_display());
+                                  const DisplayTransform& display = *srgb_display());
 /// Writes layer `layer` as an 8-bit PNG (display_rgb8). InputError(path) if there is no such layer.
-void write_png(const std::string& path, const Image& image, const std::string& layer,
-               const DisplayTransform& display = srgb_display());
+void write_png(const std::string& path, const Image& image, const std::string& layer, const DisplayTransform& display);
 /// Writes raw 8-bit RGB pixels as a PNG (used for false-colour and diagnostic images).
 void write_png_rgb8(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb);
 

@@ -120,7 +120,7 @@ void write_frame_outputs(const RenderResult& result, const FrameFiles& files, co
         image = &pasted;
     }
     write_exr(files.output, *image);
-    write_png(files.png(), *image, show, files.display ? *files.display : srgb_display());
+    write_png(files.png(), *image, show, *files.display);
     if (!files.deep_out.empty() && result.gathered_deep) write_deep(files.deep_out, *result.gathered_deep,
                                                                            result.deep_colour.empty() ? nullptr : &result.deep_colour);
     if (result.cache && !files.cache_out.empty()) write_cache_file(files.cache_out, result.cache->to_file(result.cache_info));

@@ -21,8 +21,8 @@ struct FrameFiles {
     std::string output;      ///< the EXR; the PNG is written beside it
     std::string deep_in, deep_out, cache_in, cache_out, stats_json;
     std::string base;        ///< with a crop: an earlier full-frame EXR the crop is pasted over
-    /// How the PNG's colours are encoded (OpenColorIO display and view); null = built-in sRGB.
-    std::shared_ptr<const DisplayTransform> display;
+    /// How the PNG's colours are encoded (an OpenColorIO display and view, or the built-in sRGB).
+    std::shared_ptr<const DisplayTransform> display = srgb_display();
     /// The PNG written beside `output`.
     std::string png() const;
     /// Whether any file name holds a #### frame pattern (expand_frame expands them).

@@ -54,8 +54,8 @@ struct SessionOptions {
     /// Unless the scene or `sets` say otherwise, records keep their bounce light per light
     /// (render.light_parts), so a light's colour or intensity edit updates it exactly.
     bool default_to_light_parts = true;
-    /// How the view's colours are encoded (OpenColorIO display and view); null = built-in sRGB.
-    std::shared_ptr<const DisplayTransform> display;
+    /// How the view's colours are encoded (an OpenColorIO display and view, or the built-in sRGB).
+    std::shared_ptr<const DisplayTransform> display = srgb_display();
 };
 
 /// What a render request does, least work first.

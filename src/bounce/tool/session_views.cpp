@@ -33,7 +33,7 @@ LightingSession::Pixels LightingSession::pixels(const std::string& layer, float 
     const Layer* l = image_.find(layer);
     if (!l || l->channels.empty()) throw InputError("request", "layer", fmt::format("the image has no layer '{}'", layer));
     Pixels p;
-    const std::vector<uint8_t> rgb = display_rgb8(image_, *l, exposure, options_.display ? *options_.display : srgb_display());
+    const std::vector<uint8_t> rgb = display_rgb8(image_, *l, exposure, *options_.display);
     p.rgba.resize(rgb.size() / 3 * 4);
     for (size_t i = 0; i < rgb.size() / 3; ++i)
         for (size_t c = 0; c < 4; ++c) p.rgba[4 * i + c] = static_cast<char>(c < 3 ? rgb[3 * i + c] : 255);
