@@ -265,7 +265,7 @@ TEST(CacheReuse, OwnCacheCreatesNoRecordsAndTheSameImage) {
     EXPECT_EQ(s2.total().gather_rays, 0u);
     EXPECT_TRUE(a.image.find("indirect")->data == b.image.find("indirect")->data);
     // --regather flushes: everything is gathered again.
-    again.regather = true;
+    again.kind = FrameKind::Regather;
     RenderResult c = render_with({}, again, s3);
     EXPECT_EQ(c.records_new, a.records_new);
 }

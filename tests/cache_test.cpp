@@ -318,7 +318,7 @@ TEST(CachePasses, AShadingOnlyReshadePreviewsOnePixelInSixteenExactly) {
     std::vector<Image> frames;
     RenderRequest req;
     req.cache_in = d.file("c.bic");
-    req.reshade = true;
+    req.kind = FrameKind::Reshade;
     req.preview = [&](const Image& img) { frames.push_back(img); };
     RenderResult r = render(s, req, s2, nullptr);
     ASSERT_EQ(frames.size(), 1u);

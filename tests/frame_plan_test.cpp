@@ -41,7 +41,7 @@ TEST(FramePlan, BruteForceAndDirectLightHaveNoCache) {
 
 TEST(FramePlan, ACropGathersAMarginAndARegatherFlushesOnlyInsideIt) {
     RenderRequest req;
-    req.cache_in = "f.bic", req.regather = true;
+    req.cache_in = "f.bic", req.kind = FrameKind::Regather;
     const FramePlan p = plan_frame(cornell({"render.crop=[10,20,12,30]"}), {}, req);
     const int m = crop_margin(cornell());
     EXPECT_EQ(p.gather_window, (std::array<int, 4>{0, std::min(40, 20 + m), 0, std::min(40, 30 + m)}));
@@ -56,7 +56,7 @@ TEST(FramePlan, AReshadeStartsFromWhatThePreviousFrameLeftAndGathersOnlyWhereMis
     RenderResult first = render(cornell(), {}, s, nullptr);
     const FrameState state = first.release_state();
     RenderRequest req;
-    req.reuse_previous = req.reshade = true;
+    req.kind = FrameKind::Reshade;
     const FramePlan p = plan_frame(cornell(), state, req);
     EXPECT_EQ(p.visibility, VisibilityStep::Previous);
     EXPECT_EQ(p.cache, CacheStart::Previous);
@@ -85,7 +85,7 @@ TEST(FramePlan, AReshadeOfAnIncompleteCacheGathersWhereItMissesAndMissesNothing)
     state.deep = std::make_shared<const DeepBuffer>(full.deep);
     state.cache = std::shared_ptr<const IrradianceCache>(std::move(crop.cache));
     RenderRequest req;
-    req.reuse_previous = req.reshade = true;
+    req.kind = FrameKind::Reshade;
     Stats s2;
     const FramePlan p = plan_frame(cornell(), state, req);
     RenderResult r = run_frame(cornell(), p, state, req, s2, nullptr);
@@ -102,7 +102,7 @@ TEST(FramePlan, AReshadeWithAStaleDeepBufferSaysSo) {
     RenderResult first = render(cornell(), {}, s, nullptr);
     const FrameState state = first.release_state();
     RenderRequest req;
-    req.reuse_previous = req.reshade = true;
+    req.kind = FrameKind::Reshade;
     const Scene moved = cornell({"camera.fov=30"});
     try {
         run_frame(moved, plan_frame(moved, state, req), state, req, s, nullptr);
@@ -126,7 +126,7 @@ public:
 
 TEST(FramePlan, RefinementsGathersAreKeptForReprojectionInAShot) {
     RenderRequest shot;
-    shot.sequence = true;
+    shot.kind = FrameKind::ShotFrame;
     EXPECT_TRUE(plan_frame(cornell(), {}, shot).keep_gathers);  // on by default
     EXPECT_FALSE(plan_frame(cornell(), {}, {}).keep_gathers);  // a still has no next frame
     EXPECT_FALSE(plan_frame(cornell({"render.temporal_refine_reuse=0"}), {}, shot).keep_gathers);

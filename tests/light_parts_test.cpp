@@ -54,7 +54,7 @@ RenderResult fresh(const json& j) {
 /// A re-shade of `scene` from the state `state` left: the records as they are, no new deep buffer.
 RenderResult reshade(const Scene& scene, const FrameState& state) {
     RenderRequest req;
-    req.reuse_previous = req.reshade = true;
+    req.kind = FrameKind::Reshade;
     req.force = true;
     req.cache_reuse = CacheReuse::Any;
     Stats stats;

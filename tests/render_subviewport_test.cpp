@@ -89,7 +89,7 @@ TEST(SubViewport, ADeepFileOfAWindowRendersThatWindowWithoutACrop) {
 TEST(SubViewport, CropRegatherKeepsTheRestAndAFullReshadeHasNoMisses) {
     FullFrame f;
     RenderRequest req = f.reuse();
-    req.regather = true;
+    req.kind = FrameKind::Regather;
     Stats s;
     RenderResult crop = render(cornell({"render.crop=[16,48,16,48]"}), req, s, nullptr);
     EXPECT_GT(crop.records_new, 0u);
@@ -144,7 +144,7 @@ TEST(CacheIdentity, OtherRecordSettingsAreRefusedNamingEachKeyUnlessReusedOrRega
     EXPECT_EQ(s2.to_json()["cache_reused_with_other_settings"].size(), 1u);
     EXPECT_GT(r.records_new, 0u);  // records reach less: gathers where the old ones now miss
     req.cache_reuse = CacheReuse::Strict;
-    req.regather = true;
+    req.kind = FrameKind::Regather;
     EXPECT_NO_THROW(render(cornell({"render.min_spacing=1"}), req, s, nullptr));
 }
 

@@ -91,6 +91,8 @@ async function render(action) {
 }
 
 async function fetchImage() {
+  // Nothing rendered yet: there is no image to ask for.
+  if (!state.status || !state.status.image.layers.length) return;
   const layer = $('layer').value, exposure = $('exposure').value;
   try {
     const { data, res } = await api(`/api/image?layer=${encodeURIComponent(layer)}&exposure=${exposure}`);
@@ -99,7 +101,7 @@ async function fetchImage() {
     canvas.width = w; canvas.height = h;
     canvas.getContext('2d').putImageData(new ImageData(new Uint8ClampedArray(data), w, h), 0, 0);
     state.version = +res.headers.get('X-Version');
-  } catch (e) { if (!e.message.includes('nothing rendered')) showError(e.message); }
+  } catch (e) { showError(e.message); }
 }
 
 const STAT_KEYS = [['phases_s', 'visibility', 's'], ['phases_s', 'gather', 's'], ['phases_s', 'shading', 's'], ['records', null, ''],
@@ -122,6 +124,9 @@ function showStats(stats) {
   }
 }
 
+/// What each render action does, as the header says it (the status carries the action's name).
+const ACTION_WORDS = { reshade: 're-shade', regather: 're-gather', rasterize: 'new deep file', frame: 'next frame' };
+
 async function refreshStatus() {
   const { data: s } = await api('/api/status');
   // Answers can arrive out of order (the once-a-second listener's and a render's own polls): an
@@ -129,11 +134,15 @@ async function refreshStatus() {
   if (state.status && s.serial <= state.status.serial) return state.status;
   // A light edit re-shaded over the old records: the bounce light is the old lights' until a re-gather.
   const stale = s.bounce_stale ? 'bounce light is stale: Re-gather to update it' : '';
-  $('pending').textContent = [s.pending ? `pending: ${s.pending}` : '', stale].filter(Boolean).join(' · ');
+  $('pending').textContent = [s.pending ? `pending: ${ACTION_WORDS[s.pending]}` : '', stale].filter(Boolean).join(' · ');
   const p = s.progress;
   $('bar').style.width = p.total ? `${100 * p.done / p.total}%` : s.state === 'done' ? '100%' : '0';
-  $('progress-text').textContent = `${s.state}${s.action ? ' (' + s.action + ')' : ''}${p.phase ? ': ' + p.phase : ''}${s.message ? ' — ' + s.message : ''}`;
-  if (s.state === 'failed') showError(s.message);
+  $('progress-text').textContent = `${s.state}${s.action ? ' (' + ACTION_WORDS[s.action] + ')' : ''}${p.phase ? ': ' + p.phase : ''}${s.message ? ' — ' + s.message : ''}`;
+  switch (s.state) {
+    case 'failed': showError(s.message); break;
+    case 'idle': case 'running': case 'done': case 'cancelled': break;
+    default: showError(`unknown session state ${s.state}`);
+  }
   const sel = $('layer');
   if (s.image.layers.length && sel.options.length !== s.image.layers.length) {
     const cur = sel.value;
@@ -147,6 +156,7 @@ async function refreshStatus() {
     if (document.activeElement !== f) f.value = s.frame;
     $('shot-frame-value').textContent = s.frame;
   }
+  state.status = s;  // newer than the one shown (checked above): fetchImage reads it
   if (s.image.version !== state.version) await fetchImage();
   // A page that has never rendered is black: say how to start.
   $('hint').hidden = s.image.layers.length > 0 || s.state === 'running';
@@ -159,7 +169,6 @@ async function refreshStatus() {
     }
     state.running = false;
   }
-  state.status = s;
   return s;
 }
 

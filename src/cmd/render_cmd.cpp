@@ -44,6 +44,8 @@ Scene load_render_scene(const RenderArgs& a, std::optional<double> frame) {
         throw InputError("command line", "--base " + a.files.base, "--base fills the pixels outside --crop; give a crop");
     if (a.reuse_any && a.regather)
         throw InputError("command line", "--cache-reuse-any", "cannot be combined with --regather");
+    if (a.regather && !a.frames.empty())
+        throw InputError("command line", "--regather", "a sequence's frames start from the frame before; render a frame alone (--frame) to gather it anew");
     return scene;
 }
 
@@ -52,7 +54,7 @@ RenderRequest request_of(const RenderArgs& a, const FrameFiles& files, int frame
     request.deep_in = files.deep_in;
     request.deep_out = files.deep_out;
     request.cache_in = files.cache_in;
-    request.regather = a.regather;
+    request.kind = a.regather ? FrameKind::Regather : FrameKind::Still;
     request.force = a.force;
     request.cache_reuse = a.reuse_any ? CacheReuse::Any : CacheReuse::Strict;
     request.frame = frame;

@@ -21,8 +21,26 @@ namespace bounce {
 
 class Communicator;
 
+/// What a front end asks of a frame, given what the frame before left (FrameState).
+enum class FrameKind : uint8_t {
+    /// The frame on its own: its deep buffer and cache from the request's files, or made anew.
+    Still,
+    /// The next frame of a shot (the previous state is the frame before in time): BVHs,
+    /// radiosity texels, cache records and the deep buffer are kept, moved or redone by what
+    /// changed between the two scenes (docs/animation.md). Also the first frame (no previous
+    /// state): its records keep what the next frame reuses.
+    ShotFrame,
+    /// The previous frame's deep buffer and cache (in memory, else the request's files) shaded
+    /// as they are; the gathering and refinement passes run only if a fragment has no record.
+    Reshade,
+    /// The previous frame's deep buffer (in memory, else deep_in); the cache flushed before
+    /// gathering: with a crop and a cache to start from, only the records seen inside the crop.
+    Regather,
+};
+
 /// What a front end asks of one frame.
 struct RenderRequest {
+    FrameKind kind = FrameKind::Still;
     std::string deep_in;   ///< start from this deep file instead of tracing visibility
     std::string deep_out;  ///< write the deep buffer (of the gathered window) here
     /// Preview mode (render.preview with gi cache): called with the whole image after every
@@ -30,19 +48,7 @@ struct RenderRequest {
     /// pixel in x and y shaded and standing for its 4x4 block, before shading the rest.
     std::function<void(const Image&)> preview;
     std::string cache_in;   ///< start the irradiance cache from this file (gathers only where it misses)
-    bool regather = false;  ///< flush the cache before gathering; with a crop (and a cache to start
-                            ///< from), only the records seen inside the crop are flushed
     bool force = false;     ///< accept a cache made for another scene or camera
-    /// Re-shade: shade the cache the frame starts from (the previous frame's, or cache_in) as
-    /// it is; the gathering and refinement passes run only if some fragment has no record.
-    bool reshade = false;
-    /// Start from the previous frame's deep buffer and cache (FrameState) instead of files: the
-    /// lighting tool keeps them in memory.
-    bool reuse_previous = false;
-    /// A frame of a shot (the previous frame's state is the frame before in time): BVHs,
-    /// radiosity texels, cache records and the deep buffer are kept, moved or redone by what
-    /// changed between the two scenes (docs/animation.md).
-    bool sequence = false;
     CacheReuse cache_reuse = CacheReuse::Strict;  ///< keep a cache made with other settings
     int frame = 0;          ///< frame number stamped on new records (sequences)
     const CancelToken* cancel = nullptr;  ///< stops the render (throws Cancelled) when set
@@ -110,6 +116,9 @@ struct FramePlan {
     std::string deep_in, deep_out;
     AccelStep accel = AccelStep::Build;
     RadiosityStep radiosity = RadiosityStep::None;
+    /// An MPI job's ranks exchange the sides each baked: textures saved by rank 0, or carried to
+    /// a shot's next frame, whose list of changed sides must be the same on every rank.
+    bool share_radiosity = false;
     CacheStart cache = CacheStart::None;
     std::string cache_in;
     bool flush_crop = false;  ///< leave out the starting cache's records seen inside the crop

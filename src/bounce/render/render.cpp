@@ -166,8 +166,8 @@ namespace {
 /// Under MPI each rank bakes the sides its own gathers hit. They are exchanged only when they
 /// outlive the frame: saved by rank 0, or carried to a shot's next frame, whose list of changed
 /// sides (temporal.h) must be the same on every rank. Values are the same wherever baked.
-void finish_radiosity(const FrameContext& ctx, const RenderRequest& request, RadiosityTextures& rt, size_t baked_before) {
-    if (request.sequence || !ctx.scene.render.radiosity.folder.empty()) share_radiosity_pass(ctx, rt);
+void finish_radiosity(const FrameContext& ctx, const FramePlan& plan, RadiosityTextures& rt, size_t baked_before) {
+    if (plan.share_radiosity) share_radiosity_pass(ctx, rt);
     save_radiosity_pass(ctx, rt, baked_before);
 }
 
@@ -218,14 +218,14 @@ void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const Visi
     ctx.stats.set("records_loaded", static_cast<double>(result.records_loaded));
     ctx.stats.set("records_new", static_cast<double>(result.records_new));
     // After the shading pass: refined fragments' gathers may have baked sides too.
-    if (radiosity.textures) finish_radiosity(ctx, request, *radiosity.textures, baked_before);
+    if (radiosity.textures) finish_radiosity(ctx, plan, *radiosity.textures, baked_before);
     if ((plan.refine || cache.fragment_record_count() > 0) && !shaded.refined.empty())  // empty: a rank that writes no image
         add_mask_layer(result.image, shaded.refined, "refined");
 }
 
 /// Brute force, direct light only, or a cache file read for its records layer.
 void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep, const FrameState& previous,
-                         RadiosityResult& radiosity, const RenderRequest& request, RenderResult& result) {
+                         RadiosityResult& radiosity, RenderResult& result) {
     std::vector<Indirect> light;
     SpecularSitesResult specular = specular_sites_pass(ctx, deep.shaded());
     const bool radiosity_sites = ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity;
@@ -241,7 +241,7 @@ void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const V
         const uint64_t rays = ctx.stats.total().gather_rays - rays_before;
         ctx.stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
         result.gathered = true;
-        if (radiosity.textures) finish_radiosity(ctx, request, *radiosity.textures, baked_before);
+        if (radiosity.textures) finish_radiosity(ctx, plan, *radiosity.textures, baked_before);
     }
     ShadeResult shaded = shading_pass(ctx, deep.shaded(), nullptr, plan.gather == GatherStep::Brute ? &light : nullptr, specular,
                                       radiosity.textures.get());
@@ -331,19 +331,6 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
                        Stats& stats, ProgressSink* progress) {
     const uint64_t sent0 = request.comm ? request.comm->bytes_sent : 0;
     const double wait0 = request.comm ? request.comm->wait_s : 0;
-    if (double need = estimate_render_bytes(scene), have = available_memory_bytes(); need > 0.8 * have)
-        throw InputError(scene.path, "camera.resolution",
-                         fmt::format("a {}x{} frame needs about {:.2f} GiB; it may use {:.2f} GiB (80 % of the {:.2f} GiB available; "
-                                     "render a crop)", scene.camera.width, scene.camera.height, need / 1073741824.0,
-                                     0.8 * have / 1073741824.0, have / 1073741824.0));
-    if (request.comm && request.comm->size() > 1 && scene.render.shading.deep_colour && !plan.deep_out.empty())
-        throw InputError(scene.path, "render.deep_colour", "a deep file with colour is written by one process (not under MPI yet)");
-    if (request.comm && request.comm->size() > 1 && scene.render.cache.light_parts && scene.render.indirect.gi == GiMode::Cache)
-        throw InputError(scene.path, "render.light_parts", "records with light parts are made by one process (the lighting tool's; not under MPI)");
-    // A rank's tiles find the pilots one process would only where tiles follow the pilots' grid.
-    if (request.comm && request.comm->size() > 1 && scene.render.indirect.guided > 0 && scene.render.parallel.tile_size % kGuideBlock != 0)
-        throw InputError(scene.path, "render.tile_size",
-                         fmt::format("guided gathers under MPI need tiles of a multiple of {} pixels", kGuideBlock));
     tbb::task_arena arena(plan.threads);
     stats.set("threads", plan.threads);
     report_dicing(scene, stats);
@@ -384,7 +371,7 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
             run_cache_passes(ctx, plan, deep, previous, radiosity, start, request, result);
         } else {
             result.cache = std::move(start.cache);
-            run_direct_or_brute(ctx, plan, deep, previous, radiosity, request, result);
+            run_direct_or_brute(ctx, plan, deep, previous, radiosity, result);
         }
         if (!result.cache) result.cache = std::move(start.cache);
         if (result.cache) {

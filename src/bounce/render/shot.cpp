@@ -5,7 +5,7 @@
 namespace bounce {
 
 RenderResult Shot::render(const std::shared_ptr<const Scene>& scene, RenderRequest request, Stats& stats, ProgressSink* progress) {
-    request.sequence = true;
+    request.kind = FrameKind::ShotFrame;
     const FramePlan plan = plan_frame(*scene, state_, request);
     return run_frame(*scene, plan, state_, request, stats, progress);
 }

@@ -32,6 +32,17 @@ SessionAction parse_session_action(const std::string& name) {
     throw InputError("request", "action", fmt::format("'{}' is not reshade, regather, rasterize or frame", name));
 }
 
+const char* session_state_name(SessionState s) {
+    switch (s) {
+        case SessionState::Idle: return "idle";
+        case SessionState::Running: return "running";
+        case SessionState::Done: return "done";
+        case SessionState::Cancelled: return "cancelled";
+        case SessionState::Failed: return "failed";
+    }
+    return "?";
+}
+
 const char* session_action_name(SessionAction a) {
     switch (a) {
         case SessionAction::Reshade: return "reshade";
@@ -117,7 +128,6 @@ LightingSession::LightingSession(SessionOptions options) : options_(std::move(op
         throw InputError(options_.out_dir, "", "cannot create the output folder (" + ec.message() + ")");
     out_dir_ = fs::canonical(options_.out_dir);
     deep_path_ = out_dir_ / "session.deep.exr";
-    cache_path_ = out_dir_ / "session.bic";
     // Start from the given files: copies, so the lighter's originals are never overwritten.
     // Each is read (and refused, naming it) before it replaces the session's own file.
     auto copy_in = [&](const std::string& from, const fs::path& to, const std::function<void(const std::string&)>& check) {
@@ -138,9 +148,13 @@ LightingSession::LightingSession(SessionOptions options) : options_(std::move(op
     const json& render_keys = scene_.description.contains("render") ? scene_.description["render"] : json();
     if (options_.default_to_light_parts && !(render_keys.is_object() && render_keys.contains("light_parts")))
         edit("render.light_parts", true);
-    pending_ = -1;  // nothing rendered yet: the first render is a new deep file anyway
     copy_in(options_.deep_in, deep_path_, [&](const std::string& f) { validate_deep_for_scene(read_deep(f), scene_, f); });
-    copy_in(options_.cache_in, cache_path_, [](const std::string& f) { read_cache_file(f); });
+    copy_in(options_.cache_in, cache_path_locked(), [](const std::string& f) { read_cache_file(f); });
+    // Nothing rendered yet: the first render makes what the session has no file of.
+    const bool cached = scene_.render.indirect.gi == GiMode::Cache;
+    pending_ = static_cast<int>(!fs::exists(deep_path_)                     ? SessionAction::Rasterize
+                                : cached && !fs::exists(cache_path_locked()) ? SessionAction::Regather
+                                                                              : SessionAction::Reshade);
 }
 
 LightingSession::~LightingSession() {
@@ -200,18 +214,24 @@ json LightingSession::edit(const std::string& key, const json& value, const std:
     at.frame = frame_;
     if (cli_origin.empty()) at.check_path = edit_path_check(key);
     Scene s = load_scene(options_.scene, o, at);  // throws with the file and place on a bad value
+    const Param* p = find_param(scene_params(), key);
+    SessionAction needs = needs_for(p ? p->identity : kImageOnly);
+    // A key the parameter table does not list (an object's mesh file or subdivision, an
+    // instance) that changes what the camera sees needs a new deep file: the old one is
+    // another scene's. Lights and materials are re-shaded (or re-gathered) over it.
+    if (!p && !key.starts_with("lights") && !key.starts_with("materials") &&
+        s.visibility_fingerprint() != scene_.visibility_fingerprint())
+        needs = SessionAction::Rasterize;
     if (!edits_.count(key)) edit_order_.push_back(key);
     edits_[key] = value;
     ++edit_count_;
     scene_ = std::move(s);
-    const Param* p = find_param(scene_params(), key);
     // Lights and materials: a re-shade shows them (the bounce light follows on a re-gather).
-    const SessionAction needs = needs_for(p ? p->identity : kImageOnly);
     pending_ = std::max(pending_, static_cast<int>(needs));
     // Records with light parts take a light's new colour or intensity on the re-shade, exactly
     // (a mesh light's is its material's emission: not a light key).
-    const bool rescaled = light_scale_key(key) && cache_ && scene_.render.cache.light_parts &&
-                          cache_->has_light_parts(scene_.lights.size());
+    const bool rescaled = light_scale_key(key) && last_.cache && scene_.render.cache.light_parts &&
+                          last_.cache->has_light_parts(scene_.lights.size());
     if (changes_bounce_light(key) && !rescaled) bounce_stale_ = true;
     return {{"key", key}, {"value", value}, {"needs", session_action_name(needs)}};
 }
@@ -234,6 +254,8 @@ json LightingSession::set_frame(double frame) {
         if (!scene_.shot.animated) throw InputError("request", "frame", "the scene has no shot (no \"animation\" block)");
         if (!std::isfinite(frame) || !scene_.shot.contains(frame))
             throw InputError("request", "frame", scene_.shot.outside(frame));
+        // A shot steps in whole frames, as --frames does (each frame's cache is named by it).
+        if (frame != std::floor(frame)) throw InputError("request", "frame", fmt::format("{:g} is not a whole frame", frame));
         LoadOptions at;
         at.frame = frame;
         scene_ = load_scene(options_.scene, overrides_locked(), at);
@@ -242,6 +264,16 @@ json LightingSession::set_frame(double frame) {
     }
     start(SessionAction::Frame);
     return {{"frame", frame}};
+}
+
+fs::path LightingSession::cache_path() const {
+    std::lock_guard lock(mutex_);
+    return cache_path_locked();
+}
+
+fs::path LightingSession::cache_path_locked() const {
+    if (!scene_.shot.animated) return out_dir_ / "session.bic";
+    return out_dir_ / fmt::format("session.{:04}.bic", static_cast<long>(frame_));
 }
 
 SessionAction LightingSession::pending() const {
@@ -265,7 +297,7 @@ void LightingSession::start(SessionAction action, std::optional<std::array<int, 
     }
     cancel_ = std::make_unique<CancelToken>();
     running_ = true;
-    state_ = "running", message_.clear(), action_ = session_action_name(action);
+    state_ = SessionState::Running, message_.clear(), action_ = action;
     phase_.clear(), done_ = total_ = 0;
     worker_ = std::thread([this, action, crop] { run(action, crop); });
 }
@@ -287,6 +319,7 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
     RenderRequest req;
     uint64_t edits_seen = 0;
     FrameState previous;
+    fs::path cache_file;
     {
         // The scene as the last edit loaded it (no file is read again); the request's own
         // settings are not part of any identity.
@@ -297,18 +330,10 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
         if (options_.threads > 0) scene.render.parallel.threads = options_.threads;
         // Renders stream their previews unless the lighter turned them off.
         if (!edits_.count("render.preview")) scene.render.parallel.preview = true;
-        req.cancel = cancel_.get();
-        previous.deep = deep_, previous.cache = cache_;
-        previous.scene = rendered_, previous.accel = accel_, previous.radiosity = radiosity_, previous.waiting = waiting_;
+        req = request_locked(action, scene.render.indirect.gi == GiMode::Cache, crop.has_value(), previous);
+        cache_file = cache_path_locked();
     }
-    const bool cached = scene.render.indirect.gi == GiMode::Cache;
-    if (action == SessionAction::Frame) {
-        // Another frame of the shot: its plan keeps, moves or redoes what the last one left.
-        req.sequence = true;
-    } else {
-        set_session_files(action, req, previous, cached);
-    }
-    if (cached && scene.render.parallel.preview)
+    if (scene.render.indirect.gi == GiMode::Cache && scene.render.parallel.preview)
         req.preview = [&](const Image& img) {
             std::lock_guard lock(mutex_);
             // Over the last full frame when there is one: layers a preview lacks stay shown.
@@ -322,52 +347,81 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
             }
             ++version_;
         };
-    FramePlan plan = plan_frame(scene, previous, req);
-    if (plan.visibility == VisibilityStep::Trace) plan.deep_out = deep_path_.string();  // the session's file follows
+    const FramePlan plan = plan_frame(scene, previous, req);
     RenderResult r = run_frame(scene, plan, previous, req, stats, &sink);
     // Only a finished render replaces the deep file and the cache (atomically) and the image.
-    if (r.gathered_deep) write_deep(plan.deep_out, *r.gathered_deep, r.deep_colour.empty() ? nullptr : &r.deep_colour);
-    if (cached && r.cache && (r.cache_changed() || action != SessionAction::Reshade))
-        write_cache_file(cache_path_.string(), r.cache->to_file(r.cache_info));
+    if (r.gathered_deep && plan.visibility != VisibilityStep::Previous)
+        write_deep(plan.deep_out, *r.gathered_deep, r.deep_colour.empty() ? nullptr : &r.deep_colour);
+    if (scene.render.indirect.gi == GiMode::Cache && r.cache &&
+        (r.cache_changed() || action != SessionAction::Reshade || !fs::exists(cache_file)))
+        write_cache_file(cache_file.string(), r.cache->to_file(r.cache_info));
     std::lock_guard lock(mutex_);
+    keep_locked(action, crop.has_value(), edits_seen, std::move(scene), r);
+}
+
+RenderRequest LightingSession::request_locked(SessionAction action, bool cached, bool crop, FrameState& previous) const {
+    RenderRequest req;
+    req.cancel = cancel_.get();
+    req.frame = static_cast<int>(std::lround(frame_));
+    previous = last_;
+    // In a shot, a whole frame stepped to, made anew or gathered anew is planned as --frames
+    // plans a frame (a new deep file or the kept one, the records keeping what the next frame
+    // reuses), so the next frame starts from what it would start from in a sequence.
+    const bool shot = scene_.shot.animated && !crop;
+    const bool anew = action == SessionAction::Rasterize || !previous.deep;
+    if (action == SessionAction::Frame || (shot && action == SessionAction::Rasterize) ||
+        (shot && action == SessionAction::Regather && !anew)) {
+        req.kind = FrameKind::ShotFrame;
+        req.deep_out = deep_path_.string();  // written when the plan traces a new one
+        if (action == SessionAction::Rasterize) previous = {};
+        if (action == SessionAction::Regather) previous.cache.reset(), previous.waiting.clear(), previous.gathers.clear();
+        return req;
+    }
+    set_session_files(action, req, previous, cached);
+    return req;
+}
+
+void LightingSession::set_session_files(SessionAction action, RenderRequest& req, FrameState& previous, bool cached) const {
+    // The session's deep buffer and cache, from memory when it holds them, else from its files.
+    req.kind = action == SessionAction::Reshade    ? FrameKind::Reshade
+               : action == SessionAction::Regather ? FrameKind::Regather
+                                                   : FrameKind::Still;
+    if (action == SessionAction::Rasterize || !fs::exists(deep_path_))
+        req.deep_out = deep_path_.string(), previous.deep.reset();
+    else if (!previous.deep)
+        req.deep_in = deep_path_.string();
+    const fs::path cache_file = cache_path_locked();
+    if (cached && action != SessionAction::Rasterize && fs::exists(cache_file)) {
+        // The session knows its cache's history: lights and materials may have changed since
+        // it was gathered (a re-shade keeps its bounce light on purpose).
+        if (!previous.cache) req.cache_in = cache_file.string();
+        req.force = true;
+        req.cache_reuse = CacheReuse::Any;
+    } else {
+        previous.cache.reset();
+    }
+}
+
+void LightingSession::keep_locked(SessionAction action, bool crop, uint64_t edits_seen, Scene scene, RenderResult& r) {
     image_ = crop ? paste_over(image_, r.image, "session image") : std::move(r.image);
     ++version_;
     if (!crop && edit_count_ == edits_seen) {  // edits made while it ran still need showing
         pending_ = -1;
         if (action == SessionAction::Regather || action == SessionAction::Rasterize) bounce_stale_ = false;
     }
-    const bool new_deep = !crop && plan.visibility != VisibilityStep::Previous;
     FrameState next = r.release_state();
-    if (new_deep) deep_ = next.deep;  // else deep_ holds it already
-    if (next.cache) cache_ = next.cache;  // what the file now holds
-    if (!crop) {
-        rendered_ = std::make_shared<const Scene>(std::move(scene));
-        accel_ = next.accel, radiosity_ = next.radiosity, waiting_ = std::move(next.waiting);
+    if (!next.cache) next.cache = last_.cache;  // what the file still holds
+    if (crop) {  // the frame's deep buffer, scene and BVHs stay; the cache is what the file now holds
+        last_.cache = next.cache;
+        return;
     }
-}
-
-void LightingSession::set_session_files(SessionAction action, RenderRequest& req, FrameState& previous, bool cached) const {
-    // The session's deep buffer and cache, from memory when it holds them, else from its files.
-    req.reuse_previous = action != SessionAction::Rasterize;
-    if (action == SessionAction::Rasterize || !fs::exists(deep_path_))
-        req.deep_out = deep_path_.string(), req.reuse_previous = false;
-    else if (!previous.deep)
-        req.deep_in = deep_path_.string();
-    if (cached && action != SessionAction::Rasterize && fs::exists(cache_path_)) {
-        // The session knows its cache's history: lights and materials may have changed since
-        // it was gathered (a re-shade keeps its bounce light on purpose).
-        if (!previous.cache) req.cache_in = cache_path_.string();
-        req.force = true;
-        req.cache_reuse = CacheReuse::Any;
-        req.regather = action == SessionAction::Regather;
-        req.reshade = action == SessionAction::Reshade;
-    } else {
-        previous.cache.reset();
-    }
+    next.scene = std::make_shared<const Scene>(std::move(scene));
+    last_ = std::move(next);
 }
 
 void LightingSession::run(SessionAction action, std::optional<std::array<int, 4>> crop) {
-    std::string state = "done", message;
+    SessionState state = SessionState::Done;
+    std::string message;
     json stats_json;
     // A render that is stopped or fails leaves the image it started from, not its previews.
     Image before;
@@ -383,14 +437,14 @@ void LightingSession::run(SessionAction action, std::optional<std::array<int, 4>
         try {
             render_once(action, crop, stats, sink);
         } catch (const Cancelled&) {
-            state = "cancelled";
+            state = SessionState::Cancelled;
         } catch (const std::exception& e) {
-            state = "failed", message = e.what();  // the previous image and cache stay
+            state = SessionState::Failed, message = e.what();  // the previous image and cache stay
         }
         stats_json = stats.to_json();
     }
     std::lock_guard lock(mutex_);
-    if (state != "done" && version_ != before_version) image_ = std::move(before), ++version_;
+    if (state != SessionState::Done && version_ != before_version) image_ = std::move(before), ++version_;
     stats_ = std::move(stats_json);
     state_ = state, message_ = message;
     running_ = false;
@@ -401,10 +455,10 @@ json LightingSession::status() const {
     std::lock_guard lock(mutex_);
     json layers = json::array();
     for (const Layer& l : image_.layers) layers.push_back(l.name);
-    return {{"state", state_},
+    return {{"state", session_state_name(state_)},
             {"serial", ++status_serial_},
             {"edits", edit_count_},
-            {"action", action_},
+            {"action", action_ ? json(session_action_name(*action_)) : json(nullptr)},
             {"message", message_},
             {"progress", {{"phase", phase_}, {"done", done_}, {"total", total_}}},
             {"stats", stats_},

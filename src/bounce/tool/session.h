@@ -22,6 +22,7 @@
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
 #include "bounce/render/frame_plan.h"
+#include "bounce/render/render.h"
 #include "bounce/scene/json_reader.h"
 #include "bounce/scene/scene.h"
 
@@ -68,6 +69,16 @@ enum class SessionAction {
 SessionAction parse_session_action(const std::string& name);  ///< InputError on another name
 const char* session_action_name(SessionAction a);
 
+/// Where the session's render is; the status carries its name and the page switches on it.
+enum class SessionState : uint8_t {
+    Idle,       ///< nothing rendered yet
+    Running,
+    Done,       ///< the last render finished: its image, deep file and cache are the session's
+    Cancelled,  ///< stopped (or replaced by a newer request): the image before it stays
+    Failed,     ///< the message says why; the image, deep file and cache before it stay
+};
+const char* session_state_name(SessionState s);
+
 class LightingSession {
 public:
     /// Loads the scene (InputError on bad input); creates out_dir.
@@ -87,8 +98,9 @@ public:
     nlohmann::json edit(const std::string& key, const nlohmann::json& value, const std::string& cli_origin = "");
     /// The least action that shows every edit since the last finished render.
     SessionAction pending() const;
-    /// Moves to `frame` of the scene's shot (InputError outside it, or for a still) and starts
-    /// its render, planned from what the last frame left (a frame slider). Returns {frame}.
+    /// Moves to `frame` of the scene's shot (InputError outside it, for a fraction, or for a
+    /// still) and starts its render, planned from what the last frame left as `bounce render
+    /// --frames` plans a shot's next frame (a frame slider). Returns {frame}.
     nlohmann::json set_frame(double frame);
 
     /// Starts a render on the worker, cancelling a running one first. `crop` (full-frame pixel
@@ -131,7 +143,9 @@ public:
     std::filesystem::path confined(const std::string& name, const std::string& what) const;
 
     const std::filesystem::path& deep_path() const { return deep_path_; }
-    const std::filesystem::path& cache_path() const { return cache_path_; }
+    /// The session's cache: session.bic, or in a shot the current frame's, session.NNNN.bic
+    /// (every frame rendered keeps its own, for the 3D view's cache sequence).
+    std::filesystem::path cache_path() const;
 
 private:
     class Sink;
@@ -145,9 +159,14 @@ private:
     std::function<void(const std::string&, const std::string&)> edit_path_check(const std::string& key) const;
     /// A re-shade, re-gather or new deep file: the session's deep buffer and cache (memory or files).
     void set_session_files(SessionAction action, RenderRequest& req, FrameState& previous, bool cached) const;
+    /// The request of `action` at the session's frame, and the state it starts from.
+    RenderRequest request_locked(SessionAction action, bool cached, bool crop, FrameState& previous) const;
+    std::filesystem::path cache_path_locked() const;  ///< cache_path() with mutex_ held
+    /// After a render: the frame's image, the state the next one starts from, what is pending.
+    void keep_locked(SessionAction action, bool crop, uint64_t edits_seen, Scene scene, RenderResult& r);
 
     SessionOptions options_;
-    std::filesystem::path scene_dir_, out_dir_, deep_path_, cache_path_;
+    std::filesystem::path scene_dir_, out_dir_, deep_path_;
     std::mutex control_;  ///< serialises start / load_cache / destruction (the worker thread's owners)
     mutable std::mutex mutex_;
     std::condition_variable idle_;
@@ -165,20 +184,18 @@ private:
     std::thread worker_;
     std::unique_ptr<CancelToken> cancel_;
     bool running_ = false;
-    std::string state_ = "idle", message_, action_;
+    SessionState state_ = SessionState::Idle;
+    std::optional<SessionAction> action_;  ///< of the running or last render
+    std::string message_;
     std::string phase_;
     uint64_t done_ = 0, total_ = 0;
     nlohmann::json stats_ = nlohmann::json::object();
     Image image_;          ///< the last full frame (a sub-viewport render is pasted over it)
-    /// The session's deep buffer and cache as its files hold them, kept for re-shades.
-    std::shared_ptr<const DeepBuffer> deep_;
-    std::shared_ptr<const IrradianceCache> cache_;
-    /// For the next frame of a shot: the scene last rendered and its BVHs, radiosity textures and
-    /// the records no fragment needed yet (frame_plan.h, FrameState).
-    std::shared_ptr<const Scene> rendered_;
-    std::shared_ptr<const SceneAccel> accel_;
-    std::shared_ptr<const RadiosityTextures> radiosity_;
-    std::vector<Record> waiting_;
+    /// What the last render left, whole (frame_plan.h): its deep buffer and cache as the
+    /// session's files hold them (kept for re-shades), and for the next frame of a shot the
+    /// scene last rendered in full, its BVHs, radiosity textures, the records no fragment
+    /// needed yet and refinement's gathers: the state a Shot carries from frame to frame.
+    FrameState last_;
     uint64_t version_ = 0;
     mutable uint64_t status_serial_ = 0;  ///< numbers status snapshots: a page drops one older than it holds
 };

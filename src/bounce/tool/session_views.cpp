@@ -57,7 +57,7 @@ fs::path LightingSession::confined(const std::string& name, const std::string& w
 }
 
 ViewArrays LightingSession::records(const std::string& file, size_t limit, std::optional<std::array<int, 4>> region) const {
-    const fs::path path = file.empty() ? cache_path_ : confined(file, "file");
+    const fs::path path = file.empty() ? cache_path() : confined(file, "file");
     CacheFile f = read_cache_file(path.string());
     const size_t all = f.records.size();
     if (region) {
@@ -180,9 +180,10 @@ std::string LightingSession::save_scene(const std::string& name) const {
 std::string LightingSession::save_cache(const std::string& name) const {
     const fs::path target = confined(name, "name");
     if (target.extension() != ".bic") throw InputError("request", "name", "a cache file name ends in .bic");
-    if (!fs::exists(cache_path_)) throw InputError("request", "cache", "there is no cache yet (gather first)");
-    if (target == cache_path_) return target.filename().string();
-    CacheFile f = read_cache_file(cache_path_.string());
+    const fs::path current = cache_path();
+    if (!fs::exists(current)) throw InputError("request", "cache", "there is no cache yet (gather first)");
+    if (target == current) return target.filename().string();
+    CacheFile f = read_cache_file(current.string());
     write_cache_file(target.string(), f);
     return target.filename().string();
 }
@@ -192,9 +193,9 @@ void LightingSession::load_cache(const std::string& file) {
     CacheFile f = read_cache_file(from.string());  // refuses a bad file before anything changes
     std::lock_guard control(control_);
     stop();
-    write_cache_file(cache_path_.string(), f);
     std::lock_guard lock(mutex_);
-    cache_.reset();  // the next render reads the file
+    write_cache_file(cache_path_locked().string(), f);
+    last_.cache.reset();  // the next render reads the file
 }
 
 }  // namespace bounce
