@@ -1,5 +1,5 @@
-// Issue 48: a frame of a sequence is the same frame rendered alone (DESIGN.md, "A frame is the
-// same whichever way it was reached"). A shot with a skinned strip, a morphed quad, a keyed
+// Issue 48: a frame of a sequence is the same frame rendered alone, whichever way it was reached
+// (docs/animation.md). A shot with a skinned strip, a morphed quad, a keyed
 // rigid ball and a moving camera is rendered with --frames and each frame again with --frame:
 // every layer bit for bit without a cache and with brute force; through the cache within the
 // kept-record rules' tolerance. Also: glTF binds morph targets through the node's mesh

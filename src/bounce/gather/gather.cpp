@@ -1,4 +1,5 @@
 #include "bounce/gather/gather.h"
+#include "bounce/gather/gather_terms.h"
 
 #include "bounce/gather/ao_cutoff.h"
 #include "bounce/gather/gather_cells.h"
@@ -12,28 +13,6 @@
 #include "bounce/core/sampling.h"
 
 namespace bounce {
-
-LightPart combine_parts(const LightParts& parts, std::span<const Color> scales) {
-    LightPart out;
-    for (size_t i = 0; i < parts.light.size(); ++i) {
-        const LightPart& p = parts.light[i];
-        const Color& s = scales[i];
-        out.E += p.E * s;
-        for (size_t c = 0; c < 3; ++c) {
-            out.dir[c] += p.dir[c] * s[static_cast<int>(c)];
-            out.grad_r[c] += p.grad_r[c] * s[static_cast<int>(c)];
-            out.grad_t[c] += p.grad_t[c] * s[static_cast<int>(c)];
-        }
-    }
-    return out;
-}
-
-void normalise_shares(std::span<Color> parts) {
-    Color sum(0);
-    for (const Color& p : parts) sum += p;
-    for (Color& p : parts)
-        for (int c = 0; c < 3; ++c) p[c] = sum[c] > 0 ? p[c] / sum[c] : 0.0f;
-}
 
 Gatherer::Gatherer(const Scene& scene, const SceneAccel& accel, const Materials& materials,
                    const DirectLighting& lighting, const RadiosityTextures* radiosity, GatherSettings settings)
@@ -177,58 +156,6 @@ GatherResult Gatherer::update(const Vec3& p, const Vec3& n, const RandomStream& 
     return reshade(p, n, rng, kept, counters, near);
 }
 
-namespace {
-
-float chan(float v, int) { return v; }
-float chan(const Color& v, int c) { return v[c]; }
-
-/// Rotational gradient (cell-centre angles): sum_k t(phi_k) sum_j tan(theta_j) L_jk, and the
-/// translational one, Ward-Heckbert over cell boundaries with min distances (docs/gather.md has
-/// the derivation and the sign convention), of the values L[c * stride] (C channels), unscaled.
-/// A pair of cells `skip` names moves no boundary (AO's pairs on one surface: ao_cutoff.h).
-struct NoSkip {
-    bool operator()(size_t, size_t) const { return false; }
-};
-template <class V, size_t C, class Skip = NoSkip>
-void gradient_sums(const GatherGrid& grid, const Frame& frame, float near, const float* R, const V* L, size_t stride,
-                   std::array<Vec3, C>& gr, std::array<Vec3, C>& gt, const Skip& skip = {}) {
-    const int M = grid.m, N = grid.n;
-    const auto fM = static_cast<float>(M);
-    const auto at = [&](int j, int k) -> const V& { return L[static_cast<size_t>(j * N + k) * stride]; };
-    for (int k = 0; k < N; ++k) {
-        float phi_c = 2 * kPi * (static_cast<float>(k) + 0.5f) / static_cast<float>(N);
-        float phi_0 = 2 * kPi * static_cast<float>(k) / static_cast<float>(N);
-        Vec3 t_c = frame.to_world({-std::sin(phi_c), std::cos(phi_c), 0});
-        Vec3 u_c = frame.to_world({std::cos(phi_c), std::sin(phi_c), 0});
-        Vec3 t_0 = frame.to_world({-std::sin(phi_0), std::cos(phi_0), 0});
-        V rot(0), radial(0), azim(0);
-        const int kprev = (k + N - 1) % N;
-        for (int j = 0; j < M; ++j) {
-            const auto c = static_cast<size_t>(j * N + k);
-            float sin_c = std::sqrt((static_cast<float>(j) + 0.5f) / fM);
-            float tan_c = sin_c / std::sqrt(std::max(1e-6f, 1 - sin_c * sin_c));
-            rot += at(j, k) * tan_c;
-            float sin_lo = std::sqrt(static_cast<float>(j) / fM), sin_hi = std::sqrt((static_cast<float>(j) + 1) / fM);
-            if (j >= 1) {  // boundary between rows j-1 and j moves radially
-                const auto cp = static_cast<size_t>((j - 1) * N + k);
-                float rmin = std::max(near, std::min(R[c], R[cp]));
-                if (std::isfinite(rmin) && rmin > 0 && !skip(cp, c))  // a hit at 0 (a fold of a displaced surface) moves nothing
-                    radial += (at(j, k) - at(j - 1, k)) * (sin_lo * (1 - sin_lo * sin_lo) / rmin);
-            }
-            // boundary between columns k-1 and k moves in azimuth
-            const auto cq = static_cast<size_t>(j * N + kprev);
-            float rmin = std::max(near, std::min(R[c], R[cq]));
-            if (std::isfinite(rmin) && rmin > 0 && !skip(cq, c)) azim += (at(j, k) - at(j, kprev)) * ((sin_hi - sin_lo) / rmin);
-        }
-        const float dphi = 2 * kPi / static_cast<float>(N);
-        for (size_t ch = 0; ch < C; ++ch) {
-            gr[ch] += t_c * chan(rot, static_cast<int>(ch));
-            gt[ch] += u_c * (dphi * chan(radial, static_cast<int>(ch))) + t_0 * chan(azim, static_cast<int>(ch));
-        }
-    }
-}
-
-}  // namespace
 
 LightPart Gatherer::light_part(const detail::Cells& cells, const Color* L, size_t stride, const Frame& frame, float near,
                                bool gradients) const {
@@ -250,75 +177,6 @@ LightPart Gatherer::light_part(const detail::Cells& cells, const Color* L, size_
     return out;
 }
 
-namespace {
-
-/// The relative standard error of a gather's value `value` (AO, or the irradiance's luminance)
-/// from the differences of azimuthally adjacent cells (GatherResult::rel_stderr).
-float relative_stderr(const GatherGrid& grid, bool ao, const std::vector<Color>& L, const std::vector<float>& U, double value) {
-    const int M = grid.m, N = grid.n, S = M * N;
-    double d2 = 0;
-    int pairs = 0;
-    for (int j = 0; j < M; ++j)
-        for (int k = 0; k + 1 < N; k += 2) {
-            const auto a = static_cast<size_t>(j * N + k), b = a + 1;
-            const double d = ao ? U[a] - U[b] : luminance(L[a]) - luminance(L[b]);
-            d2 += d * d;
-            ++pairs;
-        }
-    if (pairs == 0) return 0;
-    // AO is a mean (1/S), irradiance pi/S times a sum; scale to all S/2 pairs.
-    const double scale = ao ? 1.0 / S : static_cast<double>(kPi / static_cast<float>(S));
-    const double var = scale * scale * d2 * (0.5 * S / pairs);
-    return static_cast<float>(std::sqrt(var) / std::max(value, 1e-12));
-}
-
-/// The gather's Hessian (hessian.h) from its cells' hits: the radiance `L` (AO mode: the
-/// unoccluded fractions `U`) at distances `R` along `D`, escaped rays ending at `far`.
-TangentHessian cells_hessian(const GatherGrid& grid, const Vec3& p, const Vec3& n, float far, bool ao, const std::vector<Color>& L,
-                             const std::vector<float>& U, const std::vector<float>& R, const std::vector<Vec3>& D) {
-    const int M = grid.m, N = grid.n, S = M * N;
-    // Relative values (Radiance's normalisation: 0.99 of the mean plus 0.01, so that a dark
-    // hemisphere still has a geometric Hessian).
-    thread_local std::vector<Vec3> pts;
-    thread_local std::vector<double> vals;
-    thread_local std::vector<float> dist;
-    double total = 0;
-    for (size_t c = 0; c < static_cast<size_t>(S); ++c) total += ao ? U[c] : luminance(L[c]);
-    const double scale = total > 1e-20 ? 0.99 * S / total : 0.0, floor = total > 1e-20 ? 0.01 : 1.0;
-    // The mesh of every `stride`-th row and column, at most ~2048 vertices: its cost grows
-    // with the mesh, but a coarser mesh misses curvature (at 1024 rays a stride of 2 gave
-    // Sponza 9 % fewer records and 3.68 % error instead of 3.03 %).
-    const int stride = std::max(1, static_cast<int>(std::sqrt(S / 2048.0) + 0.999));
-    const int hm = (M + stride - 1) / stride, hn = N / stride;
-    pts.resize(static_cast<size_t>(hm * hn)), vals.resize(pts.size()), dist.resize(pts.size());
-    for (int j = 0; j < hm; ++j)
-        for (int k = 0; k < hn; ++k) {
-            const auto c = static_cast<size_t>(j * stride * N + k * stride), h = static_cast<size_t>(j * hn + k);
-            dist[h] = std::min(R[c], far);
-            pts[h] = p + D[c] * dist[h];
-            vals[h] = (ao ? U[c] : luminance(L[c])) * scale + floor;
-        }
-    return gather_hessian(p, n, hm, hn, pts, vals, dist);
-}
-
-}  // namespace
-
-namespace {
-
-/// GatherResult::bins: each bin's mean over the cells whose directions fall in it.
-void set_bins(GatherResult& res, const Frame& frame, std::span<const float> ao, const std::vector<Color>& L, const std::vector<Vec3>& D) {
-    std::array<int, kReachBins> count{};
-    Color all(0);
-    for (size_t c = 0; c < D.size(); ++c) {
-        const Color v = ao.empty() ? L[c] : Color(ao[c]);
-        const auto b = static_cast<size_t>(direction_bin(frame.to_local(D[c])));
-        res.bins[b] += v, ++count[b], all += v;
-    }
-    all = all / static_cast<float>(std::max<size_t>(1, D.size()));
-    for (size_t b = 0; b < res.bins.size(); ++b) res.bins[b] = count[b] ? res.bins[b] / static_cast<float>(count[b]) : all;
-}
-
-}  // namespace
 
 Color Gatherer::cell_radiance(detail::Cells& cells, const Vec3& p, size_t c, const RandomStream& rng, Counters& counters,
                               std::span<Color> parts) const {

@@ -14,6 +14,8 @@
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
 #include "bounce/deep/deep_buffer.h"
+#include "bounce/gather/grid.h"
+#include "bounce/gather/light_parts.h"
 #include "bounce/lighting/lighting.h"
 #include "bounce/radiosity/radiosity.h"
 
@@ -35,82 +37,6 @@ struct GatherSettings : IndirectSettings {
     /// neither: a 512-ray record's cells alone are 6 KB.
     bool prediction = false;
 };
-
-/// The part of a gather's (and its record's) values that is linear in the light: what one light (or all of them,
-/// each at scale 1) contributes to its irradiance, directions and gradients.
-struct LightPart {
-    Color E{0};
-    std::array<Vec3, 3> dir{}, grad_r{}, grad_t{};
-};
-
-/// A gather's bounce light per light (GatherSettings::light_parts), every light's scale
-/// (light_scales) factored out; fixed once made, so records' copies share it.
-struct LightParts {
-    LightPart signal;              ///< every light at scale 1: what placement decisions read
-    std::vector<LightPart> light;  ///< per scene light
-    size_t bytes() const { return sizeof(LightParts) + light.size() * sizeof(LightPart); }
-};
-
-/// The sum of every light's part times its scale, in one fixed order (a record made fresh and
-/// one rescaled to the same scales hold the same bits).
-LightPart combine_parts(const LightParts& parts, std::span<const Color> scales);
-
-/// Divides each channel of `parts` by the channel's sum over them (all 0 where the sum is not
-/// positive): each light's share of a total.
-void normalise_shares(std::span<Color> parts);
-
-/// The stratification used for `rays`.
-struct GatherGrid {
-    int m = 1, n = 1;  ///< elevation and azimuth strata
-    int rays() const { return m * n; }
-};
-GatherGrid gather_grid(int rays);
-/// The direction, in the gather point's frame (z = normal), of the ray of cell (j, k) with
-/// jitter (u, v) in [0,1)^2: cosine-weighted, sin^2(theta) stratified by j and phi by k.
-Vec3 gather_cell_direction(const GatherGrid& grid, int j, int k, float u, float v);
-/// The same with the jitter a gather with stream `rng` draws for that cell.
-Vec3 gather_cell_direction(const GatherGrid& grid, int j, int k, const RandomStream& rng);
-/// Every cell's direction of a gather with `rng` (cell j * n + k), in its frame: the rays
-/// Gatherer::gather traces.
-void gather_local_directions(const GatherGrid& grid, const RandomStream& rng, std::vector<Vec3>& out);
-/// The cell (j * n + k) of `grid` whose stratum holds direction `local` (z > 0).
-int grid_cell(const GatherGrid& grid, const Vec3& local);
-/// The order in which a gather traces its grid's cells (index j * n + k): 4x4 blocks of
-/// neighbouring cells, so each packet of 16 rays points in nearby directions.
-std::vector<uint32_t> gather_packet_order(const GatherGrid& grid);
-
-/// Direction bins of a gather's view summary (GatherResult::reach): its elevation strata in
-/// kReachBands bands, its azimuth strata in kReachSectors sectors. Frames of a shot test moving
-/// geometry and changed light against them (cache/temporal.h).
-inline constexpr int kReachBands = 4, kReachSectors = 8, kReachBins = kReachBands * kReachSectors;
-/// The bin of a direction `local` in a gather's frame (z = its normal; z > 0): band by sin^2
-/// of its elevation in quarters, sector by azimuth in eighths. Every bin holds 1/32 of the
-/// cosine-weighted hemisphere (pi/32 of its cosine-weighted measure).
-int direction_bin(const Vec3& local);
-
-/// A gather's ray hits, per cell: what a re-shade traces again for free when only the light its
-/// rays found has changed (Gatherer::reshade).
-struct GatherHits {
-    int m = 0, n = 0;                    ///< the gather's grid (GatherGrid)
-    std::vector<float> t, u, v;          ///< distance (INFINITY: escaped) and the hit's (u, v)
-    std::vector<uint32_t> object, prim;  ///< object (kNoHit: escaped; | kHairBit: a strand) and primitive
-    static constexpr uint32_t kHairBit = 0x80000000u;
-    size_t bytes() const { return t.size() * (3 * sizeof(float) + 2 * sizeof(uint32_t)); }
-};
-
-/// An earlier gather whose rays a nearby one may reuse (Gatherer::reproject): where it was made,
-/// about which normal, with which random stream, and what each ray hit.
-struct EarlierGather {
-    Vec3 p, n;
-    RandomStream rng;
-    const GatherHits& hits;
-};
-
-/// The cells of a gather (at p about n with `rng` and `grid`) whose rays, as `hits` recorded
-/// them, pass through any of `boxes` (an escaped ray: anywhere along it): the rays a moving
-/// object may now stop or let through. Appended to `out`.
-void cells_through(const GatherGrid& grid, const Vec3& p, const Vec3& n, const RandomStream& rng, const GatherHits& hits,
-                   std::span<const Bounds> boxes, std::vector<uint32_t>& out);
 
 struct DirectionGuide;
 namespace detail {

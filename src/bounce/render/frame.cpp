@@ -119,8 +119,10 @@ void write_frame_outputs(const RenderResult& result, const FrameFiles& files, co
         pasted = paste_over(read_exr(files.base), result.image, files.base);
         image = &pasted;
     }
-    write_exr(files.output, *image);
-    write_png(files.png(), *image, show, *files.display);
+    if (!files.output.empty()) {  // the lighting tool keeps its image in memory
+        write_exr(files.output, *image);
+        write_png(files.png(), *image, show, *files.display);
+    }
     if (!files.deep_out.empty() && result.gathered_deep) write_deep(files.deep_out, *result.gathered_deep,
                                                                            result.deep_colour.empty() ? nullptr : &result.deep_colour);
     if (result.cache && !files.cache_out.empty()) write_cache_file(files.cache_out, result.cache->to_file(result.cache_info));

@@ -1,4 +1,4 @@
-// A frame as a plan (DESIGN.md, "A frame is a plan"): built once from the scene at the
+// A frame as a plan (docs/architecture.md, "A frame is a plan"): built once from the scene at the
 // frame's time, what the previous frame left (FrameState) and the front end's request, it says
 // which passes run and on what. The CLI, a sequence, the lighting tool and an MPI rank all
 // drive frames through it; a new capability adds a step or a plan rule, never a flag.

@@ -13,6 +13,7 @@
 
 #include "bounce/accel/accel.h"
 #include "bounce/render/distributed.h"
+#include "bounce/render/frame.h"
 #include "bounce/render/frame_passes.h"
 #include "bounce/cache/passes.h"
 #include "bounce/core/error.h"
@@ -405,7 +406,9 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
 RenderResult render(const Scene& scene, const RenderRequest& request, Stats& stats, ProgressSink* progress) {
     const FrameState none;
     RenderResult r = run_frame(scene, plan_frame(scene, none, request), none, request, stats, progress);
-    if (r.gathered_deep) write_deep(r.plan.deep_out, *r.gathered_deep, r.deep_colour.empty() ? nullptr : &r.deep_colour);
+    FrameFiles files;
+    files.deep_out = r.plan.deep_out;
+    write_frame_outputs(r, files, "", stats);
     return r;
 }
 
