@@ -15,6 +15,7 @@
 #include "bounce/core/progress.h"
 #include "bounce/dist/mpi.h"
 #include "bounce/scene/params.h"
+#include "bounce/core/version.h"
 #include "light.h"
 #include "render_cmd.h"
 #include "tools_cmd.h"
@@ -60,100 +61,86 @@ void report_failure(const Communicator* comm, const std::string& text) {
     std::fflush(stderr);
 }
 
-int run_command(int argc, char** argv, Communicator* comm) {
-    CLI::App app{"bounce: one-bounce diffuse global illumination and ambient occlusion"};
-    app.require_subcommand(1);
-    app.set_version_flag("--version", std::string("bounce ") + BOUNCE_VERSION + " (" + BOUNCE_GIT_REV + ")");
-
+/// Every subcommand's arguments and its CLI11 app (set once parsed when it was the one given).
+struct Commands {
     RenderArgs ra;
-    ra.comm = comm;
-    CLI::App* render = app.add_subcommand("render", "render a scene to a multi-layer EXR and a PNG");
-    add_render_options(*render, ra);
-
-    bool params_json = false, params_markdown_flag = false;
-    CLI::App* params = app.add_subcommand("params", "list every scene parameter: key, stage, default, range, unit, doc");
-    params->add_flag("--json", params_json, "print JSON (the lighting tool's spreadsheet)");
-    params->add_flag("--markdown", params_markdown_flag, "print the Markdown table of docs/scene-format.md");
-
+    bool params_json = false, params_markdown = false;
     BakeAoArgs ba;
-    CLI::App* bake = app.add_subcommand("bake-ao", "bake an object's occlusion by its fine (displaced) detail into its uv space");
-    bake->add_option("scene", ba.scene, "scene file")->required();
-    bake->add_option("--object", ba.object, "the object's name")->required();
-    bake->add_option("-o,--output", ba.output, "occlusion map (EXR) for a material's ao_texture")->required();
-    bake->add_option("--res", ba.resolution, "texels per side")->check(CLI::Range(1, 16384));
-    bake->add_option("--rays", ba.rays, "rays per texel")->check(CLI::Range(1, 1 << 20));
-    bake->add_option("--distance", ba.distance, "occluders beyond this do not count; default 4x the displacement bound");
-
     LightArgs la;
-    CLI::App* light = app.add_subcommand("light", "the lighting tool: a local web page to edit, re-gather and re-shade");
-    light->add_option("scene", la.scene, "scene file")->required();
-    light->add_option("--port", la.port, "port (0 = any free one)")->check(CLI::Range(0, 65535));
-    light->add_option("--bind", la.bind, "loopback address to listen on (127.0.0.1, ::1, localhost)");
-    light->add_option("--out", la.out_dir, "folder for the session's deep file, cache and saved files");
-    light->add_option("--deep-in", la.deep_in, "start from this deep file");
-    light->add_option("--cache-in", la.cache_in, "start from this irradiance cache");
-    light->add_option("--threads", la.threads, "render threads (0 = all)")->check(CLI::Range(0, 4096));
-    add_display_options(*light, la.display);
-    light->add_option("--set", la.sets, "start with this edit: key.path=value (render.gi defaults to cache)")->take_all();
-
     CompareArgs ca;
-    CLI::App* compare = app.add_subcommand("compare", "error of a render against a reference, per layer");
-    compare->add_option("test", ca.test, "the render to judge (EXR)")->required();
-    compare->add_option("reference", ca.reference, "the reference (EXR)")->required();
-    compare->add_option("--layer", ca.layer, "only this layer (beauty, direct, indirect, ao, ..., or beauty_ref_direct: the beauty with the reference's direct light)");
-    compare->add_option("--diff", ca.diff, "false-colour difference PNG (default: TEST.diff.png)");
-    compare->add_flag("--json", ca.json, "print JSON");
-    compare->add_flag("--sequence", ca.sequence, "TEST and REFERENCE are #### frame patterns: per-frame error, flicker, popping");
-    compare->add_option("--frames", ca.frames, "with --sequence: FIRST-LAST");
-    compare->add_option("--strip", ca.strip, "with --sequence: a PNG strip of six frames of the test (and their record dots)");
-
     CacheArgs ka;
-    CLI::App* cache = app.add_subcommand("cache", "inspect, merge, filter and export irradiance cache files");
-    cache->require_subcommand(1);
-    CLI::App* cinfo = cache->add_subcommand("info", "counts, bounds, parameters, radius histogram, memory (FILE or a #### sequence)");
-    cinfo->add_option("file", ka.inputs, "cache file, or a frame pattern like cache.####.bic")->required()->expected(1);
-    cinfo->add_flag("--json", ka.json, "print JSON");
-    CLI::App* cmerge = cache->add_subcommand("merge", "merge caches without duplicates");
-    cmerge->add_option("inputs", ka.inputs, "caches to merge")->required();
-    cmerge->add_option("-o,--output", ka.output, "merged cache")->required();
-    cmerge->add_flag("--force", ka.force, "merge caches of different scenes or cameras");
-    CLI::App* cfilter = cache->add_subcommand("filter", "keep (or --remove) records by region or value");
-    cfilter->add_option("input", ka.inputs, "cache file")->required()->expected(1);
-    cfilter->add_option("-o,--output", ka.output, "filtered cache")->required();
-    cfilter->add_option("--box", ka.box, "x0,y0,z0,x1,y1,z1: records inside the box");
-    cfilter->add_option("--sphere", ka.sphere, "cx,cy,cz,r: records inside the sphere");
-    cfilter->add_option("--where", ka.where, "FIELD OP NUMBER, e.g. \"pixels<2\" (repeatable, all must hold)");
-    cfilter->add_flag("--remove", ka.remove, "remove the matching records instead of keeping them");
-    CLI::App* cexport = cache->add_subcommand("export", "write a PLY point cloud (MeshLab, CloudCompare, Blender)");
-    cexport->add_option("input", ka.inputs, "cache file")->required()->expected(1);
-    cexport->add_option("-o,--output", ka.output, "PLY file")->required();
+    CLI::App *render = nullptr, *params = nullptr, *bake = nullptr, *light = nullptr, *compare = nullptr;
+    CLI::App *cache = nullptr, *cinfo = nullptr, *cmerge = nullptr, *cfilter = nullptr, *cexport = nullptr;
+};
 
-    // CLI11 would only say "A subcommand is required".
-    if (argc > 1 && argv[1][0] != '-' && unknown_command(app, argv[1], "")) return 2;
-    if (argc > 2 && std::string(argv[1]) == "cache" && argv[2][0] != '-' && unknown_command(*cache, argv[2], "cache ")) return 2;
+/// bake-ao, light and compare.
+void add_tool_commands(CLI::App& app, Commands& c) {
+    c.bake = app.add_subcommand("bake-ao", "bake an object's occlusion by its fine (displaced) detail into its uv space");
+    c.bake->add_option("scene", c.ba.scene, "scene file")->required();
+    c.bake->add_option("--object", c.ba.object, "the object's name")->required();
+    c.bake->add_option("-o,--output", c.ba.output, "occlusion map (EXR) for a material's ao_texture")->required();
+    c.bake->add_option("--res", c.ba.resolution, "texels per side")->check(CLI::Range(1, 16384));
+    c.bake->add_option("--rays", c.ba.rays, "rays per texel")->check(CLI::Range(1, 1 << 20));
+    c.bake->add_option("--distance", c.ba.distance, "occluders beyond this do not count; default 4x the displacement bound");
+
+    c.light = app.add_subcommand("light", "the lighting tool: a local web page to edit, re-gather and re-shade");
+    c.light->add_option("scene", c.la.scene, "scene file")->required();
+    c.light->add_option("--port", c.la.port, "port (0 = any free one)")->check(CLI::Range(0, 65535));
+    c.light->add_option("--bind", c.la.bind, "loopback address to listen on (127.0.0.1, ::1, localhost)");
+    c.light->add_option("--out", c.la.out_dir, "folder for the session's deep file, cache and saved files");
+    c.light->add_option("--deep-in", c.la.deep_in, "start from this deep file");
+    c.light->add_option("--cache-in", c.la.cache_in, "start from this irradiance cache");
+    c.light->add_option("--threads", c.la.threads, "render threads (0 = all)")->check(CLI::Range(0, 4096));
+    add_display_options(*c.light, c.la.display);
+    c.light->add_option("--set", c.la.sets, "start with this edit: key.path=value (render.gi defaults to cache)")->take_all();
+
+    c.compare = app.add_subcommand("compare", "error of a render against a reference, per layer");
+    c.compare->add_option("test", c.ca.test, "the render to judge (EXR)")->required();
+    c.compare->add_option("reference", c.ca.reference, "the reference (EXR)")->required();
+    c.compare->add_option("--layer", c.ca.layer, "only this layer (beauty, direct, indirect, ao, ..., or beauty_ref_direct: the beauty with the reference's direct light)");
+    c.compare->add_option("--diff", c.ca.diff, "false-colour difference PNG (default: TEST.diff.png)");
+    c.compare->add_flag("--json", c.ca.json, "print JSON");
+    c.compare->add_flag("--sequence", c.ca.sequence, "TEST and REFERENCE are #### frame patterns: per-frame error, flicker, popping");
+    c.compare->add_option("--frames", c.ca.frames, "with --sequence: FIRST-LAST");
+    c.compare->add_option("--strip", c.ca.strip, "with --sequence: a PNG strip of six frames of the test (and their record dots)");
+}
+
+/// cache info, merge, filter and export.
+void add_cache_commands(CLI::App& app, Commands& c) {
+    c.cache = app.add_subcommand("cache", "inspect, merge, filter and export irradiance cache files");
+    c.cache->require_subcommand(1);
+    c.cinfo = c.cache->add_subcommand("info", "counts, bounds, parameters, radius histogram, memory (FILE or a #### sequence)");
+    c.cinfo->add_option("file", c.ka.inputs, "cache file, or a frame pattern like cache.####.bic")->required()->expected(1);
+    c.cinfo->add_flag("--json", c.ka.json, "print JSON");
+    c.cmerge = c.cache->add_subcommand("merge", "merge caches without duplicates");
+    c.cmerge->add_option("inputs", c.ka.inputs, "caches to merge")->required();
+    c.cmerge->add_option("-o,--output", c.ka.output, "merged cache")->required();
+    c.cmerge->add_flag("--force", c.ka.force, "merge caches of different scenes or cameras");
+    c.cfilter = c.cache->add_subcommand("filter", "keep (or --remove) records by region or value");
+    c.cfilter->add_option("input", c.ka.inputs, "cache file")->required()->expected(1);
+    c.cfilter->add_option("-o,--output", c.ka.output, "filtered cache")->required();
+    c.cfilter->add_option("--box", c.ka.box, "x0,y0,z0,x1,y1,z1: records inside the box");
+    c.cfilter->add_option("--sphere", c.ka.sphere, "cx,cy,cz,r: records inside the sphere");
+    c.cfilter->add_option("--where", c.ka.where, "FIELD OP NUMBER, e.g. \"pixels<2\" (repeatable, all must hold)");
+    c.cfilter->add_flag("--remove", c.ka.remove, "remove the matching records instead of keeping them");
+    c.cexport = c.cache->add_subcommand("export", "write a PLY point cloud (MeshLab, CloudCompare, Blender)");
+    c.cexport->add_option("input", c.ka.inputs, "cache file")->required()->expected(1);
+    c.cexport->add_option("-o,--output", c.ka.output, "PLY file")->required();
+}
+
+/// Runs the subcommand given; InputError and the like become a one-line message and a status.
+int dispatch(const Commands& c, Communicator* comm, const char* command) {
     try {
-        app.parse(argc, argv);
-    } catch (const CLI::CallForHelp& e) {
-        return app.exit(e);
-    } catch (const CLI::CallForAllHelp& e) {
-        return app.exit(e);
-    } catch (const CLI::CallForVersion& e) {
-        return app.exit(e);
-    } catch (const CLI::ParseError& e) {
-        std::fprintf(stderr, "bounce: command line: error: %s (see bounce --help)\n", e.what());
-        return 2;
-    }
-    try {
-        if (*render) return run_render(ra);
-        if (comm && comm->size() > 1) throw InputError("command line", argv[1], "only render runs as an MPI job of many ranks");
-        if (*params) return run_params(params_json, params_markdown_flag);
-        if (*compare) return run_compare(ca);
-        if (*bake) return run_bake_ao(ba);
-        if (*light) return run_light(la);
-        if (*cinfo) return run_cache_info(ka);
-        if (*cmerge) return run_cache_merge(ka);
-        if (*cfilter) return run_cache_filter(ka);
-        if (*cexport) return run_cache_export(ka);
+        if (*c.render) return run_render(c.ra);
+        if (comm && comm->size() > 1) throw InputError("command line", command, "only render runs as an MPI job of many ranks");
+        if (*c.params) return run_params(c.params_json, c.params_markdown);
+        if (*c.compare) return run_compare(c.ca);
+        if (*c.bake) return run_bake_ao(c.ba);
+        if (*c.light) return run_light(c.la);
+        if (*c.cinfo) return run_cache_info(c.ka);
+        if (*c.cmerge) return run_cache_merge(c.ka);
+        if (*c.cfilter) return run_cache_filter(c.ka);
+        if (*c.cexport) return run_cache_export(c.ka);
     } catch (const InputError& e) {
         report_failure(comm, e.what());
         return 2;
@@ -169,6 +156,37 @@ int run_command(int argc, char** argv, Communicator* comm) {
         return 1;
     }
     return 0;
+}
+
+int run_command(int argc, char** argv, Communicator* comm) {
+    CLI::App app{"bounce: one-bounce diffuse global illumination and ambient occlusion"};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", std::string(bounce::bounce_software()));
+    Commands c;
+    c.ra.comm = comm;
+    c.render = app.add_subcommand("render", "render a scene to a multi-layer EXR and a PNG");
+    add_render_options(*c.render, c.ra);
+    c.params = app.add_subcommand("params", "list every scene parameter: key, stage, default, range, unit, doc");
+    c.params->add_flag("--json", c.params_json, "print JSON (the lighting tool's spreadsheet)");
+    c.params->add_flag("--markdown", c.params_markdown, "print the Markdown table of docs/scene-format.md");
+    add_tool_commands(app, c);
+    add_cache_commands(app, c);
+    // CLI11 would only say "A subcommand is required".
+    if (argc > 1 && argv[1][0] != '-' && unknown_command(app, argv[1], "")) return 2;
+    if (argc > 2 && std::string(argv[1]) == "cache" && argv[2][0] != '-' && unknown_command(*c.cache, argv[2], "cache ")) return 2;
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        std::fprintf(stderr, "bounce: command line: error: %s (see bounce --help)\n", e.what());
+        return 2;
+    }
+    return dispatch(c, comm, argv[1]);
 }
 
 int main(int argc, char** argv) {

@@ -22,6 +22,7 @@
 #include "bounce/scene/params.h"
 #include "bounce/scene/params_cli.h"
 #include "bounce/scene/scene_load.h"
+#include "bounce/core/version.h"
 
 namespace bounce {
 
@@ -76,7 +77,7 @@ void check_ranks(const RenderArgs& a, const Scene& scene) {
     if (!a.comm || a.comm->size() == 1) return;
     std::string command;
     for (const auto& o : a.sets) command += " --set " + o;
-    const std::string identity = fmt::format("bounce {} ({}), {} {}{} (scene {:016x})", BOUNCE_VERSION, BOUNCE_GIT_REV,
+    const std::string identity = fmt::format("bounce {} ({}), {} {}{} (scene {:016x})", bounce_version(), bounce_revision(),
                                              a.files.scene, a.files.output, command,
                                              scene.fingerprint({"objects", "materials", "lights", "camera", "render"}));
     check_same_job(*a.comm, identity);

@@ -12,6 +12,7 @@
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
 #include "bounce/scene/shot.h"
+#include "bounce/core/version.h"
 
 namespace bounce {
 
@@ -226,7 +227,7 @@ std::string serialize_cache_file(const CacheFile& file) {
     h["parameters"] = file.info.parameters;
     h["luminance_floor"] = file.info.luminance_floor;
     h["frame"] = file.info.frame;
-    h["software"] = "bounce " BOUNCE_VERSION " (" BOUNCE_GIT_REV ")";
+    h["software"] = bounce_software();
     std::string header = h.dump();
     std::string out(kMagic, 8);
     put(out, kCacheFileVersion);

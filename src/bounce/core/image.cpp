@@ -14,6 +14,7 @@
 #include "bounce/core/files.h"
 #include "bounce/core/image_input.h"
 #include "bounce/core/parallel.h"
+#include "bounce/core/version.h"
 
 namespace bounce {
 
@@ -58,7 +59,7 @@ void write_exr(const std::string& path, const Image& image) {
     // said in the file so a compositor's colour management need not assume it.
     static constexpr float rec709[8] = {0.64f, 0.33f, 0.30f, 0.60f, 0.15f, 0.06f, 0.3127f, 0.3290f};
     spec.attribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), rec709);
-    spec.attribute("Software", "bounce " BOUNCE_VERSION " (" BOUNCE_GIT_REV ")");
+    spec.attribute("Software", bounce_software());
     for (const auto& [k, v] : image.metadata) spec.attribute("bounce:" + k, v);
     std::vector<float> pixels(static_cast<size_t>(image.width) * image.height * names.size());
     size_t stride = names.size(), offset = 0;

@@ -9,6 +9,7 @@
 #include "bounce/core/files.h"
 #include "bounce/core/image_input.h"
 #include "bounce/deep/deep_buffer.h"
+#include "bounce/core/version.h"
 
 namespace bounce {
 
@@ -103,7 +104,7 @@ void write_deep(const std::string& path, const DeepBuffer& deep, const std::vect
     spec.attribute("bounce:spp", deep.spp);
     spec.attribute("bounce:seed", fmt::format("{}", deep.seed));
     spec.attribute("bounce:scene_fingerprint", fmt::format("{:016x}", deep.scene_fingerprint));
-    spec.attribute("Software", "bounce " BOUNCE_VERSION);
+    spec.attribute("Software", std::string("bounce ") + bounce_version());
 
     OIIO::DeepData dd;
     dd.init(static_cast<int64_t>(deep.pixel_count()), static_cast<int>(chans.size()),
@@ -162,19 +163,11 @@ const char* invalid_fragment_field(const Fragment& f) {
     return nullptr;
 }
 
-DeepBuffer read_deep(const std::string& path) {
-    check_input_file(path);
-    std::string why;
-    auto in = open_image(path, why);
-    if (!in) throw InputError(path, "", "not a readable deep file: " + why);
-    const OIIO::ImageSpec& spec = in->spec();
-    if (!spec.deep) throw InputError(path, "", "not a deep image (expected an OpenEXR deep file from --deep-out)");
-    int version = spec.get_int_attribute("bounce:deep_version", -1);
-    if (version != kDeepVersion && version != 1)
-        throw InputError(path, "bounce:deep_version",
-                         version < 0 ? "not a bounce deep file (no bounce:deep_version attribute)"
-                                     : fmt::format("unsupported version {} (this bounce reads 1 to {})", version, kDeepVersion));
-    // OpenEXR stores channels sorted by name: find ours by name.
+namespace {
+
+/// Where each of our channels is in the file (OpenEXR stores them sorted by name); -1 for the
+/// fur channels a version-1 file lacks. InputError for a missing channel or another type.
+std::vector<int> deep_channel_index(const OIIO::ImageSpec& spec, int version, const std::string& path) {
     const auto& chans = deep_channels();
     std::vector<int> index(chans.size(), -1);
     for (size_t c = 0; c < chans.size(); ++c) {
@@ -190,6 +183,11 @@ DeepBuffer read_deep(const std::string& path) {
     // A deep file with colour keeps the coverage in its own channel (A is then the over-alpha).
     for (int k = 0; k < spec.nchannels; ++k)
         if (spec.channelnames[static_cast<size_t>(k)] == "coverage" && spec.channelformat(k) == OIIO::TypeDesc::FLOAT) index[1] = k;
+    return index;
+}
+
+/// The buffer's window, samples, seed and scene fingerprint from the header, checked.
+DeepBuffer deep_header(const OIIO::ImageSpec& spec, const std::string& path) {
     DeepBuffer deep;
     deep.x0 = spec.x, deep.y0 = spec.y, deep.width = spec.width, deep.height = spec.height;
     deep.full_width = spec.full_width, deep.full_height = spec.full_height;
@@ -205,9 +203,11 @@ DeepBuffer read_deep(const std::string& path) {
     if (deep.spp <= 0 || deep.width <= 0 || deep.height <= 0 || deep.x0 < 0 || deep.y0 < 0 ||
         deep.x0 + deep.width > deep.full_width || deep.y0 + deep.height > deep.full_height)
         throw InputError(path, "header", "inconsistent image window or sample count");
-    OIIO::DeepData dd;
-    if (!in->read_native_deep_image(0, 0, dd))
-        throw InputError(path, "", "cannot read deep data: " + in->geterror());
+    return deep;
+}
+
+/// Every pixel's fragments from the file's deep samples, each field checked.
+void read_fragments(const OIIO::DeepData& dd, const std::vector<int>& index, const std::string& path, DeepBuffer& deep) {
     deep.offsets.resize(deep.pixel_count() + 1);
     deep.offsets[0] = 0;
     for (size_t i = 0; i < deep.pixel_count(); ++i) {
@@ -242,6 +242,28 @@ DeepBuffer read_deep(const std::string& path) {
                                  "value out of range (not finite, beyond +-1e18, or a normal that is not unit length)");
         }
     }
+}
+
+}  // namespace
+
+DeepBuffer read_deep(const std::string& path) {
+    check_input_file(path);
+    std::string why;
+    auto in = open_image(path, why);
+    if (!in) throw InputError(path, "", "not a readable deep file: " + why);
+    const OIIO::ImageSpec& spec = in->spec();
+    if (!spec.deep) throw InputError(path, "", "not a deep image (expected an OpenEXR deep file from --deep-out)");
+    int version = spec.get_int_attribute("bounce:deep_version", -1);
+    if (version != kDeepVersion && version != 1)
+        throw InputError(path, "bounce:deep_version",
+                         version < 0 ? "not a bounce deep file (no bounce:deep_version attribute)"
+                                     : fmt::format("unsupported version {} (this bounce reads 1 to {})", version, kDeepVersion));
+    const std::vector<int> index = deep_channel_index(spec, version, path);
+    DeepBuffer deep = deep_header(spec, path);
+    OIIO::DeepData dd;
+    if (!in->read_native_deep_image(0, 0, dd))
+        throw InputError(path, "", "cannot read deep data: " + in->geterror());
+    read_fragments(dd, index, path, deep);
     return deep;
 }
 

@@ -84,7 +84,7 @@ struct SpecularSitesResult {
     /// Whether the cache (or brute force) lights the sites: indirect_at_specular_hits = cache.
     static bool lit_by_gathers(const Scene& scene);
 };
-SpecularSitesResult specular_sites_pass(const FrameContext& ctx, const DeepBuffer& shaded);
+SpecularSitesResult specular_sites_pass(const FrameContext& ctx, const FramePlan& plan, const DeepBuffer& shaded);
 /// The sites' part of the gathering pass: records where the cache does not cover a site.
 /// Returns how many it made.
 size_t specular_gather_pass(const FrameContext& ctx, const FramePlan& plan, const DeepBuffer& sites,

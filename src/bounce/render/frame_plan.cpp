@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "bounce/accel/accel.h"
@@ -10,6 +11,7 @@
 #include "bounce/core/error.h"
 #include "bounce/core/memory.h"
 #include "bounce/gather/guide.h"
+#include "bounce/render/frame_passes.h"
 #include "bounce/render/render.h"
 #include "bounce/scene/keyframes.h"
 
@@ -152,6 +154,8 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
     plan.force = request.force;
     plan.cache_reuse = request.cache_reuse;
     plan.gather = gather_step(scene, plan.cache, request);
+    const bool specular = std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) { return m.is_specular(); });
+    plan.specular_sites = specular && SpecularSitesResult::lit_by_gathers(scene);
     plan.refine = (plan.gather == GatherStep::Cache || plan.gather == GatherStep::WhereMissing) && refinement_runs(scene);
     plan.correct = scene.render.indirect.any() && scene.render.indirect.gi == GiMode::Cache && scene.render.cache.correction_rays > 0;
     const IndirectSettings& ind = scene.render.indirect;
@@ -198,6 +202,7 @@ nlohmann::json FramePlan::describe() const {
             {"share_radiosity", share_radiosity},
             {"cache", name(cache)},
             {"flush_crop", flush_crop},
+            {"specular_sites", specular_sites},
             {"gather", name(gather)},
             {"refine", refine},
             {"correct", correct},

@@ -124,6 +124,9 @@ struct FramePlan {
     bool flush_crop = false;  ///< leave out the starting cache's records seen inside the crop
     bool force = false;
     CacheReuse cache_reuse = CacheReuse::Strict;
+    /// Mirror and glass paths traced from the visible fragments to the sites where gathers
+    /// light them (a scene with specular materials whose bounce light comes from gathers).
+    bool specular_sites = false;
     GatherStep gather = GatherStep::None;
     bool refine = false;      ///< per-fragment refinement after the gathering pass
     bool correct = false;     ///< every fragment's own rays correct the records' prediction (cache.correction_rays)

@@ -178,7 +178,7 @@ void finish_radiosity(const FrameContext& ctx, const FramePlan& plan, RadiosityT
 void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep, const FrameState& previous,
                       RadiosityResult& radiosity, CacheStartResult& start, const RenderRequest& request, RenderResult& result) {
     size_t baked_before = 0;
-    const SpecularSitesResult specular = specular_sites_pass(ctx, deep.shaded());
+    const SpecularSitesResult specular = specular_sites_pass(ctx, plan, deep.shaded());
     if (specular.mirrors && !radiosity.textures &&
         ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity)
         radiosity = radiosity_pass(ctx, plan, previous);
@@ -228,7 +228,7 @@ void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const Visi
 void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep, const FrameState& previous,
                          RadiosityResult& radiosity, RenderResult& result) {
     std::vector<Indirect> light;
-    SpecularSitesResult specular = specular_sites_pass(ctx, deep.shaded());
+    SpecularSitesResult specular = specular_sites_pass(ctx, plan, deep.shaded());
     const bool radiosity_sites = ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity;
     if (specular.mirrors && radiosity_sites && !radiosity.textures && ctx.scene.render.indirect.any())
         radiosity = radiosity_pass(ctx, plan, previous);

@@ -15,13 +15,13 @@ bool SpecularSitesResult::lit_by_gathers(const Scene& scene) {
            !scene.render.indirect.ao;
 }
 
-SpecularSitesResult specular_sites_pass(const FrameContext& ctx, const DeepBuffer& shaded) {
+SpecularSitesResult specular_sites_pass(const FrameContext& ctx, const FramePlan& plan, const DeepBuffer& shaded) {
     SpecularSitesResult out;
     const SpecularTracer tracer(ctx.scene, ctx.accel, ctx.lighting, ctx.materials);
     out.mirrors = tracer.active();
     // Without gathers to light them (direct light only, AO, radiosity textures) the shading
     // pass traces the paths itself and needs no sites.
-    if (!out.mirrors || !SpecularSitesResult::lit_by_gathers(ctx.scene)) return out;
+    if (!plan.specular_sites) return out;
     PhaseTimer t(ctx.stats, "specular paths");
     out.sites = specular_sites(ctx.scene, shaded, tracer, ctx.stats, ctx.progress);
     ctx.stats.set("specular_sites", static_cast<double>(out.sites.fragments.size()));

@@ -151,6 +151,64 @@ void check_overridden_values(const json& doc, const std::vector<Override>& overr
     }
 }
 
+/// render.max_spacing against min_spacing, and a crop inside the image.
+void check_frame_settings(const Scene& scene, const JsonContext& ctx) {
+    const Camera& cam = scene.camera;
+    const CacheSettings& cs = scene.render.cache;
+    if (cs.max_spacing < cs.min_spacing) ctx.fail("/render/max_spacing", "max_spacing is below min_spacing");
+    const auto& crop = scene.render.visibility.crop;
+    // Only all zeros means the full frame: [4, 4, 4, 4] is an empty window, not no crop.
+    const bool crop_given = crop[0] != 0 || crop[1] != 0 || crop[2] != 0 || crop[3] != 0;
+    if (crop_given &&
+        (crop[0] >= crop[1] || crop[2] >= crop[3] || crop[1] > cam.width || crop[3] > cam.height))
+        ctx.fail("/render/crop", fmt::format("crop [{}, {}, {}, {}] is empty or outside the {}x{} image",
+                                            crop[0], crop[1], crop[2], crop[3], cam.width, cam.height));
+}
+
+/// Every object: instancers last (their prototypes may come after them), each holding its index
+/// meanwhile; then the meshes a mesh file's nodes share.
+void read_objects(const JsonReader& root, Scene& scene, const JsonContext& ctx) {
+    if (!root.has("objects")) root.fail("", "missing required key \"objects\"");
+    const json& objs = root.raw("objects");
+    if (!objs.is_array() || objs.empty()) root.fail("objects", "expected a non-empty array of objects");
+    check_generated_geometry(root, objs, scene);
+    // Instancers last (their prototypes may come after them), each holding its index meanwhile.
+    std::vector<Object> file_instances;  // meshes shared by a mesh file's nodes, after every entry
+    for (size_t i = 0; i < objs.size(); ++i) {
+        if (places_instances(objs[i])) scene.objects.emplace_back().instance = true;
+        else read_object(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), scene, i, file_instances);
+    }
+    for (size_t i = 0; i < objs.size(); ++i)
+        if (places_instances(objs[i])) read_instances(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), objs, scene, i);
+    for (Object& o : file_instances) scene.objects.push_back(std::move(o));
+}
+
+/// Explicit lights, then one mesh light per object with emissive faces.
+void read_lights(const JsonReader& root, Scene& scene, const JsonContext& ctx) {
+    if (root.has("lights")) {
+        const json& ls = root.raw("lights");
+        if (!ls.is_array()) root.fail("lights", "expected an array of lights");
+        int shadow_slots = 0;
+        for (size_t i = 0; i < ls.size(); ++i) {
+            JsonReader l(ls[i], fmt::format("/lights/{}", i), ctx, light_keys());
+            scene.lights.push_back(read_light(l));
+            scene.lights.back().name = l.string("name", fmt::format("light{}", i));
+            read_light_links(l, scene, scene.lights.back(), shadow_slots);
+        }
+    }
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+        bool emits = false;  // (an instance may not emit: instance_reader refuses it; a prototype is not placed)
+        for (uint32_t m : scene.objects[i].placed() ? scene.objects[i].coarse.face_materials : std::vector<uint32_t>{}) emits |= scene.materials[m].is_emissive();
+        if (emits) {
+            Light l;
+            l.type = LightType::Mesh;
+            l.object = static_cast<uint32_t>(i);
+            l.name = scene.objects[i].name;
+            scene.lights.push_back(l);
+        }
+    }
+}
+
 Scene build_scene(json doc, const std::string& path, const std::vector<Override>& overrides, const LoadOptions& options) {
     JsonContext ctx;
     ctx.file = path;
@@ -182,16 +240,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     if (!root.has("camera")) root.fail("", "missing required key \"camera\"");
     read_params(root.raw("camera"), "camera", scene, ctx);
     check_camera(scene.camera, ctx);
-    const Camera& cam = scene.camera;
-    const CacheSettings& cs = scene.render.cache;
-    if (cs.max_spacing < cs.min_spacing) ctx.fail("/render/max_spacing", "max_spacing is below min_spacing");
-    const auto& crop = scene.render.visibility.crop;
-    // Only all zeros means the full frame: [4, 4, 4, 4] is an empty window, not no crop.
-    const bool crop_given = crop[0] != 0 || crop[1] != 0 || crop[2] != 0 || crop[3] != 0;
-    if (crop_given &&
-        (crop[0] >= crop[1] || crop[2] >= crop[3] || crop[1] > cam.width || crop[3] > cam.height))
-        ctx.fail("/render/crop", fmt::format("crop [{}, {}, {}, {}] is empty or outside the {}x{} image",
-                                            crop[0], crop[1], crop[2], crop[3], cam.width, cam.height));
+    check_frame_settings(scene, ctx);
 
     // Materials.
     if (root.has("materials")) {
@@ -203,44 +252,9 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
         }
     }
 
-    // Objects.
-    if (!root.has("objects")) root.fail("", "missing required key \"objects\"");
-    const json& objs = root.raw("objects");
-    if (!objs.is_array() || objs.empty()) root.fail("objects", "expected a non-empty array of objects");
-    check_generated_geometry(root, objs, scene);
-    // Instancers last (their prototypes may come after them), each holding its index meanwhile.
-    std::vector<Object> file_instances;  // meshes shared by a mesh file's nodes, after every entry
-    for (size_t i = 0; i < objs.size(); ++i) {
-        if (places_instances(objs[i])) scene.objects.emplace_back().instance = true;
-        else read_object(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), scene, i, file_instances);
-    }
-    for (size_t i = 0; i < objs.size(); ++i)
-        if (places_instances(objs[i])) read_instances(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), objs, scene, i);
-    for (Object& o : file_instances) scene.objects.push_back(std::move(o));
+    read_objects(root, scene, ctx);
 
-    // Lights: explicit ones, then one mesh light per object with emissive faces.
-    if (root.has("lights")) {
-        const json& ls = root.raw("lights");
-        if (!ls.is_array()) root.fail("lights", "expected an array of lights");
-        int shadow_slots = 0;
-        for (size_t i = 0; i < ls.size(); ++i) {
-            JsonReader l(ls[i], fmt::format("/lights/{}", i), ctx, light_keys());
-            scene.lights.push_back(read_light(l));
-            scene.lights.back().name = l.string("name", fmt::format("light{}", i));
-            read_light_links(l, scene, scene.lights.back(), shadow_slots);
-        }
-    }
-    for (size_t i = 0; i < scene.objects.size(); ++i) {
-        bool emits = false;  // (an instance may not emit: instance_reader refuses it; a prototype is not placed)
-        for (uint32_t m : scene.objects[i].placed() ? scene.objects[i].coarse.face_materials : std::vector<uint32_t>{}) emits |= scene.materials[m].is_emissive();
-        if (emits) {
-            Light l;
-            l.type = LightType::Mesh;
-            l.object = static_cast<uint32_t>(i);
-            l.name = scene.objects[i].name;
-            scene.lights.push_back(l);
-        }
-    }
+    read_lights(root, scene, ctx);
     if (scene.camera.has_motion_blur()) add_shutter_positions(scene, ctx);
     // What every file holds goes into the identities (deep and cache files).
     ctx.inputs = nullptr;

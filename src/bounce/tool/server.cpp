@@ -87,6 +87,35 @@ float float_param(const httplib::Request& req, const char* key, float def) {
     throw InputError("request", key, fmt::format("'{}' is not a finite number", v));
 }
 
+/// The body's "crop" [x0, x1, y0, y1] (absent or null: none); InputError when it is not a
+/// non-empty rectangle of integers in range.
+std::optional<std::array<int, 4>> crop_field(const json& b) {
+    if (!b.contains("crop") || b["crop"].is_null()) return std::nullopt;
+    const json& c = b["crop"];
+    if (!c.is_array() || c.size() != 4 || !std::all_of(c.begin(), c.end(), [](const json& v) { return v.is_number_integer(); }))
+        throw InputError("request body", "crop", "four integers [x0, x1, y0, y1] are required");
+    std::array<int, 4> crop{};
+    for (size_t i = 0; i < 4; ++i) {
+        const auto v = c[i].get<long long>();
+        if (v < 0 || v > 1 << 20) throw InputError("request body", fmt::format("crop/{}", i), "out of range");
+        crop[i] = static_cast<int>(v);
+    }
+    if (crop[0] >= crop[1] || crop[2] >= crop[3])
+        throw InputError("request body", "crop", "an empty region: x0 < x1 and y0 < y1 are required");
+    return crop;
+}
+
+/// The query's region=x0,x1,y0,y1 (absent: none); InputError when it is not four integers.
+std::optional<std::array<int, 4>> region_param(const httplib::Request& req) {
+    if (!req.has_param("region")) return std::nullopt;
+    std::array<int, 4> r{};
+    const std::string v = req.get_param_value("region");
+    int used = 0;
+    if (std::sscanf(v.c_str(), "%d,%d,%d,%d%n", &r[0], &r[1], &r[2], &r[3], &used) != 4 || used != static_cast<int>(v.size()))
+        throw InputError("request", "region", fmt::format("'{}' is not x0,x1,y0,y1", v));
+    return r;
+}
+
 }  // namespace
 
 LightingServer::LightingServer(LightingSession& session, ServerOptions options)
@@ -147,6 +176,17 @@ void LightingServer::routes() {
         if (res.body.empty())
             reply(res, res.status, {{"error", res.status == 413 ? "request body too large" : fmt::format("{} {}: status {}", req.method, req.path, res.status)}});
     });
+    render_routes(s);
+    view_routes(s);
+    // httplib compresses every text/* type: scripts go as application/javascript (a JavaScript
+    // MIME type browsers take for modules) with a charset, which it leaves alone.
+    for (const char* ext : {"js", "mjs"}) s.set_file_extension_and_mimetype_mapping(ext, "application/javascript; charset=utf-8");
+    if (!options_.web_dir.empty()) s.set_mount_point("/", options_.web_dir);
+    if (!options_.three_dir.empty() && std::filesystem::is_directory(options_.three_dir))
+        s.set_mount_point("/vendor/three", options_.three_dir);
+}
+
+void LightingServer::render_routes(httplib::Server& s) {
     s.Get("/api/params", [this](const httplib::Request&, httplib::Response& res) { reply(res, 200, session_.params()); });
     s.Post("/api/edit", [this](const httplib::Request& req, httplib::Response& res) {
         const json b = body_object(req);
@@ -156,20 +196,7 @@ void LightingServer::routes() {
     s.Post("/api/render", [this](const httplib::Request& req, httplib::Response& res) {
         const json b = body_object(req);
         const SessionAction action = b.contains("action") ? parse_session_action(string_field(b, "action")) : session_.pending();
-        std::optional<std::array<int, 4>> crop;
-        if (b.contains("crop") && !b["crop"].is_null()) {
-            const json& c = b["crop"];
-            if (!c.is_array() || c.size() != 4 || !std::all_of(c.begin(), c.end(), [](const json& v) { return v.is_number_integer(); }))
-                throw InputError("request body", "crop", "four integers [x0, x1, y0, y1] are required");
-            crop = std::array<int, 4>{};
-            for (size_t i = 0; i < 4; ++i) {
-                const auto v = c[i].get<long long>();
-                if (v < 0 || v > 1 << 20) throw InputError("request body", fmt::format("crop/{}", i), "out of range");
-                (*crop)[i] = static_cast<int>(v);
-            }
-            if ((*crop)[0] >= (*crop)[1] || (*crop)[2] >= (*crop)[3])
-                throw InputError("request body", "crop", "an empty region: x0 < x1 and y0 < y1 are required");
-        }
+        const std::optional<std::array<int, 4>> crop = crop_field(b);
         session_.start(action, crop);
         reply(res, 202, {{"started", session_action_name(action)}});
     });
@@ -183,6 +210,9 @@ void LightingServer::routes() {
         reply(res, 200, session_.status());
     });
     s.Get("/api/status", [this](const httplib::Request&, httplib::Response& res) { reply(res, 200, session_.status()); });
+}
+
+void LightingServer::view_routes(httplib::Server& s) {
     s.Get("/api/image", [this](const httplib::Request& req, httplib::Response& res) {
         const std::string layer = req.has_param("layer") ? req.get_param_value("layer") : "beauty";
         LightingSession::Pixels p = session_.pixels(layer, float_param(req, "exposure", 0));
@@ -193,15 +223,7 @@ void LightingServer::routes() {
     });
     s.Get("/api/records", [this](const httplib::Request& req, httplib::Response& res) {
         const std::string file = req.has_param("file") ? req.get_param_value("file") : "";
-        std::optional<std::array<int, 4>> region;
-        if (req.has_param("region")) {
-            region = std::array<int, 4>{};
-            const std::string v = req.get_param_value("region");
-            int used = 0;
-            auto& r = *region;
-            if (std::sscanf(v.c_str(), "%d,%d,%d,%d%n", &r[0], &r[1], &r[2], &r[3], &used) != 4 || used != static_cast<int>(v.size()))
-                throw InputError("request", "region", fmt::format("'{}' is not x0,x1,y0,y1", v));
-        }
+        const std::optional<std::array<int, 4>> region = region_param(req);
         reply_arrays(req, res, session_.records(file, static_cast<size_t>(int_param(req, "limit", 200000, 0, 10000000)), region));
     });
     s.Get("/api/caches", [this](const httplib::Request&, httplib::Response& res) { reply(res, 200, session_.cache_files()); });
@@ -218,12 +240,6 @@ void LightingServer::routes() {
         session_.load_cache(string_field(body_object(req), "file"));
         reply(res, 200, session_.status());
     });
-    // httplib compresses every text/* type: scripts go as application/javascript (a JavaScript
-    // MIME type browsers take for modules) with a charset, which it leaves alone.
-    for (const char* ext : {"js", "mjs"}) s.set_file_extension_and_mimetype_mapping(ext, "application/javascript; charset=utf-8");
-    if (!options_.web_dir.empty()) s.set_mount_point("/", options_.web_dir);
-    if (!options_.three_dir.empty() && std::filesystem::is_directory(options_.three_dir))
-        s.set_mount_point("/vendor/three", options_.three_dir);
 }
 
 }  // namespace bounce

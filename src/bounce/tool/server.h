@@ -39,7 +39,9 @@ public:
     const std::string& token() const { return guard_.token(); }
 
 private:
-    void routes();
+    void routes();  ///< guard, errors, static files
+    void render_routes(httplib::Server& s);  ///< edits, renders, frames, status
+    void view_routes(httplib::Server& s);    ///< image, records, scene, files
     LightingSession& session_;
     ServerOptions options_;
     RequestGuard guard_;  ///< every request passes it first (guard.h)
