@@ -137,5 +137,32 @@ TEST(FramePlan, RefinementsGathersAreKeptForReprojectionInAShot) {
     EXPECT_TRUE(plan_frame(cornell(), {}, shot).keep_gathers);
 }
 
+TEST(FramePlan, EveryDecisionIsAStepOfThePlanAndDescribed) {
+    // Mirror and glass paths to the sites gathers light: only with specular materials, and only
+    // when gathers light them.
+    const Scene mirrors = load_scene(test::source_dir() + "/scenes/cornell/mirror-glass.json",
+                                     {"camera.resolution=[40,40]", "render.gi=\"cache\""});
+    EXPECT_TRUE(plan_frame(mirrors, {}, {}).specular_sites);
+    EXPECT_FALSE(plan_frame(cornell(), {}, {}).specular_sites);
+    EXPECT_EQ(plan_frame(mirrors, {}, {}).describe()["specular_sites"], true);
+    // Ranks exchange radiosity sides only when the textures outlive the frame (a shot's next frame).
+    RenderRequest shot;
+    shot.kind = FrameKind::ShotFrame;
+    TwoRanks two;
+    shot.comm = &two;
+    EXPECT_TRUE(plan_frame(cornell(), {}, shot).share_radiosity);
+    RenderRequest still;
+    still.comm = &two;
+    EXPECT_FALSE(plan_frame(cornell(), {}, still).share_radiosity);
+    EXPECT_EQ(plan_frame(cornell(), {}, shot).describe()["share_radiosity"], true);
+    // What ranks cannot make together is refused while planning, before any pass.
+    EXPECT_THROW(plan_frame(cornell({"render.light_parts=true"}), {}, still), InputError);
+}
+
+TEST(FramePlan, ASequenceIsNotGatheredAnewFrameByFrame) {
+    test::expect_refused("render " + test::source_dir() + "/scenes/shots/cornell-rolling.json --frames 1-2 --regather -o /tmp/never.####.exr",
+                         {"--regather", "--frame"});
+}
+
 }  // namespace
 }  // namespace bounce

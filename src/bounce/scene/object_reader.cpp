@@ -326,6 +326,97 @@ void check_generated_geometry(const JsonReader& root, const nlohmann::json& obje
     if (std::string why = memory_shortfall(bytes, fmt::format("tessellating {} spheres", spheres)); !why.empty()) root.fail("objects", why);
 }
 
+namespace {
+
+/// The object's material, else the scene's "default" (made when there is none).
+uint32_t default_material(Scene& scene, int mat) {
+    if (mat >= 0) return static_cast<uint32_t>(mat);
+    int d = material_index(scene, "default");
+    if (d < 0) {
+        Material m;
+        m.name = "default";
+        scene.materials.push_back(m);
+        d = static_cast<int>(scene.materials.size() - 1);
+    }
+    return static_cast<uint32_t>(d);
+}
+
+/// Places a mesh or quad by its transform, keeping its local copy, and splits it `fine` times
+/// (linearly) for primary visibility.
+void place_with_fine(Object& obj, int fine) {
+    if (fine > 0 && keeps_local(obj)) {
+        const TriangleMesh local_fine = subdivide_linear(obj.coarse, fine);
+        keep_local(obj, obj.coarse, &local_fine);
+    } else {
+        keep_local(obj, obj.coarse, nullptr);
+    }
+    obj.coarse.transform(obj.placement);
+    if (fine > 0) obj.fine = subdivide_linear(obj.coarse, fine);
+}
+
+/// A mesh file without subdivision: its triangles (the meshes several of its nodes place go to
+/// `shared`), posed by its animation. Returns its fine_subdivisions.
+int read_mesh_object(const JsonReader& r, Scene& scene, int mat, Object& obj, std::vector<MeshFileParts::Shared>& shared) {
+    std::string file = r.file("file", true);
+    const int fine = r.integer("fine_subdivisions", 0, 0, 6);
+    MeshInputs read = mesh_inputs(r, "file");
+    // An animation of the file plays over the shot: from its start at the shot's first frame.
+    const MeshPose pose = mesh_pose(r, scene, scene.frame);
+    obj.deforms = !pose.clip.empty();
+    obj.moves = obj.moves || obj.deforms;
+    // Meshes its nodes share become instances, unless it moves, grows fur or is a prototype
+    // (instances of instances): then every node's copy is flattened into its mesh, as before.
+    const bool may_share = !obj.moves && !obj.prototype && !r.has("fur");
+    try {
+        if (may_share) {
+            MeshFileParts parts = load_mesh_parts(file, obj.name, scene.materials, mat, &read);
+            obj.coarse = std::move(parts.once);
+            shared = std::move(parts.shared);
+        } else {
+            obj.coarse = load_mesh_file(file, obj.name, scene.materials, mat, &read, pose);
+        }
+    } catch (const InputError& e) {
+        r.fail(r.has("animation") && e.place() == "animations" ? "animation" : "file", e.what());
+    }
+    record_inputs(r, "file", read);
+    obj.placement = read_transform(r);
+    place_with_fine(obj, fine);
+    return fine;
+}
+
+/// A quad of four vertices. Returns its fine_subdivisions.
+int read_quad_object(const JsonReader& r, Scene& scene, int mat, Object& obj) {
+    const json& v = r.has("vertices") ? r.raw("vertices") : json();
+    if (!v.is_array() || v.size() != 4) r.fail(r.has("vertices") ? "vertices" : "", "a quad needs \"vertices\": four [x,y,z] points");
+    Vec3 p[4];
+    for (size_t i = 0; i < 4; ++i) p[i] = r.to_vec3(v[i], r.at("vertices") + "/" + std::to_string(i));
+    if (length(cross(p[1] - p[0], p[2] - p[0])) == 0) r.fail("vertices", "quad is degenerate (zero area)");
+    const int fine = r.integer("fine_subdivisions", 0, 0, 8);
+    obj.coarse = make_quad(p[0], p[1], p[2], p[3], default_material(scene, mat));
+    obj.placement = read_transform(r);
+    place_with_fine(obj, fine);
+    return fine;
+}
+
+/// An icosphere, finer for primary visibility. Returns its extra fine levels.
+int read_sphere_object(const JsonReader& r, Scene& scene, int mat, Object& obj) {
+    Vec3 c = r.vec3("center", {});
+    auto radius = static_cast<float>(r.number("radius", 1, 0, kMaxCoordinate));
+    if (radius <= 0) r.fail("radius", "radius must be > 0");
+    int level = r.integer("subdivisions", 3, 0, 8);
+    const int fine = r.integer("fine_subdivisions", 2, 0, 8 - level);
+    uint32_t m = default_material(scene, mat);
+    obj.coarse = make_icosphere(c, radius, level, m);
+    const Transform t = obj.placement = read_transform(r);
+    if (fine > 0) obj.fine = make_icosphere(c, radius, level + fine, m);
+    keep_local(obj, obj.coarse, fine > 0 ? &obj.fine : nullptr);
+    obj.coarse.transform(t);
+    if (fine > 0) obj.fine.transform(t);
+    return fine;
+}
+
+}  // namespace
+
 void read_object(const JsonReader& r, Scene& scene, size_t index, std::vector<Object>& later) {
     Object obj;
     obj.name = r.string("name", fmt::format("object{}", index));
@@ -336,84 +427,17 @@ void read_object(const JsonReader& r, Scene& scene, size_t index, std::vector<Ob
     r.only(keys_of_type(type, subdivided),
            type != "mesh" ? "a " + type : subdivided ? "a subdivision surface" : "a mesh without \"subdivision\"");
     const int mat = read_material_name(r, "material", scene);
-    auto default_material = [&]() {
-        if (mat >= 0) return static_cast<uint32_t>(mat);
-        int d = material_index(scene, "default");
-        if (d < 0) {
-            Material m;
-            m.name = "default";
-            scene.materials.push_back(m);
-            d = static_cast<int>(scene.materials.size() - 1);
-        }
-        return static_cast<uint32_t>(d);
-    };
     int fine = 0;
     std::vector<MeshFileParts::Shared> shared;  // a mesh file's meshes that several of its nodes place
     const std::string subdivision = r.choice("subdivision", "none", {"none", "catmull-clark", "loop"});
     if (type == "mesh" && subdivision != "none") {
         read_subdivision_object(r, scene, mat, obj, subdivision == "loop" ? SubdivScheme::Loop : SubdivScheme::CatmullClark);
     } else if (type == "mesh") {
-        std::string file = r.file("file", true);
-        fine = r.integer("fine_subdivisions", 0, 0, 6);
-        MeshInputs read = mesh_inputs(r, "file");
-        // An animation of the file plays over the shot: from its start at the shot's first frame.
-        const MeshPose pose = mesh_pose(r, scene, scene.frame);
-        obj.deforms = !pose.clip.empty();
-        obj.moves = obj.moves || obj.deforms;
-        // Meshes its nodes share become instances, unless it moves, grows fur or is a prototype
-        // (instances of instances): then every node's copy is flattened into its mesh, as before.
-        const bool may_share = !obj.moves && !obj.prototype && !r.has("fur");
-        try {
-            if (may_share) {
-                MeshFileParts parts = load_mesh_parts(file, obj.name, scene.materials, mat, &read);
-                obj.coarse = std::move(parts.once);
-                shared = std::move(parts.shared);
-            } else {
-                obj.coarse = load_mesh_file(file, obj.name, scene.materials, mat, &read, pose);
-            }
-        } catch (const InputError& e) {
-            r.fail(r.has("animation") && e.place() == "animations" ? "animation" : "file", e.what());
-        }
-        record_inputs(r, "file", read);
-        obj.placement = read_transform(r);
-        if (fine > 0 && keeps_local(obj)) {
-            const TriangleMesh local_fine = subdivide_linear(obj.coarse, fine);
-            keep_local(obj, obj.coarse, &local_fine);
-        } else {
-            keep_local(obj, obj.coarse, nullptr);
-        }
-        obj.coarse.transform(obj.placement);
-        if (fine > 0) obj.fine = subdivide_linear(obj.coarse, fine);
+        fine = read_mesh_object(r, scene, mat, obj, shared);
     } else if (type == "quad") {
-        const json& v = r.has("vertices") ? r.raw("vertices") : json();
-        if (!v.is_array() || v.size() != 4) r.fail(r.has("vertices") ? "vertices" : "", "a quad needs \"vertices\": four [x,y,z] points");
-        Vec3 p[4];
-        for (size_t i = 0; i < 4; ++i) p[i] = r.to_vec3(v[i], r.at("vertices") + "/" + std::to_string(i));
-        if (length(cross(p[1] - p[0], p[2] - p[0])) == 0) r.fail("vertices", "quad is degenerate (zero area)");
-        fine = r.integer("fine_subdivisions", 0, 0, 8);
-        obj.coarse = make_quad(p[0], p[1], p[2], p[3], default_material());
-        obj.placement = read_transform(r);
-        if (fine > 0 && keeps_local(obj)) {
-            const TriangleMesh local_fine = subdivide_linear(obj.coarse, fine);
-            keep_local(obj, obj.coarse, &local_fine);
-        } else {
-            keep_local(obj, obj.coarse, nullptr);
-        }
-        obj.coarse.transform(obj.placement);
-        if (fine > 0) obj.fine = subdivide_linear(obj.coarse, fine);
+        fine = read_quad_object(r, scene, mat, obj);
     } else {
-        Vec3 c = r.vec3("center", {});
-        auto radius = static_cast<float>(r.number("radius", 1, 0, kMaxCoordinate));
-        if (radius <= 0) r.fail("radius", "radius must be > 0");
-        int level = r.integer("subdivisions", 3, 0, 8);
-        fine = r.integer("fine_subdivisions", 2, 0, 8 - level);
-        uint32_t m = default_material();
-        obj.coarse = make_icosphere(c, radius, level, m);
-        const Transform t = obj.placement = read_transform(r);
-        if (fine > 0) obj.fine = make_icosphere(c, radius, level + fine, m);
-        keep_local(obj, obj.coarse, fine > 0 ? &obj.fine : nullptr);
-        obj.coarse.transform(t);
-        if (fine > 0) obj.fine.transform(t);
+        fine = read_sphere_object(r, scene, mat, obj);
     }
     read_object_visibility(r, obj);  // (before its shared meshes are placed: they take its controls)
     std::vector<Object> placed = place_shared_meshes(r, obj, shared, fine);
