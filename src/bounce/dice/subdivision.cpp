@@ -158,6 +158,72 @@ int dicing_level(const ControlMesh& c, const std::function<float(const Vec3&)>& 
     return std::clamp(static_cast<int>(std::lround(levels)), min_level, max_level);
 }
 
+namespace {
+
+/// A point shared between the faces of an adaptive dicing.
+struct DicedPoint {
+    Vec3 p, n;        // un-displaced limit position and normal (the derivatives' cross product, then limit_normal)
+    float tangents2;  // |du|^2 + |dv|^2 (limit_normal's degeneracy scale)
+    Vec2 uv;          // where the displacement is read (the first face's uv)
+};
+
+/// Each control edge's segment count (at least 1).
+std::vector<int> edge_rates(const Far::TopologyLevel& base, const ControlMesh& c, const std::function<int(const Vec3&, const Vec3&)>& edge_rate) {
+    std::vector<int> rates(static_cast<size_t>(base.GetNumEdges()));
+    for (int e = 0; e < base.GetNumEdges(); ++e) {
+        const auto ev = base.GetEdgeVertices(e);
+        rates[static_cast<size_t>(e)] = std::max(1, edge_rate(c.positions[static_cast<size_t>(ev[0])], c.positions[static_cast<size_t>(ev[1])]));
+    }
+    return rates;
+}
+
+/// A face's tessellation's triangles, its vertices numbered from `first`.
+void append_facets(const Bfr::Tessellation& tess, uint32_t first, uint32_t material, std::vector<int>& facets, TriangleMesh& m) {
+    facets.resize(3 * static_cast<size_t>(tess.GetNumFacets()));
+    tess.GetFacets(facets.data());
+    for (size_t t = 0; t < facets.size(); t += 3) {
+        m.indices.insert(m.indices.end(), {first + static_cast<uint32_t>(facets[t]), first + static_cast<uint32_t>(facets[t + 1]),
+                                           first + static_cast<uint32_t>(facets[t + 2])});
+        m.face_materials.push_back(material);
+    }
+}
+
+/// The mesh's positions and normals from its shared points (`out_point`: each output vertex's).
+void place_points(const SubdivSurface& s, std::vector<DicedPoint>& pts, const std::vector<int>& out_point, TriangleMesh& m) {
+    // Normals per shared point: the facets around it orient the derivatives' cross product and
+    // stand in where it degenerates (limit_normal, as dice does); then displace once per point.
+    auto facet_sums = [&](auto position) {
+        std::vector<Vec3> sums(pts.size(), Vec3(0));
+        for (size_t t = 0; t < m.indices.size(); t += 3) {
+            const int a = out_point[m.indices[t]], b = out_point[m.indices[t + 1]], d = out_point[m.indices[t + 2]];
+            const Vec3 fn = cross(position(b) - position(a), position(d) - position(a));
+            for (int q : {a, b, d}) sums[static_cast<size_t>(q)] += fn;
+        }
+        return sums;
+    };
+    const std::vector<Vec3> around = facet_sums([&](int i) { return pts[static_cast<size_t>(i)].p; });
+    std::vector<Vec3> disp(pts.size());
+    for (size_t i = 0; i < pts.size(); ++i) {
+        DicedPoint& q = pts[i];
+        q.n = limit_normal(q.n, q.tangents2, around[i]);
+        disp[i] = s.displacement.active() ? q.p + q.n * s.displacement.offset(q.uv) : q.p;
+    }
+    std::vector<Vec3> normals(pts.size());
+    if (s.displacement.active()) {
+        normals = facet_sums([&](int i) { return disp[static_cast<size_t>(i)]; });
+        for (size_t i = 0; i < pts.size(); ++i) normals[i] = dot(normals[i], normals[i]) > 0 ? normalize(normals[i]) : pts[i].n;
+    } else {
+        for (size_t i = 0; i < pts.size(); ++i) normals[i] = pts[i].n;
+    }
+    for (int q : out_point) {
+        const auto i = static_cast<size_t>(q);
+        m.positions.push_back(disp[i]), m.normals.push_back(normals[i]);
+        m.base_positions.push_back(pts[i].p), m.base_normals.push_back(pts[i].n);
+    }
+}
+
+}  // namespace
+
 TriangleMesh dice_adaptive(const SubdivSurface& s, const std::function<int(const Vec3&, const Vec3&)>& edge_rate) {
     const ControlMesh& c = s.control;
     check_control_mesh(c, s.scheme);
@@ -165,20 +231,11 @@ TriangleMesh dice_adaptive(const SubdivSurface& s, const std::function<int(const
     const Far::TopologyLevel& base = refiner->GetLevel(0);
     const Bfr::RefinerSurfaceFactory<> factory(*refiner, Bfr::SurfaceFactory::Options().SetDefaultFVarID(0));
     const bool has_uv = !c.face_uvs.empty();
-    std::vector<int> rates(static_cast<size_t>(base.GetNumEdges()));
-    for (int e = 0; e < base.GetNumEdges(); ++e) {
-        const auto ev = base.GetEdgeVertices(e);
-        rates[static_cast<size_t>(e)] = std::max(1, edge_rate(c.positions[static_cast<size_t>(ev[0])], c.positions[static_cast<size_t>(ev[1])]));
-    }
+    const std::vector<int> rates = edge_rates(base, c, edge_rate);
 
     // Points shared between faces: one per control vertex, rate - 1 per control edge (in the
     // edge's own direction), and each face's interior points.
-    struct Point {
-        Vec3 p, n;        // un-displaced limit position and normal (the derivatives' cross product, then limit_normal)
-        float tangents2;  // |du|^2 + |dv|^2 (limit_normal's degeneracy scale)
-        Vec2 uv;          // where the displacement is read (the first face's uv)
-    };
-    std::vector<Point> pts;
+    std::vector<DicedPoint> pts;
     std::vector<int> vertex_point(static_cast<size_t>(base.GetNumVertices()), -1), edge_point(rates.size(), -1);
     std::vector<int> out_point;  // per output vertex: its shared point
     TriangleMesh m;
@@ -238,46 +295,11 @@ TriangleMesh dice_adaptive(const SubdivSurface& s, const std::function<int(const
             out_point.push_back(local[static_cast<size_t>(k)]);
             m.uvs.push_back(uv_at(k));
         }
-        facets.resize(3 * static_cast<size_t>(tess.GetNumFacets()));
-        tess.GetFacets(facets.data());
         const uint32_t material = f < static_cast<int>(c.face_materials.size()) ? c.face_materials[static_cast<size_t>(f)] : 0;
-        for (size_t t = 0; t < facets.size(); t += 3) {
-            m.indices.insert(m.indices.end(), {first + static_cast<uint32_t>(facets[t]), first + static_cast<uint32_t>(facets[t + 1]),
-                                               first + static_cast<uint32_t>(facets[t + 2])});
-            m.face_materials.push_back(material);
-        }
+        append_facets(tess, first, material, facets, m);
     }
 
-    // Normals per shared point: the facets around it orient the derivatives' cross product and
-    // stand in where it degenerates (limit_normal, as dice does); then displace once per point.
-    auto facet_sums = [&](auto position) {
-        std::vector<Vec3> sums(pts.size(), Vec3(0));
-        for (size_t t = 0; t < m.indices.size(); t += 3) {
-            const int a = out_point[m.indices[t]], b = out_point[m.indices[t + 1]], d = out_point[m.indices[t + 2]];
-            const Vec3 fn = cross(position(b) - position(a), position(d) - position(a));
-            for (int q : {a, b, d}) sums[static_cast<size_t>(q)] += fn;
-        }
-        return sums;
-    };
-    const std::vector<Vec3> around = facet_sums([&](int i) { return pts[static_cast<size_t>(i)].p; });
-    std::vector<Vec3> disp(pts.size());
-    for (size_t i = 0; i < pts.size(); ++i) {
-        Point& q = pts[i];
-        q.n = limit_normal(q.n, q.tangents2, around[i]);
-        disp[i] = s.displacement.active() ? q.p + q.n * s.displacement.offset(q.uv) : q.p;
-    }
-    std::vector<Vec3> normals(pts.size());
-    if (s.displacement.active()) {
-        normals = facet_sums([&](int i) { return disp[static_cast<size_t>(i)]; });
-        for (size_t i = 0; i < pts.size(); ++i) normals[i] = dot(normals[i], normals[i]) > 0 ? normalize(normals[i]) : pts[i].n;
-    } else {
-        for (size_t i = 0; i < pts.size(); ++i) normals[i] = pts[i].n;
-    }
-    for (int q : out_point) {
-        const auto i = static_cast<size_t>(q);
-        m.positions.push_back(disp[i]), m.normals.push_back(normals[i]);
-        m.base_positions.push_back(pts[i].p), m.base_normals.push_back(pts[i].n);
-    }
+    place_points(s, pts, out_point, m);
     if (!has_uv) m.uvs.clear();
     return m;
 }
@@ -306,6 +328,37 @@ ControlMesh refine_cage(const SubdivSurface& s, int level) {
     return out;
 }
 
+namespace {
+
+/// Per vertex of `last`, the sum of its faces' normals (Newell: twice the area, along the
+/// normal), for vertex positions `pos(i)`.
+template <class Position>
+std::vector<Vec3> vertex_normal_sums(const Far::TopologyLevel& last, const Position& pos) {
+    std::vector<Vec3> sums(static_cast<size_t>(last.GetNumVertices()), Vec3(0));
+    for (int f = 0; f < last.GetNumFaces(); ++f) {
+        const auto fv = last.GetFaceVertices(f);
+        Vec3 n(0);
+        for (int k = 0; k < fv.size(); ++k) n += cross(pos(fv[k]), pos(fv[(k + 1) % fv.size()]));
+        for (int k = 0; k < fv.size(); ++k) sums[static_cast<size_t>(fv[k])] += n;
+    }
+    return sums;
+}
+
+/// Each face of refinement level `level` with its control face's material.
+std::vector<uint32_t> diced_materials(const ControlMesh& c, const Far::TopologyRefiner& refiner, int level) {
+    std::vector<uint32_t> mat(c.face_materials.begin(), c.face_materials.end());
+    if (mat.size() != c.face_count()) mat.assign(c.face_count(), 0);
+    for (int l = 1; l <= level; ++l) {
+        const Far::TopologyLevel& tl = refiner.GetLevel(l);
+        std::vector<uint32_t> child(static_cast<size_t>(tl.GetNumFaces()));
+        for (int f = 0; f < tl.GetNumFaces(); ++f) child[static_cast<size_t>(f)] = mat[static_cast<size_t>(tl.GetFaceParentFace(f))];
+        mat.swap(child);
+    }
+    return mat;
+}
+
+}  // namespace
+
 TriangleMesh dice(const SubdivSurface& s, int level) {
     const ControlMesh& c = s.control;
     check_control_mesh(c, s.scheme);
@@ -326,19 +379,8 @@ TriangleMesh dice(const SubdivSurface& s, int level) {
     std::vector<P3> limit(nv), du(nv), dv(nv);
     primvar.Limit(pts, limit, du, dv);
 
-    // Per vertex, the sum of its faces' normals (Newell: twice the area, along the normal),
-    // for vertex positions `pos`.
     const int nf = last.GetNumFaces();
-    auto normal_sums = [&](const auto& pos) {
-        std::vector<Vec3> sums(nv, Vec3(0));
-        for (int f = 0; f < nf; ++f) {
-            const auto fv = last.GetFaceVertices(f);
-            Vec3 n(0);
-            for (int k = 0; k < fv.size(); ++k) n += cross(pos(fv[k]), pos(fv[(k + 1) % fv.size()]));
-            for (int k = 0; k < fv.size(); ++k) sums[static_cast<size_t>(fv[k])] += n;
-        }
-        return sums;
-    };
+    const auto normal_sums = [&](const auto& pos) { return vertex_normal_sums(last, pos); };
     // The limit mesh's face normals orient the limit tangents' cross product (and stand in
     // where it degenerates).
     const std::vector<Vec3> around = normal_sums([&](int i) { return limit[static_cast<size_t>(i)].v; });
@@ -367,15 +409,7 @@ TriangleMesh dice(const SubdivSurface& s, int level) {
         for (size_t i = 0; i < nv; ++i) nrm[i] = dot(nrm[i], nrm[i]) > 0 ? normalize(nrm[i]) : bn[i];
     }
 
-    // Materials: each diced face inherits its control face's.
-    std::vector<uint32_t> mat(c.face_materials.begin(), c.face_materials.end());
-    if (mat.size() != c.face_count()) mat.assign(c.face_count(), 0);
-    for (int l = 1; l <= level; ++l) {
-        const Far::TopologyLevel& tl = refiner->GetLevel(l);
-        std::vector<uint32_t> child(static_cast<size_t>(tl.GetNumFaces()));
-        for (int f = 0; f < tl.GetNumFaces(); ++f) child[static_cast<size_t>(f)] = mat[static_cast<size_t>(tl.GetFaceParentFace(f))];
-        mat.swap(child);
-    }
+    const std::vector<uint32_t> mat = diced_materials(c, *refiner, level);
 
     // Output vertices: one per (vertex, uv value) pair; positions repeat across uv seams.
     TriangleMesh m;
