@@ -236,14 +236,19 @@ void add_display_options(CLI::App& command, DisplaySettings& display) {
     command.add_option("--view", display.view, "the display's view (default: its default view)");
 }
 
+Distribute parse_distribute(const std::string& name) {
+    if (name == "tiles") return Distribute::Tiles;
+    if (name == "frames") return Distribute::Frames;
+    throw InputError("command line", "--distribute " + name, "is tiles or frames");
+}
+
 int run_render(const RenderArgs& given) {
     RenderArgs a = given;
     a.files.display = std::make_shared<const DisplayTransform>(a.display, std::getenv("OCIO"));
-    if (a.distribute != "tiles" && a.distribute != "frames")
-        throw InputError("command line", "--distribute " + a.distribute, "is tiles or frames");
+    const bool chunks = parse_distribute(a.distribute) == Distribute::Frames;
     if (a.frames.empty()) {
         if (a.resume) throw InputError("command line", "--resume", "goes with --frames");
-        if (a.distribute == "frames") throw InputError("command line", "--distribute frames", "goes with --frames");
+        if (chunks) throw InputError("command line", "--distribute frames", "goes with --frames");
         // The range a key's frame may have (a still has no shot to refuse the frame otherwise).
         if (a.frame && !is_frame_number(*a.frame))
             throw InputError("command line", fmt::format("--frame {:g}", *a.frame), fmt::format("a frame must be a finite number within +-{:g}", kMaxFrame));
@@ -262,7 +267,7 @@ int run_render(const RenderArgs& given) {
     for (const auto& [flag, pattern] : patterns)
         if (pattern.find('#') == std::string::npos)
             throw InputError("command line", std::string(flag) + " " + pattern, "a sequence needs a #### frame pattern in it");
-    if (a.distribute == "frames" && a.comm && a.comm->size() > 1) return render_frame_chunks(a, first, last);
+    if (chunks && a.comm && a.comm->size() > 1) return render_frame_chunks(a, first, last);
     return render_sequence(a, first, last, first, a.comm, false);
 }
 

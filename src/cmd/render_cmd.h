@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <memory>
 #include <optional>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,14 @@
 #include "bounce/scene/json_reader.h"
 
 namespace bounce {
+
+/// How an MPI job shares a --frames range among its ranks.
+enum class Distribute : uint8_t {
+    Tiles,   ///< every frame on every rank, a share of its tiles each
+    Frames,  ///< a chunk of frames per rank
+};
+/// "tiles" or "frames" (--distribute); InputError naming the flag otherwise.
+Distribute parse_distribute(const std::string& name);
 
 struct RenderArgs {
     FrameFiles files;
