@@ -90,7 +90,7 @@ int find_clip(const aiScene* s, const std::string& name, const std::string& path
             return static_cast<int>(i);
         }
     }
-    throw InputError(path, "animations", fmt::format("no animation \"{}\" (the file has {})", name,
+    throw NoSuchClip(path, "animations", fmt::format("no animation \"{}\" (the file has {})", name,
                                                      names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", "))));
 }
 

@@ -9,9 +9,17 @@
 #include <unordered_map>
 #include <vector>
 
+#include "bounce/core/error.h"
 #include "bounce/core/math.h"
 
 namespace bounce {
+
+/// A mesh file has no clip of the name an object plays: the object's "animation" is at fault,
+/// not its "file" (object_reader names the key by the type, not by the message).
+class NoSuchClip : public InputError {
+public:
+    using InputError::InputError;
+};
 
 /// Which animation of a mesh file plays, and when.
 struct MeshTime {

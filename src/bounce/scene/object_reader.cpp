@@ -14,6 +14,7 @@
 #include "bounce/scene/item_readers.h"
 #include "bounce/scene/keyframes.h"
 #include "bounce/scene/link_reader.h"
+#include "bounce/scene/mesh_animation.h"
 #include "bounce/scene/mesh_import.h"
 
 namespace bounce {
@@ -202,8 +203,10 @@ TriangleMesh posed_visible_mesh(const JsonReader& r, const Scene& scene, double 
     TriangleMesh mesh;
     try {
         mesh = load_mesh_file(r.file("file", true), "", materials, -1, nullptr, mesh_pose(r, scene, frame));
+    } catch (const NoSuchClip& e) {
+        r.fail("animation", e.what());
     } catch (const InputError& e) {
-        r.fail(e.place() == "animations" ? "animation" : "file", e.what());
+        r.fail("file", e.what());
     }
     mesh.transform(read_transform(r));
     const int fine = r.integer("fine_subdivisions", 0, 0, 6);
@@ -375,8 +378,10 @@ int read_mesh_object(const JsonReader& r, Scene& scene, int mat, Object& obj, st
         } else {
             obj.coarse = load_mesh_file(file, obj.name, scene.materials, mat, &read, pose);
         }
+    } catch (const NoSuchClip& e) {
+        r.fail(r.has("animation") ? "animation" : "file", e.what());
     } catch (const InputError& e) {
-        r.fail(r.has("animation") && e.place() == "animations" ? "animation" : "file", e.what());
+        r.fail("file", e.what());
     }
     record_inputs(r, "file", read);
     obj.placement = read_transform(r);
