@@ -96,11 +96,15 @@ async function fetchImage() {
   const layer = $('layer').value, exposure = $('exposure').value;
   try {
     const { data, res } = await api(`/api/image?layer=${encodeURIComponent(layer)}&exposure=${exposure}`);
+    // Two fetches can overlap (a render's poll and the once-a-second listener): an image older
+    // than the one shown, e.g. a preview answered late, must not replace the finished frame.
+    const version = +res.headers.get('X-Version');
+    if (version < state.version) return;
     const w = +res.headers.get('X-Width'), h = +res.headers.get('X-Height');
     const canvas = $('image');
     canvas.width = w; canvas.height = h;
     canvas.getContext('2d').putImageData(new ImageData(new Uint8ClampedArray(data), w, h), 0, 0);
-    state.version = +res.headers.get('X-Version');
+    state.version = version;
   } catch (e) { showError(e.message); }
 }
 

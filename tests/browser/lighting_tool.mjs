@@ -74,7 +74,8 @@ async function lighterFound() {
     await a.goto(glossyUrl, { timeout: 120000 });  // the server may be busy with its first render
     await a.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
     const done = async (page, minVersion) => {
-      await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v,
+      await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v &&
+      window.bounce.version === window.bounce.status.image.version,
         minVersion, { timeout: 300000 });
       return page.evaluate(() => window.bounce.status);
     };
@@ -220,7 +221,8 @@ try {
   await attackers();
 
   const waitDone = async (minVersion) => {
-    await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v,
+    await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v &&
+      window.bounce.version === window.bounce.status.image.version,
       minVersion, { timeout: 300000 });
     return page.evaluate(() => window.bounce.status);
   };
