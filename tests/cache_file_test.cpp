@@ -120,7 +120,7 @@ TEST(CacheTools, MergeKeepsOneFragmentRecordPerKeyWhateverTheOrder) {
     ASSERT_EQ(ab.fragment_records.size(), 50u);
     EXPECT_EQ(serialize_cache_file(ab), serialize_cache_file(ba));
     RecordFilter inside;
-    inside.where = {"frame==1"};
+    inside.where = {WhereTerm::parse("frame==1")};
     for (const Record& r : filter_cache(ab, inside, false).fragment_records) EXPECT_EQ(r.frame, 1);
     EXPECT_EQ(filter_cache(ab, inside, false).fragment_records.size() + filter_cache(ab, inside, true).fragment_records.size(), 50u);
 }
@@ -159,9 +159,24 @@ TEST(CacheTools, BoxFilterKeepsExactlyTheRecordsInside) {
     EXPECT_EQ(removed.records.size(), a.records.size() - inside);
     for (const auto& r : kept.records) EXPECT_TRUE(f.matches(r));
     RecordFilter w;
-    w.where = {"frame==1", "E.g>0.5"};
+    w.where = {WhereTerm::parse("frame==1"), WhereTerm::parse("E.g>0.5")};
     for (const auto& r : filter_cache(a, w, false).records) EXPECT_TRUE(r.frame == 1 && r.E.y > 0.5f);
-    EXPECT_THROW(check_where_term("colour<3"), InputError);
+    EXPECT_THROW(WhereTerm::parse("colour<3"), InputError);
+}
+
+TEST(CacheTools, EveryWhereOperatorAndFieldReadsTheRecord) {
+    Record r;
+    r.p = {1, 2, 3}, r.n = {0, 0.6f, 0.8f}, r.E = Color(0.25f, 0.5f, 1.0f), r.ao = 0.75f;
+    r.radius = 4, r.footprint = 0.5f, r.rays = 256, r.frame = 7;
+    const std::pair<const char*, bool> cases[] = {
+        {"p.x==1", true}, {"p.y<2", false}, {"p.z<=3", true}, {"n.x!=0", false}, {"n.y>0.5", true}, {"n.z>=0.8", true},
+        {"E.r==0.25", true}, {"E.g<0.5", false}, {"E.b>=1", true}, {"ao>0.8", false}, {"radius==4", true},
+        {"pixels==8", true}, {"rays>=256", true}, {"frame!=7", false}, {"frame > 6", true}};
+    for (const auto& [term, holds] : cases) EXPECT_EQ(WhereTerm::parse(term).holds(r), holds) << term;
+    EXPECT_NEAR(luminance(r.E), 0.25 * 0.2126 + 0.5 * 0.7152 + 0.0722, 1e-6);
+    EXPECT_TRUE(WhereTerm::parse("E.y>0.48").holds(r));
+    EXPECT_FALSE(WhereTerm::parse("E.y>0.49").holds(r));
+    for (const char* bad : {"radius<", "radius~1", "radius<1e999", "<1", "E.q>1"}) EXPECT_THROW(WhereTerm::parse(bad), InputError) << bad;
 }
 
 TEST(CacheTools, PlyExportHasOnePointPerRecord) {

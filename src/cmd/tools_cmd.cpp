@@ -260,8 +260,7 @@ int run_cache_filter(const CacheArgs& a) {
         filter.radius = v[3];
         if (!(filter.radius > 0)) throw InputError("command line", "--sphere " + a.sphere, "the radius must be > 0");
     }
-    for (const auto& w : a.where) check_where_term(w);
-    filter.where = a.where;
+    for (const auto& w : a.where) filter.where.push_back(WhereTerm::parse(w));
     if (!filter.has_box && !filter.has_sphere && filter.where.empty())
         throw InputError("command line", "cache filter", "give --box, --sphere or --where");
     CacheFile in = read_cache_file(a.inputs.at(0));

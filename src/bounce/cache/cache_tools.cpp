@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -165,22 +166,56 @@ CacheFile merge_caches(const CacheFile& a, const CacheFile& b, const std::string
 
 namespace {
 
-struct WhereTerm {
-    std::string field, op;
-    double value;
-};
+/// The --where fields, by the names the CLI takes.
+constexpr std::array<std::pair<std::string_view, WhereTerm::Field>, 15> kWhereFields{{
+    {"p.x", WhereTerm::Field::PX}, {"p.y", WhereTerm::Field::PY}, {"p.z", WhereTerm::Field::PZ},
+    {"n.x", WhereTerm::Field::NX}, {"n.y", WhereTerm::Field::NY}, {"n.z", WhereTerm::Field::NZ},
+    {"E.r", WhereTerm::Field::ER}, {"E.g", WhereTerm::Field::EG}, {"E.b", WhereTerm::Field::EB},
+    {"E.y", WhereTerm::Field::EY}, {"ao", WhereTerm::Field::Ao}, {"radius", WhereTerm::Field::Radius},
+    {"pixels", WhereTerm::Field::Pixels}, {"rays", WhereTerm::Field::Rays}, {"frame", WhereTerm::Field::Frame}}};
+constexpr std::array<std::pair<std::string_view, WhereTerm::Op>, 6> kWhereOps{{
+    {"<", WhereTerm::Op::Less}, {"<=", WhereTerm::Op::LessEqual}, {">", WhereTerm::Op::Greater},
+    {">=", WhereTerm::Op::GreaterEqual}, {"==", WhereTerm::Op::Equal}, {"!=", WhereTerm::Op::NotEqual}}};
 
-WhereTerm parse_where(const std::string& term) {
+double field_value(const Record& r, WhereTerm::Field f) {
+    using F = WhereTerm::Field;
+    switch (f) {
+        case F::PX: return r.p.x;
+        case F::PY: return r.p.y;
+        case F::PZ: return r.p.z;
+        case F::NX: return r.n.x;
+        case F::NY: return r.n.y;
+        case F::NZ: return r.n.z;
+        case F::ER: return r.E.x;
+        case F::EG: return r.E.y;
+        case F::EB: return r.E.z;
+        case F::EY: return luminance(r.E);
+        case F::Ao: return r.ao;
+        case F::Radius: return r.radius;
+        case F::Pixels: return r.radius / r.footprint;
+        case F::Rays: return r.rays;
+        case F::Frame: return r.frame;
+    }
+    return 0;
+}
+
+}  // namespace
+
+WhereTerm WhereTerm::parse(const std::string& term) {
     static const std::regex re(R"(\s*([A-Za-z_]+(?:\.[A-Za-z])?)\s*(<=|>=|==|!=|<|>)\s*(-?[0-9.eE+-]+)\s*)");
-    static const std::vector<std::string> fields = {"p.x", "p.y", "p.z", "n.x", "n.y", "n.z", "E.r", "E.g", "E.b", "E.y",
-                                                    "ao", "radius", "pixels", "rays", "frame"};
     std::smatch m;
     if (!std::regex_match(term, m, re))
         throw InputError("command line", "--where " + term, "expected FIELD OP NUMBER, e.g. \"radius<0.5\" or \"E.y>=0.1\"");
-    WhereTerm w{m[1], m[2], 0};
-    if (std::find(fields.begin(), fields.end(), w.field) == fields.end())
-        throw InputError("command line", "--where " + term,
-                         fmt::format("unknown field \"{}\" (valid: {})", w.field, fmt::join(fields, ", ")));
+    const std::string name = m[1], op = m[2];
+    auto field = std::find_if(kWhereFields.begin(), kWhereFields.end(), [&](const auto& f) { return f.first == name; });
+    if (field == kWhereFields.end()) {
+        std::vector<std::string_view> names;
+        for (const auto& f : kWhereFields) names.push_back(f.first);
+        throw InputError("command line", "--where " + term, fmt::format("unknown field \"{}\" (valid: {})", name, fmt::join(names, ", ")));
+    }
+    WhereTerm w;
+    w.field = field->second;
+    w.op = std::find_if(kWhereOps.begin(), kWhereOps.end(), [&](const auto& o) { return o.first == op; })->second;
     try {
         w.value = std::stod(m[3]);
     } catch (...) {
@@ -189,41 +224,25 @@ WhereTerm parse_where(const std::string& term) {
     return w;
 }
 
-double field_value(const Record& r, const std::string& f) {
-    if (f == "p.x") return r.p.x;
-    if (f == "p.y") return r.p.y;
-    if (f == "p.z") return r.p.z;
-    if (f == "n.x") return r.n.x;
-    if (f == "n.y") return r.n.y;
-    if (f == "n.z") return r.n.z;
-    if (f == "E.r") return r.E.x;
-    if (f == "E.g") return r.E.y;
-    if (f == "E.b") return r.E.z;
-    if (f == "E.y") return luminance(r.E);
-    if (f == "ao") return r.ao;
-    if (f == "radius") return r.radius;
-    if (f == "pixels") return r.radius / r.footprint;
-    if (f == "rays") return r.rays;
-    return r.frame;
+bool WhereTerm::holds(const Record& r) const {
+    const double v = field_value(r, field);
+    switch (op) {
+        case Op::Less: return v < value;
+        case Op::LessEqual: return v <= value;
+        case Op::Greater: return v > value;
+        case Op::GreaterEqual: return v >= value;
+        case Op::Equal: return v == value;
+        case Op::NotEqual: return v != value;
+    }
+    return false;
 }
-
-}  // namespace
-
-void check_where_term(const std::string& term) { parse_where(term); }
 
 bool RecordFilter::matches(const Record& r) const {
     if (has_box && (r.p.x < box_lo.x || r.p.y < box_lo.y || r.p.z < box_lo.z || r.p.x > box_hi.x || r.p.y > box_hi.y ||
                     r.p.z > box_hi.z))
         return false;
     if (has_sphere && length(r.p - center) > radius) return false;
-    for (const auto& t : where) {
-        WhereTerm w = parse_where(t);
-        double v = field_value(r, w.field);
-        bool ok = w.op == "<" ? v < w.value : w.op == "<=" ? v <= w.value : w.op == ">" ? v > w.value
-                : w.op == ">=" ? v >= w.value : w.op == "==" ? v == w.value : v != w.value;
-        if (!ok) return false;
-    }
-    return true;
+    return std::all_of(where.begin(), where.end(), [&](const WhereTerm& w) { return w.holds(r); });
 }
 
 CacheFile filter_cache(const CacheFile& in, const RecordFilter& filter, bool remove) {

@@ -22,18 +22,28 @@ std::string cache_info_text(const nlohmann::json& info, const std::string& path)
 CacheFile merge_caches(const CacheFile& a, const CacheFile& b, const std::string& name_a,
                        const std::string& name_b, bool force);
 
+/// One --where term, parsed: a record field compared with a number.
+struct WhereTerm {
+    enum class Field { PX, PY, PZ, NX, NY, NZ, ER, EG, EB, EY, Ao, Radius, Pixels, Rays, Frame };
+    enum class Op { Less, LessEqual, Greater, GreaterEqual, Equal, NotEqual };
+    Field field = Field::Radius;
+    Op op = Op::Less;
+    double value = 0;
+    /// Parses "field op value": fields p.x p.y p.z n.x .. E.r E.g E.b E.y (luminance) ao radius
+    /// pixels (radius / footprint) rays frame; ops < <= > >= == !=. Throws InputError naming
+    /// `term` on a bad one.
+    static WhereTerm parse(const std::string& term);
+    bool holds(const Record& r) const;
+};
+
 /// A record predicate for `cache filter`.
 struct RecordFilter {
     bool has_box = false, has_sphere = false;
     Vec3 box_lo, box_hi, center;
     float radius = 0;
-    /// "field op value" terms, all of which must hold: fields p.x p.y p.z n.x .. E.r E.g E.b
-    /// E.y (luminance) ao radius pixels (radius / footprint) rays frame; ops < <= > >= == !=.
-    std::vector<std::string> where;
+    std::vector<WhereTerm> where;  ///< all must hold
     bool matches(const Record& r) const;
 };
-/// Parses one --where term; throws InputError naming `term` on a bad one.
-void check_where_term(const std::string& term);
 
 /// Keeps the records matching `filter` (or removes them when `remove`).
 CacheFile filter_cache(const CacheFile& in, const RecordFilter& filter, bool remove);
