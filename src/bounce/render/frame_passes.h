@@ -15,6 +15,7 @@
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
 #include "bounce/deep/deep_buffer.h"
+#include "bounce/gather/gather.h"
 #include "bounce/lighting/lighting.h"
 #include "bounce/lighting/materials.h"
 #include "bounce/radiosity/radiosity.h"
@@ -137,6 +138,10 @@ struct ShadeResult {
 ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
                          const std::vector<Indirect>* brute, const SpecularSitesResult& specular,
                          const RadiosityTextures* radiosity, const std::function<void(const Image&)>& quick_look = {});
+
+/// The scene's gather settings for this frame's gathers: with gradients (`record_terms`) for
+/// records, without for brute force, refinement and the correction; the frame's cancel token.
+GatherSettings frame_gather_settings(const FrameContext& ctx, bool record_terms);
 
 /// A copy of `cache` that a frame may add records to.
 std::unique_ptr<IrradianceCache> copy_cache(const IrradianceCache& cache, const Scene& scene);
