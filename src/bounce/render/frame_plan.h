@@ -68,8 +68,18 @@ struct FrameState {
     std::shared_ptr<const Scene> scene;  ///< its meshes back `accel`
     std::shared_ptr<const SceneAccel> accel;
     std::shared_ptr<const RadiosityTextures> radiosity;
-    std::vector<Record> waiting;
-    std::vector<Record> gathers;  ///< refinement's gathers that still serve (plan.keep_gathers)
+    /// Shared like the rest, so a front end that keeps the state (the lighting tool) hands it to
+    /// the next plan without copying records (a shot's kept gathers hold their rays' hits).
+    std::shared_ptr<const std::vector<Record>> waiting;
+    std::shared_ptr<const std::vector<Record>> gathers;  ///< refinement's gathers that still serve (plan.keep_gathers)
+    const std::vector<Record>& waiting_records() const { return waiting ? *waiting : none(); }
+    const std::vector<Record>& kept_gathers() const { return gathers ? *gathers : none(); }
+
+private:
+    static const std::vector<Record>& none() {
+        static const std::vector<Record> empty;
+        return empty;
+    }
 };
 
 /// Primary visibility.

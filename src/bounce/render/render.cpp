@@ -275,8 +275,8 @@ FrameState RenderResult::release_state() {
     s.cache = std::shared_ptr<const IrradianceCache>(std::move(cache));
     s.accel = std::move(accel);
     s.radiosity = std::move(radiosity);
-    s.waiting = std::move(waiting);
-    s.gathers = std::move(gathers);
+    s.waiting = std::make_shared<const std::vector<Record>>(std::move(waiting));
+    s.gathers = std::make_shared<const std::vector<Record>>(std::move(gathers));
     return s;
 }
 

@@ -130,7 +130,7 @@ RenderRequest LightingSession::request_locked(SessionAction action, bool cached,
         (shot && action == SessionAction::Regather && !anew)) {
         req.kind = FrameKind::ShotFrame;
         if (action == SessionAction::Rasterize) previous = {};
-        if (action == SessionAction::Regather) previous.cache.reset(), previous.waiting.clear(), previous.gathers.clear();
+        if (action == SessionAction::Regather) previous.cache.reset(), previous.waiting.reset(), previous.gathers.reset();
         return req;
     }
     set_session_files(action, req, previous, cached);
