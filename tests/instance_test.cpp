@@ -110,6 +110,50 @@ TEST(Instances, UnderAnyPlacementEqualTheFlatGeometryToFloatRounding) {
     }
 }
 
+TEST(Instances, TheSceneBoundsAreEveryPlacedVertexsBitForBitThoughInteriorPlacementsAreNotPlacedVertexByVertex) {
+    // A forest of rotated, scaled balls (a coarse and a fine tessellation): only the placements
+    // that can reach the union's surface place every vertex; the union is still exact.
+    json transforms = json::array();
+    uint64_t state = 7;
+    const auto uniform = [&](double lo, double hi) {
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        return lo + (hi - lo) * static_cast<double>(state >> 11) / 9007199254740992.0;
+    };
+    for (int k = 0; k < 400; ++k)
+        transforms.push_back({{"rotate", {uniform(0, 360), uniform(-1, 1), 1, uniform(-1, 1)}}, {"scale", uniform(0.3, 1.7)},
+                              {"translate", {(k % 20) * 1.3 - 12 + uniform(-0.4, 0.4), uniform(0, 0.5), (k / 20) * 1.1 - 10}}});
+    const Scene scene = test::scene_from(room(json::array({{{"name", "forest"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}}),
+                                              {{"fine_subdivisions", 1}}));
+    Bounds coarse, fine, others;
+    size_t placements = 0, shortcut = 0;
+    for (const Object& o : scene.objects) {
+        if (!o.instance) {
+            if (o.placed()) others.extend(o.coarse_bounds());
+            if (o.placed() && o.has_fine()) fine.extend(o.visible_mesh_bounds());
+            continue;
+        }
+        ++placements;
+        Bounds own;
+        for (const Vec3& v : o.local_coarse->positions) own.extend(o.placement.point(v));
+        for (const Vec3& v : o.local_fine->positions) fine.extend(o.placement.point(v));
+        coarse.extend(own);
+        for (int a = 0; a < 3; ++a) {  // each placement's box holds its vertices
+            EXPECT_LE(o.instance_bounds.lo[a], own.lo[a]);
+            EXPECT_GE(o.instance_bounds.hi[a], own.hi[a]);
+        }
+        shortcut += std::memcmp(&own, &o.instance_bounds, sizeof(Bounds)) != 0;
+    }
+    ASSERT_EQ(placements, 400u);
+    Bounds expected = others;
+    expected.extend(coarse);
+    const Bounds all = scene.bounds();
+    EXPECT_EQ(std::memcmp(&all, &expected, sizeof(Bounds)), 0);
+    expected.extend(fine);
+    const Bounds visible = scene.visible_bounds();
+    EXPECT_EQ(std::memcmp(&visible, &expected, sizeof(Bounds)), 0);
+    EXPECT_GT(shortcut, 300u);  // the interior's placements kept a conservative box
+}
+
 TEST(Instances, ShareOnePrototypesTrianglesAndReportTheirOwnObjectInHits) {
     // A row of 50 balls along x, 3 units apart.
     json transforms = json::array();

@@ -2,7 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <array>
+#include <cmath>
 #include <iterator>
+#include <map>
 #include <memory>
 #include <utility>
 
@@ -84,16 +87,89 @@ Object make_instance(std::string name, std::shared_ptr<const TriangleMesh> coars
     return o;
 }
 
-void bound_instances(std::span<Object> placed, const std::function<const JsonReader(size_t)>& at) {
-    std::vector<uint8_t> beyond(placed.size(), 0);
+namespace {
+
+/// A box that holds every vertex of a mesh with local bounds `local` as `t.point` places it:
+/// the local box's image in double, widened by far more than float rounding can move a
+/// placed vertex (t.point sums three products and a translation in float).
+Bounds conservative_bounds(const Bounds& local, const Transform& t) {
+    Bounds out;
+    for (int i = 0; i < 3; ++i) {
+        double centre = t.m[4 * i + 3], extent = 0, size = std::fabs(t.m[4 * i + 3]);
+        for (int j = 0; j < 3; ++j) {
+            const double m = t.m[4 * i + j], lo = local.lo[j], hi = local.hi[j];
+            centre += m * (lo + hi) / 2, extent += std::fabs(m) * (hi - lo) / 2;
+            size += std::fabs(m) * std::max(std::fabs(lo), std::fabs(hi));
+        }
+        const double margin = 1e-6 * size;
+        out.lo[i] = static_cast<float>(centre - extent - margin), out.hi[i] = static_cast<float>(centre + extent + margin);
+    }
+    return out;
+}
+
+bool holds(const Bounds& outer, const Bounds& inner) {
+    for (int i = 0; i < 3; ++i)
+        if (!(outer.lo[i] <= inner.lo[i] && inner.hi[i] <= outer.hi[i])) return false;
+    return true;
+}
+
+/// One tessellation of every placement (coarse or fine): its local box and the vertices that
+/// are extreme along its local axes, found once per shared mesh.
+struct Prototype {
+    Bounds local;
+    std::vector<Vec3> extremes;  ///< none for a mesh without vertices
+    explicit Prototype(const TriangleMesh& m) : local(m.bounds()) {
+        if (m.positions.empty()) return;
+        std::array<size_t, 6> at{};
+        for (size_t v = 0; v < m.positions.size(); ++v)
+            for (int a = 0; a < 3; ++a) {
+                if (m.positions[v][a] < m.positions[at[2 * a]][a]) at[2 * a] = v;
+                if (m.positions[v][a] > m.positions[at[2 * a + 1]][a]) at[2 * a + 1] = v;
+            }
+        for (size_t v : at) extremes.push_back(m.positions[v]);
+    }
+};
+
+/// Sets `bounds(o)` for every placement so that their union is exactly the union of their
+/// exactly placed vertices, placing every vertex only of the placements that can reach that
+/// union's surface: the others' conservative boxes lie inside the box of vertices the
+/// placements are known to put somewhere (their prototype's extremes, placed), so the union
+/// is bit for bit what placing every vertex gives. `beyond[k]`: placement k leaves the limit.
+void bound_tessellation(std::span<Object> placed, const std::function<const TriangleMesh*(const Object&)>& mesh,
+                        const std::function<Bounds&(Object&)>& bounds, std::vector<uint8_t>& beyond) {
+    std::map<const TriangleMesh*, Prototype> prototypes;
+    for (const Object& o : placed)
+        if (const TriangleMesh* m = mesh(o)) prototypes.try_emplace(m, *m);
+    std::vector<Bounds> inner(placed.size());
+    parallel_for_each_index(size_t{0}, placed.size(), [&](size_t k) {
+        const Object& o = placed[k];
+        if (const TriangleMesh* m = mesh(o))
+            for (const Vec3& p : prototypes.at(m).extremes) inner[k].extend(o.placement.point(p));
+    });
+    Bounds known;
+    for (const Bounds& b : inner) known.extend(b);
     parallel_for_each_index(size_t{0}, placed.size(), [&](size_t k) {
         Object& o = placed[k];
-        o.instance_bounds = o.instance_visible_bounds = Bounds{};
-        bool ok = placed_bounds(*o.local_coarse, o.placement, o.instance_bounds);
-        if (!o.local_fine) o.instance_visible_bounds = o.instance_bounds;
-        else ok = ok && placed_bounds(*o.local_fine, o.placement, o.instance_visible_bounds);
-        beyond[k] = !ok;
+        const TriangleMesh* m = mesh(o);
+        if (!m) return;
+        Bounds& b = bounds(o);
+        b = conservative_bounds(prototypes.at(m).local, o.placement);
+        if (within(b.lo, kMaxCoordinate) && within(b.hi, kMaxCoordinate) && holds(known, b)) return;
+        b = Bounds{};
+        beyond[k] |= !placed_bounds(*m, o.placement, b);
     });
+}
+
+}  // namespace
+
+void bound_instances(std::span<Object> placed, const std::function<const JsonReader(size_t)>& at) {
+    std::vector<uint8_t> beyond(placed.size(), 0);
+    bound_tessellation(placed, [](const Object& o) { return o.local_coarse.get(); }, [](Object& o) -> Bounds& { return o.instance_bounds; },
+                       beyond);
+    bound_tessellation(placed, [](const Object& o) { return o.local_fine.get(); }, [](Object& o) -> Bounds& { return o.instance_visible_bounds; },
+                       beyond);
+    for (Object& o : placed)
+        if (!o.local_fine) o.instance_visible_bounds = o.instance_bounds;
     for (size_t k = 0; k < placed.size(); ++k)
         if (beyond[k]) at(k).fail("", fmt::format("this placement moves vertices to non-finite positions or beyond +-{:g}", kMaxCoordinate));
 }

@@ -22,9 +22,12 @@ bool places_instances(const nlohmann::json& entry);
 /// named `name`; its world bounds are bound_instances' work.
 Object make_instance(std::string name, std::shared_ptr<const TriangleMesh> coarse, std::shared_ptr<const TriangleMesh> fine,
                      const Transform& placement);
-/// Sets every placement's world bounds, in parallel (each places all its prototype's vertices:
-/// most of a big instanced scene's load). Fails at `at(k)` for the first placement `k` that
-/// moves a vertex beyond the coordinate limit, as a serial loop would.
+/// Sets every placement's world bounds, in parallel, so that their union is exactly the box of
+/// every placed vertex (Scene::bounds is the same bit for bit as the flat geometry's). Only the
+/// placements that can reach that union's surface place all their prototype's vertices; the
+/// others keep a conservative box inside it (placing every vertex was most of a big instanced
+/// scene's load). Fails at `at(k)` for the first placement `k` that moves a vertex beyond the
+/// coordinate limit, as a serial loop would.
 void bound_instances(std::span<Object> placed, const std::function<const JsonReader(size_t)>& at);
 
 /// Reads instancer number `index` (read from `r`): its first placement takes `scene.objects[index]`
