@@ -41,7 +41,7 @@ TEST(ControlVariate, WithAZeroPredictionItIsBruteForceBitForBit) {
     IrradianceCache zero(c.scene.bounds(), c.scene.render.cache, false);
     for (size_t i = 0; i < c.cache.size(); ++i) {
         Record r = c.cache.record(i);
-        r.bins = {};
+        r.bins.reset();
         r.cells = std::make_shared<std::vector<Color>>(r.cells ? r.cells->size() : 0, Color(0));
         zero.insert_loaded(r);
     }

@@ -70,7 +70,7 @@ void write_record(std::string& out, const Record& r) {
     for (float d : r.reach) put(out, d);
     put(out, r.anchor), put_vec(out, r.anchor_p), put_vec(out, r.anchor_n), put(out, r.gathered), put(out, r.drift);
     put(out, r.near), put(out, r.anchor_prim), put(out, r.noise);
-    for (const Color& b : r.bins) put_vec(out, b);
+    for (const Color& b : r.bin_values()) put_vec(out, b);
 }
 
 /// Sequential reader over the file's bytes with bounds checks.
@@ -125,7 +125,9 @@ Record read_record(Cursor& c) {
     r.anchor = c.get<uint32_t>("anchor"), r.anchor_p = c.vec("anchor_p"), r.anchor_n = c.vec("anchor_n");
     r.gathered = c.get<int32_t>("gathered"), r.drift = c.get<float>("drift"), r.near = c.get<float>("near");
     r.anchor_prim = c.get<uint32_t>("anchor_prim"), r.noise = c.get<float>("noise");
-    for (Color& b : r.bins) b = c.vec("bins");
+    std::array<Color, kReachBins> bins;
+    for (Color& b : bins) b = c.vec("bins");
+    r.set_bins(bins);
     return r;
 }
 
@@ -160,7 +162,7 @@ const char* record_problem(const Record& r) {
     if (!(r.drift >= 0 && r.drift <= kMaxRadiometric)) return "drift is not in [0, 1e20]";
     if (!(r.near >= 0 && r.near <= kMaxCoordinate)) return "near distance is not in [0, 1e18]";
     if (!(r.noise >= 0 && r.noise <= kMaxRadiometric)) return "noise is not in [0, 1e20]";
-    for (const Color& b : r.bins)
+    for (const Color& b : r.bin_values())
         if (!(b.x >= 0 && b.y >= 0 && b.z >= 0 && b.x <= kMaxRadiometric && b.y <= kMaxRadiometric && b.z <= kMaxRadiometric))
             return "direction bins outside [0, 1e20]";
     return nullptr;

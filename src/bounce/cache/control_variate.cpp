@@ -63,7 +63,7 @@ int blend_bins(const IrradianceCache& cache, const Vec3& p, const Vec3& n, const
 
 BinPrediction predict_bins(const IrradianceCache& cache, const Vec3& p, const Vec3& n, const Vec3& gather_n) {
     BinPrediction out;
-    out.records = blend_bins(cache, p, n, gather_n, [](const Record& r) { return &r.bins; }, out.bin);
+    out.records = blend_bins(cache, p, n, gather_n, [](const Record& r) { return &r.bin_values(); }, out.bin);
     return out;
 }
 

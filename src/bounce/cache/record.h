@@ -2,6 +2,7 @@
 // reach. Formulas: docs/irradiance-cache.md.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -43,8 +44,20 @@ struct Record {
     Vec3 origin{0};              ///< where the gather's rays left from (world)
     std::array<float, kReachBins> reach{};  ///< farthest hit per direction bin (INFINITY: a ray escaped)
     /// Mean radiance per direction bin (GatherResult::bins; unoccluded fraction in AO mode): the
-    /// record's prediction for a fragment's correction rays (control_variate.h).
-    std::array<Color, kReachBins> bins{};
+    /// record's prediction for a fragment's correction rays (control_variate.h). Null when every
+    /// bin is 0 (without render.correction_rays): 384 bytes inline cost every record of a shot
+    /// that much whether it predicted anything or not.
+    std::shared_ptr<const std::array<Color, kReachBins>> bins;
+    /// Its bins, 0 where it keeps none.
+    const std::array<Color, kReachBins>& bin_values() const {
+        static const std::array<Color, kReachBins> zero{};
+        return bins ? *bins : zero;
+    }
+    /// Keeps `values` unless every one is 0.
+    void set_bins(const std::array<Color, kReachBins>& values) {
+        const bool any = std::any_of(values.begin(), values.end(), [](const Color& c) { return c.x != 0 || c.y != 0 || c.z != 0; });
+        bins = any ? std::make_shared<const std::array<Color, kReachBins>>(values) : nullptr;
+    }
     /// Its gather's every cell (GatherResult::cells; not in files): the prediction for fragments
     /// on its own plane.
     std::shared_ptr<const std::vector<Color>> cells;
