@@ -62,6 +62,14 @@ function check(ok, what) {
   if (!ok) failures++;
 }
 
+/// Waits until `page` shows a finished render of at least `minVersion`: the status says it is no
+/// longer running and the image on the page is that status's own (not a preview answered late).
+async function renderDone(page, minVersion) {
+  await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v &&
+    window.bounce.version === window.bounce.status.image.version, minVersion, { timeout: 300000 });
+  return page.evaluate(() => window.bounce.status);
+}
+
 /// Issue 28's list of what a lighter found, on the glossy Cornell box (a spot light with a handle).
 async function lighterFound() {
   const [glossy, glossyUrl] = await startLight(path.join(work, 'cornell/glossy-bump.json'), path.join(work, 'glossy-out'));
@@ -73,18 +81,12 @@ async function lighterFound() {
     a.on('console', (m) => { if (m.type() === 'error' && !m.text().startsWith('Failed to load resource')) errs.push(m.text()); });
     await a.goto(glossyUrl, { timeout: 120000 });  // the server may be busy with its first render
     await a.waitForFunction(() => window.bounce && window.bounce.ready, null, { timeout: 120000 });
-    const done = async (page, minVersion) => {
-      await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v &&
-      window.bounce.version === window.bounce.status.image.version,
-        minVersion, { timeout: 300000 });
-      return page.evaluate(() => window.bounce.status);
-    };
     const imageOf = (page) => page.evaluate(() => {
       const c = document.getElementById('image');
       return Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data);
     });
     await a.click('#rasterize');
-    await done(a, 1);
+    await renderDone(a, 1);
     const cell = (page, key) => page.locator(`input[aria-label="${key}"]`);
 
     // The range and "needs" columns are in view at 1400 px.
@@ -150,7 +152,7 @@ async function lighterFound() {
     await a.click('#regather');
     await a.waitForFunction((w) => window.bounce.version > w, v, { timeout: 60000 });
     await a.click('#stop');
-    const stopped = await done(a, v + 2);
+    const stopped = await renderDone(a, v + 2);
     check(stopped.state === 'cancelled', `the render was stopped (${stopped.state})`);
     await a.waitForTimeout(500);
     const after = await imageOf(a);
@@ -220,12 +222,7 @@ try {
     'a page with nothing rendered says to press Update');
   await attackers();
 
-  const waitDone = async (minVersion) => {
-    await page.waitForFunction((v) => window.bounce.status && window.bounce.status.state !== 'running' && window.bounce.version >= v &&
-      window.bounce.version === window.bounce.status.image.version,
-      minVersion, { timeout: 300000 });
-    return page.evaluate(() => window.bounce.status);
-  };
+  const waitDone = (minVersion) => renderDone(page, minVersion);
   const pixels = () => page.evaluate(() => {
     const c = document.getElementById('image');
     return Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data);
