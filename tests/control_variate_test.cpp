@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <string>
+#include <vector>
 
 #include "bounce/cache/control_variate.h"
 #include "bounce/cache/passes.h"
@@ -15,9 +17,18 @@
 namespace bounce {
 namespace {
 
+std::vector<Override> cornell_settings(const std::string& prediction) {
+    return {"camera.resolution=[32,24]", "render.spp=1", "render.rays=128", "render.gi=\"cache\"",
+            "render.correction_rays=16",  // records keep their prediction
+            "render.correction_prediction=\"" + prediction + "\""};
+}
+
 struct Cornell {
-    Scene scene = load_scene(test::cornell_scene(), {"camera.resolution=[32,24]", "render.spp=1", "render.rays=128", "render.gi=\"cache\"",
-                                                     "render.correction_rays=16"});  // records keep their prediction
+    explicit Cornell(const std::string& prediction = "cells") : scene(load_scene(test::cornell_scene(), cornell_settings(prediction))) {
+        const Gatherer g(scene, accel, materials, lighting, nullptr, gather_settings(scene));
+        gathering_pass(scene, deep, g, cache, stats, nullptr);
+    }
+    Scene scene;
     Stats stats;
     SceneAccel accel{scene};
     DeepBuffer deep = render_visibility(scene, accel, stats, nullptr);
@@ -28,10 +39,6 @@ struct Cornell {
         GatherSettings gs = gather_settings(scene);
         gs.rays = rays, gs.record_terms = false;
         return Gatherer(scene, accel, materials, lighting, nullptr, gs);
-    }
-    Cornell() {
-        const Gatherer g(scene, accel, materials, lighting, nullptr, gather_settings(scene));
-        gathering_pass(scene, deep, g, cache, stats, nullptr);
     }
 };
 
@@ -77,14 +84,16 @@ TEST(ControlVariate, WhereThePredictionIsTheTruthTheCorrectionHasNoVariance) {
     EXPECT_GT(std::sqrt(plain_sq / 64), 0.05 * exact.x);  // brute force at 8 rays does vary
 }
 
-TEST(ControlVariate, StaysUnbiasedWhateverTheRecordsPredict) {
-    // At fragments of the Cornell box, the corrected 16-ray estimate averaged over 400 seeds
-    // against a 16 384-ray gather: within 4 standard errors of the mean, with the records'
-    // prediction and with a prediction made wrong on purpose (every record's cells doubled).
-    Cornell c;
+/// At fragments of the Cornell box, the corrected 16-ray estimate averaged over 400 seeds
+/// against a 16 384-ray gather: within 4 standard errors of the mean, with the records'
+/// prediction and with a prediction made wrong on purpose (every record's cells doubled).
+void expect_unbiased(const std::string& prediction) {
+    Cornell c(prediction);
+    const bool hits = prediction == "hits";
     IrradianceCache wrong(c.scene.bounds(), c.scene.render.cache, false);
     for (size_t i = 0; i < c.cache.size(); ++i) {
         Record r = c.cache.record(i);
+        ASSERT_EQ(r.cell_hits != nullptr, hits) << "record " << i;  // hit points kept only for that prediction
         auto doubled = std::make_shared<std::vector<Color>>(*r.cells);
         for (Color& v : *doubled) v = v * 2.0f;
         r.cells = doubled;
@@ -106,7 +115,9 @@ TEST(ControlVariate, StaysUnbiasedWhateverTheRecordsPredict) {
                 const GatherResult g = g16.gather(frag.p, frag.n, rng, counters);
                 gather_local_directions(g16.grid(), rng, local);
                 int records = 0;
-                const double v = g.irradiance.y + plane_correction(*cache, frag.p, frag.n, local, kPi, records).y;
+                const Color correction = hits ? hits_correction(*cache, frag.p, frag.n, frag.p, frag.n, local, kPi, records)
+                                              : plane_correction(*cache, frag.p, frag.n, local, kPi, records);
+                const double v = g.irradiance.y + correction.y;
                 predicted += records > 0;
                 sum += v, sq += v * v;
             }
@@ -117,6 +128,11 @@ TEST(ControlVariate, StaysUnbiasedWhateverTheRecordsPredict) {
     }
     EXPECT_GE(checked, 6);  // the prediction was used, not left at 0
 }
+
+TEST(ControlVariate, StaysUnbiasedWhateverTheRecordsPredict) { expect_unbiased("cells"); }
+
+// The records' hit points seen from the fragment (render.correction_prediction "hits").
+TEST(ControlVariate, StaysUnbiasedWhateverTheRecordsHitsPredict) { expect_unbiased("hits"); }
 
 }  // namespace
 }  // namespace bounce

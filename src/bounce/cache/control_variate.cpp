@@ -102,9 +102,44 @@ Color plane_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& 
     return (integral - along) * (scale / wsum);
 }
 
+Color hits_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& n, const Vec3& at, const Vec3& gather_n,
+                      std::span<const Vec3> local, float scale, int& records) {
+    static const GatherGrid fine{kHitRows, kHitCols};
+    const Frame frame(gather_n);
+    std::vector<Color> value(static_cast<size_t>(fine.rays()), Color(0));
+    std::vector<float> weight(value.size(), 0.0f);
+    records = 0;
+    cache.visit_weights(p, n, [&](uint32_t id, float w) {
+        const Record& r = cache.record(id);
+        if (!(w > 0) || !r.cell_hits || !r.cells) return;
+        ++records;
+        const std::vector<Vec3>& hits = *r.cell_hits;
+        for (size_t c = 0; c < hits.size(); ++c) {
+            const Vec3 d = frame.to_local(hits[c] - at);
+            if (!(d.z > 0)) continue;  // behind the fragment's plane: none of its rays go there
+            const auto cell = static_cast<size_t>(grid_cell(fine, d / length(d)));
+            value[cell] += (*r.cells)[c] * w, weight[cell] += w;
+        }
+    });
+    if (records == 0) return Color(0);
+    // A cell no hit reached takes the records' bins (each fine cell lies inside one bin).
+    const BinPrediction bins = predict_bins(cache, p, n, gather_n);
+    Color integral(0), along(0);
+    for (int j = 0; j < fine.m; ++j)
+        for (int k = 0; k < fine.n; ++k) {
+            const auto cell = static_cast<size_t>(j * fine.n + k);
+            value[cell] = weight[cell] > 0 ? value[cell] / weight[cell]
+                                           : bins.bin[static_cast<size_t>(direction_bin(gather_cell_direction(fine, j, k, 0.5f, 0.5f)))];
+            integral += value[cell];
+        }
+    for (const Vec3& d : local) along += value[static_cast<size_t>(grid_cell(fine, d))];
+    return (integral / static_cast<float>(value.size()) - along / static_cast<float>(local.size())) * scale;
+}
+
 void correction_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache, const Gatherer& gatherer,
                      std::vector<Indirect>& light, Stats& stats, ProgressSink* progress) {
     const bool ao = scene.render.indirect.ao;
+    const bool hits = scene.render.cache.correction_prediction == CorrectionPrediction::Hits;
     tbb::enumerable_thread_specific<std::vector<Vec3>> directions;
     tbb::enumerable_thread_specific<uint64_t> fragments(0), predicted(0);
     for_each_bounce_fragment(scene, deep, progress, "correct", [&](const BounceFragment& b) {
@@ -117,10 +152,12 @@ void correction_pass(const Scene& scene, const DeepBuffer& deep, const Irradianc
         const Site site = record_site(scene, b.f, cache.settings());
         gather_local_directions(gatherer.grid(), b.rng, local);
         int records = 0;  // the records on its own plane predict it, else the others' bins
-        Color c = plane_correction(cache, site.p, at.n, local, ao ? 1.0f : kPi, records);
+        const float scale = ao ? 1.0f : kPi;
+        Color c = hits ? hits_correction(cache, site.p, site.n, at.p, at.n, local, scale, records)
+                       : plane_correction(cache, site.p, at.n, local, scale, records);
         if (records == 0) {
             const BinPrediction pred = predict_bins(cache, site.p, site.n, at.n);
-            c = prediction_correction(pred, local, ao ? 1.0f : kPi), records = pred.records;
+            c = prediction_correction(pred, local, scale), records = pred.records;
         }
         Indirect& out = light[b.index];
         if (ao) out.ao = g.ao + c.x;

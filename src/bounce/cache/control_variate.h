@@ -50,6 +50,16 @@ Color prediction_correction(const BinPrediction& prediction, std::span<const Vec
 Color plane_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& n, std::span<const Vec3> local, float scale,
                        int& records);
 
+/// The same from the records' cells' hit points (Record::cell_hits) seen from the fragment's
+/// gather point `at` (normal gather_n), records looked up at (p, n): each hit, weighed by its
+/// record's interpolation weight, goes to the cell of a fine grid over the fragment's hemisphere
+/// (kHitRows x kHitCols cells of equal cosine-weighted measure) it is seen in; a cell no hit
+/// reaches takes the records' bins there. The prediction is piecewise constant over those
+/// cells, so its integral is their mean. `records`: how many took part.
+inline constexpr int kHitRows = 16, kHitCols = 64;
+Color hits_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& n, const Vec3& at, const Vec3& gather_n,
+                      std::span<const Vec3> local, float scale, int& records);
+
 /// The correction pass: every fragment that uses the bounce light gathers `gatherer`'s rays
 /// (CacheSettings::correction_rays) at its own point and seed, as brute force does, and its
 /// irradiance (AO in AO mode) becomes that gather corrected by the records' prediction; its bent

@@ -78,7 +78,7 @@ bool IrradianceCache::has_light_parts(size_t lights) const {
 void IrradianceCache::set_values(Record& r, const GatherResult& g, bool gradients, float grad_t_scale) const {
     r.ao = g.ao;
     r.set_bins(g.bins);  // with light parts, the signal's (every light at scale 1)
-    r.cells = g.cells, r.grid = g.grid;
+    r.cells = g.cells, r.cell_hits = g.cell_hits, r.grid = g.grid;
     r.guide = g.guide;
     // Capped (a record in near darkness divides by almost nothing): past 1000 % it is all
     // noise anyway, and a cache file refuses values beyond 1e20.

@@ -61,6 +61,8 @@ struct Record {
     /// Its gather's every cell (GatherResult::cells; not in files): the prediction for fragments
     /// on its own plane.
     std::shared_ptr<const std::vector<Color>> cells;
+    /// With correction_prediction "hits": its cells' hit points (GatherResult::cell_hits; not in files).
+    std::shared_ptr<const std::vector<Vec3>> cell_hits;
     GatherGrid grid;
     uint32_t anchor = kNoAnchor; ///< the moving object whose surface carries it, or kNoAnchor (static)
     /// Rigid objects: p and n in the object's own space (before its placement). Deforming

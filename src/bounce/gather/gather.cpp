@@ -259,6 +259,11 @@ GatherResult Gatherer::finish(detail::Cells& cells, const Vec3& p, const Vec3& n
         if (settings_.ao)
             for (size_t c = 0; c < all->size(); ++c) (*all)[c] = Color(U[c]);
         res.cells = std::move(all), res.grid = grid_;
+        if (settings_.prediction_hits) {
+            auto at = std::make_shared<std::vector<Vec3>>(static_cast<size_t>(S));
+            for (size_t c = 0; c < at->size(); ++c) (*at)[c] = p + D[c] * std::min(R[c], kEscapedHit);
+            res.cell_hits = std::move(at);
+        }
     }
     if (settings_.guided > 0) res.guide = std::make_shared<const DirectionGuide>(cells_guide(cells, n));
     if (settings_.hessian) {
@@ -308,6 +313,7 @@ GatherSettings gather_settings(const Scene& scene) {
     g.ao_distance = r.ao_distance >= 0 ? r.ao_distance : 0.1f * scene.size();
     g.light_parts = scene.render.cache.light_parts && r.gi == GiMode::Cache;
     g.prediction = scene.render.cache.correction_rays > 0 && r.gi == GiMode::Cache;
+    g.prediction_hits = g.prediction && scene.render.cache.correction_prediction == CorrectionPrediction::Hits;
     return g;
 }
 

@@ -36,12 +36,19 @@ struct GatherSettings : IndirectSettings {
     /// (GatherResult::bins and cells; CacheSettings::correction_rays). Off, records carry
     /// neither: a 512-ray record's cells alone are 6 KB.
     bool prediction = false;
+    /// With prediction: also each cell's hit point (GatherResult::cell_hits;
+    /// CacheSettings::correction_prediction "hits").
+    bool prediction_hits = false;
 };
 
 struct DirectionGuide;
 namespace detail {
 struct Cells;
 }
+
+/// Where GatherResult::cell_hits puts an escaped ray's hit: this far along its direction (seen
+/// from any point of a scene, still that direction).
+inline constexpr float kEscapedHit = 1e20f;
 
 /// What a gather returns; gradients follow Ward-Heckbert (rotational) and Ward-Heckbert with
 /// Krivanek's occlusion-aware distances (translational), see docs/gather.md.
@@ -72,6 +79,9 @@ struct GatherResult {
     /// With prediction: every cell's radiance (unoccluded fraction in AO mode), cell j * n + k
     /// of the gather's grid: a finer prediction for fragments on the record's own plane.
     std::shared_ptr<const std::vector<Color>> cells;
+    /// With prediction_hits: every cell's hit point (an escaped ray's: kEscapedHit along its
+    /// direction), so that a fragment can see the cells from its own point.
+    std::shared_ptr<const std::vector<Vec3>> cell_hits;
     GatherGrid grid;
     std::shared_ptr<LightParts> parts;  ///< GatherSettings::light_parts: per light
     /// With record_terms and GatherSettings::guided: how its cells varied per direction bin,

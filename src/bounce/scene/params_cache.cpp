@@ -82,6 +82,12 @@ void add_refinement_rows(std::vector<Row>& rows) {
                             "prediction (their direction bins, blended) the rays' measured difference from it: unbiased "
                             "whatever the records say, brute force at these rays where none covers it (docs/gather.md); "
                             "0 = interpolation alone").flag());
+    rows.push_back(row("correction_prediction", "cache", &R::cache, &CacheSettings::correction_prediction)
+                       .choices({"cells", "hits"})
+                       .doc("records as a control variate: what they predict a fragment's correction rays see: `cells`, "
+                            "each record's cells where it lies on the fragment's plane, else the records' direction bins; "
+                            "`hits`, the records' cells' hit points seen from the fragment (parallax-correct; 24 bytes a ray "
+                            "per record in memory, docs/gather.md)").flag());
     rows.push_back(row("displaced_records", "cache", &R::cache, &CacheSettings::displaced_records)
                        .choices({"undisplaced", "displaced"})
                        .doc("where records of displaced surfaces live: on the un-displaced surface (rays still leave the "

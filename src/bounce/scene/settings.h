@@ -16,6 +16,9 @@ enum class GiMode : uint8_t { None, Brute, Cache };
 enum class Metric : uint8_t { TL04, Ward, Hessian };
 enum class CacheSharing : uint8_t { Shared, PerThread };
 enum class RecordSurface : uint8_t { Undisplaced, Displaced };
+/// What records predict for the control variate (docs/gather.md): their cells on a fragment's
+/// own plane, else their direction bins; or their cells' hit points seen from the fragment.
+enum class CorrectionPrediction : uint8_t { Cells, Hits };
 /// Which layers the EXR holds beside the standard ones (shade/layers.h).
 enum class LayerSet : uint8_t { Standard, Components };
 /// The bounce light at the surfaces mirrors and glass show: from the cache (records the
@@ -96,6 +99,7 @@ struct CacheSettings {
     /// Records as a control variate (docs/gather.md): every fragment traces this many rays of its
     /// own and adds their unbiased correction of the records' directional prediction; 0 = off.
     int correction_rays = 0;
+    CorrectionPrediction correction_prediction = CorrectionPrediction::Cells;  ///< what the records predict
     RecordSurface displaced_records = RecordSurface::Undisplaced;  ///< where records of displaced surfaces live
     float displacement_near = 10;  ///< un-displaced records: hits within this many displacement bounds do not shrink them
     float refine_tilt = 20;       ///< un-displaced records: a fragment whose normal tilts more than this (degrees) is refined; 0 = off
