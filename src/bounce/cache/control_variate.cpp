@@ -3,6 +3,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include <cmath>
+#include <optional>
 
 #include "bounce/cache/sites.h"
 #include "bounce/core/random.h"
@@ -122,14 +123,19 @@ Color hits_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& n
         }
     });
     if (records == 0) return Color(0);
-    // A cell no hit reached takes the records' bins (each fine cell lies inside one bin).
-    const BinPrediction bins = predict_bins(cache, p, n, gather_n);
+    // A cell no hit reached takes the records' bins (each fine cell lies inside one bin), blended
+    // only if some cell needs them: a second visit of the records.
+    std::optional<BinPrediction> bins;
     Color integral(0), along(0);
     for (int j = 0; j < fine.m; ++j)
         for (int k = 0; k < fine.n; ++k) {
             const auto cell = static_cast<size_t>(j * fine.n + k);
-            value[cell] = weight[cell] > 0 ? value[cell] / weight[cell]
-                                           : bins.bin[static_cast<size_t>(direction_bin(gather_cell_direction(fine, j, k, 0.5f, 0.5f)))];
+            if (weight[cell] > 0) {
+                value[cell] = value[cell] / weight[cell];
+            } else {
+                if (!bins) bins = predict_bins(cache, p, n, gather_n);
+                value[cell] = bins->bin[static_cast<size_t>(direction_bin(gather_cell_direction(fine, j, k, 0.5f, 0.5f)))];
+            }
             integral += value[cell];
         }
     for (const Vec3& d : local) along += value[static_cast<size_t>(grid_cell(fine, d))];
@@ -151,7 +157,7 @@ void correction_pass(const Scene& scene, const DeepBuffer& deep, const Irradianc
         // ... corrected by the records' prediction about the site they are looked up at.
         const Site site = record_site(scene, b.f, cache.settings());
         gather_local_directions(gatherer.grid(), b.rng, local);
-        int records = 0;  // the records on its own plane predict it, else the others' bins
+        int records = 0;  // the records' hits, or those on its own plane; else the records' bins
         const float scale = ao ? 1.0f : kPi;
         Color c = hits ? hits_correction(cache, site.p, site.n, at.p, at.n, local, scale, records)
                        : plane_correction(cache, site.p, at.n, local, scale, records);
