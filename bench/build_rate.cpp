@@ -1,6 +1,7 @@
 // Issue 49's load and build rates: a scene's load (bounce's loader: parsing, mesh files through
 // Assimp, tessellation) and its ray-tracing structures (SceneAccel: BVHs and the ray-offset
-// measurement) against the physical limits on the same triangles: Embree's own build of them
+// measurement) against the physical limits on the same triangles, with the mesh files parsed and
+// read from a mesh cache (scene/mesh_cache.h): Embree's own build of them
 // (shared buffers, no copies, one scene per prototype placed by instances as bounce does) at
 // each build quality, and reading the scene's mesh files from the page cache. Prints one
 // Markdown row per scene (docs/benchmarks.md, "Load and build rates").
@@ -19,6 +20,7 @@
 #include <map>
 #include <set>
 #include <string>
+#include <unistd.h>
 #include <vector>
 
 #include "bounce/accel/accel.h"
@@ -113,9 +115,23 @@ std::pair<double, double> read_rate(const Scene& scene, int repeat) {
     return {bytes, s};
 }
 
+/// Best load of `path` with its mesh files parsed, and with them read from a mesh cache
+/// (scene/mesh_cache.h; a fresh folder, filled by one load first).
+std::pair<double, double> load_rates(const std::string& path, int repeat, Scene& scene) {
+    unsetenv("BOUNCE_MESH_CACHE");
+    const double parsed = best_of(repeat, [&] { scene = load_scene(path); });
+    const auto folder = std::filesystem::temp_directory_path() / fmt::format("bounce-build-rate-{}", getpid());
+    setenv("BOUNCE_MESH_CACHE", folder.c_str(), 1);
+    scene = load_scene(path);
+    const double cached = best_of(repeat, [&] { scene = load_scene(path); });
+    unsetenv("BOUNCE_MESH_CACHE");
+    std::filesystem::remove_all(folder);
+    return {parsed, cached};
+}
+
 void measure(const std::string& path, int repeat) {
     Scene scene;
-    const double load = best_of(repeat, [&] { scene = load_scene(path); });
+    const auto [load, cached] = load_rates(path, repeat, scene);
     double triangles = 0, placed = 0;
     std::set<const TriangleMesh*> unique;
     for (const Object& o : scene.objects) {
@@ -134,9 +150,9 @@ void measure(const std::string& path, int repeat) {
                  (fine ? best_of(repeat, [&] { raw_build(device, scene, qualities[q], true); }) : 0.0);
     rtcReleaseDevice(device);
     const auto [bytes, read] = read_rate(scene, repeat);
-    std::printf("| %s | %.3g | %.3g | %.2f s | %.3f s | %.3f / %.3f / %.3f s | %.1fx | %.1fx | %.0f MB in %.3f s |\n",
-                std::filesystem::path(path).filename().c_str(), triangles, placed, load, accel, raw[0], raw[1], raw[2],
-                accel / raw[2], (load + accel) / raw[2], bytes / 1e6, read);
+    std::printf("| %s | %.3g | %.3g | %.3f s | %.3f s | %.3f s | %.3f / %.3f / %.3f s | %.1fx | %.1fx | %.1fx | %.0f MB in %.3f s |\n",
+                std::filesystem::path(path).filename().c_str(), triangles, placed, load, cached, accel, raw[0], raw[1], raw[2],
+                accel / raw[2], (load + accel) / raw[2], (cached + accel) / raw[2], bytes / 1e6, read);
     std::fflush(stdout);
 }
 
@@ -154,8 +170,9 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "usage: bounce_build_rate SCENE... [--repeat N]\n");
         return 2;
     }
-    std::printf("| scene | triangles (unique) | placed | load | SceneAccel | raw Embree low / medium / high | SceneAccel / raw high | load + SceneAccel / raw high | files read |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|\n");
+    std::printf("| scene | triangles (unique) | placed | load, parsed | load, mesh cache | SceneAccel | raw Embree low / medium / high | "
+                "SceneAccel / raw high | load parsed + SceneAccel / raw high | load cached + SceneAccel / raw high | files read |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
     try {
         for (const auto& s : scenes) bounce::measure(s, repeat);
     } catch (const std::exception& e) {

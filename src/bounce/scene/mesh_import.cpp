@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -17,6 +18,7 @@
 #include "bounce/core/files.h"
 #include "bounce/core/image.h"
 #include "bounce/scene/gltf_instances.h"
+#include "bounce/scene/mesh_cache.h"
 #include "bounce/scene/mesh_animation.h"
 #include "bounce/scene/mesh_checks.h"
 
@@ -302,8 +304,10 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
     return mat_map;
 }
 
-TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                            int override_material, MeshInputs* files_read, const MeshPose& pose) {
+namespace {
+
+TriangleMesh import_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
+                              int override_material, MeshInputs* files_read, const MeshPose& pose) {
     Assimp::Importer imp;
     const aiScene* s = import_file(imp, path, kAssimpFlags, files_read);
     const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material, files_read);
@@ -325,8 +329,8 @@ TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, 
     return out;
 }
 
-MeshFileParts load_mesh_parts(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                              int override_material, MeshInputs* files_read) {
+MeshFileParts import_mesh_parts(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
+                                int override_material, MeshInputs* files_read) {
     Assimp::Importer imp;
     const aiScene* s = import_file(imp, path, kAssimpFlags, files_read);
     const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material, files_read);
@@ -365,6 +369,61 @@ MeshFileParts load_mesh_parts(const std::string& path, const std::string& prefix
     });
     if (out.once.triangle_count() == 0 && out.shared.empty()) throw InputError(path, "", "mesh has no triangles");
     return out;
+}
+
+/// Calls fn(face material) for every face of `parts`.
+template <typename Fn>
+void for_each_face_material(MeshFileParts& parts, Fn&& fn) {
+    for (uint32_t& f : parts.once.face_materials) f = fn(f);
+    for (MeshFileParts::Shared& s : parts.shared)
+        for (uint32_t& f : s.mesh.face_materials) f = fn(f);
+}
+
+/// A load through the mesh cache (mesh_cache.h) when BOUNCE_MESH_CACHE names one: `import` runs
+/// only on a miss, and a hit replays what it did (the files it read through `files_read`'s
+/// check, the file's materials appended to `materials`).
+MeshFileParts through_cache(const std::string& path, const std::string& prefix, bool parts, std::vector<Material>& materials,
+                            int override_material, MeshInputs* files_read, const std::function<MeshFileParts(MeshInputs*)>& import) {
+    const std::string folder = mesh_cache_folder();
+    if (folder.empty()) return import(files_read);
+    const MeshCacheKey key{fs::absolute(path).lexically_normal().string(), prefix, override_material >= 0,
+                           override_material >= 0 && materials[static_cast<size_t>(override_material)].is_emissive(), parts};
+    const auto base = static_cast<uint32_t>(materials.size());
+    auto to_scene = [&](uint32_t f) { return override_material >= 0 ? static_cast<uint32_t>(override_material) : base + f; };
+    if (std::optional<LoadedMeshFile> hit = read_mesh_cache(folder, key)) {
+        for (const auto& input : hit->inputs)
+            if (files_read) files_read->add(input.first);
+        materials.insert(materials.end(), hit->materials.begin(), hit->materials.end());
+        for_each_face_material(hit->parts, to_scene);
+        return std::move(hit->parts);
+    }
+    MeshInputs read{files_read ? files_read->check : nullptr, {}};
+    LoadedMeshFile entry{import(&read), {materials.begin() + base, materials.end()}, {}};
+    if (files_read) files_read->files.insert(files_read->files.end(), read.files.begin(), read.files.end());
+    for (const std::string& f : read.files) entry.inputs.emplace_back(f, file_content_hash(f));
+    for_each_face_material(entry.parts, [&](uint32_t f) { return override_material >= 0 ? 0 : f - base; });
+    write_mesh_cache(folder, key, entry);
+    for_each_face_material(entry.parts, to_scene);
+    return std::move(entry.parts);
+}
+
+}  // namespace
+
+TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
+                            int override_material, MeshInputs* files_read, const MeshPose& pose) {
+    if (!pose.clip.empty()) return import_mesh_file(path, prefix, materials, override_material, files_read, pose);
+    return through_cache(path, prefix, false, materials, override_material, files_read, [&](MeshInputs* read) {
+               MeshFileParts p;
+               p.once = import_mesh_file(path, prefix, materials, override_material, read, pose);
+               return p;
+           }).once;
+}
+
+MeshFileParts load_mesh_parts(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
+                              int override_material, MeshInputs* files_read) {
+    return through_cache(path, prefix, true, materials, override_material, files_read, [&](MeshInputs* read) {
+        return import_mesh_parts(path, prefix, materials, override_material, read);
+    });
 }
 
 ControlMesh load_control_mesh(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
