@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <iterator>
@@ -47,15 +48,6 @@ const Object& find_prototype(const JsonReader& in, const json& entries, const Sc
     in.fail("of", fmt::format("no object is named \"{}\"{}", of, hint.empty() ? "" : " (did you mean \"" + hint + "\"?)"));
 }
 
-/// World bounds of `mesh` placed by `t`; false when a vertex lands beyond the coordinate limit.
-bool placed_bounds(const TriangleMesh& mesh, const Transform& t, Bounds& b) {
-    for (const Vec3& p : mesh.positions) {
-        const Vec3 q = t.point(p);
-        if (!within(q, kMaxCoordinate)) return false;
-        b.extend(q);
-    }
-    return true;
-}
 
 /// What placements share of their prototype (copied: the prototype moves as objects are appended).
 struct Shared {
@@ -113,12 +105,21 @@ bool holds(const Bounds& outer, const Bounds& inner) {
     return true;
 }
 
-/// One tessellation of every placement (coarse or fine): its local box and the vertices that
-/// are extreme along its local axes, found once per shared mesh.
+/// One tessellation of every placement (coarse or fine): its local box, the vertices that are
+/// extreme along its local axes, and a tree of its vertices (median splits, leaves of at most
+/// kLeafSize) with each node's local box, built once per shared mesh.
 struct Prototype {
+    static constexpr size_t kLeafSize = 64;
+    struct Node {
+        Bounds local;
+        size_t begin, end;  ///< its vertices in `vertices`
+        size_t right = 0;   ///< the second child (the first follows the node); 0 = a leaf
+    };
     Bounds local;
     std::vector<Vec3> extremes;  ///< none for a mesh without vertices
-    explicit Prototype(const TriangleMesh& m) : local(m.bounds()) {
+    std::vector<Vec3> vertices;  ///< the mesh's, in the tree's order
+    std::vector<Node> nodes;
+    explicit Prototype(const TriangleMesh& m) : local(m.bounds()), vertices(m.positions) {
         if (m.positions.empty()) return;
         std::array<size_t, 6> at{};
         for (size_t v = 0; v < m.positions.size(); ++v)
@@ -127,14 +128,54 @@ struct Prototype {
                 if (m.positions[v][a] > m.positions[at[2 * a + 1]][a]) at[2 * a + 1] = v;
             }
         for (size_t v : at) extremes.push_back(m.positions[v]);
+        split(0, vertices.size());
+    }
+    void split(size_t begin, size_t end) {
+        const size_t node = nodes.size();
+        Bounds b;
+        for (size_t v = begin; v < end; ++v) b.extend(vertices[v]);
+        nodes.push_back({b, begin, end});
+        if (end - begin <= kLeafSize) return;
+        const Vec3 size = b.hi - b.lo;
+        const int axis = size.x >= size.y && size.x >= size.z ? 0 : size.y >= size.z ? 1 : 2;
+        const auto mid = static_cast<std::ptrdiff_t>(begin + (end - begin) / 2);
+        std::nth_element(vertices.begin() + static_cast<std::ptrdiff_t>(begin), vertices.begin() + mid,
+                         vertices.begin() + static_cast<std::ptrdiff_t>(end), [axis](const Vec3& p, const Vec3& q) { return p[axis] < q[axis]; });
+        split(begin, static_cast<size_t>(mid));
+        nodes[node].right = nodes.size();
+        split(static_cast<size_t>(mid), end);
     }
 };
 
+/// World bounds of `proto`'s vertices placed by `t`, each exactly as t.point places it, except
+/// under the tree's nodes whose conservative box lies inside `known` (they cannot widen a union
+/// that holds `known`): those add their conservative box. False when a vertex lands beyond the limit.
+bool placed_bounds(const Prototype& proto, const Transform& t, const Bounds& known, Bounds& b) {
+    std::vector<size_t> stack{0};
+    while (!stack.empty()) {
+        const Prototype::Node& n = proto.nodes[stack.back()];
+        stack.pop_back();
+        const Bounds cb = conservative_bounds(n.local, t);
+        if (within(cb.lo, kMaxCoordinate) && within(cb.hi, kMaxCoordinate) && holds(known, cb)) {
+            b.extend(cb.lo), b.extend(cb.hi);
+        } else if (n.right) {
+            stack.push_back(n.right), stack.push_back(static_cast<size_t>(&n - proto.nodes.data()) + 1);
+        } else {
+            for (size_t v = n.begin; v < n.end; ++v) {
+                const Vec3 q = t.point(proto.vertices[v]);
+                if (!within(q, kMaxCoordinate)) return false;
+                b.extend(q);
+            }
+        }
+    }
+    return true;
+}
+
 /// Sets `bounds(o)` for every placement so that their union is exactly the union of their
-/// exactly placed vertices, placing every vertex only of the placements that can reach that
-/// union's surface: the others' conservative boxes lie inside the box of vertices the
-/// placements are known to put somewhere (their prototype's extremes, placed), so the union
-/// is bit for bit what placing every vertex gives. `beyond[k]`: placement k leaves the limit.
+/// exactly placed vertices, placing only the vertices (of the clusters, of the placements)
+/// that can reach that union's surface: the other conservative boxes lie inside the box of
+/// vertices the placements are known to put somewhere (their prototype's extremes, placed), so
+/// the union is bit for bit what placing every vertex gives. `beyond[k]`: placement k leaves the limit.
 void bound_tessellation(std::span<Object> placed, const std::function<const TriangleMesh*(const Object&)>& mesh,
                         const std::function<Bounds&(Object&)>& bounds, std::vector<uint8_t>& beyond) {
     std::map<const TriangleMesh*, Prototype> prototypes;
@@ -156,7 +197,7 @@ void bound_tessellation(std::span<Object> placed, const std::function<const Tria
         b = conservative_bounds(prototypes.at(m).local, o.placement);
         if (within(b.lo, kMaxCoordinate) && within(b.hi, kMaxCoordinate) && holds(known, b)) return;
         b = Bounds{};
-        beyond[k] |= !placed_bounds(*m, o.placement, b);
+        beyond[k] |= !placed_bounds(prototypes.at(m), o.placement, known, b);
     });
 }
 
@@ -193,12 +234,20 @@ void read_instances(const JsonReader& r, const json& entries, Scene& scene, size
         if (!list[k].is_object()) r.ctx().fail(at, fmt::format("expected a transform object, got {}", json_type_name(list[k])));
         return JsonReader(list[k], at, r.ctx(), {"translate", "rotate", "scale", "matrix", "name", "material", "visible_to", "matte"});
     };
-    std::vector<Object> placed;
-    placed.reserve(list.size());
-    for (size_t k = 0; k < list.size(); ++k) placed.push_back(read_placement(r, entry(k), scene, shared, k));
-    bound_instances(placed, entry);
-    scene.objects[index] = std::move(placed[0]);
-    std::move(placed.begin() + 1, placed.end(), std::back_inserter(scene.objects));
+    // Read in place at the end of the objects (read_objects reserved room for every placement),
+    // then the first moves to the instancer's index: one Object each, never a second copy.
+    const size_t first = scene.objects.size();
+    scene.objects.reserve(first + list.size());
+    for (size_t k = 0; k < list.size(); ++k) scene.objects.push_back(read_placement(r, entry(k), scene, shared, k));
+    bound_instances(std::span<Object>(scene.objects).subspan(first), entry);
+    scene.objects[index] = std::move(scene.objects[first]);
+    scene.objects.erase(scene.objects.begin() + static_cast<std::ptrdiff_t>(first));
+}
+
+size_t placements_of(const json& entry) {
+    if (!places_instances(entry) || !entry["instances"].is_object()) return 0;
+    const json& in = entry["instances"];
+    return in.contains("transforms") && in["transforms"].is_array() ? in["transforms"].size() : 0;
 }
 
 }  // namespace bounce

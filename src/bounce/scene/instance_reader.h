@@ -35,4 +35,8 @@ void bound_instances(std::span<Object> placed, const std::function<const JsonRea
 /// others are appended. Its prototype must be read already; `entries` are the scene file's objects.
 void read_instances(const JsonReader& r, const nlohmann::json& entries, Scene& scene, size_t index);
 
+/// How many placements a scene file's object entry asks for (0 unless it places instances):
+/// what read_objects reserves room for before any is read.
+size_t placements_of(const nlohmann::json& entry);
+
 }  // namespace bounce
