@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "bounce/core/error.h"
+#include "bounce/scene/json_reader.h"
 #include "bounce/scene/mesh_import.h"
 #include "test_util.h"
 
@@ -60,6 +61,22 @@ TEST(SceneLoad, MissingFile) {
 TEST(SceneLoad, MalformedJsonReportsLineAndColumn) {
     std::string text = "{\n  \"camera\": {\n    \"fov\": 40,,\n  }\n}\n";
     expect_input_error([&] { load_scene_text(text, "bad.json"); }, {"bad.json: 3:", "malformed JSON"});
+}
+
+TEST(SceneLoad, TheParserBuildsNlohmannsDocumentAndNamesADuplicateKeyWhereverItIs) {
+    const std::string cornell = test::bytes_of(test::cornell_scene());
+    EXPECT_EQ(parse_json_text(cornell, "c.json"), json::parse(cornell));
+    const std::string mixed = R"({"a": [1, -2, 3.5e300, true, null, "s", [], {}, [[{"b": {"c": [0]}}]]], "u": 18446744073709551615})";
+    EXPECT_EQ(parse_json_text(mixed, "m.json"), json::parse(mixed));
+    auto refused = [](const std::string& text, const std::string& pointer) {
+        expect_input_error([&] { parse_json_text(text, "d.json"); }, {"d.json: " + pointer + ": error: key given twice in one object"});
+    };
+    refused(R"({"a": 1, "a": 2})", "/a");
+    refused(R"({"objects": [{"name": "x"}, {"type": "quad", "name": "y", "type": "mesh"}]})", "/objects/1/type");
+    refused(R"({"o": [[0], [1, {"k": {"x": 1, "y": [{"z": 0, "z": 1}]}}]]})", "/o/1/1/k/y/0/z");
+    // The first duplicate is named, and keys of the same name in other objects are not duplicates.
+    refused(R"({"p": {"q": 1}, "q": {"q": 2, "r": 3, "r": 4}, "s": {"t": 0, "t": 0}})", "/q/r");
+    expect_input_error([] { parse_json_text("[1, 2", "t.json"); }, {"t.json: 1:", "malformed JSON"});
 }
 
 TEST(SceneLoad, UnknownKeySuggestsTheClosest) {

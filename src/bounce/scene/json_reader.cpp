@@ -4,7 +4,6 @@
 
 #include <cfloat>
 #include <fstream>
-#include <set>
 #include <sstream>
 
 #include "bounce/core/error.h"
@@ -73,64 +72,89 @@ std::string read_text_file(const std::string& path) {
 
 namespace {
 
-/// The JSON pointer of the value being parsed, kept by the parser callback so that a key given
-/// twice can be named (the parser itself keeps the last one silently).
-struct KeyTracker {
-    struct Frame {
-        bool array;
-        std::string name;
-        std::set<std::string> keys;
-        size_t index = 0;
-    };
-    std::vector<Frame> stack;
-    std::string pending;
+/// Builds the document as nlohmann's own DOM parser does (a SAX handler), and notes the first
+/// key given twice in one object, which that parser keeps the last of silently. Each open
+/// container knows its current key, so a duplicate's pointer is put together only when there
+/// is one (a per-key set and name strings took most of a 14 400-placement scene's parse).
+class DomBuilder {
+public:
+    explicit DomBuilder(json& root) : root_(root) {}
     std::string duplicate;  ///< pointer of the first duplicate key
 
+    bool null() { return add(nullptr); }
+    bool boolean(bool v) { return add(v); }
+    bool number_integer(json::number_integer_t v) { return add(v); }
+    bool number_unsigned(json::number_unsigned_t v) { return add(v); }
+    bool number_float(json::number_float_t v, const json::string_t&) { return add(v); }
+    bool string(json::string_t& v) { return add(std::move(v)); }
+    bool binary(json::binary_t& v) { return add(json::binary(std::move(v))); }
+    bool start_object(std::size_t) { return open(json::object()); }
+    bool start_array(std::size_t) { return open(json::array()); }
+    bool end_object() { return close(); }
+    bool end_array() { return close(); }
+    bool key(json::string_t& k) {
+        auto& object = open_.back().value->get_ref<json::object_t&>();
+        auto [it, fresh] = object.try_emplace(k);
+        if (!fresh && duplicate.empty()) duplicate = pointer() + "/" + k;
+        open_.back().key = &it->first;
+        element_ = &it->second;
+        return true;
+    }
+    template <class Exception>
+    bool parse_error(std::size_t, const std::string&, const Exception& e) {
+        throw e;  // (as nlohmann's DOM parser: its type kept for the byte offset)
+    }
+
+private:
+    struct Open {
+        json* value;
+        const std::string* key = nullptr;  ///< an object's key being read
+    };
+    json& root_;
+    std::vector<Open> open_;
+    json* element_ = nullptr;  ///< where an object's next value goes
+
+    json* place(json&& v) {
+        if (open_.empty()) return &(root_ = std::move(v));
+        json& parent = *open_.back().value;
+        if (parent.is_array()) {
+            parent.get_ref<json::array_t&>().push_back(std::move(v));
+            return &parent.get_ref<json::array_t&>().back();
+        }
+        return &(*element_ = std::move(v));
+    }
+    bool add(json&& v) {
+        place(std::move(v));
+        return true;
+    }
+    bool open(json&& v) {
+        open_.push_back({place(std::move(v))});
+        return true;
+    }
+    bool close() {
+        open_.pop_back();
+        return true;
+    }
+    /// Pointer of the innermost open container: each level's key in its parent, or its index
+    /// (the last element: an open container is its parent's last).
     std::string pointer() const {
         std::string p;
-        for (const auto& f : stack) p += f.name.empty() ? "" : "/" + f.name;
-        return p;
-    }
-    std::string child_name() {
-        if (stack.empty()) return "";
-        if (stack.back().array) return std::to_string(stack.back().index);
-        return pending;
-    }
-    bool operator()(int, json::parse_event_t e, json& parsed) {
-        switch (e) {
-            case json::parse_event_t::object_start:
-            case json::parse_event_t::array_start: {
-                std::string name = child_name();
-                stack.push_back({e == json::parse_event_t::array_start, name, {}, 0});
-                break;
-            }
-            case json::parse_event_t::key: {
-                pending = parsed.get<std::string>();
-                if (!stack.empty() && !stack.back().keys.insert(pending).second && duplicate.empty())
-                    duplicate = pointer() + "/" + pending;
-                break;
-            }
-            case json::parse_event_t::object_end:
-            case json::parse_event_t::array_end:
-                stack.pop_back();
-                if (!stack.empty() && stack.back().array) ++stack.back().index;
-                break;
-            case json::parse_event_t::value:
-                if (!stack.empty() && stack.back().array) ++stack.back().index;
-                break;
+        for (size_t i = 1; i < open_.size(); ++i) {
+            const Open& parent = open_[i - 1];
+            p += "/" + (parent.value->is_array() ? std::to_string(parent.value->size() - 1) : *parent.key);
         }
-        return true;
+        return p;
     }
 };
 
 }  // namespace
 
 json parse_json_text(const std::string& text, const std::string& path) {
-    KeyTracker keys;
     json doc;
+    DomBuilder keys(doc);
     check_json_nesting(text, path);
     try {
-        doc = json::parse(text, [&keys](int d, json::parse_event_t e, json& p) { return keys(d, e, p); });
+        json::sax_parse(text, &keys);
     } catch (const json::parse_error& e) {
         size_t line = 1, col = 1;
         for (size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
