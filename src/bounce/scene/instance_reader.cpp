@@ -8,6 +8,7 @@
 #include <iterator>
 #include <map>
 #include <memory>
+#include <set>
 #include <utility>
 
 #include "bounce/core/error.h"
@@ -107,7 +108,8 @@ bool holds(const Bounds& outer, const Bounds& inner) {
 
 /// One tessellation of every placement (coarse or fine): its local box, the vertices that are
 /// extreme along its local axes, and a tree of its vertices (median splits, leaves of at most
-/// kLeafSize) with each node's local box, built once per shared mesh.
+/// kLeafSize) with each node's local box, built once per shared mesh and only when some
+/// placement of it needs more than its conservative box.
 struct Prototype {
     static constexpr size_t kLeafSize = 64;
     struct Node {
@@ -119,7 +121,7 @@ struct Prototype {
     std::vector<Vec3> extremes;  ///< none for a mesh without vertices
     std::vector<Vec3> vertices;  ///< the mesh's, in the tree's order
     std::vector<Node> nodes;
-    explicit Prototype(const TriangleMesh& m) : local(m.bounds()), vertices(m.positions) {
+    explicit Prototype(const TriangleMesh& m) : local(m.bounds()) {
         if (m.positions.empty()) return;
         std::array<size_t, 6> at{};
         for (size_t v = 0; v < m.positions.size(); ++v)
@@ -128,7 +130,10 @@ struct Prototype {
                 if (m.positions[v][a] > m.positions[at[2 * a + 1]][a]) at[2 * a + 1] = v;
             }
         for (size_t v : at) extremes.push_back(m.positions[v]);
-        split(0, vertices.size());
+    }
+    void build_tree(const TriangleMesh& m) {
+        vertices = m.positions;
+        if (!vertices.empty()) split(0, vertices.size());
     }
     void split(size_t begin, size_t end) {
         const size_t node = nodes.size();
@@ -189,15 +194,24 @@ void bound_tessellation(std::span<Object> placed, const std::function<const Tria
     });
     Bounds known;
     for (const Bounds& b : inner) known.extend(b);
+    std::vector<uint8_t> exact(placed.size(), 0);
     parallel_for_each_index(size_t{0}, placed.size(), [&](size_t k) {
         Object& o = placed[k];
         const TriangleMesh* m = mesh(o);
         if (!m) return;
         Bounds& b = bounds(o);
         b = conservative_bounds(prototypes.at(m).local, o.placement);
-        if (within(b.lo, kMaxCoordinate) && within(b.hi, kMaxCoordinate) && holds(known, b)) return;
+        exact[k] = !(within(b.lo, kMaxCoordinate) && within(b.hi, kMaxCoordinate) && holds(known, b));
+    });
+    std::set<const TriangleMesh*> trees;
+    for (size_t k = 0; k < placed.size(); ++k)
+        if (exact[k] && trees.insert(mesh(placed[k])).second) prototypes.at(mesh(placed[k])).build_tree(*mesh(placed[k]));
+    parallel_for_each_index(size_t{0}, placed.size(), [&](size_t k) {
+        if (!exact[k]) return;
+        Object& o = placed[k];
+        Bounds& b = bounds(o);
         b = Bounds{};
-        beyond[k] |= !placed_bounds(prototypes.at(m), o.placement, known, b);
+        beyond[k] |= !placed_bounds(prototypes.at(mesh(o)), o.placement, known, b);
     });
 }
 

@@ -181,12 +181,13 @@ void read_objects(const JsonReader& root, Scene& scene, const JsonContext& ctx) 
     }
     // Room for every placement at once: a vector of Objects that grew as they came would move
     // them all at each doubling (most of a 14 400-placement scene's load).
-    double placements = 0;
+    double placements = static_cast<double>(file_instances.size());
     for (const json& o : objs) placements += static_cast<double>(placements_of(o));
     if (memory_shortfall((placements + static_cast<double>(scene.objects.size())) * sizeof(Object), "").empty())
         scene.objects.reserve(scene.objects.size() + static_cast<size_t>(placements));
     for (size_t i = 0; i < objs.size(); ++i)
         if (places_instances(objs[i])) read_instances(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), objs, scene, i);
+    scene.objects.reserve(scene.objects.size() + file_instances.size());
     for (Object& o : file_instances) scene.objects.push_back(std::move(o));
 }
 
