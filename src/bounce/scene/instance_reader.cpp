@@ -8,7 +8,6 @@
 #include <iterator>
 #include <map>
 #include <memory>
-#include <set>
 #include <utility>
 
 #include "bounce/core/error.h"
@@ -111,7 +110,7 @@ bool holds(const Bounds& outer, const Bounds& inner) {
 /// kLeafSize) with each node's local box, built once per shared mesh and only when some
 /// placement of it needs more than its conservative box.
 struct Prototype {
-    static constexpr size_t kLeafSize = 64;
+    static constexpr size_t kLeafSize = 64, kPlacementsWorthATree = 16;
     struct Node {
         Bounds local;
         size_t begin, end;  ///< its vertices in `vertices`
@@ -131,9 +130,13 @@ struct Prototype {
             }
         for (size_t v : at) extremes.push_back(m.positions[v]);
     }
-    void build_tree(const TriangleMesh& m) {
+    /// The tree for `placements` placements that need it; a few place every vertex instead
+    /// (one leaf), which is cheaper than splitting.
+    void build_tree(const TriangleMesh& m, size_t placements) {
         vertices = m.positions;
-        if (!vertices.empty()) split(0, vertices.size());
+        if (vertices.empty()) return;
+        if (placements > kPlacementsWorthATree) split(0, vertices.size());
+        else nodes.push_back({local, 0, vertices.size()});
     }
     void split(size_t begin, size_t end) {
         const size_t node = nodes.size();
@@ -182,7 +185,7 @@ bool placed_bounds(const Prototype& proto, const Transform& t, const Bounds& kno
 /// vertices the placements are known to put somewhere (their prototype's extremes, placed), so
 /// the union is bit for bit what placing every vertex gives. `beyond[k]`: placement k leaves the limit.
 void bound_tessellation(std::span<Object> placed, const std::function<const TriangleMesh*(const Object&)>& mesh,
-                        const std::function<Bounds&(Object&)>& bounds, std::vector<uint8_t>& beyond) {
+                        const std::function<Bounds&(Object&)>& bounds, const Bounds& given, std::vector<uint8_t>& beyond) {
     std::map<const TriangleMesh*, Prototype> prototypes;
     for (const Object& o : placed)
         if (const TriangleMesh* m = mesh(o)) prototypes.try_emplace(m, *m);
@@ -192,7 +195,7 @@ void bound_tessellation(std::span<Object> placed, const std::function<const Tria
         if (const TriangleMesh* m = mesh(o))
             for (const Vec3& p : prototypes.at(m).extremes) inner[k].extend(o.placement.point(p));
     });
-    Bounds known;
+    Bounds known = given;
     for (const Bounds& b : inner) known.extend(b);
     std::vector<uint8_t> exact(placed.size(), 0);
     parallel_for_each_index(size_t{0}, placed.size(), [&](size_t k) {
@@ -203,9 +206,10 @@ void bound_tessellation(std::span<Object> placed, const std::function<const Tria
         b = conservative_bounds(prototypes.at(m).local, o.placement);
         exact[k] = !(within(b.lo, kMaxCoordinate) && within(b.hi, kMaxCoordinate) && holds(known, b));
     });
-    std::set<const TriangleMesh*> trees;
+    std::map<const TriangleMesh*, size_t> trees;  // placements that need each prototype's tree
     for (size_t k = 0; k < placed.size(); ++k)
-        if (exact[k] && trees.insert(mesh(placed[k])).second) prototypes.at(mesh(placed[k])).build_tree(*mesh(placed[k]));
+        if (exact[k]) ++trees[mesh(placed[k])];
+    for (const auto& [m, n] : trees) prototypes.at(m).build_tree(*m, n);
     parallel_for_each_index(size_t{0}, placed.size(), [&](size_t k) {
         if (!exact[k]) return;
         Object& o = placed[k];
@@ -217,19 +221,30 @@ void bound_tessellation(std::span<Object> placed, const std::function<const Tria
 
 }  // namespace
 
-void bound_instances(std::span<Object> placed, const std::function<const JsonReader(size_t)>& at) {
+KnownBounds still_bounds(std::span<const Object> objects) {
+    KnownBounds known;
+    for (const Object& o : objects) {
+        if (!o.placed() || o.moves) continue;
+        known.coarse.extend(o.coarse_bounds());
+        if (o.has_fine()) known.visible.extend(o.visible_mesh_bounds());
+    }
+    known.visible.extend(known.coarse);
+    return known;
+}
+
+void bound_instances(std::span<Object> placed, const std::function<const JsonReader(size_t)>& at, const KnownBounds& known) {
     std::vector<uint8_t> beyond(placed.size(), 0);
     bound_tessellation(placed, [](const Object& o) { return o.local_coarse.get(); }, [](Object& o) -> Bounds& { return o.instance_bounds; },
-                       beyond);
+                       known.coarse, beyond);
     bound_tessellation(placed, [](const Object& o) { return o.local_fine.get(); }, [](Object& o) -> Bounds& { return o.instance_visible_bounds; },
-                       beyond);
+                       known.visible, beyond);
     for (Object& o : placed)
         if (!o.local_fine) o.instance_visible_bounds = o.instance_bounds;
     for (size_t k = 0; k < placed.size(); ++k)
         if (beyond[k]) at(k).fail("", fmt::format("this placement moves vertices to non-finite positions or beyond +-{:g}", kMaxCoordinate));
 }
 
-void read_instances(const JsonReader& r, const json& entries, Scene& scene, size_t index) {
+void read_instances(const JsonReader& r, const json& entries, Scene& scene, size_t index, std::span<const Object> file_instances) {
     r.only({"name", "instances", "material", "visible_to", "matte"}, "an object that places instances");
     if (!r.raw("instances").is_object()) r.fail("instances", "expected {\"of\": \"prototype name\", \"transforms\": [...]}");
     const JsonReader in(r.raw("instances"), r.at("instances"), r.ctx(), {"of", "transforms"});
@@ -253,7 +268,10 @@ void read_instances(const JsonReader& r, const json& entries, Scene& scene, size
     const size_t first = scene.objects.size();
     scene.objects.reserve(first + list.size());
     for (size_t k = 0; k < list.size(); ++k) scene.objects.push_back(read_placement(r, entry(k), scene, shared, k));
-    bound_instances(std::span<Object>(scene.objects).subspan(first), entry);
+    KnownBounds known = still_bounds(std::span<const Object>(scene.objects).first(first));
+    const KnownBounds files = still_bounds(file_instances);
+    known.coarse.extend(files.coarse), known.visible.extend(files.visible);
+    bound_instances(std::span<Object>(scene.objects).subspan(first), entry, known);
     scene.objects[index] = std::move(scene.objects[first]);
     scene.objects.erase(scene.objects.begin() + static_cast<std::ptrdiff_t>(first));
 }

@@ -28,12 +28,22 @@ Object make_instance(std::string name, std::shared_ptr<const TriangleMesh> coars
 /// others keep a conservative box inside it (placing every vertex was most of a big instanced
 /// scene's load). Fails at `at(k)` for the first placement `k` that moves a vertex beyond the
 /// coordinate limit, as a serial loop would.
-void bound_instances(std::span<Object> placed, const std::function<const JsonReader(size_t)>& at);
+/// `known`: boxes the scene's bounds hold whatever comes later (still_bounds of the objects read
+/// before): a placement inside them needs no vertex placed.
+struct KnownBounds {
+    Bounds coarse, visible;
+};
+void bound_instances(std::span<Object> placed, const std::function<const JsonReader(size_t)>& at, const KnownBounds& known = {});
+
+/// The boxes of `objects` that are placed and still, as Scene::bounds and Scene::visible_bounds
+/// take them (movers left out: Scene::size holds only the still ones).
+KnownBounds still_bounds(std::span<const Object> objects);
 
 /// Reads instancer number `index` (read from `r`): its first placement takes `scene.objects[index]`
 /// (held empty for it while the other objects were read, so every entry keeps its index), the
 /// others are appended. Its prototype must be read already; `entries` are the scene file's objects.
-void read_instances(const JsonReader& r, const nlohmann::json& entries, Scene& scene, size_t index);
+/// `file_instances`: the placements of mesh files' shared meshes read so far (appended last).
+void read_instances(const JsonReader& r, const nlohmann::json& entries, Scene& scene, size_t index, std::span<const Object> file_instances);
 
 /// How many placements a scene file's object entry asks for (0 unless it places instances):
 /// what read_objects reserves room for before any is read.

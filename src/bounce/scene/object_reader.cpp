@@ -269,7 +269,8 @@ namespace {
 /// Instances of the meshes a mesh file's nodes share, named "<object>/<node>", placed by the
 /// node's world transform then the object's; `fine` levels of linear subdivision for the camera.
 /// Each takes the object's lighter's controls (visibility, matte).
-std::vector<Object> place_shared_meshes(const JsonReader& r, const Object& obj, std::vector<MeshFileParts::Shared>& shared, int fine) {
+std::vector<Object> place_shared_meshes(const JsonReader& r, const Object& obj, std::vector<MeshFileParts::Shared>& shared, int fine,
+                                        const KnownBounds& known) {
     std::vector<Object> placed;
     double uses = 0;  // each an Object of its own: refused before they could exhaust memory
     for (const MeshFileParts::Shared& s : shared) uses += static_cast<double>(s.uses.size());
@@ -284,7 +285,7 @@ std::vector<Object> place_shared_meshes(const JsonReader& r, const Object& obj, 
             placed.back().visible_to = obj.visible_to, placed.back().matte = obj.matte;
         }
     }
-    bound_instances(placed, [&](size_t) { return r; });
+    bound_instances(placed, [&](size_t) { return r; }, known);
     return placed;
 }
 
@@ -446,7 +447,13 @@ void read_object(const JsonReader& r, Scene& scene, size_t index, std::vector<Ob
         fine = read_sphere_object(r, scene, mat, obj);
     }
     read_object_visibility(r, obj);  // (before its shared meshes are placed: they take its controls)
-    std::vector<Object> placed = place_shared_meshes(r, obj, shared, fine);
+    KnownBounds known;  // (only a file with shared meshes needs it)
+    if (!shared.empty()) {
+        known = still_bounds(scene.objects);
+        const KnownBounds earlier = still_bounds(later);
+        known.coarse.extend(earlier.coarse), known.visible.extend(earlier.visible);
+    }
+    std::vector<Object> placed = place_shared_meshes(r, obj, shared, fine, known);
     if (obj.coarse.triangle_count() == 0 && !placed.empty()) {  // the file's meshes are all shared
         obj = std::move(placed.front());
         placed.erase(placed.begin());
