@@ -9,6 +9,7 @@
 //   bounce_build_rate SCENE... [--repeat N]
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
+#include <malloc.h>
 
 #include <algorithm>
 #include <chrono>
@@ -160,6 +161,13 @@ void measure(const std::string& path, int repeat) {
 }  // namespace bounce
 
 int main(int argc, char** argv) {
+    // Best of N in one process measures the work, not the kernel: glibc would hand a load's
+    // freed pages back and the next load fault them in again (14.5 us a 4 KiB page on this
+    // VM, most of a 14 400-placement load), while Embree's builds take 2 MiB pages of their
+    // own. So freed memory stays with the process, as in a shot's or the lighting tool's
+    // reloads; docs/benchmarks.md also gives a fresh process's first load.
+    mallopt(M_MMAP_THRESHOLD, 1 << 30);
+    mallopt(M_TRIM_THRESHOLD, -1);
     int repeat = 3;
     std::vector<std::string> scenes;
     for (int i = 1; i < argc; ++i) {

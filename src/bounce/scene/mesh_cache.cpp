@@ -4,6 +4,7 @@
 #include <assimp/version.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -229,8 +230,10 @@ std::optional<LoadedMeshFile> read_mesh_cache(const std::string& folder, const M
     if (!fs::exists(fs::symlink_status(entry, ec))) return std::nullopt;
     try {
         if (const std::string why = not_a_regular_file(entry); !why.empty()) throw Damaged{why};
-        std::ifstream f(entry, std::ios::binary);
-        std::string bytes((std::istreambuf_iterator<char>(f)), {});
+        std::ifstream f(entry, std::ios::binary | std::ios::ate);
+        std::string bytes(static_cast<size_t>(std::max<std::streamoff>(0, f.tellg())), '\0');
+        f.seekg(0);
+        if (!f.read(bytes.data(), static_cast<std::streamsize>(bytes.size()))) throw Damaged{"it cannot be read"};
         if (bytes.size() < kHeaderBytes || std::memcmp(bytes.data(), kMagic, 8) != 0) throw Damaged{"not a mesh cache entry"};
         In in{bytes.data() + 8, bytes.data() + bytes.size()};
         if (in.pod<uint32_t>() != kVersion) return std::nullopt;  // another version's: rewritten
