@@ -240,9 +240,9 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
         collect_keyed(scene.keyed, "", ctx.keyed);
         ctx.frame = scene.frame;
     }
-    scene.description = doc;
+    scene.description = std::move(doc);  // (read in place: a copy was a 14 400-placement scene's second parse)
     ctx.inputs = &scene.inputs;
-    JsonReader root(doc, "", ctx, {"camera", "render", "materials", "lights", "objects", "description", "animation"});
+    JsonReader root(scene.description, "", ctx, {"camera", "render", "materials", "lights", "objects", "description", "animation"});
 
     if (root.has("render")) read_params(root.raw("render"), "render", scene, ctx);
     if (!root.has("camera")) root.fail("", "missing required key \"camera\"");
