@@ -55,14 +55,22 @@ struct Shared {
     Transform placement;                               ///< that transform
 };
 
+/// What every placement of an instancer takes from it unless its entry says otherwise (read once).
+struct InstancerDefaults {
+    std::string name;
+    int material = -1;
+    RayVisibility visible_to;
+    bool matte = false;
+};
+
 /// Placement `k` of prototype `proto`, read from its entry `e` in "transforms": the entry's
 /// transform applied after the prototype's own.
-Object read_placement(const JsonReader& r, const JsonReader& e, const Scene& scene, const Shared& proto, size_t k) {
-    Object o = make_instance(e.string("name", fmt::format("{}/{}", r.string("name", ""), k)), proto.coarse, proto.fine,
+Object read_placement(const JsonReader& e, const Scene& scene, const Shared& proto, const InstancerDefaults& by, size_t k) {
+    Object o = make_instance(e.has("name") ? e.string("name", "") : fmt::format("{}/{}", by.name, k), proto.coarse, proto.fine,
                              read_transform_keys(e) * proto.placement);
     const int own = read_material_name(e, "material", scene);
-    o.material_override = own >= 0 ? own : read_material_name(r, "material", scene);
-    read_object_visibility(r, o);
+    o.material_override = own >= 0 ? own : by.material;
+    o.visible_to = by.visible_to, o.matte = by.matte;
     read_object_visibility(e, o);  // the placement's own flags over the instancer's
     return o;
 }
@@ -267,7 +275,11 @@ void read_instances(const JsonReader& r, const json& entries, Scene& scene, size
     // then the first moves to the instancer's index: one Object each, never a second copy.
     const size_t first = scene.objects.size();
     scene.objects.reserve(first + list.size());
-    for (size_t k = 0; k < list.size(); ++k) scene.objects.push_back(read_placement(r, entry(k), scene, shared, k));
+    InstancerDefaults by{r.string("name", ""), read_material_name(r, "material", scene), {}, false};
+    Object flags;
+    read_object_visibility(r, flags);
+    by.visible_to = flags.visible_to, by.matte = flags.matte;
+    for (size_t k = 0; k < list.size(); ++k) scene.objects.push_back(read_placement(entry(k), scene, shared, by, k));
     KnownBounds known = still_bounds(std::span<const Object>(scene.objects).first(first));
     const KnownBounds files = still_bounds(file_instances);
     known.coarse.extend(files.coarse), known.visible.extend(files.visible);
