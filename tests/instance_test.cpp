@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 
@@ -15,6 +16,7 @@
 #include "bounce/radiosity/radiosity.h"
 #include "bounce/render/render.h"
 #include "bounce/scene/changes.h"
+#include "bounce/scene/mesh_cache.h"
 #include "gltf_strip.h"
 #include "test_util.h"
 
@@ -380,6 +382,30 @@ TEST(Instances, GltfGpuInstancesLoadAsInstancesAndFlattenWhereTheObjectCannotSha
     // An object that cannot share (a prototype) holds every copy in its own mesh.
     json proto = cubes_scene(d, Cubes::GpuInstanced, {{"prototype", true}});
     EXPECT_EQ(test::scene_from(proto).objects[0].local_coarse->triangle_count(), 3u * 12 + 2);
+}
+
+TEST(Instances, AGltfsPlacementsFromTheMeshCacheAreTheParsedOnes) {
+    test::TempDir d, cache;
+    for (Cubes how : {Cubes::Shared, Cubes::GpuInstanced}) {
+        const Scene parsed = test::scene_from(cubes_scene(d, how));
+        setenv("BOUNCE_MESH_CACHE", cache.path().c_str(), 1);
+        const uint64_t hits = mesh_cache_counts().hits;
+        const Scene miss = test::scene_from(cubes_scene(d, how)), hit = test::scene_from(cubes_scene(d, how));
+        unsetenv("BOUNCE_MESH_CACHE");
+        EXPECT_EQ(mesh_cache_counts().hits, hits + 1);
+        for (const Scene* s : {&miss, &hit}) {
+            ASSERT_EQ(s->objects.size(), parsed.objects.size());
+            for (size_t i = 0; i < parsed.objects.size(); ++i) {
+                const Object &a = s->objects[i], &b = parsed.objects[i];
+                EXPECT_EQ(a.name, b.name);
+                EXPECT_EQ(a.instance, b.instance);
+                EXPECT_EQ(a.placement.m, b.placement.m) << a.name;
+                EXPECT_EQ(a.coarse_mesh().positions.size(), b.coarse_mesh().positions.size());
+                const Bounds ba = a.coarse_bounds(), bb = b.coarse_bounds();
+                EXPECT_EQ(std::memcmp(&ba, &bb, sizeof(Bounds)), 0) << a.name;
+            }
+        }
+    }
 }
 
 TEST(Instances, MalformedGpuInstancesAreRefusedWithTheirPlace) {
