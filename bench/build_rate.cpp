@@ -7,6 +7,7 @@
 // Markdown row per scene (docs/benchmarks.md, "Load and build rates").
 //
 //   bounce_build_rate SCENE... [--repeat N]
+//   bounce_build_rate --once SCENE      (one of each in a fresh process; BOUNCE_MESH_CACHE as set)
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
 #include <malloc.h>
@@ -25,6 +26,7 @@
 #include <vector>
 
 #include "bounce/accel/accel.h"
+#include "bounce/core/parallel.h"
 #include "bounce/scene/scene_load.h"
 
 namespace bounce {
@@ -157,6 +159,26 @@ void measure(const std::string& path, int repeat) {
     std::fflush(stdout);
 }
 
+/// One load, one SceneAccel and one raw build (high quality) of `path` in a fresh process (the
+/// thread pool and Embree's device started first): what a render's first load costs, page
+/// faults and all, against Embree's first build.
+void measure_once(const std::string& path) {
+    RTCDevice device = rtcNewDevice("threads=0");
+    parallel_for_each_index(size_t{0}, size_t{64}, [](size_t) {});
+    const auto t0 = Clock::now();
+    const Scene scene = load_scene(path);
+    const double load = seconds_since(t0);
+    const auto t1 = Clock::now();
+    { SceneAccel a(scene); }
+    const double accel = seconds_since(t1);
+    bool fine = false;
+    for (const Object& o : scene.objects) fine = fine || (o.placed() && o.has_fine());
+    const double raw = raw_build(device, scene, RTC_BUILD_QUALITY_HIGH, false) + (fine ? raw_build(device, scene, RTC_BUILD_QUALITY_HIGH, true) : 0.0);
+    rtcReleaseDevice(device);
+    std::printf("| %s (first, fresh process) | %.3f s | %.3f s | %.3f s | %.1fx |\n", std::filesystem::path(path).filename().c_str(), load, accel,
+                raw, (load + accel) / raw);
+}
+
 }  // namespace
 }  // namespace bounce
 
@@ -169,13 +191,24 @@ int main(int argc, char** argv) {
     mallopt(M_MMAP_THRESHOLD, 1 << 30);
     mallopt(M_TRIM_THRESHOLD, -1);
     int repeat = 3;
+    bool once = false;
     std::vector<std::string> scenes;
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "--repeat") == 0 && i + 1 < argc) repeat = std::max(1, std::atoi(argv[++i]));
+        else if (std::strcmp(argv[i], "--once") == 0) once = true;
         else scenes.emplace_back(argv[i]);
     }
+    if (once && scenes.size() == 1) {
+        try {
+            bounce::measure_once(scenes[0]);  // (the mesh cache as BOUNCE_MESH_CACHE says)
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "bounce_build_rate: %s\n", e.what());
+            return 2;
+        }
+        return 0;
+    }
     if (scenes.empty()) {
-        std::fprintf(stderr, "usage: bounce_build_rate SCENE... [--repeat N]\n");
+        std::fprintf(stderr, "usage: bounce_build_rate SCENE... [--repeat N] | bounce_build_rate --once SCENE\n");
         return 2;
     }
     std::printf("| scene | triangles (unique) | placed | load, parsed | load, mesh cache | SceneAccel | raw Embree low / medium / high | "
