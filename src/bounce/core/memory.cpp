@@ -1,6 +1,7 @@
 #include "bounce/core/memory.h"
 
 #include <fmt/format.h>
+#include <sys/mman.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -43,6 +44,14 @@ std::string memory_shortfall(double bytes, const std::string& what, double share
 
 void check_memory(double bytes, const std::string& file, const std::string& place, const std::string& what, double share) {
     if (std::string why = memory_shortfall(bytes, what, share); !why.empty()) throw InputError(file, place, why);
+}
+
+void advise_huge_pages(const void* p, size_t bytes) {
+    constexpr uintptr_t kHuge = uintptr_t{2} << 20;
+    if (bytes < 2 * kHuge) return;
+    const auto begin = (reinterpret_cast<uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
+    const auto end = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(kHuge - 1);
+    if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // (a hint: failure changes nothing)
 }
 
 }  // namespace bounce

@@ -274,7 +274,7 @@ void read_instances(const JsonReader& r, const json& entries, Scene& scene, size
     // Read in place at the end of the objects (read_objects reserved room for every placement),
     // then the first moves to the instancer's index: one Object each, never a second copy.
     const size_t first = scene.objects.size();
-    scene.objects.reserve(first + list.size());
+    reserve_huge(scene.objects, first + list.size());
     InstancerDefaults by{r.string("name", ""), read_material_name(r, "material", scene), {}, false};
     Object flags;
     read_object_visibility(r, flags);

@@ -184,10 +184,10 @@ void read_objects(const JsonReader& root, Scene& scene, const JsonContext& ctx) 
     double placements = static_cast<double>(file_instances.size());
     for (const json& o : objs) placements += static_cast<double>(placements_of(o));
     if (memory_shortfall((placements + static_cast<double>(scene.objects.size())) * sizeof(Object), "").empty())
-        scene.objects.reserve(scene.objects.size() + static_cast<size_t>(placements));
+        reserve_huge(scene.objects, scene.objects.size() + static_cast<size_t>(placements));
     for (size_t i = 0; i < objs.size(); ++i)
         if (places_instances(objs[i])) read_instances(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), objs, scene, i, file_instances);
-    scene.objects.reserve(scene.objects.size() + file_instances.size());
+    reserve_huge(scene.objects, scene.objects.size() + file_instances.size());
     for (Object& o : file_instances) scene.objects.push_back(std::move(o));
 }
 
