@@ -16,6 +16,7 @@
 
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/files.h"
+#include "bounce/core/memory.h"
 #include "bounce/core/random.h"
 
 namespace bounce {
@@ -231,15 +232,17 @@ std::optional<LoadedMeshFile> read_mesh_cache(const std::string& folder, const M
     try {
         if (const std::string why = not_a_regular_file(entry); !why.empty()) throw Damaged{why};
         std::ifstream f(entry, std::ios::binary | std::ios::ate);
-        std::string bytes(static_cast<size_t>(std::max<std::streamoff>(0, f.tellg())), '\0');
+        const auto size = static_cast<size_t>(std::max<std::streamoff>(0, f.tellg()));
+        if (!memory_shortfall(static_cast<double>(size), "").empty()) throw Damaged{"it is larger than memory"};
+        std::string bytes(size, '\0');
         f.seekg(0);
         if (!f.read(bytes.data(), static_cast<std::streamsize>(bytes.size()))) throw Damaged{"it cannot be read"};
         if (bytes.size() < kHeaderBytes || std::memcmp(bytes.data(), kMagic, 8) != 0) throw Damaged{"not a mesh cache entry"};
         In in{bytes.data() + 8, bytes.data() + bytes.size()};
         if (in.pod<uint32_t>() != kVersion) return std::nullopt;  // another version's: rewritten
         in.pod<uint32_t>();
-        const auto size = in.pod<uint64_t>(), hash = in.pod<uint64_t>();
-        if (size != in.left() || hash != body_hash(bytes, kHeaderBytes)) throw Damaged{"its checksum does not match"};
+        const auto body = in.pod<uint64_t>(), hash = in.pod<uint64_t>();
+        if (body != in.left() || hash != body_hash(bytes, kHeaderBytes)) throw Damaged{"its checksum does not match"};
         Out k;
         write_key(k, key, file_content_hash(key.path));
         if (in.left() < k.bytes.size() || std::memcmp(in.p, k.bytes.data(), k.bytes.size()) != 0) return std::nullopt;
