@@ -48,7 +48,6 @@ const Object& find_prototype(const JsonReader& in, const json& entries, const Sc
     in.fail("of", fmt::format("no object is named \"{}\"{}", of, hint.empty() ? "" : " (did you mean \"" + hint + "\"?)"));
 }
 
-
 /// What placements share of their prototype (copied: the prototype moves as objects are appended).
 struct Shared {
     std::shared_ptr<const TriangleMesh> coarse, fine;  ///< before the prototype's own transform
@@ -188,10 +187,11 @@ bool placed_bounds(const Prototype& proto, const Transform& t, const Bounds& kno
 }
 
 /// Sets `bounds(o)` for every placement so that their union is exactly the union of their
-/// exactly placed vertices, placing only the vertices (of the clusters, of the placements)
-/// that can reach that union's surface: the other conservative boxes lie inside the box of
-/// vertices the placements are known to put somewhere (their prototype's extremes, placed), so
-/// the union is bit for bit what placing every vertex gives. `beyond[k]`: placement k leaves the limit.
+/// exactly placed vertices, placing only the vertices (under the tree nodes, of the placements)
+/// that can reach that union's surface: the other conservative boxes lie inside a box the union
+/// is known to hold (the placements' prototype extremes, placed, and `given`: still objects read
+/// before), so the union is bit for bit what placing every vertex gives. `beyond[k]`: placement
+/// k leaves the limit.
 void bound_tessellation(std::span<Object> placed, const std::function<const TriangleMesh*(const Object&)>& mesh,
                         const std::function<Bounds&(Object&)>& bounds, const Bounds& given, std::vector<uint8_t>& beyond) {
     std::map<const TriangleMesh*, Prototype> prototypes;
