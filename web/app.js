@@ -12,7 +12,12 @@ function showError(msg) { $('error').textContent = msg || ''; }
 
 async function api(path, body) {
   const opts = body === undefined ? {} : { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) };
-  const res = await fetch(path, opts);
+  let res = await fetch(path, opts);
+  // A busy tool answers 503 with Retry-After (never a reset): ask again, a few times.
+  for (let tries = 0; res.status === 503 && tries < 5; ++tries) {
+    await new Promise((r) => setTimeout(r, 1000 * (+res.headers.get('Retry-After') || 1)));
+    res = await fetch(path, opts);
+  }
   const type = res.headers.get('Content-Type') || '';
   const data = type.includes('json') ? await res.json() : await res.arrayBuffer();
   if (!res.ok) throw new Error(data.error || `${path}: ${res.status}`);
@@ -90,6 +95,8 @@ async function render(action) {
   } catch (e) { showError(e.message); }
 }
 
+const VALUE_LAYERS = new Set(['N', 'bentnormal', 'depth', 'ao', 'refined']);
+
 async function fetchImage() {
   // Nothing rendered yet: there is no image to ask for.
   if (!state.status || !state.status.image.layers.length) return;
@@ -123,13 +130,14 @@ function showStats(stats) {
     if (v === undefined) continue;
     const tr = body.insertRow();
     tr.insertCell().textContent = sub ? `${sub} time` : k === 'gather_rays_per_pixel' ? 'gather rays' : k.replaceAll('_', ' ');
-    tr.insertCell().textContent = `${typeof v === 'number' ? +v.toPrecision(4) : v} ${unit}`;
+    // Counts are shown whole (13 898 records, as the status and `bounce cache info` say); times and rates to 4 digits.
+    tr.insertCell().textContent = `${typeof v === 'number' ? (Number.isInteger(v) ? v : +v.toPrecision(4)) : v} ${unit}`;
     tr.dataset.stat = sub || k;
   }
 }
 
 /// What each render action does, as the header says it (the status carries the action's name).
-const ACTION_WORDS = { reshade: 're-shade', regather: 're-gather', rasterize: 'new deep file', frame: 'next frame' };
+const ACTION_WORDS = { reshade: 're-shade', regather: 're-gather', rasterize: 'new deep file', frame: 'frame' };
 
 async function refreshStatus() {
   const { data: s } = await api('/api/status');
@@ -141,7 +149,11 @@ async function refreshStatus() {
   $('pending').textContent = [s.pending ? `pending: ${ACTION_WORDS[s.pending]}` : '', stale].filter(Boolean).join(' · ');
   const p = s.progress;
   $('bar').style.width = p.total ? `${100 * p.done / p.total}%` : s.state === 'done' ? '100%' : '0';
-  $('progress-text').textContent = `${s.state}${s.action ? ' (' + ACTION_WORDS[s.action] + ')' : ''}${p.phase ? ': ' + p.phase : ''}${s.message ? ' — ' + s.message : ''}`;
+  // A slider move renders the frames up to the one asked for in order (each frame's records
+  // depend on the frames before it, as on the farm): say which one is being rendered.
+  const replay = s.replay && s.replay.from < s.replay.to
+    ? ` — frame ${s.frame} of ${s.replay.from}-${s.replay.to}: frames are rendered in order so frame ${s.replay.to} is the farm's` : '';
+  $('progress-text').textContent = `${s.state}${s.action ? ' (' + ACTION_WORDS[s.action] + ')' : ''}${p.phase ? ': ' + p.phase : ''}${replay}${s.message ? ' — ' + s.message : ''}`;
   switch (s.state) {
     case 'failed': showError(s.message); break;
     case 'idle': case 'running': case 'done': case 'cancelled': break;
@@ -425,7 +437,13 @@ async function main() {
   for (const a of ['reshade', 'regather', 'rasterize']) $(a).addEventListener('click', () => render(a));
   $('update').addEventListener('click', () => render(null));
   $('stop').addEventListener('click', () => api('/api/stop', {}).then(refreshStatus).catch((e) => showError(e.message)));
-  $('layer').addEventListener('change', fetchImage);
+  $('layer').addEventListener('change', () => {
+    // These layers are values, not light (the server shows them without exposure): say so.
+    const value = VALUE_LAYERS.has($('layer').value);
+    $('exposure').disabled = value;
+    $('exposure').title = value ? 'not light: this layer is shown as values, without exposure' : '';
+    fetchImage();
+  });
   $('exposure').addEventListener('input', fetchImage);
   $('filter').addEventListener('input', filterRows);
   $('show-records').addEventListener('change', () => {

@@ -198,7 +198,8 @@ std::vector<uint8_t> display_rgb8(const Image& image, const Layer& l, float expo
     std::vector<float> value(3 * n);
     for (size_t p = 0; p < n; ++p)
         for (size_t c = 0; c < 3; ++c) value[3 * p + c] = l.data[p * nc + std::min(c, nc - 1)];
-    // Directions and depth are shown as values, not light: no exposure, no display transform.
+    // Directions, depth, occlusion and masks are shown as values, not light: no exposure, no
+    // display transform (the page says the exposure does not apply to them).
     if (l.name == "N" || l.name == "bentnormal") {
         for (size_t i = 0; i < 3 * n; ++i) rgb[i] = byte(0.5f + 0.5f * value[i]);
     } else if (l.name == "depth") {
@@ -209,6 +210,12 @@ std::vector<uint8_t> display_rgb8(const Image& image, const Layer& l, float expo
             const float z = value[i];
             rgb[i] = byte(z > 0 && std::isfinite(z) ? 1 - 0.9f * (z - near) / std::max(far - near, 1e-30f) : 0);
         }
+    } else if (l.name == "ao") {
+        // Occlusion is a fraction, not light: its value as a grey (1, unoccluded, is white).
+        for (size_t i = 0; i < 3 * n; ++i) rgb[i] = byte(value[i]);
+    } else if (l.name == "refined") {
+        // A coverage mask of the few pixels refinement gathered at: any coverage shows plainly.
+        for (size_t i = 0; i < 3 * n; ++i) rgb[i] = byte(value[i] > 0 ? 0.3f + 0.7f * value[i] : 0);
     } else {
         const float scale = std::exp2(exposure);
         for (float& v : value) v *= scale;

@@ -3,10 +3,17 @@
 #include <fmt/format.h>
 #include <httplib.h>
 
+#include <netdb.h>
+#include <poll.h>
+#include <sys/socket.h>
+
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 
 #include "bounce/core/error.h"
 #include "bounce/core/json_limits.h"
+#include "bounce/tool/connections.h"
 
 namespace bounce {
 
@@ -20,6 +27,90 @@ bool is_loopback_host(const std::string& host) {
 }
 
 namespace {
+
+/// A connected socket as httplib reads and writes it (its own stream type is not public).
+class SocketStream : public httplib::Stream {
+public:
+    explicit SocketStream(int socket) : socket_(socket) {}
+    bool is_readable() const override { return wait(POLLIN); }
+    bool is_writable() const override { return wait(POLLOUT); }
+    ssize_t read(char* ptr, size_t size) override {
+        // httplib reads headers a byte at a time: small reads come from a buffer.
+        if (at_ == end_ && size < sizeof buffer_) {
+            const ssize_t n = is_readable() ? ::recv(socket_, buffer_, sizeof buffer_, 0) : -1;
+            if (n <= 0) return n;
+            at_ = 0, end_ = static_cast<size_t>(n);
+        }
+        if (at_ < end_) {
+            const size_t n = std::min(size, end_ - at_);
+            std::memcpy(ptr, buffer_ + at_, n);
+            at_ += n;
+            return static_cast<ssize_t>(n);
+        }
+        return is_readable() ? ::recv(socket_, ptr, size, 0) : -1;
+    }
+    ssize_t write(const char* ptr, size_t size) override {
+        return is_writable() ? ::send(socket_, ptr, size, MSG_NOSIGNAL) : -1;
+    }
+    void get_remote_ip_and_port(std::string& ip, int& port) const override { address(::getpeername, ip, port); }
+    void get_local_ip_and_port(std::string& ip, int& port) const override { address(::getsockname, ip, port); }
+    socket_t socket() const override { return socket_; }
+
+private:
+    /// A client (a token holder: the guard has run) gets this long for each read or write.
+    bool wait(short events) const {
+        pollfd p{socket_, events, 0};
+        return ::poll(&p, 1, 5000) > 0 && (p.revents & events);
+    }
+    void address(int (*get)(int, sockaddr*, socklen_t*), std::string& ip, int& port) const {
+        sockaddr_storage a{};
+        socklen_t len = sizeof a;
+        char host[NI_MAXHOST] = "", serv[NI_MAXSERV] = "";
+        port = 0;
+        if (get(socket_, reinterpret_cast<sockaddr*>(&a), &len) != 0 ||
+            ::getnameinfo(reinterpret_cast<sockaddr*>(&a), len, host, sizeof host, serv, sizeof serv, NI_NUMERICHOST | NI_NUMERICSERV) != 0)
+            return;
+        ip = host, port = std::atoi(serv);
+    }
+    int socket_;
+    char buffer_[4096];
+    size_t at_ = 0, end_ = 0;
+};
+
+}  // namespace
+
+/// httplib's server with its connections passed through a ConnectionGate (connections.h): a
+/// worker takes a connection only once its headers are whole, and each serves one request.
+class GatedHttpServer : public httplib::Server {
+public:
+    explicit GatedHttpServer(GateLimits limits)
+        : gate_(limits, [this](int socket) {
+              SocketStream stream(socket);
+              bool closed = false;
+              process_request(stream, true, closed, nullptr);
+              gate_.close_gently(socket);
+          }) {
+        new_task_queue = [] { return new httplib::ThreadPool(2); };  // they only hand sockets to the gate
+    }
+    /// httplib listens with a backlog of 5 (compiled in): a burst of POSTs overflowed it and
+    /// was reset. Linux takes a second listen() as a new backlog.
+    void raise_backlog() { ::listen(svr_sock_, SOMAXCONN); }
+
+private:
+    // httplib's accept loop hands each socket here (a private virtual may be overridden).
+    bool process_and_close_socket(socket_t sock) override {
+        gate_.admit(sock);
+        return true;
+    }
+    ConnectionGate gate_;
+};
+
+namespace {
+
+std::string lower_ascii(std::string s) {
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+}
 
 // Nothing is compressed: the tool answers on loopback, where compression is pure cost, and
 // httplib (Debian's, built with Brotli) answers a browser's "br" at Brotli's slowest quality:
@@ -42,8 +133,9 @@ void reply_arrays(const httplib::Request& req, httplib::Response& res, const Vie
     res.set_content(v.bytes(), "application/octet-stream");
 }
 
-/// The request's JSON body, an object; InputError naming the byte of a syntax error.
-json body_object(const httplib::Request& req) {
+/// The request's JSON body, an object of `keys` only; InputError naming the byte of a syntax
+/// error or the first key the route does not take (a misspelt key is not ignored).
+json body_object(const httplib::Request& req, std::initializer_list<const char*> keys) {
     json j;
     check_json_nesting(req.body, "request body");
     try {
@@ -54,6 +146,12 @@ json body_object(const httplib::Request& req) {
         throw InputError("request body", "", "a number is not finite");
     }
     if (!j.is_object()) throw InputError("request body", "", "a JSON object is expected");
+    for (const auto& [key, value] : j.items())
+        if (std::none_of(keys.begin(), keys.end(), [&](const char* k) { return key == k; })) {
+            std::string known;
+            for (const char* k : keys) known += fmt::format("{}\"{}\"", known.empty() ? "" : ", ", k);
+            throw InputError("request body", key.substr(0, 40), fmt::format("unknown key (this request takes {})", known));
+        }
     return j;
 }
 
@@ -112,21 +210,19 @@ std::optional<std::array<int, 4>> region_param(const httplib::Request& req) {
     const std::string v = req.get_param_value("region");
     int used = 0;
     if (std::sscanf(v.c_str(), "%d,%d,%d,%d%n", &r[0], &r[1], &r[2], &r[3], &used) != 4 || used != static_cast<int>(v.size()))
-        throw InputError("request", "region", fmt::format("'{}' is not x0,x1,y0,y1", v));
+        throw InputError("request", "region", fmt::format("'{}' is not x0,x1,y0,y1", v.substr(0, 40)));
+    if (r[0] < 0 || r[2] < 0 || r[0] >= r[1] || r[2] >= r[3])
+        throw InputError("request", "region", fmt::format("'{}' is an empty region: 0 <= x0 < x1 and 0 <= y0 < y1 are required", v));
     return r;
 }
 
 }  // namespace
 
 LightingServer::LightingServer(LightingSession& session, ServerOptions options)
-    : session_(session), options_(std::move(options)), guard_(options_.token), http_(std::make_unique<httplib::Server>()) {
+    : session_(session), options_(std::move(options)), guard_(options_.token), http_(std::make_unique<GatedHttpServer>(GateLimits{options_.header_time})) {
     if (!is_loopback_host(options_.host))
         throw InputError("command line", "--bind", fmt::format("'{}' is not a loopback address; the tool serves this machine only", options_.host));
     if (options_.port < 0 || options_.port > 65535) throw InputError("command line", "--port", "must be in [0, 65535]");
-    // A browser keeps up to six idle connections per page: httplib's default 8 threads would
-    // starve a second tab.
-    http_->new_task_queue = [] { return new httplib::ThreadPool(32); };
-    http_->set_keep_alive_timeout(2);
     routes();
 }
 
@@ -136,6 +232,7 @@ int LightingServer::bind() {
     const int port = options_.port == 0 ? http_->bind_to_any_port(options_.host)
                                         : (http_->bind_to_port(options_.host, options_.port) ? options_.port : -1);
     if (port <= 0) throw InputError("command line", "--port", fmt::format("cannot listen on {}:{}", options_.host, options_.port));
+    static_cast<GatedHttpServer&>(*http_).raise_backlog();  // httplib's is 5: a burst of POSTs overflowed it
     guard_.bind(port);
     return port;
 }
@@ -169,8 +266,20 @@ void LightingServer::routes() {
             reply(res, 403, {{"error", v.message}});
             return httplib::Server::HandlerResponse::Handled;
         }
+        // httplib reads a chunked body whole, past the payload limit: only a body of known
+        // length is read (a browser's fetch always sends one).
+        if (lower_ascii(req.get_header_value("Transfer-Encoding")).find("chunked") != std::string::npos) {
+            reply(res, 411, {{"error", "a request body needs a Content-Length (chunked bodies are refused)"}});
+            return httplib::Server::HandlerResponse::Handled;
+        }
         if (v.set_cookie) res.set_header("Set-Cookie", guard_.cookie());
         return httplib::Server::HandlerResponse::Unhandled;
+    });
+    // No page of another origin may frame the tool (clickjacking: a click on an invisible
+    // frame would press its buttons): every answer says so, the old way and the new.
+    s.set_post_routing_handler([](const httplib::Request&, httplib::Response& res) {
+        res.set_header("X-Frame-Options", "DENY");
+        res.set_header("Content-Security-Policy", "frame-ancestors 'none'");
     });
     s.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
         if (res.body.empty())
@@ -189,19 +298,19 @@ void LightingServer::routes() {
 void LightingServer::render_routes(httplib::Server& s) {
     s.Get("/api/params", [this](const httplib::Request&, httplib::Response& res) { reply(res, 200, session_.params()); });
     s.Post("/api/edit", [this](const httplib::Request& req, httplib::Response& res) {
-        const json b = body_object(req);
+        const json b = body_object(req, {"key", "value"});
         if (!b.contains("value")) throw InputError("request body", "value", "a value is required");
         reply(res, 200, session_.edit(string_field(b, "key"), b["value"]));
     });
     s.Post("/api/render", [this](const httplib::Request& req, httplib::Response& res) {
-        const json b = body_object(req);
+        const json b = body_object(req, {"action", "crop"});
         const SessionAction action = b.contains("action") ? parse_session_action(string_field(b, "action")) : session_.pending();
         const std::optional<std::array<int, 4>> crop = crop_field(b);
         session_.start(action, crop);
         reply(res, 202, {{"started", session_action_name(action)}});
     });
     s.Post("/api/frame", [this](const httplib::Request& req, httplib::Response& res) {
-        const json b = body_object(req);
+        const json b = body_object(req, {"frame"});
         if (!b.contains("frame") || !b["frame"].is_number()) throw InputError("request body", "frame", "a frame number is required");
         reply(res, 202, session_.set_frame(b["frame"].get<double>()));
     });
@@ -231,13 +340,13 @@ void LightingServer::view_routes(httplib::Server& s) {
         reply_arrays(req, res, session_.scene_view(static_cast<size_t>(int_param(req, "max_triangles", 100000, 1, 10000000))));
     });
     s.Post("/api/save-scene", [this](const httplib::Request& req, httplib::Response& res) {
-        reply(res, 200, {{"saved", session_.save_scene(string_field(body_object(req), "name"))}});
+        reply(res, 200, {{"saved", session_.save_scene(string_field(body_object(req, {"name"}), "name"))}});
     });
     s.Post("/api/save-cache", [this](const httplib::Request& req, httplib::Response& res) {
-        reply(res, 200, {{"saved", session_.save_cache(string_field(body_object(req), "name"))}});
+        reply(res, 200, {{"saved", session_.save_cache(string_field(body_object(req, {"name"}), "name"))}});
     });
     s.Post("/api/load-cache", [this](const httplib::Request& req, httplib::Response& res) {
-        session_.load_cache(string_field(body_object(req), "file"));
+        session_.load_cache(string_field(body_object(req, {"file"}), "file"));
         reply(res, 200, session_.status());
     });
 }

@@ -3,6 +3,7 @@
 // docs/lighting-tool.md lists the API.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <memory>
 #include <string>
@@ -23,6 +24,8 @@ struct ServerOptions {
     std::string three_dir;           ///< node_modules/three (served as /vendor/three)
     size_t max_body = 4u << 20;      ///< larger request bodies are refused (413)
     std::string token;               ///< the session token (empty: a new random one)
+    /// A connection's headers must arrive whole within this (then 408; connections.h).
+    std::chrono::milliseconds header_time{5000};
 };
 
 class LightingServer {

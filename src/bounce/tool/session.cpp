@@ -235,6 +235,7 @@ std::function<void(const std::string&, const std::string&)> LightingSession::edi
 }
 
 json LightingSession::set_frame(double frame) {
+    Replay replay;
     {
         std::lock_guard lock(mutex_);
         if (!scene_.shot.animated) throw InputError("request", "frame", "the scene has no shot (no \"animation\" block)");
@@ -242,14 +243,20 @@ json LightingSession::set_frame(double frame) {
             throw InputError("request", "frame", scene_.shot.outside(frame));
         // A shot steps in whole frames, as --frames does (each frame's cache is named by it).
         if (frame != std::floor(frame)) throw InputError("request", "frame", fmt::format("{:g} is not a whole frame", frame));
-        LoadOptions at;
-        at.frame = frame;
-        scene_ = load_scene(options_.scene, overrides_locked(), at);
-        frame_ = frame;
+        const int target = static_cast<int>(frame);
+        // Forward from the sequence's last frame: the frames in between, then this one. Back
+        // (or before any frame): the sequence again from its first frame, which no state
+        // kept in memory could skip (a frame's records depend on every frame before it).
+        if (sequence_frame_ && target > *sequence_frame_) replay = {*sequence_frame_ + 1, *sequence_frame_ + 1, target, false};
+        else {
+            const int first = std::min(sequence_frame_ ? sequence_first_ : target, target);
+            replay = {first, first, target, true};
+        }
+        replay_ = replay;
         ++edit_count_;
     }
     start(SessionAction::Frame);
-    return {{"frame", frame}};
+    return {{"frame", frame}, {"from", replay.first}};
 }
 
 fs::path LightingSession::cache_path() const {
@@ -282,6 +289,7 @@ json LightingSession::status() const {
             {"pending", pending_ < 0 ? json(nullptr) : json(session_action_name(static_cast<SessionAction>(pending_)))},
             {"bounce_stale", bounce_stale_},
             {"frame", frame_},
+            {"replay", running_ && action_ == SessionAction::Frame ? json{{"from", replay_.first}, {"to", replay_.target}} : json(nullptr)},
             {"shot", {{"animated", scene_.shot.animated}, {"first", scene_.shot.first}, {"last", scene_.shot.last}, {"fps", scene_.shot.fps}}},
             {"scene", options_.scene}};
 }

@@ -100,7 +100,11 @@ public:
     SessionAction pending() const;
     /// Moves to `frame` of the scene's shot (InputError outside it, for a fraction, or for a
     /// still) and starts its render, planned from what the last frame left as `bounce render
-    /// --frames` plans a shot's next frame (a frame slider). Returns {frame}.
+    /// --frames` plans a shot's next frame (a frame slider). A frame is the farm's however it
+    /// is reached: a jump past the next frame renders the frames in between first, and a move
+    /// back replays the sequence from its first frame (the frame its new deep file was made
+    /// at), so frame k is `--frames F-k`'s frame k. Returns {frame, from}: the first frame the
+    /// render goes through.
     nlohmann::json set_frame(double frame);
 
     /// Starts a render on the worker, cancelling a running one first. `crop` (full-frame pixel
@@ -150,6 +154,12 @@ public:
 private:
     class Sink;
     void run(SessionAction action, std::optional<std::array<int, 4>> crop);
+    /// Renders `action` (a slider move: each frame of its replay in turn); `stats` ends as the
+    /// statistics of the frame rendered last, also when it throws.
+    void render_action(SessionAction action, std::optional<std::array<int, 4>> crop, ProgressSink& sink, nlohmann::json& stats);
+    /// The next frame of a slider move made the session's (its scene loaded), and the action
+    /// that renders it; none when the move is done.
+    std::optional<SessionAction> next_replay_frame();
     /// One frame through its plan (plan_frame): a re-shade gathers only if records are missing.
     void render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats, ProgressSink& sink);
     std::vector<Override> overrides_locked() const;
@@ -174,6 +184,17 @@ private:
     std::vector<std::string> edit_order_;
     Scene scene_;  ///< with every edit, at frame_
     double frame_ = 1;  ///< the shot's frame the session shows
+    /// In a shot: the frame whose state last_ holds as the sequence left it (`--frames F-k`'s
+    /// frame k, F = sequence_first_), so the next frame steps from it; none before a first frame.
+    std::optional<int> sequence_frame_;
+    int sequence_first_ = 1;
+    /// A slider move's frames: next to render, the one asked for, and whether the first starts
+    /// the sequence anew (no kept state).
+    struct Replay {
+        int first = 0, next = 0, target = 0;
+        bool fresh = false;
+    };
+    Replay replay_;
     int pending_ = -1;  ///< SessionAction, or -1 = nothing to show
     uint64_t edit_count_ = 0;  ///< edits so far (a render clears pending_ only if none came while it ran)
     /// A light or material edit was re-shaded over records gathered with the old lights: the

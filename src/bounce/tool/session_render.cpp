@@ -9,6 +9,7 @@
 #include "bounce/core/stats.h"
 #include "bounce/render/frame.h"
 #include "bounce/render/render.h"
+#include "bounce/scene/scene_load.h"
 #include "bounce/tool/session.h"
 
 namespace bounce {
@@ -165,6 +166,12 @@ void LightingSession::keep_locked(SessionAction action, bool crop, uint64_t edit
         pending_ = -1;
         if (action == SessionAction::Regather || action == SessionAction::Rasterize) bounce_stale_ = false;
     }
+    // The state kept is the sequence's at this frame: the next frame steps from it (set_frame).
+    if (!crop && scene.shot.animated) {
+        const int frame = static_cast<int>(std::lround(frame_));
+        if (action == SessionAction::Rasterize || !sequence_frame_) sequence_first_ = frame;
+        sequence_frame_ = frame;
+    }
     FrameState next = r.release_state();
     if (!next.cache) next.cache = last_.cache;  // what the file still holds
     if (crop) {  // the frame's deep buffer, scene and BVHs stay; the cache is what the file now holds
@@ -173,6 +180,32 @@ void LightingSession::keep_locked(SessionAction action, bool crop, uint64_t edit
     }
     next.scene = std::make_shared<const Scene>(std::move(scene));
     last_ = std::move(next);
+}
+
+void LightingSession::render_action(SessionAction action, std::optional<std::array<int, 4>> crop, ProgressSink& sink, json& stats) {
+    if (action != SessionAction::Frame) {
+        Stats one;
+        struct Keep {  // the statistics also of a render that throws
+            Stats& from;
+            json& to;
+            ~Keep() { to = from.to_json(); }
+        } keep{one, stats};
+        return render_once(action, crop, one, sink);
+    }
+    while (const std::optional<SessionAction> step = next_replay_frame()) render_action(*step, std::nullopt, sink, stats);
+}
+
+std::optional<SessionAction> LightingSession::next_replay_frame() {
+    std::lock_guard lock(mutex_);
+    if (replay_.next > replay_.target) return std::nullopt;
+    LoadOptions at;
+    at.frame = replay_.next;
+    scene_ = load_scene(options_.scene, overrides_locked(), at);
+    frame_ = replay_.next;
+    // A replay from the sequence's start makes its first frame anew, as --frames does.
+    const bool anew = replay_.fresh && replay_.next == replay_.first;
+    ++replay_.next;
+    return anew ? SessionAction::Rasterize : SessionAction::Frame;
 }
 
 void LightingSession::run(SessionAction action, std::optional<std::array<int, 4>> crop) {
@@ -189,15 +222,13 @@ void LightingSession::run(SessionAction action, std::optional<std::array<int, 4>
     {
         // Everything the render allocated is freed before the session says it is idle.
         Sink sink(*this);
-        Stats stats;
         try {
-            render_once(action, crop, stats, sink);
+            render_action(action, crop, sink, stats_json);
         } catch (const Cancelled&) {
             state = SessionState::Cancelled;
         } catch (const std::exception& e) {
             state = SessionState::Failed, message = e.what();  // the previous image and cache stay
         }
-        stats_json = stats.to_json();
     }
     std::lock_guard lock(mutex_);
     if (state != SessionState::Done && version_ != before_version) image_ = std::move(before), ++version_;
