@@ -2,6 +2,7 @@
 // same plans from the same kept state (records, their hits and refinement's gathers, BVHs,
 // radiosity texels), so frame 2 after frame 1 is the sequence's frame 2 bit for bit, with the
 // same statistics; every frame's cache is kept for the 3D view's cache-sequence slider.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -86,6 +87,41 @@ TEST(LightingToolShot, EveryFrameLeavesItsCacheAndTheRecordsShownAreTheCurrentFr
     EXPECT_EQ(s.status()["stats"]["records"], three.records.size());
     // An earlier frame's cache is its own.
     EXPECT_EQ(s.records("session.0001.bic", 1000000).meta["frame"], 1);
+}
+
+// Issue 65: a frame reached by a jump is the farm's frame, forward (the frames in between are
+// rendered first) and back (the sequence replayed from its first frame), and going back leaves
+// every frame's cache as the sequence made it.
+TEST(LightingToolShot, AFrameReachedByAJumpForwardOrBackIsTheSequencesFrame) {
+    test::TempDir d;
+    const SessionOptions o = rolling_shot(d);
+    LightingSession s(o);
+    test::render_and_wait(s, SessionAction::Rasterize);
+    ASSERT_EQ(test::run_bounce(cli_frames(o, d, "1-4") + " --cache-out " + d.file("s.####.bic")), 0);
+    const auto same_cache = [&](int frame) {
+        EXPECT_EQ(test::bytes_of(d.file(fmt::format("out/session.{:04}.bic", frame))),
+                  test::bytes_of(d.file(fmt::format("s.{:04}.bic", frame))))
+            << "frame " << frame << "'s cache";
+    };
+    const auto same_frame = [&](int frame) {  // the frame shown
+        same_cache(frame);
+        const Image seq = read_exr(d.file(fmt::format("s.{:04}.exr", frame)));
+        EXPECT_EQ(test::differing_values(s.image(), seq), 0u) << "frame " << frame;
+        const json tool = s.status()["stats"], cli = json::parse(test::bytes_of(d.file(fmt::format("s.{:04}.json", frame))));
+        for (const char* key : kRecordStats) EXPECT_EQ(tool[key], cli[key]) << key << " of frame " << frame;
+    };
+    EXPECT_EQ(s.set_frame(4)["from"], 2);  // frames 2 and 3 first
+    wait_done(s);
+    EXPECT_EQ(s.status()["frame"], 4);
+    same_frame(4);
+    same_cache(3);  // the frame in between is the sequence's too
+    EXPECT_EQ(s.set_frame(2)["from"], 1);  // back: the sequence again from frame 1
+    wait_done(s);
+    same_frame(2);
+    same_cache(4);  // frame 4's cache was left as the sequence made it
+    s.set_frame(3);  // and a step from there is the next frame
+    wait_done(s);
+    same_frame(3);
 }
 
 TEST(LightingToolShot, AFrameIsAWholeNumberInsideTheShot) {

@@ -179,7 +179,8 @@ async function attackers() {
   const edit = JSON.stringify({ key: 'render.min_spacing', value: 2.5 });
   const evil = http.createServer((req, res) => {
     res.writeHead(200, { 'Content-Type': 'text/html' });
-    res.end(`<!doctype html><script>
+    // Issue 65: it also frames the tool, as a clickjacking page would under an invisible overlay.
+    res.end(`<!doctype html><iframe id="framed" src="${tool}/"></iframe><script>
       const post = (type) => fetch(${JSON.stringify(tool)} + '/api/edit', { method: 'POST', mode: 'no-cors', credentials: 'include',
         headers: { 'Content-Type': type }, body: ${JSON.stringify(edit)} }).then(() => 'sent', () => 'failed');
       window.tries = Promise.all([post('text/plain'), post('application/x-www-form-urlencoded')]);
@@ -190,6 +191,12 @@ async function attackers() {
     const evilPage = await lighter.newPage();
     await evilPage.goto(`http://127.0.0.1:${evil.address().port}/`);
     const sent = await evilPage.evaluate(() => window.tries);
+    // The browser refuses to show the tool inside another origin's page (frame-ancestors 'none'):
+    // the frame holds an error page, with no Update button to be clicked.
+    await evilPage.waitForLoadState('load');
+    const framed = evilPage.frames().find((f) => f !== evilPage.mainFrame());
+    const buttons = framed ? await framed.evaluate(() => document.querySelectorAll('#update, #rasterize').length).catch(() => 0) : 0;
+    check(framed && buttons === 0, `another origin's page cannot frame the tool (frame ${framed && framed.url()}, ${buttons} buttons in it)`);
     await evilPage.close();
     const rows = await page.evaluate(() => fetch('/api/params').then((r) => r.json()));
     const spacing = rows.find((r) => r.key === 'render.min_spacing');

@@ -235,7 +235,6 @@ std::function<void(const std::string&, const std::string&)> LightingSession::edi
 }
 
 json LightingSession::set_frame(double frame) {
-    Replay replay;
     {
         std::lock_guard lock(mutex_);
         if (!scene_.shot.animated) throw InputError("request", "frame", "the scene has no shot (no \"animation\" block)");
@@ -243,20 +242,26 @@ json LightingSession::set_frame(double frame) {
             throw InputError("request", "frame", scene_.shot.outside(frame));
         // A shot steps in whole frames, as --frames does (each frame's cache is named by it).
         if (frame != std::floor(frame)) throw InputError("request", "frame", fmt::format("{:g} is not a whole frame", frame));
-        const int target = static_cast<int>(frame);
-        // Forward from the sequence's last frame: the frames in between, then this one. Back
-        // (or before any frame): the sequence again from its first frame, which no state
-        // kept in memory could skip (a frame's records depend on every frame before it).
-        if (sequence_frame_ && target > *sequence_frame_) replay = {*sequence_frame_ + 1, *sequence_frame_ + 1, target, false};
-        else {
-            const int first = std::min(sequence_frame_ ? sequence_first_ : target, target);
-            replay = {first, first, target, true};
-        }
-        replay_ = replay;
+        frame_asked_ = static_cast<int>(frame);
         ++edit_count_;
     }
-    start(SessionAction::Frame);
+    start(SessionAction::Frame);  // plans the frames to render (start_replay_locked)
+    std::lock_guard lock(mutex_);
+    const Replay replay = replay_;
     return {{"frame", frame}, {"from", replay.first}};
+}
+
+void LightingSession::start_replay_locked() {
+    const int target = frame_asked_;
+    // Forward from the sequence's last frame: the frames in between, then this one. Back
+    // (or before any frame): the sequence again from its first frame, which no state kept in
+    // memory could skip (a frame's records depend on every frame before it).
+    if (sequence_frame_ && target > *sequence_frame_) {
+        replay_ = {*sequence_frame_ + 1, *sequence_frame_ + 1, target, false};
+    } else {
+        const int first = std::min(sequence_frame_ ? sequence_first_ : target, target);
+        replay_ = {first, first, target, true};
+    }
 }
 
 fs::path LightingSession::cache_path() const {

@@ -195,6 +195,10 @@ private:
         bool fresh = false;
     };
     Replay replay_;
+    int frame_asked_ = 1;  ///< the frame set_frame was last asked for
+    /// replay_ for frame_asked_, from the sequence as the last render left it (so called by
+    /// start() once the render before has stopped: a move during a move starts from its end).
+    void start_replay_locked();
     int pending_ = -1;  ///< SessionAction, or -1 = nothing to show
     uint64_t edit_count_ = 0;  ///< edits so far (a render clears pending_ only if none came while it ran)
     /// A light or material edit was re-shaded over records gathered with the old lights: the

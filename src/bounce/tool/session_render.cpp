@@ -47,6 +47,7 @@ void LightingSession::start(SessionAction action, std::optional<std::array<int, 
             throw InputError("request", "crop", "render the whole frame once before a sub-viewport");
         if (action == SessionAction::Rasterize) throw InputError("request", "crop", "a new deep file is always the whole frame");
     }
+    if (action == SessionAction::Frame) start_replay_locked();
     cancel_ = std::make_unique<CancelToken>();
     running_ = true;
     state_ = SessionState::Running, message_.clear(), action_ = action;
@@ -183,16 +184,17 @@ void LightingSession::keep_locked(SessionAction action, bool crop, uint64_t edit
 }
 
 void LightingSession::render_action(SessionAction action, std::optional<std::array<int, 4>> crop, ProgressSink& sink, json& stats) {
-    if (action != SessionAction::Frame) {
+    const auto render = [&](SessionAction a, std::optional<std::array<int, 4>> c) {
         Stats one;
         struct Keep {  // the statistics also of a render that throws
             Stats& from;
             json& to;
             ~Keep() { to = from.to_json(); }
         } keep{one, stats};
-        return render_once(action, crop, one, sink);
-    }
-    while (const std::optional<SessionAction> step = next_replay_frame()) render_action(*step, std::nullopt, sink, stats);
+        render_once(a, c, one, sink);
+    };
+    if (action != SessionAction::Frame) return render(action, crop);
+    while (const std::optional<SessionAction> step = next_replay_frame()) render(*step, std::nullopt);
 }
 
 std::optional<SessionAction> LightingSession::next_replay_frame() {
