@@ -251,7 +251,7 @@ TEST(CacheFile, BadFilesAreRefusedCleanly) {
     // reader refuses this version's (it checks the same version word).
     std::string v3 = good;
     v3[8] = 3;
-    refused(v3, "unsupported cache version 3 (this bounce reads version 4)");
+    refused(v3, "unsupported cache version 3 (this bounce reads versions 4 and 5)");
     // Every truncation is an error, never a crash.
     for (size_t n = 1; n < good.size(); n += 7) EXPECT_THROW(parse_cache_file(good.substr(0, n), "t.bic"), InputError) << n;
     // Every single flipped bit after the magic and version is caught (checksums, bounds).

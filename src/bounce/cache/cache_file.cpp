@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -168,6 +169,46 @@ const char* record_problem(const Record& r) {
     return nullptr;
 }
 
+/// Floats of one light part: E, then dir, grad_r and grad_t (3 vectors each).
+constexpr size_t kPartFloats = 3 + 3 * 9;
+/// The most lights a file's parts may be for (a bound on the header's word before allocating).
+constexpr uint64_t kMaxPartLights = 1u << 16;
+
+void write_part(std::string& out, const LightPart& p) {
+    put_vec(out, p.E);
+    for (const auto* a : {&p.dir, &p.grad_r, &p.grad_t})
+        for (const Vec3& v : *a) put_vec(out, v);
+}
+
+LightPart read_part(Cursor& c) {
+    LightPart p;
+    p.E = c.vec("light part");
+    for (auto* a : {&p.dir, &p.grad_r, &p.grad_t})
+        for (Vec3& v : *a) v = c.vec("light part");
+    return p;
+}
+
+/// The number of lights every record keeps its parts for (0: some record has none, or they
+/// differ): only then are parts written, and a loaded cache rescales exactly.
+size_t parts_lights(const CacheFile& f) {
+    const Record* first = !f.records.empty() ? &f.records[0] : !f.fragment_records.empty() ? &f.fragment_records[0] : nullptr;
+    if (!first || !first->parts || first->parts->light.empty()) return 0;
+    const size_t lights = first->parts->light.size();
+    const auto has = [lights](const Record& r) { return r.parts && r.parts->light.size() == lights; };
+    return std::all_of(f.records.begin(), f.records.end(), has) && std::all_of(f.fragment_records.begin(), f.fragment_records.end(), has)
+               ? lights
+               : 0;
+}
+
+bool part_in_range(const LightPart& p) {
+    const auto ok = [](const Vec3& v) { return isfinite(v) && within(v, kMaxRadiometric); };
+    if (!ok(p.E)) return false;
+    for (const auto* a : {&p.dir, &p.grad_r, &p.grad_t})
+        for (const Vec3& v : *a)
+            if (!ok(v)) return false;
+    return true;
+}
+
 }  // namespace
 
 std::string serialize_records(std::span<const Record> records) {
@@ -226,6 +267,9 @@ std::string serialize_cache_file(const CacheFile& file) {
     h["scene_fingerprint"] = fmt::format("{:016x}", file.info.scene_fingerprint);
     h["camera_fingerprint"] = fmt::format("{:016x}", file.info.camera_fingerprint);
     h["geometry_fingerprint"] = fmt::format("{:016x}", file.info.geometry_fingerprint);
+    h["unscaled_fingerprint"] = fmt::format("{:016x}", file.info.unscaled_fingerprint);
+    const size_t lights = parts_lights(file);
+    if (lights > 0) h["light_parts"] = lights;
     h["parameters"] = file.info.parameters;
     h["luminance_floor"] = file.info.luminance_floor;
     h["frame"] = file.info.frame;
@@ -249,6 +293,21 @@ std::string serialize_cache_file(const CacheFile& file) {
         put(out, fnv1a(payload.data(), payload.size()));
         out += payload;
     }
+    // Version 5: the records' bounce light per light (scales factored out), in blocks of the
+    // same records, so a loaded cache takes a light's new colour or intensity exactly.
+    for (size_t b = 0; lights > 0 && b < total; b += kBlockRecords) {
+        auto n = static_cast<uint32_t>(std::min<size_t>(kBlockRecords, total - b));
+        std::string payload;
+        payload.reserve(n * (lights + 1) * kPartFloats * 4);
+        for (uint32_t i = 0; i < n; ++i) {
+            const LightParts& parts = *at(b + i).parts;
+            write_part(payload, parts.signal);
+            for (const LightPart& p : parts.light) write_part(payload, p);
+        }
+        put(out, n);
+        put(out, fnv1a(payload.data(), payload.size()));
+        out += payload;
+    }
     return out;
 }
 
@@ -262,14 +321,47 @@ void write_cache_file(const std::string& path, const CacheFile& file) {
     });
 }
 
+namespace {
+
+/// The light-parts section: one block per block of records, each record's signal then its
+/// `lights` parts (bounded by the bytes present before anything is allocated).
+void read_parts(Cursor& c, const std::string& name, size_t lights, std::vector<Record>& records) {
+    const size_t record_bytes = (lights + 1) * kPartFloats * 4;
+    if (records.size() > c.remaining() / record_bytes)
+        c.fail(fmt::format("{} records' parts for {} lights cannot fit in the {} bytes that follow", records.size(), lights, c.remaining()));
+    for (size_t done = 0; done < records.size();) {
+        const size_t block_at = c.pos();
+        const auto n = c.get<uint32_t>("parts block size");
+        if (n == 0 || n > kBlockRecords || n > records.size() - done)
+            throw InputError(name, fmt::format("byte {}", block_at), fmt::format("bad light-parts block size {}", n));
+        const auto sum = c.get<uint64_t>("parts block checksum");
+        const std::string payload = c.bytes(n * record_bytes, "light parts");
+        if (sum != fnv1a(payload.data(), payload.size()))
+            throw InputError(name, fmt::format("light-parts block at byte {}", block_at), "checksum mismatch (file is corrupt)");
+        Cursor pc(payload, name);
+        for (uint32_t i = 0; i < n; ++i, ++done) {
+            auto parts = std::make_shared<LightParts>();
+            parts->signal = read_part(pc);
+            parts->light.resize(lights);
+            for (LightPart& p : parts->light) p = read_part(pc);
+            if (!part_in_range(parts->signal) || !std::all_of(parts->light.begin(), parts->light.end(), part_in_range))
+                throw InputError(name, fmt::format("record {}'s light parts", done), "non-finite or beyond 1e20");
+            records[done].parts = std::move(parts);
+        }
+    }
+}
+
+}  // namespace
+
 CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
     Cursor c(bytes, name);
     if (bytes.empty()) c.fail("empty file (not an irradiance cache)");
     std::string magic = c.bytes(std::min<size_t>(8, bytes.size()), "magic");
     if (magic.size() < 8 || std::memcmp(magic.data(), kMagic, 8) != 0) throw InputError(name, "byte 0", "not a bounce irradiance cache (bad magic)");
     auto version = c.get<uint32_t>("version");
-    if (version != kCacheFileVersion)
-        throw InputError(name, "byte 8", fmt::format("unsupported cache version {} (this bounce reads version {})", version, kCacheFileVersion));
+    // Version 4 is version 5 without light parts: still read.
+    if (version != kCacheFileVersion && version != 4)
+        throw InputError(name, "byte 8", fmt::format("unsupported cache version {} (this bounce reads versions 4 and {})", version, kCacheFileVersion));
     auto hlen = c.get<uint32_t>("header length");
     if (hlen > kMaxHeader || hlen > c.remaining()) c.fail(fmt::format("header length {} is impossible for this file", hlen));
     std::string header = c.bytes(hlen, "header");
@@ -305,6 +397,11 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
         f.info.camera_fingerprint = std::stoull(h.at("camera_fingerprint").get<std::string>(), nullptr, 16);
         if (h.contains("geometry_fingerprint"))  // absent in files of earlier builds
             f.info.geometry_fingerprint = std::stoull(h.at("geometry_fingerprint").get<std::string>(), nullptr, 16);
+        if (h.contains("unscaled_fingerprint"))  // version 5
+            f.info.unscaled_fingerprint = std::stoull(h.at("unscaled_fingerprint").get<std::string>(), nullptr, 16);
+        const uint64_t lights = count_of("light_parts", false);
+        if (lights > kMaxPartLights || (lights > 0 && version < 5))
+            throw InputError(name, "header/light_parts", fmt::format("{} lights' parts cannot be in a version {} file of at most {} lights", lights, version, kMaxPartLights));
         f.info.parameters = h.at("parameters");
         f.info.luminance_floor = h.at("luminance_floor").get<float>();
         // A frame number is an integer within the shots' bound (1e39 was read as -2147483648).
@@ -330,6 +427,7 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
                 f.records.push_back(r);
             }
         }
+        if (lights > 0) read_parts(c, name, static_cast<size_t>(lights), f.records);
         if (c.remaining() != 0) c.fail(fmt::format("{} unexpected bytes after the last block", c.remaining()));
         f.fragment_records.assign(f.records.begin() + static_cast<std::ptrdiff_t>(shared), f.records.end());
         f.records.resize(shared);

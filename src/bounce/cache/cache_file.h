@@ -21,6 +21,10 @@ struct CacheFileInfo {
     /// known, a file from before it was written). Equal while scene_fingerprint differs: only
     /// lights or materials changed, so the records still fit the scene and hold its old light.
     uint64_t geometry_fingerprint = 0;
+    /// scene_fingerprint with every light's colour and intensity left out (Scene::
+    /// unscaled_fingerprint): equal while only those differ, records that keep light parts
+    /// take the new ones exactly (0: not known, a file from before version 5).
+    uint64_t unscaled_fingerprint = 0;
     nlohmann::json parameters = nlohmann::json::object();  ///< the settings that made it
     float luminance_floor = 0;
     int frame = 0;
@@ -36,7 +40,10 @@ struct CacheFile {
 
 /// 2: records carry their gather's origin, view summary (reach), anchor, last gather frame and drift.
 /// 3: ... and their gather's noise (Record::noise, for refinement's spread).
-inline constexpr uint32_t kCacheFileVersion = 4;
+/// 4: ... and per-fragment refinement's records.
+/// 5: ... and, when every record keeps them, the records' light parts (render.light_parts), with
+///    the scene's fingerprint without the lights' colours and intensities. 4 is still read.
+inline constexpr uint32_t kCacheFileVersion = 5;
 
 /// Writes `file` to `path` (temporary name, then rename).
 void write_cache_file(const std::string& path, const CacheFile& file);

@@ -2,7 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "bounce/core/error.h"
+#include "bounce/lighting/lighting.h"
 #include "bounce/scene/params.h"
 
 namespace bounce {
@@ -12,9 +15,26 @@ CacheFileInfo cache_file_info(const Scene& scene, int frame) {
     info.scene_fingerprint = scene.fingerprint({"objects", "materials", "lights"}, true);
     info.camera_fingerprint = scene.fingerprint({"camera"});
     info.geometry_fingerprint = scene.fingerprint({"objects"});
+    info.unscaled_fingerprint = scene.unscaled_fingerprint();
     info.parameters = param_values(scene, kCacheIdentity);
     info.frame = frame;
     return info;
+}
+
+bool keeps_light_parts(const CacheFile& file, size_t lights) {
+    const auto has = [lights](const Record& r) { return r.parts && r.parts->light.size() == lights; };
+    return lights > 0 && !file.records.empty() && std::all_of(file.records.begin(), file.records.end(), has) &&
+           std::all_of(file.fragment_records.begin(), file.fragment_records.end(), has);
+}
+
+CacheFit cache_fit(const CacheFile& file, const Scene& scene) {
+    const CacheFileInfo want = cache_file_info(scene, 0);
+    if (file.info.scene_fingerprint == want.scene_fingerprint) return CacheFit::Same;
+    if (file.info.geometry_fingerprint == 0 || file.info.geometry_fingerprint != want.geometry_fingerprint) return CacheFit::OtherObjects;
+    if (file.info.unscaled_fingerprint != 0 && file.info.unscaled_fingerprint == want.unscaled_fingerprint &&
+        keeps_light_parts(file, scene.lights.size()))
+        return CacheFit::Rescaled;
+    return CacheFit::OtherLighting;
 }
 
 LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, CacheReuse reuse, IrradianceCache& cache,
@@ -23,9 +43,8 @@ LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, 
     CacheFileInfo want = cache_file_info(scene, 0);
     // A lighter's re-shade after a light or material edit reuses the records on purpose (the
     // bounce light follows on a re-gather); other objects make them wrong.
-    const bool same_objects = f.info.geometry_fingerprint != 0 && f.info.geometry_fingerprint == want.geometry_fingerprint;
-    const bool other_scene = f.info.scene_fingerprint != want.scene_fingerprint;
-    if (!force && other_scene && !same_objects)
+    const CacheFit fit = cache_fit(f, scene);
+    if (!force && fit == CacheFit::OtherObjects)
         throw InputError(path, "scene_fingerprint",
                          "cache was made for another scene (its objects differ, or a file they read has changed since); "
                          "--force uses it anyway");
@@ -37,7 +56,10 @@ LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, 
     if (f.info.parameters.contains(ao_key) && f.info.parameters[ao_key] != want.parameters[ao_key])
         throw InputError(path, "parameters/" + ao_key, scene.render.indirect.ao ? "cache holds irradiance, not AO" : "cache holds AO, not irradiance");
     LoadedCache out;
-    out.other_lighting = other_scene && same_objects;
+    // Records that keep a part per light (scales factored out) take this scene's colours and
+    // intensities exactly when nothing else about the lights and materials differs.
+    out.rescaled = fit == CacheFit::Rescaled;
+    out.other_lighting = fit == CacheFit::OtherLighting;
     out.differences = param_differences(f.info.parameters, want.parameters);
     if (!out.differences.empty() && reuse == CacheReuse::Strict)
         throw InputError(path, "parameters",
@@ -45,14 +67,20 @@ LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, 
                                      "--cache-reuse-any keeps its records",
                                      fmt::join(out.differences, "; ")));
     cache.set_luminance_floor(f.info.luminance_floor);
+    const std::vector<Color> scales = light_scales(scene);
+    const auto scaled = [&](Record r) {
+        if (r.parts && r.parts->light.size() == scales.size()) apply_light_scales(r, scales);
+        else r.parts.reset();
+        return r;
+    };
     for (const Record& r : f.records)
         if (!keep || keep(r)) {
-            cache.insert_loaded(r);
+            cache.insert_loaded(scaled(r));
             ++out.records;
         }
     for (const Record& r : f.fragment_records)
         if (!keep || keep(r)) {
-            cache.insert_fragment_record(r);
+            cache.insert_fragment_record(scaled(r));
             ++out.fragment_records;
         }
     return out;

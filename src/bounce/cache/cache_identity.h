@@ -2,6 +2,7 @@
 // checks that keep a lighter from reusing records made for something else.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -21,12 +22,27 @@ enum class CacheReuse {
     Any,     ///< keep its records whatever settings made them (gather only where they miss)
 };
 
+/// How a cache file's records fit a scene, best first.
+enum class CacheFit : uint8_t {
+    Same,           ///< made for these objects, lights and materials
+    Rescaled,       ///< only the lights' colours or intensities differ, and every record keeps its
+                    ///< light parts: loaded at the scene's scales, exactly
+    OtherLighting,  ///< the same objects, other lights or materials: the records hold that bounce light
+    OtherObjects,   ///< other objects (or a file they read has changed): the records do not fit
+};
+CacheFit cache_fit(const CacheFile& file, const Scene& scene);
+/// Whether every record of `file` keeps its light parts for `lights` lights.
+bool keeps_light_parts(const CacheFile& file, size_t lights);
+
 struct LoadedCache {
     size_t records = 0;
     size_t fragment_records = 0;  ///< per-fragment refinement's records
     std::vector<std::string> differences;  ///< "key: was -> now", for the settings that differ
     /// Same objects, other lights or materials: the records hold the bounce light of those.
     bool other_lighting = false;
+    /// Only the lights' colours or intensities differed: the records' parts took the scene's
+    /// exactly (not other_lighting).
+    bool rescaled = false;
 };
 
 /// Loads `path` into `cache`. Refuses (InputError, exit 2) a cache made for other objects or

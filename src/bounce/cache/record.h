@@ -73,7 +73,7 @@ struct Record {
     float near = 0;              ///< its gather's `near` (Gatherer::gather), to gather it again alike
     float drift = 0;             ///< bound on how far its irradiance may have moved since (relative to E)
     std::shared_ptr<const GatherHits> hits;  ///< kept only when a shot may re-shade it (not in files)
-    std::shared_ptr<const LightParts> parts; ///< CacheSettings::light_parts only (not in files)
+    std::shared_ptr<const LightParts> parts; ///< CacheSettings::light_parts only (in files from version 5)
     /// render.guided only (not in files): how its gather's cells varied per direction bin, the
     /// guide of the refinement gathers of fragments it covers (guide.h).
     std::shared_ptr<const DirectionGuide> guide;

@@ -226,6 +226,10 @@ struct Scene {
     /// irradiance does not depend on them.
     /// Each part's hash includes the content of the files named under it (inputs_hash).
     uint64_t fingerprint(const std::vector<std::string>& parts, bool without_surface_shading = false) const;
+    /// fingerprint({"objects", "materials", "lights"}, true) with every light's "color" and
+    /// "intensity" left out: records that keep their light parts (scales factored out) serve
+    /// any scene of the same unscaled fingerprint exactly, at its own scales.
+    uint64_t unscaled_fingerprint() const;
     /// Hash of the content of the input files named under top-level `part` ("objects" ...).
     uint64_t inputs_hash(const std::string& part, bool without_surface_shading = false) const;
     /// The scene file and every file it reads: what no output may overwrite.

@@ -328,6 +328,17 @@ uint64_t Scene::fingerprint(const std::vector<std::string>& parts, bool without_
     return h;
 }
 
+uint64_t Scene::unscaled_fingerprint() const {
+    uint64_t h = fingerprint({"objects", "materials"}, true);
+    json unscaled = description.contains("lights") ? description["lights"] : json();
+    if (unscaled.is_array())
+        for (json& l : unscaled)
+            if (l.is_object()) l.erase("color"), l.erase("intensity");
+    const std::string s = "lights=" + (unscaled.is_null() ? "" : unscaled.dump());
+    for (unsigned char c : s) h = hash_combine(h, c);
+    return hash_combine(h, inputs_hash("lights", true));
+}
+
 std::vector<std::string> Scene::input_paths() const {
     std::vector<std::string> out{path};
     for (const SceneInput& in : inputs) out.push_back(in.path);

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "bounce/cache/cache_file.h"
+#include "bounce/cache/cache_identity.h"
 #include "bounce/core/json_limits.h"
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
@@ -135,7 +136,7 @@ LightingSession::LightingSession(SessionOptions options) : options_(std::move(op
     if (options_.default_to_light_parts && !(render_keys.is_object() && render_keys.contains("light_parts")))
         edit("render.light_parts", true);
     copy_in(options_.deep_in, deep_path_, [&](const std::string& f) { validate_deep_for_scene(read_deep(f), scene_, f); });
-    copy_in(options_.cache_in, cache_path_locked(), [](const std::string& f) { read_cache_file(f); });
+    copy_in(options_.cache_in, cache_path_locked(), [&](const std::string& f) { adopt_cache_locked(read_cache_file(f), f); });
     // Nothing rendered yet: the first render makes what the session has no file of.
     const bool cached = scene_.render.indirect.gi == GiMode::Cache;
     pending_ = static_cast<int>(!fs::exists(deep_path_)                     ? SessionAction::Rasterize
@@ -216,8 +217,9 @@ json LightingSession::edit(const std::string& key, const json& value, const std:
     pending_ = std::max(pending_, static_cast<int>(needs));
     // Records with light parts take a light's new colour or intensity on the re-shade, exactly
     // (a mesh light's is its material's emission: not a light key).
-    const bool rescaled = light_scale_key(key) && last_.cache && scene_.render.cache.light_parts &&
-                          last_.cache->has_light_parts(scene_.lights.size());
+    const size_t lights = scene_.lights.size();
+    const bool parts = last_.cache ? last_.cache->has_light_parts(lights) : file_parts_lights_ == lights;
+    const bool rescaled = light_scale_key(key) && scene_.render.cache.light_parts && parts;
     if (changes_bounce_light(key) && !rescaled) bounce_stale_ = true;
     return {{"key", key}, {"value", value}, {"needs", session_action_name(needs)}};
 }

@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "bounce/cache/cache_file.h"
 #include "bounce/cache/irradiance_cache.h"
 #include "bounce/core/image.h"
 #include "bounce/deep/deep_buffer.h"
@@ -140,7 +141,10 @@ public:
     /// Writes the scene with every edit applied, atomically, into the scene's folder.
     std::string save_scene(const std::string& name) const;
     std::string save_cache(const std::string& name) const;  ///< copies the session's cache to out_dir/name
-    void load_cache(const std::string& file);                 ///< makes `file` the session's cache
+    /// Makes `file` the session's cache: InputError when it was gathered on other objects or
+    /// for another camera; its bounce light is stale when it was gathered under other lights or
+    /// materials (but colours and intensities, when its records keep their light parts).
+    void load_cache(const std::string& file);
 
     /// `name` resolved inside the scene's folder or the output folder; InputError (naming
     /// `what`) for absolute paths, "..", or a symlink that leads out.
@@ -205,6 +209,11 @@ private:
     /// bounce light is the old one until a full-frame re-gather (or new deep file) is done.
     /// (A colour or intensity edit of a light is not, while the records keep light parts.)
     bool bounce_stale_ = false;
+    /// The lights a cache file brought in keeps its records' parts for (0: none): until a
+    /// render holds its records in last_, what says whether a light's edit rescales them.
+    size_t file_parts_lights_ = 0;
+    /// A cache file brought in (load_cache, --cache-in): checked against the scene (see load_cache).
+    void adopt_cache_locked(const CacheFile& f, const std::string& name);
     // Worker state.
     std::thread worker_;
     std::unique_ptr<CancelToken> cancel_;

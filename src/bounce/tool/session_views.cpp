@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "bounce/cache/cache_file.h"
+#include "bounce/cache/cache_identity.h"
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
@@ -194,8 +195,25 @@ void LightingSession::load_cache(const std::string& file) {
     std::lock_guard control(control_);
     stop();
     std::lock_guard lock(mutex_);
+    adopt_cache_locked(f, file);
     write_cache_file(cache_path_locked().string(), f);
     last_.cache.reset();  // the next render reads the file
+    // The image shown is not the loaded cache's.
+    pending_ = std::max(pending_, static_cast<int>(SessionAction::Reshade));
+}
+
+void LightingSession::adopt_cache_locked(const CacheFile& f, const std::string& name) {
+    // The cache's identity against the session's scene, as the CLI checks it: records of other
+    // objects or another camera do not fit; other lights or materials make its bounce light
+    // stale (shown until a re-gather), unless only colours and intensities differ and the
+    // records keep their light parts (then they take the session's exactly).
+    const CacheFit fit = cache_fit(f, scene_);
+    if (fit == CacheFit::OtherObjects)
+        throw InputError(name, "scene_fingerprint", "the cache was gathered on other objects (or a file they read has changed since): Re-gather instead");
+    if (f.info.camera_fingerprint != cache_file_info(scene_, 0).camera_fingerprint)
+        throw InputError(name, "camera_fingerprint", "the cache was gathered for another camera (its spacing is in that camera's pixels): Re-gather instead");
+    bounce_stale_ = fit == CacheFit::OtherLighting;
+    file_parts_lights_ = keeps_light_parts(f, scene_.lights.size()) ? scene_.lights.size() : 0;
 }
 
 }  // namespace bounce
