@@ -42,7 +42,9 @@ struct Folder {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     static const Folder folder;
     std::string bytes = folder.prefix + std::string(reinterpret_cast<const char*>(data), size);
-    const uint64_t body = bytes.size() - 32, hash = OIIO::xxhash::XXH64(bytes.data() + 32, body, 1);
+    uint32_t version = 0;  // the body's hash is seeded with the entry's version
+    std::memcpy(&version, bytes.data() + 8, 4);
+    const uint64_t body = bytes.size() - 32, hash = OIIO::xxhash::XXH64(bytes.data() + 32, body, version);
     std::memcpy(bytes.data() + 16, &body, 8);
     std::memcpy(bytes.data() + 24, &hash, 8);
     std::ofstream(folder.entry, std::ios::binary | std::ios::trunc) << bytes;

@@ -227,8 +227,12 @@ TEST(HostileValues, AFileValueAFlagReplacesIsStillChecked) {
     expect_refused(with({{"spp", json::array()}}, json::object(), "--spp 1 --res 16x16"), {"s.json", "/render/spp"});
     expect_refused(with({{"threads", 18446744073709551615.0}}, json::object(), "--threads 1 --res 16x16"), {"s.json", "/render/threads"});
     expect_refused(with(json::object(), {{"resolution", {0, 0}}}, "--res 16x16"), {"s.json", "/camera/resolution"});
+    // A keyed resolution is refused as it is without the flag: it cannot be animated
+    // (issue 65, item 20: with valid keys it was accepted).
     expect_refused(with(json::object(), {{"resolution", {{"keys", {{1, {16, 16}}, {2, {0, 16}}}}}}}, "--res 16x16"),
-            {"s.json", "/camera/resolution/keys/1/1"});
+            {"s.json", "/camera/resolution", "cannot be animated"});
+    expect_refused(with(json::object(), {{"resolution", {{"keys", {{1, {32, 32}}, {2, {16, 16}}}}}}}, "--res 32x32"),
+            {"s.json", "/camera/resolution", "cannot be animated"});
     EXPECT_EQ(test::run_bounce(with({{"spp", 2}}, json::object(), "--spp 1 --res 16x16")), 0);
 }
 

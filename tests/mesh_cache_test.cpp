@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "bounce/core/files.h"
 #include "bounce/scene/mesh_cache.h"
 #include "bounce/scene/mesh_import.h"
 #include "test_util.h"
@@ -150,7 +151,9 @@ TEST_F(MeshCache, AnEditedFileOrMtlIsParsedAgain) {
 /// Bytes of an entry with its body's checksum made right again (mesh_cache.cpp's layout: 32
 /// header bytes, the body's XXH64 at 24 seeded with the version).
 std::string with_checksum(std::string bytes) {
-    const uint64_t h = OIIO::xxhash::XXH64(bytes.data() + 32, bytes.size() - 32, 1);
+    uint32_t version = 0;  // the body's hash is seeded with the entry's version
+    std::memcpy(&version, bytes.data() + 8, 4);
+    const uint64_t h = OIIO::xxhash::XXH64(bytes.data() + 32, bytes.size() - 32, version);
     std::memcpy(bytes.data() + 24, &h, 8);
     return bytes;
 }
@@ -226,6 +229,54 @@ TEST_F(MeshCache, ARenderFromTheCacheIsTheRenderFromTheFile) {
     const Image parsed = read_exr(dir.file("parsed.exr"));
     EXPECT_EQ(test::differing_values(read_exr(dir.file("miss.exr")), parsed), 0u);
     EXPECT_EQ(test::differing_values(read_exr(dir.file("hit.exr")), parsed), 0u);
+}
+
+// Issue 65: an entry's MTL is checked where the mesh's folder has it, not by a name relative to
+// the working directory of the run that wrote the entry (a copy of an old MTL there hid an edit).
+TEST_F(MeshCache, AnEditedMtlIsSeenFromAnyWorkingDirectory) {
+    const fs::path start = fs::current_path();
+    fs::current_path(dir.path());
+    obj = "box.obj";  // relative, as a scene in this folder names it
+    load();  // the entry, written from the mesh's folder
+    test::TempDir elsewhere;
+    fs::copy_file(dir.file("CornellBox-Original.mtl"), elsewhere.file("CornellBox-Original.mtl"));  // the old MTL
+    std::string mtl = test::bytes_of(dir.file("CornellBox-Original.mtl"));
+    const size_t kd = mtl.find("Kd ");
+    ASSERT_NE(kd, std::string::npos);
+    mtl.replace(kd, mtl.find('\n', kd) - kd, "Kd 0.1 0.1 0.8");
+    std::ofstream(dir.file("CornellBox-Original.mtl"), std::ios::trunc) << mtl;
+    fs::current_path(elsewhere.path());
+    obj = dir.file("box.obj");
+    const MeshCacheCounts before = mesh_cache_counts();
+    const Loaded l = load();
+    EXPECT_EQ(mesh_cache_counts().hits, before.hits) << "the old entry was used";
+    const Loaded reference = parsed();
+    fs::current_path(start);
+    expect_same_materials(l.materials, reference.materials);
+    bool blue = false;
+    for (const Material& m : l.materials) blue |= m.color[0] == 0.1f && m.color[2] == 0.8f;
+    EXPECT_TRUE(blue);
+}
+
+// Issue 65: a material's texture in an entry is a file the parse read and a texture a parse
+// would take; /etc/passwd or a missing file makes the entry damaged (parsed again).
+TEST_F(MeshCache, AnEntrysTexturesAreCheckedAsAParseChecksThem) {
+    const Loaded reference = parsed();
+    load();
+    const MeshCacheKey key{fs::absolute(obj).lexically_normal().string(), "box", false, false, true};
+    const std::optional<LoadedMeshFile> good = read_mesh_cache(cache.path().string(), key);
+    ASSERT_TRUE(good);
+    for (const std::string& texture : {std::string("/etc/passwd"), dir.file("nosuch.png")}) {
+        for (const bool listed : {false, true}) {
+            LoadedMeshFile bad = *good;
+            bad.materials.back().color_texture = texture;
+            if (listed) bad.inputs.emplace_back(texture, file_content_hash(texture));
+            write_mesh_cache(cache.path().string(), key, bad);
+            EXPECT_FALSE(read_mesh_cache(cache.path().string(), key)) << texture << (listed ? " (listed)" : "");
+        }
+    }
+    // The load parses again and is the parse's.
+    expect_same(load(), reference);
 }
 
 }  // namespace

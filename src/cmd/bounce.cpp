@@ -182,6 +182,13 @@ int run_command(int argc, char** argv, Communicator* comm) {
         return app.exit(e);
     } catch (const CLI::CallForVersion& e) {
         return app.exit(e);
+    } catch (const CLI::ArgumentMismatch& e) {
+        // CLI11 says "At Most 1 required but received 2" for an option given twice.
+        std::string what = e.what();
+        if (const auto at = what.find("At Most 1 required but received"); at != std::string::npos)
+            what = what.substr(0, at) + "given more than once (an option takes one value; give it once)";
+        std::fprintf(stderr, "bounce: command line: error: %s (see bounce --help)\n", what.c_str());
+        return 2;
     } catch (const CLI::ParseError& e) {
         std::fprintf(stderr, "bounce: command line: error: %s (see bounce --help)\n", e.what());
         return 2;

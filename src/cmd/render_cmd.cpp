@@ -231,7 +231,8 @@ std::unique_ptr<ProgressSink> make_progress(bool quiet) {
 
 void add_display_options(CLI::App& command, DisplaySettings& display) {
     command.add_option("--ocio-config", display.config,
-                       "OpenColorIO config for the PNG and the tool's view (default: $OCIO, else built-in sRGB); EXRs stay scene-linear");
+                       "OpenColorIO config for the PNG and the tool's view (default: $OCIO, else built-in sRGB); EXRs stay scene-linear")
+        ->each([&display](const std::string&) { display.config_given = true; });
     command.add_option("--display", display.display, "the config's display (default: its default display)");
     command.add_option("--view", display.view, "the display's view (default: its default view)");
 }

@@ -28,8 +28,10 @@ void write_atomically(const std::filesystem::path& path,
     std::error_code ec;
     fs::rename(tmp, path, ec);
     if (ec) {
-        fs::remove(tmp, ec);
-        throw InputError(path.string(), "", "cannot write output: " + ec.message());
+        std::error_code removed;  // the rename's reason is the one to give (it said "Success")
+        fs::remove(tmp, removed);
+        const std::string why = fs::is_directory(path, removed) ? "a folder of that name is in the way" : ec.message();
+        throw InputError(path.string(), "", "cannot write output: " + why);
     }
 }
 

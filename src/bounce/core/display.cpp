@@ -38,6 +38,61 @@ std::string pick(const std::string& config, const std::string& what, const std::
     throw InputError(config, what, fmt::format("no {} '{}'; the config has: {}", what, wanted, fmt::join(listed, ", ")));
 }
 
+void file_transforms(const OCIO::ConstTransformRcPtr& t, std::vector<std::string>& out) {
+    if (!t) return;
+    if (const auto f = OCIO::DynamicPtrCast<const OCIO::FileTransform>(t)) {
+        if (f->getSrc() && *f->getSrc()) out.emplace_back(f->getSrc());
+    } else if (const auto g = OCIO::DynamicPtrCast<const OCIO::GroupTransform>(t)) {
+        for (int i = 0; i < g->getNumTransforms(); ++i) file_transforms(g->getTransform(i), out);
+    }
+}
+
+/// Every file the config's transforms name (colour spaces, looks, view and named transforms),
+/// resolved through its search path: the LUTs it may read. Files it cannot find are left out
+/// (OpenColorIO refuses them if the view uses them); one that is not a regular file (a FIFO
+/// would block OpenColorIO's open() for good) is refused here, before OpenColorIO opens it.
+std::vector<std::string> config_files(const OCIO::ConstConfigRcPtr& c, const std::string& config) {
+    std::vector<std::string> named;
+    for (int i = 0; i < c->getNumColorSpaces(OCIO::SEARCH_REFERENCE_SPACE_ALL, OCIO::COLORSPACE_ALL); ++i) {
+        const auto cs = c->getColorSpace(c->getColorSpaceNameByIndex(OCIO::SEARCH_REFERENCE_SPACE_ALL, OCIO::COLORSPACE_ALL, i));
+        if (!cs) continue;
+        file_transforms(cs->getTransform(OCIO::COLORSPACE_DIR_TO_REFERENCE), named);
+        file_transforms(cs->getTransform(OCIO::COLORSPACE_DIR_FROM_REFERENCE), named);
+    }
+    for (int i = 0; i < c->getNumLooks(); ++i)
+        if (const auto look = c->getLook(c->getLookNameByIndex(i))) {
+            file_transforms(look->getTransform(), named);
+            file_transforms(look->getInverseTransform(), named);
+        }
+    for (int i = 0; i < c->getNumViewTransforms(); ++i)
+        if (const auto v = c->getViewTransform(c->getViewTransformNameByIndex(i))) {
+            file_transforms(v->getTransform(OCIO::VIEWTRANSFORM_DIR_TO_REFERENCE), named);
+            file_transforms(v->getTransform(OCIO::VIEWTRANSFORM_DIR_FROM_REFERENCE), named);
+        }
+    for (int i = 0; i < c->getNumNamedTransforms(); ++i)
+        if (const auto n = c->getNamedTransform(c->getNamedTransformNameByIndex(i))) {
+            file_transforms(n->getTransform(OCIO::TRANSFORM_DIR_FORWARD), named);
+            file_transforms(n->getTransform(OCIO::TRANSFORM_DIR_INVERSE), named);
+        }
+    std::vector<std::string> out;
+    const OCIO::ConstContextRcPtr context = c->getCurrentContext();
+    for (const std::string& src : named) {
+        std::string path;
+        try {
+            path = context->resolveFileLocation(src.c_str());
+        } catch (const OCIO::Exception&) {
+            continue;
+        }
+        try {
+            check_input_file(path);
+        } catch (const InputError& e) {
+            throw InputError(config, "FileTransform " + src, e.what());
+        }
+        out.push_back(path);
+    }
+    return out;
+}
+
 }  // namespace
 
 DisplayTransform::DisplayTransform() = default;
@@ -46,6 +101,9 @@ DisplayTransform::DisplayTransform(DisplayTransform&&) noexcept = default;
 DisplayTransform& DisplayTransform::operator=(DisplayTransform&&) noexcept = default;
 
 DisplayTransform::DisplayTransform(const DisplaySettings& s, const char* env_ocio) {
+    // An empty --ocio-config is a mistake, not "none" ($OCIO empty means unset, as OpenColorIO reads it).
+    if (s.config_given && s.config.empty())
+        throw InputError("command line", "--ocio-config ''", "an empty file name (leave the option out for $OCIO or the built-in sRGB)");
     const std::string config = !s.config.empty() ? s.config : env_ocio ? env_ocio : "";
     if (config.empty()) {
         if (!s.display.empty() || !s.view.empty())
@@ -56,6 +114,8 @@ DisplayTransform::DisplayTransform(const DisplaySettings& s, const char* env_oci
     check_input_file(config);
     try {
         const OCIO::ConstConfigRcPtr c = OCIO::Config::CreateFromFile(config.c_str());
+        files_ = config_files(c, config);
+        files_.insert(files_.begin(), config);
         const std::string display = pick(config, "display", s.display, c->getDefaultDisplay(),
                                          names(c->getNumDisplays(), [&](int i) { return c->getDisplay(i); }));
         const std::string view = pick(config, "view", s.view, c->getDefaultView(display.c_str()),

@@ -5,6 +5,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace bounce {
 
@@ -12,6 +13,7 @@ namespace bounce {
 /// built-in sRGB curve; empty `display`/`view`: the config's defaults.
 struct DisplaySettings {
     std::string config, display, view;
+    bool config_given = false;  ///< --ocio-config was on the command line (then it may not be empty)
 };
 
 /// A display transform made once (a config is parsed and its processor built) and applied to
@@ -34,11 +36,14 @@ public:
     /// "sRGB (built-in)" or "<config>: <display> / <view>".
     const std::string& name() const { return name_; }
     bool builtin() const { return !ocio_; }
+    /// The config and every file (LUT) its transforms name, as read: inputs no output may overwrite.
+    const std::vector<std::string>& files() const { return files_; }
 
 private:
     struct Ocio;
     std::unique_ptr<const Ocio> ocio_;  ///< null: the built-in curve
     std::string name_ = "sRGB (built-in)";
+    std::vector<std::string> files_;
 };
 
 /// The built-in sRGB transform, one shared instance (the default of every holder of a transform).

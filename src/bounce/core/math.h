@@ -142,6 +142,14 @@ struct Transform {
         return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
                 m[8] * v.x + m[9] * v.y + m[10] * v.z};
     }
+    /// Whether the transform flattens space (a zero scale, an all-zero or rank-2 matrix): it
+    /// has no normals to give. Relative to the axes' lengths, so a tiny but whole scale is not.
+    bool flattens() const {
+        const Vec3 r0{m[0], m[1], m[2]}, r1{m[4], m[5], m[6]}, r2{m[8], m[9], m[10]};
+        const double det = dot(r0, cross(r1, r2));
+        const double scale = static_cast<double>(length(r0)) * length(r1) * length(r2);
+        return !(std::abs(det) > 1e-6 * scale);
+    }
     /// The inverse of an affine transform (identity when singular).
     Transform inverse() const {
         const Vec3 c0{m[0], m[4], m[8]}, c1{m[1], m[5], m[9]}, c2{m[2], m[6], m[10]};

@@ -12,6 +12,7 @@
 
 #include "bounce/cache/cache_file.h"
 #include "bounce/cache/passes.h"
+#include "bounce/scene/shot.h"
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
@@ -28,6 +29,7 @@ void FrameFiles::check(const Scene& loaded) const {
         throw InputError("command line", "-o " + output, "the output is an OpenEXR file (.exr); its PNG is written beside it");
     std::vector<std::string> inputs = loaded.input_paths();
     inputs.insert(inputs.end(), {scene, deep_in, cache_in, base});
+    inputs.insert(inputs.end(), display->files().begin(), display->files().end());  // the OpenColorIO config and its LUTs
     std::vector<std::pair<std::string, std::string>> outputs{{"-o", output}, {"-o", png()}};
     if (!deep_out.empty()) outputs.emplace_back("--deep-out", deep_out);
     if (!cache_out.empty()) outputs.emplace_back("--cache-out", cache_out);
@@ -64,9 +66,18 @@ FrameFiles expand_frame(const FrameFiles& p, int frame) {
 
 std::pair<int, int> parse_frame_range(const std::string& text, const std::string& origin) {
     std::smatch m;
-    if (!std::regex_match(text, m, std::regex(R"((-?\d{1,6})-(-?\d{1,6}))")) || std::stoi(m[1]) > std::stoi(m[2]))
+    if (!std::regex_match(text, m, std::regex(R"((-?\d+)-(-?\d+))")))
         throw InputError("command line", origin, "expected FIRST-LAST, e.g. 1-24");
-    return {std::stoi(m[1]), std::stoi(m[2])};
+    // A frame number has at most 6 digits (the shots' bound, +-1e6): the message says which is past it.
+    const auto frame = [&](const std::string& digits) {
+        const std::string magnitude = digits.substr(digits[0] == '-' ? 1 : 0);
+        if (magnitude.size() > 7 || std::stoi(magnitude) > kMaxFrame)
+            throw InputError("command line", origin, fmt::format("frame {} is past the largest frame number, +-{:g}", digits, kMaxFrame));
+        return std::stoi(digits);
+    };
+    const int first = frame(m[1]), last = frame(m[2]);
+    if (first > last) throw InputError("command line", origin, fmt::format("the first frame {} is after the last {}", first, last));
+    return {first, last};
 }
 
 FrameFiles sequence_frame(const FrameFiles& patterns, int first, int frame) {

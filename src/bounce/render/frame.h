@@ -28,7 +28,7 @@ struct FrameFiles {
     /// Whether any file name holds a #### frame pattern (expand_frame expands them).
     bool patterned() const;
     /// Refuses (InputError) outputs that are not regular files or new names, that name an input
-    /// (this frame's files, and every file `loaded` reads: meshes, textures, maps, the sky) or
+    /// (this frame's files, every file `loaded` reads: meshes, textures, maps, the sky, and the OpenColorIO config with its LUTs) or
     /// each other, that lie in a folder it reads (radiosity textures) or in a folder
     /// that cannot take a new file, and an `output` that is not an .exr; removes stale
     /// temporary files that killed renders left beside the outputs.

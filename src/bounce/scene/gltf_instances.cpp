@@ -81,6 +81,7 @@ std::vector<float> read_accessor(const json& j, const json& index, int component
     const int type = a.value("componentType", 0);
     const size_t size = type == 5126 ? 4 : rotation && type == 5122 ? 2 : rotation && type == 5120 ? 1 : 0;
     if (size == 0) return fail(rotation ? "ROTATION must be floats or normalized bytes or shorts" : "expected floats (componentType 5126)");
+    if (size < 4 && !a.value("normalized", false)) return fail("ROTATION of bytes or shorts must be normalized (\"normalized\": true)");
     if (a.value("type", std::string()) != (components == 3 ? "VEC3" : "VEC4")) return fail(components == 3 ? "expected a VEC3 accessor" : "expected a VEC4 accessor");
     const size_t count = a.value("count", size_t{0}), view_index = a["bufferView"].is_number_unsigned() ? a["bufferView"].get<size_t>() : SIZE_MAX;
     if (!j.contains("bufferViews") || view_index >= j["bufferViews"].size()) return fail("its bufferView does not exist");

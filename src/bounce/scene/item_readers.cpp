@@ -150,10 +150,7 @@ Transform read_transform_keys(const JsonReader& t) {
         for (size_t i = 0; i < 16; ++i)
             r.m[i] = static_cast<float>(t.check_number(m[i], t.at("matrix") + "/" + std::to_string(i), -INFINITY, INFINITY));
         // As "scale": 0 is: a matrix that flattens space (all zeros, rank 2) has no normals to give.
-        const auto row = [&](int i) { return Vec3{r.m[4 * i], r.m[4 * i + 1], r.m[4 * i + 2]}; };
-        const double det = dot(row(0), cross(row(1), row(2)));
-        const double scale = static_cast<double>(length(row(0))) * length(row(1)) * length(row(2));
-        if (!(std::abs(det) > 1e-6 * scale)) t.fail("matrix", "the matrix is singular (it flattens the object)");
+        if (r.flattens()) t.fail("matrix", "the matrix is singular (it flattens the object)");
         return r;
     }
     Transform r;

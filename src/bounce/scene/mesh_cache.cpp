@@ -16,6 +16,7 @@
 
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/files.h"
+#include "bounce/core/image.h"
 #include "bounce/core/memory.h"
 #include "bounce/core/random.h"
 
@@ -26,7 +27,9 @@ namespace fs = std::filesystem;
 namespace {
 
 // Bump when what a load makes of a mesh file changes (mesh_import.cpp), or the layout below.
-constexpr uint32_t kVersion = 1;
+/// 2: inputs and textures by absolute path (1 named them relative to the working directory of
+/// the run that wrote the entry, so another folder's copy of an MTL could stand in for it).
+constexpr uint32_t kVersion = 2;
 constexpr char kMagic[8] = {'B', 'N', 'C', 'M', 'E', 'S', 'H', '\n'};
 constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 + 8;  // magic, version, 0, body bytes, body hash
 constexpr size_t kMaxString = 1 << 16;
@@ -201,6 +204,19 @@ LoadedMeshFile read_entry(In& in, bool overridden) {
     return loaded;
 }
 
+/// A material's textures are files the parse read (so their content is checked with the
+/// entry's inputs, and they pass the same confinement on a hit) and still textures a parse
+/// would take: a name that is neither is damage, and the file is parsed again.
+void check_textures(const LoadedMeshFile& loaded) {
+    for (const Material& m : loaded.materials)
+        for (const std::string* t : {&m.color_texture, &m.bump_texture, &m.normal_texture}) {
+            if (t->empty()) continue;
+            if (std::none_of(loaded.inputs.begin(), loaded.inputs.end(), [&](const auto& in) { return in.first == *t; }))
+                throw Damaged{"a material names a texture the parse did not read"};
+            if (!texture_problem(*t).empty()) throw Damaged{"a material's texture is not one a parse would take"};
+        }
+}
+
 uint64_t body_hash(const std::string& bytes, size_t from) {
     return OIIO::xxhash::XXH64(bytes.data() + from, bytes.size() - from, kVersion);
 }
@@ -250,6 +266,7 @@ std::optional<LoadedMeshFile> read_mesh_cache(const std::string& folder, const M
         LoadedMeshFile loaded = read_entry(in, key.overridden);
         for (const auto& [path, hash_then] : loaded.inputs)
             if (file_content_hash(path) != hash_then) return std::nullopt;  // an MTL or texture changed
+        check_textures(loaded);
         ++hits;
         return loaded;
     } catch (const Damaged& d) {

@@ -213,15 +213,24 @@ std::vector<std::string> check_gltf(const std::string& path) {
 }
 
 /// An OBJ's MTL files (mtllib lines), each counted: more materials than kMaxMtlMaterials is refused.
-std::vector<std::string> check_obj(const std::string& path) {
+std::vector<std::string> check_obj(const std::string& path, const MeshCheckOptions& options) {
     std::ifstream in(path, std::ios::binary);
     std::vector<std::string> out;
+    size_t line_number = 0;
     for (std::string line; std::getline(in, line);) {
+        ++line_number;
         if (line.rfind("mtllib", 0) != 0) continue;
         std::istringstream ls(line.substr(6));
         for (std::string name; ls >> name;) {
             const fs::path mtl = (fs::path(path).parent_path() / name).lexically_normal();
-            if (!not_a_regular_file(mtl.string()).empty()) continue;  // Assimp warns and goes on without it
+            if (options.before_open) options.before_open(mtl.string());  // refused before it is opened
+            if (const std::string why = not_a_regular_file(mtl.string()); !why.empty()) {
+                // Assimp would warn and give every face its default material: with the file's
+                // own materials in use, that is a wrong image in silence.
+                if (options.own_materials)
+                    throw InputError(path, fmt::format("line {}", line_number), fmt::format("mtllib {}: {}", name, why));
+                continue;
+            }
             std::ifstream m(mtl, std::ios::binary);
             size_t count = 0, lineno = 0;
             for (std::string l; std::getline(m, l);) {
@@ -239,11 +248,11 @@ std::vector<std::string> check_obj(const std::string& path) {
 
 }  // namespace
 
-std::vector<std::string> check_mesh_file(const std::string& path) {
+std::vector<std::string> check_mesh_file(const std::string& path, const MeshCheckOptions& options) {
     const std::string ext = lower_extension(path);
     if (ext == ".ply") check_ply_counts(path);
     if (ext == ".gltf" || ext == ".glb") return check_gltf(path);
-    if (ext == ".obj") return check_obj(path);
+    if (ext == ".obj") return check_obj(path, options);
     return {};
 }
 

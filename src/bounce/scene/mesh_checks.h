@@ -4,6 +4,7 @@
 // the file and the place (exit 2), never left to a crash, a bad_alloc or a minutes-long load.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -15,9 +16,19 @@ inline constexpr int kMaxNodeDepth = 1000;
 /// Most materials one OBJ's MTL files may define.
 inline constexpr int kMaxMtlMaterials = 65536;
 
+/// What a mesh file's checks need from the caller.
+struct MeshCheckOptions {
+    /// Called with each file the mesh names before anything opens it (the lighting tool's
+    /// confinement: a file outside is refused unread).
+    std::function<void(const std::string&)> before_open;
+    /// The file's own materials are used (no scene material replaces them): an OBJ's missing
+    /// MTL is then an error, not Assimp's silent default material.
+    bool own_materials = true;
+};
+
 /// Runs the checks that apply to `path`'s format; returns the files it names that Assimp will
 /// read too (a glTF's buffers and images, an OBJ's MTL files), resolved.
-std::vector<std::string> check_mesh_file(const std::string& path);
+std::vector<std::string> check_mesh_file(const std::string& path, const MeshCheckOptions& options = {});
 
 /// A .gltf file, or a .glb with its JSON and BIN chunks found (read once).
 struct GltfFile {

@@ -55,9 +55,12 @@ const unsigned kAssimpFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVer
 
 /// Reads `path` through Assimp after mesh_checks.h's checks; the files it names (a glTF's
 /// buffers and images, an OBJ's MTL files) pass `files_read` before Assimp opens them.
-const aiScene* import_file(Assimp::Importer& imp, const std::string& path, unsigned flags, MeshInputs* files_read) {
+const aiScene* import_file(Assimp::Importer& imp, const std::string& path, unsigned flags, MeshInputs* files_read, bool own_materials) {
     imp.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-    const std::vector<std::string> named = check_mesh_file(path);
+    MeshCheckOptions checks;
+    checks.own_materials = own_materials;
+    if (files_read && files_read->check) checks.before_open = files_read->check;
+    const std::vector<std::string> named = check_mesh_file(path, checks);
     if (files_read)
         for (const std::string& f : named) files_read->add(f);
     const aiScene* s = imp.ReadFile(path, flags);
@@ -102,12 +105,18 @@ void for_each_posed_instance(const aiScene* s, const std::unordered_map<const ai
 /// mesh are refused (the extension places rigid copies).
 std::vector<MeshFileParts::Use> node_placements(const aiNode* node, const aiMesh* am, const aiMatrix4x4& world,
                                                 const std::unordered_map<const aiNode*, GpuInstances>& gpu, const std::string& path) {
+    // A placement that flattens its mesh is refused, as the scene file refuses one.
+    const auto flat = [&](const Transform& t, const std::string& where) {
+        if (t.flattens()) throw InputError(path, where, "the placement is singular (a zero scale or matrix flattens the object)");
+        return t;
+    };
     const auto it = gpu.find(node);
-    if (it == gpu.end()) return {{node->mName.C_Str(), to_transform(world)}};
+    if (it == gpu.end()) return {{node->mName.C_Str(), flat(to_transform(world), fmt::format("node \"{}\"", node->mName.C_Str()))}};
     if (am->HasBones() || am->mNumAnimMeshes > 0) throw InputError(path, it->second.pointer, "instances of a skinned or morphed mesh are not supported");
     std::vector<MeshFileParts::Use> at;
     for (size_t i = 0; i < it->second.at.size(); ++i)
-        at.push_back({fmt::format("{}/{}", node->mName.C_Str(), i), to_transform(world) * it->second.at[i]});
+        at.push_back({fmt::format("{}/{}", node->mName.C_Str(), i),
+                      flat(to_transform(world) * it->second.at[i], fmt::format("{} instance {}", it->second.pointer, i))});
     return at;
 }
 
@@ -162,7 +171,7 @@ std::optional<GltfCamera> gltf_camera(const std::string& path) {
 
 json describe_mesh_file(const std::string& path) {
     Assimp::Importer imp;
-    const aiScene* s = import_file(imp, path, kAssimpFlags, nullptr);
+    const aiScene* s = import_file(imp, path, kAssimpFlags, nullptr, true);
     json doc;
     doc["objects"] = json::array({{{"name", fs::path(path).stem().string()}, {"file", fs::path(path).filename().string()}}});
     if (s->mNumCameras == 0)
@@ -309,7 +318,7 @@ namespace {
 TriangleMesh import_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
                               int override_material, MeshInputs* files_read, const MeshPose& pose) {
     Assimp::Importer imp;
-    const aiScene* s = import_file(imp, path, kAssimpFlags, files_read);
+    const aiScene* s = import_file(imp, path, kAssimpFlags, files_read, override_material < 0);
     const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material, files_read);
     // Posed (animation channels, skins, morph targets) or at rest.
     const MeshTime time{pose.clip.empty() ? -1 : find_clip(s, pose.clip, path), pose.seconds};
@@ -332,7 +341,7 @@ TriangleMesh import_mesh_file(const std::string& path, const std::string& prefix
 MeshFileParts import_mesh_parts(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
                                 int override_material, MeshInputs* files_read) {
     Assimp::Importer imp;
-    const aiScene* s = import_file(imp, path, kAssimpFlags, files_read);
+    const aiScene* s = import_file(imp, path, kAssimpFlags, files_read, override_material < 0);
     const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material, files_read);
     const MeshTime rest;
     const auto nodes = posed_nodes(s, rest, path);
@@ -400,7 +409,12 @@ MeshFileParts through_cache(const std::string& path, const std::string& prefix, 
     MeshInputs read{files_read ? files_read->check : nullptr, {}};
     LoadedMeshFile entry{import(&read), {materials.begin() + base, materials.end()}, {}};
     if (files_read) files_read->files.insert(files_read->files.end(), read.files.begin(), read.files.end());
-    for (const std::string& f : read.files) entry.inputs.emplace_back(f, file_content_hash(f));
+    // By absolute path: a later run from another working directory reads the same files.
+    const auto absolute = [](const std::string& f) { return fs::absolute(f).lexically_normal().string(); };
+    for (const std::string& f : read.files) entry.inputs.emplace_back(absolute(f), file_content_hash(f));
+    for (Material& m : entry.materials)
+        for (std::string* t : {&m.color_texture, &m.bump_texture, &m.normal_texture})
+            if (!t->empty()) *t = absolute(*t);
     for_each_face_material(entry.parts, [&](uint32_t f) { return override_material >= 0 ? 0 : f - base; });
     write_mesh_cache(folder, key, entry);
     for_each_face_material(entry.parts, to_scene);
@@ -431,7 +445,7 @@ ControlMesh load_control_mesh(const std::string& path, const std::string& prefix
     // Faces stay polygons; vertices are welded by position here (Assimp keeps uv seams apart,
     // which would cut the subdivision surface) and uvs become face-varying values.
     Assimp::Importer imp;
-    const aiScene* s = import_file(imp, path, aiProcess_SortByPType | aiProcess_ValidateDataStructure, files_read);
+    const aiScene* s = import_file(imp, path, aiProcess_SortByPType | aiProcess_ValidateDataStructure, files_read, override_material < 0);
     const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material, files_read);
     ControlMesh c;
     c.source = path;

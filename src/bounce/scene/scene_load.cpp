@@ -146,6 +146,8 @@ void check_overridden_values(const json& doc, const std::vector<Override>& overr
             check_param(*p, v, fail(ptr));
             continue;
         }
+        // A keyed value the flag replaces is refused as it would be without the flag.
+        if (!p->animatable) ctx.fail(ptr, "this value cannot be animated (bounce params lists what can: the \"animatable\" column)");
         const json& keys = v.value("keys", json());
         for (size_t i = 0; keys.is_array() && i < keys.size(); ++i)
             if (keys[i].is_array() && keys[i].size() == 2) check_param(*p, keys[i][1], fail(fmt::format("{}/keys/{}/1", ptr, i)));
