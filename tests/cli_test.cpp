@@ -107,5 +107,20 @@ TEST(Cli, HelpAndVersionSucceed) {
     EXPECT_EQ(run_bounce("render"), 2);
 }
 
+// Issue 65: the scene's load, its mesh files' parse and the radiosity layout are phases of the
+// statistics (they were most of a big scene's wall time, and invisible).
+TEST(Cli, TheStatisticsTimeTheLoadTheMeshParseAndTheRadiosityLayout) {
+    test::TempDir d;
+    ASSERT_EQ(run_bounce("render " + test::cornell_scene() + " -o " + d.file("o.exr") + " --res 16x16 --spp 1 --gi cache --rays 16 -q --stats-json " +
+                         d.file("s.json")),
+              0);
+    const nlohmann::json phases = nlohmann::json::parse(test::bytes_of(d.file("s.json")))["phases_s"];
+    for (const char* p : {"scene load", "mesh parse", "radiosity layout"}) {
+        ASSERT_TRUE(phases.contains(p)) << p << " in " << phases.dump();
+        EXPECT_GE(phases[p].get<double>(), 0.0) << p;
+    }
+    EXPECT_GT(phases["mesh parse"].get<double>(), 0.0);  // the box's blocks are OBJ files
+}
+
 }  // namespace
 }  // namespace bounce

@@ -50,6 +50,12 @@ Scene load_render_scene(const RenderArgs& a, std::optional<double> frame) {
     return scene;
 }
 
+/// The scene's load as the first phases of its frame's statistics (mesh files apart).
+void add_load_phases(Stats& stats, const Scene& scene) {
+    stats.add_phase("scene load", scene.load_times.seconds - scene.load_times.mesh_parse_seconds);
+    stats.add_phase("mesh parse", scene.load_times.mesh_parse_seconds);
+}
+
 RenderRequest request_of(const RenderArgs& a, const FrameFiles& files, int frame) {
     RenderRequest request;
     request.deep_in = files.deep_in;
@@ -113,6 +119,7 @@ int render_frame(const RenderArgs& a, const FrameFiles& files) {
     if (writes(a.comm)) check_frame(a, files, scene);
     std::unique_ptr<ProgressSink> sink = make_progress(a.quiet || !writes(a.comm));
     Stats stats;
+    add_load_phases(stats, scene);
     RenderRequest request = request_of(a, files, static_cast<int>(std::lround(scene.frame)));
     request.comm = a.comm;
     if (scene.render.parallel.preview && (!a.comm || a.comm->size() == 1))  // a preview needs every band
@@ -192,6 +199,7 @@ int render_sequence(const RenderArgs& a, int first, int last, int shot_first, Co
             rank0_says(comm, std::filesystem::is_regular_file(before)))
             shot.start_from(std::make_shared<const Scene>(load_render_scene(a, f - 1)), before);
         Stats stats;
+        add_load_phases(stats, *scene);
         RenderRequest request = request_of(a, files, f);
         request.comm = comm;
         if (f > shot_first || shot.has_previous()) request.cache_in.clear();  // the shot carries its own cache

@@ -50,7 +50,10 @@ RadiosityResult radiosity_pass(const FrameContext& ctx, const FramePlan& plan, c
         if (ctx.progress)
             std::fprintf(stderr, "radiosity textures in %s not reused: %s; baking\n", settings.folder.c_str(), why.c_str());
     }
-    *out.textures = RadiosityTextures::lazy(ctx.scene, ctx.materials, ctx.lighting, settings);
+    {
+        PhaseTimer t(ctx.stats, "radiosity layout");  // every side's lattice laid out (pages come as they are baked)
+        *out.textures = RadiosityTextures::lazy(ctx.scene, ctx.materials, ctx.lighting, settings);
+    }
     ctx.stats.set("radiosity_reused", 0);
     if (plan.radiosity == RadiosityStep::BakeSplit) {
         PhaseTimer t(ctx.stats, "radiosity");

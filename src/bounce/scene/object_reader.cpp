@@ -98,7 +98,9 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
     MeshInputs read = mesh_inputs(r, "file");
     try {
         obj.placement = read_transform(r);
+        const auto start = std::chrono::steady_clock::now();
         surf.control = load_control_mesh(file, obj.name, scene.materials, mat, obj.placement, &read);
+        scene.load_times.mesh_parse_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         check_control_mesh(surf.control, surf.scheme);
     } catch (const InputError& e) {
         r.fail("file", e.what());
@@ -373,6 +375,7 @@ int read_mesh_object(const JsonReader& r, Scene& scene, int mat, Object& obj, st
     // (instances of instances): then every node's copy is flattened into its mesh, as before.
     const bool may_share = !obj.moves && !obj.prototype && !r.has("fur");
     try {
+        const auto start = std::chrono::steady_clock::now();
         if (may_share) {
             MeshFileParts parts = load_mesh_parts(file, obj.name, scene.materials, mat, &read);
             obj.coarse = std::move(parts.once);
@@ -380,6 +383,7 @@ int read_mesh_object(const JsonReader& r, Scene& scene, int mat, Object& obj, st
         } else {
             obj.coarse = load_mesh_file(file, obj.name, scene.materials, mat, &read, pose);
         }
+        scene.load_times.mesh_parse_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     } catch (const NoSuchClip& e) {
         r.fail(r.has("animation") ? "animation" : "file", e.what());
     } catch (const InputError& e) {

@@ -195,8 +195,15 @@ struct SceneInput {
     uint64_t hash = 0;  ///< file_content_hash, taken at load
 };
 
+/// How long loading a scene took (the statistics' first phases): all of it, and of that the
+/// mesh files' parsing (or their mesh cache entries' reading).
+struct LoadTimes {
+    double seconds = 0, mesh_parse_seconds = 0;
+};
+
 struct Scene {
     std::string path;  ///< the file it came from
+    LoadTimes load_times;
     std::vector<SceneInput> inputs;          ///< every file it reads (not the scene file itself)
     std::vector<std::string> input_folders;  ///< folders it reads (render.radiosity_textures)
     Camera camera;

@@ -280,9 +280,16 @@ Scene load_scene_text(const std::string& text, const std::string& path, const st
 }
 
 Scene load_scene(const std::string& path, const std::vector<Override>& overrides, const LoadOptions& options) {
-    if (lower_extension(path) == ".json") return load_scene_text(read_text_file(path), path, overrides, options);
-    check_input_file(path);
-    return build_scene(describe_mesh_file(path), path, overrides, options);
+    const auto start = std::chrono::steady_clock::now();
+    Scene scene;
+    if (lower_extension(path) == ".json") {
+        scene = load_scene_text(read_text_file(path), path, overrides, options);
+    } else {
+        check_input_file(path);
+        scene = build_scene(describe_mesh_file(path), path, overrides, options);
+    }
+    scene.load_times.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return scene;
 }
 
 Bounds Scene::bounds() const {
