@@ -185,6 +185,28 @@ TEST(HostileOutputs, WhatCannotFitUnderAnAddressSpaceLimitIsRefusedWithItsEstima
     std::tie(rc, err) = under_limit(fmt::format("bake-ao {} --object rounded_cube --res 12000 -o {}", displaced, d.file("ao.exr")));
     EXPECT_EQ(rc, 2) << err;
     EXPECT_NE(err.find("--res 12000"), std::string::npos) << err;
+    // Issue 65: 10^6 placements (3.3 KB each at render) were "out of memory" with no file or
+    // estimate, and a scene file of 10^7 aborted in its parse: both refused with the estimate.
+    j = test::base_scene();
+    j["objects"].push_back({{"name", "ball"}, {"type", "sphere"}, {"center", {0, 0, 0}}, {"radius", 1}, {"prototype", true}});
+    std::string rows;
+    for (int i = 0; i < 1000000; ++i) rows += fmt::format("{}{{\"translate\":[{},{},{}]}}", i ? "," : "", i % 1000, i / 1000, 0);
+    std::string text = j.dump();
+    text.insert(text.rfind(']'), R"(,{"name":"row","instances":{"of":"ball","transforms":[)" + rows + "]}}");
+    d.write("many.json", text);
+    std::tie(rc, err) = under_limit(quick(d.file("many.json"), d.file("o.exr")));
+    EXPECT_EQ(rc, 2) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_NE(err.find("many.json"), std::string::npos) << err;
+    EXPECT_NE(err.find("/objects/2/instances/transforms"), std::string::npos) << err;
+    EXPECT_NE(err.find("1000000 instances"), std::string::npos) << err;
+    // A scene file whose JSON alone cannot be read within the limit.
+    std::string huge = text;
+    for (int copies = 0; copies < 8; ++copies) huge.insert(huge.rfind(']'), R"(,{"name":"more","instances":{"of":"ball","transforms":[)" + rows + "]}}");
+    d.write("huge.json", huge);
+    std::tie(rc, err) = under_limit(quick(d.file("huge.json"), d.file("o.exr")));
+    EXPECT_EQ(rc, 2) << err;
+    EXPECT_NE(err.find("huge.json: error: reading its"), std::string::npos) << err;
 }
 
 TEST(HostileOutputs, MessagesNameWhatTheUserWrote) {

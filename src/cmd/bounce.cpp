@@ -146,7 +146,7 @@ int dispatch(const Commands& c, Communicator* comm, const char* command) {
         return 2;
     } catch (const std::bad_alloc&) {
         // Estimates refuse what cannot fit before allocating; this is what slipped past them.
-        report_failure(comm, "error: out of memory (lower the resolution, the dicing rate or the fur density)");
+        report_failure(comm, "error: out of memory while rendering (lower the resolution, the dicing rate, the fur density or the number of placements)");
         return 2;
     } catch (const Cancelled&) {
         report_failure(comm, "cancelled");

@@ -262,9 +262,10 @@ void read_instances(const JsonReader& r, const json& entries, Scene& scene, size
     if (!in.has("transforms") || !in.raw("transforms").is_array() || in.raw("transforms").empty())
         in.fail(in.has("transforms") ? "transforms" : "", "expected \"transforms\": a non-empty array of {translate, rotate, scale} or {matrix}");
     const json& list = in.raw("transforms");
-    // Each placement is an Object (no triangles of its own): refused before it could exhaust memory.
-    check_memory(static_cast<double>(list.size()) * (sizeof(Object) + 64), r.ctx().file, in.at("transforms"),
-                 fmt::format("{} instances", list.size()));
+    // Each placement is an Object (no triangles of its own), an Embree instance, its share of
+    // the radiosity layout and of every per-object table: refused before it could exhaust memory.
+    check_memory(static_cast<double>(list.size()) * kPlacementBytes, r.ctx().file, in.at("transforms"),
+                 fmt::format("{} instances (about {:.1f} KB each)", list.size(), kPlacementBytes / 1024.0));
     const Shared shared{proto.local_coarse, proto.local_fine, proto.placement};
     const auto entry = [&](size_t k) {
         const std::string at = in.at("transforms") + "/" + std::to_string(k);

@@ -15,6 +15,11 @@
 
 namespace bounce {
 
+/// What a render holds per placement, measured (10^5 and 2 x 10^5 placements of a sphere:
+/// 2.6 KB each without bounce light, 3.3 KB with the cache's radiosity): the estimate a scene's
+/// placements are refused by before they are read.
+inline constexpr double kPlacementBytes = 3400;
+
 /// Whether a scene file's object entry places instances.
 bool places_instances(const nlohmann::json& entry);
 

@@ -276,7 +276,7 @@ std::vector<Object> place_shared_meshes(const JsonReader& r, const Object& obj, 
     std::vector<Object> placed;
     double uses = 0;  // each an Object of its own: refused before they could exhaust memory
     for (const MeshFileParts::Shared& s : shared) uses += static_cast<double>(s.uses.size());
-    check_memory(uses * (sizeof(Object) + 64), r.ctx().file, r.at("file"), fmt::format("{:.0f} instances of the file's shared meshes", uses));
+    check_memory(uses * kPlacementBytes, r.ctx().file, r.at("file"), fmt::format("{:.0f} instances of the file's shared meshes", uses));
     reserve_huge(placed, static_cast<size_t>(uses));
     for (MeshFileParts::Shared& s : shared) {
         auto local_fine = fine > 0 ? std::make_shared<const TriangleMesh>(subdivide_linear(s.mesh, fine)) : nullptr;
