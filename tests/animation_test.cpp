@@ -173,6 +173,7 @@ TEST(TemporalCache, AMovingCamerasRefinedFragmentsUseTheirOwnGathers) {
     json j = shot_scene();
     j["camera"]["position"] = {{"keys", {{1, {0, 3, 8}}, {3, {0.4, 3, 7.4}}}}};
     j["render"]["refine"] = 0.01;  // many fragments refine
+    j["render"]["refine_noise"] = 0;  // (the raw spread: noise-aware refinement refines few here)
     j["render"]["temporal_refine_reuse"] = 0;  // each gathers its own
     Frames f;
     f.render(j, 1);
@@ -196,6 +197,7 @@ TEST(TemporalCache, RefinementReprojectsEarlierGathersAndKeepsOnlyGathersForLate
     json j = shot_scene();
     j["camera"]["position"] = {{"keys", {{1, {0, 3, 8}}, {3, {0.04, 3, 7.96}}}}};
     j["render"]["refine"] = 0.01;
+    j["render"]["refine_noise"] = 0;  // (the raw spread: noise-aware refinement refines few here)
     j["render"]["temporal_refine_reuse"] = 1.5;
     Frames f;
     f.render(j, 1);

@@ -48,18 +48,20 @@ TEST(Refine, SpreadIsTheWeightedRelativeDeviationOfTheRecords) {
 TEST(Refine, TheSpreadLeavesOutWhatTheRecordsOwnNoiseExplains) {
     // Values 1 and 3 at equal weights (mean 2, weighted variance 1), each record's gather with
     // relative standard error s. Independent estimates of one value would spread by
-    // sum(w (s l)^2)/W (1 - sum(w^2)/W^2) = (s^2 + 9 s^2)/2 x 1/2 = 2.5 s^2; refinement judges
-    // the variance beyond refine_noise times that.
+    // sum(w (s l)^2)/W (1 - sum(w^2)/W^2) = (s^2 + 9 s^2)/2 x 1/2 = 2.5 s^2, and a fragment's own
+    // gather (at the records' rays) would bring sum(w (s l)^2)/W = 5 s^2 where the interpolation
+    // carries sum(w^2 (s l)^2)/W^2 = 2.5 s^2: 2.5 s^2 more. Refinement judges the variance beyond
+    // refine_noise times both, 5 s^2.
     const auto spread = [](float noise, float refine_noise) {
         const Interpolated in = between_two_records(noise, refine_noise);
         EXPECT_NEAR(luminance(in.E), 2.0f, 1e-5f);  // the value itself is untouched
         return in.spread;
     };
     EXPECT_NEAR(spread(0.2f, 0), 0.5f, 1e-5f);                          // the raw spread
-    EXPECT_NEAR(spread(0.2f, 1), std::sqrt(1 - 0.1f) / 2, 1e-5f);       // 1 - 2.5 x 0.04
-    EXPECT_NEAR(spread(0.2f, 2), std::sqrt(1 - 0.2f) / 2, 1e-5f);       // the default
+    EXPECT_NEAR(spread(0.2f, 1), std::sqrt(1 - 0.2f) / 2, 1e-5f);       // 1 - 5 x 0.04
+    EXPECT_NEAR(spread(0.2f, 2), std::sqrt(1 - 0.4f) / 2, 1e-5f);       // the default
     EXPECT_NEAR(spread(0, 2), 0.5f, 1e-5f);                             // noiseless records
-    EXPECT_EQ(spread(0.5f, 2), 0.0f);                                   // all of it noise: 1.25 > 1
+    EXPECT_EQ(spread(0.5f, 2), 0.0f);                                   // all of it noise: 2.5 > 1
 }
 
 TEST(Refine, ARecordKeepsItsGathersNoiseEstimate) {
@@ -147,8 +149,8 @@ TEST(Refine, InsideTheBandAFragmentBlendsItsGatherWithTheInterpolationInProporti
     // the rest of the interpolation.
     Stats s0, s1, s2;
     RenderResult interpolated = render(cornell({"render.gi=\"cache\"", "render.refine=0"}), {}, s0, nullptr);
-    RenderResult hard = render(cornell({"render.gi=\"cache\"", "render.refine=0.05"}), {}, s1, nullptr);
-    const Scene scene = cornell({"render.gi=\"cache\"", "render.refine=0.05", "render.refine_band=3"});
+    RenderResult hard = render(cornell({"render.gi=\"cache\"", "render.refine=0.05", "render.refine_noise=0"}), {}, s1, nullptr);
+    const Scene scene = cornell({"render.gi=\"cache\"", "render.refine=0.05", "render.refine_band=3", "render.refine_noise=0"});
     RenderResult band = render(scene, {}, s2, nullptr);
     ASSERT_EQ(interpolated.cache->size(), band.cache->size());
     ASSERT_EQ(s1.to_json()["refined_fragments"], s2.to_json()["refined_fragments"]);  // the same gathers

@@ -58,7 +58,8 @@ void add_refinement_rows(std::vector<Row>& rows) {
     rows.push_back(row("refine_noise", "cache", &R::cache, &CacheSettings::refine_noise).range(0, 100)
                        .doc("per-fragment refinement: the records' spread counts only beyond what their own gathers' "
                             "noise explains (this many times their estimated variance): records that disagree only by "
-                            "noise give a fragment nothing its own gather, as noisy, would improve "
+                            "noise give a fragment nothing its own gather, as noisy, would improve; and beyond the "
+                            "noise that own gather (at refine_rays) would add over the interpolation's, times the same "
                             "(docs/irradiance-cache.md); 0 = the raw spread").flag());
     rows.push_back(row("refine_band", "cache", &R::cache, &CacheSettings::refine_band).range(1, 100)
                        .doc("per-fragment refinement: a refined fragment's own gather replaces the interpolation wholly "
