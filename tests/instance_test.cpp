@@ -421,6 +421,31 @@ TEST(Instances, GltfGpuInstancesLoadAsInstancesAndFlattenWhereTheObjectCannotSha
     EXPECT_EQ(test::scene_from(proto).objects[0].local_coarse->triangle_count(), 3u * 12 + 2);
 }
 
+// Issue 65: GPU instances against the same placements made by nodes, in the radiosity lattice:
+// the quarter-turned cube's float matrix differs from the node's by an ulp (-1.19e-7 for 0),
+// and with a texel that makes its faces' diagonals a whole number of texels, one of the two was
+// laid out finer (4 % other bounce light on a face). Every placement's levels are now the same.
+TEST(Instances, GltfGpuInstancesAreLaidOutInTheRadiosityLatticeAsTheSameNodes) {
+    test::TempDir d;
+    const auto levels = [&](Cubes how) {
+        json j = cubes_scene(d, how, {{"material", "white"}});
+        j["render"]["radiosity_texel"] = std::sqrt(2.0f) / 4;  // a face's diagonal: 4 texels
+        const Scene s = test::scene_from(j);
+        const SceneAccel accel(s);
+        const Materials materials(s);
+        const DirectLighting lighting(s, accel);
+        const RadiosityTextures rt = RadiosityTextures::lazy(s, materials, lighting, s.render.radiosity);
+        std::vector<std::vector<uint8_t>> out;
+        for (uint32_t id = 0; id < s.objects.size(); ++id) out.push_back(rt.object(id).level.vec());
+        return out;
+    };
+    const auto gpu = levels(Cubes::GpuInstanced), nodes = levels(Cubes::Shared);
+    ASSERT_EQ(gpu.size(), nodes.size());
+    for (size_t id = 0; id < gpu.size(); ++id) EXPECT_EQ(gpu[id], nodes[id]) << "object " << id;
+    ASSERT_EQ(gpu[3].size(), 12u);  // the turned cube's triangles, each a diagonal of 4 texels
+    for (const uint8_t level : gpu[3]) EXPECT_EQ(level, 4);
+}
+
 TEST(Instances, AGltfsPlacementsFromTheMeshCacheAreTheParsedOnes) {
     test::TempDir d, cache;
     for (Cubes how : {Cubes::Shared, Cubes::GpuInstanced}) {
