@@ -146,8 +146,8 @@ json body_object(const httplib::Request& req, std::initializer_list<const char*>
         throw InputError("request body", "", "a number is not finite");
     }
     if (!j.is_object()) throw InputError("request body", "", "a JSON object is expected");
-    for (const auto& [key, value] : j.items())
-        if (std::none_of(keys.begin(), keys.end(), [&](const char* k) { return key == k; })) {
+    for (auto it = j.begin(); it != j.end(); ++it)  // (clang 14 cannot capture a structured binding)
+        if (const std::string& key = it.key(); std::none_of(keys.begin(), keys.end(), [&](const char* k) { return key == k; })) {
             std::string known;
             for (const char* k : keys) known += fmt::format("{}\"{}\"", known.empty() ? "" : ", ", k);
             throw InputError("request body", key.substr(0, 40), fmt::format("unknown key (this request takes {})", known));
