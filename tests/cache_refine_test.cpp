@@ -64,6 +64,38 @@ TEST(Refine, TheSpreadLeavesOutWhatTheRecordsOwnNoiseExplains) {
     EXPECT_EQ(spread(0.5f, 2), 0.0f);                                   // all of it noise: 2.5 > 1
 }
 
+// Issue 65 (ic-algorithms.md 2.4): a record whose neighbour clamp lowers its radius below the
+// minimum spacing is kept at that spacing, further than its gradient holds: its translational
+// gradients (irradiance, AO) are scaled by raw / R_min, as a short raw radius is at creation.
+TEST(Refine, ANeighbourClampBelowTheMinimumSpacingCapsTheGradient) {
+    CacheSettings cs;
+    cs.min_spacing = 2;  // x a footprint of 1: R_min = 2
+    IrradianceCache cache(Bounds{Vec3(-10), Vec3(10)}, cs, false);
+    Record near;
+    near.p = {0, 0, 0}, near.n = {0, 0, 1}, near.E = Color(1);
+    near.raw_radius = 1, near.radius = 2, near.footprint = 1;
+    cache.insert_loaded(near);
+    Record r;
+    r.p = {0.2f, 0, 0}, r.n = {0, 0, 1}, r.E = Color(1), r.footprint = 1;
+    r.raw_radius = 10, r.radius = 10;
+    r.grad_t = {Vec3(1, 0, 0), Vec3(0, 2, 0), Vec3(0, 0, 3)};
+    r.ao_grad_t = Vec3(4, 0, 0);
+    cache.clamp_to_neighbours(r);
+    // 1 + 0.2 = 1.2 < R_min: kept at 2, the gradients at 1.2 / 2 of what they were.
+    EXPECT_NEAR(r.raw_radius, 1.2f, 1e-6f);
+    EXPECT_EQ(r.radius, 2.0f);
+    EXPECT_NEAR(r.grad_t[0].x, 0.6f, 1e-6f);
+    EXPECT_NEAR(r.grad_t[1].y, 1.2f, 1e-6f);
+    EXPECT_NEAR(r.grad_t[2].z, 1.8f, 1e-6f);
+    EXPECT_NEAR(r.ao_grad_t.x, 2.4f, 1e-6f);
+    // A clamp that stays above R_min changes no gradient.
+    Record far = r;
+    far.p = {1.5f, 0, 0}, far.raw_radius = 10, far.grad_t = {Vec3(1, 0, 0), Vec3(0), Vec3(0)};
+    cache.clamp_to_neighbours(far);
+    EXPECT_NEAR(far.raw_radius, 2.5f, 1e-5f);  // clamped, not below R_min
+    EXPECT_EQ(far.grad_t[0].x, 1.0f);
+}
+
 TEST(Refine, ARecordKeepsItsGathersNoiseEstimate) {
     IrradianceCache cache(Bounds{Vec3(-10), Vec3(10)}, CacheSettings{}, false);
     GatherResult g;

@@ -259,9 +259,29 @@ void IrradianceCache::clamp_to_neighbours(Record& r, std::span<const Record> ext
     };
     octree_.visit(r.p, [&](uint32_t id) { limit(records_[id]); });
     for (const Record& o : extra) limit(o);
+    // Below the minimum spacing the record is kept at it, further than its raw radius: its
+    // translational gradient is capped as a raw radius that short is at creation (raw / R_min).
+    const float rmin = settings_.min_spacing * r.footprint;
+    const auto share = [rmin](float radius) { return radius < rmin && rmin > 0 ? std::max(radius, 0.0f) / rmin : 1.0f; };
+    if (const float before = share(r.raw_radius), after = share(raw); after < before && before > 0)
+        scale_translational_gradient(r, after / before);
     r.raw_radius = raw;
-    r.radius = std::clamp(raw, settings_.min_spacing * r.footprint, settings_.max_spacing * r.footprint);
+    r.radius = std::clamp(raw, rmin, settings_.max_spacing * r.footprint);
     if (r.radius_long > 0) set_long_radius(r, r.radius_long, r.axis);
+}
+
+void IrradianceCache::scale_translational_gradient(Record& r, float factor) const {
+    r.ao_grad_t = r.ao_grad_t * factor;
+    if (!r.parts) {
+        for (Vec3& g : r.grad_t) g = g * factor;
+        return;
+    }
+    auto parts = std::make_shared<LightParts>(*r.parts);  // a fresh record's own: not shared yet
+    for (Vec3& g : parts->signal.grad_t) g = g * factor;
+    for (LightPart& part : parts->light)
+        for (Vec3& g : part.grad_t) g = g * factor;
+    r.parts = std::move(parts);
+    apply_light_scales(r, light_scales_);
 }
 
 void IrradianceCache::set_long_radius(Record& r, float wanted, const Vec3& axis) const {

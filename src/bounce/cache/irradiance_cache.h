@@ -101,6 +101,8 @@ public:
     /// over this cache's records and `extra` whose reach includes p_r; then the screen-space
     /// clamps again. A no-op when the setting is off.
     void clamp_to_neighbours(Record& r, std::span<const Record> extra = {}) const;
+    /// Multiplies r's translational gradients (irradiance, AO, every light part's) by `factor`.
+    void scale_translational_gradient(Record& r, float factor) const;
     /// Hessian records: the long radius along `axis`, between the short radius and
     /// max_anisotropy times it (and the maximum spacing); round (0) when it is not longer.
     void set_long_radius(Record& r, float wanted, const Vec3& axis) const;
