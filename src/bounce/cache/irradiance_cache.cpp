@@ -259,15 +259,18 @@ void IrradianceCache::clamp_to_neighbours(Record& r, std::span<const Record> ext
     };
     octree_.visit(r.p, [&](uint32_t id) { limit(records_[id]); });
     for (const Record& o : extra) limit(o);
+    set_raw_radius(r, raw, std::clamp(raw, settings_.min_spacing * r.footprint, settings_.max_spacing * r.footprint));
+    if (r.radius_long > 0) set_long_radius(r, r.radius_long, r.axis);
+}
+
+void IrradianceCache::set_raw_radius(Record& r, float raw, float radius) const {
     // Below the minimum spacing the record is kept at it, further than its raw radius: its
     // translational gradient is capped as a raw radius that short is at creation (raw / R_min).
     const float rmin = settings_.min_spacing * r.footprint;
-    const auto share = [rmin](float radius) { return radius < rmin && rmin > 0 ? std::max(radius, 0.0f) / rmin : 1.0f; };
+    const auto share = [rmin](float x) { return x < rmin && rmin > 0 ? std::max(x, 0.0f) / rmin : 1.0f; };
     if (const float before = share(r.raw_radius), after = share(raw); after < before && before > 0)
         scale_translational_gradient(r, after / before);
-    r.raw_radius = raw;
-    r.radius = std::clamp(raw, rmin, settings_.max_spacing * r.footprint);
-    if (r.radius_long > 0) set_long_radius(r, r.radius_long, r.axis);
+    r.raw_radius = raw, r.radius = radius;
 }
 
 void IrradianceCache::scale_translational_gradient(Record& r, float factor) const {

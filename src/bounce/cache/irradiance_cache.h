@@ -101,6 +101,10 @@ public:
     /// over this cache's records and `extra` whose reach includes p_r; then the screen-space
     /// clamps again. A no-op when the setting is off.
     void clamp_to_neighbours(Record& r, std::span<const Record> extra = {}) const;
+    /// Gives a new record `raw` and `radius` (a neighbour clamp's, or the ones an earlier frame's
+    /// record kept): a raw radius lowered below the minimum spacing caps the translational
+    /// gradient by raw / R_min, as at creation.
+    void set_raw_radius(Record& r, float raw, float radius) const;
     /// Multiplies r's translational gradients (irradiance, AO, every light part's) by `factor`.
     void scale_translational_gradient(Record& r, float factor) const;
     /// Hessian records: the long radius along `axis`, between the short radius and

@@ -47,7 +47,7 @@ StaleRecords::Redo redo_function(const TemporalFrame& now, const IrradianceCache
         // Its nearest hits where they were: it keeps its reach, neighbour clamps included (clamped
         // again as it is inserted among other records, it would depend on their order).
         if (cache.settings().metric != Metric::Hessian && g.min_distance == old.dmin && g.harmonic_distance == old.harmonic)
-            r.raw_radius = old.raw_radius, r.radius = old.radius;
+            cache.set_raw_radius(r, old.raw_radius, old.radius);
         blend_with_previous(r, old, cache.settings().temporal_filter);
         r.origin = old.origin, r.near = old.near, r.frame = old.frame, r.gathered = frame;
         r.anchor = old.anchor, r.anchor_p = old.anchor_p, r.anchor_n = old.anchor_n, r.anchor_prim = old.anchor_prim;
