@@ -189,15 +189,11 @@ LightPart read_part(Cursor& c) {
 }
 
 /// The number of lights every record keeps its parts for (0: some record has none, or they
-/// differ): only then are parts written, and a loaded cache rescales exactly.
+/// differ), as the first record says.
 size_t parts_lights(const CacheFile& f) {
     const Record* first = !f.records.empty() ? &f.records[0] : !f.fragment_records.empty() ? &f.fragment_records[0] : nullptr;
-    if (!first || !first->parts || first->parts->light.empty()) return 0;
-    const size_t lights = first->parts->light.size();
-    const auto has = [lights](const Record& r) { return r.parts && r.parts->light.size() == lights; };
-    return std::all_of(f.records.begin(), f.records.end(), has) && std::all_of(f.fragment_records.begin(), f.fragment_records.end(), has)
-               ? lights
-               : 0;
+    const size_t lights = first && first->parts ? first->parts->light.size() : 0;
+    return keeps_light_parts(f, lights) ? lights : 0;
 }
 
 bool part_in_range(const LightPart& p) {
@@ -210,6 +206,12 @@ bool part_in_range(const LightPart& p) {
 }
 
 }  // namespace
+
+bool keeps_light_parts(const CacheFile& file, size_t lights) {
+    const auto has = [lights](const Record& r) { return r.parts && r.parts->light.size() == lights; };
+    return lights > 0 && (!file.records.empty() || !file.fragment_records.empty()) &&
+           std::all_of(file.records.begin(), file.records.end(), has) && std::all_of(file.fragment_records.begin(), file.fragment_records.end(), has);
+}
 
 std::string serialize_records(std::span<const Record> records) {
     std::string out;

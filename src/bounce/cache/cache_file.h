@@ -45,6 +45,10 @@ struct CacheFile {
 ///    the scene's fingerprint without the lights' colours and intensities. 4 is still read.
 inline constexpr uint32_t kCacheFileVersion = 5;
 
+/// Whether every record of `file` (fragment records too) keeps its light parts for `lights`
+/// lights: only then are parts written, and a loaded cache rescales exactly.
+bool keeps_light_parts(const CacheFile& file, size_t lights);
+
 /// Writes `file` to `path` (temporary name, then rename).
 void write_cache_file(const std::string& path, const CacheFile& file);
 /// Reads a cache file; InputError naming the file and the place on anything malformed.

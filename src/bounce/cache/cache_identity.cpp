@@ -2,8 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
-
 #include "bounce/core/error.h"
 #include "bounce/lighting/lighting.h"
 #include "bounce/scene/params.h"
@@ -21,18 +19,11 @@ CacheFileInfo cache_file_info(const Scene& scene, int frame) {
     return info;
 }
 
-bool keeps_light_parts(const CacheFile& file, size_t lights) {
-    const auto has = [lights](const Record& r) { return r.parts && r.parts->light.size() == lights; };
-    return lights > 0 && !file.records.empty() && std::all_of(file.records.begin(), file.records.end(), has) &&
-           std::all_of(file.fragment_records.begin(), file.fragment_records.end(), has);
-}
-
-CacheFit cache_fit(const CacheFile& file, const Scene& scene) {
-    const CacheFileInfo want = cache_file_info(scene, 0);
+CacheFit cache_fit(const CacheFile& file, const CacheFileInfo& want, size_t lights) {
     if (file.info.scene_fingerprint == want.scene_fingerprint) return CacheFit::Same;
     if (file.info.geometry_fingerprint == 0 || file.info.geometry_fingerprint != want.geometry_fingerprint) return CacheFit::OtherObjects;
     if (file.info.unscaled_fingerprint != 0 && file.info.unscaled_fingerprint == want.unscaled_fingerprint &&
-        keeps_light_parts(file, scene.lights.size()))
+        keeps_light_parts(file, lights))
         return CacheFit::Rescaled;
     return CacheFit::OtherLighting;
 }
@@ -43,7 +34,7 @@ LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, 
     CacheFileInfo want = cache_file_info(scene, 0);
     // A lighter's re-shade after a light or material edit reuses the records on purpose (the
     // bounce light follows on a re-gather); other objects make them wrong.
-    const CacheFit fit = cache_fit(f, scene);
+    const CacheFit fit = cache_fit(f, want, scene.lights.size());
     if (!force && fit == CacheFit::OtherObjects)
         throw InputError(path, "scene_fingerprint",
                          "cache was made for another scene (its objects differ, or a file they read has changed since); "

@@ -30,9 +30,8 @@ enum class CacheFit : uint8_t {
     OtherLighting,  ///< the same objects, other lights or materials: the records hold that bounce light
     OtherObjects,   ///< other objects (or a file they read has changed): the records do not fit
 };
-CacheFit cache_fit(const CacheFile& file, const Scene& scene);
-/// Whether every record of `file` keeps its light parts for `lights` lights.
-bool keeps_light_parts(const CacheFile& file, size_t lights);
+/// How `file` fits a scene whose cache_file_info is `want` and which has `lights` lights.
+CacheFit cache_fit(const CacheFile& file, const CacheFileInfo& want, size_t lights);
 
 struct LoadedCache {
     size_t records = 0;

@@ -9,6 +9,14 @@
 
 namespace bounce {
 
+namespace {
+
+/// How much of a record's translational gradient holds out to the minimum spacing `rmin` when
+/// its raw radius is `raw` (ic-algorithms.md 2.4): raw / rmin below it, else all.
+float raised_share(float raw, float rmin) { return raw < rmin && rmin > 0 ? std::max(raw, 0.0f) / rmin : 1.0f; }
+
+}  // namespace
+
 IrradianceCache::IrradianceCache(const Bounds& scene_bounds, CacheSettings settings, bool ao_only)
     : scene_bounds_(scene_bounds), settings_(std::move(settings)), shading_settings_(settings_.for_shading()), ao_only_(ao_only),
       octree_(scene_bounds) {}
@@ -222,7 +230,7 @@ Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const 
     // A radius raised to the minimum spacing reaches further than the gather measured its
     // gradient for (ic-algorithms.md 2.4, Mitsuba's cap): the translational gradient is scaled
     // by raw / R_min there, so extrapolation over R_min changes the value as over the raw radius.
-    float grad_t_scale = r.raw_radius < rmin && rmin > 0 ? std::max(r.raw_radius, 0.0f) / rmin : 1;
+    float grad_t_scale = raised_share(r.raw_radius, rmin);
     // Weber's law: the distance at which the gradient-extrapolated change reaches tau times
     // the record's value (luminance, or AO), never below the minimum spacing. (With light
     // parts, g's values are the signal's: every light at scale 1.)
@@ -267,8 +275,7 @@ void IrradianceCache::set_raw_radius(Record& r, float raw, float radius) const {
     // Below the minimum spacing the record is kept at it, further than its raw radius: its
     // translational gradient is capped as a raw radius that short is at creation (raw / R_min).
     const float rmin = settings_.min_spacing * r.footprint;
-    const auto share = [rmin](float x) { return x < rmin && rmin > 0 ? std::max(x, 0.0f) / rmin : 1.0f; };
-    if (const float before = share(r.raw_radius), after = share(raw); after < before && before > 0)
+    if (const float before = raised_share(r.raw_radius, rmin), after = raised_share(raw, rmin); after < before && before > 0)
         scale_translational_gradient(r, after / before);
     r.raw_radius = raw, r.radius = radius;
 }

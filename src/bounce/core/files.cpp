@@ -53,11 +53,12 @@ void check_output_folder(const std::string& path, const fs::path& dir) {
 
 }  // namespace
 
-std::string lower_extension(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return ext;
+std::string ascii_lower(std::string s) {
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
 }
+
+std::string lower_extension(const std::string& path) { return ascii_lower(std::filesystem::path(path).extension().string()); }
 
 bool inside(const std::filesystem::path& path, const std::filesystem::path& folder) {
     std::error_code ec;

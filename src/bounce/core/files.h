@@ -22,6 +22,8 @@ void check_output_file(const std::string& path, const std::vector<std::string>& 
                        const std::vector<std::string>& input_folders = {});
 /// The extension of `path`, lower case (".PLY" -> ".ply"; "" for none).
 std::string lower_extension(const std::string& path);
+/// `s` with its ASCII letters in lower case (extensions, HTTP header values).
+std::string ascii_lower(std::string s);
 /// True when `path` is `folder` or lies under it, symlinks that exist resolved.
 bool inside(const std::filesystem::path& path, const std::filesystem::path& folder);
 /// A 64-bit hash of the file's whole content (xxHash), remembered per (path, size, mtime) for

@@ -1,11 +1,10 @@
 #include "bounce/radiosity/radiosity.h"
 
 #include <OpenImageIO/hash.h>
-
-#include <bit>
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
+#include <bit>
 #include <chrono>
 #include <filesystem>
 #include <thread>

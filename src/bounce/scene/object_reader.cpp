@@ -88,6 +88,14 @@ float projected_pixels(const Camera& cam, const Vec3& a, const Vec3& b) {
 /// A mesh object with "subdivision": its control mesh diced into the fine tessellation (from
 /// the camera, render.dicing) and the coarse one (render.dicing.ray_level), both displaced
 /// when the object has a "displacement".
+/// Runs `parse` (a mesh file's load), its time counted in the scene's mesh_parse_seconds.
+template <class Parse>
+void parsing_mesh(Scene& scene, Parse&& parse) {
+    const auto start = std::chrono::steady_clock::now();
+    parse();
+    scene.load_times.mesh_parse_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object& obj, SubdivScheme scheme) {
     SubdivSurface surf;
     surf.scheme = scheme;
@@ -98,9 +106,7 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
     MeshInputs read = mesh_inputs(r, "file");
     try {
         obj.placement = read_transform(r);
-        const auto start = std::chrono::steady_clock::now();
-        surf.control = load_control_mesh(file, obj.name, scene.materials, mat, obj.placement, &read);
-        scene.load_times.mesh_parse_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        parsing_mesh(scene, [&] { surf.control = load_control_mesh(file, obj.name, scene.materials, mat, obj.placement, &read); });
         check_control_mesh(surf.control, surf.scheme);
     } catch (const InputError& e) {
         r.fail("file", e.what());
@@ -375,15 +381,15 @@ int read_mesh_object(const JsonReader& r, Scene& scene, int mat, Object& obj, st
     // (instances of instances): then every node's copy is flattened into its mesh, as before.
     const bool may_share = !obj.moves && !obj.prototype && !r.has("fur");
     try {
-        const auto start = std::chrono::steady_clock::now();
-        if (may_share) {
-            MeshFileParts parts = load_mesh_parts(file, obj.name, scene.materials, mat, &read);
-            obj.coarse = std::move(parts.once);
-            shared = std::move(parts.shared);
-        } else {
-            obj.coarse = load_mesh_file(file, obj.name, scene.materials, mat, &read, pose);
-        }
-        scene.load_times.mesh_parse_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        parsing_mesh(scene, [&] {
+            if (may_share) {
+                MeshFileParts parts = load_mesh_parts(file, obj.name, scene.materials, mat, &read);
+                obj.coarse = std::move(parts.once);
+                shared = std::move(parts.shared);
+            } else {
+                obj.coarse = load_mesh_file(file, obj.name, scene.materials, mat, &read, pose);
+            }
+        });
     } catch (const NoSuchClip& e) {
         r.fail(r.has("animation") ? "animation" : "file", e.what());
     } catch (const InputError& e) {

@@ -25,8 +25,9 @@ constexpr const char* kBusy = "the lighting tool is busy: try again";
 std::string error_response(int status, const char* reason, const char* message) {
     const std::string body = fmt::format("{{\"error\":\"{}\"}}", message);
     std::string head = fmt::format("HTTP/1.1 {} {}\r\nContent-Type: application/json; charset=utf-8\r\nContent-Length: {}\r\n"
-                                   "Connection: close\r\nX-Frame-Options: DENY\r\nContent-Security-Policy: frame-ancestors 'none'\r\n",
+                                   "Connection: close\r\n",
                                    status, reason, body.size());
+    for (const auto& [name, value] : kNoFramingHeaders) head += fmt::format("{}: {}\r\n", name, value);
     if (status == 503) head += "Retry-After: 1\r\n";
     return head + "\r\n" + body;
 }

@@ -11,6 +11,7 @@
 // request passes the gate.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -19,9 +20,15 @@
 #include <functional>
 #include <mutex>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace bounce {
+
+/// What every answer says, the old way and the new: no page of another origin may frame the tool
+/// (clickjacking: a click on an invisible frame would press its buttons).
+inline constexpr std::array<std::pair<const char*, const char*>, 2> kNoFramingHeaders{
+    {{"X-Frame-Options", "DENY"}, {"Content-Security-Policy", "frame-ancestors 'none'"}}};
 
 struct GateLimits {
     std::chrono::milliseconds header_time{5000};  ///< from accept to the headers' blank line
@@ -76,6 +83,5 @@ private:
     std::thread poller_;
     std::vector<std::thread> workers_;
 };
-
 
 }  // namespace bounce

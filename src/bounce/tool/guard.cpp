@@ -6,16 +6,12 @@
 #include <cctype>
 #include <random>
 
+#include "bounce/core/files.h"
 #include "bounce/tool/server.h"
 
 namespace bounce {
 
 namespace {
-
-std::string lower(std::string s) {
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return s;
-}
 
 std::string trim(const std::string& s) {
     const size_t a = s.find_first_not_of(" \t"), b = s.find_last_not_of(" \t");
@@ -58,7 +54,7 @@ bool split_authority(const std::string& authority, std::string& host, int& port)
 bool loopback_at(const std::string& authority, int port) {
     std::string host;
     int p = -1;
-    return split_authority(lower(authority), host, p) && is_loopback_host(host) && (p < 0 ? 80 : p) == port;
+    return split_authority(ascii_lower(authority), host, p) && is_loopback_host(host) && (p < 0 ? 80 : p) == port;
 }
 
 std::string cookie_value(const std::string& header, const std::string& name) {
@@ -101,16 +97,16 @@ Verdict RequestGuard::check(const RequestFacts& r) const {
     if (!loopback_at(r.host, port_))
         return refuse(Refusal::Host, fmt::format("Host '{}' is not this machine's loopback address at port {} (the tool serves "
                                                  "only the URL it printed)", r.host, port_));
-    if (!r.origin.empty() && !(lower(r.origin).rfind("http://", 0) == 0 && loopback_at(r.origin.substr(7), port_)))
+    if (!r.origin.empty() && !(ascii_lower(r.origin).rfind("http://", 0) == 0 && loopback_at(r.origin.substr(7), port_)))
         return refuse(Refusal::Origin, fmt::format("a page of origin '{}' may not use the lighting tool", r.origin));
     const std::string auth = trim(r.authorization);
-    const bool by_header = lower(auth.substr(0, 6)) == "token " && same_secret(trim(auth.substr(6)), token_);
+    const bool by_header = ascii_lower(auth.substr(0, 6)) == "token " && same_secret(trim(auth.substr(6)), token_);
     const bool by_url = same_secret(r.query_token, token_);
     if (!by_header && !by_url && !same_secret(cookie_value(r.cookie, cookie_name()), token_))
         return refuse(Refusal::Token, r.query_token.empty() && auth.empty()
                                           ? "no session token: open the URL bounce light printed (it ends in ?token=...)"
                                           : "wrong session token");
-    const std::string type = lower(trim(r.content_type.substr(0, r.content_type.find(';'))));
+    const std::string type = ascii_lower(trim(r.content_type.substr(0, r.content_type.find(';'))));
     if (r.method != "GET" && r.method != "HEAD" && type != "application/json")
         return refuse(Refusal::ContentType, fmt::format("{} needs a JSON body (Content-Type: application/json)", r.method));
     v.set_cookie = by_url;

@@ -12,6 +12,7 @@
 #include <filesystem>
 
 #include "bounce/core/error.h"
+#include "bounce/core/files.h"
 #include "bounce/core/json_limits.h"
 #include "bounce/tool/connections.h"
 
@@ -106,11 +107,6 @@ private:
 };
 
 namespace {
-
-std::string lower_ascii(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
 
 // Nothing is compressed: the tool answers on loopback, where compression is pure cost, and
 // httplib (Debian's, built with Brotli) answers a browser's "br" at Brotli's slowest quality:
@@ -268,18 +264,16 @@ void LightingServer::routes() {
         }
         // httplib reads a chunked body whole, past the payload limit: only a body of known
         // length is read (a browser's fetch always sends one).
-        if (lower_ascii(req.get_header_value("Transfer-Encoding")).find("chunked") != std::string::npos) {
+        if (ascii_lower(req.get_header_value("Transfer-Encoding")).find("chunked") != std::string::npos) {
             reply(res, 411, {{"error", "a request body needs a Content-Length (chunked bodies are refused)"}});
             return httplib::Server::HandlerResponse::Handled;
         }
         if (v.set_cookie) res.set_header("Set-Cookie", guard_.cookie());
         return httplib::Server::HandlerResponse::Unhandled;
     });
-    // No page of another origin may frame the tool (clickjacking: a click on an invisible
-    // frame would press its buttons): every answer says so, the old way and the new.
+    // No page of another origin may frame the tool: every answer says so (connections.h).
     s.set_post_routing_handler([](const httplib::Request&, httplib::Response& res) {
-        res.set_header("X-Frame-Options", "DENY");
-        res.set_header("Content-Security-Policy", "frame-ancestors 'none'");
+        for (const auto& [name, value] : kNoFramingHeaders) res.set_header(name, value);
     });
     s.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
         if (res.body.empty())

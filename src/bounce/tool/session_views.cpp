@@ -207,10 +207,11 @@ void LightingSession::adopt_cache_locked(const CacheFile& f, const std::string& 
     // objects or another camera do not fit; other lights or materials make its bounce light
     // stale (shown until a re-gather), unless only colours and intensities differ and the
     // records keep their light parts (then they take the session's exactly).
-    const CacheFit fit = cache_fit(f, scene_);
+    const CacheFileInfo want = cache_file_info(scene_, 0);
+    const CacheFit fit = cache_fit(f, want, scene_.lights.size());
     if (fit == CacheFit::OtherObjects)
         throw InputError(name, "scene_fingerprint", "the cache was gathered on other objects (or a file they read has changed since): Re-gather instead");
-    if (f.info.camera_fingerprint != cache_file_info(scene_, 0).camera_fingerprint)
+    if (f.info.camera_fingerprint != want.camera_fingerprint)
         throw InputError(name, "camera_fingerprint", "the cache was gathered for another camera (its spacing is in that camera's pixels): Re-gather instead");
     bounce_stale_ = fit == CacheFit::OtherLighting;
     file_parts_lights_ = keeps_light_parts(f, scene_.lights.size()) ? scene_.lights.size() : 0;
