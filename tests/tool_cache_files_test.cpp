@@ -1,7 +1,10 @@
 // Issue 65: a cache file brought into the lighting tool (Load cache, --cache-in) is checked
 // against the session's scene as the CLI checks it, and keeps its records' light parts, so a
 // saved cache relights exactly and one gathered under other lighting says it is stale.
+#include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <limits>
 
 #include "bounce/cache/cache_file.h"
 #include "bounce/core/error.h"
@@ -128,6 +131,23 @@ TEST(LightingToolCacheFiles, ACacheFileWithoutPartsIsReadAndOneWithBadPartsRefus
     const uint32_t four = 4;
     std::memcpy(v4.data() + 8, &four, 4);
     EXPECT_EQ(parse_cache_file(v4, "v4.bic").records.size(), f.records.size());
+    // A part of NaN, 1e39 (inf) or 1e30 (past 1e20), its block's checksum made right: refused, naming the record.
+    const size_t lights = back.records[0].parts->light.size(), total = back.records.size() + back.fragment_records.size();
+    ASSERT_LE(total, 4096u);  // one block of parts: u32 count, u64 FNV-1a, then the payload
+    const size_t payload = total * (lights + 1) * 30 * 4, at = bytes.size() - payload;
+    for (const float bad : {std::nanf(""), std::numeric_limits<float>::infinity(), 1e30f}) {  // 1e39 reads as inf
+        std::string crafted = bytes;
+        std::memcpy(crafted.data() + at, &bad, 4);
+        uint64_t h = 0xcbf29ce484222325ULL;
+        for (size_t i = at; i < crafted.size(); ++i) h = (h ^ static_cast<uint8_t>(crafted[i])) * 0x100000001b3ULL;
+        std::memcpy(crafted.data() + at - 8, &h, 8);
+        try {
+            parse_cache_file(crafted, "bad.bic");
+            ADD_FAILURE() << "a part of " << bad << " was read";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("record 0's light parts"), std::string::npos) << e.what();
+        }
+    }
     // Parts cut short: refused by name.
     try {
         parse_cache_file(bytes.substr(0, bytes.size() - 100), "short.bic");
