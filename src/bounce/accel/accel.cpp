@@ -87,6 +87,8 @@ void SceneAccel::build_flat(const Scene& scene) {
         coarse.masks.push_back(object_ray_mask(scene, i));
         fine.meshes.push_back(o.placed() ? &o.visible() : nullptr);
         fine.motion.push_back(o.shutter[0].empty() ? nullptr : &o.shutter);  // camera rays see motion blur
+        coarse.cutouts.push_back(o.placed() ? CutoutMesh::make(scene.materials, o.coarse) : nullptr);
+        fine.cutouts.push_back(!o.placed() ? nullptr : o.has_fine() ? CutoutMesh::make(scene.materials, o.visible()) : coarse.cutouts.back());
         any_fine |= o.has_fine() || fine.motion.back();
     }
     fine.masks = coarse.masks;

@@ -124,6 +124,10 @@ void Bvh::begin(RTCDevice device, const BvhGeometry& geometry) {
             g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), m.triangle_count()));
         std::copy(m.indices.begin(), m.indices.end(), ib);
         if (id < geometry.masks.size()) rtcSetGeometryMask(g, geometry.masks[id]);
+        if (const auto& cut = at_or<std::shared_ptr<const CutoutMesh>>(geometry.cutouts, id, nullptr)) {
+            cut->attach(g);
+            cutouts_.push_back(cut);
+        }
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(scene_, g, static_cast<unsigned>(id));
         rtcReleaseGeometry(g);

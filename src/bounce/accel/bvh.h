@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "bounce/accel/cutouts.h"
 #include "bounce/core/math.h"
 #include "bounce/geometry/fur.h"
 #include "bounce/geometry/mesh.h"
@@ -54,6 +55,7 @@ struct BvhGeometry {
     std::vector<const TriangleMesh*> meshes;      ///< geometry id = index (null: none)
     std::vector<const ShutterPositions*> motion;  ///< mesh i at shutter open and close (Embree's motion blur)
     std::vector<unsigned> masks;                  ///< mesh i's ray mask
+    std::vector<std::shared_ptr<const CutoutMesh>> cutouts;  ///< mesh i's cutouts (null: none, no filter)
     std::vector<const Fur*> furs;                 ///< geometry id = meshes.size() + i: object i's fur
     std::vector<const FurShutter*> fur_motion;    ///< fur i at shutter open and close
     std::vector<unsigned> fur_masks;              ///< fur i's ray mask
@@ -114,6 +116,7 @@ private:
     uint64_t refits_ = 0;
     std::vector<std::shared_ptr<const Bvh>> placed_;  ///< kept alive while this one traces them
     std::vector<uint32_t> object_of_;                  ///< per placed geometry id: Placed::object
+    std::vector<std::shared_ptr<const CutoutMesh>> cutouts_;  ///< its filters' data, kept while it traces
 };
 
 }  // namespace bounce

@@ -104,13 +104,18 @@ void BvhParts::take_still(RTCDevice device, const Scene& scene, const BvhParts* 
         any = true;
         const unsigned mask = coarse.masks[i] = fine.masks[i] = object_ray_mask(scene, i);
         coarse.meshes[i] = &o.coarse, fine.meshes[i] = &o.visible();
-        coarse_key.add(i).add(o.coarse.positions).add(o.coarse.indices).add(mask);
-        fine_key.add(i).add(o.visible().positions).add(o.visible().indices).add(mask);
+        coarse_key.add(i).add(o.coarse.positions).add(o.coarse.indices).add(mask).add(CutoutMesh::key(scene.materials, o.coarse));
+        fine_key.add(i).add(o.visible().positions).add(o.visible().indices).add(mask).add(CutoutMesh::key(scene.materials, o.visible()));
         needs_fine_ = needs_fine_ || o.has_fine();
     }
     if (!any) return;
-    auto build = [&](const BvhGeometry& g) {
-        return [&] { return std::make_shared<Bvh>(device, g); };
+    auto build = [&](BvhGeometry& g) {
+        return [&] {
+            g.cutouts.assign(n, nullptr);
+            for (size_t i = 0; i < n; ++i)
+                if (g.meshes[i]) g.cutouts[i] = CutoutMesh::make(scene.materials, *g.meshes[i]);
+            return std::make_shared<Bvh>(device, g);
+        };
     };
     auto none = [](Bvh&) {};
     still_coarse_ = take(before ? &before->still_coarse_ : nullptr, coarse_key.value(), 0, build(coarse), none);
@@ -135,13 +140,15 @@ void BvhParts::take_movers(RTCDevice device, const Scene& scene, const BvhParts*
                 BvhGeometry g;
                 g.meshes.assign(n, nullptr), g.motion.assign(n, nullptr);
                 g.meshes[i] = &mesh, g.motion[i] = motion, g.refittable = refittable;
+                g.cutouts.assign(n, nullptr);
+                g.cutouts[i] = CutoutMesh::make(scene.materials, mesh);
                 return std::make_shared<Bvh>(device, g);
             };
         };
         if (o.local_coarse) {  // rigid: its shape before the placement, placed at every frame
             const TriangleMesh &lc = *o.local_coarse, &lf = o.local_fine ? *o.local_fine : lc;
-            const uint64_t kc = PartKey(kLocal, n).add(i).add(lc.positions).add(lc.indices).value();
-            const uint64_t kf = PartKey(kLocal, n).add(i).add(lf.positions).add(lf.indices).value();
+            const uint64_t kc = PartKey(kLocal, n).add(i).add(lc.positions).add(lc.indices).add(CutoutMesh::key(scene.materials, lc)).value();
+            const uint64_t kf = PartKey(kLocal, n).add(i).add(lf.positions).add(lf.indices).add(CutoutMesh::key(scene.materials, lf)).value();
             auto none = [](Bvh&) {};
             coarse_[i] = take(was_coarse, kc, 0, build(lc, nullptr, false), none);
             fine_[i] = kf == kc ? coarse_[i] : take(was_fine, kf, 0, build(lf, nullptr, false), none);
@@ -153,11 +160,14 @@ void BvhParts::take_movers(RTCDevice device, const Scene& scene, const BvhParts*
         const ShutterPositions* motion = o.shutter[0].empty() ? nullptr : &o.shutter;
         PartKey kc(kWorld, n), kf(kWorld, n);
         kc.add(i), kf.add(i);
-        kc.add(c.positions).add(c.indices);
-        kf.add(v.positions).add(v.indices);
+        kc.add(c.positions).add(c.indices).add(CutoutMesh::key(scene.materials, c));
+        kf.add(v.positions).add(v.indices).add(CutoutMesh::key(scene.materials, v));
         if (motion) kf.add((*motion)[0]).add((*motion)[1]);
+        // A refit keeps the part's cutouts: their uvs and materials must be the same.
         auto layout = [&](const TriangleMesh& m, bool moving) {
-            return o.deforms ? PartKey(kLayout, n).add(i).add(m.indices).add(m.positions.size()).add(moving ? 2 : 1).value() : 0;
+            return o.deforms ? PartKey(kLayout, n).add(i).add(m.indices).add(m.positions.size()).add(moving ? 2 : 1)
+                                   .add(CutoutMesh::key(scene.materials, m)).value()
+                             : 0;
         };
         coarse_[i] = take(was_coarse, kc.value(), layout(c, false), build(c, nullptr, o.deforms),
                           [&](Bvh& b) { b.refit(static_cast<unsigned>(i), c, nullptr); });
@@ -209,12 +219,13 @@ void BvhParts::take_prototypes(RTCDevice device, const Scene& scene, const BvhPa
             continue;
         }
         const TriangleMesh &c = *o.local_coarse, &f = o.local_fine ? *o.local_fine : c;
-        const uint64_t kc = PartKey(kPrototype, 1).add(c.positions).add(c.indices).value();
-        const uint64_t kf = PartKey(kPrototype, 1).add(f.positions).add(f.indices).value();
+        const uint64_t kc = PartKey(kPrototype, 1).add(c.positions).add(c.indices).add(CutoutMesh::key(scene.materials, c)).value();
+        const uint64_t kf = PartKey(kPrototype, 1).add(f.positions).add(f.indices).add(CutoutMesh::key(scene.materials, f)).value();
         const auto build = [&](const TriangleMesh& mesh) {
             return [&] {
                 BvhGeometry g;
                 g.meshes = {&mesh};
+                g.cutouts = {CutoutMesh::make(scene.materials, mesh)};
                 return std::make_shared<Bvh>(device, g);
             };
         };

@@ -27,6 +27,7 @@ struct Accum {
     Vec3 n_base0{0};            ///< the first subsample's (oriented) un-displaced normal
     int based = 0;              ///< subsamples that carried an un-displaced surface
     bool hair = false;          ///< subsamples of one strand (prim = the strand)
+    float cover = 0;            ///< the subsamples' shares it covers (1 each but through blended cutouts)
     Vec3 tangent{0};
     float v = 0;
 };
@@ -94,6 +95,139 @@ bool hidden(const SceneAccel& accel, const CameraRays& camera, const Vec3& p) {
     return dist > 0 && accel.fine().intersect(o, (p - o) / dist, 0, dist * (1 - 1e-5f), 0, kRayCamera).valid();
 }
 
+
+/// How many surfaces one camera subsample passes through (blended cutouts), and the share of
+/// it below which what is behind is not looked for: past either the rest shows the background.
+constexpr int kMaxLayers = 32;
+constexpr float kLeastThrough = 1e-4f;
+
+/// One pixel's camera subsamples grouped into fragments: subsamples of the same surface merge.
+class PixelFragments {
+public:
+    PixelFragments(const Scene& scene, const SceneAccel& accel, const CameraRays& camera)
+        : scene_(scene), accel_(accel), camera_(camera) {}
+    void clear() { groups_.clear(), subsamples_.clear(); }
+    /// Hit `h` of the ray leaving `origin` along unit `dn` (pixel direction `d`), reached by
+    /// `through` of its subsample: adds what the surface covers of it and returns the surface's
+    /// opacity there (1 but for blended cutouts).
+    float add(const Hit& h, const Vec3& origin, const Vec3& d, const Vec3& dn, float through);
+    /// The pixel's fragments (`spp` subsamples), in the order their groups were made.
+    void emit(int spp, std::vector<Fragment>& out) const;
+
+private:
+    const Scene& scene_;
+    const SceneAccel& accel_;
+    const CameraRays& camera_;
+    std::vector<Accum> groups_;
+    std::vector<std::pair<Vec3, size_t>> subsamples_;  // (point, group)
+};
+
+float PixelFragments::add(const Hit& h, const Vec3& origin, const Vec3& d, const Vec3& dn, float through) {
+    const CameraRays& camera = camera_;
+    std::vector<Accum>& groups = groups_;
+    const Object& obj = scene_.objects[h.object];
+    const uint32_t prim = h.hair ? obj.fur->strand_of(h.prim) : h.prim;
+    SurfacePoint sp = h.hair ? hair_point(*obj.fur, h, origin, dn, obj.visible())
+                             : obj.visible_point(h.prim, h.u, h.v);
+    const Material& material = scene_.materials[sp.material];
+    const float alpha = h.hair || material.alpha_mode != AlphaMode::Blend ? 1.0f : material.opacity_at(sp.uv);
+    if (!(alpha > 0)) return 0;
+    // Face the camera (all surfaces are two-sided).
+    if (dot(sp.ng, dn) > 0) sp.ng = -sp.ng, sp.n = -sp.n;
+    if (dot(sp.n, dn) > 0) sp.n = normalize(sp.n - dn * (2 * dot(sp.n, dn)));
+    float fp = camera.footprint(d, h.t, sp.ng);
+    // Merge with a subsample of the same surface: same object and material,
+    // similar orientation and depth (so silhouettes of one object stay apart),
+    // and within a pixel's width of the group's plane (a step between parallel
+    // faces is two surfaces, however close their depths).
+    Accum* g = nullptr;
+    for (auto& a : groups) {
+        if (a.hair != h.hair || (h.hair && (a.object != h.object || a.prim != prim))) continue;
+        const float off = std::abs(dot(sp.p - a.p0, a.ng0));
+        if (h.hair ||  // subsamples of one strand are one fragment
+            (a.object == h.object && a.material == sp.material &&
+             dot(normalize(a.ng), sp.ng) > 0.9f &&
+             std::abs(a.depth / static_cast<float>(a.count) - h.t) < 0.05f * h.t + 4 * fp && off < fp)) {
+            g = &a;
+            g->off_plane = std::max(g->off_plane, off / fp);
+            break;
+        }
+    }
+    if (!g) {
+        groups.push_back({Vec3(0), Vec3(0), Vec3(0), sp.p, sp.ng, 0, {}, sp.material, h.object, prim,
+                          0, 0, 0});
+        g = &groups.back();
+        g->hair = h.hair;
+    }
+    subsamples_.emplace_back(sp.p, static_cast<size_t>(g - groups.data()));
+    g->p += sp.p, g->n += sp.n, g->ng += sp.ng;
+    g->uv.x += sp.uv.x, g->uv.y += sp.uv.y;
+    g->depth += h.t;
+    ++g->count;
+    float spacing_fp = fp;  // the fragment's footprint: where records are spaced
+    if (h.hair) {
+        g->tangent += obj.fur->tangent(h.prim);
+        g->v += obj.fur->v_of(h.prim, h.u);
+        g->p_base = obj.fur->root_p[prim], g->n_base = obj.fur->root_n[prim];
+    } else if (obj.visible().displaced()) {
+        auto [pb, nb] = base_point(obj.visible(), h.prim, h.u, h.v);
+        // On the side of the displaced normal seen: at a silhouette a bump can face
+        // the camera where the smooth surface under it does not, and flipping Nref
+        // towards the camera there turned the records' hemisphere inside the
+        // model (black blotches on a displaced ball's outline).
+        const Vec3 o = dot(nb, sp.n) < 0 ? -nb : nb;
+        if (g->based++ == 0) g->n_base0 = o;
+        g->p_base += pb, g->n_base += o;
+        // Records are spaced on the un-displaced surface: its footprint, not
+        // the bump's (a bump seen edge-on would pack them).
+        spacing_fp = camera.footprint(d, h.t, o);
+    }
+    g->footprint += spacing_fp;
+    g->cover += through * alpha;
+    return alpha;
+}
+
+void PixelFragments::emit(int spp, std::vector<Fragment>& out) const {
+    const std::vector<Accum>& groups = groups_;
+    for (size_t gi = 0; gi < groups.size(); ++gi) {
+        const Accum& a = groups[gi];
+        auto c = static_cast<float>(a.count);
+        Fragment f;
+        // A planar group sits at its centroid. Otherwise the centroid can lie off
+        // every surface (inside a convex ridge, between offset faces), or on its
+        // plane but behind another surface of the pixel (what is seen of a ceiling
+        // around a light's corner is not convex), where a gather sees only the back
+        // of what hides it: take the subsample nearest it. (Not at every edge: the
+        // subsample taken changes from frame to frame where the centroid does not.)
+        const Vec3 centroid = a.p / c;
+        f.p = centroid;
+        if (a.off_plane > 1e-3f || (groups.size() > 1 && !a.hair && hidden(accel_, camera_, centroid))) {
+            float best = INFINITY;
+            for (const auto& [q, group] : subsamples_) {
+                const float dist = length(q - centroid);
+                if (group == gi && dist < best) best = dist, f.p = q;
+            }
+        }
+        f.n = normalize(a.n);
+        f.ng = normalize(a.ng);
+        // Cache records live on the un-displaced surface when there is one.
+        // (Across a fold the subsamples' orientations can cancel: keep the first's.)
+        f.p_base = a.based ? a.p_base / static_cast<float>(a.based) : f.p;
+        f.n_base = !a.based ? f.n : dot(a.n_base, a.n_base) > 1e-12f ? normalize(a.n_base) : a.n_base0;
+        if (a.hair) {
+            f.p_base = a.p_base, f.n_base = a.n_base;
+            f.tangent = dot(a.tangent, a.tangent) > 0 ? normalize(a.tangent) : a.n_base;
+            f.strand_v = a.v / c;
+        }
+        f.uv = {a.uv.x / c, a.uv.y / c};
+        f.material = a.material, f.object = a.object, f.prim = a.prim;
+        f.depth = a.depth / c;
+        f.weight = a.cover / static_cast<float>(spp);
+        f.footprint = a.footprint / c;
+        out.push_back(f);
+    }
+}
+
 }  // namespace
 
 DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* sink,
@@ -110,15 +244,13 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
 
     parallel_ranges(0, deep.height, 1, [&](int row0, int row1) {
         Counters& counters = stats.local();
-        std::vector<Accum> groups;
-        std::vector<std::pair<Vec3, size_t>> subsamples;  // (point, group) of this pixel
+        PixelFragments pixel(scene, accel, camera);
         std::vector<int> time_strata(static_cast<size_t>(spp));
         for (int wy = row0; wy < row1; ++wy) {
             for (int wx = 0; wx < deep.width; ++wx) {
                 int x = wx + deep.x0, y = wy + deep.y0;
                 RandomStream rng(rs.seed, static_cast<uint64_t>(y) * 65536u + static_cast<uint64_t>(x));
-                groups.clear();
-                subsamples.clear();
+                pixel.clear();
                 // Motion blur: every time stratum once, in an order shuffled per pixel, so a
                 // subsample's time says nothing of where in the pixel it lies.
                 if (blur) {
@@ -135,103 +267,18 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     // scene at its time in the shutter. Shading stays at the frame's time.
                     const float time = blur ? (static_cast<float>(time_strata[su]) + rng.get(su, kDimTime)) / static_cast<float>(spp) : 0.0f;
                     const Vec3 origin = camera.lens_ray(px, py, rng.get(su, kDimLensU), rng.get(su, kDimLensV), dn, time);
-                    ++counters.camera_rays;
-                    Hit h = accel.fine().intersect(origin, dn, 0, INFINITY, time, kRayCamera);
-                    if (!h.valid()) continue;
-                    const Object& obj = scene.objects[h.object];
-                    const uint32_t prim = h.hair ? obj.fur->strand_of(h.prim) : h.prim;
-                    SurfacePoint sp = h.hair ? hair_point(*obj.fur, h, origin, dn, obj.visible())
-                                             : obj.visible_point(h.prim, h.u, h.v);
-                    // Face the camera (all surfaces are two-sided).
-                    if (dot(sp.ng, dn) > 0) sp.ng = -sp.ng, sp.n = -sp.n;
-                    if (dot(sp.n, dn) > 0) sp.n = normalize(sp.n - dn * (2 * dot(sp.n, dn)));
-                    float fp = camera.footprint(d, h.t, sp.ng);
-                    // Merge with a subsample of the same surface: same object and material,
-                    // similar orientation and depth (so silhouettes of one object stay apart),
-                    // and within a pixel's width of the group's plane (a step between parallel
-                    // faces is two surfaces, however close their depths).
-                    Accum* g = nullptr;
-                    for (auto& a : groups) {
-                        if (a.hair != h.hair || (h.hair && (a.object != h.object || a.prim != prim))) continue;
-                        const float off = std::abs(dot(sp.p - a.p0, a.ng0));
-                        if (h.hair ||  // subsamples of one strand are one fragment
-                            (a.object == h.object && a.material == sp.material &&
-                             dot(normalize(a.ng), sp.ng) > 0.9f &&
-                             std::abs(a.depth / static_cast<float>(a.count) - h.t) < 0.05f * h.t + 4 * fp && off < fp)) {
-                            g = &a;
-                            g->off_plane = std::max(g->off_plane, off / fp);
-                            break;
-                        }
+                    // Blended cutouts cover their share of the subsample and let the rest on.
+                    float through = 1, tnear = 0;
+                    for (int layer = 0; layer < kMaxLayers && through > kLeastThrough; ++layer) {
+                        ++counters.camera_rays;
+                        const Hit h = accel.fine().intersect(origin, dn, tnear, INFINITY, time, kRayCamera);
+                        if (!h.valid()) break;
+                        through *= 1 - pixel.add(h, origin, d, dn, through);
+                        tnear = h.t + std::max(1e-4f, 1e-5f * h.t);
                     }
-                    if (!g) {
-                        groups.push_back({Vec3(0), Vec3(0), Vec3(0), sp.p, sp.ng, 0, {}, sp.material, h.object, prim,
-                                          0, 0, 0});
-                        g = &groups.back();
-                        g->hair = h.hair;
-                    }
-                    subsamples.emplace_back(sp.p, static_cast<size_t>(g - groups.data()));
-                    g->p += sp.p, g->n += sp.n, g->ng += sp.ng;
-                    g->uv.x += sp.uv.x, g->uv.y += sp.uv.y;
-                    g->depth += h.t;
-                    ++g->count;
-                    float spacing_fp = fp;  // the fragment's footprint: where records are spaced
-                    if (h.hair) {
-                        g->tangent += obj.fur->tangent(h.prim);
-                        g->v += obj.fur->v_of(h.prim, h.u);
-                        g->p_base = obj.fur->root_p[prim], g->n_base = obj.fur->root_n[prim];
-                    } else if (obj.visible().displaced()) {
-                        auto [pb, nb] = base_point(obj.visible(), h.prim, h.u, h.v);
-                        // On the side of the displaced normal seen: at a silhouette a bump can face
-                        // the camera where the smooth surface under it does not, and flipping Nref
-                        // towards the camera there turned the records' hemisphere inside the
-                        // model (black blotches on a displaced ball's outline).
-                        const Vec3 o = dot(nb, sp.n) < 0 ? -nb : nb;
-                        if (g->based++ == 0) g->n_base0 = o;
-                        g->p_base += pb, g->n_base += o;
-                        // Records are spaced on the un-displaced surface: its footprint, not
-                        // the bump's (a bump seen edge-on would pack them).
-                        spacing_fp = camera.footprint(d, h.t, o);
-                    }
-                    g->footprint += spacing_fp;
                 }
                 auto& out = per_pixel[static_cast<size_t>(wy) * deep.width + wx];
-                for (size_t gi = 0; gi < groups.size(); ++gi) {
-                    const Accum& a = groups[gi];
-                    auto c = static_cast<float>(a.count);
-                    Fragment f;
-                    // A planar group sits at its centroid. Otherwise the centroid can lie off
-                    // every surface (inside a convex ridge, between offset faces), or on its
-                    // plane but behind another surface of the pixel (what is seen of a ceiling
-                    // around a light's corner is not convex), where a gather sees only the back
-                    // of what hides it: take the subsample nearest it. (Not at every edge: the
-                    // subsample taken changes from frame to frame where the centroid does not.)
-                    const Vec3 centroid = a.p / c;
-                    f.p = centroid;
-                    if (a.off_plane > 1e-3f || (groups.size() > 1 && !a.hair && hidden(accel, camera, centroid))) {
-                        float best = INFINITY;
-                        for (const auto& [q, group] : subsamples) {
-                            const float dist = length(q - centroid);
-                            if (group == gi && dist < best) best = dist, f.p = q;
-                        }
-                    }
-                    f.n = normalize(a.n);
-                    f.ng = normalize(a.ng);
-                    // Cache records live on the un-displaced surface when there is one.
-                    // (Across a fold the subsamples' orientations can cancel: keep the first's.)
-                    f.p_base = a.based ? a.p_base / static_cast<float>(a.based) : f.p;
-                    f.n_base = !a.based ? f.n : dot(a.n_base, a.n_base) > 1e-12f ? normalize(a.n_base) : a.n_base0;
-                    if (a.hair) {
-                        f.p_base = a.p_base, f.n_base = a.n_base;
-                        f.tangent = dot(a.tangent, a.tangent) > 0 ? normalize(a.tangent) : a.n_base;
-                        f.strand_v = a.v / c;
-                    }
-                    f.uv = {a.uv.x / c, a.uv.y / c};
-                    f.material = a.material, f.object = a.object, f.prim = a.prim;
-                    f.depth = a.depth / c;
-                    f.weight = c / static_cast<float>(spp);
-                    f.footprint = a.footprint / c;
-                    out.push_back(f);
-                }
+                pixel.emit(spp, out);
                 // Front to back, as deep compositing expects.
                 std::stable_sort(out.begin(), out.end(), [](const Fragment& a, const Fragment& b) { return a.depth < b.depth; });
             }

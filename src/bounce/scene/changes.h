@@ -24,7 +24,7 @@ struct ObjectMotion {
 };
 
 struct SceneChanges {
-    /// The same objects with the same triangles in both frames: anything at all may be kept.
+    /// The same objects with the same triangles (and cutouts) in both frames: anything at all may be kept.
     bool comparable = false;
     std::vector<ObjectMotion> objects;  ///< per object of this frame (when comparable)
     bool lights = false;     ///< a light, an emissive material or the sky changed: every bake is redone

@@ -1,4 +1,5 @@
 #include "bounce/scene/item_readers.h"
+#include "bounce/scene/opacity.h"
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -33,7 +34,8 @@ json material_defaults() {
 const std::vector<std::string>& material_keys() {
     static const std::vector<std::string> keys = {"color",          "color_texture", "emission",      "specular",  "roughness",
                                                   "bump_texture",   "normal_texture", "bump_strength", "ao_texture",
-                                                  "mirror",         "transmission",  "ior",           "absorption"};
+                                                  "mirror",         "transmission",  "ior",           "absorption",
+                                                  "alpha_mode",     "opacity",       "opacity_texture", "alpha_cutoff"};
     return keys;
 }
 
@@ -187,6 +189,26 @@ std::string texture_file(const JsonReader& m, const std::string& key) {
     return path;
 }
 
+/// Cutout opacity: `alpha_mode` (blend when only an opacity is given), `opacity`,
+/// `opacity_texture` (read whole, opacity.h), `alpha_cutoff` (mask only).
+void read_cutout(const JsonReader& m, Material& mat) {
+    const bool given = m.has("opacity") || m.has("opacity_texture");
+    const std::string mode = m.choice("alpha_mode", given ? "blend" : "opaque", {"opaque", "mask", "blend"});
+    mat.alpha_mode = mode == "mask" ? AlphaMode::Mask : mode == "blend" ? AlphaMode::Blend : AlphaMode::Opaque;
+    if (!mat.is_cutout() && given)
+        m.fail("alpha_mode", "an opaque material reads no opacity: say \"mask\" or \"blend\", or remove the opacity keys");
+    if (mat.alpha_mode != AlphaMode::Mask && m.has("alpha_cutoff"))
+        m.fail("alpha_cutoff", "alpha_cutoff applies to alpha_mode \"mask\" only");
+    mat.opacity = static_cast<float>(m.number("opacity", mat.opacity, 0, 1));
+    mat.alpha_cutoff = static_cast<float>(m.number("alpha_cutoff", mat.alpha_cutoff, 0, 1));
+    mat.opacity_texture = m.file("opacity_texture", false);
+    if (!mat.opacity_texture.empty()) {
+        std::string why;
+        mat.opacity_map = load_opacity_map(mat.opacity_texture, OpacityChannel::AlphaOrFirst, why);
+        if (!mat.opacity_map) m.fail("opacity_texture", "\"" + mat.opacity_texture + "\": " + why);
+    }
+}
+
 }  // namespace
 
 Material read_material(const JsonReader& m, const std::string& name) {
@@ -215,6 +237,7 @@ Material read_material(const JsonReader& m, const std::string& name) {
     // Real dielectrics lie in [1, 3] (diamond 2.42); below 1 would need the medium outside.
     mat.ior = static_cast<float>(m.number("ior", mat.ior, 1, 3));
     mat.absorption = m.color("absorption", mat.absorption);
+    read_cutout(m, mat);
     return mat;
 }
 

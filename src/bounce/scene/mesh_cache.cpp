@@ -1,4 +1,5 @@
 #include "bounce/scene/mesh_cache.h"
+#include "bounce/scene/opacity.h"
 
 #include <OpenImageIO/hash.h>
 #include <assimp/version.h>
@@ -29,7 +30,7 @@ namespace {
 // Bump when what a load makes of a mesh file changes (mesh_import.cpp), or the layout below.
 /// 2: inputs and textures by absolute path (1 named them relative to the working directory of
 /// the run that wrote the entry, so another folder's copy of an MTL could stand in for it).
-constexpr uint32_t kVersion = 2;
+constexpr uint32_t kVersion = 3;  // 3: materials' cutouts
 constexpr char kMagic[8] = {'B', 'N', 'C', 'M', 'E', 'S', 'H', '\n'};
 constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 + 8;  // magic, version, 0, body bytes, body hash
 constexpr size_t kMaxString = 1 << 16;
@@ -148,6 +149,7 @@ void write_material(Out& out, const Material& m) {
     out.str(m.name);
     out.pod(m.color), out.pod(m.emission), out.pod(m.specular), out.pod(m.roughness);
     out.str(m.color_texture), out.str(m.bump_texture), out.str(m.normal_texture);
+    out.pod(static_cast<uint8_t>(m.alpha_mode)), out.pod(m.opacity), out.pod(m.alpha_cutoff), out.str(m.opacity_texture);
 }
 
 /// A material as mesh_import makes one, in the ranges it allows.
@@ -157,6 +159,12 @@ Material read_material(In& in) {
     m.color = in.pod<Color>(), m.emission = in.pod<Color>(), m.specular = in.pod<Color>();
     m.roughness = in.pod<float>();
     m.color_texture = in.str(), m.bump_texture = in.str(), m.normal_texture = in.str();
+    const auto mode = in.pod<uint8_t>();
+    m.opacity = in.pod<float>(), m.alpha_cutoff = in.pod<float>();
+    m.opacity_texture = in.str();
+    if (mode > static_cast<uint8_t>(AlphaMode::Blend) || !finite_in(m.opacity, 0, 1) || !finite_in(m.alpha_cutoff, 0, 1))
+        throw Damaged{"a material's cutout is out of range"};
+    m.alpha_mode = static_cast<AlphaMode>(mode);
     for (int c = 0; c < 3; ++c)
         if (!finite_in(m.color[c], 0, 1) || !finite_in(m.specular[c], 0, 1) || !finite_in(m.emission[c], 0, kMaxRadiometric))
             throw Damaged{"a material is out of range"};
@@ -207,14 +215,21 @@ LoadedMeshFile read_entry(In& in, bool overridden) {
 /// A material's textures are files the parse read (so their content is checked with the
 /// entry's inputs, and they pass the same confinement on a hit) and still textures a parse
 /// would take: a name that is neither is damage, and the file is parsed again.
-void check_textures(const LoadedMeshFile& loaded) {
-    for (const Material& m : loaded.materials)
-        for (const std::string* t : {&m.color_texture, &m.bump_texture, &m.normal_texture}) {
+/// An opacity texture is read again (the entry keeps its name, not its texels).
+void check_textures(LoadedMeshFile& loaded) {
+    for (Material& m : loaded.materials) {
+        for (const std::string* t : {&m.color_texture, &m.bump_texture, &m.normal_texture, &m.opacity_texture}) {
             if (t->empty()) continue;
             if (std::none_of(loaded.inputs.begin(), loaded.inputs.end(), [&](const auto& in) { return in.first == *t; }))
                 throw Damaged{"a material names a texture the parse did not read"};
-            if (!texture_problem(*t).empty()) throw Damaged{"a material's texture is not one a parse would take"};
+            if (t != &m.opacity_texture && !texture_problem(*t).empty())
+                throw Damaged{"a material's texture is not one a parse would take"};
         }
+        if (m.opacity_texture.empty()) continue;
+        std::string why;
+        m.opacity_map = load_opacity_map(m.opacity_texture, OpacityChannel::AlphaOrFirst, why);
+        if (!m.opacity_map) throw Damaged{"a material's opacity texture is not one a parse would take"};
+    }
 }
 
 uint64_t body_hash(const std::string& bytes, size_t from) {

@@ -1,4 +1,6 @@
 #include "bounce/scene/mesh_import.h"
+#include "bounce/scene/opacity.h"
+#include <assimp/GltfMaterial.h>
 
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -240,6 +242,45 @@ json describe_mesh_file(const std::string& path) {
     return doc;
 }
 
+/// A file material's cutout: glTF's alphaMode, alphaCutoff and base colour alpha (factor times
+/// the base colour texture's alpha, if it has one); MTL's d (or 1 - Tr) and map_d, as blend,
+/// as Blender's importer reads them. `map_d`: the OPACITY texture's path (empty: none).
+void read_file_cutout(const aiMaterial& am, const std::string& path, const std::string& where, const std::string& map_d,
+                      Material& m) {
+    std::string why;
+    aiString mode;
+    if (am.Get(AI_MATKEY_GLTF_ALPHAMODE, mode) == AI_SUCCESS) {
+        const std::string name = mode.C_Str();
+        if (name == "OPAQUE") return;
+        if (name != "MASK" && name != "BLEND")
+            throw InputError(path, where, fmt::format("alphaMode \"{}\" is not OPAQUE, MASK or BLEND", name.substr(0, 40)));
+        m.alpha_mode = name == "MASK" ? AlphaMode::Mask : AlphaMode::Blend;
+        aiColor4D base{1, 1, 1, 1};
+        am.Get(AI_MATKEY_BASE_COLOR, base);
+        m.opacity = base.a;
+        if (m.alpha_mode == AlphaMode::Mask) am.Get(AI_MATKEY_GLTF_ALPHACUTOFF, m.alpha_cutoff);
+        if (!m.color_texture.empty()) {
+            m.opacity_map = load_opacity_map(m.color_texture, OpacityChannel::AlphaOnly, why);
+            if (m.opacity_map) m.opacity_texture = m.color_texture;
+        }
+    } else {
+        float d = 1;
+        am.Get(AI_MATKEY_OPACITY, d);
+        if (d >= 1 && map_d.empty()) return;
+        m.alpha_mode = AlphaMode::Blend;
+        m.opacity = d;
+        if (!map_d.empty()) {
+            m.opacity_texture = map_d;
+            m.opacity_map = load_opacity_map(map_d, OpacityChannel::AlphaOrFirst, why);
+        }
+    }
+    if (!why.empty()) throw InputError(path, where, fmt::format("opacity texture \"{}\": {}", m.opacity_texture.empty() ? m.color_texture : m.opacity_texture, why));
+    if (!(m.opacity >= 0 && m.opacity <= 1))
+        throw InputError(path, where, fmt::format("opacity {} is not in [0, 1]", m.opacity));
+    if (!(m.alpha_cutoff >= 0 && m.alpha_cutoff <= 1))
+        throw InputError(path, where, fmt::format("alphaCutoff {} is not in [0, 1]", m.alpha_cutoff));
+}
+
 /// The file's materials appended to `materials` (named "<prefix>/<name>"), or `override_material`
 /// for all: the scene index of each of the file's materials.
 std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path, const std::string& prefix,
@@ -301,6 +342,7 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
             };
             m.color_texture = texture({aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE});
             if (!m.color_texture.empty()) m.color = Color(1 - metallic);
+            read_file_cutout(*am, path, where, texture({aiTextureType_OPACITY}), m);
             // Assimp files MTL's bump maps under HEIGHT, glTF's normalTexture under NORMALS.
             m.bump_texture = texture({aiTextureType_HEIGHT, aiTextureType_DISPLACEMENT});
             m.normal_texture = texture({aiTextureType_NORMALS});

@@ -55,6 +55,20 @@ struct LatLongMap {
     Color at_uv(float u, float v) const;
 };
 
+/// A single-channel texture of opacity (a cutout's alpha), read whole at load and looked up
+/// bilinearly with periodic wrap, as the colour texture is (uv (0, 0) is the image's bottom left).
+struct OpacityMap {
+    int width = 0, height = 0;
+    std::vector<uint16_t> texels;  ///< width*height, row 0 at the top, 65535 = opaque (8-bit values exact)
+    uint64_t hash = 0;             ///< of its size and texels (BVH parts built with it are keyed by it)
+    float at(const Vec2& uv) const;
+};
+
+/// How a material's opacity cuts its surface (glTF's alphaMode). Opaque: it is not read. Mask:
+/// where it is below the cutoff the surface is not there for any ray. Blend: it is the share of
+/// a pixel the surface covers and the chance that a secondary ray meeting it stops there.
+enum class AlphaMode : uint8_t { Opaque, Mask, Blend };
+
 enum class LightType { Point, Spot, Distant, Quad, Sky, Mesh };
 
 struct Light {
@@ -108,6 +122,18 @@ struct Material {
     Color transmission{0};
     float ior = 1.5f;           ///< the dielectric's index of refraction (with transmission)
     Color absorption{0};        ///< inside the dielectric: Beer-Lambert coefficient per world unit
+    AlphaMode alpha_mode = AlphaMode::Opaque;
+    float opacity = 1;          ///< multiplies the opacity texture (glTF: the base colour factor's alpha)
+    /// Absolute path, empty = none: its alpha channel, or its only channel (MTL's map_d).
+    std::string opacity_texture;
+    std::shared_ptr<const OpacityMap> opacity_map;  ///< opacity_texture read (null = none)
+    float alpha_cutoff = 0.5f;  ///< mask: opacity below it is cut away
+    bool is_cutout() const { return alpha_mode != AlphaMode::Opaque; }
+    /// Opacity at uv (1 for opaque materials).
+    float opacity_at(const Vec2& uv) const {
+        if (alpha_mode == AlphaMode::Opaque) return 1;
+        return opacity_map ? opacity * opacity_map->at(uv) : opacity;
+    }
     bool is_dielectric() const { return transmission.x > 0 || transmission.y > 0 || transmission.z > 0; }
     bool is_specular() const { return is_dielectric() || mirror.x > 0 || mirror.y > 0 || mirror.z > 0; }
     bool has_specular() const { return specular.x > 0 || specular.y > 0 || specular.z > 0; }

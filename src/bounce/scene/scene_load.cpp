@@ -424,12 +424,28 @@ uint64_t Scene::visibility_fingerprint() const {
     // Subdivision surfaces are diced from the camera by render.dicing and fragments name their
     // micropolygons: a deep file of another dicing would shade the wrong ones. ("per-edge": the
     // dicing rule, so files of the earlier uniform dicing are not taken for this one.)
+    // Cutouts decide what the camera sees: the scene file's cutout keys and opacity textures
+    // (a mesh file's materials come with its objects' inputs).
+    std::vector<std::string> parts = {"camera", "objects"};
+    if (std::any_of(materials.begin(), materials.end(), [](const Material& m) { return m.is_cutout(); })) {
+        json cut = json::object();
+        const json given = description.value("materials", json::object());
+        for (const auto& [name, m] : given.items())
+            for (const char* key : {"alpha_mode", "opacity", "opacity_texture", "alpha_cutoff"})
+                if (m.is_object() && m.contains(key)) cut[name][key] = m[key];
+        copy.description["materials"] = cut;
+        std::erase_if(copy.inputs, [](const SceneInput& in) {
+            return in.pointer.starts_with("/materials/") && !in.pointer.ends_with("/opacity_texture");
+        });
+        parts.push_back("materials");
+    }
     const bool diced = std::any_of(objects.begin(), objects.end(), [](const Object& o) { return o.surface != nullptr; });
-    if (!diced) return copy.fingerprint({"camera", "objects"});
+    if (!diced) return copy.fingerprint(parts);
     const DicingSettings& d = render.dicing;
     copy.description["dicing"] = {{"rule", "per-edge"}, {"shading_rate", d.shading_rate}, {"ray_level", d.ray_level},
                                   {"max_level", d.max_level}};
-    return copy.fingerprint({"camera", "objects", "dicing"});
+    parts.push_back("dicing");
+    return copy.fingerprint(parts);
 }
 
 Color LatLongMap::at_uv(float u, float v) const {

@@ -204,10 +204,10 @@ json LightingSession::edit(const std::string& key, const json& value, const std:
     const Param* p = find_param(scene_params(), key);
     SessionAction needs = needs_for(p ? p->identity : kImageOnly);
     // A key the parameter table does not list (an object's mesh file or subdivision, an
-    // instance) that changes what the camera sees needs a new deep file: the old one is
-    // another scene's. Lights and materials are re-shaded (or re-gathered) over it.
-    if (!p && !key.starts_with("lights") && !key.starts_with("materials") &&
-        s.visibility_fingerprint() != scene_.visibility_fingerprint())
+    // instance, a material's cutout) that changes what the camera sees needs a new deep file:
+    // the old one is another scene's. Lights and other material keys are re-shaded (or
+    // re-gathered) over it.
+    if (!p && !key.starts_with("lights") && s.visibility_fingerprint() != scene_.visibility_fingerprint())
         needs = SessionAction::Rasterize;
     if (!edits_.count(key)) edit_order_.push_back(key);
     edits_[key] = value;

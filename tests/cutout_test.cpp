@@ -1,0 +1,242 @@
+// Cutout opacity (issue 61): a masked card is the same shape as its opaque parts modelled as
+// geometry for the camera, shadows and bounce light; a blended card covers its share of each
+// pixel (composited front to back) and lets that share of light through; hostile cutouts are
+// refused naming the file and the key.
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+
+#include "bounce/render/render.h"
+#include "bounce/scene/mesh_cache.h"
+#include "gltf_strip.h"
+#include "test_util.h"
+
+namespace bounce {
+namespace {
+
+using nlohmann::json;
+
+/// Writes a w x h 8-bit PNG of `channels` channels of `values` (rows from the top, 0..255).
+void write_png(const std::string& path, int w, int h, int channels, const std::vector<unsigned char>& values) {
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(w, h, channels, OIIO::TypeDesc::UINT8);
+    if (channels == 4) spec.alpha_channel = 3;
+    ASSERT_TRUE(out->open(path, spec) && out->write_image(OIIO::TypeDesc::UINT8, values.data()) && out->close());
+}
+void write_grey(const std::string& path, int w, int h, const std::vector<unsigned char>& values) {
+    write_png(path, w, h, 1, values);
+}
+
+json quad(const std::string& name, const std::string& material, double x0, double x1, double y0, double y1, double z) {
+    // uv (0, 0) at the first vertex, u along x, v along y (geometry/mesh.h's make_quad).
+    return {{"name", name}, {"type", "quad"}, {"material", material},
+            {"vertices", {{x0, y0, z}, {x1, y0, z}, {x1, y1, z}, {x0, y1, z}}}};
+}
+
+/// A floor and a back wall under a small quad light, a card at z = 0 in front of the wall casting a
+/// shadow on the floor, and `card` objects.
+json stage(const json& card, const json& card_material) {
+    json j = {{"camera", {{"position", {0, 1.6, -6}}, {"look_at", {0, 1, 0}}, {"fov", 45}, {"resolution", {48, 36}}}},
+              {"render", {{"spp", 4}, {"light_samples", 2}, {"seed", 7}, {"rays", 16}}},
+              {"materials", {{"white", {{"color", 0.7}}}, {"leaf", card_material}}},
+              {"lights", {{{"type", "quad"}, {"corner", {0.1, 4, -3.2}}, {"edge_u", {0.4, 0, 0}}, {"edge_v", {0, 0, 0.4}}, {"color", 200}}}},
+              {"objects",
+               {{{"name", "floor"}, {"type", "quad"}, {"material", "white"}, {"vertices", {{-6, 0, -6}, {-6, 0, 6}, {6, 0, 6}, {6, 0, -6}}}},
+                quad("back", "white", -6, 6, 0, 6, 3)}}};
+    for (const json& o : card) j["objects"].push_back(o);
+    return j;
+}
+
+Image render_with(const json& scene, const std::string& gi, const std::vector<Override>& more = {}) {
+    Stats stats;
+    std::vector<Override> o{Override("render.gi=" + gi)};
+    o.insert(o.end(), more.begin(), more.end());
+    return render(test::scene_from(scene, o), {}, stats, nullptr).image;
+}
+
+const json kLeaf = {{"color", {0.2, 0.6, 0.1}}};
+
+TEST(Cutouts, AMaskedCardIsItsOpaquePartsModelledAsGeometry) {
+    test::TempDir dir;
+    // Stripes: opaque where u is in [0, 0.25] and [0.5, 0.75] (bilinear between texel centres
+    // crosses the cutoff 0.5 at the texel edges), i.e. x in [-1, -0.5] and [0, 0.5].
+    const std::string stripes = dir.file("stripes.png");
+    write_grey(stripes, 4, 1, {255, 0, 255, 0});
+    json masked = kLeaf;
+    masked.update({{"alpha_mode", "mask"}, {"opacity_texture", stripes}});
+    const json cut = stage(json::array({quad("card", "leaf", -1, 1, 0.2, 2.2, 0)}), masked);
+    const json geometry =
+        stage(json::array({quad("card", "leaf", -1, -0.5, 0.2, 2.2, 0), quad("card2", "leaf", 0, 0.5, 0.2, 2.2, 0)}), kLeaf);
+    // Without radiosity textures a gather hit is lit by shadow rays: the lattice of a card of two
+    // triangles is not the lattice of two cards of two, and would differ within noise.
+    for (const std::string gi : {"none", "brute"}) {
+        const Image a = render_with(cut, gi, {Override("render.radiosity=false")});
+        const Image b = render_with(geometry, gi, {Override("render.radiosity=false")});
+        const Layer *la = a.find("beauty"), *lb = b.find("beauty");
+        ASSERT_TRUE(la && lb);
+        size_t differ = 0, leaf = 0, through = 0;
+        double sa = 0, sb = 0;
+        for (size_t i = 0; i < la->data.size(); ++i) {
+            sa += la->data[i], sb += lb->data[i];
+            differ += std::abs(la->data[i] - lb->data[i]) > 1e-4f * (1 + std::abs(lb->data[i]));
+        }
+        const Layer* albedo = a.find("albedo");
+        for (int y = 0; y < a.height; ++y)
+            for (int x = 0; x < a.width; ++x) {
+                const float* c = a.at(*albedo, x, y);
+                leaf += c[1] > 0.55f && c[0] < 0.25f;
+                through += y > 8 && y < 24 && x > 12 && x < 36 && c[0] > 0.65f;  // the wall between the stripes
+            }
+        // The same pixels, shadows and bounce light: equal where the same rays are traced (the
+        // stripes' edges are the quads' edges only to float rounding).
+        EXPECT_LE(differ, la->data.size() / 100) << "--gi " << gi;
+        EXPECT_NEAR(sa / sb, 1.0, 2e-3) << "--gi " << gi;
+        EXPECT_GT(leaf, 60u) << "--gi " << gi;
+        EXPECT_GT(through, 60u) << "--gi " << gi;
+    }
+}
+
+TEST(Cutouts, ABlendedCardCoversItsShareOfEachPixelAndLetsTheRestOfTheLightThrough) {
+    const json card = json::array({quad("card", "leaf", -1, 1, 0.2, 2.2, 0)});
+    const Image opaque = render_with(stage(card, kLeaf), "none");
+    const Image none = render_with(stage(json::array(), kLeaf), "none");
+    const Layer *ao = opaque.find("albedo"), *an = none.find("albedo");
+    for (const float alpha : {0.25f, 0.5f, 0.75f}) {
+        json blend = kLeaf;
+        blend.update({{"opacity", alpha}});  // alpha_mode blend when only an opacity is given
+        const Image img = render_with(stage(card, blend), "none", {Override("render.light_samples=64")});
+        const Layer* a = img.find("albedo");
+        ASSERT_TRUE(a && ao && an);
+        // Coverage composited front to back: alpha of the card over what is behind it, per pixel.
+        double worst = 0;
+        for (size_t i = 0; i < a->data.size(); ++i)
+            worst = std::max(worst, static_cast<double>(std::abs(a->data[i] - (alpha * ao->data[i] + (1 - alpha) * an->data[i]))));
+        EXPECT_LT(worst, 1e-5) << alpha;
+        // The card's shadow on the floor lets 1 - alpha of the light through (shadow rays stop
+        // with probability alpha): its mean over the pixels the opaque card darkens.
+        const Layer *d = img.find("direct"), *dop = opaque.find("direct"), *dn = none.find("direct");
+        double lit = 0, open = 0, shut = 0;
+        size_t n = 0;
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x < img.width; ++x) {
+                const float *c = img.at(*d, x, y), *co = opaque.at(*dop, x, y), *cn = none.at(*dn, x, y);
+                const float *alb_o = opaque.at(*ao, x, y);
+                // Floor pixels (white in both) that the opaque card shadows.
+                if (!(alb_o[0] > 0.65f && cn[1] > 0 && co[1] < 0.05f * cn[1])) continue;
+                lit += c[1], open += cn[1], shut += co[1];
+                ++n;
+            }
+        ASSERT_GT(n, 20u);
+        EXPECT_NEAR(lit / open, (1 - alpha) + alpha * shut / open, 0.04) << alpha;
+    }
+}
+
+/// The card of `stage` as a glTF quad (buffers inline) with `material`; its uvs are the JSON
+/// quad's (glTF's v runs down the image: Assimp turns it up).
+std::string gltf_card(const test::TempDir& dir, const json& material) {
+    std::string b;
+    test::put<float>(b, {-1, 0.2f, 0, 1, 0.2f, 0, 1, 2.2f, 0, -1, 2.2f, 0});  // 48 bytes
+    test::put<float>(b, {0, 1, 1, 1, 1, 0, 0, 0});                         // 32 bytes: TEXCOORD_0
+    test::put<uint16_t>(b, {0, 1, 2, 0, 2, 3});                            // 12 bytes
+    json g = {{"asset", {{"version", "2.0"}}}, {"scene", 0}, {"scenes", {{{"nodes", {0}}}}}, {"nodes", {{{"mesh", 0}}}}};
+    g["buffers"] = {{{"byteLength", b.size()}, {"uri", "data:application/octet-stream;base64," + test::base64(b)}}};
+    g["bufferViews"] = {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 48}},
+                        {{"buffer", 0}, {"byteOffset", 48}, {"byteLength", 32}},
+                        {{"buffer", 0}, {"byteOffset", 80}, {"byteLength", 12}}};
+    g["accessors"] = {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {-1, 0.2, 0}}, {"max", {1, 2.2, 0}}},
+                      {{"bufferView", 1}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}},
+                      {{"bufferView", 2}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}};
+    const json primitive = {{"attributes", {{"POSITION", 0}, {"TEXCOORD_0", 1}}}, {"indices", 2}, {"material", 0}};
+    g["meshes"] = json::array({json{{"primitives", json::array({primitive})}}});
+    g["materials"] = {material};
+    g["images"] = {{{"uri", "leaf.png"}}};
+    g["textures"] = {{{"source", 0}}};
+    return dir.write("card.gltf", g.dump());
+}
+
+TEST(Cutouts, AGltfMaskOrBlendIsTheSameCutoutWrittenInTheSceneFile) {
+    test::TempDir dir;
+    // White stripes, their alpha the mask test's stripes.
+    const std::string leaf = dir.file("leaf.png");
+    write_png(leaf, 4, 1, 4, {255, 255, 255, 255, 255, 255, 255, 0, 255, 255, 255, 255, 255, 255, 255, 0});
+    for (const std::string mode : {"MASK", "BLEND"}) {
+        json m = {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"baseColorFactor", {1, 1, 1, 0.8}},
+                                            {"metallicFactor", 0}, {"roughnessFactor", 1}}},
+                  {"alphaMode", mode}};
+        if (mode == "MASK") m["alphaCutoff"] = 0.7;
+        const std::string file = gltf_card(dir, m);
+        json from_file = stage(json::array({{{"name", "card"}, {"type", "mesh"}, {"file", file}}}), kLeaf);
+        json same = {{"color", 1}, {"color_texture", leaf}, {"specular", 0.04}, {"roughness", 1}, {"opacity", 0.8},
+                     {"alpha_mode", mode == "MASK" ? "mask" : "blend"}, {"opacity_texture", leaf}};
+        if (mode == "MASK") same["alpha_cutoff"] = 0.7;
+        const json written = stage(json::array({quad("card", "leaf", -1, 1, 0.2, 2.2, 0)}), same);
+        const Image a = render_with(from_file, "brute"), b = render_with(written, "brute");
+        EXPECT_EQ(test::differing_values(a, b), 0u) << mode;
+        // Not vacuous: the card is seen (the colour texture, filtered over the pixel, is not the
+        // wall's grey 0.7).
+        const Layer* albedo = a.find("albedo");
+        size_t card = 0;
+        for (int y = 0; y < a.height; ++y)
+            for (int x = 0; x < a.width; ++x) card += std::abs(a.at(*albedo, x, y)[0] - 0.7f) > 0.01f;
+        EXPECT_GT(card, 30u) << mode;
+    }
+}
+
+TEST(Cutouts, SurviveInstancingAndTheMeshCache) {
+    test::TempDir dir;
+    const std::string leaf = dir.file("leaf.png");
+    write_png(leaf, 4, 1, 4, {255, 255, 255, 255, 255, 255, 255, 0, 255, 255, 255, 255, 255, 255, 255, 0});
+    json masked = kLeaf;
+    masked.update({{"alpha_mode", "mask"}, {"opacity_texture", leaf}});
+    // Placements that round nothing (identity, mirrors) render as the flat scene bit for bit.
+    const json transforms = json::array({json::object(), {{"scale", {-1, 1, 1}}}, {{"scale", {-1, 1, -1}}}});
+    json proto = quad("card", "leaf", 0.2, 1.6, 0.2, 2.2, 0.5);
+    proto["prototype"] = true;
+    json instanced = stage(json::array({proto, {{"name", "cards"}, {"instances", {{"of", "card"}, {"transforms", transforms}}}}}), masked);
+    json flat = stage(json::array({proto}), masked);  // the prototype is an object of both, unseen
+    for (size_t k = 0; k < transforms.size(); ++k) {
+        json o = quad("cards/" + std::to_string(k), "leaf", 0.2, 1.6, 0.2, 2.2, 0.5);
+        o["transform"] = transforms[k];
+        flat["objects"].push_back(o);
+    }
+    for (const std::string gi : {"none", "brute"})
+        EXPECT_EQ(test::differing_values(render_with(instanced, gi), render_with(flat, gi)), 0u) << "--gi " << gi;
+    // A glTF card read once, then from the mesh cache: the same cutout.
+    json m = {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"metallicFactor", 0}}}, {"alphaMode", "MASK"}};
+    const json from_file = stage(json::array({{{"name", "card"}, {"type", "mesh"}, {"file", gltf_card(dir, m)}}}), kLeaf);
+    const Image parsed = render_with(from_file, "none");
+    setenv("BOUNCE_MESH_CACHE", dir.file("meshes").c_str(), 1);
+    const MeshCacheCounts before = mesh_cache_counts();
+    const Image stored = render_with(from_file, "none"), cached = render_with(from_file, "none");
+    unsetenv("BOUNCE_MESH_CACHE");
+    EXPECT_EQ(mesh_cache_counts().hits, before.hits + 1);
+    EXPECT_EQ(test::differing_values(parsed, stored), 0u);
+    EXPECT_EQ(test::differing_values(parsed, cached), 0u);
+}
+
+TEST(Cutouts, HostileCutoutsAreRefusedNamingTheKey) {
+    test::TempDir dir;
+    const json card = json::array({quad("card", "leaf", -1, 1, 0.2, 2.2, 0)});
+    const auto refused = [&](const json& material, const std::vector<std::string>& parts) {
+        json m = kLeaf;
+        m.update(material);
+        test::expect_input_error([&] { test::scene_from(stage(card, m)); }, parts);
+    };
+    refused({{"alpha_mode", "mask"}, {"alpha_cutoff", 2}}, {"/materials/leaf/alpha_cutoff"});
+    refused({{"alpha_mode", "mask"}, {"alpha_cutoff", "NaN"}}, {"/materials/leaf/alpha_cutoff"});
+    refused({{"opacity", -0.5}}, {"/materials/leaf/opacity"});
+    refused({{"opacity", 1e39}}, {"/materials/leaf/opacity"});
+    refused({{"alpha_mode", "opaque"}, {"opacity", 0.5}}, {"/materials/leaf/alpha_mode", "reads no opacity"});
+    refused({{"alpha_mode", "blend"}, {"alpha_cutoff", 0.3}}, {"/materials/leaf/alpha_cutoff", "mask"});
+    refused({{"alpha_mode", "cutout"}}, {"/materials/leaf/alpha_mode"});
+    refused({{"opacity_texture", dir.file("missing.png")}}, {"/materials/leaf/opacity_texture"});
+    const std::string nan = dir.file("nan.exr");
+    test::write_constant_image(nan, 2, 2, {NAN});
+    refused({{"opacity_texture", nan}}, {"/materials/leaf/opacity_texture", "texel (0, 0)"});
+}
+
+}  // namespace
+}  // namespace bounce
