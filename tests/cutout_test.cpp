@@ -10,6 +10,7 @@
 
 #include "bounce/render/render.h"
 #include "bounce/scene/mesh_cache.h"
+#include "bounce/tool/session.h"
 #include "gltf_strip.h"
 #include "test_util.h"
 
@@ -185,6 +186,31 @@ TEST(Cutouts, AGltfMaskOrBlendIsTheSameCutoutWrittenInTheSceneFile) {
     }
 }
 
+TEST(Cutouts, AnMtlsDissolveAndMapDAreBlendedOpacity) {
+    test::TempDir dir;
+    const std::string stripes = dir.file("stripes.png");
+    write_grey(stripes, 4, 1, {255, 0, 255, 0});
+    // The stage's card as an OBJ quad (u along x, v along y), MTL's d = 1 - Tr and map_d.
+    const std::string obj = dir.write("card.obj", "mtllib card.mtl\nv -1 0.2 0\nv 1 0.2 0\nv 1 2.2 0\nv -1 2.2 0\n"
+                                                  "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl leaf\nf 1/1 2/2 3/3 4/4\n");
+    for (const std::string dissolve : {"d 0.6", "Tr 0.4"}) {
+        dir.write("card.mtl", "newmtl leaf\nKd 0.2 0.6 0.1\n" + dissolve + "\nmap_d stripes.png\n");
+        const json from_file = stage(json::array({{{"name", "card"}, {"type", "mesh"}, {"file", obj}}}), kLeaf);
+        json same = kLeaf;
+        same.update({{"opacity", 0.6}, {"opacity_texture", stripes}});
+        const json written = stage(json::array({quad("card", "leaf", -1, 1, 0.2, 2.2, 0)}), same);
+        const Image a = render_with(from_file, "none"), b = render_with(written, "none");
+        // Coverage is exact; shading only to the normals' rounding (Assimp's from the face).
+        const Layer *la = a.find("albedo"), *lb = b.find("albedo");
+        size_t card = 0;
+        for (size_t i = 0; i < la->data.size(); ++i) {
+            EXPECT_NEAR(la->data[i], lb->data[i], 1e-6f) << dissolve << " value " << i;
+            card += std::abs(la->data[i] - 0.7f) > 0.01f;
+        }
+        EXPECT_GT(card, 60u) << dissolve;
+    }
+}
+
 TEST(Cutouts, SurviveInstancingAndTheMeshCache) {
     test::TempDir dir;
     const std::string leaf = dir.file("leaf.png");
@@ -215,6 +241,54 @@ TEST(Cutouts, SurviveInstancingAndTheMeshCache) {
     EXPECT_EQ(mesh_cache_counts().hits, before.hits + 1);
     EXPECT_EQ(test::differing_values(parsed, stored), 0u);
     EXPECT_EQ(test::differing_values(parsed, cached), 0u);
+}
+
+// Item 4: what a file's materials carry that bounce does not read is named once per file.
+TEST(UnreadMaterials, EveryUnreadFeatureIsNamedOnStderrOncePerFile) {
+    test::TempDir dir;
+    write_png(dir.file("leaf.png"), 4, 1, 4, {255, 255, 255, 255, 255, 255, 255, 0, 255, 255, 255, 255, 255, 255, 255, 0});
+    const json tex = {{"index", 0}};
+    json m = {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}, {"extensions", {{"KHR_texture_transform", {{"scale", {2, 2}}}}}}}},
+                                        {"metallicRoughnessTexture", tex}}},
+              {"emissiveTexture", tex}, {"occlusionTexture", {{"index", 0}, {"texCoord", 1}}},
+              {"extensions", {{"KHR_materials_clearcoat", {{"clearcoatFactor", 1}}}}}};
+    const std::string file = gltf_card(dir, m);
+    json g = json::parse(test::bytes_of(file));
+    g["materials"].push_back(g["materials"][0]);  // two materials carry them
+    g["extensionsUsed"] = {"KHR_materials_clearcoat", "KHR_texture_transform", "KHR_materials_variants"};
+    dir.write("card.gltf", g.dump());
+    // The same file twice (two objects) is named once.
+    json scene = stage(json::array({{{"name", "card"}, {"type", "mesh"}, {"file", file}},
+                                    {{"name", "again"}, {"type", "mesh"}, {"file", file}, {"transform", {{"translate", {0, 0, 1}}}}}}),
+                       kLeaf);
+    const std::string path = dir.write("scene.json", scene.dump());
+    std::string err;
+    ASSERT_EQ(test::run_bounce("render " + path + " -o " + dir.file("out.exr"), &err), 0) << err;
+    for (const std::string want : {"metallicRoughnessTexture on 2 materials", "emissiveTexture on 2 materials",
+                                   "occlusionTexture on 2 materials", "KHR_texture_transform on 2 materials",
+                                   "texCoord 1 (a second uv set) on 2 materials", "KHR_materials_clearcoat on 2 materials",
+                                   "KHR_materials_variants on 1 file"}) {
+        const std::string line = "card.gltf: ignored: " + want;
+        const size_t at = err.find(line);
+        EXPECT_NE(at, std::string::npos) << line << " in:\n" << err;
+        EXPECT_EQ(err.find(line, at + 1), std::string::npos) << line << " twice";
+    }
+    // An MTL's statements bounce does not read, once per material that has them.
+    dir.write("card.mtl", "newmtl a\nKd 0.5 0.5 0.5\nKa 1 1 1\nillum 2\nmap_Ks s.png\nNi 1.5\nd 0.5\nnewmtl b\nNi 1.4\nillum 7\nPr 0.3\n"
+                          "newmtl c\nNi 1.5\nillum 2\n");  // c's Ni (opaque) means nothing
+    const std::string obj = dir.write("card.obj", "mtllib card.mtl\nv -1 0.2 0\nv 1 0.2 0\nv 1 2.2 0\nusemtl a\nf 1 2 3\n");
+    scene = stage(json::array({{{"name", "card"}, {"type", "mesh"}, {"file", obj}}}), kLeaf);
+    ASSERT_EQ(test::run_bounce("render " + dir.write("obj.json", scene.dump()) + " -o " + dir.file("obj.exr"), &err), 0) << err;
+    for (const std::string want : {"MTL map_Ks on 1 material", "MTL Ni on 2 materials", "MTL Pr on 1 material"})
+        EXPECT_NE(err.find("card.obj: ignored: " + want), std::string::npos) << want << " in:\n" << err;
+    EXPECT_EQ(err.find("MTL Ka"), std::string::npos) << err;  // ambient colour means nothing here: not named
+    // The lighting tool's status carries them (the page shows them).
+    SessionOptions o;
+    o.scene = dir.file("obj.json"), o.out_dir = dir.file("tool");
+    LightingSession session(o);
+    const json unread = session.status()["unread"];
+    ASSERT_TRUE(unread.is_array());
+    EXPECT_NE(std::find(unread.begin(), unread.end(), obj + ": ignored: MTL Ni on 2 materials"), unread.end()) << unread.dump();
 }
 
 TEST(Cutouts, HostileCutoutsAreRefusedNamingTheKey) {

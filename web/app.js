@@ -153,6 +153,7 @@ async function refreshStatus() {
   // depend on the frames before it, as on the farm): say which one is being rendered.
   const replay = s.replay && s.replay.from < s.replay.to
     ? ` — frame ${s.frame} of ${s.replay.from}-${s.replay.to}: frames are rendered in order so frame ${s.replay.to} is the farm's` : '';
+  $('unread').textContent = (s.unread || []).join('\n');
   $('progress-text').textContent = `${s.state}${s.action ? ' (' + ACTION_WORDS[s.action] + ')' : ''}${p.phase ? ': ' + p.phase : ''}${replay}${s.message ? ' — ' + s.message : ''}`;
   switch (s.state) {
     case 'failed': showError(s.message); break;

@@ -100,6 +100,11 @@ void check_frame(const RenderArgs& a, const FrameFiles& files, const Scene& scen
     files.check(scene);
     check_show_layer(a.show, scene, !files.cache_in.empty());
     if (!files.base.empty()) check_base(files.base, scene);
+    // Nothing dropped in silence: what the mesh files carry that is not read, once a run (a
+    // sequence's frames read the same files), once the frame is sure to render.
+    static bool noted = false;
+    for (const std::string& line : noted ? std::vector<std::string>{} : scene.unread) std::fprintf(stderr, "bounce: %s\n", line.c_str());
+    noted = true;
 }
 
 void report(const RenderArgs& a, const RenderResult& r, const FrameFiles& files, const Stats& stats, const Scene& scene) {

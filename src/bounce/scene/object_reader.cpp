@@ -1,4 +1,5 @@
 #include "bounce/scene/object_reader.h"
+#include "bounce/scene/material_report.h"
 
 #include <fmt/format.h>
 
@@ -96,6 +97,15 @@ void parsing_mesh(Scene& scene, Parse&& parse) {
     scene.load_times.mesh_parse_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+/// Names once per file what `file`'s own materials carry that is not read (material_report.h).
+void note_unread(Scene& scene, const std::string& file, int mat) {
+    if (mat >= 0) return;  // a scene material replaces the file's
+    const std::string prefix = file + ": ignored: ";
+    if (std::any_of(scene.unread.begin(), scene.unread.end(), [&](const std::string& l) { return l.starts_with(prefix); }))
+        return;
+    for (const UnreadFeature& f : unread_material_features(file)) scene.unread.push_back(prefix + f.line());
+}
+
 void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object& obj, SubdivScheme scheme) {
     SubdivSurface surf;
     surf.scheme = scheme;
@@ -112,6 +122,7 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
         r.fail("file", e.what());
     }
     record_inputs(r, "file", read);
+    note_unread(scene, file, mat);
     if (r.has("displacement")) {
         JsonReader d(r.raw("displacement"), r.at("displacement"), r.ctx(), {"map", "scale", "midpoint"});
         if (!d.has("map")) d.fail("", "a displacement needs a \"map\"");
@@ -396,6 +407,7 @@ int read_mesh_object(const JsonReader& r, Scene& scene, int mat, Object& obj, st
         r.fail("file", e.what());
     }
     record_inputs(r, "file", read);
+    note_unread(scene, file, mat);
     obj.placement = read_transform(r);
     place_with_fine(obj, fine);
     return fine;

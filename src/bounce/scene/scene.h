@@ -232,6 +232,9 @@ struct Scene {
     LoadTimes load_times;
     std::vector<SceneInput> inputs;          ///< every file it reads (not the scene file itself)
     std::vector<std::string> input_folders;  ///< folders it reads (render.radiosity_textures)
+    /// What its mesh files' materials carry that bounce does not read, one line per file and
+    /// feature ("card.gltf: ignored: emissiveTexture on 3 materials"); front ends show them.
+    std::vector<std::string> unread;
     Camera camera;
     std::vector<Light> lights;
     std::vector<Material> materials;

@@ -298,7 +298,8 @@ json LightingSession::status() const {
             {"frame", frame_},
             {"replay", running_ && action_ == SessionAction::Frame ? json{{"from", replay_.first}, {"to", replay_.target}} : json(nullptr)},
             {"shot", {{"animated", scene_.shot.animated}, {"first", scene_.shot.first}, {"last", scene_.shot.last}, {"fps", scene_.shot.fps}}},
-            {"scene", options_.scene}};
+            {"scene", options_.scene},
+            {"unread", scene_.unread}};
 }
 
 }  // namespace bounce
