@@ -57,8 +57,9 @@ void gltf_material(const json& m, Tally& tally) {
         for (const char* t : {"baseColorTexture", "metallicRoughnessTexture"})
             if (pbr.contains(t)) texture_info(pbr[t], tally);
     }
-    for (const char* t : {"occlusionTexture", "emissiveTexture"})
-        if (m.contains(t)) tally.add(t, "material");
+    if (m.contains("emissiveTexture")) tally.add("emissiveTexture", "material");
+    if (m.contains("occlusionTexture") && m["occlusionTexture"].is_object() && m["occlusionTexture"].value("strength", 1.0) != 1.0)
+        tally.add("occlusionTexture.strength", "material");
     for (const char* t : {"normalTexture", "occlusionTexture", "emissiveTexture"})
         if (m.contains(t)) texture_info(m[t], tally);
     if (m.contains("extensions") && m["extensions"].is_object())

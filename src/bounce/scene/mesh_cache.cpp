@@ -30,7 +30,7 @@ namespace {
 // Bump when what a load makes of a mesh file changes (mesh_import.cpp), or the layout below.
 /// 2: inputs and textures by absolute path (1 named them relative to the working directory of
 /// the run that wrote the entry, so another folder's copy of an MTL could stand in for it).
-constexpr uint32_t kVersion = 3;  // 3: materials' cutouts
+constexpr uint32_t kVersion = 3;  // 3: materials' cutouts and occlusion textures
 constexpr char kMagic[8] = {'B', 'N', 'C', 'M', 'E', 'S', 'H', '\n'};
 constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 + 8;  // magic, version, 0, body bytes, body hash
 constexpr size_t kMaxString = 1 << 16;
@@ -148,7 +148,7 @@ TriangleMesh read_mesh(In& in, size_t materials, bool overridden) {
 void write_material(Out& out, const Material& m) {
     out.str(m.name);
     out.pod(m.color), out.pod(m.emission), out.pod(m.specular), out.pod(m.roughness);
-    out.str(m.color_texture), out.str(m.bump_texture), out.str(m.normal_texture);
+    out.str(m.color_texture), out.str(m.bump_texture), out.str(m.normal_texture), out.str(m.ao_texture);
     out.pod(static_cast<uint8_t>(m.alpha_mode)), out.pod(m.opacity), out.pod(m.alpha_cutoff), out.str(m.opacity_texture);
 }
 
@@ -158,7 +158,7 @@ Material read_material(In& in) {
     m.name = in.str();
     m.color = in.pod<Color>(), m.emission = in.pod<Color>(), m.specular = in.pod<Color>();
     m.roughness = in.pod<float>();
-    m.color_texture = in.str(), m.bump_texture = in.str(), m.normal_texture = in.str();
+    m.color_texture = in.str(), m.bump_texture = in.str(), m.normal_texture = in.str(), m.ao_texture = in.str();
     const auto mode = in.pod<uint8_t>();
     m.opacity = in.pod<float>(), m.alpha_cutoff = in.pod<float>();
     m.opacity_texture = in.str();
@@ -218,7 +218,7 @@ LoadedMeshFile read_entry(In& in, bool overridden) {
 /// An opacity texture is read again (the entry keeps its name, not its texels).
 void check_textures(LoadedMeshFile& loaded) {
     for (Material& m : loaded.materials) {
-        for (const std::string* t : {&m.color_texture, &m.bump_texture, &m.normal_texture, &m.opacity_texture}) {
+        for (const std::string* t : {&m.color_texture, &m.bump_texture, &m.normal_texture, &m.ao_texture, &m.opacity_texture}) {
             if (t->empty()) continue;
             if (std::none_of(loaded.inputs.begin(), loaded.inputs.end(), [&](const auto& in) { return in.first == *t; }))
                 throw Damaged{"a material names a texture the parse did not read"};

@@ -343,6 +343,10 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
             m.color_texture = texture({aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE});
             if (!m.color_texture.empty()) m.color = Color(1 - metallic);
             read_file_cutout(*am, path, where, texture({aiTextureType_OPACITY}), m);
+            // glTF's occlusionTexture (its red channel) is baked occlusion, as ao_texture.
+            aiString gltf;
+            if (am->Get(AI_MATKEY_GLTF_ALPHAMODE, gltf) == AI_SUCCESS)
+                m.ao_texture = texture({aiTextureType_LIGHTMAP, aiTextureType_AMBIENT_OCCLUSION});
             // Assimp files MTL's bump maps under HEIGHT, glTF's normalTexture under NORMALS.
             m.bump_texture = texture({aiTextureType_HEIGHT, aiTextureType_DISPLACEMENT});
             m.normal_texture = texture({aiTextureType_NORMALS});
