@@ -319,6 +319,26 @@ TEST(GltfMaterials, AnOcclusionTextureIsTheSceneFilesAoTexture) {
     EXPECT_LT(sa, 0.98 * sc);
 }
 
+// KHR_materials_emissive_strength multiplies emissiveFactor (Assimp reads it; material_report
+// does not name it as unread).
+TEST(GltfMaterials, EmissiveStrengthMultipliesTheEmissiveFactor) {
+    test::TempDir dir;
+    write_png(dir.file("leaf.png"), 4, 1, 4, std::vector<unsigned char>(16, 255));
+    json m = {{"emissiveFactor", {1, 0.5, 0.25}}, {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", 6}}}}}};
+    const std::string file = gltf_card(dir, m);
+    const Scene s = test::scene_from(stage(json::array({{{"name", "card"}, {"type", "mesh"}, {"file", file}}}), kLeaf));
+    const auto it = std::find_if(s.materials.begin(), s.materials.end(), [](const Material& x) { return x.name.starts_with("card/"); });
+    ASSERT_NE(it, s.materials.end());
+    EXPECT_EQ(it->emission, Color(6, 3, 1.5));
+    EXPECT_TRUE(s.unread.empty()) << s.unread.front();
+    for (const json bad : {json(-1), json("bright"), json(1e39)}) {
+        m["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"] = bad;
+        const std::string hostile = gltf_card(dir, m);
+        test::expect_input_error([&] { test::scene_from(stage(json::array({{{"name", "card"}, {"type", "mesh"}, {"file", hostile}}}), kLeaf)); },
+                                 {"card.gltf", "KHR_materials_emissive_strength", "emissiveStrength"});
+    }
+}
+
 TEST(Cutouts, HostileCutoutsAreRefusedNamingTheKey) {
     test::TempDir dir;
     const json card = json::array({quad("card", "leaf", -1, 1, 0.2, 2.2, 0)});

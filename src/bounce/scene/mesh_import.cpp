@@ -281,6 +281,29 @@ void read_file_cutout(const aiMaterial& am, const std::string& path, const std::
         throw InputError(path, where, fmt::format("alphaCutoff {} is not in [0, 1]", m.alpha_cutoff));
 }
 
+/// glTF materials' KHR_materials_emissive_strength (Assimp 5.2 does not read it), by material
+/// index (1 where there is none; empty for other formats).
+std::vector<float> gltf_emissive_strengths(const std::string& path) {
+    const std::string ext = lower_extension(path);
+    if (ext != ".gltf" && ext != ".glb") return {};
+    const nlohmann::json j = nlohmann::json::parse(gltf_json_text(path), nullptr, false);  // check_mesh_file parsed it
+    std::vector<float> out;
+    if (!j.is_object() || !j.contains("materials") || !j["materials"].is_array()) return out;
+    for (size_t i = 0; i < j["materials"].size(); ++i) {
+        const nlohmann::json& m = j["materials"][i];
+        const nlohmann::json* e = m.is_object() && m.contains("extensions") && m["extensions"].is_object() &&
+                                          m["extensions"].contains("KHR_materials_emissive_strength")
+                                      ? &m["extensions"]["KHR_materials_emissive_strength"]
+                                      : nullptr;
+        const nlohmann::json strength = e && e->is_object() ? e->value("emissiveStrength", nlohmann::json(1.0)) : nlohmann::json(1.0);
+        if (!strength.is_number() || !(strength.get<double>() >= 0 && strength.get<double>() <= kMaxRadiometric))
+            throw InputError(path, fmt::format("/materials/{}/extensions/KHR_materials_emissive_strength", i),
+                             fmt::format("emissiveStrength {} is not a number in [0, {:g}]", strength.dump().substr(0, 40), kMaxRadiometric));
+        out.push_back(strength.get<float>());
+    }
+    return out;
+}
+
 /// The file's materials appended to `materials` (named "<prefix>/<name>"), or `override_material`
 /// for all: the scene index of each of the file's materials.
 std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path, const std::string& prefix,
@@ -288,6 +311,7 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
                                        MeshInputs* files_read) {
     std::vector<uint32_t> mat_map(s->mNumMaterials);
     if (override_material < 0) {
+        const std::vector<float> strengths = gltf_emissive_strengths(path);
         for (unsigned i = 0; i < s->mNumMaterials; ++i) {
             const aiMaterial* am = s->mMaterials[i];
             Material m;
@@ -307,6 +331,7 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
             if (am->Get(AI_MATKEY_COLOR_EMISSIVE, ke) == AI_SUCCESS) m.emission = to_vec3(ke);
             float strength = 1;
             if (am->Get(AI_MATKEY_EMISSIVE_INTENSITY, strength) == AI_SUCCESS) m.emission = m.emission * strength;
+            else if (i < strengths.size()) m.emission = m.emission * strengths[i];
             for (int c = 0; c < 3; ++c)
                 if (!(m.emission[c] >= 0 && m.emission[c] <= kMaxRadiometric))
                     throw InputError(path, where, fmt::format("emission {} is not in [0, {:g}]", m.emission[c], kMaxRadiometric));
