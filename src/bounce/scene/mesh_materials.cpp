@@ -1,0 +1,170 @@
+#include "bounce/scene/mesh_materials.h"
+
+#include <assimp/GltfMaterial.h>
+#include <assimp/material.h>
+#include <assimp/scene.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "bounce/core/error.h"
+#include "bounce/core/files.h"
+#include "bounce/core/image.h"
+#include "bounce/scene/mesh_checks.h"
+#include "bounce/scene/opacity.h"
+
+namespace bounce {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+Vec3 to_vec3(const aiColor3D& v) { return {v.r, v.g, v.b}; }
+
+/// A file material's cutout: glTF's alphaMode, alphaCutoff and base colour alpha (factor times
+/// the base colour texture's alpha, if it has one); MTL's d (or 1 - Tr) and map_d, as blend,
+/// as Blender's importer reads them. `map_d`: the OPACITY texture's path (empty: none).
+void read_file_cutout(const aiMaterial& am, const std::string& path, const std::string& where, const std::string& map_d,
+                      Material& m) {
+    std::string why;
+    aiString mode;
+    if (am.Get(AI_MATKEY_GLTF_ALPHAMODE, mode) == AI_SUCCESS) {
+        const std::string name = mode.C_Str();
+        if (name == "OPAQUE") return;
+        if (name != "MASK" && name != "BLEND")
+            throw InputError(path, where, fmt::format("alphaMode \"{}\" is not OPAQUE, MASK or BLEND", name.substr(0, 40)));
+        m.alpha_mode = name == "MASK" ? AlphaMode::Mask : AlphaMode::Blend;
+        aiColor4D base{1, 1, 1, 1};
+        am.Get(AI_MATKEY_BASE_COLOR, base);
+        m.opacity = base.a;
+        if (m.alpha_mode == AlphaMode::Mask) am.Get(AI_MATKEY_GLTF_ALPHACUTOFF, m.alpha_cutoff);
+        if (!m.color_texture.empty()) {
+            m.opacity_map = load_opacity_map(m.color_texture, OpacityChannel::AlphaOnly, why);
+            if (m.opacity_map) m.opacity_texture = m.color_texture;
+        }
+    } else {
+        float d = 1;
+        am.Get(AI_MATKEY_OPACITY, d);
+        if (d >= 1 && map_d.empty()) return;
+        m.alpha_mode = AlphaMode::Blend;
+        m.opacity = d;
+        if (!map_d.empty()) {
+            m.opacity_texture = map_d;
+            m.opacity_map = load_opacity_map(map_d, OpacityChannel::AlphaOrFirst, why);
+        }
+    }
+    if (!why.empty()) throw InputError(path, where, fmt::format("opacity texture \"{}\": {}", m.opacity_texture.empty() ? m.color_texture : m.opacity_texture, why));
+    if (!(m.opacity >= 0 && m.opacity <= 1))
+        throw InputError(path, where, fmt::format("opacity {} is not in [0, 1]", m.opacity));
+    if (!(m.alpha_cutoff >= 0 && m.alpha_cutoff <= 1))
+        throw InputError(path, where, fmt::format("alphaCutoff {} is not in [0, 1]", m.alpha_cutoff));
+}
+
+/// glTF materials' KHR_materials_emissive_strength (Assimp 5.2 does not read it), by material
+/// index (1 where there is none; empty for other formats).
+std::vector<float> gltf_emissive_strengths(const std::string& path) {
+    const std::string ext = lower_extension(path);
+    if (ext != ".gltf" && ext != ".glb") return {};
+    const nlohmann::json j = nlohmann::json::parse(gltf_json_text(path), nullptr, false);  // check_mesh_file parsed it
+    std::vector<float> out;
+    if (!j.is_object() || !j.contains("materials") || !j["materials"].is_array()) return out;
+    for (size_t i = 0; i < j["materials"].size(); ++i) {
+        const nlohmann::json& m = j["materials"][i];
+        const nlohmann::json* e = m.is_object() && m.contains("extensions") && m["extensions"].is_object() &&
+                                          m["extensions"].contains("KHR_materials_emissive_strength")
+                                      ? &m["extensions"]["KHR_materials_emissive_strength"]
+                                      : nullptr;
+        const nlohmann::json strength = e && e->is_object() ? e->value("emissiveStrength", nlohmann::json(1.0)) : nlohmann::json(1.0);
+        if (!strength.is_number() || !(strength.get<double>() >= 0 && strength.get<double>() <= kMaxRadiometric))
+            throw InputError(path, fmt::format("/materials/{}/extensions/KHR_materials_emissive_strength", i),
+                             fmt::format("emissiveStrength {} is not a number in [0, {:g}]", strength.dump().substr(0, 40), kMaxRadiometric));
+        out.push_back(strength.get<float>());
+    }
+    return out;
+}
+
+}  // namespace
+
+/// The file's materials appended to `materials` (named "<prefix>/<name>"), or `override_material`
+/// for all: the scene index of each of the file's materials.
+std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path, const std::string& prefix,
+                                       std::vector<Material>& materials, int override_material,
+                                       MeshInputs* files_read) {
+    std::vector<uint32_t> mat_map(s->mNumMaterials);
+    if (override_material < 0) {
+        const std::vector<float> strengths = gltf_emissive_strengths(path);
+        for (unsigned i = 0; i < s->mNumMaterials; ++i) {
+            const aiMaterial* am = s->mMaterials[i];
+            Material m;
+            aiString name;
+            am->Get(AI_MATKEY_NAME, name);
+            m.name = prefix + "/" + (name.length ? name.C_Str() : std::to_string(i));
+            aiColor4D base;
+            aiColor3D diffuse;
+            if (am->Get(AI_MATKEY_BASE_COLOR, base) == AI_SUCCESS) m.color = {base.r, base.g, base.b};
+            else if (am->Get(AI_MATKEY_COLOR_DIFFUSE, diffuse) == AI_SUCCESS) m.color = to_vec3(diffuse);
+            const std::string where = "material " + m.name.substr(prefix.size() + 1);
+            // As a JSON material's: an albedo above 1 creates energy, a radiance above 1e20 overflows.
+            for (int c = 0; c < 3; ++c)
+                if (!(m.color[c] >= 0 && m.color[c] <= 1))
+                    throw InputError(path, where, fmt::format("base colour {} is not in [0, 1]", m.color[c]));
+            aiColor3D ke;
+            if (am->Get(AI_MATKEY_COLOR_EMISSIVE, ke) == AI_SUCCESS) m.emission = to_vec3(ke);
+            float strength = 1;
+            if (am->Get(AI_MATKEY_EMISSIVE_INTENSITY, strength) == AI_SUCCESS) m.emission = m.emission * strength;
+            else if (i < strengths.size()) m.emission = m.emission * strengths[i];
+            for (int c = 0; c < 3; ++c)
+                if (!(m.emission[c] >= 0 && m.emission[c] <= kMaxRadiometric))
+                    throw InputError(path, where, fmt::format("emission {} is not in [0, {:g}]", m.emission[c], kMaxRadiometric));
+            // Glossy lobe: glTF metallic-roughness (F0 = mix(0.04, base, metallic), the diffuse
+            // part darkened by 1 - metallic), or MTL's Ks and Ns (Blinn-Phong exponent to GGX
+            // roughness: alpha = sqrt(2 / (Ns + 2))).
+            float metallic = 0, rough = 1, ns = 0;
+            aiColor3D ks;
+            if (am->Get(AI_MATKEY_ROUGHNESS_FACTOR, rough) == AI_SUCCESS) {
+                am->Get(AI_MATKEY_METALLIC_FACTOR, metallic);
+                metallic = std::clamp(metallic, 0.0f, 1.0f);
+                m.specular = Color(0.04f) * (1 - metallic) + m.color * metallic;
+                m.color = m.color * (1 - metallic);
+                m.roughness = std::clamp(rough, 0.01f, 1.0f);
+            } else if (am->Get(AI_MATKEY_COLOR_SPECULAR, ks) == AI_SUCCESS && (ks.r > 0 || ks.g > 0 || ks.b > 0)) {
+                m.specular = vmin(vmax(to_vec3(ks), Color(0)), Color(1));
+                if (am->Get(AI_MATKEY_SHININESS, ns) == AI_SUCCESS && ns > 0)
+                    m.roughness = std::clamp(std::sqrt(std::sqrt(2 / (ns + 2))), 0.01f, 1.0f);
+            }
+            // A texture the file names must be there: a missing one would render untextured.
+            auto texture = [&](std::initializer_list<aiTextureType> types) -> std::string {
+                aiString tex;
+                for (aiTextureType type : types) {
+                    if (am->GetTexture(type, 0, &tex) != AI_SUCCESS || tex.C_Str()[0] == '*') continue;
+                    const std::string t = (fs::path(path).parent_path() / tex.C_Str()).lexically_normal().string();
+                    if (files_read) files_read->add(t);  // confined before anything opens it
+                    std::string why = not_a_regular_file(t);
+                    if (why.empty()) why = texture_problem(t);
+                    if (!why.empty()) throw InputError(path, where, fmt::format("texture \"{}\": {}", t, why));
+                    return t;
+                }
+                return "";
+            };
+            m.color_texture = texture({aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE});
+            if (!m.color_texture.empty()) m.color = Color(1 - metallic);
+            read_file_cutout(*am, path, where, texture({aiTextureType_OPACITY}), m);
+            // glTF's occlusionTexture (its red channel) is baked occlusion, as ao_texture.
+            aiString gltf;
+            if (am->Get(AI_MATKEY_GLTF_ALPHAMODE, gltf) == AI_SUCCESS)
+                m.ao_texture = texture({aiTextureType_LIGHTMAP, aiTextureType_AMBIENT_OCCLUSION});
+            // Assimp files MTL's bump maps under HEIGHT, glTF's normalTexture under NORMALS.
+            m.bump_texture = texture({aiTextureType_HEIGHT, aiTextureType_DISPLACEMENT});
+            m.normal_texture = texture({aiTextureType_NORMALS});
+            mat_map[i] = static_cast<uint32_t>(materials.size());
+            materials.push_back(m);
+        }
+    } else {
+        mat_map.assign(s->mNumMaterials, static_cast<uint32_t>(override_material));
+    }
+    return mat_map;
+}
+
+}  // namespace bounce
