@@ -13,6 +13,7 @@
 #include "bounce/tool/session.h"
 #include "gltf_strip.h"
 #include "test_util.h"
+#include "tool_util.h"
 
 namespace bounce {
 namespace {
@@ -317,6 +318,30 @@ TEST(GltfMaterials, AnOcclusionTextureIsTheSceneFilesAoTexture) {
     double sa = 0, sc = 0;
     for (size_t i = 0; i < ia->data.size(); ++i) sa += ia->data[i], sc += ic->data[i];
     EXPECT_LT(sa, 0.98 * sc);
+}
+
+// A lighter's opacity edit changes what the camera sees: the tool asks for a new deep file, and
+// its frame is the scene rendered with that opacity.
+TEST(Cutouts, AnOpacityEditInTheLightingToolRendersAsTheSceneWithThatOpacity) {
+    test::TempDir dir;
+    json blend = kLeaf;
+    blend.update({{"opacity", 0.6}});
+    const json card = json::array({quad("card", "leaf", -1, 1, 0.2, 2.2, 0)});
+    SessionOptions o;
+    o.scene = dir.write("scene.json", stage(card, blend).dump());
+    o.out_dir = dir.file("tool");
+    o.threads = 2;
+    o.sets = {"render.gi=\"brute\"", "render.light_parts=false"};
+    LightingSession session(o);
+    test::render_and_wait(session, SessionAction::Rasterize);
+    const json answer = session.edit("materials.leaf.opacity", 0.3);
+    EXPECT_EQ(answer["needs"], "rasterize");
+    test::render_and_wait(session, SessionAction::Rasterize);
+    blend["opacity"] = 0.3;
+    const Image want = render_with(stage(card, blend), "brute", {Override("render.light_parts=false")});
+    EXPECT_EQ(test::differing_values(session.image(), want), 0u);
+    const Image before = render_with(stage(card, kLeaf), "brute");
+    EXPECT_GT(test::differing_values(want, before), 100u);  // not vacuous: the card is another card
 }
 
 // KHR_materials_emissive_strength multiplies emissiveFactor (Assimp reads it; material_report
