@@ -356,7 +356,7 @@ TEST(GltfMaterials, EmissiveStrengthMultipliesTheEmissiveFactor) {
     ASSERT_NE(it, s.materials.end());
     EXPECT_EQ(it->emission, Color(6, 3, 1.5));
     EXPECT_TRUE(s.unread.empty()) << s.unread.front();
-    for (const json bad : {json(-1), json("bright"), json(1e39)}) {
+    for (const json& bad : {json(-1), json("bright"), json(1e39)}) {
         m["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"] = bad;
         const std::string hostile = gltf_card(dir, m);
         test::expect_input_error([&] { test::scene_from(stage(json::array({{{"name", "card"}, {"type", "mesh"}, {"file", hostile}}}), kLeaf)); },
@@ -380,6 +380,20 @@ TEST(Cutouts, HostileCutoutsAreRefusedNamingTheKey) {
     refused({{"alpha_mode", "blend"}, {"alpha_cutoff", 0.3}}, {"/materials/leaf/alpha_cutoff", "mask"});
     refused({{"alpha_mode", "cutout"}}, {"/materials/leaf/alpha_mode"});
     refused({{"opacity_texture", dir.file("missing.png")}}, {"/materials/leaf/opacity_texture"});
+    // A PNG whose header says 30000 x 30000 (its pixels never read): refused by its size.
+    const auto crc = [](const std::string& bytes) {
+        uint32_t c = 0xffffffffu;
+        for (unsigned char b : bytes) {
+            c ^= b;
+            for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
+        }
+        return c ^ 0xffffffffu;
+    };
+    const auto be32 = [](uint32_t v) { return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8), static_cast<char>(v)}; };
+    const auto chunk = [&](const std::string& kind, const std::string& data) { return be32(static_cast<uint32_t>(data.size())) + kind + data + be32(crc(kind + data)); };
+    const std::string huge = dir.write("huge.png", std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", be32(30000) + be32(30000) + std::string("\x08\x00\x00\x00\x00", 5)) +
+                                                       chunk("IDAT", std::string("\x78\x9c\x03\x00\x00\x00\x00\x01", 8)) + chunk("IEND", ""));
+    refused({{"opacity_texture", huge}}, {"/materials/leaf/opacity_texture", "30000x30000", "8192x8192"});
     const std::string nan = dir.file("nan.exr");
     test::write_constant_image(nan, 2, 2, {NAN});
     refused({{"opacity_texture", nan}}, {"/materials/leaf/opacity_texture", "texel (0, 0)"});
