@@ -37,6 +37,16 @@ TEST(BadInput, CoordinatesThatOverflowFloatAreRefusedAtLoad) {
     refused(render_cmd(d.file("bright.json"), out), {"bright.json", "/lights/0/intensity", "exceeds"});
 }
 
+// Found by render_fuzz's 30-minute run (issue 65): an object whose type is a number aborted the
+// loader (the sphere memory estimate read the type as a string before read_object checked it).
+TEST(BadInput, AnObjectTypeThatIsNotAStringIsNamed) {
+    for (const nlohmann::json& type : {nlohmann::json(5), nlohmann::json::array(), nlohmann::json(nullptr)}) {
+        nlohmann::json j = test::base_scene();
+        j["objects"] = {{{"type", type}}};
+        test::expect_input_error([&] { test::scene_from(j); }, {"/objects/0/type"});
+    }
+}
+
 TEST(BadInput, CacheRecordsBeyondFloatRangeAreRefusedAtRead) {
     test::TempDir d;
     ASSERT_EQ(test::run_bounce(render_cmd(test::cornell_scene(), d.file("a.exr")) + " --gi cache --rays 16 --cache-out " + d.file("c.bic")), 0);

@@ -274,6 +274,16 @@ TEST(UnreadMaterials, EveryUnreadFeatureIsNamedOnStderrOncePerFile) {
         EXPECT_NE(at, std::string::npos) << line << " in:\n" << err;
         EXPECT_EQ(err.find(line, at + 1), std::string::npos) << line << " twice";
     }
+    // bounce info: per material, what was read and what was not.
+    ASSERT_EQ(test::run_bounce_shell(std::string(BOUNCE_BINARY) + " info " + path + " > " + dir.file("info.txt"), &err), 0) << err;
+    const std::string info = test::bytes_of(dir.file("info.txt"));
+    // (glTF's default metallic factor is 1: a black diffuse and a white specular.)
+    EXPECT_NE(info.find("material card/0: colour 0 x leaf.png; specular 1, roughness 1; occlusion leaf.png; not read: "
+                        "metallicRoughnessTexture, KHR_texture_transform, emissiveTexture, texCoord 1 (a second uv set), "
+                        "KHR_materials_clearcoat\n"),
+              std::string::npos) << info;
+    EXPECT_NE(info.find("material again/1:"), std::string::npos) << info;
+    EXPECT_NE(info.find("card.gltf: ignored: KHR_materials_variants on 1 file"), std::string::npos) << info;
     // An MTL's statements bounce does not read, once per material that has them.
     dir.write("card.mtl", "newmtl a\nKd 0.5 0.5 0.5\nKa 1 1 1\nillum 2\nmap_Ks s.png\nNi 1.5\nd 0.5\nnewmtl b\nNi 1.4\nillum 7\nPr 0.3\n"
                           "newmtl c\nNi 1.5\nillum 2\n");  // c's Ni (opaque) means nothing

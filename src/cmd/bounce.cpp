@@ -66,15 +66,19 @@ struct Commands {
     RenderArgs ra;
     bool params_json = false, params_markdown = false;
     BakeAoArgs ba;
+    InfoArgs ia;
     LightArgs la;
     CompareArgs ca;
     CacheArgs ka;
-    CLI::App *render = nullptr, *params = nullptr, *bake = nullptr, *light = nullptr, *compare = nullptr;
+    CLI::App *render = nullptr, *params = nullptr, *bake = nullptr, *light = nullptr, *compare = nullptr, *info = nullptr;
     CLI::App *cache = nullptr, *cinfo = nullptr, *cmerge = nullptr, *cfilter = nullptr, *cexport = nullptr;
 };
 
-/// bake-ao, light and compare.
+/// info, bake-ao, light and compare.
 void add_tool_commands(CLI::App& app, Commands& c) {
+    c.info = app.add_subcommand("info", "what a scene's materials read, and what its mesh files carry that bounce does not");
+    c.info->add_option("scene", c.ia.scene, "scene file")->required();
+
     c.bake = app.add_subcommand("bake-ao", "bake an object's occlusion by its fine (displaced) detail into its uv space");
     c.bake->add_option("scene", c.ba.scene, "scene file")->required();
     c.bake->add_option("--object", c.ba.object, "the object's name")->required();
@@ -136,6 +140,7 @@ int dispatch(const Commands& c, Communicator* comm, const char* command) {
         if (*c.params) return run_params(c.params_json, c.params_markdown);
         if (*c.compare) return run_compare(c.ca);
         if (*c.bake) return run_bake_ao(c.ba);
+        if (*c.info) return run_info(c.ia);
         if (*c.light) return run_light(c.la);
         if (*c.cinfo) return run_cache_info(c.ka);
         if (*c.cmerge) return run_cache_merge(c.ka);

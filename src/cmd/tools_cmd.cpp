@@ -22,6 +22,7 @@
 #include "bounce/render/frame.h"
 #include "bounce/core/memory.h"
 #include "bounce/gather/ao_bake.h"
+#include "bounce/scene/opacity.h"
 #include "bounce/scene/scene_load.h"
 #include "render_cmd.h"
 
@@ -79,6 +80,49 @@ std::vector<std::pair<int, std::string>> sequence_files(const std::string& patte
 
 /// `bounce bake-ao`: an object's occlusion by its own fine detail, in its uv space (EXR, one
 /// channel), for a material's ao_texture.
+namespace {
+
+std::string rgb(const Color& c) { return c.x == c.y && c.y == c.z ? fmt::format("{:g}", c.x) : fmt::format("{:g} {:g} {:g}", c.x, c.y, c.z); }
+
+/// What a material reads, as one line: every field off its default, and its files by name.
+std::string described(const Material& m) {
+    const Material none;
+    std::vector<std::string> parts{"colour " + rgb(m.color)};
+    const auto file = [](const std::string& path) { return std::filesystem::path(path).filename().string(); };
+    if (!m.color_texture.empty()) parts.back() += " x " + file(m.color_texture);
+    if (m.is_emissive()) parts.push_back("emission " + rgb(m.emission));
+    if (m.has_specular()) parts.push_back(fmt::format("specular {}, roughness {:g}", rgb(m.specular), m.roughness));
+    if (!m.bump_texture.empty()) parts.push_back("bump " + file(m.bump_texture));
+    if (!m.normal_texture.empty()) parts.push_back("normal map " + file(m.normal_texture));
+    if (!m.ao_texture.empty()) parts.push_back("occlusion " + file(m.ao_texture));
+    if (!(m.mirror == none.mirror)) parts.push_back("mirror " + rgb(m.mirror));
+    if (m.is_dielectric()) parts.push_back(fmt::format("transmission {}, ior {:g}", rgb(m.transmission), m.ior));
+    if (m.is_cutout()) {
+        std::string cut = fmt::format("cutout {}, opacity {:g}", alpha_mode_name(m.alpha_mode), m.opacity);
+        if (!m.opacity_texture.empty()) cut += " x " + file(m.opacity_texture);
+        if (m.alpha_mode == AlphaMode::Mask) cut += fmt::format(", cutoff {:g}", m.alpha_cutoff);
+        parts.push_back(cut);
+    }
+    std::string line;
+    for (const std::string& p : parts) line += (line.empty() ? "" : "; ") + p;
+    if (!m.unread.empty()) {
+        line += "; not read:";
+        for (size_t i = 0; i < m.unread.size(); ++i) line += (i ? ", " : " ") + m.unread[i];
+    }
+    return line;
+}
+
+}  // namespace
+
+int run_info(const InfoArgs& a) {
+    const Scene scene = load_scene(a.scene);
+    std::printf("%s: %zu objects, %zu materials, %zu lights\n", a.scene.c_str(), scene.objects.size(), scene.materials.size(),
+                scene.lights.size());
+    for (const Material& m : scene.materials) std::printf("material %s: %s\n", m.name.c_str(), described(m).c_str());
+    for (const std::string& line : scene.unread) std::printf("%s\n", line.c_str());
+    return 0;
+}
+
 int run_bake_ao(const BakeAoArgs& a) {
     check_input_file(a.scene);
     check_output_file(a.output, {a.scene});

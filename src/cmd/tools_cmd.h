@@ -13,6 +13,10 @@ struct BakeAoArgs {
     std::optional<double> distance;  ///< not given: 4x the displacement bound (double: 1e39 is shown as given, not as inf)
 };
 
+struct InfoArgs {
+    std::string scene;
+};
+
 struct CompareArgs {
     std::string test, reference, layer, diff;
     bool json = false;
@@ -31,6 +35,8 @@ struct CacheArgs {
 /// `bounce bake-ao`: an object's occlusion by its own fine detail, in its uv space (EXR, one
 /// channel), for a material's ao_texture.
 int run_bake_ao(const BakeAoArgs& a);
+/// `bounce info SCENE`: per material what was read and what was not, and the files' unread features.
+int run_info(const InfoArgs& a);
 int run_compare(const CompareArgs& a);
 int run_cache_info(const CacheArgs& a);
 int run_cache_merge(const CacheArgs& a);

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -23,10 +24,14 @@ namespace {
 /// Counts of what is not read, by feature, in the order first seen.
 class Tally {
 public:
-    void add(const std::string& what, const std::string& unit) {
+    /// `material`: the file's name of the material that carries it (none for other units).
+    void add(const std::string& what, const std::string& unit, const std::string& material = "") {
         auto [it, fresh] = index_.emplace(what, out_.size());
-        if (fresh) out_.push_back({what, 0, unit});
-        ++out_[it->second].count;
+        if (fresh) out_.push_back({what, 0, unit, {}});
+        UnreadFeature& f = out_[it->second];
+        if (!material.empty() && std::find(f.materials.begin(), f.materials.end(), material) != f.materials.end()) return;
+        ++f.count;
+        if (!material.empty()) f.materials.push_back(material);
     }
     std::vector<UnreadFeature> take() { return std::move(out_); }
 
@@ -42,29 +47,30 @@ const std::set<std::string> kGltfReadFileExtensions = {"KHR_lights_punctual", "E
                                                        "KHR_materials_emissive_strength", "KHR_mesh_quantization"};
 
 /// A textureInfo's unread parts: a second uv set, a transform.
-void texture_info(const json& t, Tally& tally) {
+void texture_info(const json& t, const std::string& name, Tally& tally) {
     if (!t.is_object()) return;
-    if (t.value("texCoord", 0) != 0) tally.add("texCoord 1 (a second uv set)", "material");
+    if (t.value("texCoord", 0) != 0) tally.add("texCoord 1 (a second uv set)", "material", name);
     if (t.contains("extensions") && t["extensions"].is_object() && t["extensions"].contains("KHR_texture_transform"))
-        tally.add("KHR_texture_transform", "material");
+        tally.add("KHR_texture_transform", "material", name);
 }
 
-void gltf_material(const json& m, Tally& tally) {
+/// `name`: as mesh_materials names it (the glTF name, else its index).
+void gltf_material(const json& m, const std::string& name, Tally& tally) {
     if (!m.is_object()) return;
     const json pbr = m.value("pbrMetallicRoughness", json::object());
     if (pbr.is_object()) {
-        if (pbr.contains("metallicRoughnessTexture")) tally.add("metallicRoughnessTexture", "material");
+        if (pbr.contains("metallicRoughnessTexture")) tally.add("metallicRoughnessTexture", "material", name);
         for (const char* t : {"baseColorTexture", "metallicRoughnessTexture"})
-            if (pbr.contains(t)) texture_info(pbr[t], tally);
+            if (pbr.contains(t)) texture_info(pbr[t], name, tally);
     }
-    if (m.contains("emissiveTexture")) tally.add("emissiveTexture", "material");
+    if (m.contains("emissiveTexture")) tally.add("emissiveTexture", "material", name);
     if (m.contains("occlusionTexture") && m["occlusionTexture"].is_object() && m["occlusionTexture"].value("strength", 1.0) != 1.0)
-        tally.add("occlusionTexture.strength", "material");
+        tally.add("occlusionTexture.strength", "material", name);
     for (const char* t : {"normalTexture", "occlusionTexture", "emissiveTexture"})
-        if (m.contains(t)) texture_info(m[t], tally);
+        if (m.contains(t)) texture_info(m[t], name, tally);
     if (m.contains("extensions") && m["extensions"].is_object())
-        for (const auto& [name, value] : m["extensions"].items())
-            if (!kGltfReadExtensions.count(name)) tally.add(name, "material");
+        for (const auto& [ext, value] : m["extensions"].items())
+            if (!kGltfReadExtensions.count(ext)) tally.add(ext.substr(0, 80), "material", name);
 }
 
 std::vector<UnreadFeature> gltf_unread(const std::string& path) {
@@ -72,7 +78,13 @@ std::vector<UnreadFeature> gltf_unread(const std::string& path) {
     Tally tally;
     if (!j.is_object()) return {};
     if (j.contains("materials") && j["materials"].is_array())
-        for (const json& m : j["materials"]) gltf_material(m, tally);
+        for (size_t i = 0; i < j["materials"].size(); ++i) {
+            const json& m = j["materials"][i];
+            const std::string name = m.is_object() && m.contains("name") && m["name"].is_string() && !m["name"].get<std::string>().empty()
+                                         ? m["name"].get<std::string>()
+                                         : std::to_string(i);
+            gltf_material(m, name, tally);
+        }
     if (j.contains("meshes") && j["meshes"].is_array())
         for (const json& mesh : j["meshes"])
             if (mesh.is_object() && mesh.contains("primitives") && mesh["primitives"].is_array())
@@ -90,7 +102,7 @@ std::vector<UnreadFeature> gltf_unread(const std::string& path) {
             if (!e.is_string() || kGltfReadFileExtensions.count(e.get<std::string>())) continue;
             const std::string name = e.get<std::string>().substr(0, 80);
             if (std::none_of(out.begin(), out.end(), [&](const UnreadFeature& f) { return f.what == name; }))
-                out.push_back({name, 1, "file"});
+                out.push_back({name, 1, "file", {}});
         }
     return out;
 }
@@ -104,13 +116,14 @@ const std::set<std::string> kMtlRead = {"newmtl", "Kd", "map_Kd", "Ks", "Ns", "K
 /// transparent material (d < 1, Tr > 0, or an illumination model of refraction): the Cornell
 /// box's walls carry Ni 1.5 with illum 2, meaning nothing.
 struct MtlMaterial {
+    std::string name;
     std::set<std::string> keys;
     int illum = 2;
     float d = 1, tr = 0;
     void end(Tally& tally) {
         const bool transparent = d < 1 || tr > 0 || illum == 4 || illum == 6 || illum == 7 || illum == 9;
         for (const std::string& k : keys)
-            if (k != "Ni" || transparent) tally.add("MTL " + k, "material");
+            if (k != "Ni" || transparent) tally.add("MTL " + k, "material", name.empty() ? "?" : name);
         *this = {};
     }
 };
@@ -130,7 +143,11 @@ std::vector<UnreadFeature> obj_unread(const std::string& path) {
                 std::istringstream words(l);
                 std::string key;
                 if (!(words >> key) || key[0] == '#') continue;
-                if (key == "newmtl") m.end(tally);
+                if (key == "newmtl") {
+                    m.end(tally);
+                    std::getline(words >> std::ws, m.name);
+                    while (!m.name.empty() && std::isspace(static_cast<unsigned char>(m.name.back()))) m.name.pop_back();
+                }
                 if (key == "illum") words >> m.illum;
                 if ((key == "d" && words >> m.d) || (key == "Tr" && words >> m.tr)) continue;
                 if (!kMtlRead.count(key)) m.keys.insert(key.substr(0, 40));

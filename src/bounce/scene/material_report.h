@@ -12,6 +12,7 @@ struct UnreadFeature {
     std::string what;  ///< "KHR_materials_clearcoat", "emissiveTexture", "MTL map_Ks"
     int count = 0;
     std::string unit;  ///< "material", "primitive", "file"
+    std::vector<std::string> materials;  ///< the file's names of the materials that carry it (unit "material")
     std::string line() const;  ///< "emissiveTexture on 3 materials"
 };
 

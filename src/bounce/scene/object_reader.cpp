@@ -97,13 +97,19 @@ void parsing_mesh(Scene& scene, Parse&& parse) {
     scene.load_times.mesh_parse_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-/// Names once per file what `file`'s own materials carry that is not read (material_report.h).
-void note_unread(Scene& scene, const std::string& file, int mat) {
+/// What `file`'s own materials (read for object `object`) carry that is not read
+/// (material_report.h): on each of its materials, and named once per file on the scene.
+void note_unread(Scene& scene, const std::string& file, int mat, const std::string& object) {
     if (mat >= 0) return;  // a scene material replaces the file's
+    const std::vector<UnreadFeature> unread = unread_material_features(file);
+    for (const UnreadFeature& f : unread)
+        for (const std::string& name : f.materials)
+            for (Material& m : scene.materials)
+                if (m.name == object + "/" + name) m.unread.push_back(f.what);
     const std::string prefix = file + ": ignored: ";
     if (std::any_of(scene.unread.begin(), scene.unread.end(), [&](const std::string& l) { return l.starts_with(prefix); }))
         return;
-    for (const UnreadFeature& f : unread_material_features(file)) scene.unread.push_back(prefix + f.line());
+    for (const UnreadFeature& f : unread) scene.unread.push_back(prefix + f.line());
 }
 
 void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object& obj, SubdivScheme scheme) {
@@ -122,7 +128,7 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
         r.fail("file", e.what());
     }
     record_inputs(r, "file", read);
-    note_unread(scene, file, mat);
+    note_unread(scene, file, mat, obj.name);
     if (r.has("displacement")) {
         JsonReader d(r.raw("displacement"), r.at("displacement"), r.ctx(), {"map", "scale", "midpoint"});
         if (!d.has("map")) d.fail("", "a displacement needs a \"map\"");
@@ -333,7 +339,8 @@ void check_generated_geometry(const JsonReader& root, const nlohmann::json& obje
     double triangles = 0;
     size_t spheres = 0;
     for (const nlohmann::json& o : objects) {
-        if (!o.is_object() || o.value("type", std::string()) != "sphere") continue;
+        // (A type that is not a string is read_object's to name: value() would throw here.)
+        if (!o.is_object() || !o.contains("type") || o["type"] != "sphere") continue;
         const auto level = [&](const char* key, int def) {
             const nlohmann::json& v = o.value(key, nlohmann::json(def));
             return v.is_number_integer() ? std::clamp(v.get<int>(), 0, 8) : def;  // read_object names a bad one
@@ -407,7 +414,7 @@ int read_mesh_object(const JsonReader& r, Scene& scene, int mat, Object& obj, st
         r.fail("file", e.what());
     }
     record_inputs(r, "file", read);
-    note_unread(scene, file, mat);
+    note_unread(scene, file, mat, obj.name);
     obj.placement = read_transform(r);
     place_with_fine(obj, fine);
     return fine;

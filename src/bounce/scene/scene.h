@@ -128,6 +128,8 @@ struct Material {
     std::string opacity_texture;
     std::shared_ptr<const OpacityMap> opacity_map;  ///< opacity_texture read (null = none)
     float alpha_cutoff = 0.5f;  ///< mask: opacity below it is cut away
+    /// A mesh file's material: what it carries that bounce does not read ("emissiveTexture", ...).
+    std::vector<std::string> unread;
     bool is_cutout() const { return alpha_mode != AlphaMode::Opaque; }
     /// Opacity at uv (1 for opaque materials).
     float opacity_at(const Vec2& uv) const {
