@@ -188,6 +188,11 @@ void check_ply_counts(const std::string& path) {
     while (std::getline(in, line)) {
         ++header_lines;
         if (!line.empty() && line.back() == '\r') line.pop_back();
+        // A header is text: Assimp's reader ends it at a line that only starts with end_header
+        // (NUL bytes after it), where these checks would read on (found by the mesh fuzzer:
+        // its body then failed an assertion inside Assimp that aborts the process).
+        if (std::any_of(line.begin(), line.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 && c != '\t'; }))
+            throw InputError(path, fmt::format("line {}", header_lines), "the header holds a byte that is not text");
         std::istringstream ls(line);
         std::string word;
         ls >> word;
