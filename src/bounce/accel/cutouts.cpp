@@ -2,6 +2,7 @@
 
 #include <OpenImageIO/hash.h>
 
+#include <algorithm>
 #include <bit>
 
 #include "bounce/accel/bvh.h"
@@ -9,10 +10,17 @@
 
 namespace bounce {
 
+namespace {
+
+bool has_cutout(const std::vector<Material>& materials, const TriangleMesh& mesh) {
+    return std::any_of(mesh.face_materials.begin(), mesh.face_materials.end(),
+                       [&](uint32_t m) { return m < materials.size() && materials[m].is_cutout(); });
+}
+
+}  // namespace
+
 std::shared_ptr<const CutoutMesh> CutoutMesh::make(const std::vector<Material>& materials, const TriangleMesh& mesh) {
-    bool any = false;
-    for (uint32_t m : mesh.face_materials) any = any || (m < materials.size() && materials[m].is_cutout());
-    if (!any) return nullptr;
+    if (!has_cutout(materials, mesh)) return nullptr;
     auto c = std::make_shared<CutoutMesh>();
     c->cuts_.resize(materials.size());
     for (size_t i = 0; i < materials.size(); ++i) {
@@ -26,9 +34,7 @@ std::shared_ptr<const CutoutMesh> CutoutMesh::make(const std::vector<Material>& 
 }
 
 uint64_t CutoutMesh::key(const std::vector<Material>& materials, const TriangleMesh& mesh) {
-    bool any = false;
-    for (uint32_t m : mesh.face_materials) any = any || (m < materials.size() && materials[m].is_cutout());
-    if (!any) return 0;
+    if (!has_cutout(materials, mesh)) return 0;
     uint64_t h = OIIO::xxhash::XXH64(mesh.uvs.data(), mesh.uvs.size() * sizeof(Vec2), 0x61c88647);
     h = OIIO::xxhash::XXH64(mesh.face_materials.data(), mesh.face_materials.size() * sizeof(uint32_t), h);
     for (const Material& m : materials) {
@@ -78,8 +84,9 @@ void cutout_filter(const RTCFilterFunctionNArguments* args) {
         if (args->valid[i] != -1) continue;
         const unsigned prim = RTCHitN_primID(args->hit, n, i);
         const bool camera = RTCRayN_mask(args->ray, n, i) == kRayCamera;
-        if (!mesh->stops(prim, RTCHitN_u(args->hit, n, i), RTCHitN_v(args->hit, n, i), camera, ray_hash(args, i, prim)))
-            args->valid[i] = 0;
+        // Only a blended surface met by a secondary ray draws a number.
+        const uint64_t hash = !camera && mesh->mode(prim) == AlphaMode::Blend ? ray_hash(args, i, prim) : 0;
+        if (!mesh->stops(prim, RTCHitN_u(args->hit, n, i), RTCHitN_v(args->hit, n, i), camera, hash)) args->valid[i] = 0;
     }
 }
 

@@ -24,6 +24,7 @@ public:
     /// cutouts is not taken over.
     static uint64_t key(const std::vector<Material>& materials, const TriangleMesh& mesh);
 
+    AlphaMode mode(uint32_t prim) const { return cuts_[face_materials_[prim]].mode; }
     /// Opacity at barycentrics (u, v) of triangle `prim` (Embree's: p = (1-u-v) p0 + u p1 + v p2).
     float opacity(uint32_t prim, float u, float v) const;
     /// Whether the surface at (u, v) of `prim` stops a ray. Mask: opacity at or above the cutoff,
