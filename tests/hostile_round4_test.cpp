@@ -208,6 +208,10 @@ TEST(HostileGltf, MorphTargetSkinAndSamplerCountsAndTimesAreChecked) {
     // Two keys out of order: Assimp's own validation refuses them (the last key is the clip's
     // duration); longer tracks out of order reach check_clip.
     expect_refused(play("strip.gltf", test::skinned_strip(1, 1, {1, 0.5f}), "bend"), {"strip.gltf", "cannot load mesh"});
+    // A channel without its target (Assimp 5.2 dereferenced it: the mesh fuzzer's 30-minute run).
+    json untargeted = test::morphed_quad();
+    untargeted["animations"][0]["channels"][0].erase("target");
+    expect_refused(play("blob.gltf", untargeted, "rise"), {"blob.gltf", "/animations/0/channels/0", "needs a \"target\""});
     EXPECT_EQ(test::run_bounce(play("strip.gltf", test::skinned_strip(), "bend")), 0);
     EXPECT_EQ(test::run_bounce(play("blob.gltf", test::morphed_quad(), "rise")), 0);
 }
