@@ -70,6 +70,8 @@ TEST(HostilePly, AsciiBodiesAreReadAgainstTheirHeader) {
         {std::string(kPlyHeader).replace(std::string(kPlyHeader).find("end_header") + 10, 0, std::string(1, '\0') + "x") +
              "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
          {"m.ply", "line 9", "not text"}},
+        // NUL bytes inside a body line (Assimp's tokens end there; the same assertion aborted).
+        {std::string(kPlyHeader) + "0 0 0\n1 0" + std::string(3, '\0') + " 0\n0 1 0\n3 0 1 2\n", {"m.ply", "line 11", "not text"}},
     };
     for (const Case& c : cases) expect_refused(render_cmd(ply_scene(d, c.body), d.file("o.exr")), c.expect);
     // The same file, well formed, renders.
