@@ -72,6 +72,9 @@ TEST(HostilePly, AsciiBodiesAreReadAgainstTheirHeader) {
          {"m.ply", "line 9", "not text"}},
         // NUL bytes inside a body line (Assimp's tokens end there; the same assertion aborted).
         {std::string(kPlyHeader) + "0 0 0\n1 0" + std::string(3, '\0') + " 0\n0 1 0\n3 0 1 2\n", {"m.ply", "line 11", "not text"}},
+        // A second format line, and a format of another name (the checks read on as Assimp did not).
+        {"ply\nformat ascii 1.0\nformat %ascii 1.0\n" + std::string(kPlyHeader).substr(21), {"m.ply", "line 3", "a second format line"}},
+        {"ply\nformat utf8 1.0\n" + std::string(kPlyHeader).substr(21), {"m.ply", "line 2", "format \"utf8\""}},
     };
     for (const Case& c : cases) expect_refused(render_cmd(ply_scene(d, c.body), d.file("o.exr")), c.expect);
     // The same file, well formed, renders.
