@@ -7,6 +7,7 @@
 
 #include "bounce/accel/bvh.h"
 #include "bounce/core/random.h"
+#include "bounce/scene/opacity.h"
 
 namespace bounce {
 
@@ -37,11 +38,7 @@ uint64_t CutoutMesh::key(const std::vector<Material>& materials, const TriangleM
     if (!has_cutout(materials, mesh)) return 0;
     uint64_t h = OIIO::xxhash::XXH64(mesh.uvs.data(), mesh.uvs.size() * sizeof(Vec2), 0x61c88647);
     h = OIIO::xxhash::XXH64(mesh.face_materials.data(), mesh.face_materials.size() * sizeof(uint32_t), h);
-    for (const Material& m : materials) {
-        h = hash_combine(h, static_cast<uint64_t>(m.alpha_mode));
-        h = hash_combine(hash_combine(h, std::bit_cast<uint32_t>(m.opacity)), std::bit_cast<uint32_t>(m.alpha_cutoff));
-        h = hash_combine(h, m.opacity_map ? m.opacity_map->hash : 0);
-    }
+    for (const Material& m : materials) h = hash_combine(h, cutout_identity(m));
     return h | 1;
 }
 

@@ -1,4 +1,5 @@
 #include "bounce/scene/changes.h"
+#include "bounce/scene/opacity.h"
 
 #include <map>
 #include <optional>
@@ -107,12 +108,8 @@ SceneChanges scene_changes(const Scene& before, const Scene& now) {
         c.comparable = before.objects[i].name == now.objects[i].name && before.objects[i].instance == now.objects[i].instance &&
                        meshes.same_topology(before.objects[i].coarse_mesh(), now.objects[i].coarse_mesh());
     // Cutouts decide where surfaces are: other cutouts are other geometry.
-    for (size_t i = 0; c.comparable && i < now.materials.size(); ++i) {
-        const Material &a = before.materials[i], &b = now.materials[i];
-        c.comparable = a.alpha_mode == b.alpha_mode && (!a.is_cutout() || (a.opacity == b.opacity && a.alpha_cutoff == b.alpha_cutoff &&
-                                                                           (a.opacity_map ? a.opacity_map->hash : 0) ==
-                                                                               (b.opacity_map ? b.opacity_map->hash : 0)));
-    }
+    for (size_t i = 0; c.comparable && i < now.materials.size(); ++i)
+        c.comparable = cutout_identity(before.materials[i]) == cutout_identity(now.materials[i]);
     if (!c.comparable) return c;
     c.visible_geometry_same = true;
     for (size_t i = 0; i < now.objects.size(); ++i) {

@@ -4,10 +4,12 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "bounce/core/image_input.h"
 #include "bounce/core/memory.h"
+#include "bounce/core/random.h"
 
 namespace bounce {
 
@@ -71,6 +73,13 @@ std::shared_ptr<const OpacityMap> load_opacity_map(const std::string& path, Opac
     map->hash = OIIO::xxhash::XXH64(map->texels.data(), map->texels.size() * sizeof(uint16_t),
                                     static_cast<uint64_t>(map->width) << 32 | static_cast<uint64_t>(map->height));
     return map;
+}
+
+uint64_t cutout_identity(const Material& m) {
+    if (!m.is_cutout()) return 0;
+    uint64_t h = hash_combine(0x2545f4914f6cdd1dULL, static_cast<uint64_t>(m.alpha_mode));
+    h = hash_combine(hash_combine(h, std::bit_cast<uint32_t>(m.opacity)), std::bit_cast<uint32_t>(m.alpha_cutoff));
+    return hash_combine(h, m.opacity_map ? m.opacity_map->hash : 0);
 }
 
 const char* alpha_mode_name(AlphaMode mode) {

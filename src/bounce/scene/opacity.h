@@ -22,6 +22,11 @@ enum class OpacityChannel { AlphaOrFirst, AlphaOnly };
 /// with `error` empty when AlphaOnly finds no alpha channel.
 std::shared_ptr<const OpacityMap> load_opacity_map(const std::string& path, OpacityChannel channel, std::string& error);
 
+/// What a material's cutout is, hashed: equal for equal cutouts (mode, opacity, cutoff, the
+/// opacity texture's texels), 0 for every opaque material. A BVH part's key and a shot's
+/// scene changes judge cutouts by it.
+uint64_t cutout_identity(const Material& m);
+
 /// "opaque", "mask", "blend" (the scene file's names) and back.
 const char* alpha_mode_name(AlphaMode mode);
 
