@@ -14,6 +14,7 @@ SCENES = {
     "ogre": os.path.join(ROOT, "bench", "scenes", "ogre.json"),
     "furball": os.path.join(ROOT, "scenes", "fur", "furball.json"),
     "grass": os.path.join(ROOT, "scenes", "fur", "grass.json"),
+    "foliage": os.path.join(ROOT, "scenes", "foliage", "foliage.json"),
 }
 
 

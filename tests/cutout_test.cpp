@@ -11,7 +11,7 @@
 #include "bounce/render/render.h"
 #include "bounce/scene/mesh_cache.h"
 #include "bounce/tool/session.h"
-#include "gltf_strip.h"
+#include "material_scenes.h"
 #include "test_util.h"
 #include "tool_util.h"
 
@@ -19,47 +19,7 @@ namespace bounce {
 namespace {
 
 using nlohmann::json;
-
-/// Writes a w x h 8-bit PNG of `channels` channels of `values` (rows from the top, 0..255).
-void write_png(const std::string& path, int w, int h, int channels, const std::vector<unsigned char>& values) {
-    auto out = OIIO::ImageOutput::create(path);
-    ASSERT_TRUE(out);
-    OIIO::ImageSpec spec(w, h, channels, OIIO::TypeDesc::UINT8);
-    if (channels == 4) spec.alpha_channel = 3;
-    ASSERT_TRUE(out->open(path, spec) && out->write_image(OIIO::TypeDesc::UINT8, values.data()) && out->close());
-}
-void write_grey(const std::string& path, int w, int h, const std::vector<unsigned char>& values) {
-    write_png(path, w, h, 1, values);
-}
-
-json quad(const std::string& name, const std::string& material, double x0, double x1, double y0, double y1, double z) {
-    // uv (0, 0) at the first vertex, u along x, v along y (geometry/mesh.h's make_quad).
-    return {{"name", name}, {"type", "quad"}, {"material", material},
-            {"vertices", {{x0, y0, z}, {x1, y0, z}, {x1, y1, z}, {x0, y1, z}}}};
-}
-
-/// A floor and a back wall under a small quad light, a card at z = 0 in front of the wall casting a
-/// shadow on the floor, and `card` objects.
-json stage(const json& card, const json& card_material) {
-    json j = {{"camera", {{"position", {0, 1.6, -6}}, {"look_at", {0, 1, 0}}, {"fov", 45}, {"resolution", {48, 36}}}},
-              {"render", {{"spp", 4}, {"light_samples", 2}, {"seed", 7}, {"rays", 16}}},
-              {"materials", {{"white", {{"color", 0.7}}}, {"leaf", card_material}}},
-              {"lights", {{{"type", "quad"}, {"corner", {0.1, 4, -3.2}}, {"edge_u", {0.4, 0, 0}}, {"edge_v", {0, 0, 0.4}}, {"color", 200}}}},
-              {"objects",
-               {{{"name", "floor"}, {"type", "quad"}, {"material", "white"}, {"vertices", {{-6, 0, -6}, {-6, 0, 6}, {6, 0, 6}, {6, 0, -6}}}},
-                quad("back", "white", -6, 6, 0, 6, 3)}}};
-    for (const json& o : card) j["objects"].push_back(o);
-    return j;
-}
-
-Image render_with(const json& scene, const std::string& gi, const std::vector<Override>& more = {}) {
-    Stats stats;
-    std::vector<Override> o{Override("render.gi=" + gi)};
-    o.insert(o.end(), more.begin(), more.end());
-    return render(test::scene_from(scene, o), {}, stats, nullptr).image;
-}
-
-const json kLeaf = {{"color", {0.2, 0.6, 0.1}}};
+using namespace test_scenes;
 
 TEST(Cutouts, AMaskedCardIsItsOpaquePartsModelledAsGeometry) {
     test::TempDir dir;
@@ -134,29 +94,6 @@ TEST(Cutouts, ABlendedCardCoversItsShareOfEachPixelAndLetsTheRestOfTheLightThrou
         ASSERT_GT(n, 20u);
         EXPECT_NEAR(lit / open, (1 - alpha) + alpha * shut / open, 0.04) << alpha;
     }
-}
-
-/// The card of `stage` as a glTF quad (buffers inline) with `material`; its uvs are the JSON
-/// quad's (glTF's v runs down the image: Assimp turns it up).
-std::string gltf_card(const test::TempDir& dir, const json& material) {
-    std::string b;
-    test::put<float>(b, {-1, 0.2f, 0, 1, 0.2f, 0, 1, 2.2f, 0, -1, 2.2f, 0});  // 48 bytes
-    test::put<float>(b, {0, 1, 1, 1, 1, 0, 0, 0});                         // 32 bytes: TEXCOORD_0
-    test::put<uint16_t>(b, {0, 1, 2, 0, 2, 3});                            // 12 bytes
-    json g = {{"asset", {{"version", "2.0"}}}, {"scene", 0}, {"scenes", {{{"nodes", {0}}}}}, {"nodes", {{{"mesh", 0}}}}};
-    g["buffers"] = {{{"byteLength", b.size()}, {"uri", "data:application/octet-stream;base64," + test::base64(b)}}};
-    g["bufferViews"] = {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 48}},
-                        {{"buffer", 0}, {"byteOffset", 48}, {"byteLength", 32}},
-                        {{"buffer", 0}, {"byteOffset", 80}, {"byteLength", 12}}};
-    g["accessors"] = {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {-1, 0.2, 0}}, {"max", {1, 2.2, 0}}},
-                      {{"bufferView", 1}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}},
-                      {{"bufferView", 2}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}};
-    const json primitive = {{"attributes", {{"POSITION", 0}, {"TEXCOORD_0", 1}}}, {"indices", 2}, {"material", 0}};
-    g["meshes"] = json::array({json{{"primitives", json::array({primitive})}}});
-    g["materials"] = {material};
-    g["images"] = {{{"uri", "leaf.png"}}};
-    g["textures"] = {{{"source", 0}}};
-    return dir.write("card.gltf", g.dump());
 }
 
 TEST(Cutouts, AGltfMaskOrBlendIsTheSameCutoutWrittenInTheSceneFile) {
@@ -265,10 +202,11 @@ TEST(UnreadMaterials, EveryUnreadFeatureIsNamedOnStderrOncePerFile) {
     const std::string path = dir.write("scene.json", scene.dump());
     std::string err;
     ASSERT_EQ(test::run_bounce("render " + path + " -o " + dir.file("out.exr"), &err), 0) << err;
-    for (const std::string want : {"metallicRoughnessTexture on 2 materials", "emissiveTexture on 2 materials",
-                                   "KHR_texture_transform on 2 materials",
-                                   "texCoord 1 (a second uv set) on 2 materials", "KHR_materials_clearcoat on 2 materials",
-                                   "KHR_materials_variants on 1 file"}) {
+    // The base colour's transform and uv set are read; the occlusion texture's other set and the
+    // other textures' missing transform are named.
+    for (const std::string want : {"KHR_texture_transform differing between a material's textures (the first texture's is read) on 2 materials",
+                                   "texCoord differing between a material's textures (the first texture's set is read) on 2 materials",
+                                   "KHR_materials_clearcoat on 2 materials", "KHR_materials_variants on 1 file"}) {
         const std::string line = "card.gltf: ignored: " + want;
         const size_t at = err.find(line);
         EXPECT_NE(at, std::string::npos) << line << " in:\n" << err;
@@ -277,10 +215,12 @@ TEST(UnreadMaterials, EveryUnreadFeatureIsNamedOnStderrOncePerFile) {
     // bounce info: per material, what was read and what was not.
     ASSERT_EQ(test::run_bounce_shell(std::string(BOUNCE_BINARY) + " info " + path + " > " + dir.file("info.txt"), &err), 0) << err;
     const std::string info = test::bytes_of(dir.file("info.txt"));
-    // (glTF's default metallic factor is 1: a black diffuse and a white specular.)
-    EXPECT_NE(info.find("material card/0: colour 0 x leaf.png; specular 1, roughness 1; occlusion leaf.png; not read: "
-                        "metallicRoughnessTexture, KHR_texture_transform, emissiveTexture, texCoord 1 (a second uv set), "
-                        "KHR_materials_clearcoat\n"),
+    // (glTF's default metallic factor is 1: with its texture, a base colour of 1 and a white specular.)
+    // (Its emissiveTexture is read, times an emissiveFactor of 0 by default: it does not emit.)
+    EXPECT_NE(info.find("material card/0: colour 1 x leaf.png; specular 1, roughness 1; metallic 1 x leaf.png; "
+                        "occlusion leaf.png; uv transform scale 2 2; not read: KHR_texture_transform differing between a material's "
+                        "textures (the first texture's is read), texCoord differing between a material's textures (the first "
+                        "texture's set is read), KHR_materials_clearcoat\n"),
               std::string::npos) << info;
     EXPECT_NE(info.find("material again/1:"), std::string::npos) << info;
     EXPECT_NE(info.find("card.gltf: ignored: KHR_materials_variants on 1 file"), std::string::npos) << info;
@@ -390,19 +330,7 @@ TEST(Cutouts, HostileCutoutsAreRefusedNamingTheKey) {
     refused({{"alpha_mode", "blend"}, {"alpha_cutoff", 0.3}}, {"/materials/leaf/alpha_cutoff", "mask"});
     refused({{"alpha_mode", "cutout"}}, {"/materials/leaf/alpha_mode"});
     refused({{"opacity_texture", dir.file("missing.png")}}, {"/materials/leaf/opacity_texture"});
-    // A PNG whose header says 30000 x 30000 (its pixels never read): refused by its size.
-    const auto crc = [](const std::string& bytes) {
-        uint32_t c = 0xffffffffu;
-        for (unsigned char b : bytes) {
-            c ^= b;
-            for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
-        }
-        return c ^ 0xffffffffu;
-    };
-    const auto be32 = [](uint32_t v) { return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8), static_cast<char>(v)}; };
-    const auto chunk = [&](const std::string& kind, const std::string& data) { return be32(static_cast<uint32_t>(data.size())) + kind + data + be32(crc(kind + data)); };
-    const std::string huge = dir.write("huge.png", std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", be32(30000) + be32(30000) + std::string("\x08\x00\x00\x00\x00", 5)) +
-                                                       chunk("IDAT", std::string("\x78\x9c\x03\x00\x00\x00\x00\x01", 8)) + chunk("IEND", ""));
+    const std::string huge = write_huge_png(dir);
     refused({{"opacity_texture", huge}}, {"/materials/leaf/opacity_texture", "30000x30000", "8192x8192"});
     const std::string nan = dir.file("nan.exr");
     test::write_constant_image(nan, 2, 2, {NAN});

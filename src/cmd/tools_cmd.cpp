@@ -90,11 +90,21 @@ std::string described(const Material& m) {
     std::vector<std::string> parts{"colour " + rgb(m.color)};
     const auto file = [](const std::string& path) { return std::filesystem::path(path).filename().string(); };
     if (!m.color_texture.empty()) parts.back() += " x " + file(m.color_texture);
-    if (m.is_emissive()) parts.push_back("emission " + rgb(m.emission));
+    if (m.is_emissive()) parts.push_back("emission " + rgb(m.emission) + (m.emission_texture.empty() ? "" : " x " + file(m.emission_texture)));
     if (m.has_specular()) parts.push_back(fmt::format("specular {}, roughness {:g}", rgb(m.specular), m.roughness));
+    if (!m.metallic_roughness_texture.empty()) parts.push_back(fmt::format("metallic {:g} x {}", m.metallic, file(m.metallic_roughness_texture)));
     if (!m.bump_texture.empty()) parts.push_back("bump " + file(m.bump_texture));
     if (!m.normal_texture.empty()) parts.push_back("normal map " + file(m.normal_texture));
     if (!m.ao_texture.empty()) parts.push_back("occlusion " + file(m.ao_texture));
+    if (!m.uv_transform.identity()) {
+        const UvTransform& t = m.uv_transform;
+        std::string xf = "uv transform";
+        if (!(t.offset == Vec2{0, 0})) xf += fmt::format(" offset {:g} {:g}", t.offset.x, t.offset.y);
+        if (t.rotation != 0) xf += fmt::format(" rotation {:g}", t.rotation);
+        if (!(t.scale == Vec2{1, 1})) xf += fmt::format(" scale {:g} {:g}", t.scale.x, t.scale.y);
+        parts.push_back(xf);
+    }
+    if (m.uv_set) parts.push_back(fmt::format("uv set {}", m.uv_set));
     if (!(m.mirror == none.mirror)) parts.push_back("mirror " + rgb(m.mirror));
     if (m.is_dielectric()) parts.push_back(fmt::format("transmission {}, ior {:g}", rgb(m.transmission), m.ior));
     if (m.is_cutout()) {

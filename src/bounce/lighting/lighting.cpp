@@ -258,10 +258,9 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
                 if (cos_x <= 0 || cos_l <= 0) continue;
                 ++counters.shadow_rays;
                 if (accel_.occluded(p, w, r, hair_start, mask)) continue;
-                e += scene_.materials[q.material].emission * (cos_x * cos_l / r2);
-                if (each)
-                    (*each)(index, w, scene_.materials[q.material].emission *
-                                   (cos_x * cos_l / r2 * em.area / static_cast<float>(samples)));
+                const Color L = scene_.materials[q.material].emission_at(q.uv);
+                e += L * (cos_x * cos_l / r2);
+                if (each) (*each)(index, w, L * (cos_x * cos_l / r2 * em.area / static_cast<float>(samples)));
             }
             return e * (em.area / static_cast<float>(samples));
         }

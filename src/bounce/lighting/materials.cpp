@@ -11,7 +11,8 @@ namespace bounce {
 Materials::Materials(const Scene& scene) : scene_(scene) {
     bool any = false;
     for (const auto& m : scene.materials)
-        any |= !m.color_texture.empty() || !m.bump_texture.empty() || !m.normal_texture.empty() || !m.ao_texture.empty();
+        any |= !m.color_texture.empty() || !m.bump_texture.empty() || !m.normal_texture.empty() || !m.ao_texture.empty() ||
+               !m.metallic_roughness_texture.empty();
     if (any) {
         textures_ = OIIO::TextureSystem::create(false);
         textures_->attribute("max_memory_MB", 1024.0f);
@@ -19,7 +20,8 @@ Materials::Materials(const Scene& scene) : scene_(scene) {
     }
     auto unique = [](const std::string& f) { return f.empty() ? nullptr : OIIO::ustring(f).c_str(); };
     for (const auto& m : scene.materials)
-        names_.push_back({unique(m.color_texture), unique(m.bump_texture), unique(m.normal_texture), unique(m.ao_texture)});
+        names_.push_back({unique(m.color_texture), unique(m.bump_texture), unique(m.normal_texture), unique(m.ao_texture),
+                          unique(m.metallic_roughness_texture)});
 }
 
 Materials::~Materials() {
@@ -51,12 +53,26 @@ bool all_finite(const float* v, int n) {
 
 }  // namespace
 
-Color Materials::albedo(uint32_t material, const Vec2& uv) const {
+Color Materials::base_colour(uint32_t material, const Vec2& st, float du, float dv) const {
     const Material& m = scene_.materials[material];
-    if (m.color_texture.empty() || !textures_) return m.color;
     float rgb[3] = {1, 1, 1};
-    if (!lookup(textures_, names_[material].color, uv, 0, 0, 3, rgb)) return m.color;
-    return m.color * albedo_of(rgb);
+    if (!m.color_texture.empty() && textures_ && lookup(textures_, names_[material].color, st, du, dv, 3, rgb)) return m.color * albedo_of(rgb);
+    return m.color;
+}
+
+float Materials::metalness(uint32_t material, const Vec2& st, float du, float dv, float* roughness) const {
+    const Material& m = scene_.materials[material];
+    if (m.metallic_roughness_texture.empty() || !textures_) return -1;
+    float rgb[3] = {0, 1, 1};
+    if (!lookup(textures_, names_[material].metallic_roughness, st, du, dv, 3, rgb) || !all_finite(rgb, 3)) rgb[1] = rgb[2] = 1;
+    if (roughness) *roughness = std::clamp(m.roughness * rgb[1], 0.01f, 1.0f);
+    return std::clamp(m.metallic * rgb[2], 0.0f, 1.0f);
+}
+
+Color Materials::albedo(uint32_t material, const Vec2& uv) const {
+    const Vec2 st = scene_.materials[material].uv_transform.apply(uv);
+    const float metal = metalness(material, st, 0, 0);
+    return base_colour(material, st, 0, 0) * (metal > 0 ? 1 - metal : 1.0f);
 }
 
 float fresnel_dielectric(float cos_i, float eta) {
@@ -95,12 +111,14 @@ Color Materials::secondary_albedo(uint32_t material, const Vec2& uv) const {
     return albedo(material, uv) * base_share(scene_.materials[material]);
 }
 
-bool triangle_tangents(const TriangleMesh& mesh, uint32_t prim, Vec3& dpdu, Vec3& dpdv) {
+bool triangle_tangents(const TriangleMesh& mesh, uint32_t prim, Vec3& dpdu, Vec3& dpdv, const UvTransform* xf) {
     if (mesh.uvs.empty()) return false;
     const uint32_t i0 = mesh.indices[3 * prim], i1 = mesh.indices[3 * prim + 1], i2 = mesh.indices[3 * prim + 2];
     const Vec3 e1 = mesh.positions[i1] - mesh.positions[i0], e2 = mesh.positions[i2] - mesh.positions[i0];
-    const Vec2 t1{mesh.uvs[i1].x - mesh.uvs[i0].x, mesh.uvs[i1].y - mesh.uvs[i0].y};
-    const Vec2 t2{mesh.uvs[i2].x - mesh.uvs[i0].x, mesh.uvs[i2].y - mesh.uvs[i0].y};
+    const auto uv = [&](uint32_t i) { return xf ? xf->apply(mesh.uvs[i]) : mesh.uvs[i]; };
+    const Vec2 u0 = uv(i0), u1 = uv(i1), u2 = uv(i2);
+    const Vec2 t1{u1.x - u0.x, u1.y - u0.y};
+    const Vec2 t2{u2.x - u0.x, u2.y - u0.y};
     const float det = t1.x * t2.y - t1.y * t2.x;
     if (std::abs(det) < 1e-12f) return false;
     dpdu = (e1 * t2.y - e2 * t1.y) / det;
@@ -127,7 +145,8 @@ SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t p
     s.normal = n;
     Vec3 dpdu, dpdv;
     const Object& o = scene_.objects[object];
-    const bool tangents = triangle_tangents(o.visible_mesh(), prim, dpdu, dpdv);
+    const Vec2 st = m.uv_transform.apply(uv);
+    const bool tangents = triangle_tangents(o.visible_mesh(), prim, dpdu, dpdv, &m.uv_transform);
     if (tangents && o.to_world()) dpdu = o.to_world()->vector(dpdu), dpdv = o.to_world()->vector(dpdv);
     // Filter width in uv: the pixel's footprint over the length of the tangents.
     float du = 0, dv = 0;
@@ -135,25 +154,25 @@ SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t p
         du = footprint / std::max(length(dpdu), 1e-20f);
         dv = footprint / std::max(length(dpdv), 1e-20f);
     }
-    s.albedo = m.color;
-    if (!m.color_texture.empty() && textures_) {
-        float rgb[3] = {1, 1, 1};
-        if (lookup(textures_, names_[material].color, uv, du, dv, 3, rgb)) s.albedo = m.color * albedo_of(rgb);
+    s.albedo = base_colour(material, st, du, dv);
+    if (const float metal = metalness(material, st, du, dv, &s.roughness); metal >= 0) {
+        s.specular = Color(0.04f) * (1 - metal) + s.albedo * metal;
+        s.albedo = s.albedo * (1 - metal);
     }
     if (!m.ao_texture.empty() && textures_) {
         float ao = 1;
-        if (lookup(textures_, names_[material].ao, uv, du, dv, 1, &ao) && std::isfinite(ao)) s.occlusion = std::clamp(ao, 0.0f, 1.0f);
+        if (lookup(textures_, names_[material].ao, st, du, dv, 1, &ao) && std::isfinite(ao)) s.occlusion = std::clamp(ao, 0.0f, 1.0f);
     }
     if (!m.has_bump() || !tangents || !textures_) return s;
     if (!m.bump_texture.empty()) {
         float h = 0, dh_ds = 0, dh_dt = 0;
-        if (lookup(textures_, names_[material].bump, uv, du, dv, 1, &h, &dh_ds, &dh_dt) && std::isfinite(dh_ds) &&
+        if (lookup(textures_, names_[material].bump, st, du, dv, 1, &h, &dh_ds, &dh_dt) && std::isfinite(dh_ds) &&
             std::isfinite(dh_dt))
             s.normal = bumped_normal(n, dpdu, dpdv, m.bump_strength * dh_ds, -m.bump_strength * dh_dt);  // t = 1 - v
         return s;
     }
     float rgb[3] = {0.5f, 0.5f, 1};
-    if (!lookup(textures_, names_[material].normal, uv, du, dv, 3, rgb) || !all_finite(rgb, 3)) return s;
+    if (!lookup(textures_, names_[material].normal, st, du, dv, 3, rgb) || !all_finite(rgb, 3)) return s;
     // Tangent frame from dP/du (Gram-Schmidt against n); the bitangent follows dP/dv's side.
     Vec3 t = dpdu - n * dot(n, dpdu);
     if (dot(t, t) <= 0) return s;

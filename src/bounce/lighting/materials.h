@@ -37,7 +37,8 @@ public:
     /// What secondary rays (gathers, radiosity textures) see: albedo x base_share (a mirror or
     /// glass surface reflects little diffusely).
     Color secondary_albedo(uint32_t material, const Vec2& uv) const;
-    Color emission(uint32_t material) const { return scene_.materials[material].emission; }
+    /// Emitted radiance at uv (its emission texture read whole at load: Material::emission_at).
+    Color emission(uint32_t material, const Vec2& uv) const { return scene_.materials[material].emission_at(uv); }
 
     /// The material at a visible point: triangle `prim` of object `object`'s visible mesh, at
     /// `uv`, with interpolated normal `n` and pixel footprint `footprint` (world units; the
@@ -54,7 +55,13 @@ private:
         const char* bump = nullptr;
         const char* normal = nullptr;
         const char* ao = nullptr;
+        const char* metallic_roughness = nullptr;
     };
+    /// Colour x colour texture at texture uv `st` (the material's uv transform applied), with
+    /// a filter of (du, dv) uv units.
+    Color base_colour(uint32_t material, const Vec2& st, float du, float dv) const;
+    /// glTF's metalness at `st` (metallic x the texture's blue channel): -1 without a texture.
+    float metalness(uint32_t material, const Vec2& st, float du, float dv, float* roughness = nullptr) const;
     const Scene& scene_;
     OIIO::TextureSystem* textures_ = nullptr;
     std::vector<TextureNames> names_;
@@ -81,9 +88,9 @@ SpecularSplit specular_split(const Material& m, float cos_i, bool entering);
 /// (gathers, the radiosity bake) see on a mirror or glass surface.
 Color base_share(const Material& m);
 
-/// dP/du and dP/dv of triangle `prim` of `mesh` (from its positions and uvs); false when the
-/// mesh has no uvs or they are degenerate there.
-bool triangle_tangents(const TriangleMesh& mesh, uint32_t prim, Vec3& dpdu, Vec3& dpdv);
+/// dP/du and dP/dv of triangle `prim` of `mesh` (from its positions and uvs, moved by `xf`
+/// when given); false when the mesh has no uvs or they are degenerate there.
+bool triangle_tangents(const TriangleMesh& mesh, uint32_t prim, Vec3& dpdu, Vec3& dpdv, const UvTransform* xf = nullptr);
 
 /// Blinn's bump mapping: the normal of the surface P + h n, for height derivatives (dh/du,
 /// dh/dv) and tangents dP/du, dP/dv; n unchanged when both derivatives are 0.

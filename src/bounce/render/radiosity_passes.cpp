@@ -35,7 +35,7 @@ RadiosityResult radiosity_pass(const FrameContext& ctx, const FramePlan& plan, c
                                                  out.changed, ctx.stats);
         // What a moving object can show or hide: the brightest texel, emission or sky.
         out.brightest = out.textures->brightest();
-        for (const Material& m : ctx.scene.materials) out.brightest = std::max(out.brightest, luminance(m.emission));
+        for (const Material& m : ctx.scene.materials) out.brightest = std::max(out.brightest, luminance(m.peak_emission()));
         for (const Light& l : ctx.scene.lights)
             if (l.type == LightType::Sky) out.brightest = std::max(out.brightest, sky_brightest(l));
         return out;

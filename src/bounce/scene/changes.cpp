@@ -130,7 +130,7 @@ SceneChanges scene_changes(const Scene& before, const Scene& now) {
         const bool albedo = a.name != b.name || !(a.color == b.color) || a.color_texture != b.color_texture;
         c.materials[i] = albedo || json_differs(mb, mn, b.name.c_str());
         // An emissive material that changed is a light that changed.
-        if (!(a.emission == b.emission)) c.lights = true;
+        if (!(a.emission == b.emission) || a.emission_texture != b.emission_texture) c.lights = true;
     }
     if (before.inputs_hash("materials") != now.inputs_hash("materials")) c.lights = true;  // a texture file changed
     // An emissive object that moves is a light that moves.

@@ -1,5 +1,6 @@
 #include "bounce/scene/item_readers.h"
 #include "bounce/scene/opacity.h"
+#include "bounce/scene/surface_textures.h"
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -35,7 +36,8 @@ const std::vector<std::string>& material_keys() {
     static const std::vector<std::string> keys = {"color",          "color_texture", "emission",      "specular",  "roughness",
                                                   "bump_texture",   "normal_texture", "bump_strength", "ao_texture",
                                                   "mirror",         "transmission",  "ior",           "absorption",
-                                                  "alpha_mode",     "opacity",       "opacity_texture", "alpha_cutoff"};
+                                                  "alpha_mode",     "opacity",       "opacity_texture", "alpha_cutoff",
+                                                  "emission_texture", "metallic_roughness_texture", "metallic", "uv_transform"};
     return keys;
 }
 
@@ -209,6 +211,36 @@ void read_cutout(const JsonReader& m, Material& mat) {
     }
 }
 
+/// "uv_transform": {"offset": [s, t], "rotation": radians, "scale": [s, t]}, KHR_texture_transform's.
+UvTransform read_uv_transform(const JsonReader& m, const std::string& key) {
+    if (!m.has(key)) return {};
+    const JsonReader x(m.raw(key), m.at(key), m.ctx(), {"offset", "rotation", "scale"});
+    const auto pair = [&](const char* k, Vec2 def) {
+        if (!x.has(k)) return def;
+        const json& v = x.raw(k);
+        if (!v.is_array() || v.size() != 2) x.fail(k, "expected [s, t]");
+        return Vec2{x.check_number(v[0], x.at(k) + "/0", -1e6, 1e6), x.check_number(v[1], x.at(k) + "/1", -1e6, 1e6)};
+    };
+    UvTransform t;
+    std::string why;
+    if (!make_uv_transform(pair("offset", t.offset), x.number("rotation", t.rotation, -1e6, 1e6), pair("scale", t.scale), t, why))
+        x.fail("scale", why);
+    return t;
+}
+
+/// glTF's metallic-roughness model, with its texture: `metallic` and `roughness` scale its blue
+/// and green channels, and `specular` does not apply.
+void read_metallic_roughness(const JsonReader& m, Material& mat) {
+    mat.metallic_roughness_texture = texture_file(m, "metallic_roughness_texture");
+    if (mat.metallic_roughness_texture.empty()) {
+        if (m.has("metallic")) m.fail("metallic", "metallic applies with a metallic_roughness_texture only (say \"specular\" otherwise)");
+        return;
+    }
+    if (m.has("specular")) m.fail("specular", "a metallic_roughness_texture gives the specular colour: leave \"specular\" out");
+    mat.metallic = m.number("metallic", mat.metallic, 0, 1);
+    mat.specular = Color(0.04f) * (1 - mat.metallic) + mat.color * mat.metallic;  // its mean, for what reads no texture
+}
+
 }  // namespace
 
 Material read_material(const JsonReader& m, const std::string& name) {
@@ -219,7 +251,8 @@ Material read_material(const JsonReader& m, const std::string& name) {
     for (int i = 0; i < 3; ++i)
         if (mat.color[i] > 1) m.fail("color", "albedo components must be <= 1 (energy conservation)");
     mat.color_texture = texture_file(m, "color_texture");
-    mat.emission = m.color("emission", mat.emission);
+    // An emission texture alone emits as it is (emission defaults to 1 with one).
+    mat.emission = m.color("emission", m.has("emission_texture") ? Color(1) : mat.emission);
     mat.specular = m.color("specular", mat.specular);
     for (int i = 0; i < 3; ++i)
         if (mat.specular[i] > 1) m.fail("specular", "specular components must be <= 1");
@@ -238,6 +271,14 @@ Material read_material(const JsonReader& m, const std::string& name) {
     mat.ior = static_cast<float>(m.number("ior", mat.ior, 1, 3));
     mat.absorption = m.color("absorption", mat.absorption);
     read_cutout(m, mat);
+    read_metallic_roughness(m, mat);
+    mat.uv_transform = read_uv_transform(m, "uv_transform");
+    mat.emission_texture = m.file("emission_texture", false);
+    if (!mat.emission_texture.empty()) {
+        std::string why;
+        mat.emission_map = load_emission_map(mat.emission_texture, why);
+        if (!mat.emission_map) m.fail("emission_texture", "\"" + mat.emission_texture + "\": " + why);
+    }
     return mat;
 }
 

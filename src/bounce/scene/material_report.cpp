@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "bounce/core/files.h"
+#include "bounce/scene/gltf_materials.h"
 #include "bounce/scene/mesh_checks.h"
 
 namespace bounce {
@@ -40,50 +41,25 @@ private:
     std::vector<UnreadFeature> out_;
 };
 
-// What mesh_import reads of a glTF material (Assimp's keys): everything else is named.
-const std::set<std::string> kGltfReadExtensions = {"KHR_materials_emissive_strength"};
-// Top-level extensions bounce (or Assimp for it) reads; material ones are named per material.
-const std::set<std::string> kGltfReadFileExtensions = {"KHR_lights_punctual", "EXT_mesh_gpu_instancing",
-                                                       "KHR_materials_emissive_strength", "KHR_mesh_quantization"};
-
-/// A textureInfo's unread parts: a second uv set, a transform.
-void texture_info(const json& t, const std::string& name, Tally& tally) {
-    if (!t.is_object()) return;
-    if (t.value("texCoord", 0) != 0) tally.add("texCoord 1 (a second uv set)", "material", name);
-    if (t.contains("extensions") && t["extensions"].is_object() && t["extensions"].contains("KHR_texture_transform"))
-        tally.add("KHR_texture_transform", "material", name);
-}
-
-/// `name`: as mesh_materials names it (the glTF name, else its index).
-void gltf_material(const json& m, const std::string& name, Tally& tally) {
-    if (!m.is_object()) return;
-    const json pbr = m.value("pbrMetallicRoughness", json::object());
-    if (pbr.is_object()) {
-        if (pbr.contains("metallicRoughnessTexture")) tally.add("metallicRoughnessTexture", "material", name);
-        for (const char* t : {"baseColorTexture", "metallicRoughnessTexture"})
-            if (pbr.contains(t)) texture_info(pbr[t], name, tally);
-    }
-    if (m.contains("emissiveTexture")) tally.add("emissiveTexture", "material", name);
-    if (m.contains("occlusionTexture") && m["occlusionTexture"].is_object() && m["occlusionTexture"].value("strength", 1.0) != 1.0)
-        tally.add("occlusionTexture.strength", "material", name);
-    for (const char* t : {"normalTexture", "occlusionTexture", "emissiveTexture"})
-        if (m.contains(t)) texture_info(m[t], name, tally);
-    if (m.contains("extensions") && m["extensions"].is_object())
-        for (const auto& [ext, value] : m["extensions"].items())
-            if (!kGltfReadExtensions.count(ext)) tally.add(ext.substr(0, 80), "material", name);
-}
+// Top-level extensions bounce (or Assimp for it) reads; material ones are named per material
+// (gltf_materials.h).
+const std::set<std::string> kGltfReadFileExtensions = {"KHR_lights_punctual", "EXT_mesh_gpu_instancing", "KHR_materials_emissive_strength",
+                                                       "KHR_mesh_quantization", "KHR_texture_transform", "KHR_materials_transmission",
+                                                       "KHR_materials_ior"};
 
 std::vector<UnreadFeature> gltf_unread(const std::string& path) {
     const json j = json::parse(gltf_json_text(path), nullptr, false);
     Tally tally;
     if (!j.is_object()) return {};
+    const std::vector<GltfMaterialJson> materials = read_gltf_materials(path);
     if (j.contains("materials") && j["materials"].is_array())
         for (size_t i = 0; i < j["materials"].size(); ++i) {
             const json& m = j["materials"][i];
             const std::string name = m.is_object() && m.contains("name") && m["name"].is_string() && !m["name"].get<std::string>().empty()
                                          ? m["name"].get<std::string>()
                                          : std::to_string(i);
-            gltf_material(m, name, tally);
+            if (i < materials.size())
+                for (const std::string& what : materials[i].unread) tally.add(what, "material", name);
         }
     if (j.contains("meshes") && j["meshes"].is_array())
         for (const json& mesh : j["meshes"])
@@ -91,6 +67,11 @@ std::vector<UnreadFeature> gltf_unread(const std::string& path) {
                 for (const json& p : mesh["primitives"])
                     if (p.is_object() && p.contains("attributes") && p["attributes"].is_object() && p["attributes"].contains("COLOR_0"))
                         tally.add("COLOR_0 (vertex colours)", "primitive");
+    // Assimp hands an embedded image (a data: uri or a buffer view) over as bytes, not a file.
+    if (j.contains("images") && j["images"].is_array())
+        for (const json& image : j["images"])
+            if (image.is_object() && (image.contains("bufferView") || image.value("uri", std::string()).rfind("data:", 0) == 0))
+                tally.add("embedded images (bounce reads image files beside the glTF)", "image");
     if (j.contains("samplers") && j["samplers"].is_array())
         for (const json& s : j["samplers"])
             if (s.is_object() && (s.value("wrapS", 10497) != 10497 || s.value("wrapT", 10497) != 10497))

@@ -1,5 +1,6 @@
 #include "bounce/scene/mesh_cache.h"
 #include "bounce/scene/opacity.h"
+#include "bounce/scene/surface_textures.h"
 
 #include <OpenImageIO/hash.h>
 #include <assimp/version.h>
@@ -30,7 +31,7 @@ namespace {
 // Bump when what a load makes of a mesh file changes (mesh_import.cpp), or the layout below.
 /// 2: inputs and textures by absolute path (1 named them relative to the working directory of
 /// the run that wrote the entry, so another folder's copy of an MTL could stand in for it).
-constexpr uint32_t kVersion = 3;  // 3: materials' cutouts and occlusion textures
+constexpr uint32_t kVersion = 4;  // 3: materials' cutouts and occlusion textures; 4: the whole glTF material
 constexpr char kMagic[8] = {'B', 'N', 'C', 'M', 'E', 'S', 'H', '\n'};
 constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 + 8;  // magic, version, 0, body bytes, body hash
 constexpr size_t kMaxString = 1 << 16;
@@ -150,6 +151,9 @@ void write_material(Out& out, const Material& m) {
     out.pod(m.color), out.pod(m.emission), out.pod(m.specular), out.pod(m.roughness);
     out.str(m.color_texture), out.str(m.bump_texture), out.str(m.normal_texture), out.str(m.ao_texture);
     out.pod(static_cast<uint8_t>(m.alpha_mode)), out.pod(m.opacity), out.pod(m.alpha_cutoff), out.str(m.opacity_texture);
+    out.str(m.emission_texture), out.str(m.metallic_roughness_texture), out.pod(m.metallic);
+    out.pod(m.uv_transform.offset), out.pod(m.uv_transform.rotation), out.pod(m.uv_transform.scale), out.pod(m.uv_set);
+    out.pod(m.transmission), out.pod(m.ior);
 }
 
 /// A material as mesh_import makes one, in the ranges it allows.
@@ -165,8 +169,18 @@ Material read_material(In& in) {
     if (mode > static_cast<uint8_t>(AlphaMode::Blend) || !finite_in(m.opacity, 0, 1) || !finite_in(m.alpha_cutoff, 0, 1))
         throw Damaged{"a material's cutout is out of range"};
     m.alpha_mode = static_cast<AlphaMode>(mode);
+    m.emission_texture = in.str(), m.metallic_roughness_texture = in.str(), m.metallic = in.pod<float>();
+    const Vec2 offset = in.pod<Vec2>();
+    const float rotation = in.pod<float>();
+    const Vec2 scale = in.pod<Vec2>();
+    std::string why;
+    if (!make_uv_transform(offset, rotation, scale, m.uv_transform, why)) throw Damaged{"a material's uv transform is out of range"};
+    m.uv_set = in.pod<uint8_t>();
+    m.transmission = in.pod<Color>(), m.ior = in.pod<float>();
+    if (m.uv_set > 1 || !finite_in(m.metallic, 0, 1) || !finite_in(m.ior, 1, 3)) throw Damaged{"a material is out of range"};
     for (int c = 0; c < 3; ++c)
-        if (!finite_in(m.color[c], 0, 1) || !finite_in(m.specular[c], 0, 1) || !finite_in(m.emission[c], 0, kMaxRadiometric))
+        if (!finite_in(m.color[c], 0, 1) || !finite_in(m.specular[c], 0, 1) || !finite_in(m.emission[c], 0, kMaxRadiometric) ||
+            !finite_in(m.transmission[c], 0, 1))
             throw Damaged{"a material is out of range"};
     if (!finite_in(m.roughness, 0.01f, 1)) throw Damaged{"a material is out of range"};
     return m;
@@ -218,16 +232,19 @@ LoadedMeshFile read_entry(In& in, bool overridden) {
 /// An opacity texture is read again (the entry keeps its name, not its texels).
 void check_textures(LoadedMeshFile& loaded) {
     for (Material& m : loaded.materials) {
-        for (const std::string* t : {&m.color_texture, &m.bump_texture, &m.normal_texture, &m.ao_texture, &m.opacity_texture}) {
+        for (const std::string* t : m.texture_files()) {
             if (t->empty()) continue;
             if (std::none_of(loaded.inputs.begin(), loaded.inputs.end(), [&](const auto& in) { return in.first == *t; }))
                 throw Damaged{"a material names a texture the parse did not read"};
-            if (t != &m.opacity_texture && !texture_problem(*t).empty())
+            if (t != &m.opacity_texture && t != &m.emission_texture && !texture_problem(*t).empty())
                 throw Damaged{"a material's texture is not one a parse would take"};
         }
-        if (m.opacity_texture.empty()) continue;
         std::string why;
-        m.opacity_map = load_opacity_map(m.opacity_texture, OpacityChannel::AlphaOrFirst, why);
+        if (!m.emission_texture.empty() && !(m.emission_map = load_emission_map(m.emission_texture, why)))
+            throw Damaged{"a material's emission texture is not one a parse would take"};
+        if (m.opacity_texture.empty()) continue;
+        // glTF's base colour alpha (AlphaOnly) or a grey map: whichever the parse read.
+        m.opacity_map = load_opacity_map(m.opacity_texture, m.opacity_texture == m.color_texture ? OpacityChannel::AlphaOnly : OpacityChannel::AlphaOrFirst, why);
         if (!m.opacity_map) throw Damaged{"a material's opacity texture is not one a parse would take"};
     }
 }

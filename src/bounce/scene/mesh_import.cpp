@@ -121,13 +121,26 @@ std::vector<MeshFileParts::Use> node_placements(const aiNode* node, const aiMesh
     return at;
 }
 
-/// The triangles of `am` at `positions` and `normals` (posed), every face of material `mat`.
-TriangleMesh triangles_of(const aiMesh* am, const std::vector<Vec3>& positions, const std::vector<Vec3>& normals, uint32_t mat) {
+/// The uv set the textures of material `mat` read on `am` (glTF's texCoord; the first set for
+/// an object's own material, which may not be among `materials` yet): null when the mesh has
+/// none; a second set the mesh lacks is refused, as glTF requires it.
+const aiVector3D* uv_channel(const aiMesh* am, uint32_t mat, const std::vector<Material>& materials, const std::string& path) {
+    const uint8_t set = mat < materials.size() ? materials[mat].uv_set : 0;
+    if (set == 0 || am->mTextureCoords[set]) return am->mTextureCoords[set];
+    throw InputError(path, fmt::format("mesh \"{}\"", am->mName.C_Str()),
+                     fmt::format("material \"{}\" reads texCoord {}, a uv set the mesh does not have", materials[mat].name, set));
+}
+
+/// The triangles of `am` at `positions` and `normals` (posed), every face of material `mat`
+/// (`materials[mat]`), with the uv set its textures read.
+TriangleMesh triangles_of(const aiMesh* am, const std::vector<Vec3>& positions, const std::vector<Vec3>& normals, uint32_t mat,
+                          const std::vector<Material>& materials, const std::string& path) {
     TriangleMesh m;
+    const aiVector3D* uvs = uv_channel(am, mat, materials, path);
     for (unsigned v = 0; v < am->mNumVertices; ++v) {
         m.positions.push_back(positions[v]);
         if (am->mNormals) m.normals.push_back(normals[v]);
-        if (am->mTextureCoords[0]) m.uvs.push_back({am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y});
+        if (uvs) m.uvs.push_back({uvs[v].x, uvs[v].y});
     }
     for (unsigned f = 0; f < am->mNumFaces; ++f) {
         const aiFace& face = am->mFaces[f];
@@ -260,7 +273,7 @@ TriangleMesh import_mesh_file(const std::string& path, const std::string& prefix
         if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) return;
         for (const MeshFileParts::Use& u : node_placements(node, am, nodes.at(node), gpu, path)) {  // (GPU instances flattened)
             pose_mesh(s, am, time, to_ai(u.world), nodes, posed, posed_normals, path);
-            out.append(triangles_of(am, posed, posed_normals, mat_map[am->mMaterialIndex]));
+            out.append(triangles_of(am, posed, posed_normals, mat_map[am->mMaterialIndex], materials, path));
         }
     });
     if (out.triangle_count() == 0) throw InputError(path, "", "mesh has no triangles");
@@ -293,14 +306,14 @@ MeshFileParts import_mesh_parts(const std::string& path, const std::string& pref
         if (uses[index] < 2 || am->HasBones() || am->mNumAnimMeshes > 0 || materials[mat].is_emissive()) {
             for (const MeshFileParts::Use& u : at) {
                 pose_mesh(s, am, rest, to_ai(u.world), nodes, posed, posed_normals, path);
-                out.once.append(triangles_of(am, posed, posed_normals, mat));
+                out.once.append(triangles_of(am, posed, posed_normals, mat, materials, path));
             }
             return;
         }
         if (slot[index] < 0) {  // in its own space, once
             slot[index] = static_cast<int>(out.shared.size());
             pose_mesh(s, am, rest, aiMatrix4x4(), nodes, posed, posed_normals, path);
-            out.shared.push_back({triangles_of(am, posed, posed_normals, mat), {}});
+            out.shared.push_back({triangles_of(am, posed, posed_normals, mat, materials, path), {}});
         }
         auto& uses_of = out.shared[static_cast<size_t>(slot[index])].uses;
         uses_of.insert(uses_of.end(), at.begin(), at.end());
@@ -342,7 +355,7 @@ MeshFileParts through_cache(const std::string& path, const std::string& prefix, 
     const auto absolute = [](const std::string& f) { return fs::absolute(f).lexically_normal().string(); };
     for (const std::string& f : read.files) entry.inputs.emplace_back(absolute(f), file_content_hash(f));
     for (Material& m : entry.materials)
-        for (std::string* t : {&m.color_texture, &m.bump_texture, &m.normal_texture})
+        for (std::string* t : m.texture_files())
             if (!t->empty()) *t = absolute(*t);
     for_each_face_material(entry.parts, [&](uint32_t f) { return override_material >= 0 ? 0 : f - base; });
     write_mesh_cache(folder, key, entry);
@@ -383,7 +396,8 @@ ControlMesh load_control_mesh(const std::string& path, const std::string& prefix
     bool any_uv = false;
     for_each_mesh_instance(s, [&](const aiMesh* am, const Transform& t) {
         if (!(am->mPrimitiveTypes & (aiPrimitiveType_POLYGON | aiPrimitiveType_TRIANGLE))) return;
-        any_uv |= am->mTextureCoords[0] != nullptr;
+        const aiVector3D* uvs = uv_channel(am, mat_map[am->mMaterialIndex], materials, path);
+        any_uv |= uvs != nullptr;
         for (unsigned f = 0; f < am->mNumFaces; ++f) {
             const aiFace& face = am->mFaces[f];
             if (face.mNumIndices < 3) continue;
@@ -397,7 +411,7 @@ ControlMesh load_control_mesh(const std::string& path, const std::string& prefix
                 auto [it, fresh] = vertex_of.emplace(std::array<float, 3>{p.x, p.y, p.z}, static_cast<int>(c.positions.size()));
                 if (fresh) c.positions.push_back(p);
                 c.face_vertices.push_back(it->second);
-                const Vec2 uv = am->mTextureCoords[0] ? Vec2{am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y} : Vec2{};
+                const Vec2 uv = uvs ? Vec2{uvs[v].x, uvs[v].y} : Vec2{};
                 auto [ut, ufresh] = uv_of.emplace(std::array<float, 2>{uv.x, uv.y}, static_cast<int>(c.uvs.size()));
                 if (ufresh) c.uvs.push_back(uv);
                 c.face_uvs.push_back(ut->second);

@@ -12,8 +12,10 @@
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
 #include "bounce/core/image.h"
+#include "bounce/scene/gltf_materials.h"
 #include "bounce/scene/mesh_checks.h"
 #include "bounce/scene/opacity.h"
+#include "bounce/scene/surface_textures.h"
 
 namespace bounce {
 
@@ -62,27 +64,23 @@ void read_file_cutout(const aiMaterial& am, const std::string& path, const std::
         throw InputError(path, where, fmt::format("alphaCutoff {} is not in [0, 1]", m.alpha_cutoff));
 }
 
-/// glTF materials' KHR_materials_emissive_strength (Assimp 5.2 does not read it), by material
-/// index (1 where there is none; empty for other formats).
-std::vector<float> gltf_emissive_strengths(const std::string& path) {
-    const std::string ext = lower_extension(path);
-    if (ext != ".gltf" && ext != ".glb") return {};
-    const nlohmann::json j = nlohmann::json::parse(gltf_json_text(path), nullptr, false);  // check_mesh_file parsed it
-    std::vector<float> out;
-    if (!j.is_object() || !j.contains("materials") || !j["materials"].is_array()) return out;
-    for (size_t i = 0; i < j["materials"].size(); ++i) {
-        const nlohmann::json& m = j["materials"][i];
-        const nlohmann::json* e = m.is_object() && m.contains("extensions") && m["extensions"].is_object() &&
-                                          m["extensions"].contains("KHR_materials_emissive_strength")
-                                      ? &m["extensions"]["KHR_materials_emissive_strength"]
-                                      : nullptr;
-        const nlohmann::json strength = e && e->is_object() ? e->value("emissiveStrength", nlohmann::json(1.0)) : nlohmann::json(1.0);
-        if (!strength.is_number() || !(strength.get<double>() >= 0 && strength.get<double>() <= kMaxRadiometric))
-            throw InputError(path, fmt::format("/materials/{}/extensions/KHR_materials_emissive_strength", i),
-                             fmt::format("emissiveStrength {} is not a number in [0, {:g}]", strength.dump().substr(0, 40), kMaxRadiometric));
-        out.push_back(strength.get<float>());
+/// What a glTF material adds to Assimp's reading: its occlusion, emission and metallic-roughness
+/// textures, where its textures are read, and KHR_materials_transmission onto bounce's glass
+/// (the base colour tints what is let through, as Cycles' Principled BSDF does).
+template <class Texture>
+void read_gltf_parts(const GltfMaterialJson& g, const Texture& texture, const std::string& path, const std::string& where, Material& m) {
+    // occlusionTexture (its red channel) is baked occlusion, as ao_texture.
+    m.ao_texture = texture({aiTextureType_LIGHTMAP, aiTextureType_AMBIENT_OCCLUSION});
+    m.metallic_roughness_texture = texture({aiTextureType_UNKNOWN});
+    m.emission_texture = texture({aiTextureType_EMISSIVE});
+    if (!m.emission_texture.empty()) {
+        std::string why;
+        m.emission_map = load_emission_map(m.emission_texture, why);
+        if (!m.emission_map) throw InputError(path, where, fmt::format("emissive texture \"{}\": {}", m.emission_texture, why));
     }
-    return out;
+    m.uv_transform = g.uv_transform;
+    m.uv_set = g.uv_set;
+    if (g.transmission && *g.transmission > 0) m.transmission = m.color * *g.transmission, m.ior = g.ior;
 }
 
 }  // namespace
@@ -94,7 +92,7 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
                                        MeshInputs* files_read) {
     std::vector<uint32_t> mat_map(s->mNumMaterials);
     if (override_material < 0) {
-        const std::vector<float> strengths = gltf_emissive_strengths(path);
+        const std::vector<GltfMaterialJson> gltf = read_gltf_materials(path);
         for (unsigned i = 0; i < s->mNumMaterials; ++i) {
             const aiMaterial* am = s->mMaterials[i];
             Material m;
@@ -114,7 +112,7 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
             if (am->Get(AI_MATKEY_COLOR_EMISSIVE, ke) == AI_SUCCESS) m.emission = to_vec3(ke);
             float strength = 1;
             if (am->Get(AI_MATKEY_EMISSIVE_INTENSITY, strength) == AI_SUCCESS) m.emission = m.emission * strength;
-            else if (i < strengths.size()) m.emission = m.emission * strengths[i];
+            else if (i < gltf.size()) m.emission = m.emission * gltf[i].emissive_strength;
             for (int c = 0; c < 3; ++c)
                 if (!(m.emission[c] >= 0 && m.emission[c] <= kMaxRadiometric))
                     throw InputError(path, where, fmt::format("emission {} is not in [0, {:g}]", m.emission[c], kMaxRadiometric));
@@ -127,7 +125,7 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
                 am->Get(AI_MATKEY_METALLIC_FACTOR, metallic);
                 metallic = std::clamp(metallic, 0.0f, 1.0f);
                 m.specular = Color(0.04f) * (1 - metallic) + m.color * metallic;
-                m.color = m.color * (1 - metallic);
+                m.metallic = metallic;
                 m.roughness = std::clamp(rough, 0.01f, 1.0f);
             } else if (am->Get(AI_MATKEY_COLOR_SPECULAR, ks) == AI_SUCCESS && (ks.r > 0 || ks.g > 0 || ks.b > 0)) {
                 m.specular = vmin(vmax(to_vec3(ks), Color(0)), Color(1));
@@ -149,12 +147,11 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
                 return "";
             };
             m.color_texture = texture({aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE});
-            if (!m.color_texture.empty()) m.color = Color(1 - metallic);
             read_file_cutout(*am, path, where, texture({aiTextureType_OPACITY}), m);
-            // glTF's occlusionTexture (its red channel) is baked occlusion, as ao_texture.
-            aiString gltf;
-            if (am->Get(AI_MATKEY_GLTF_ALPHAMODE, gltf) == AI_SUCCESS)
-                m.ao_texture = texture({aiTextureType_LIGHTMAP, aiTextureType_AMBIENT_OCCLUSION});
+            if (i < gltf.size()) read_gltf_parts(gltf[i], texture, path, where, m);
+            // Without a metallic-roughness texture the metalness is one number: the albedo is
+            // darkened here (with one, per texel where it is read: Materials).
+            if (m.metallic_roughness_texture.empty()) m.color = m.color * (1 - metallic);
             // Assimp files MTL's bump maps under HEIGHT, glTF's normalTexture under NORMALS.
             m.bump_texture = texture({aiTextureType_HEIGHT, aiTextureType_DISPLACEMENT});
             m.normal_texture = texture({aiTextureType_NORMALS});

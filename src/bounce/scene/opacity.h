@@ -9,16 +9,13 @@
 
 namespace bounce {
 
-/// The largest opacity texture read (texels): it is read whole, 2 bytes a texel.
-inline constexpr double kMaxOpacityTexels = 8192.0 * 8192.0;
-
 /// Which channel of an image is opacity: its alpha, or its first channel when it has no alpha
 /// (a grey map: MTL's map_d, the scene file's opacity_texture); AlphaOnly: its alpha, none
 /// without one (glTF: a base colour texture without alpha is opaque).
 enum class OpacityChannel { AlphaOrFirst, AlphaOnly };
 
 /// Reads `path`'s opacity channel into an OpacityMap. Null with `error` set to one line when
-/// the file cannot be read, is larger than kMaxOpacityTexels, or would not fit in memory; null
+/// the file cannot be read, is larger than kMaxWholeTextureTexels (surface_textures.h), or would not fit in memory; null
 /// with `error` empty when AlphaOnly finds no alpha channel.
 std::shared_ptr<const OpacityMap> load_opacity_map(const std::string& path, OpacityChannel channel, std::string& error);
 

@@ -64,6 +64,30 @@ struct OpacityMap {
     float at(const Vec2& uv) const;
 };
 
+/// An emission texture (glTF's emissiveTexture, the scene file's emission_texture): linear RGB
+/// read whole at load, so light sampling, gathers and the camera all see the same radiance,
+/// looked up as the opacity map is (bilinear, periodic, uv (0, 0) at the image's bottom left).
+struct EmissionMap {
+    int width = 0, height = 0;
+    std::vector<float> rgb;  ///< width*height*3, row 0 at the top
+    Color peak{0};           ///< the brightest texel's value per channel
+    Color at(const Vec2& uv) const;
+};
+
+/// Where a material's textures are read (KHR_texture_transform), in image space as glTF
+/// writes it (s = u, t = 1 - v, t down): (s', t') = offset + R(rotation) (scale x s, scale y t),
+/// R turning counter-clockwise in the image by `rotation` radians. One per material: every
+/// texture of the material is read through it.
+struct UvTransform {
+    Vec2 offset{0, 0};
+    float rotation = 0;
+    Vec2 scale{1, 1};
+    bool identity() const { return offset == Vec2{0, 0} && rotation == 0 && scale == Vec2{1, 1}; }
+    bool operator==(const UvTransform&) const = default;
+    /// A mesh uv moved to the uv its textures are read at.
+    Vec2 apply(const Vec2& uv) const;
+};
+
 /// How a material's opacity cuts its surface (glTF's alphaMode). Opaque: it is not read. Mask:
 /// where it is below the cutoff the surface is not there for any ray. Blend: it is the share of
 /// a pixel the surface covers and the chance that a secondary ray meeting it stops there.
@@ -108,8 +132,17 @@ struct Material {
     Color color{0.7f};          ///< diffuse albedo (multiplied by the texture if any)
     std::string color_texture;  ///< absolute path, empty = none
     Color emission{0};          ///< emitted radiance; nonzero makes faces area lights
+    /// Absolute path, empty = none: multiplies `emission` (read whole into emission_map).
+    std::string emission_texture;
+    std::shared_ptr<const EmissionMap> emission_map;
     Color specular{0};          ///< GGX lobe's reflectance at normal incidence (F0); 0 = no lobe
     float roughness = 0.5f;     ///< GGX roughness (alpha = roughness^2), in (0, 1]
+    /// glTF's metallic-roughness texture (absolute path, empty = none): where it is given,
+    /// roughness x its green channel is the roughness and metallic x its blue channel the
+    /// metalness m, so the albedo is color x (1 - m) and F0 = 0.04 (1 - m) + color x m
+    /// (`specular` is not read).
+    std::string metallic_roughness_texture;
+    float metallic = 1;
     std::string bump_texture;   ///< height map (texture units per uv unit x bump_strength)
     std::string normal_texture; ///< tangent-space normal map (used when there is no bump map)
     float bump_strength = 1.0f; ///< scales the bump height or the normal map's tilt; 0 = off
@@ -128,19 +161,32 @@ struct Material {
     std::string opacity_texture;
     std::shared_ptr<const OpacityMap> opacity_map;  ///< opacity_texture read (null = none)
     float alpha_cutoff = 0.5f;  ///< mask: opacity below it is cut away
-    /// A mesh file's material: what it carries that bounce does not read ("emissiveTexture", ...).
+    UvTransform uv_transform;  ///< where every texture of the material is read
+    uint8_t uv_set = 0;         ///< a mesh file's uv set its textures read (glTF texCoord)
+    /// A mesh file's material: what it carries that bounce does not read ("KHR_materials_sheen", ...).
     std::vector<std::string> unread;
     bool is_cutout() const { return alpha_mode != AlphaMode::Opaque; }
     /// Opacity at uv (1 for opaque materials).
     float opacity_at(const Vec2& uv) const {
         if (alpha_mode == AlphaMode::Opaque) return 1;
-        return opacity_map ? opacity * opacity_map->at(uv) : opacity;
+        return opacity_map ? opacity * opacity_map->at(uv_transform.apply(uv)) : opacity;
     }
+    /// Emitted radiance at uv.
+    Color emission_at(const Vec2& uv) const { return emission_map ? emission * emission_map->at(uv_transform.apply(uv)) : emission; }
     bool is_dielectric() const { return transmission.x > 0 || transmission.y > 0 || transmission.z > 0; }
     bool is_specular() const { return is_dielectric() || mirror.x > 0 || mirror.y > 0 || mirror.z > 0; }
     bool has_specular() const { return specular.x > 0 || specular.y > 0 || specular.z > 0; }
     bool has_bump() const { return bump_strength != 0 && (!bump_texture.empty() || !normal_texture.empty()); }
-    bool is_emissive() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }
+    /// Every texture file it names, empty or not (for what treats them alike: the mesh cache).
+    std::array<std::string*, 7> texture_files() {
+        return {&color_texture, &bump_texture, &normal_texture, &ao_texture, &opacity_texture, &emission_texture, &metallic_roughness_texture};
+    }
+    /// The most it emits anywhere (its emission texture's brightest texel).
+    Color peak_emission() const { return emission_map ? emission * emission_map->peak : emission; }
+    bool is_emissive() const {
+        const Color most = peak_emission();
+        return most.x > 0 || most.y > 0 || most.z > 0;
+    }
 };
 
 struct SubdivSurface;

@@ -24,7 +24,7 @@ Color fragment_direct(const Scene& scene, const Materials& materials, const Dire
     };
     Color e = lighting.irradiance(f.p, surf.normal, f.object, fragment_stream(scene.render.visibility.seed, x, y, k),
                                   scene.render.lighting.light_samples, counters, include_sky, glossy || per_light ? &each : nullptr);
-    const Color emission = materials.emission(f.material), diffuse = surf.albedo * e * kInvPi;
+    const Color emission = materials.emission(f.material, f.uv), diffuse = surf.albedo * e * kInvPi;
     if (parts) parts->emission = emission, parts->diffuse_direct = diffuse, parts->specular_direct = gloss;
     return emission + diffuse + gloss;
 }
@@ -104,7 +104,7 @@ constexpr uint32_t kSiteStream = 256;
 Color site_radiance(const ShadeContext& c, const PathSite& s, int x, int y, uint32_t j, const Indirect* in, Counters& counters) {
     const Fragment& f = s.at;
     if (c.sites.radiosity)
-        return c.materials.emission(f.material) + c.sites.radiosity->lookup(f.object, f.prim, s.u, s.v, s.front, counters);
+        return c.materials.emission(f.material, f.uv) + c.sites.radiosity->lookup(f.object, f.prim, s.u, s.v, s.front, counters);
     const Material& m = c.scene.materials[f.material];
     SurfaceShading surf;
     surf.albedo = c.materials.albedo(f.material, f.uv), surf.specular = m.specular, surf.roughness = m.roughness, surf.normal = f.n;

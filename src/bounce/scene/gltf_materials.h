@@ -1,0 +1,34 @@
+// What bounce reads of a glTF material from the file's JSON itself, where Assimp 5.2 reads it
+// not at all or not as the specification says: KHR_materials_emissive_strength, the texture
+// transform and uv set of each texture, KHR_materials_transmission and KHR_materials_ior,
+// doubleSided; and, for every material, what is left unread (material_report.h names it).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bounce/scene/scene.h"
+
+namespace bounce {
+
+/// One glTF material's parts read from its JSON.
+struct GltfMaterialJson {
+    float emissive_strength = 1;
+    /// Where its textures are read: the transform and uv set of its base colour texture (else
+    /// its first texture's); textures that differ are named in `unread`.
+    UvTransform uv_transform;
+    uint8_t uv_set = 0;
+    std::optional<float> transmission;  ///< KHR_materials_transmission's factor
+    float ior = 1.5f;                   ///< KHR_materials_ior's (with transmission)
+    /// Features bounce does not read ("KHR_materials_sheen", "COLOR_0 ..."), each once.
+    std::vector<std::string> unread;
+};
+
+/// Every material of a .gltf or .glb file, by index (empty for other formats or a file without
+/// materials). Throws InputError naming the file and the JSON pointer of a value out of range
+/// (a transform that is not finite, an emissive strength beyond 1e20, a texCoord past 1, an
+/// ior outside [1, 3], a transmission outside [0, 1]).
+std::vector<GltfMaterialJson> read_gltf_materials(const std::string& path);
+
+}  // namespace bounce
