@@ -4,6 +4,7 @@
 // quad light does, what is not read is named, and hostile values are refused naming the place.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -233,6 +234,63 @@ TEST(GltfMaterials, TheWholeMaterialSurvivesTheMeshCache) {
     EXPECT_FLOAT_EQ(it->uv_transform.rotation, 0.4f);
     ASSERT_TRUE(it->emission_map);
     EXPECT_FALSE(it->metallic_roughness_texture.empty());
+}
+
+/// The card of gltf_card with COLOR_0 `colors` (its four vertices: left bottom, right bottom,
+/// right top, left top), as a second inline buffer.
+std::string card_with_colors(const test::TempDir& dir, const json& material, const std::vector<float>& colors) {
+    json g = json::parse(test::bytes_of(gltf_card(dir, material)));
+    std::string b;
+    for (float c : colors) test::put<float>(b, {c});
+    g["buffers"].push_back({{"byteLength", b.size()}, {"uri", "data:application/octet-stream;base64," + test::base64(b)}});
+    g["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 0}, {"byteLength", b.size()}});
+    g["accessors"].push_back({{"bufferView", g["bufferViews"].size() - 1}, {"componentType", 5126}, {"count", colors.size() / 3}, {"type", "VEC3"}});
+    g["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = g["accessors"].size() - 1;
+    return dir.write("card.gltf", g.dump());
+}
+
+// COLOR_0 multiplies the base colour for the camera and for the bounce light: equal colours are
+// the scene file's colour bit for bit, a gradient runs across the card.
+TEST(GltfMaterials, VertexColoursMultiplyTheBaseColour) {
+    test::TempDir dir;
+    write_stripes(dir.file("leaf.png"));
+    const json m = {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"metallicFactor", 0}, {"roughnessFactor", 1}}}};
+    const std::vector<float> tint = {0.5f, 0.25f, 1, 0.5f, 0.25f, 1, 0.5f, 0.25f, 1, 0.5f, 0.25f, 1};
+    const json same = {{"color", {0.5, 0.25, 1}}, {"color_texture", dir.file("leaf.png")}, {"specular", 0.04}, {"roughness", 1}};
+    const json scene = stage(card_from(card_with_colors(dir, m, tint)), kLeaf);
+    const Image a = render_with(scene, "brute"), b = render_with(stage(kWrittenCard, same), "brute");
+    EXPECT_EQ(test::differing_values(a, b), 0u);
+    json white = same;
+    white["color"] = 1;
+    EXPECT_GT(test::differing_values(a, render_with(stage(kWrittenCard, white), "brute")), 50u);
+    // Through the radiosity textures (the bounce light's other path) and the mesh cache.
+    EXPECT_EQ(test::differing_values(render_with(scene, "cache", {Override("render.radiosity=true")}),
+                                     render_with(stage(kWrittenCard, same), "cache", {Override("render.radiosity=true")})), 0u);
+    setenv("BOUNCE_MESH_CACHE", dir.file("meshes").c_str(), 1);
+    const Image stored = render_with(scene, "brute"), cached = render_with(scene, "brute");
+    unsetenv("BOUNCE_MESH_CACHE");
+    EXPECT_EQ(test::differing_values(a, cached), 0u);
+    // White on the left edge, black on the right: the albedo falls across the card.
+    const json plain = {{"pbrMetallicRoughness", {{"metallicFactor", 0}, {"roughnessFactor", 1}}}};
+    const Image g = render_with(stage(card_from(card_with_colors(dir, plain, {1, 1, 1, 0, 0, 0, 0, 0, 0, 1, 1, 1})), kLeaf), "none");
+    const Layer* albedo = g.find("albedo");
+    const int y = g.height / 2;
+    std::vector<float> row;
+    for (int x = 0; x < g.width; ++x)
+        if (const float v = g.at(*albedo, x, y)[1]; std::abs(v - 0.7f) > 1e-3f) row.push_back(v);  // the card, not the wall
+    ASSERT_GT(row.size(), 8u);
+    row = std::vector<float>(row.begin() + 1, row.end() - 1);  // the edge pixels blend the card with the wall
+    if (row.front() < row.back()) std::reverse(row.begin(), row.end());  // from the white edge, however the camera sees it
+    EXPECT_GT(row.front(), 0.85f);
+    EXPECT_LT(row.back(), 0.15f);
+    for (size_t i = 1; i < row.size(); ++i) EXPECT_LE(row[i], row[i - 1] + 1e-6f) << i;
+    const Scene s = test::scene_from(stage(card_from(dir.file("card.gltf")), kLeaf));
+    EXPECT_TRUE(s.unread.empty()) << s.unread.front();
+    // Hostile: a count other than the vertices', a component outside [0, 1].
+    const std::string three = card_with_colors(dir, plain, {1, 1, 1, 0, 0, 0, 0, 0, 0});
+    test::expect_input_error([&] { test::scene_from(stage(card_from(three), kLeaf)); }, {"card.gltf", "attributes/COLOR_0", "3 elements", "4 vertices"});
+    const std::string bright = card_with_colors(dir, plain, {1, 1, 1, 0, 0, 0, 0, 2, 0, 1, 1, 1});
+    test::expect_input_error([&] { test::scene_from(stage(card_from(bright), kLeaf)); }, {"card.gltf", "COLOR_0", "2 is not a colour component"});
 }
 
 TEST(GltfMaterials, WhatIsNotReadIsNamedAndHostileValuesAreRefused) {

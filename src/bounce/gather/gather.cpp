@@ -51,7 +51,7 @@ Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d
     }
     if (radiosity_) return radiosity_->lookup(h.object, h.prim, h.u, h.v, front, counters);
     Vec3 n = front ? sp.ng : -sp.ng;
-    Color albedo = materials_.secondary_albedo(sp.material, sp.uv);
+    Color albedo = materials_.secondary_albedo(sp);
     RandomStream hit_rng(rng.bits(ray, kDimGather + 3), ray);
     if (parts.empty()) return albedo * lighting_.irradiance(sp.p, n, h.object, hit_rng, settings_.hit_light_samples, counters) * kInvPi;
     lighting_.irradiance_parts(sp.p, n, h.object, hit_rng, settings_.hit_light_samples, counters, parts);

@@ -42,6 +42,7 @@ void TriangleMesh::append(const TriangleMesh& o) {
     if (uvs.empty() != o.uvs.empty()) {
         if (uvs.empty() && !positions.empty()) uvs.assign(positions.size(), Vec2{});
     }
+    if (colors.empty() && !o.colors.empty() && !positions.empty()) colors.assign(positions.size(), Color(1));
     // Dicing makes each displaced object's mesh whole; nothing appends to one.
     if (displaced() || o.displaced()) throw std::logic_error("TriangleMesh::append: displaced meshes are not appended");
     positions.insert(positions.end(), o.positions.begin(), o.positions.end());
@@ -49,6 +50,8 @@ void TriangleMesh::append(const TriangleMesh& o) {
     else if (!normals.empty()) normals.resize(positions.size(), Vec3(0));
     if (!o.uvs.empty()) uvs.insert(uvs.end(), o.uvs.begin(), o.uvs.end());
     else if (!uvs.empty()) uvs.resize(positions.size(), Vec2{});
+    if (!o.colors.empty()) colors.insert(colors.end(), o.colors.begin(), o.colors.end());
+    else if (!colors.empty()) colors.resize(positions.size(), Color(1));
     for (uint32_t i : o.indices) indices.push_back(i + base);
     face_materials.insert(face_materials.end(), o.face_materials.begin(), o.face_materials.end());
 }
@@ -62,6 +65,7 @@ TriangleMesh split_once(const TriangleMesh& m, Project project) {
     r.positions = m.positions;
     r.normals = m.normals;
     r.uvs = m.uvs;
+    r.colors = m.colors;
     std::map<std::pair<uint32_t, uint32_t>, uint32_t> midpoints;
     auto mid = [&](uint32_t a, uint32_t b) {
         auto key = std::minmax(a, b);
@@ -72,6 +76,7 @@ TriangleMesh split_once(const TriangleMesh& m, Project project) {
         if (!r.normals.empty()) r.normals.push_back(normalize(r.normals[a] + r.normals[b]));
         if (!r.uvs.empty())
             r.uvs.push_back({(r.uvs[a].x + r.uvs[b].x) * 0.5f, (r.uvs[a].y + r.uvs[b].y) * 0.5f});
+        if (!r.colors.empty()) r.colors.push_back(r.colors[a] + (r.colors[b] - r.colors[a]) * 0.5f);
         project(r, idx);
         midpoints.emplace(key, idx);
         return idx;
@@ -220,8 +225,28 @@ SurfacePoint surface_point(const TriangleMesh& m, const Transform* to_world, uin
         const Vec2 &ta = m.uvs[i0], &tb = m.uvs[i1], &tc = m.uvs[i2];
         sp.uv = {ta.x * w + tb.x * u + tc.x * v, ta.y * w + tb.y * u + tc.y * v};
     }
+    sp.color = vertex_color(m, prim, u, v);
     sp.material = m.face_materials[prim];
     return sp;
+}
+
+Color vertex_color(const TriangleMesh& m, uint32_t prim, float u, float v) {
+    if (m.colors.empty()) return Color(1);
+    const Color &a = m.colors[m.indices[3 * prim]], &b = m.colors[m.indices[3 * prim + 1]], &c = m.colors[m.indices[3 * prim + 2]];
+    return a + (b - a) * u + (c - a) * v;
+}
+
+Color vertex_color_at(const TriangleMesh& m, const Transform* to_world, uint32_t prim, const Vec3& p) {
+    if (m.colors.empty()) return Color(1);
+    const auto [a, b, c] = triangle_vertices(m, to_world, prim);
+    // Barycentrics of p's projection (least squares on the two edges), clamped into the triangle.
+    const Vec3 e1 = b - a, e2 = c - a, d = p - a;
+    const float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2), det = d11 * d22 - d12 * d12;
+    if (!(det > 0)) return vertex_color(m, prim, 0, 0);
+    float u = (d22 * dot(d, e1) - d12 * dot(d, e2)) / det, v = (d11 * dot(d, e2) - d12 * dot(d, e1)) / det;
+    u = std::clamp(u, 0.0f, 1.0f), v = std::clamp(v, 0.0f, 1.0f);
+    if (u + v > 1) u /= u + v, v = 1 - u;
+    return vertex_color(m, prim, u, v);
 }
 
 }  // namespace bounce

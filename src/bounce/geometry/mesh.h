@@ -16,6 +16,8 @@ struct TriangleMesh {
     std::vector<Vec3> positions;
     std::vector<Vec3> normals;  ///< per vertex shading normals; empty = use geometric normals
     std::vector<Vec2> uvs;      ///< per vertex; empty = none
+    /// Per vertex, multiplying the albedo (glTF's COLOR_0), each in [0, 1]; empty = none.
+    std::vector<Color> colors;
     std::vector<uint32_t> indices;         ///< 3 per triangle
     std::vector<uint32_t> face_materials;  ///< per triangle index into Scene::materials
     /// Per vertex, the surface before displacement (the limit surface of a subdivision
@@ -58,8 +60,16 @@ struct SurfacePoint {
     Vec3 n;   ///< shading normal (interpolated), unit
     Vec3 ng;  ///< geometric normal, unit, same side as n
     Vec2 uv;
+    Color color{1};  ///< the vertex colours there (1 without)
     uint32_t material = 0;
 };
+
+/// The vertex colours of triangle `prim` at barycentrics (u, v), written so that equal colours
+/// interpolate to exactly themselves (1 when the mesh has none).
+Color vertex_color(const TriangleMesh& mesh, uint32_t prim, float u, float v);
+/// At point `p` (world space; `to_world` places the mesh, null = in place), projected onto the
+/// triangle's plane and clamped to it: for what keeps a point, not barycentrics (the deep buffer's fragments).
+Color vertex_color_at(const TriangleMesh& mesh, const Transform* to_world, uint32_t prim, const Vec3& p);
 
 /// Evaluates triangle `prim` of `mesh` at barycentrics (u, v) (Embree's convention:
 /// p = (1-u-v) v0 + u v1 + v v2).

@@ -107,8 +107,14 @@ SpecularSplit specular_split(const Material& m, float cos_i, bool entering) {
 
 Color base_share(const Material& m) { return m.is_specular() ? specular_split(m, 1, true).base : Color(1); }
 
-Color Materials::secondary_albedo(uint32_t material, const Vec2& uv) const {
-    return albedo(material, uv) * base_share(scene_.materials[material]);
+Color Materials::secondary_albedo(const SurfacePoint& sp) const {
+    return albedo(sp.material, sp.uv) * sp.color * base_share(scene_.materials[sp.material]);
+}
+
+Color Materials::vertex_color(uint32_t object, uint32_t prim, const Vec3& p) const {
+    const Object& o = scene_.objects[object];
+    const TriangleMesh& mesh = o.visible_mesh();
+    return mesh.colors.empty() ? Color(1) : vertex_color_at(mesh, o.to_world(), prim, p);
 }
 
 bool triangle_tangents(const TriangleMesh& mesh, uint32_t prim, Vec3& dpdu, Vec3& dpdv, const UvTransform* xf) {
@@ -136,7 +142,7 @@ Vec3 bumped_normal(const Vec3& n, const Vec3& dpdu, const Vec3& dpdv, float dhdu
     return isfinite(b) && dot(b, b) > 0.5f ? b : n;  // a huge slope overflows: keep the normal
 }
 
-SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t prim, const Vec2& uv, const Vec3& n,
+SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t prim, const Vec3& p, const Vec2& uv, const Vec3& n,
                                   float footprint) const {
     const Material& m = scene_.materials[material];
     SurfaceShading s;
@@ -154,7 +160,7 @@ SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t p
         du = footprint / std::max(length(dpdu), 1e-20f);
         dv = footprint / std::max(length(dpdv), 1e-20f);
     }
-    s.albedo = base_colour(material, st, du, dv);
+    s.albedo = base_colour(material, st, du, dv) * vertex_color(object, prim, p);
     if (const float metal = metalness(material, st, du, dv, &s.roughness); metal >= 0) {
         s.specular = Color(0.04f) * (1 - metal) + s.albedo * metal;
         s.albedo = s.albedo * (1 - metal);

@@ -34,17 +34,19 @@ public:
 
     /// Albedo at uv, unfiltered.
     Color albedo(uint32_t material, const Vec2& uv) const;
-    /// What secondary rays (gathers, radiosity textures) see: albedo x base_share (a mirror or
-    /// glass surface reflects little diffusely).
-    Color secondary_albedo(uint32_t material, const Vec2& uv) const;
+    /// What secondary rays (gathers, radiosity textures) see at a point they reach: albedo x
+    /// its vertex colour x base_share (a mirror or glass surface reflects little diffusely).
+    Color secondary_albedo(const SurfacePoint& sp) const;
+    /// The vertex colour (glTF's COLOR_0) of object `object`'s visible triangle `prim` at `p`.
+    Color vertex_color(uint32_t object, uint32_t prim, const Vec3& p) const;
     /// Emitted radiance at uv (its emission texture read whole at load: Material::emission_at).
     Color emission(uint32_t material, const Vec2& uv) const { return scene_.materials[material].emission_at(uv); }
 
     /// The material at a visible point: triangle `prim` of object `object`'s visible mesh, at
-    /// `uv`, with interpolated normal `n` and pixel footprint `footprint` (world units; the
+    /// `p` and `uv` (the albedo times the vertex colour there), with interpolated normal `n` and pixel footprint `footprint` (world units; the
     /// texture filter width). Bump maps displace by bump_strength x texture value (world
     /// units); normal maps are tangent-space, tilted by bump_strength.
-    SurfaceShading surface(uint32_t material, uint32_t object, uint32_t prim, const Vec2& uv, const Vec3& n,
+    SurfaceShading surface(uint32_t material, uint32_t object, uint32_t prim, const Vec3& p, const Vec2& uv, const Vec3& n,
                            float footprint) const;
 
 private:

@@ -190,7 +190,7 @@ void RadiosityTextures::bake_side(uint32_t id, uint32_t t, bool front, Counters&
         for (int i = 0; i + j <= n; ++i) {
             float u = static_cast<float>(i) / static_cast<float>(n), v = static_cast<float>(j) / static_cast<float>(n);
             SurfacePoint sp = o.coarse_point(t, u, v);
-            Color albedo = src.materials->secondary_albedo(sp.material, sp.uv) * kInvPi;
+            Color albedo = src.materials->secondary_albedo(sp) * kInvPi;
             uint32_t k = map.offset[t] + lattice_index(i, j, n);
             // Random numbers keyed by (object, triangle, point): the textures depend on the
             // scene alone (renders with other seeds share them) and not on the bake order.

@@ -61,12 +61,6 @@ std::vector<UnreadFeature> gltf_unread(const std::string& path) {
             if (i < materials.size())
                 for (const std::string& what : materials[i].unread) tally.add(what, "material", name);
         }
-    if (j.contains("meshes") && j["meshes"].is_array())
-        for (const json& mesh : j["meshes"])
-            if (mesh.is_object() && mesh.contains("primitives") && mesh["primitives"].is_array())
-                for (const json& p : mesh["primitives"])
-                    if (p.is_object() && p.contains("attributes") && p["attributes"].is_object() && p["attributes"].contains("COLOR_0"))
-                        tally.add("COLOR_0 (vertex colours)", "primitive");
     // Assimp hands an embedded image (a data: uri or a buffer view) over as bytes, not a file.
     if (j.contains("images") && j["images"].is_array())
         for (const json& image : j["images"])

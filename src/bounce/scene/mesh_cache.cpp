@@ -111,6 +111,7 @@ void write_mesh(Out& out, const TriangleMesh& m) {
     out.array(m.positions);
     out.array(m.normals);
     out.array(m.uvs);
+    out.array(m.colors);
     out.array(m.indices);
     out.array(m.face_materials);
 }
@@ -129,11 +130,14 @@ TriangleMesh read_mesh(In& in, size_t materials, bool overridden) {
     m.positions = in.array<Vec3>();
     m.normals = in.array<Vec3>();
     m.uvs = in.array<Vec2>();
+    m.colors = in.array<Color>();
     m.indices = in.array<uint32_t>();
     m.face_materials = in.array<uint32_t>();
     const size_t n = m.positions.size();
-    if ((!m.normals.empty() && m.normals.size() != n) || (!m.uvs.empty() && m.uvs.size() != n))
-        throw Damaged{"normals or uvs do not match the vertices"};
+    if ((!m.normals.empty() && m.normals.size() != n) || (!m.uvs.empty() && m.uvs.size() != n) || (!m.colors.empty() && m.colors.size() != n))
+        throw Damaged{"normals, uvs or colours do not match the vertices"};
+    for (const Color& c : m.colors)
+        if (!(finite_in(c.x, 0, 1) && finite_in(c.y, 0, 1) && finite_in(c.z, 0, 1))) throw Damaged{"a vertex colour is out of range"};
     if (m.indices.size() % 3 != 0 || m.face_materials.size() != m.indices.size() / 3)
         throw Damaged{"faces do not match their materials"};
     for (uint32_t i : m.indices)

@@ -165,16 +165,25 @@ int64_t accessor_count(const json& j, const json& index) {
     return count.is_number_unsigned() ? count.get<int64_t>() : -1;
 }
 
-/// Counts that must agree: a morph target's elements with its primitive's vertices, a skin's
-/// inverse bind matrices with its joints (Assimp accepted fewer and read past them, or left
+/// Counts that must agree: a primitive's attributes and a morph target's elements with its
+/// vertices, a skin's inverse bind matrices with its joints (Assimp accepted fewer and read past them, or left
 /// the matrices out and failed later with no place).
 void check_gltf_counts(const json& j, const std::string& path) {
     if (j.contains("meshes") && j["meshes"].is_array())
         for (size_t m = 0; m < j["meshes"].size(); ++m) {
             const json& prims = j["meshes"][m].is_object() ? j["meshes"][m].value("primitives", json()) : json();
             for (size_t p = 0; prims.is_array() && p < prims.size(); ++p) {
-                if (!prims[p].is_object() || !prims[p].contains("attributes") || !prims[p].contains("targets")) continue;
+                if (!prims[p].is_object() || !prims[p].contains("attributes") || !prims[p]["attributes"].is_object()) continue;
                 const int64_t vertices = accessor_count(j, prims[p]["attributes"].value("POSITION", json()));
+                // Every attribute has one element per vertex (glTF 2.0, 3.7.2.1): a COLOR_0 or
+                // TEXCOORD_1 of another count would be read past its end or left short.
+                for (const auto& [name, index] : prims[p]["attributes"].items()) {
+                    const int64_t n = accessor_count(j, index);
+                    if (vertices >= 0 && n >= 0 && n != vertices)
+                        throw InputError(path, fmt::format("/meshes/{}/primitives/{}/attributes/{}", m, p, name.substr(0, 40)),
+                                         fmt::format("{} elements for the primitive's {} vertices", n, vertices));
+                }
+                if (!prims[p].contains("targets")) continue;
                 const json& targets = prims[p]["targets"];
                 for (size_t t = 0; vertices >= 0 && targets.is_array() && t < targets.size(); ++t) {
                     if (!targets[t].is_object()) continue;

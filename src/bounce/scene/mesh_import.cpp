@@ -137,10 +137,21 @@ TriangleMesh triangles_of(const aiMesh* am, const std::vector<Vec3>& positions, 
                           const std::vector<Material>& materials, const std::string& path) {
     TriangleMesh m;
     const aiVector3D* uvs = uv_channel(am, mat, materials, path);
+    // glTF's COLOR_0 multiplies the base colour (as Blender's importer wires it); an OBJ's or a
+    // PLY's vertex colours are data that no material of theirs reads.
+    const std::string ext = lower_extension(path);
+    const aiColor4D* colors = ext == ".gltf" || ext == ".glb" ? am->mColors[0] : nullptr;
     for (unsigned v = 0; v < am->mNumVertices; ++v) {
         m.positions.push_back(positions[v]);
         if (am->mNormals) m.normals.push_back(normals[v]);
         if (uvs) m.uvs.push_back({uvs[v].x, uvs[v].y});
+        if (!colors) continue;
+        const Color c{colors[v].r, colors[v].g, colors[v].b};
+        for (int k = 0; k < 3; ++k)
+            if (!(c[k] >= 0 && c[k] <= 1))
+                throw InputError(path, fmt::format("mesh \"{}\" COLOR_0 vertex {}", am->mName.C_Str(), v),
+                                 fmt::format("{} is not a colour component in [0, 1]", c[k]));
+        m.colors.push_back(c);
     }
     for (unsigned f = 0; f < am->mNumFaces; ++f) {
         const aiFace& face = am->mFaces[f];

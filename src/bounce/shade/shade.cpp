@@ -56,7 +56,7 @@ Color hair_direct(const Scene& scene, const DirectLighting& lighting, const Frag
 
 /// The material where the camera sees fragment f; a strand has none (fur shades itself).
 SurfaceShading fragment_surface(const Materials& materials, const Fragment& f) {
-    return f.is_hair() ? SurfaceShading{} : materials.surface(f.material, f.object, f.prim, f.uv, f.n, f.footprint);
+    return f.is_hair() ? SurfaceShading{} : materials.surface(f.material, f.object, f.prim, f.p, f.uv, f.n, f.footprint);
 }
 
 /// Direct light (and emission) leaving fragment k of pixel (x, y) towards wo: a strand's or a surface's.
@@ -107,7 +107,7 @@ Color site_radiance(const ShadeContext& c, const PathSite& s, int x, int y, uint
         return c.materials.emission(f.material, f.uv) + c.sites.radiosity->lookup(f.object, f.prim, s.u, s.v, s.front, counters);
     const Material& m = c.scene.materials[f.material];
     SurfaceShading surf;
-    surf.albedo = c.materials.albedo(f.material, f.uv), surf.specular = m.specular, surf.roughness = m.roughness, surf.normal = f.n;
+    surf.albedo = c.materials.albedo(f.material, f.uv) * c.materials.vertex_color(f.object, f.prim, f.p), surf.specular = m.specular, surf.roughness = m.roughness, surf.normal = f.n;
     Color out = fragment_direct(c.scene, c.materials, c.lighting, f, surf, s.wo, x, y, kSiteStream + j, c.indirect == nullptr,
                                 counters, nullptr);
     if (in) out += indirect_radiance(*in, f.n, surf, s.wo, c.scene.render.shading.light_per_channel);

@@ -77,7 +77,7 @@ Vec3 SpecularTracer::bumped(const Fragment& f, const Start& at, const Vec3& d) c
     // The map's tilt of the fragment's normal, carried over to the start's (which may face the
     // other way, and is the coarse surface's); lessened where the mirror direction would go
     // under the surface (a steep bump seen at a grazing angle), so every path leaves it.
-    Vec3 tilt = materials_.surface(f.material, f.object, f.prim, f.uv, f.n, f.footprint).normal - f.n;
+    Vec3 tilt = materials_.surface(f.material, f.object, f.prim, f.p, f.uv, f.n, f.footprint).normal - f.n;
     if (dot(f.n, at.n) < 0) tilt = -tilt;
     const Vec3 above = dot(d, at.outward) < 0 ? at.outward : -at.outward;
     for (float share : {1.0f, 0.75f, 0.5f, 0.25f}) {
