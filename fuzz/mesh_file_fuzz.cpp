@@ -9,6 +9,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -23,6 +25,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // A file of this process's own in the working directory (the fuzzer runs in an empty one).
     const std::string path = "fuzz-" + std::to_string(getpid()) + ext;
     std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(data + 2), static_cast<std::streamsize>(size - 2));
+    // Embedded images go to a folder of the working directory, not the user's cache.
+    setenv("BOUNCE_IMAGE_CACHE", "images", 1);
     std::vector<bounce::Material> materials;
     bounce::MeshPose pose;
     if (data[0] % 3 == 1 && data[1] & 1) pose.clip = "0", pose.seconds = (data[1] >> 1) / 64.0;
@@ -32,5 +36,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     } catch (const bounce::InputError&) {
     }
     std::remove(path.c_str());
+    std::error_code ec;
+    std::filesystem::remove_all("images", ec);  // embedded images written by the load (below)
     return 0;
 }

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <limits>
 #include <numbers>
 
@@ -291,6 +292,40 @@ TEST(GltfMaterials, VertexColoursMultiplyTheBaseColour) {
     test::expect_input_error([&] { test::scene_from(stage(card_from(three), kLeaf)); }, {"card.gltf", "attributes/COLOR_0", "3 elements", "4 vertices"});
     const std::string bright = card_with_colors(dir, plain, {1, 1, 1, 0, 0, 0, 0, 2, 0, 1, 1, 1});
     test::expect_input_error([&] { test::scene_from(stage(card_from(bright), kLeaf)); }, {"card.gltf", "COLOR_0", "2 is not a colour component"});
+}
+
+// Images inside the file (data: URIs here, a .glb's buffer views alike) are read as the same
+// images beside it: written once to the image cache, by content.
+TEST(GltfMaterials, EmbeddedImagesAreTheSameImagesAsFiles) {
+    test::TempDir dir;
+    write_stripes(dir.file("leaf.png"));
+    setenv("BOUNCE_IMAGE_CACHE", dir.file("images").c_str(), 1);
+    const json m = {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"metallicFactor", 0}, {"roughnessFactor", 1}}}};
+    const Image beside = render_with(stage(card_from(gltf_card(dir, m)), kLeaf), "brute");
+    json g = json::parse(test::bytes_of(dir.file("card.gltf")));
+    g["images"][0] = {{"uri", "data:image/png;base64," + test::base64(test::bytes_of(dir.file("leaf.png")))}};
+    const std::string inside = dir.write("inside.gltf", g.dump());
+    const Image embedded = render_with(stage(card_from(inside), kLeaf), "brute");
+    EXPECT_EQ(test::differing_values(beside, embedded), 0u);
+    size_t written = 0;
+    for (const auto& e : std::filesystem::directory_iterator(dir.file("images"))) written += e.path().extension() == ".png";
+    EXPECT_EQ(written, 1u);
+    // Again, and through the mesh cache: the same file, nothing more written.
+    setenv("BOUNCE_MESH_CACHE", dir.file("meshes").c_str(), 1);
+    const Image stored = render_with(stage(card_from(inside), kLeaf), "brute"), cached = render_with(stage(card_from(inside), kLeaf), "brute");
+    unsetenv("BOUNCE_MESH_CACHE");
+    EXPECT_EQ(test::differing_values(beside, cached), 0u);
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.file("images")), {}), 1);
+    // Bytes that are no image are refused naming the material, an image cache that cannot be
+    // written too.
+    g["images"][0] = {{"uri", "data:image/png;base64," + test::base64("not an image at all")}};
+    const std::string broken = dir.write("inside.gltf", g.dump());
+    test::expect_input_error([&] { test::scene_from(stage(card_from(broken), kLeaf)); }, {"inside.gltf", "material"});
+    setenv("BOUNCE_IMAGE_CACHE", dir.write("a-file", "x").c_str(), 1);
+    g["images"][0] = {{"uri", "data:image/png;base64," + test::base64(test::bytes_of(dir.file("leaf.png")) + " ")}};
+    const std::string elsewhere = dir.write("inside.gltf", g.dump());
+    test::expect_input_error([&] { test::scene_from(stage(card_from(elsewhere), kLeaf)); }, {"inside.gltf", "BOUNCE_IMAGE_CACHE"});
+    unsetenv("BOUNCE_IMAGE_CACHE");
 }
 
 TEST(GltfMaterials, WhatIsNotReadIsNamedAndHostileValuesAreRefused) {

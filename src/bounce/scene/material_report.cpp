@@ -61,11 +61,6 @@ std::vector<UnreadFeature> gltf_unread(const std::string& path) {
             if (i < materials.size())
                 for (const std::string& what : materials[i].unread) tally.add(what, "material", name);
         }
-    // Assimp hands an embedded image (a data: uri or a buffer view) over as bytes, not a file.
-    if (j.contains("images") && j["images"].is_array())
-        for (const json& image : j["images"])
-            if (image.is_object() && (image.contains("bufferView") || image.value("uri", std::string()).rfind("data:", 0) == 0))
-                tally.add("embedded images (bounce reads image files beside the glTF)", "image");
     if (j.contains("samplers") && j["samplers"].is_array())
         for (const json& s : j["samplers"])
             if (s.is_object() && (s.value("wrapS", 10497) != 10497 || s.value("wrapT", 10497) != 10497))

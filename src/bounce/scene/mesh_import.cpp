@@ -17,6 +17,7 @@
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
 #include "bounce/core/image.h"
+#include "bounce/scene/embedded_images.h"
 #include "bounce/scene/gltf_instances.h"
 #include "bounce/scene/mesh_cache.h"
 #include "bounce/scene/mesh_animation.h"
@@ -354,7 +355,8 @@ MeshFileParts through_cache(const std::string& path, const std::string& prefix, 
     auto to_scene = [&](uint32_t f) { return override_material >= 0 ? static_cast<uint32_t>(override_material) : base + f; };
     if (std::optional<LoadedMeshFile> hit = read_mesh_cache(folder, key)) {
         for (const auto& input : hit->inputs)
-            if (files_read) files_read->add(input.first);
+            if (files_read && is_embedded_image(input.first)) files_read->files.push_back(input.first);  // bounce's own, as on a parse
+            else if (files_read) files_read->add(input.first);
         materials.insert(materials.end(), hit->materials.begin(), hit->materials.end());
         for_each_face_material(hit->parts, to_scene);
         return std::move(hit->parts);

@@ -12,6 +12,7 @@
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
 #include "bounce/core/image.h"
+#include "bounce/scene/embedded_images.h"
 #include "bounce/scene/gltf_materials.h"
 #include "bounce/scene/mesh_checks.h"
 #include "bounce/scene/opacity.h"
@@ -136,9 +137,16 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
             auto texture = [&](std::initializer_list<aiTextureType> types) -> std::string {
                 aiString tex;
                 for (aiTextureType type : types) {
-                    if (am->GetTexture(type, 0, &tex) != AI_SUCCESS || tex.C_Str()[0] == '*') continue;
-                    const std::string t = (fs::path(path).parent_path() / tex.C_Str()).lexically_normal().string();
-                    if (files_read) files_read->add(t);  // confined before anything opens it
+                    if (am->GetTexture(type, 0, &tex) != AI_SUCCESS) continue;
+                    std::string t;
+                    if (const aiTexture* embedded = s->GetEmbeddedTexture(tex.C_Str())) {
+                        // Written by bounce from the file's own bytes: recorded, not confined.
+                        t = embedded_image_file(*embedded, path, where);
+                        if (files_read) files_read->files.push_back(t);
+                    } else {
+                        t = (fs::path(path).parent_path() / tex.C_Str()).lexically_normal().string();
+                        if (files_read) files_read->add(t);  // confined before anything opens it
+                    }
                     std::string why = not_a_regular_file(t);
                     if (why.empty()) why = texture_problem(t);
                     if (!why.empty()) throw InputError(path, where, fmt::format("texture \"{}\": {}", t, why));
