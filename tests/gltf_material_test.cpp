@@ -287,6 +287,12 @@ TEST(GltfMaterials, VertexColoursMultiplyTheBaseColour) {
     for (size_t i = 1; i < row.size(); ++i) EXPECT_LE(row[i], row[i - 1] + 1e-6f) << i;
     const Scene s = test::scene_from(stage(card_from(dir.file("card.gltf")), kLeaf));
     EXPECT_TRUE(s.unread.empty()) << s.unread.front();
+    // A subdivision surface does not carry them: said, not dropped in silence.
+    json subdivided = card_from(dir.file("card.gltf"));
+    subdivided[0]["subdivision"] = "loop";
+    const Scene d = test::scene_from(stage(subdivided, kLeaf));
+    ASSERT_EQ(d.unread.size(), 1u);
+    EXPECT_EQ(d.unread[0], dir.file("card.gltf") + ": ignored: COLOR_0 (vertex colours) on a subdivision surface");
     // Hostile: a count other than the vertices', a component outside [0, 1].
     const std::string three = card_with_colors(dir, plain, {1, 1, 1, 0, 0, 0, 0, 0, 0});
     test::expect_input_error([&] { test::scene_from(stage(card_from(three), kLeaf)); }, {"card.gltf", "attributes/COLOR_0", "3 elements", "4 vertices"});

@@ -28,6 +28,8 @@ struct ControlMesh {
     std::vector<Vec2> uvs;               ///< distinct uv values
     std::vector<int> face_uvs;           ///< corner -> uv value (empty = no uvs)
     std::vector<uint32_t> face_materials;
+    /// The file had vertex colours (glTF's COLOR_0), which subdivision does not carry.
+    bool dropped_vertex_colors = false;
     size_t face_count() const { return face_sizes.size(); }
 };
 

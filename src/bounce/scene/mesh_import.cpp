@@ -411,6 +411,7 @@ ControlMesh load_control_mesh(const std::string& path, const std::string& prefix
         if (!(am->mPrimitiveTypes & (aiPrimitiveType_POLYGON | aiPrimitiveType_TRIANGLE))) return;
         const aiVector3D* uvs = uv_channel(am, mat_map[am->mMaterialIndex], materials, path);
         any_uv |= uvs != nullptr;
+        c.dropped_vertex_colors |= am->mColors[0] && (lower_extension(path) == ".gltf" || lower_extension(path) == ".glb");
         for (unsigned f = 0; f < am->mNumFaces; ++f) {
             const aiFace& face = am->mFaces[f];
             if (face.mNumIndices < 3) continue;

@@ -124,6 +124,9 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
         obj.placement = read_transform(r);
         parsing_mesh(scene, [&] { surf.control = load_control_mesh(file, obj.name, scene.materials, mat, obj.placement, &read); });
         check_control_mesh(surf.control, surf.scheme);
+        const std::string dropped = file + ": ignored: COLOR_0 (vertex colours) on a subdivision surface";
+        if (surf.control.dropped_vertex_colors && std::find(scene.unread.begin(), scene.unread.end(), dropped) == scene.unread.end())
+            scene.unread.push_back(dropped);
     } catch (const InputError& e) {
         r.fail("file", e.what());
     }
