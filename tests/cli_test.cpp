@@ -77,7 +77,7 @@ TEST(Cli, DeepFileFromAnotherSceneIsRefused) {
 }
 
 TEST(Cli, TheReadmesLightersLoopReshadesALightEditWithTheCache) {
-    // README, "the lighter's loop": a light edit re-shades a region with the frame's cache
+    // docs/usage.md, "the lighter's loop": a light edit re-shades a region with the frame's cache
     // (its bounce light is the old lights', and bounce says so); moved objects are refused.
     test::TempDir d;
     const std::string scene = test::source_dir() + "/scenes/cornell/glossy-bump.json";

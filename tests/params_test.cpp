@@ -190,7 +190,7 @@ namespace {
 TEST(Params, EveryKeyTheDocsNameExists) {
     const std::regex key("`((render|camera)\\.[a-z_]+)[`=]");
     for (const char* file : {"docs/displacement.md", "docs/animation.md", "docs/irradiance-cache.md", "docs/fur.md", "docs/parallel.md",
-                             "docs/shading.md", "README.md"}) {
+                             "docs/shading.md", "docs/usage.md", "docs/benchmarks.md", "docs/scene-format.md", "README.md"}) {
         const std::string text = test::bytes_of(test::source_dir() + "/" + file);
         ASSERT_FALSE(text.empty()) << file;
         for (auto it = std::sregex_iterator(text.begin(), text.end(), key); it != std::sregex_iterator(); ++it)

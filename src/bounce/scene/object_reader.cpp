@@ -117,7 +117,7 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
     surf.scheme = scheme;
     surf.boundary = r.choice("boundary", "edge-and-corner", {"edge-only", "edge-and-corner"}) == "edge-only"
                         ? SubdivBoundary::EdgeOnly : SubdivBoundary::EdgeAndCorner;
-    if (r.has("fine_subdivisions")) r.fail("fine_subdivisions", "a subdivision surface is diced by render.dicing, not fine_subdivisions");
+    if (r.has("fine_subdivisions")) r.fail("fine_subdivisions", "a subdivision surface is diced from the camera by render.shading_rate (rays see render.ray_level), not fine_subdivisions");
     const std::string file = r.file("file", true);
     MeshInputs read = mesh_inputs(r, "file");
     try {
