@@ -202,6 +202,10 @@ TEST(GltfMaterials, TransmissionAndIorAreTheSceneFilesGlass) {
     EXPECT_GT(test::differing_values(a, render_with(stage(kWrittenCard, opaque), "brute")), 50u);
     const Scene s = test::scene_from(stage(card_from(file), kLeaf));
     EXPECT_TRUE(s.unread.empty()) << s.unread.front();
+    // A one-sided material renders as the two-sided one (the camera sees the card's back here).
+    json one_sided = m;
+    one_sided["doubleSided"] = false;
+    EXPECT_EQ(test::differing_values(a, render_with(stage(card_from(gltf_card(dir, one_sided)), kLeaf), "brute")), 0u);
 }
 
 // Every part survives the mesh cache: a hit renders as the parse did.
