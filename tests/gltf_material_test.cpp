@@ -84,6 +84,24 @@ TEST(GltfMaterials, ATextureTransformIsTheSceneFilesUvTransform) {
     EXPECT_TRUE(s.unread.empty()) << s.unread.front();
 }
 
+// An MTL's map_Kd replaces its Kd (Blender's importer reads it so); glTF's factor multiplies.
+TEST(GltfMaterials, AnMtlTextureReplacesKdWhereAGltfFactorMultiplies) {
+    test::TempDir dir;
+    write_stripes(dir.file("leaf.png"));
+    dir.write("card.mtl", "newmtl a\nKd 0.5 0.5 0.5\nmap_Kd leaf.png\n");
+    const std::string obj = dir.write("card.obj", "mtllib card.mtl\nv -1 0.2 0\nv 1 0.2 0\nv 1 2.2 0\nvt 0 0\nvt 1 0\nvt 1 1\nusemtl a\nf 1/1 2/2 3/3\n");
+    const Scene s = test::scene_from(stage(card_from(obj), kLeaf));
+    const auto it = std::find_if(s.materials.begin(), s.materials.end(), [](const Material& x) { return x.name == "card/a"; });
+    ASSERT_NE(it, s.materials.end());
+    EXPECT_EQ(it->color, Color(1));
+    EXPECT_FALSE(it->color_texture.empty());
+    const json m = {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"baseColorFactor", {0.5, 0.5, 0.5, 1}}, {"metallicFactor", 0}}}};
+    const Scene g = test::scene_from(stage(card_from(gltf_card(dir, m)), kLeaf));
+    const auto gt = std::find_if(g.materials.begin(), g.materials.end(), [](const Material& x) { return x.name.starts_with("card/"); });
+    ASSERT_NE(gt, g.materials.end());
+    EXPECT_EQ(gt->color, Color(0.5f));
+}
+
 // texCoord 1 reads the second uv set (the card's uvs; its first set reads one texel everywhere).
 TEST(GltfMaterials, TexCoordOneReadsTheSecondUvSet) {
     test::TempDir dir;

@@ -155,6 +155,9 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
                 return "";
             };
             m.color_texture = texture({aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE});
+            // glTF's base colour factor multiplies its texture; an MTL's map_Kd replaces Kd, as
+            // Blender's importer (and so Cycles) reads it.
+            if (!m.color_texture.empty() && gltf.empty()) m.color = Color(1);
             read_file_cutout(*am, path, where, texture({aiTextureType_OPACITY}), m);
             if (i < gltf.size()) read_gltf_parts(gltf[i], texture, path, where, m);
             // Without a metallic-roughness texture the metalness is one number: the albedo is
