@@ -65,6 +65,31 @@ void read_file_cutout(const aiMaterial& am, const std::string& path, const std::
         throw InputError(path, where, fmt::format("alphaCutoff {} is not in [0, 1]", m.alpha_cutoff));
 }
 
+/// A file material's texture of the first of `types` it has ("" when none): an image embedded in
+/// the file, written out (bounce's own: recorded, not confined), or a file beside the mesh file
+/// (confined through `files_read` before anything opens it). It must be there: a missing one
+/// would render untextured.
+std::string file_texture(const aiScene& s, const aiMaterial& am, std::initializer_list<aiTextureType> types, const std::string& path,
+                         const std::string& where, MeshInputs* files_read) {
+    aiString tex;
+    for (aiTextureType type : types) {
+        if (am.GetTexture(type, 0, &tex) != AI_SUCCESS) continue;
+        std::string t;
+        if (const aiTexture* embedded = s.GetEmbeddedTexture(tex.C_Str())) {
+            t = embedded_image_file(*embedded, path, where);
+            if (files_read) files_read->files.push_back(t);
+        } else {
+            t = (fs::path(path).parent_path() / tex.C_Str()).lexically_normal().string();
+            if (files_read) files_read->add(t);
+        }
+        std::string why = not_a_regular_file(t);
+        if (why.empty()) why = texture_problem(t);
+        if (!why.empty()) throw InputError(path, where, fmt::format("texture \"{}\": {}", t, why));
+        return t;
+    }
+    return "";
+}
+
 /// What a glTF material adds to Assimp's reading: its occlusion, emission and metallic-roughness
 /// textures, where its textures are read, and KHR_materials_transmission onto bounce's glass
 /// (the base colour tints what is let through, as Cycles' Principled BSDF does).
@@ -133,27 +158,7 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
                 if (am->Get(AI_MATKEY_SHININESS, ns) == AI_SUCCESS && ns > 0)
                     m.roughness = std::clamp(std::sqrt(std::sqrt(2 / (ns + 2))), 0.01f, 1.0f);
             }
-            // A texture the file names must be there: a missing one would render untextured.
-            auto texture = [&](std::initializer_list<aiTextureType> types) -> std::string {
-                aiString tex;
-                for (aiTextureType type : types) {
-                    if (am->GetTexture(type, 0, &tex) != AI_SUCCESS) continue;
-                    std::string t;
-                    if (const aiTexture* embedded = s->GetEmbeddedTexture(tex.C_Str())) {
-                        // Written by bounce from the file's own bytes: recorded, not confined.
-                        t = embedded_image_file(*embedded, path, where);
-                        if (files_read) files_read->files.push_back(t);
-                    } else {
-                        t = (fs::path(path).parent_path() / tex.C_Str()).lexically_normal().string();
-                        if (files_read) files_read->add(t);  // confined before anything opens it
-                    }
-                    std::string why = not_a_regular_file(t);
-                    if (why.empty()) why = texture_problem(t);
-                    if (!why.empty()) throw InputError(path, where, fmt::format("texture \"{}\": {}", t, why));
-                    return t;
-                }
-                return "";
-            };
+            const auto texture = [&](std::initializer_list<aiTextureType> types) { return file_texture(*s, *am, types, path, where, files_read); };
             m.color_texture = texture({aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE});
             // glTF's base colour factor multiplies its texture; an MTL's map_Kd replaces Kd, as
             // Blender's importer (and so Cycles) reads it.
