@@ -202,10 +202,11 @@ TEST(UnreadMaterials, EveryUnreadFeatureIsNamedOnStderrOncePerFile) {
     const std::string path = dir.write("scene.json", scene.dump());
     std::string err;
     ASSERT_EQ(test::run_bounce("render " + path + " -o " + dir.file("out.exr"), &err), 0) << err;
-    // The base colour's transform and uv set are read; the occlusion texture's other set and the
-    // other textures' missing transform are named.
-    for (const std::string want : {"KHR_texture_transform differing between a material's textures (the first texture's is read) on 2 materials",
-                                   "texCoord differing between a material's textures (the first texture's set is read) on 2 materials",
+    // The base colour's transform and uv set are read; the textures on another set or without its
+    // transform are not read, and named.
+    for (const std::string want : {"metallicRoughnessTexture on another uv set or transform than the material's first texture on 2 materials",
+                                   "emissiveTexture on another uv set or transform than the material's first texture on 2 materials",
+                                   "occlusionTexture on another uv set or transform than the material's first texture on 2 materials",
                                    "KHR_materials_clearcoat on 2 materials", "KHR_materials_variants on 1 file"}) {
         const std::string line = "card.gltf: ignored: " + want;
         const size_t at = err.find(line);
@@ -215,12 +216,11 @@ TEST(UnreadMaterials, EveryUnreadFeatureIsNamedOnStderrOncePerFile) {
     // bounce info: per material, what was read and what was not.
     ASSERT_EQ(test::run_bounce_shell(std::string(BOUNCE_BINARY) + " info " + path + " > " + dir.file("info.txt"), &err), 0) << err;
     const std::string info = test::bytes_of(dir.file("info.txt"));
-    // (glTF's default metallic factor is 1: with its texture, a base colour of 1 and a white specular.)
-    // (Its emissiveTexture is read, times an emissiveFactor of 0 by default: it does not emit.)
-    EXPECT_NE(info.find("material card/0: colour 1 x leaf.png; specular 1, roughness 1; metallic 1 x leaf.png; "
-                        "occlusion leaf.png; uv transform scale 2 2; not read: KHR_texture_transform differing between a material's "
-                        "textures (the first texture's is read), texCoord differing between a material's textures (the first "
-                        "texture's set is read), KHR_materials_clearcoat\n"),
+    // (glTF's default metallic factor is 1: without its texture, a black diffuse.)
+    EXPECT_NE(info.find("material card/0: colour 0 x leaf.png; specular 1, roughness 1; uv transform scale 2 2; not read: "
+                        "metallicRoughnessTexture on another uv set or transform than the material's first texture, "
+                        "emissiveTexture on another uv set or transform than the material's first texture, "
+                        "occlusionTexture on another uv set or transform than the material's first texture, KHR_materials_clearcoat\n"),
               std::string::npos) << info;
     EXPECT_NE(info.find("material again/1:"), std::string::npos) << info;
     EXPECT_NE(info.find("card.gltf: ignored: KHR_materials_variants on 1 file"), std::string::npos) << info;

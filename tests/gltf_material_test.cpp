@@ -363,8 +363,13 @@ TEST(GltfMaterials, WhatIsNotReadIsNamedAndHostileValuesAreRefused) {
               {"extensions", {{"KHR_materials_sheen", json::object()}}}};
     Scene s = test::scene_from(stage(card_from(gltf_card(dir, m, true)), kLeaf));
     ASSERT_EQ(s.unread.size(), 2u);
-    EXPECT_NE(s.unread[0].find("texCoord differing"), std::string::npos) << s.unread[0];
+    EXPECT_NE(s.unread[0].find("metallicRoughnessTexture on another uv set or transform"), std::string::npos) << s.unread[0];
     EXPECT_NE(s.unread[1].find("KHR_materials_sheen on 1 material"), std::string::npos) << s.unread[1];
+    // ... and not read at the wrong uvs: the material keeps the factors alone.
+    const auto it = std::find_if(s.materials.begin(), s.materials.end(), [](const Material& x) { return x.name.starts_with("card/"); });
+    ASSERT_NE(it, s.materials.end());
+    EXPECT_TRUE(it->metallic_roughness_texture.empty());
+    EXPECT_FALSE(it->color_texture.empty());
     // Values out of range, each named by its JSON pointer.
     const auto refused = [&](const std::string& text, const std::vector<std::string>& parts) {
         json g = json::parse(test::bytes_of(gltf_card(dir, json::object())));

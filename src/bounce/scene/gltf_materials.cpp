@@ -33,9 +33,9 @@ public:
         return v.get<float>();
     }
 
-    /// A textureInfo: its uv set and transform; the first one seen is the material's, and one
-    /// that differs from it is named.
-    void texture(const json& t, const std::string& where, GltfMaterialJson& out) {
+    /// A textureInfo (`slot`: "occlusionTexture", ...): its uv set and transform; the first one
+    /// seen is the material's, and a texture that differs from it is not read, and named.
+    void texture(const json& t, const char* slot, const std::string& where, GltfMaterialJson& out) {
         if (!t.is_object()) return;
         uint8_t set = static_cast<uint8_t>(number(t, "texCoord", 0, 0, 1, where));
         UvTransform xf;
@@ -59,8 +59,9 @@ public:
             seen_ = true, out.uv_transform = xf, out.uv_set = set;
             return;
         }
-        if (set != out.uv_set) note(out, "texCoord differing between a material's textures (the first texture's set is read)");
-        if (!(xf == out.uv_transform)) note(out, "KHR_texture_transform differing between a material's textures (the first texture's is read)");
+        if (set == out.uv_set && xf == out.uv_transform) return;
+        out.skipped.emplace_back(slot);
+        note(out, fmt::format("{} on another uv set or transform than the material's first texture", slot));
     }
 
     void note(GltfMaterialJson& out, std::string what) const {
@@ -87,9 +88,9 @@ GltfMaterialJson read_material(const json& m, const std::string& path, const std
     // The base colour's texture first: its transform is the material's.
     const json pbr = m.value("pbrMetallicRoughness", json::object());
     for (const char* t : {"baseColorTexture", "metallicRoughnessTexture"})
-        if (pbr.is_object() && pbr.contains(t)) r.texture(pbr[t], at + "/pbrMetallicRoughness/" + t, out);
+        if (pbr.is_object() && pbr.contains(t)) r.texture(pbr[t], t, at + "/pbrMetallicRoughness/" + t, out);
     for (const char* t : {"emissiveTexture", "occlusionTexture", "normalTexture"})
-        if (m.contains(t)) r.texture(m[t], at + "/" + t, out);
+        if (m.contains(t)) r.texture(m[t], t, at + "/" + t, out);
     if (m.contains("occlusionTexture") && m["occlusionTexture"].is_object() && m["occlusionTexture"].value("strength", 1.0) != 1.0)
         r.note(out, "occlusionTexture.strength");
     const json ext = m.value("extensions", json::object());

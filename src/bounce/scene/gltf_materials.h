@@ -16,9 +16,12 @@ namespace bounce {
 struct GltfMaterialJson {
     float emissive_strength = 1;
     /// Where its textures are read: the transform and uv set of its base colour texture (else
-    /// its first texture's); textures that differ are named in `unread`.
+    /// its first texture's). A texture on another set or transform is not read (`skipped`,
+    /// "occlusionTexture", ...: read at the wrong uvs it would be wrong, not missing) and is
+    /// named in `unread`.
     UvTransform uv_transform;
     uint8_t uv_set = 0;
+    std::vector<std::string> skipped;
     std::optional<float> transmission;  ///< KHR_materials_transmission's factor
     float ior = 1.5f;                   ///< KHR_materials_ior's (with transmission)
     /// Features bounce does not read ("KHR_materials_sheen", "COLOR_0 ..."), each once.

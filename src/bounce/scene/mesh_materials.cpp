@@ -95,10 +95,12 @@ std::string file_texture(const aiScene& s, const aiMaterial& am, std::initialize
 /// (the base colour tints what is let through, as Cycles' Principled BSDF does).
 template <class Texture>
 void read_gltf_parts(const GltfMaterialJson& g, const Texture& texture, const std::string& path, const std::string& where, Material& m) {
+    const auto read = [&](const char* slot) { return std::find(g.skipped.begin(), g.skipped.end(), slot) == g.skipped.end(); };
     // occlusionTexture (its red channel) is baked occlusion, as ao_texture.
-    m.ao_texture = texture({aiTextureType_LIGHTMAP, aiTextureType_AMBIENT_OCCLUSION});
-    m.metallic_roughness_texture = texture({aiTextureType_UNKNOWN});
-    m.emission_texture = texture({aiTextureType_EMISSIVE});
+    if (read("occlusionTexture")) m.ao_texture = texture({aiTextureType_LIGHTMAP, aiTextureType_AMBIENT_OCCLUSION});
+    if (read("metallicRoughnessTexture")) m.metallic_roughness_texture = texture({aiTextureType_UNKNOWN});
+    if (read("emissiveTexture")) m.emission_texture = texture({aiTextureType_EMISSIVE});
+    if (!read("normalTexture")) m.normal_texture.clear();
     if (!m.emission_texture.empty()) {
         std::string why;
         m.emission_map = load_emission_map(m.emission_texture, why);
@@ -164,13 +166,13 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
             // Blender's importer (and so Cycles) reads it.
             if (!m.color_texture.empty() && gltf.empty()) m.color = Color(1);
             read_file_cutout(*am, path, where, texture({aiTextureType_OPACITY}), m);
+            // Assimp files MTL's bump maps under HEIGHT, glTF's normalTexture under NORMALS.
+            m.bump_texture = texture({aiTextureType_HEIGHT, aiTextureType_DISPLACEMENT});
+            m.normal_texture = texture({aiTextureType_NORMALS});
             if (i < gltf.size()) read_gltf_parts(gltf[i], texture, path, where, m);
             // Without a metallic-roughness texture the metalness is one number: the albedo is
             // darkened here (with one, per texel where it is read: Materials).
             if (m.metallic_roughness_texture.empty()) m.color = m.color * (1 - metallic);
-            // Assimp files MTL's bump maps under HEIGHT, glTF's normalTexture under NORMALS.
-            m.bump_texture = texture({aiTextureType_HEIGHT, aiTextureType_DISPLACEMENT});
-            m.normal_texture = texture({aiTextureType_NORMALS});
             mat_map[i] = static_cast<uint32_t>(materials.size());
             materials.push_back(m);
         }
