@@ -158,6 +158,20 @@ TEST(HostileGltf, DeepNodeChainsCyclesAndTruncatedFilesAreRefusedBeforeAssimp) {
     missing["images"] = {{{"uri", "nosuch.png"}}};
     d.write("img.gltf", missing.dump());
     test::expect_refused(render_cmd(scene_with("img.gltf"), d.file("o.exr")), {"img.gltf", "/images/0/uri", "nosuch.png"});
+    // data: URIs: base64 of a whole number of quads (mesh_file_fuzz: one of 1, 2 or 3 characters
+    // made Assimp 5.2 read past its decoded buffer), of its own alphabet, as long as byteLength says.
+    const auto refused_uri = [&](const std::string& uri, size_t length, const std::vector<std::string>& parts) {
+        json g = gltf_chain(3);
+        g["buffers"] = {{{"byteLength", length}, {"uri", uri}}};
+        d.write("uri.gltf", g.dump());
+        std::vector<std::string> want{"uri.gltf", "/buffers/0/uri"};
+        want.insert(want.end(), parts.begin(), parts.end());
+        test::expect_refused(render_cmd(scene_with("uri.gltf"), d.file("o.exr")), want);
+    };
+    refused_uri("data:application/octet-stream;base64,A", 0, {"1 characters, not a multiple of 4"});
+    refused_uri("data:application/octet-stream;base64,AA&A", 0, {"outside its alphabet"});
+    refused_uri("data:application/octet-stream;base64,AAAA", 8, {"3 bytes", "byteLength 8"});
+    refused_uri("data:application/octet-stream,AAAA", 3, {"data:<media type>;base64,<data>"});
 }
 
 TEST(HostileGltf, MaterialFactorsAreCheckedAsJsonMaterialsAre) {

@@ -3,12 +3,14 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <string_view>
 
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
@@ -89,7 +91,27 @@ int gltf_node_depth(const json& nodes, const std::string& path) {
     return deepest;
 }
 
-/// Files a glTF's buffers and images name (data: URIs aside), each required to exist.
+/// A data: URI as glTF writes one, "data:<media type>;base64,<data>", its data whole base64
+/// (Assimp 5.2 decodes a length that is not a multiple of 4 by reading past it), holding at
+/// least `bytes` bytes (a buffer's byteLength: Assimp reads that many).
+void check_data_uri(const std::string& uri, size_t bytes, const std::string& where, const std::string& path) {
+    const size_t comma = uri.find(',');
+    const size_t header_end = comma == std::string::npos ? 0 : comma;
+    if (header_end < 12 || uri.compare(header_end - 7, 7, ";base64") != 0)
+        throw InputError(path, where, "a data: URI must be \"data:<media type>;base64,<data>\"");
+    const std::string_view data(uri.data() + comma + 1, uri.size() - comma - 1);
+    const size_t pad = data.ends_with("==") ? 2 : data.ends_with("=") ? 1 : 0;
+    const bool alphabet = std::all_of(data.begin(), data.end() - static_cast<std::ptrdiff_t>(pad), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '+' || c == '/';
+    });
+    if (data.size() % 4 != 0 || !alphabet)
+        throw InputError(path, where, fmt::format("the data of a data: URI is not base64 ({} characters{})", data.size(),
+                                                  alphabet ? ", not a multiple of 4" : ", some outside its alphabet"));
+    if (data.size() / 4 * 3 - pad < bytes)
+        throw InputError(path, where, fmt::format("the data: URI holds {} bytes, fewer than the byteLength {}", data.size() / 4 * 3 - pad, bytes));
+}
+
+/// Files a glTF's buffers and images name, each required to exist (data: URIs checked instead).
 std::vector<std::string> gltf_referenced_files(const json& j, const std::string& path) {
     std::vector<std::string> out;
     for (const char* list : {"buffers", "images"}) {
@@ -101,7 +123,11 @@ std::vector<std::string> gltf_referenced_files(const json& j, const std::string&
             const std::string where = fmt::format("/{}/{}/uri", list, i);
             if (!item["uri"].is_string()) throw InputError(path, where, "expected a string");
             const std::string uri = item["uri"].get<std::string>();
-            if (uri.rfind("data:", 0) == 0) continue;
+            if (uri.rfind("data:", 0) == 0) {
+                const json length = item.value("byteLength", json(0));
+                check_data_uri(uri, length.is_number_unsigned() ? length.get<size_t>() : 0, where, path);
+                continue;
+            }
             const fs::path file = (fs::path(path).parent_path() / uri).lexically_normal();
             if (std::string why = not_a_regular_file(file.string()); !why.empty())
                 throw InputError(path, where, fmt::format("{}: \"{}\"", why, file.string()));
