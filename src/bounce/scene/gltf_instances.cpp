@@ -9,7 +9,6 @@
 #include <nlohmann/json.hpp>
 
 #include "bounce/core/error.h"
-#include "bounce/core/files.h"
 #include "bounce/scene/mesh_checks.h"
 
 namespace bounce {
@@ -194,8 +193,7 @@ std::unordered_map<const aiNode*, GpuInstances> read_gpu_instances(const std::st
 }  // namespace
 
 std::unordered_map<const aiNode*, GpuInstances> gltf_gpu_instances(const std::string& path, const aiScene* s) {
-    const std::string ext = lower_extension(path);
-    if (ext != ".gltf" && ext != ".glb") return {};
+    if (!is_gltf_file(path)) return {};
     const GltfFile file = read_gltf_file(path);  // (once: its JSON and a .glb's BIN chunk)
     if (file.json().find(kExtension) == std::string_view::npos) return {};
     try {

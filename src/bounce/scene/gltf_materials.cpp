@@ -6,7 +6,6 @@
 #include <set>
 
 #include "bounce/core/error.h"
-#include "bounce/core/files.h"
 #include "bounce/scene/mesh_checks.h"
 #include "bounce/scene/surface_textures.h"
 
@@ -114,8 +113,7 @@ GltfMaterialJson read_material(const json& m, const std::string& path, const std
 }  // namespace
 
 std::vector<GltfMaterialJson> read_gltf_materials(const std::string& path) {
-    const std::string ext = lower_extension(path);
-    if (ext != ".gltf" && ext != ".glb") return {};
+    if (!is_gltf_file(path)) return {};
     const json j = json::parse(gltf_json_text(path), nullptr, false);  // check_mesh_file parsed it
     std::vector<GltfMaterialJson> out;
     if (!j.is_object() || !j.contains("materials") || !j["materials"].is_array()) return out;

@@ -136,7 +136,7 @@ std::string UnreadFeature::line() const {
 
 std::vector<UnreadFeature> unread_material_features(const std::string& path) {
     const std::string ext = lower_extension(path);
-    if (ext == ".gltf" || ext == ".glb") return gltf_unread(path);
+    if (is_gltf_file(path)) return gltf_unread(path);
     if (ext == ".obj") return obj_unread(path);
     return {};
 }

@@ -287,10 +287,15 @@ std::vector<std::string> check_obj(const std::string& path, const MeshCheckOptio
 
 }  // namespace
 
+bool is_gltf_file(const std::string& path) {
+    const std::string ext = lower_extension(path);
+    return ext == ".gltf" || ext == ".glb";
+}
+
 std::vector<std::string> check_mesh_file(const std::string& path, const MeshCheckOptions& options) {
     const std::string ext = lower_extension(path);
     if (ext == ".ply") check_ply_counts(path);
-    if (ext == ".gltf" || ext == ".glb") return check_gltf(path);
+    if (is_gltf_file(path)) return check_gltf(path);
     if (ext == ".obj") return check_obj(path, options);
     return {};
 }

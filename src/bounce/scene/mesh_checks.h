@@ -30,6 +30,9 @@ struct MeshCheckOptions {
 /// read too (a glTF's buffers and images, an OBJ's MTL files), resolved.
 std::vector<std::string> check_mesh_file(const std::string& path, const MeshCheckOptions& options = {});
 
+/// Whether `path` names a glTF file (.gltf or .glb, by its extension).
+bool is_gltf_file(const std::string& path);
+
 /// A .gltf file, or a .glb with its JSON and BIN chunks found (read once).
 struct GltfFile {
     std::string bytes;

@@ -140,8 +140,7 @@ TriangleMesh triangles_of(const aiMesh* am, const std::vector<Vec3>& positions, 
     const aiVector3D* uvs = uv_channel(am, mat, materials, path);
     // glTF's COLOR_0 multiplies the base colour (as Blender's importer wires it); an OBJ's or a
     // PLY's vertex colours are data that no material of theirs reads.
-    const std::string ext = lower_extension(path);
-    const aiColor4D* colors = ext == ".gltf" || ext == ".glb" ? am->mColors[0] : nullptr;
+    const aiColor4D* colors = is_gltf_file(path) ? am->mColors[0] : nullptr;
     for (unsigned v = 0; v < am->mNumVertices; ++v) {
         m.positions.push_back(positions[v]);
         if (am->mNormals) m.normals.push_back(normals[v]);
@@ -169,8 +168,8 @@ struct GltfCamera {
 
 /// The first perspective camera of a .gltf/.glb file, read from its JSON.
 std::optional<GltfCamera> gltf_camera(const std::string& path) {
+    if (!is_gltf_file(path)) return std::nullopt;
     const std::string ext = lower_extension(path);
-    if (ext != ".gltf" && ext != ".glb") return std::nullopt;
     std::ifstream in(path, std::ios::binary);
     std::string text((std::istreambuf_iterator<char>(in)), {});
     if (ext == ".glb") {  // 12-byte header, then the JSON chunk: length, type, data
@@ -407,11 +406,12 @@ ControlMesh load_control_mesh(const std::string& path, const std::string& prefix
     std::map<std::array<float, 3>, int> vertex_of;
     std::map<std::array<float, 2>, int> uv_of;
     bool any_uv = false;
+    const bool gltf = is_gltf_file(path);
     for_each_mesh_instance(s, [&](const aiMesh* am, const Transform& t) {
         if (!(am->mPrimitiveTypes & (aiPrimitiveType_POLYGON | aiPrimitiveType_TRIANGLE))) return;
         const aiVector3D* uvs = uv_channel(am, mat_map[am->mMaterialIndex], materials, path);
         any_uv |= uvs != nullptr;
-        c.dropped_vertex_colors |= am->mColors[0] && (lower_extension(path) == ".gltf" || lower_extension(path) == ".glb");
+        c.dropped_vertex_colors |= am->mColors[0] && gltf;
         for (unsigned f = 0; f < am->mNumFaces; ++f) {
             const aiFace& face = am->mFaces[f];
             if (face.mNumIndices < 3) continue;
