@@ -114,7 +114,10 @@ GltfMaterialJson read_material(const json& m, const std::string& path, const std
 
 std::vector<GltfMaterialJson> read_gltf_materials(const std::string& path) {
     if (!is_gltf_file(path)) return {};
-    const json j = json::parse(gltf_json_text(path), nullptr, false);  // check_mesh_file parsed it
+    return read_gltf_materials(json::parse(gltf_json_text(path), nullptr, false), path);  // check_mesh_file parsed it
+}
+
+std::vector<GltfMaterialJson> read_gltf_materials(const nlohmann::json& j, const std::string& path) {
     std::vector<GltfMaterialJson> out;
     if (!j.is_object() || !j.contains("materials") || !j["materials"].is_array()) return out;
     for (size_t i = 0; i < j["materials"].size(); ++i) out.push_back(read_material(j["materials"][i], path, fmt::format("/materials/{}", i)));

@@ -4,6 +4,7 @@
 // doubleSided; and, for every material, what is left unread (material_report.h names it).
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -33,5 +34,7 @@ struct GltfMaterialJson {
 /// (a transform that is not finite, an emissive strength beyond 1e20, a texCoord past 1, an
 /// ior outside [1, 3], a transmission outside [0, 1]).
 std::vector<GltfMaterialJson> read_gltf_materials(const std::string& path);
+/// The same of file `path`'s JSON `doc`, already parsed.
+std::vector<GltfMaterialJson> read_gltf_materials(const nlohmann::json& doc, const std::string& path);
 
 }  // namespace bounce

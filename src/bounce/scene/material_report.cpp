@@ -51,7 +51,7 @@ std::vector<UnreadFeature> gltf_unread(const std::string& path) {
     const json j = json::parse(gltf_json_text(path), nullptr, false);
     Tally tally;
     if (!j.is_object()) return {};
-    const std::vector<GltfMaterialJson> materials = read_gltf_materials(path);
+    const std::vector<GltfMaterialJson> materials = read_gltf_materials(j, path);
     if (j.contains("materials") && j["materials"].is_array())
         for (size_t i = 0; i < j["materials"].size(); ++i) {
             const json& m = j["materials"][i];
