@@ -1,14 +1,11 @@
 #include "bounce/scene/object_reader.h"
-#include "bounce/scene/material_report.h"
 
 #include <fmt/format.h>
 
-#include <chrono>
 #include <cmath>
 
 #include "bounce/core/error.h"
 #include "bounce/core/memory.h"
-#include "bounce/dice/displacement.h"
 #include "bounce/dice/subdivision.h"
 #include "bounce/scene/fur_reader.h"
 #include "bounce/scene/instance_reader.h"
@@ -17,6 +14,8 @@
 #include "bounce/scene/link_reader.h"
 #include "bounce/scene/mesh_animation.h"
 #include "bounce/scene/mesh_import.h"
+#include "bounce/scene/mesh_object_files.h"
+#include "bounce/scene/subdivision_reader.h"
 
 namespace bounce {
 
@@ -48,149 +47,6 @@ int read_material_name(const JsonReader& r, const std::string& key, const Scene&
 }
 
 namespace {
-
-/// What a mesh file named by `key` pulls in is confined as the mesh itself (check_path).
-MeshInputs mesh_inputs(const JsonReader& r, const std::string& key) {
-    MeshInputs in;
-    if (r.ctx().check_path) in.check = [check = r.ctx().check_path, at = r.at(key)](const std::string& f) { check(f, at); };
-    return in;
-}
-
-/// Files a mesh file pulled in, recorded as inputs under the key that named the mesh.
-void record_inputs(const JsonReader& r, const std::string& key, const MeshInputs& read) {
-    if (r.ctx().inputs)
-        for (const std::string& f : read.files) r.ctx().inputs->push_back({f, r.at(key)});
-}
-
-/// Most micropolygons one object may be diced into (~150 bytes each with its BVH).
-constexpr double kMaxMicropolygons = 1e8;
-
-/// Pixels per world unit at p on the image plane of `cam` (0 behind it).
-float pixels_per_unit(const Camera& cam, const Vec3& p) {
-    const Vec3 forward = normalize(cam.look_at - cam.position);
-    const float z = dot(p - cam.position, forward);
-    if (!(z > 0)) return 0;
-    return static_cast<float>(cam.height) / (2 * z * std::tan(0.5f * cam.fov * kPi / 180.0f));
-}
-
-/// Length in pixels of the segment a-b projected on the image plane of `cam` (foreshortening
-/// included); where it reaches behind the camera, its length at the nearer end's depth.
-float projected_pixels(const Camera& cam, const Vec3& a, const Vec3& b) {
-    const Vec3 forward = normalize(cam.look_at - cam.position);
-    const Vec3 right = normalize(cross(forward, cam.up)), up = cross(right, forward);
-    const float za = dot(a - cam.position, forward), zb = dot(b - cam.position, forward);
-    const float scale = static_cast<float>(cam.height) / (2 * std::tan(0.5f * cam.fov * kPi / 180.0f));
-    if (!(za > 0 && zb > 0)) return length(b - a) * std::max(pixels_per_unit(cam, a), pixels_per_unit(cam, b));
-    const Vec3 da = a - cam.position, db = b - cam.position;
-    const float dx = dot(da, right) / za - dot(db, right) / zb, dy = dot(da, up) / za - dot(db, up) / zb;
-    return std::sqrt(dx * dx + dy * dy) * scale;
-}
-
-/// A mesh object with "subdivision": its control mesh diced into the fine tessellation (from
-/// the camera, render.dicing) and the coarse one (render.dicing.ray_level), both displaced
-/// when the object has a "displacement".
-/// Runs `parse` (a mesh file's load), its time counted in the scene's mesh_parse_seconds.
-template <class Parse>
-void parsing_mesh(Scene& scene, Parse&& parse) {
-    const auto start = std::chrono::steady_clock::now();
-    parse();
-    scene.load_times.mesh_parse_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-/// What `file`'s own materials (read for object `object`) carry that is not read
-/// (material_report.h): on each of its materials, and named once per file on the scene.
-void note_unread(Scene& scene, const std::string& file, int mat, const std::string& object) {
-    if (mat >= 0) return;  // a scene material replaces the file's
-    const std::vector<UnreadFeature> unread = unread_material_features(file);
-    for (const UnreadFeature& f : unread)
-        for (const std::string& name : f.materials)
-            for (Material& m : scene.materials)
-                if (m.name == object + "/" + name) m.unread.push_back(f.what);
-    const std::string prefix = file + ": ignored: ";
-    if (std::any_of(scene.unread.begin(), scene.unread.end(), [&](const std::string& l) { return l.starts_with(prefix); }))
-        return;
-    for (const UnreadFeature& f : unread) scene.unread.push_back(prefix + f.line());
-}
-
-void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object& obj, SubdivScheme scheme) {
-    SubdivSurface surf;
-    surf.scheme = scheme;
-    surf.boundary = r.choice("boundary", "edge-and-corner", {"edge-only", "edge-and-corner"}) == "edge-only"
-                        ? SubdivBoundary::EdgeOnly : SubdivBoundary::EdgeAndCorner;
-    if (r.has("fine_subdivisions")) r.fail("fine_subdivisions", "a subdivision surface is diced from the camera by render.shading_rate (rays see render.ray_level), not fine_subdivisions");
-    const std::string file = r.file("file", true);
-    MeshInputs read = mesh_inputs(r, "file");
-    try {
-        obj.placement = read_transform(r);
-        parsing_mesh(scene, [&] { surf.control = load_control_mesh(file, obj.name, scene.materials, mat, obj.placement, &read); });
-        check_control_mesh(surf.control, surf.scheme);
-        const std::string dropped = file + ": ignored: COLOR_0 (vertex colours) on a subdivision surface";
-        if (surf.control.dropped_vertex_colors && std::find(scene.unread.begin(), scene.unread.end(), dropped) == scene.unread.end())
-            scene.unread.push_back(dropped);
-    } catch (const InputError& e) {
-        r.fail("file", e.what());
-    }
-    record_inputs(r, "file", read);
-    note_unread(scene, file, mat, obj.name);
-    if (r.has("displacement")) {
-        JsonReader d(r.raw("displacement"), r.at("displacement"), r.ctx(), {"map", "scale", "midpoint"});
-        if (!d.has("map")) d.fail("", "a displacement needs a \"map\"");
-        const std::string map = d.file("map", true);
-        surf.displacement.scale = d.number("scale", 0, -kMaxCoordinate, kMaxCoordinate, true);
-        surf.displacement.midpoint = d.number("midpoint", 0.5f, -1e3, 1e3);
-        try {
-            surf.displacement.map = std::make_shared<DisplacementMap>(map);
-        } catch (const InputError& e) {
-            d.fail("map", e.what());
-        }
-        if (surf.control.face_uvs.empty()) d.fail("map", "the control mesh has no uvs to look the map up with");
-    }
-    const DicingSettings& ds = scene.render.dicing;
-    const int ray_level = std::min(ds.ray_level, ds.max_level);
-    const int level = dicing_level(surf.control, [&](const Vec3& p) { return pixels_per_unit(scene.camera, p); },
-                                   ds.shading_rate, ray_level, ds.max_level);
-    // The fine tessellation per control edge: about shading_rate pixels per diced edge from the
-    // camera, never coarser than the ray tessellation (docs/displacement.md).
-    const auto rate = [&](const Vec3& a, const Vec3& b) {
-        const float px = projected_pixels(scene.camera, a, b) / ds.shading_rate;
-        return static_cast<int>(std::clamp(std::round(px), static_cast<float>(1 << ray_level), static_cast<float>(1 << ds.max_level)));
-    };
-    // Refuse a dicing that cannot fit before allocating it: per face its largest edge rate
-    // squared (twice for quads, half per corner for n-gons), and the ray tessellation.
-    double micropolygons = 0;
-    int largest = 1 << ray_level;
-    for (size_t f = 0, k = 0; f < surf.control.face_count(); k += static_cast<size_t>(surf.control.face_sizes[f++])) {
-        const int n = surf.control.face_sizes[f];
-        int rmax = 1;
-        for (int i = 0; i < n; ++i)
-            rmax = std::max(rmax, rate(surf.control.positions[static_cast<size_t>(surf.control.face_vertices[k + static_cast<size_t>(i)])],
-                                       surf.control.positions[static_cast<size_t>(surf.control.face_vertices[k + static_cast<size_t>((i + 1) % n)])]));
-        largest = std::max(largest, rmax);
-        const double cells = static_cast<double>(rmax) * rmax, coarse = std::pow(4.0, ray_level);
-        micropolygons += (n == 3 ? 1.0 : n == 4 ? 2.0 : n / 2.0) * (cells + coarse);
-    }
-    if (micropolygons > kMaxMicropolygons)
-        r.fail("", fmt::format("dicing {} gives {:.3g} micropolygons (about {:.0f} GiB); the limit is {:.0e}: raise "
-                               "render.shading_rate or lower render.max_level / render.ray_level",
-                               obj.name, micropolygons, micropolygons * 150 / (1 << 30), kMaxMicropolygons));
-    if (std::string why = memory_shortfall(micropolygons * 150, fmt::format("dicing {} into {:.3g} micropolygons", obj.name, micropolygons));
-        !why.empty())
-        r.fail("", why + ": raise render.shading_rate or lower render.max_level / render.ray_level");
-    const auto t0 = std::chrono::steady_clock::now();
-    try {
-        obj.coarse = dice(surf, ray_level);
-        if (largest > 1 << ray_level) obj.fine = dice_adaptive(surf, rate);
-    } catch (const InputError& e) {  // a map that cannot be read after all, or OpenSubdiv refusing the mesh
-        const bool map = surf.displacement.map && e.file() == surf.displacement.map->path();
-        r.fail(map ? "displacement/map" : "file", e.what());
-    }
-    obj.dicing_level = level;
-    if (surf.displacement.active())
-        obj.displacement_bound = std::abs(surf.displacement.scale) *
-                                 std::max(std::abs(surf.displacement.midpoint), std::abs(1 - surf.displacement.midpoint));
-    obj.dicing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    obj.surface = std::make_shared<const SubdivSurface>(std::move(surf));
-}
 
 /// The keys each object type reads.
 const std::vector<std::string>& keys_of_type(const std::string& type, bool subdivision) {
