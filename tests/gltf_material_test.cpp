@@ -310,11 +310,15 @@ TEST(GltfMaterials, VertexColoursMultiplyTheBaseColour) {
     const Scene s = test::scene_from(stage(card_from(dir.file("card.gltf")), kLeaf));
     EXPECT_TRUE(s.unread.empty()) << s.unread.front();
     // A subdivision surface does not carry them: said, not dropped in silence.
-    json subdivided = card_from(dir.file("card.gltf"));
+    // (Beside what its materials leave unread: that line once did hide theirs.)
+    json sheen = plain;
+    sheen["extensions"] = {{"KHR_materials_sheen", json::object()}};
+    json subdivided = card_from(card_with_colors(dir, sheen, {1, 1, 1, 0, 0, 0, 0, 0, 0, 1, 1, 1}));
     subdivided[0]["subdivision"] = "loop";
     const Scene d = test::scene_from(stage(subdivided, kLeaf));
-    ASSERT_EQ(d.unread.size(), 1u);
+    ASSERT_EQ(d.unread.size(), 2u);
     EXPECT_EQ(d.unread[0], dir.file("card.gltf") + ": ignored: COLOR_0 (vertex colours) on a subdivision surface");
+    EXPECT_EQ(d.unread[1], dir.file("card.gltf") + ": ignored: KHR_materials_sheen on 1 material");
     // Hostile: a count other than the vertices', a component outside [0, 1].
     const std::string three = card_with_colors(dir, plain, {1, 1, 1, 0, 0, 0, 0, 0, 0});
     test::expect_input_error([&] { test::scene_from(stage(card_from(three), kLeaf)); }, {"card.gltf", "attributes/COLOR_0", "3 elements", "4 vertices"});

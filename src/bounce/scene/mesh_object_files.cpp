@@ -24,10 +24,7 @@ void note_unread(Scene& scene, const std::string& file, int mat, const std::stri
         for (const std::string& name : f.materials)
             for (Material& m : scene.materials)
                 if (m.name == object + "/" + name) m.unread.push_back(f.what);
-    const std::string prefix = file + ": ignored: ";
-    if (std::any_of(scene.unread.begin(), scene.unread.end(), [&](const std::string& l) { return l.starts_with(prefix); }))
-        return;
-    for (const UnreadFeature& f : unread) scene.unread.push_back(prefix + f.line());
+    for (const UnreadFeature& f : unread) note_ignored(scene, file, f.line());
 }
 
 void note_ignored(Scene& scene, const std::string& file, const std::string& what) {
