@@ -107,8 +107,8 @@ void check_data_uri(const std::string& uri, size_t bytes, const std::string& whe
     if (data.size() % 4 != 0 || !alphabet)
         throw InputError(path, where, fmt::format("the data of a data: URI is not base64 ({} characters{})", data.size(),
                                                   alphabet ? ", not a multiple of 4" : ", some outside its alphabet"));
-    if (data.size() / 4 * 3 - pad < bytes)
-        throw InputError(path, where, fmt::format("the data: URI holds {} bytes, fewer than the byteLength {}", data.size() / 4 * 3 - pad, bytes));
+    if (const size_t holds = data.size() / 4 * 3 - pad; holds < bytes)
+        throw InputError(path, where, fmt::format("the data: URI holds {} bytes, fewer than the byteLength {}", holds, bytes));
 }
 
 /// Files a glTF's buffers and images name, each required to exist (data: URIs checked instead).

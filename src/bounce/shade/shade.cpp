@@ -107,7 +107,8 @@ Color site_radiance(const ShadeContext& c, const PathSite& s, int x, int y, uint
         return c.materials.emission(f.material, f.uv) + c.sites.radiosity->lookup(f.object, f.prim, s.u, s.v, s.front, counters);
     const Material& m = c.scene.materials[f.material];
     SurfaceShading surf;
-    surf.albedo = c.materials.albedo(f.material, f.uv) * c.materials.vertex_color(f.object, f.prim, f.p), surf.specular = m.specular, surf.roughness = m.roughness, surf.normal = f.n;
+    surf.albedo = c.materials.albedo(f.material, f.uv) * c.materials.vertex_color(f.object, f.prim, f.p);
+    surf.specular = m.specular, surf.roughness = m.roughness, surf.normal = f.n;
     Color out = fragment_direct(c.scene, c.materials, c.lighting, f, surf, s.wo, x, y, kSiteStream + j, c.indirect == nullptr,
                                 counters, nullptr);
     if (in) out += indirect_radiance(*in, f.n, surf, s.wo, c.scene.render.shading.light_per_channel);
