@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes the foliage set (issue 61): bushes of leaf cards, each card's leaf a cutout of about
-half its square, instanced over a ground, with a fence of cutout slats, under a sun and a sky.
+half its square that lets a third of its diffuse light through (diffuse transmission), instanced over a ground, with a fence of cutout slats, under a sun and a sky.
 Deterministic: the same files every run. Usage: generate.py [FOLDER] (default: this folder)."""
 import json, math, os, random, struct, sys, zlib
 
@@ -45,7 +45,8 @@ def main():
         "render": {"spp": 4, "rays": 256, "gi": "cache"},
         "materials": {
             "ground": {"color": [0.35, 0.3, 0.22]},
-            "leaf": {"color": [0.18, 0.42, 0.08], "alpha_mode": "mask", "opacity_texture": "leaf.png"},
+            "leaf": {"color": [0.18, 0.42, 0.08], "alpha_mode": "mask", "opacity_texture": "leaf.png",
+                     "diffuse_transmission": 0.35, "diffuse_transmission_color": [0.45, 0.7, 0.15]},
             "wood": {"color": [0.55, 0.45, 0.35], "alpha_mode": "mask", "opacity_texture": "slats.png"},
             "wall": {"color": 0.7},
         },

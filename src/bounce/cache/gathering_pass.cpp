@@ -20,6 +20,7 @@ namespace {
 struct Candidate {
     int wx, wy;
     uint32_t k;
+    Side side = Side::Front;
 };
 
 /// What one sub-pass collected, per tile.
@@ -45,6 +46,8 @@ public:
 private:
     Record gather_at(const Candidate& c, Counters& counters);
     void judge_tile(const SubPass& sp, const Tile& t);
+    /// One side of one fragment of a tile: a record where the cache misses (`covering`: scratch).
+    void judge(const Candidate& c, TileWork& w, std::vector<uint32_t>& covering, Counters& counters);
     void insert_new(std::vector<Record> records);
     void exchange_work();
     void share_late(const std::vector<Candidate>& deferred, std::vector<uint8_t>& still, std::vector<Record>& late);
@@ -75,15 +78,16 @@ private:
 
 Record Gathering::gather_at(const Candidate& c, Counters& counters) {
     const Fragment& f = deep_.pixel(c.wx, c.wy)[c.k];
-    const Site site = record_site(scene_, f, cache_.settings());
-    const RandomStream rng = fragment_stream(scene_.render.visibility.seed, c.wx + deep_.x0, c.wy + deep_.y0, c.k);
+    const Site site = record_site(scene_, f, cache_.settings(), c.side);
+    const RandomStream front = fragment_stream(scene_.render.visibility.seed, c.wx + deep_.x0, c.wy + deep_.y0, c.k);
+    const RandomStream rng = c.side == Side::Back ? back_side_stream(front) : front;
     auto hits = o_.keep_hits ? std::make_shared<GatherHits>() : nullptr;
     GatherResult g = o_.first ? o_.first->gather(site.origin, site.n, rng, counters, site.near, hits.get()) : GatherResult{};
     if (!o_.first || g.rel_stderr > cache_.settings().ray_noise) {
         g = gatherer_.gather(site.origin, site.n, rng, counters, site.near, hits.get());
         ++full_gathers.local();
     }
-    Record r = cache_.make_record(g, site.p, site.n, f.footprint, candidate_key(deep_, c.wx, c.wy, c.k));
+    Record r = cache_.make_record(g, site.p, site.n, f.footprint, candidate_key(deep_, c.wx, c.wy, c.k, c.side));
     r.frame = r.gathered = o_.frame;
     r.origin = site.origin;
     r.near = site.near;
@@ -105,30 +109,35 @@ void Gathering::judge_tile(const SubPass& sp, const Tile& t) {
             auto frags = deep_.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 if (!needs_bounce_light(scene_, frags[k])) continue;
-                const Site site = record_site(scene_, frags[k], cache_.settings());
-                covering.clear();
-                if (o_.stale) {
-                    // Every earlier frame's record that covers the point is redone, not only those
-                    // that would fill a miss: which records cover a miss depends on the order of
-                    // the misses, so the point would blend another subset of them each frame.
-                    o_.stale->covering(site.p, site.n, covering);
-                    w.requests.insert(w.requests.end(), covering.begin(), covering.end());
-                }
-                if (!cache_.misses(site.p, site.n, per_tile_ ? std::span<const Record>(w.made) : std::span<const Record>(),
-                                   o_.own_weight, o_.min_weight))
-                    continue;
-                if (!covering.empty()) {  // a miss that redone records may fill: judged again after them
-                    w.deferred.push_back({wx, wy, k});
-                    continue;
-                }
-                Record r = gather_at({wx, wy, k}, counters);
-                if (per_tile_) {
-                    cache_.clamp_to_neighbours(r, w.made);
-                    r.support = cache_.support(r);
-                }
-                w.made.push_back(std::move(r));
+                judge({wx, wy, k, Side::Front}, w, covering, counters);
+                if (takes_back_light(scene_, frags[k])) judge({wx, wy, k, Side::Back}, w, covering, counters);
             }
         }
+}
+
+void Gathering::judge(const Candidate& c, TileWork& w, std::vector<uint32_t>& covering, Counters& counters) {
+    const Site site = record_site(scene_, deep_.pixel(c.wx, c.wy)[c.k], cache_.settings(), c.side);
+    covering.clear();
+    if (o_.stale) {
+        // Every earlier frame's record that covers the point is redone, not only those that would
+        // fill a miss: which records cover a miss depends on the order of the misses, so the point
+        // would blend another subset of them each frame.
+        o_.stale->covering(site.p, site.n, covering);
+        w.requests.insert(w.requests.end(), covering.begin(), covering.end());
+    }
+    if (!cache_.misses(site.p, site.n, per_tile_ ? std::span<const Record>(w.made) : std::span<const Record>(), o_.own_weight,
+                       o_.min_weight))
+        return;
+    if (!covering.empty()) {  // a miss that redone records may fill: judged again after them
+        w.deferred.push_back(c);
+        return;
+    }
+    Record r = gather_at(c, counters);
+    if (per_tile_) {
+        cache_.clamp_to_neighbours(r, w.made);
+        r.support = cache_.support(r);
+    }
+    w.made.push_back(std::move(r));
 }
 
 /// New records, merged in an order that does not depend on scheduling. Shared: by pixel,
@@ -251,7 +260,7 @@ void Gathering::subpass(const SubPass& sp) {
         const auto u = static_cast<size_t>(i);
         if (!mine(u)) return;
         const Candidate& c = deferred[u];
-        const Site site = record_site(scene_, deep_.pixel(c.wx, c.wy)[c.k], cache_.settings());
+        const Site site = record_site(scene_, deep_.pixel(c.wx, c.wy)[c.k], cache_.settings(), c.side);
         still[u] = cache_.misses(site.p, site.n, {}, o_.own_weight, o_.min_weight);
         if (still[u]) late[u] = gather_at(c, stats_.local());
     });

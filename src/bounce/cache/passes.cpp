@@ -63,13 +63,14 @@ struct Origin {
     float own = 0;
     const Record* record = nullptr;
     Color interpolated;
+    bool back_missed = false;  ///< a translucent fragment's back side found no record
 };
 
-/// The light at fragment k of window pixel (wx, wy): its own record if per-fragment
-/// refinement gave it one (blended with the interpolation inside the refine band), else the
-/// interpolation.
-Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
-                     Origin& from) {
+/// The light at fragment k of window pixel (wx, wy) through its front: its own record if
+/// per-fragment refinement gave it one (blended with the interpolation inside the refine
+/// band), else the interpolation.
+Indirect front_indirect_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
+                           Origin& from) {
     const Fragment& f = deep.pixel(wx, wy)[k];
     from = {};
     if (!needs_bounce_light(scene, f)) return {};  // nothing to look up: not a miss
@@ -92,9 +93,23 @@ Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const Dee
     return out;
 }
 
-/// Each light's share of what indirect_at gave fragment k (`from`), into `out`.
-void shares_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
-               const Origin& from, std::span<Color> out) {
+/// The light at fragment k: through its front (front_indirect_at) and, on a thin translucent
+/// surface, through its back, interpolated from the back side's records (refinement and
+/// corrections are the front's alone).
+Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
+                     Origin& from) {
+    Indirect out = front_indirect_at(scene, cache, deep, wx, wy, k, from);
+    const Fragment& f = deep.pixel(wx, wy)[k];
+    if (!takes_back_light(scene, f)) return out;
+    const Interpolated back = interpolate_at(cache, f, record_site(scene, f, cache.settings(), Side::Back), Side::Back);
+    out.back = back.E;
+    from.back_missed = back.weight <= 0;
+    return out;
+}
+
+/// Each light's share of what front_indirect_at gave fragment k (`from`), into `out`.
+void front_shares_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
+                     const Origin& from, std::span<Color> out) {
     const Fragment& f = deep.pixel(wx, wy)[k];
     if (from.src == Source::Missed || !needs_bounce_light(scene, f)) return;
     const Site site = record_site(scene, f, cache.settings());
@@ -107,6 +122,23 @@ void shares_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffe
         const Color e = from.interpolated * (1 - from.own);
         for (size_t i = 0; i < out.size(); ++i) out[i] += interpolated[i] * e;
     }
+    normalise_shares(out);
+}
+
+/// Each light's share of what indirect_at gave fragment k (`in`, `from`), into `out`: on a
+/// thin translucent surface the two sides' shares weighed by what the indirect layer takes of
+/// each, (1 - t) E_front and t E_back.
+void shares_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
+               const Indirect& in, const Origin& from, std::span<Color> out) {
+    front_shares_at(scene, cache, deep, wx, wy, k, from, out);
+    const Fragment& f = deep.pixel(wx, wy)[k];
+    if (!takes_back_light(scene, f) || from.back_missed) return;
+    thread_local std::vector<Color> back;
+    back.assign(out.size(), Color(0));
+    light_shares_at(cache, f, record_site(scene, f, cache.settings(), Side::Back), back, Side::Back);
+    const float t = scene.materials[f.material].diffuse_transmission;
+    const Color wf = from.src == Source::Missed ? Color(0) : in.irradiance * (1 - t), wb = in.back * t;
+    for (size_t i = 0; i < out.size(); ++i) out[i] = out[i] * wf + back[i] * wb;
     normalise_shares(out);
 }
 
@@ -247,13 +279,13 @@ InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep,
         for (uint32_t k = 0; k < frags.size(); ++k) {
             Origin from;
             out.light[first + k] = indirect_at(scene, cache, deep, wx, wy, k, from);
-            if (per_light) shares_at(scene, cache, deep, wx, wy, k, from, out.shares.at(first + k));
+            if (per_light) shares_at(scene, cache, deep, wx, wy, k, out.light[first + k], from, out.shares.at(first + k));
             ++lookups.local();
             if (from.src == Source::Own) {
                 ++own.local();
                 out.refined[first + k] = 1;
             }
-            misses.local() += from.src == Source::Missed;
+            misses.local() += from.src == Source::Missed || from.back_missed;
         }
     }, scene.render.parallel.tile_order);
     uint64_t m = 0, l = 0, o = 0;

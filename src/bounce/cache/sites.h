@@ -13,6 +13,11 @@
 
 namespace bounce {
 
+/// The hemisphere of a fragment a record serves: a thin translucent surface's fragments take
+/// bounce light through both (takes_back_light), each side from records of its own; the back
+/// side's records lie at the same point about the reversed normal (docs/shading.md).
+enum class Side : uint8_t { Front, Back };
+
 /// Where a fragment's records live and the hemisphere its gathers use: the un-displaced
 /// surface by default (rays still leave from the displaced point f.p), or the displaced one.
 /// Hair: at its strand's root on the growing surface whatever the mode (gather.h hair_site);
@@ -22,7 +27,12 @@ struct Site {
     Vec3 origin;      ///< where the gather's rays leave from
     float near = 0;   ///< hits nearer than this do not size the record (Gatherer::gather)
 };
-inline Site record_site(const Scene& scene, const Fragment& f, const CacheSettings& cs) {
+inline Site record_site(const Scene& scene, const Fragment& f, const CacheSettings& cs, Side side = Side::Front) {
+    if (side == Side::Back) {
+        Site s = record_site(scene, f, cs);
+        s.n = -s.n;
+        return s;
+    }
     if (f.is_hair()) {
         const HairSite h = hair_site(scene, f);
         return {h.p, h.n, h.p};
@@ -36,27 +46,33 @@ inline Site record_site(const Scene& scene, const Fragment& f, const CacheSettin
 
 /// The point and normal the shading pass extrapolates a fragment's records to: its own
 /// (displaced) point and normal; hair gets no gradient along the strand (its site's).
-inline std::pair<const Vec3*, const Vec3*> extrapolated_to(const Fragment& f, const Site& site) {
-    return f.is_hair() ? std::pair{&site.p, &site.n} : std::pair{&f.p, &f.n};
+/// (The back side's: the same point about the reversed normal.)
+inline std::pair<Vec3, Vec3> extrapolated_to(const Fragment& f, const Site& site, Side side) {
+    if (f.is_hair()) return {site.p, site.n};
+    return {f.p, side == Side::Back ? -f.n : f.n};
 }
 
-/// The shading-pass interpolation at a fragment: weights at its record site, each record's
-/// value extrapolated with its gradients to extrapolated_to.
-inline Interpolated interpolate_at(const IrradianceCache& cache, const Fragment& f, const Site& site) {
-    const auto [p, n] = extrapolated_to(f, site);
-    return cache.lookup(site.p, site.n, true, p, n);
+/// The shading-pass interpolation at a fragment's side: weights at its record site, each
+/// record's value extrapolated with its gradients to extrapolated_to.
+inline Interpolated interpolate_at(const IrradianceCache& cache, const Fragment& f, const Site& site, Side side = Side::Front) {
+    const auto [p, n] = extrapolated_to(f, site, side);
+    return cache.lookup(site.p, site.n, true, &p, &n);
 }
 
 /// Each light's share of interpolate_at's value (IrradianceCache::light_shares), into `out`.
-inline void light_shares_at(const IrradianceCache& cache, const Fragment& f, const Site& site, std::span<Color> out) {
-    const auto [p, n] = extrapolated_to(f, site);
-    cache.light_shares(site.p, site.n, true, p, n, out);
+inline void light_shares_at(const IrradianceCache& cache, const Fragment& f, const Site& site, std::span<Color> out,
+                            Side side = Side::Front) {
+    const auto [p, n] = extrapolated_to(f, site, side);
+    cache.light_shares(site.p, site.n, true, &p, &n, out);
 }
 
-inline uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k) {
+/// A back side's record key: its front's with the top bit set (no image is 2^55 pixels).
+inline constexpr uint64_t kBackSideKey = uint64_t{1} << 63;
+
+inline uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k, Side side = Side::Front) {
     uint64_t pix = static_cast<uint64_t>(wy + deep.y0) * static_cast<uint64_t>(deep.full_width) +
                    static_cast<uint64_t>(wx + deep.x0);
-    return (pix << 8) | k;
+    return (pix << 8) | k | (side == Side::Back ? kBackSideKey : 0);
 }
 
 /// Takes the cache's lock (shared or exclusive), adding the time waited to `counters`.

@@ -1,4 +1,5 @@
 #include "bounce/cache/temporal.h"
+#include "bounce/cache/sites.h"
 
 #include <algorithm>
 #include <cmath>
@@ -197,9 +198,10 @@ std::vector<Bounds> moving_bounds(const SceneChanges& changes, uint32_t except) 
 }
 
 RandomStream record_stream(const Record& r, uint64_t seed, int full_width) {
-    const uint64_t pixel = r.key >> 8;
+    const uint64_t pixel = (r.key & ~kBackSideKey) >> 8;
     const auto w = static_cast<uint64_t>(std::max(1, full_width));
-    return fragment_stream(seed, static_cast<int>(pixel % w), static_cast<int>(pixel / w), static_cast<uint32_t>(r.key & 0xff));
+    const RandomStream front = fragment_stream(seed, static_cast<int>(pixel % w), static_cast<int>(pixel / w), static_cast<uint32_t>(r.key & 0xff));
+    return r.key & kBackSideKey ? back_side_stream(front) : front;
 }
 
 namespace {

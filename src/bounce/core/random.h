@@ -50,6 +50,12 @@ enum Dim : uint32_t {
     kDimLight = 10,  ///< light i uses kDimLight + 16 i + (1, 2): far below kDimGather for any light count
     kDimLightPick = (1u << 30) - 4096,  ///< many lights: the k-th light picked at a point (DirectLighting)
     kDimGather = 1u << 30,  ///< the gather uses kDimGather + {0, 1, 3}
+    kDimBackSide = (1u << 30) + 64,  ///< back_side_stream
 };
+
+/// The random stream of what a thin translucent surface takes in through its back side (its
+/// direct light, its gathers), made from its front's: both sides are keyed by the same
+/// pixel, fragment or hit, and the front's numbers are those of an opaque surface.
+constexpr RandomStream back_side_stream(const RandomStream& front) { return RandomStream(front.bits(0, kDimBackSide), 1); }
 
 }  // namespace bounce

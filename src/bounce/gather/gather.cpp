@@ -50,13 +50,10 @@ Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d
         return part_sum(parts);
     }
     if (radiosity_) return radiosity_->lookup(h.object, h.prim, h.u, h.v, front, counters);
-    Vec3 n = front ? sp.ng : -sp.ng;
-    Color albedo = materials_.secondary_albedo(sp);
-    RandomStream hit_rng(rng.bits(ray, kDimGather + 3), ray);
-    if (parts.empty()) return albedo * lighting_.irradiance(sp.p, n, h.object, hit_rng, settings_.hit_light_samples, counters) * kInvPi;
-    lighting_.irradiance_parts(sp.p, n, h.object, hit_rng, settings_.hit_light_samples, counters, parts);
-    for (Color& x : parts) x = albedo * x * kInvPi;
-    return part_sum(parts);
+    const Vec3 n = front ? sp.ng : -sp.ng;
+    const RandomStream hit_rng(rng.bits(ray, kDimGather + 3), ray);
+    return lighting_.diffuse_radiance(sp.p, n, h.object, materials_.secondary_albedo(sp) * kInvPi,
+                                      materials_.secondary_translucency(sp) * kInvPi, hit_rng, settings_.hit_light_samples, counters, parts);
 }
 
 Color Gatherer::hair_radiance(const Hit& h, const Vec3& at, const Vec3& d, const RandomStream& rng, uint64_t ray,
@@ -304,6 +301,10 @@ bool needs_bounce_light(const Scene& scene, const Fragment& f) {
     for (int c = 0; c < 3; ++c)
         if (m.mirror[c] < 1 && m.transmission[c] < 1) return true;
     return false;
+}
+
+bool takes_back_light(const Scene& scene, const Fragment& f) {
+    return !f.is_hair() && !scene.render.indirect.ao && scene.materials[f.material].is_translucent() && needs_bounce_light(scene, f);
 }
 
 GatherSettings gather_settings(const Scene& scene) {

@@ -195,6 +195,9 @@ struct Indirect {
     float ao = 1;
     Vec3 bent_normal{0, 0, 1};
     std::array<Vec3, 3> light_dir{};  ///< per channel: mean incoming direction x radiance (GatherResult)
+    /// A thin translucent surface's irradiance through its back hemisphere (about -n; its own
+    /// records: docs/shading.md); 0 elsewhere.
+    Color back{0};
 };
 
 /// Each scene light's share of every fragment's indirect light, per channel (render.light_parts:
@@ -222,6 +225,10 @@ inline HairSite gather_site(const Scene& scene, const Fragment& f) { return f.is
 /// specular paths bring). The gathering, refinement and interpolation passes and brute force
 /// skip the others (no records, no gathers; their indirect layers are 0 and their AO 1).
 bool needs_bounce_light(const Scene& scene, const Fragment& f);
+/// Whether fragment f also takes bounce light through its back hemisphere (Indirect::back): a
+/// thin translucent surface's (Material::diffuse_transmission) in a render of light (AO looks
+/// at one side).
+bool takes_back_light(const Scene& scene, const Fragment& f);
 
 /// A fragment that takes bounce light, as the per-fragment passes (brute force, the control
 /// variate's correction) gather it: its index in deep.fragments, its window pixel, the site of

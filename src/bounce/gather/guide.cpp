@@ -189,6 +189,8 @@ std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer
                                    ? gatherer.gather_guided(b.site.p, b.site.n, b.rng, *guide, counters)
                                    : gatherer.gather(b.site.p, b.site.n, b.rng, counters);
         out[b.index] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
+        if (takes_back_light(scene, b.f))  // a plain gather: the pilots guide the front side's
+            out[b.index].back = gatherer.gather(b.site.p, -b.site.n, back_side_stream(b.rng), counters).irradiance;
     });
     return out;
 }

@@ -129,6 +129,25 @@ void DirectLighting::irradiance_parts(const Vec3& p, const Vec3& n, uint32_t obj
         out[i] = scene_.lights[i].lights(object) ? sample_light(i, p, n, rng, samples, counters, nullptr, hair_start, true) : Color(0);
 }
 
+Color DirectLighting::diffuse_radiance(const Vec3& p, const Vec3& n, uint32_t object, const Color& reflect, const Color& transmit,
+                                       const RandomStream& rng, int samples, Counters& counters, std::span<Color> parts) const {
+    const bool through = transmit != Color(0);
+    if (parts.empty()) {
+        const Color front = reflect * irradiance(p, n, object, rng, samples, counters);
+        return through ? front + transmit * irradiance(p, -n, object, back_side_stream(rng), samples, counters) : front;
+    }
+    irradiance_parts(p, n, object, rng, samples, counters, parts);
+    thread_local std::vector<Color> back;
+    if (through) back.resize(parts.size()), irradiance_parts(p, -n, object, back_side_stream(rng), samples, counters, back);
+    Color sum(0);
+    for (size_t i = 0; i < parts.size(); ++i) {
+        parts[i] = reflect * parts[i];
+        if (through) parts[i] += transmit * back[i];
+        sum += parts[i];
+    }
+    return sum;
+}
+
 Color DirectLighting::strand_radiance(const Hit& h, const Vec3& at, const Vec3& d, const RandomStream& rng, int samples,
                                       Counters& counters, std::span<Color> parts) const {
     const Fur& fur = *scene_.objects[h.object].fur;

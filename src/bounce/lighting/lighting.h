@@ -56,6 +56,14 @@ public:
     void irradiance_parts(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng, int samples,
                           Counters& counters, std::span<Color> out, float hair_start = 0) const;
 
+    /// Diffuse radiance leaving a point of a thin surface on the side of unit normal `n`:
+    /// reflect E(n) + transmit E(-n), for the BRDF `reflect` and BTDF `transmit` (albedo / pi
+    /// and translucency / pi). The irradiance through the back hemisphere is drawn from
+    /// back_side_stream(rng), and only where `transmit` is not 0. With `parts` (one per light):
+    /// per light, scales factored out (irradiance_parts), and their sum is returned.
+    Color diffuse_radiance(const Vec3& p, const Vec3& n, uint32_t object, const Color& reflect, const Color& transmit,
+                           const RandomStream& rng, int samples, Counters& counters, std::span<Color> parts = {}) const;
+
     /// Radiance a strand sends back along a ray of direction `d` that hit it (`h`, a hair hit) at
     /// `at`: its albedo x the direct light on the strand's side facing the ray / pi, as gathers
     /// and reflections see fur. With `parts` (one per light): per light, scales factored out

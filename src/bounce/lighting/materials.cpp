@@ -70,9 +70,17 @@ float Materials::metalness(uint32_t material, const Vec2& st, float du, float dv
 }
 
 Color Materials::albedo(uint32_t material, const Vec2& uv) const {
-    const Vec2 st = scene_.materials[material].uv_transform.apply(uv);
+    const Material& m = scene_.materials[material];
+    const Vec2 st = m.uv_transform.apply(uv);
     const float metal = metalness(material, st, 0, 0);
-    return base_colour(material, st, 0, 0) * (metal > 0 ? 1 - metal : 1.0f);
+    return base_colour(material, st, 0, 0) * ((metal > 0 ? 1 - metal : 1.0f) * (1 - m.diffuse_transmission));
+}
+
+Color Materials::translucency(uint32_t material, const Vec2& uv) const {
+    const Material& m = scene_.materials[material];
+    if (!m.is_translucent()) return Color(0);
+    const float metal = metalness(material, m.uv_transform.apply(uv), 0, 0);
+    return m.diffuse_transmission_color * (m.diffuse_transmission * (metal > 0 ? 1 - metal : 1.0f));
 }
 
 float fresnel_dielectric(float cos_i, float eta) {
@@ -109,6 +117,11 @@ Color base_share(const Material& m) { return m.is_specular() ? specular_split(m,
 
 Color Materials::secondary_albedo(const SurfacePoint& sp) const {
     return albedo(sp.material, sp.uv) * sp.color * base_share(scene_.materials[sp.material]);
+}
+
+Color Materials::secondary_translucency(const SurfacePoint& sp) const {
+    const Material& m = scene_.materials[sp.material];
+    return m.is_translucent() ? translucency(sp.material, sp.uv) * base_share(m) : Color(0);
 }
 
 Color Materials::vertex_color(uint32_t object, uint32_t prim, const Vec3& p) const {
@@ -161,10 +174,14 @@ SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t p
         dv = footprint / std::max(length(dpdv), 1e-20f);
     }
     s.albedo = base_colour(material, st, du, dv) * vertex_color(object, prim, p);
+    float dielectric = 1;  // the share of glTF's metallic-roughness that is not metal
     if (const float metal = metalness(material, st, du, dv, &s.roughness); metal >= 0) {
         s.specular = Color(0.04f) * (1 - metal) + s.albedo * metal;
-        s.albedo = s.albedo * (1 - metal);
+        dielectric = 1 - metal;
     }
+    // KHR_materials_diffuse_transmission: the transmitted share leaves the reflected one.
+    s.albedo = s.albedo * (dielectric * (1 - m.diffuse_transmission));
+    if (m.is_translucent()) s.translucency = m.diffuse_transmission_color * (m.diffuse_transmission * dielectric);
     if (!m.ao_texture.empty() && textures_) {
         float ao = 1;
         if (lookup(textures_, names_[material].ao, st, du, dv, 1, &ao) && std::isfinite(ao)) s.occlusion = std::clamp(ao, 0.0f, 1.0f);

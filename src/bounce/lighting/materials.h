@@ -23,6 +23,9 @@ struct SurfaceShading {
     float roughness = 1;
     Vec3 normal{0, 0, 1};  ///< shading normal after bump / normal mapping (unit; = n without)
     float occlusion = 1;   ///< the material's baked AO (ao_texture), multiplying indirect light and AO
+    /// A thin translucent surface's diffuse transmittance (Material::diffuse_transmission x its
+    /// colour): light arriving through the other side leaves with this over pi. 0 elsewhere.
+    Color translucency{0};
 };
 
 class Materials {
@@ -32,11 +35,16 @@ public:
     Materials(const Materials&) = delete;
     Materials& operator=(const Materials&) = delete;
 
-    /// Albedo at uv, unfiltered.
+    /// Albedo at uv, unfiltered: the diffuse reflectance (a translucent material's share of it
+    /// that is not transmitted).
     Color albedo(uint32_t material, const Vec2& uv) const;
+    /// Diffuse transmittance at uv (SurfaceShading::translucency), unfiltered.
+    Color translucency(uint32_t material, const Vec2& uv) const;
     /// What secondary rays (gathers, radiosity textures) see at a point they reach: albedo x
     /// its vertex colour x base_share (a mirror or glass surface reflects little diffusely).
     Color secondary_albedo(const SurfacePoint& sp) const;
+    /// The diffuse transmittance secondary rays see there (0 on an opaque material).
+    Color secondary_translucency(const SurfacePoint& sp) const;
     /// The vertex colour (glTF's COLOR_0) of object `object`'s visible triangle `prim` at `p`.
     Color vertex_color(uint32_t object, uint32_t prim, const Vec3& p) const;
     /// Emitted radiance at uv (its emission texture read whole at load: Material::emission_at).

@@ -108,8 +108,8 @@ void RadiosityMap::lookup_parts(uint32_t prim, float u, float v, bool front_side
 }
 
 /// Bumped when the bake's values change for the same scene (a saved folder of another is stale):
-/// 2, its lattice levels off ceil's step.
-constexpr uint64_t kBakeVersion = 2;
+/// 2, its lattice levels off ceil's step; 3, a glTF file's diffuse transmission read.
+constexpr uint64_t kBakeVersion = 3;
 
 uint64_t RadiosityTextures::fingerprint(const Scene& scene, const RadiositySettings& s) {
     uint64_t h = hash_combine(scene.fingerprint({"objects", "materials", "lights"}, true), kBakeVersion);  // gloss, bumps, baked AO: not in the bake
@@ -190,7 +190,7 @@ void RadiosityTextures::bake_side(uint32_t id, uint32_t t, bool front, Counters&
         for (int i = 0; i + j <= n; ++i) {
             float u = static_cast<float>(i) / static_cast<float>(n), v = static_cast<float>(j) / static_cast<float>(n);
             SurfacePoint sp = o.coarse_point(t, u, v);
-            Color albedo = src.materials->secondary_albedo(sp) * kInvPi;
+            const Color albedo = src.materials->secondary_albedo(sp) * kInvPi, through = src.materials->secondary_translucency(sp) * kInvPi;
             uint32_t k = map.offset[t] + lattice_index(i, j, n);
             // Random numbers keyed by (object, triangle, point): the textures depend on the
             // scene alone (renders with other seeds share them) and not on the bake order.
@@ -201,17 +201,14 @@ void RadiosityTextures::bake_side(uint32_t id, uint32_t t, bool front, Counters&
             const Vec3 ng = front ? sp.ng : -sp.ng;
             Color& value = values[k - map.offset[t]];
             if (src.scales.empty()) {
-                value = albedo * src.lighting->irradiance(sp.p, ng, id, rng, src.light_samples, counters);
+                value = src.lighting->diffuse_radiance(sp.p, ng, id, albedo, through, rng, src.light_samples, counters);
                 continue;
             }
             // Per light, scales factored out; the value is their scaled sum (as records' are).
             const std::span<Color> parts(part_values + size_t{k - map.offset[t]} * map.lights, map.lights);
-            src.lighting->irradiance_parts(sp.p, ng, id, rng, src.light_samples, counters, parts);
+            src.lighting->diffuse_radiance(sp.p, ng, id, albedo, through, rng, src.light_samples, counters, parts);
             value = Color(0);
-            for (size_t l = 0; l < parts.size(); ++l) {
-                parts[l] = albedo * parts[l];
-                value += parts[l] * src.scales[l];
-            }
+            for (size_t l = 0; l < parts.size(); ++l) value += parts[l] * src.scales[l];
         }
 }
 

@@ -16,7 +16,8 @@ using nlohmann::json;
 namespace {
 
 // Material extensions read here (the rest are named as unread).
-const std::set<std::string> kReadExtensions = {"KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior"};
+const std::set<std::string> kReadExtensions = {"KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior",
+                                               "KHR_materials_diffuse_transmission"};
 
 /// One material's reading, its values checked where they are (a JSON pointer each).
 class MaterialJson {
@@ -69,16 +70,32 @@ public:
         out.unread.push_back(std::move(what));
     }
 
-private:
-    float number(const json& array, size_t i, const std::string& where) const {
+    /// Element i of a JSON array, a number inside [lo, hi].
+    float number(const json& array, size_t i, const std::string& where, double lo = -1e6, double hi = 1e6) const {
         const json& v = array[i];
-        if (!v.is_number() || !(std::abs(v.get<double>()) <= 1e6))
-            throw InputError(path_, fmt::format("{}/{}", where, i), fmt::format("{} is not a number within 1e6", v.dump().substr(0, 40)));
+        if (!v.is_number() || !(v.get<double>() >= lo && v.get<double>() <= hi))
+            throw InputError(path_, fmt::format("{}/{}", where, i), fmt::format("{} is not a number in [{:g}, {:g}]", v.dump().substr(0, 40), lo, hi));
         return v.get<float>();
     }
+    const std::string& path() const { return path_; }
+
+private:
     const std::string& path_;
     bool seen_ = false;
 };
+
+/// KHR_materials_diffuse_transmission's factor and colour (its textures are named, not read).
+void read_diffuse_transmission(const MaterialJson& r, const json& d, const std::string& e, GltfMaterialJson& out) {
+    const std::string at = e + "KHR_materials_diffuse_transmission";
+    out.diffuse_transmission = r.number(d, "diffuseTransmissionFactor", 0, 0, 1, at);
+    if (d.is_object() && d.contains("diffuseTransmissionColorFactor")) {
+        const json& c = d["diffuseTransmissionColorFactor"];
+        if (!c.is_array() || c.size() != 3) throw InputError(r.path(), at + "/diffuseTransmissionColorFactor", "expected three numbers");
+        for (size_t i = 0; i < 3; ++i) out.diffuse_transmission_color[static_cast<int>(i)] = r.number(c, i, at + "/diffuseTransmissionColorFactor", 0, 1);
+    }
+    for (const char* t : {"diffuseTransmissionTexture", "diffuseTransmissionColorTexture"})
+        if (d.is_object() && d.contains(t)) r.note(out, std::string("KHR_materials_diffuse_transmission.") + t);
+}
 
 GltfMaterialJson read_material(const json& m, const std::string& path, const std::string& at) {
     GltfMaterialJson out;
@@ -103,6 +120,7 @@ GltfMaterialJson read_material(const json& m, const std::string& path, const std
         out.transmission = r.number(t, "transmissionFactor", 0, 0, 1, e + "KHR_materials_transmission");
         if (t.is_object() && t.contains("transmissionTexture")) r.note(out, "KHR_materials_transmission.transmissionTexture");
     }
+    if (ext.contains("KHR_materials_diffuse_transmission")) read_diffuse_transmission(r, ext["KHR_materials_diffuse_transmission"], e, out);
     // Real dielectrics lie in [1, 3], as the scene file's ior.
     if (ext.contains("KHR_materials_ior")) out.ior = r.number(ext["KHR_materials_ior"], "ior", 1.5f, 1, 3, e + "KHR_materials_ior");
     for (const auto& [name, value] : ext.items())

@@ -1,7 +1,7 @@
 // What bounce reads of a glTF material from the file's JSON itself, where Assimp 5.2 reads it
 // not at all or not as the specification says: KHR_materials_emissive_strength, the texture
-// transform and uv set of each texture, KHR_materials_transmission and KHR_materials_ior,
-// doubleSided; and, for every material, what is left unread (material_report.h names it).
+// transform and uv set of each texture, KHR_materials_transmission, KHR_materials_ior and
+// KHR_materials_diffuse_transmission, doubleSided; and, for every material, what is left unread (material_report.h names it).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -25,6 +25,8 @@ struct GltfMaterialJson {
     std::vector<std::string> skipped;
     std::optional<float> transmission;  ///< KHR_materials_transmission's factor
     float ior = 1.5f;                   ///< KHR_materials_ior's (with transmission)
+    float diffuse_transmission = 0;     ///< KHR_materials_diffuse_transmission's factor
+    Color diffuse_transmission_color{1};  ///< and its colour factor
     /// Features bounce does not read ("KHR_materials_sheen", "COLOR_0 ..."), each once.
     std::vector<std::string> unread;
 };

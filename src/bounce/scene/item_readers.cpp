@@ -37,7 +37,8 @@ const std::vector<std::string>& material_keys() {
                                                   "bump_texture",   "normal_texture", "bump_strength", "ao_texture",
                                                   "mirror",         "transmission",  "ior",           "absorption",
                                                   "alpha_mode",     "opacity",       "opacity_texture", "alpha_cutoff",
-                                                  "emission_texture", "metallic_roughness_texture", "metallic", "uv_transform"};
+                                                  "emission_texture", "metallic_roughness_texture", "metallic", "uv_transform",
+                                                  "diffuse_transmission", "diffuse_transmission_color"};
     return keys;
 }
 
@@ -270,6 +271,13 @@ Material read_material(const JsonReader& m, const std::string& name) {
     // Real dielectrics lie in [1, 3] (diamond 2.42); below 1 would need the medium outside.
     mat.ior = static_cast<float>(m.number("ior", mat.ior, 1, 3));
     mat.absorption = m.color("absorption", mat.absorption);
+    mat.diffuse_transmission = static_cast<float>(m.number("diffuse_transmission", mat.diffuse_transmission, 0, 1));
+    mat.diffuse_transmission_color = m.color("diffuse_transmission_color", mat.diffuse_transmission_color);
+    for (int i = 0; i < 3; ++i)
+        if (mat.diffuse_transmission_color[i] > 1)
+            m.fail("diffuse_transmission_color", "diffuse_transmission_color components must be <= 1 (energy conservation)");
+    if (mat.is_translucent() && mat.is_dielectric())
+        m.fail("diffuse_transmission", "a material is glass (transmission) or thin and translucent (diffuse_transmission), not both");
     read_cutout(m, mat);
     read_metallic_roughness(m, mat);
     mat.uv_transform = read_uv_transform(m, "uv_transform");

@@ -45,7 +45,7 @@ private:
 // (gltf_materials.h).
 const std::set<std::string> kGltfReadFileExtensions = {"KHR_lights_punctual", "EXT_mesh_gpu_instancing", "KHR_materials_emissive_strength",
                                                        "KHR_mesh_quantization", "KHR_texture_transform", "KHR_materials_transmission",
-                                                       "KHR_materials_ior"};
+                                                       "KHR_materials_ior", "KHR_materials_diffuse_transmission"};
 
 std::vector<UnreadFeature> gltf_unread(const std::string& path) {
     const json j = json::parse(gltf_json_text(path), nullptr, false);

@@ -31,7 +31,7 @@ namespace {
 // Bump when what a load makes of a mesh file changes (mesh_import.cpp), or the layout below.
 /// 2: inputs and textures by absolute path (1 named them relative to the working directory of
 /// the run that wrote the entry, so another folder's copy of an MTL could stand in for it).
-constexpr uint32_t kVersion = 4;  // 3: materials' cutouts and occlusion textures; 4: the whole glTF material
+constexpr uint32_t kVersion = 5;  // 3: materials' cutouts and occlusion textures; 4: the whole glTF material; 5: diffuse transmission
 constexpr char kMagic[8] = {'B', 'N', 'C', 'M', 'E', 'S', 'H', '\n'};
 constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 + 8;  // magic, version, 0, body bytes, body hash
 constexpr size_t kMaxString = 1 << 16;
@@ -157,7 +157,7 @@ void write_material(Out& out, const Material& m) {
     out.pod(static_cast<uint8_t>(m.alpha_mode)), out.pod(m.opacity), out.pod(m.alpha_cutoff), out.str(m.opacity_texture);
     out.str(m.emission_texture), out.str(m.metallic_roughness_texture), out.pod(m.metallic);
     out.pod(m.uv_transform.offset), out.pod(m.uv_transform.rotation), out.pod(m.uv_transform.scale), out.pod(m.uv_set);
-    out.pod(m.transmission), out.pod(m.ior);
+    out.pod(m.transmission), out.pod(m.ior), out.pod(m.diffuse_transmission), out.pod(m.diffuse_transmission_color);
 }
 
 /// A material as mesh_import makes one, in the ranges it allows.
@@ -181,10 +181,12 @@ Material read_material(In& in) {
     if (!make_uv_transform(offset, rotation, scale, m.uv_transform, why)) throw Damaged{"a material's uv transform is out of range"};
     m.uv_set = in.pod<uint8_t>();
     m.transmission = in.pod<Color>(), m.ior = in.pod<float>();
-    if (m.uv_set > 1 || !finite_in(m.metallic, 0, 1) || !finite_in(m.ior, 1, 3)) throw Damaged{"a material is out of range"};
+    m.diffuse_transmission = in.pod<float>(), m.diffuse_transmission_color = in.pod<Color>();
+    if (m.uv_set > 1 || !finite_in(m.metallic, 0, 1) || !finite_in(m.ior, 1, 3) || !finite_in(m.diffuse_transmission, 0, 1))
+        throw Damaged{"a material is out of range"};
     for (int c = 0; c < 3; ++c)
         if (!finite_in(m.color[c], 0, 1) || !finite_in(m.specular[c], 0, 1) || !finite_in(m.emission[c], 0, kMaxRadiometric) ||
-            !finite_in(m.transmission[c], 0, 1))
+            !finite_in(m.transmission[c], 0, 1) || !finite_in(m.diffuse_transmission_color[c], 0, 1))
             throw Damaged{"a material is out of range"};
     if (!finite_in(m.roughness, 0.01f, 1)) throw Damaged{"a material is out of range"};
     return m;

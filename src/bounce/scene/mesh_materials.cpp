@@ -108,7 +108,11 @@ void read_gltf_parts(const GltfMaterialJson& g, const Texture& texture, const st
     }
     m.uv_transform = g.uv_transform;
     m.uv_set = g.uv_set;
-    if (g.transmission && *g.transmission > 0) m.transmission = m.color * *g.transmission, m.ior = g.ior;
+    if (g.transmission && *g.transmission > 0) {
+        m.transmission = m.color * *g.transmission, m.ior = g.ior;
+        return;  // KHR_materials_diffuse_transmission: "the transmission effect overrides" it
+    }
+    m.diffuse_transmission = g.diffuse_transmission, m.diffuse_transmission_color = g.diffuse_transmission_color;
 }
 
 }  // namespace

@@ -155,6 +155,11 @@ struct Material {
     Color transmission{0};
     float ior = 1.5f;           ///< the dielectric's index of refraction (with transmission)
     Color absorption{0};        ///< inside the dielectric: Beer-Lambert coefficient per world unit
+    /// Thin diffuse transmission (glTF's KHR_materials_diffuse_transmission): this share of the
+    /// diffuse light leaves by the other side of the surface, tinted by
+    /// `diffuse_transmission_color` (not by `color`); the rest is reflected with `color`.
+    float diffuse_transmission = 0;
+    Color diffuse_transmission_color{1};
     AlphaMode alpha_mode = AlphaMode::Opaque;
     float opacity = 1;          ///< multiplies the opacity texture (glTF: the base colour factor's alpha)
     /// Absolute path, empty = none: its alpha channel, or its only channel (MTL's map_d).
@@ -175,6 +180,7 @@ struct Material {
     Color emission_at(const Vec2& uv) const { return emission_map ? emission * emission_map->at(uv_transform.apply(uv)) : emission; }
     bool is_dielectric() const { return transmission.x > 0 || transmission.y > 0 || transmission.z > 0; }
     bool is_specular() const { return is_dielectric() || mirror.x > 0 || mirror.y > 0 || mirror.z > 0; }
+    bool is_translucent() const { return diffuse_transmission > 0; }
     bool has_specular() const { return specular.x > 0 || specular.y > 0 || specular.z > 0; }
     bool has_bump() const { return bump_strength != 0 && (!bump_texture.empty() || !normal_texture.empty()); }
     /// Every texture file it names, empty or not (for what treats them alike: the mesh cache).

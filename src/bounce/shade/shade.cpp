@@ -22,9 +22,17 @@ Color fragment_direct(const Scene& scene, const Materials& materials, const Dire
         gloss += g;
         if (per_light) parts->light_diffuse[light] += surf.albedo * e * kInvPi, parts->light_specular[light] += g;
     };
-    Color e = lighting.irradiance(f.p, surf.normal, f.object, fragment_stream(scene.render.visibility.seed, x, y, k),
-                                  scene.render.lighting.light_samples, counters, include_sky, glossy || per_light ? &each : nullptr);
-    const Color emission = materials.emission(f.material, f.uv), diffuse = surf.albedo * e * kInvPi;
+    const RandomStream rng = fragment_stream(scene.render.visibility.seed, x, y, k);
+    Color e = lighting.irradiance(f.p, surf.normal, f.object, rng, scene.render.lighting.light_samples, counters, include_sky,
+                                  glossy || per_light ? &each : nullptr);
+    const Color emission = materials.emission(f.material, f.uv);
+    Color diffuse = surf.albedo * e * kInvPi;
+    if (surf.translucency != Color(0)) {
+        // A thin translucent surface: the light through its other side, diffusely transmitted.
+        const LightSampleFn through = [&](size_t light, const Vec3&, const Color& eb) { parts->light_diffuse[light] += surf.translucency * eb * kInvPi; };
+        diffuse += surf.translucency * lighting.irradiance(f.p, -surf.normal, f.object, back_side_stream(rng), scene.render.lighting.light_samples,
+                                                           counters, include_sky, per_light ? &through : nullptr) * kInvPi;
+    }
     if (parts) parts->emission = emission, parts->diffuse_direct = diffuse, parts->specular_direct = gloss;
     return emission + diffuse + gloss;
 }
@@ -73,6 +81,14 @@ Vec3 indirect_direction(const Indirect& in, const Vec3& fallback) {
     return dot(d, d) > 1e-20f ? normalize(d) : fallback;
 }
 
+/// What fragment f's `indirect` layer holds: the irradiance its diffuse lobes scatter, E through
+/// its front and, on a thin translucent surface, t E_back + (1 - t) E_front.
+Color indirect_layer(const Scene& scene, const Fragment& f, const Indirect& in) {
+    if (f.is_hair()) return in.irradiance;
+    const float t = scene.materials[f.material].diffuse_transmission;
+    return t > 0 ? in.irradiance * (1 - t) + in.back * t : in.irradiance;
+}
+
 /// What one pixel's fragments add up to, layer by layer.
 struct PixelSum {
     Color beauty{0}, direct{0}, albedo{0}, indirect{0};
@@ -96,6 +112,10 @@ struct ShadeContext {
     const LightShares* shares;
 };
 
+/// The bounce light a translucent surface lets through from its back side (Indirect::back),
+/// diffusely; 0 on an opaque one.
+Color transmitted_indirect(const SurfaceShading& surf, const Indirect& in) { return surf.translucency * in.back * kInvPi; }
+
 /// Site j of a pixel: the random stream of its light samples is its pixel's, after every fragment's.
 constexpr uint32_t kSiteStream = 256;
 
@@ -108,10 +128,11 @@ Color site_radiance(const ShadeContext& c, const PathSite& s, int x, int y, uint
     const Material& m = c.scene.materials[f.material];
     SurfaceShading surf;
     surf.albedo = c.materials.albedo(f.material, f.uv) * c.materials.vertex_color(f.object, f.prim, f.p);
+    surf.translucency = c.materials.translucency(f.material, f.uv);
     surf.specular = m.specular, surf.roughness = m.roughness, surf.normal = f.n;
     Color out = fragment_direct(c.scene, c.materials, c.lighting, f, surf, s.wo, x, y, kSiteStream + j, c.indirect == nullptr,
                                 counters, nullptr);
-    if (in) out += indirect_radiance(*in, f.n, surf, s.wo, c.scene.render.shading.light_per_channel);
+    if (in) out += indirect_radiance(*in, f.n, surf, s.wo, c.scene.render.shading.light_per_channel) + transmitted_indirect(surf, *in);
     return out;
 }
 
@@ -155,13 +176,14 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
     const bool hair = f.is_hair();
     const Fur* fur = hair ? c.scene.objects[f.object].fur.get() : nullptr;
     const SurfaceShading surf = fragment_surface(c.materials, f);
-    const Color alb = hair ? fur->params.albedo(f.strand_v) : surf.albedo;
+    // The albedo layer: all the surface scatters diffusely, reflected and transmitted (what a denoiser wants).
+    const Color alb = hair ? fur->params.albedo(f.strand_v) : surf.albedo + surf.translucency;
     const Vec3 wo = normalize(c.camera.origin() - f.p);
     if (c.indirect) {
         const Indirect& in = (*c.indirect)[at];
         // Baked AO of detail the gather cannot see; on hair the self-shadowing falloff.
         const float w = f.weight * (hair ? fur->params.falloff(f.strand_v) : surf.occlusion);
-        sum.indirect += in.irradiance * w;
+        sum.indirect += indirect_layer(c.scene, f, in) * w;
         sum.ao += in.ao * w;
         sum.bent += in.bent_normal * f.weight;
         IndirectLobes lobes;
@@ -172,6 +194,7 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
                                           fur->params.specular, fur->params.specular_exponent);
         else
             lobes = indirect_lobes(in, f.n, surf, wo, c.scene.render.shading.light_per_channel);
+        lobes.diffuse += transmitted_indirect(surf, in);
         lobes.diffuse *= base, lobes.specular *= base;
         sum.beauty += (lobes.diffuse + lobes.specular) * w;
         if (comps.on()) comps.add_indirect(wx, wy, lobes.diffuse, lobes.specular, w, c.shares ? c.shares->at(at) : std::span<const Color>());
