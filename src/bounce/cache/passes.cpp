@@ -133,8 +133,7 @@ void shares_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffe
     front_shares_at(scene, cache, deep, wx, wy, k, from, out);
     const Fragment& f = deep.pixel(wx, wy)[k];
     if (!takes_back_light(scene, f) || from.back_missed) return;
-    thread_local std::vector<Color> back;
-    back.assign(out.size(), Color(0));
+    std::vector<Color> back(out.size(), Color(0));
     light_shares_at(cache, f, record_site(scene, f, cache.settings(), Side::Back), back, Side::Back);
     const float t = scene.materials[f.material].diffuse_transmission;
     const Color wf = from.src == Source::Missed ? Color(0) : in.irradiance * (1 - t), wb = in.back * t;

@@ -137,7 +137,7 @@ Color DirectLighting::diffuse_radiance(const Vec3& p, const Vec3& n, uint32_t ob
         return through ? front + transmit * irradiance(p, -n, object, back_side_stream(rng), samples, counters) : front;
     }
     irradiance_parts(p, n, object, rng, samples, counters, parts);
-    thread_local std::vector<Color> back;
+    std::vector<Color> back;  // translucent hits with light parts only (the lighting tool's)
     if (through) back.resize(parts.size()), irradiance_parts(p, -n, object, back_side_stream(rng), samples, counters, back);
     Color sum(0);
     for (size_t i = 0; i < parts.size(); ++i) {
