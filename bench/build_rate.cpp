@@ -173,10 +173,11 @@ void measure_once(const std::string& path) {
     const double accel = seconds_since(t1);
     bool fine = false;
     for (const Object& o : scene.objects) fine = fine || (o.placed() && o.has_fine());
-    const double raw = raw_build(device, scene, RTC_BUILD_QUALITY_HIGH, false) + (fine ? raw_build(device, scene, RTC_BUILD_QUALITY_HIGH, true) : 0.0);
+    const double raw =
+        raw_build(device, scene, RTC_BUILD_QUALITY_HIGH, false) + (fine ? raw_build(device, scene, RTC_BUILD_QUALITY_HIGH, true) : 0.0);
     rtcReleaseDevice(device);
-    std::printf("| %s (first, fresh process) | %.3f s | %.3f s | %.3f s | %.1fx |\n", std::filesystem::path(path).filename().c_str(), load, accel,
-                raw, (load + accel) / raw);
+    std::printf("| %s (first, fresh process) | %.3f s | %.3f s | %.3f s | %.1fx |\n", std::filesystem::path(path).filename().c_str(), load,
+                accel, raw, (load + accel) / raw);
 }
 
 }  // namespace
@@ -194,9 +195,12 @@ int main(int argc, char** argv) {
     bool once = false;
     std::vector<std::string> scenes;
     for (int i = 1; i < argc; ++i) {
-        if (std::strcmp(argv[i], "--repeat") == 0 && i + 1 < argc) repeat = std::max(1, std::atoi(argv[++i]));
-        else if (std::strcmp(argv[i], "--once") == 0) once = true;
-        else scenes.emplace_back(argv[i]);
+        if (std::strcmp(argv[i], "--repeat") == 0 && i + 1 < argc)
+            repeat = std::max(1, std::atoi(argv[++i]));
+        else if (std::strcmp(argv[i], "--once") == 0)
+            once = true;
+        else
+            scenes.emplace_back(argv[i]);
     }
     if (once && scenes.size() == 1) {
         try {
@@ -211,8 +215,9 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "usage: bounce_build_rate SCENE... [--repeat N] | bounce_build_rate --once SCENE\n");
         return 2;
     }
-    std::printf("| scene | triangles (unique) | placed | load, parsed | load, mesh cache | SceneAccel | raw Embree low / medium / high | "
-                "SceneAccel / raw high | load parsed + SceneAccel / raw high | load cached + SceneAccel / raw high | files read |\n");
+    std::printf(
+        "| scene | triangles (unique) | placed | load, parsed | load, mesh cache | SceneAccel | raw Embree low / medium / high | "
+        "SceneAccel / raw high | load parsed + SceneAccel / raw high | load cached + SceneAccel / raw high | files read |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
     try {
         for (const auto& s : scenes) bounce::measure(s, repeat);

@@ -52,8 +52,7 @@ SessionOptions options(const std::string& scene, const std::string& res, const s
     o.scene = scene;
     o.out_dir = out;
     o.threads = 2;
-    o.sets = {"camera.resolution=[" + res.substr(0, res.find('x')) + "," + res.substr(res.find('x') + 1) + "]",
-              "render.preview=false"};
+    o.sets = {"camera.resolution=[" + res.substr(0, res.find('x')) + "," + res.substr(res.find('x') + 1) + "]", "render.preview=false"};
     o.default_to_light_parts = parts;
     return o;
 }
@@ -66,7 +65,8 @@ int run(const std::string& scene, const std::string& res) {
     const json st0 = s.status()["stats"];
     fmt::print("new deep file + gather (light parts): {:.2f} s, {} records, {} lights: {} bytes of parts per record\n", first,
                st0.value("records", 0.0), edits_lights(s), 160 + 120 * edits_lights(s));
-    fmt::print("| edit | re-shade (median of 3) | bounce light stale | new records | rel. RMSE indirect vs re-gather | beauty | phases (s) |\n");
+    fmt::print(
+        "| edit | re-shade (median of 3) | bounce light stale | new records | rel. RMSE indirect vs re-gather | beauty | phases (s) |\n");
     fmt::print("|---|---|---|---|---|---|---|\n");
     const json rows = s.params();
     std::vector<std::pair<std::string, json>> edits;

@@ -95,7 +95,7 @@ struct RayRig {
         return rig;
     }
 
-private:
+  private:
     RayRig() {
         const char* env = std::getenv("BOUNCE_BENCH_SCENE");
         std::string path = env ? env : std::string(BOUNCE_SOURCE_DIR) + "/scenes/cornell/cornell.json";
@@ -111,7 +111,7 @@ private:
     }
 };
 
-constexpr int kRaysPerPoint = 2048;  // as HemisphereGather/2048: like for like
+constexpr int kRaysPerPoint = 2048;                   // as HemisphereGather/2048: like for like
 const int kRays = gather_grid(kRaysPerPoint).rays();  // the grid rounds: m * n rays
 
 /// The gather's directions at point i, in the gather's own order (rows of its stratified
@@ -135,7 +135,8 @@ void BM_RaysRawEmbree(benchmark::State& state) {
     uint64_t i = 0, hits = 0;
     for (auto _ : state) {
         const Fragment& f = rig.points[i % rig.points.size()];
-        for_each_gather_ray(f, i, [&](const Vec3& p, const Vec3& d) { hits += rig.accel->coarse().intersect(p, d, eps, INFINITY).valid(); });
+        for_each_gather_ray(f, i,
+                            [&](const Vec3& p, const Vec3& d) { hits += rig.accel->coarse().intersect(p, d, eps, INFINITY).valid(); });
         ++i;
     }
     benchmark::DoNotOptimize(hits);

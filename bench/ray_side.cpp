@@ -70,11 +70,11 @@ void displace(const RTCDisplacementFunctionNArguments* a) {
 
 void attach_triangles(RTCDevice device, RTCScene scene, const TriangleMesh& m) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                          m.positions.size()));
+    auto* v = static_cast<float*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m.positions.size()));
     std::memcpy(v, m.positions.data(), m.positions.size() * sizeof(Vec3));
-    auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                               3 * sizeof(uint32_t), m.triangle_count()));
+    auto* idx = static_cast<uint32_t*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), m.triangle_count()));
     std::memcpy(idx, m.indices.data(), m.indices.size() * sizeof(uint32_t));
     rtcCommitGeometry(g);
     rtcAttachGeometry(scene, g);
@@ -84,17 +84,17 @@ void attach_triangles(RTCDevice device, RTCScene scene, const TriangleMesh& m) {
 void attach_subdivision(RTCDevice device, RTCScene scene, const DisplacedCage& cage, float rate) {
     const ControlMesh& c = cage.surface->control;
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SUBDIVISION);
-    auto* faces = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_FACE, 0, RTC_FORMAT_UINT, sizeof(uint32_t),
-                                                                 c.face_count()));
+    auto* faces =
+        static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_FACE, 0, RTC_FORMAT_UINT, sizeof(uint32_t), c.face_count()));
     for (size_t f = 0; f < c.face_count(); ++f) faces[f] = static_cast<uint32_t>(c.face_sizes[f]);
-    auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, sizeof(uint32_t),
-                                                               c.face_vertices.size()));
+    auto* idx = static_cast<uint32_t*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, sizeof(uint32_t), c.face_vertices.size()));
     for (size_t k = 0; k < c.face_vertices.size(); ++k) idx[k] = static_cast<uint32_t>(c.face_vertices[k]);
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                          c.positions.size()));
+    auto* v = static_cast<float*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), c.positions.size()));
     std::memcpy(v, c.positions.data(), c.positions.size() * sizeof(Vec3));
-    rtcSetGeometrySubdivisionMode(g, 0, cage.surface->boundary == SubdivBoundary::EdgeOnly ? RTC_SUBDIVISION_MODE_SMOOTH_BOUNDARY
-                                                                                          : RTC_SUBDIVISION_MODE_PIN_CORNERS);
+    rtcSetGeometrySubdivisionMode(
+        g, 0, cage.surface->boundary == SubdivBoundary::EdgeOnly ? RTC_SUBDIVISION_MODE_SMOOTH_BOUNDARY : RTC_SUBDIVISION_MODE_PIN_CORNERS);
     rtcSetGeometryTessellationRate(g, rate);
     if (cage.surface->displacement.active()) {
         rtcSetGeometryUserData(g, const_cast<DisplacedCage*>(&cage));
@@ -122,9 +122,7 @@ struct Side {
         rtcIntersect1(scene, &ctx, &rh);
         return rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? INFINITY : rh.ray.tfar;
     }
-    float self_epsilon(const Vec3& p) const {
-        return std::max(1e-5f * std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}), min_eps);
-    }
+    float self_epsilon(const Vec3& p) const { return std::max(1e-5f * std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}), min_eps); }
     float offset_start(const Vec3& p, const Vec3& d) const {
         const Vec3 o = p - d * delta;
         float best = -1, tn = 0;
@@ -235,13 +233,19 @@ int run(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         std::optional<long> v;
-        if (a == "--points" && i + 1 < argc && (v = count(argv[++i], 1, 10'000'000))) points = static_cast<size_t>(*v);
-        else if (a == "--rays" && i + 1 < argc && (v = count(argv[++i], 1, 1 << 16))) rays = static_cast<int>(*v);
-        else if (a == "--reference-level" && i + 1 < argc && (v = count(argv[++i], 1, 7))) ref_level = static_cast<int>(*v);
-        else if (!a.empty() && a[0] != '-') path = a;
+        if (a == "--points" && i + 1 < argc && (v = count(argv[++i], 1, 10'000'000)))
+            points = static_cast<size_t>(*v);
+        else if (a == "--rays" && i + 1 < argc && (v = count(argv[++i], 1, 1 << 16)))
+            rays = static_cast<int>(*v);
+        else if (a == "--reference-level" && i + 1 < argc && (v = count(argv[++i], 1, 7)))
+            ref_level = static_cast<int>(*v);
+        else if (!a.empty() && a[0] != '-')
+            path = a;
         else {
-            std::fprintf(stderr, "bounce_ray_side: bad argument %s; usage: bounce_ray_side [SCENE] [--points 1..1e7] "
-                                 "[--rays 1..65536] [--reference-level 1..7]\n", argv[i]);
+            std::fprintf(stderr,
+                         "bounce_ray_side: bad argument %s; usage: bounce_ray_side [SCENE] [--points 1..1e7] "
+                         "[--rays 1..65536] [--reference-level 1..7]\n",
+                         argv[i]);
             return 2;
         }
     }
@@ -289,8 +293,10 @@ int run(int argc, char** argv) {
         rtcSetSceneBuildQuality(s.scene, RTC_BUILD_QUALITY_HIGH);
         rtcSetSceneFlags(s.scene, RTC_SCENE_FLAG_ROBUST);
         for (size_t i = 0; i < cages.size(); ++i) {
-            if (rate > 0) attach_subdivision(device, s.scene, displaced[i], rate);
-            else attach_triangles(device, s.scene, dice(cages[i], level));
+            if (rate > 0)
+                attach_subdivision(device, s.scene, displaced[i], rate);
+            else
+                attach_triangles(device, s.scene, dice(cages[i], level));
         }
         for (const Object* o : others) attach_triangles(device, s.scene, o->coarse);
         rtcCommitScene(s.scene);
@@ -302,8 +308,8 @@ int run(int argc, char** argv) {
     double quads = 0;
     for (const SubdivSurface& c : cages) quads += static_cast<double>(c.control.face_count());
     if (2 * quads * std::pow(4.0, ref_level) > 1e8) {
-        std::fprintf(stderr, "bounce_ray_side: %s: level %d would dice %.3g triangles (limit 1e8): lower --reference-level\n",
-                     path.c_str(), ref_level, 2 * quads * std::pow(4.0, ref_level));
+        std::fprintf(stderr, "bounce_ray_side: %s: level %d would dice %.3g triangles (limit 1e8): lower --reference-level\n", path.c_str(),
+                     ref_level, 2 * quads * std::pow(4.0, ref_level));
         return 2;
     }
     std::vector<TriangleMesh> fine;
@@ -316,8 +322,8 @@ int run(int argc, char** argv) {
     for (float a : truth.ao) mean += a;
     mean /= static_cast<double>(truth.ao.size());
 
-    std::printf("%s: %zu cage(s), %zu points on the level-%d surface, %d AO rays each (distance %.3g), 1 thread\n\n",
-                path.c_str(), cages.size(), points, ref_level, rays, static_cast<double>(ao_distance));
+    std::printf("%s: %zu cage(s), %zu points on the level-%d surface, %d AO rays each (distance %.3g), 1 thread\n\n", path.c_str(),
+                cages.size(), points, ref_level, rays, static_cast<double>(ao_distance));
     std::printf("| ray side | build | Embree memory | gap 99th pct | offset | rays/s | AO vs fine surface (rel. RMSE) | AO bias |\n");
     std::printf("|---|---|---|---|---|---|---|---|\n");
     auto row = [&](Side& s) {

@@ -13,7 +13,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         bounce::CacheFile f = bounce::parse_cache_file(bytes, "fuzz.bic");
         // What parses must serialise back to the same bytes.
         if (bounce::serialize_cache_file(f).size() != bytes.size()) __builtin_trap();
-    } catch (const bounce::InputError&) {
-    }
+    } catch (const bounce::InputError&) {}
     return 0;
 }

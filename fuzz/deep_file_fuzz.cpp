@@ -44,8 +44,8 @@ const bounce::DeepBuffer& good_deep(const std::string& path) {
 
 /// Field `which` of fragment `f` as a float slot to overwrite.
 float* field(bounce::Fragment& f, uint8_t which) {
-    float* slots[] = {&f.p.x, &f.p.y, &f.n.x, &f.n.z, &f.ng.y, &f.p_base.x, &f.n_base.y, &f.uv.x,
-                      &f.depth, &f.weight, &f.footprint, &f.tangent.x, &f.strand_v};
+    float* slots[] = {&f.p.x,  &f.p.y,   &f.n.x,    &f.n.z,       &f.ng.y,      &f.p_base.x, &f.n_base.y,
+                      &f.uv.x, &f.depth, &f.weight, &f.footprint, &f.tangent.x, &f.strand_v};
     return slots[which % (sizeof(slots) / sizeof(slots[0]))];
 }
 
@@ -75,8 +75,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             for (float v : r.image.find("beauty")->data)
                 if (!std::isfinite(v)) __builtin_trap();  // accepted values must shade to a finite image
         }
-    } catch (const bounce::InputError&) {
-    }
+    } catch (const bounce::InputError&) {}
     ::unlink(path.c_str());
     return 0;
 }

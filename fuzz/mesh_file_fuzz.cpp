@@ -31,10 +31,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     bounce::MeshPose pose;
     if (data[0] % 3 == 1 && data[1] & 1) pose.clip = "0", pose.seconds = (data[1] >> 1) / 64.0;
     try {
-        if (pose.clip.empty() && (data[1] & 2)) (void)bounce::load_mesh_parts(path, "m", materials, -1, nullptr);
-        else (void)bounce::load_mesh_file(path, "m", materials, -1, nullptr, pose);
-    } catch (const bounce::InputError&) {
-    }
+        if (pose.clip.empty() && (data[1] & 2))
+            (void)bounce::load_mesh_parts(path, "m", materials, -1, nullptr);
+        else
+            (void)bounce::load_mesh_file(path, "m", materials, -1, nullptr, pose);
+    } catch (const bounce::InputError&) {}
     std::remove(path.c_str());
     std::error_code ec;
     std::filesystem::remove_all("images", ec);  // embedded images written by the load (below)

@@ -25,11 +25,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     const std::string cache_path = "render_fuzz." + std::to_string(::getpid()) + ".bic";
     try {
-        bounce::Scene scene = bounce::load_scene_text(
-            text, "fuzz.json",
-            {"camera.resolution=[16,16]", "render.spp=1", "render.rays=16", "render.gi=\"cache\"", "render.threads=1",
-             "render.light_samples=1", "render.radiosity_light_samples=1", "render.crop=[0,0,0,0]",
-             "render.memory_budget=0.01"});  // fur: ~27k strands at most
+        bounce::Scene scene = bounce::load_scene_text(text, "fuzz.json",
+                                                      {"camera.resolution=[16,16]", "render.spp=1", "render.rays=16", "render.gi=\"cache\"",
+                                                       "render.threads=1", "render.light_samples=1", "render.radiosity_light_samples=1",
+                                                       "render.crop=[0,0,0,0]", "render.memory_budget=0.01"});  // fur: ~27k strands at most
         bounce::RenderRequest request;
         if (!cache_bytes.empty()) {
             std::ofstream(cache_path, std::ios::binary) << cache_bytes;
@@ -39,8 +38,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         }
         bounce::Stats stats;
         bounce::render(scene, request, stats, nullptr);
-    } catch (const bounce::InputError&) {
-    }
+    } catch (const bounce::InputError&) {}
     ::unlink(cache_path.c_str());
     return 0;
 }

@@ -23,8 +23,8 @@ std::string with_description(const std::string& text, const std::string& value) 
 }
 
 std::string hostile_numbers(const std::string& text, uint8_t pick) {
-    static const char* const numbers[] = {"1e39", "-1e39", "1e308", "1e400", "-0", "18446744073709551616", "4294967296",
-                                          "1e-320", "3.4028236e38", "-2147483649", "0.5", "1e18"};
+    static const char* const numbers[] = {"1e39",       "-1e39",  "1e308",        "1e400",       "-0",  "18446744073709551616",
+                                          "4294967296", "1e-320", "3.4028236e38", "-2147483649", "0.5", "1e18"};
     std::string out;
     size_t k = pick;
     for (size_t i = 0; i < text.size();) {
@@ -35,7 +35,9 @@ std::string hostile_numbers(const std::string& text, uint8_t pick) {
             continue;
         }
         size_t j = i + 1;
-        while (j < text.size() && (std::isdigit(static_cast<unsigned char>(text[j])) || std::string(".eE+-").find(text[j]) != std::string::npos)) ++j;
+        while (j < text.size() &&
+               (std::isdigit(static_cast<unsigned char>(text[j])) || std::string(".eE+-").find(text[j]) != std::string::npos))
+            ++j;
         out += numbers[k++ % (sizeof(numbers) / sizeof(numbers[0]))];
         i = j;
     }
@@ -62,8 +64,10 @@ std::string grow(const uint8_t* data, size_t size) {
             for (size_t i = 1; i < count; ++i) array += ",0";
             return with_description(rest, array + "]");
         }
-        case 3: return hostile_numbers(rest, param);
-        default: return rest;
+        case 3:
+            return hostile_numbers(rest, param);
+        default:
+            return rest;
     }
 }
 
@@ -77,7 +81,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     try {
         // Fur: ~27k strands at most, so growing it stays quick.
         bounce::load_scene_text(text, "fuzz.json", {"render.memory_budget=0.01"});
-    } catch (const bounce::InputError&) {
-    }
+    } catch (const bounce::InputError&) {}
     return 0;
 }

@@ -7,7 +7,7 @@ packages=(
   libembree-dev libtbb-dev libopenimageio-dev openimageio-tools libopenexr-dev libimath-dev
   libassimp-dev nlohmann-json3-dev libcli11-dev libfmt-dev libgtest-dev libbenchmark-dev
   libosd-dev libcpp-httplib-dev chromium
-  clang libclang-rt-dev python3-matplotlib
+  clang libclang-rt-dev clang-format python3-matplotlib
   libopenmpi-dev openmpi-bin
   libopencolorio-dev
 )

@@ -13,8 +13,7 @@ using nlohmann::json;
 
 Scene sphere_scene(float offset = -1) {
     json j = test::base_scene();
-    j["objects"] = {{{"type", "sphere"}, {"center", {0, 0, 0}}, {"radius", 1.0}, {"subdivisions", 2},
-                     {"fine_subdivisions", 3}}};
+    j["objects"] = {{{"type", "sphere"}, {"center", {0, 0, 0}}, {"radius", 1.0}, {"subdivisions", 2}, {"fine_subdivisions", 3}}};
     if (offset >= 0) j["render"] = {{"ray_offset", offset}};
     return test::scene_from(j);
 }
@@ -48,11 +47,14 @@ RayStats shoot(const Scene& s, float gap, bool inside, Trace trace) {
                 continue;
             }
             float chord = 2 * length(sp.p) * local.z;
-            if (!h.valid()) ++st.misses;
-            else if (h.t < 0.5f * chord) ++st.self_hits;
+            if (!h.valid())
+                ++st.misses;
+            else if (h.t < 0.5f * chord)
+                ++st.self_hits;
             // The far coarse surface sags up to `gap` inside the sphere: the hit can come that
             // much earlier along the ray (divided by the cosine there, which equals ours).
-            else if (h.t > chord + 1e-3f || h.t < chord - 1.5f * gap / local.z) ++st.wrong_distance;
+            else if (h.t > chord + 1e-3f || h.t < chord - 1.5f * gap / local.z)
+                ++st.wrong_distance;
         }
     }
     return st;
@@ -82,7 +84,8 @@ TEST(RayOffset, NaiveTracingSelfHitsWhereOffsettingDoesNot) {
     // start above: this is the artefact offsetting removes (and shows this test can fail).
     Scene s = sphere_scene();
     SceneAccel accel(s);
-    RayStats st = shoot(s, accel.fine_coarse_gap(), true, [&](const Vec3& p, const Vec3& d) { return accel.coarse().intersect(p, d, 1e-5f, INFINITY); });
+    RayStats st = shoot(s, accel.fine_coarse_gap(), true,
+                        [&](const Vec3& p, const Vec3& d) { return accel.coarse().intersect(p, d, 1e-5f, INFINITY); });
     EXPECT_GT(st.self_hits, st.rays / 2);
 }
 
@@ -109,7 +112,7 @@ TEST(RayOffset, ShadowRaysSeeTheFarSideOnly) {
     int blocked_short = 0, blocked_long = 0;
     for (uint32_t t = 0; t < fine.triangle_count(); t += 11) {
         SurfacePoint sp = surface_point(fine, t, 0.3f, 0.3f);
-        Vec3 d = -normalize(sp.p);  // straight through the centre
+        Vec3 d = -normalize(sp.p);                       // straight through the centre
         blocked_short += accel.occluded(sp.p, d, 1.0f);  // stops at the centre: free
         blocked_long += accel.occluded(sp.p, d, 3.0f);   // crosses the far side: blocked
     }
@@ -138,9 +141,9 @@ TEST(RayOffset, PacketTraceMatchesOneRayAtATime) {
             for (size_t k = 0; k < dirs.size(); ++k) {
                 Hit one = accel.trace(sp.p, dirs[k]);
                 ++rays;
-                bool same = one.valid() == hits[k].valid() &&
-                            (!one.valid() || (one.object == hits[k].object && one.prim == hits[k].prim &&
-                                              std::abs(one.t - hits[k].t) <= 1e-5f * std::max(1.0f, one.t)));
+                bool same =
+                    one.valid() == hits[k].valid() && (!one.valid() || (one.object == hits[k].object && one.prim == hits[k].prim &&
+                                                                        std::abs(one.t - hits[k].t) <= 1e-5f * std::max(1.0f, one.t)));
                 mismatches += !same;
             }
         }

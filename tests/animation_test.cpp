@@ -125,7 +125,9 @@ struct Frames {
 /// A gatherer of a frame's scene as a fresh render would build it.
 struct FreshGatherer {
     explicit FreshGatherer(const Scene& scene)
-        : accel(scene), materials(scene), lighting(scene, accel),
+        : accel(scene),
+          materials(scene),
+          lighting(scene, accel),
           rt(RadiosityTextures::lazy(scene, materials, lighting, scene.render.radiosity)),
           gatherer(scene, accel, materials, lighting, &rt, gather_settings(scene)) {}
     SceneAccel accel;
@@ -152,8 +154,8 @@ TEST(TemporalCache, AKeptRecordEqualsAFreshGatherAtItsPlaceBitForBit) {
     for (size_t i = 0; i < r.cache->size(); ++i) {
         const Record& k = r.cache->record(i);
         if (k.gathered != 1 || k.frame != 1) continue;  // kept from frame 1 untouched
-        const GatherResult g = gatherer.gather(k.origin, k.n, record_stream(k, scene.render.visibility.seed, scene.camera.width),
-                                               counters, k.near);
+        const GatherResult g =
+            gatherer.gather(k.origin, k.n, record_stream(k, scene.render.visibility.seed, scene.camera.width), counters, k.near);
         // What the gather measured, bit for bit (the record's radius and gradient scaling are
         // the cache's, from the footprint of this frame's camera).
         ASSERT_EQ(g.irradiance, k.E) << "record " << i;
@@ -172,8 +174,8 @@ TEST(TemporalCache, AMovingCamerasRefinedFragmentsUseTheirOwnGathers) {
     // or its refinement's gathers are made and never used (shot A's edges, docs/animation.md).
     json j = shot_scene();
     j["camera"]["position"] = {{"keys", {{1, {0, 3, 8}}, {3, {0.4, 3, 7.4}}}}};
-    j["render"]["refine"] = 0.01;  // many fragments refine
-    j["render"]["refine_noise"] = 0;  // (the raw spread: noise-aware refinement refines few here)
+    j["render"]["refine"] = 0.01;              // many fragments refine
+    j["render"]["refine_noise"] = 0;           // (the raw spread: noise-aware refinement refines few here)
     j["render"]["temporal_refine_reuse"] = 0;  // each gathers its own
     Frames f;
     f.render(j, 1);
@@ -286,8 +288,8 @@ TEST(TemporalCache, RecordsOnAMovingObjectTravelWithItAndTheRestUpdateOnlyWhatTh
     for (size_t i = 0; i < second.cache->size(); ++i) {
         const Record& k = second.cache->record(i);
         if (k.gathered != 2 || k.frame != 1 || k.anchor != kNoAnchor) continue;
-        const GatherResult g = gatherer.gather(k.origin, k.n, record_stream(k, scene.render.visibility.seed, scene.camera.width),
-                                               counters, k.near);
+        const GatherResult g =
+            gatherer.gather(k.origin, k.n, record_stream(k, scene.render.visibility.seed, scene.camera.width), counters, k.near);
         ASSERT_EQ(g.irradiance, k.E) << "record " << i;
         ++updated;
     }
@@ -429,8 +431,8 @@ TEST(Sequences, AFrameThatFailsStopsTheShotThereAndResumeSkipsWhatIsDone) {
     json j = shot_scene(4);
     j["camera"]["fov"] = {{"keys", {{1, 40}, {3, 60}, {4, 300}}}, {"interpolation", "step"}};  // frame 4: out of range
     d.write("s.json", j.dump());
-    const std::string args = "render " + d.file("s.json") + " -q -o " + d.file("f.####.exr") + " --cache-out " + d.file("f.####.bic") +
-                             " --frames 1-4";
+    const std::string args =
+        "render " + d.file("s.json") + " -q -o " + d.file("f.####.exr") + " --cache-out " + d.file("f.####.bic") + " --frames 1-4";
     std::string err;
     EXPECT_EQ(test::run_bounce(args, &err), 2);
     EXPECT_NE(err.find("/camera/fov"), std::string::npos) << err;
@@ -458,7 +460,8 @@ TEST(Sequences, ARangePastTheShotOrASubframeOntoAFramePatternIsRefusedBeforeAnyF
                          {"command line", "--frames 3-5", "frame 5 is outside the shot, frames 1 to 4"});
     EXPECT_FALSE(std::filesystem::exists(d.file("f.0003.exr")));
     // A subframe would write frame 3's names (and overwrite its files); with a plain name it renders.
-    test::expect_refused(scene + "-o " + d.file("f.####.exr") + " --frame 2.5", {"--frame 2.5", "a #### file name needs a whole frame number"});
+    test::expect_refused(scene + "-o " + d.file("f.####.exr") + " --frame 2.5",
+                         {"--frame 2.5", "a #### file name needs a whole frame number"});
     test::expect_refused(scene + "-o " + d.file("sub.exr") + " --stats-json " + d.file("f.####.json") + " --frame 2.5",
                          {"--frame 2.5", "a #### file name needs a whole frame number"});
     EXPECT_FALSE(std::filesystem::exists(d.file("f.0003.exr")));

@@ -33,9 +33,17 @@ struct Shot {
         scene["objects"] = {
             {{"name", "floor"}, {"type", "quad"}, {"vertices", {{-6, 0, -6}, {-6, 0, 6}, {6, 0, 6}, {6, 0, -6}}}},
             {{"name", "ball"}, {"type", "sphere"}, {"radius", 0.5}, {"subdivisions", 2}, {"fine_subdivisions", 1}, {"transform", roll}},
-            {{"name", "ghost"}, {"type", "sphere"}, {"radius", 0.5}, {"subdivisions", 2}, {"fine_subdivisions", 0},
-             {"transform", hidden_roll}, {"visible_to", {{"indirect", false}}}},
-            {{"name", "strip"}, {"type", "mesh"}, {"file", "strip.gltf"}, {"animation", "bend"},
+            {{"name", "ghost"},
+             {"type", "sphere"},
+             {"radius", 0.5},
+             {"subdivisions", 2},
+             {"fine_subdivisions", 0},
+             {"transform", hidden_roll},
+             {"visible_to", {{"indirect", false}}}},
+            {{"name", "strip"},
+             {"type", "mesh"},
+             {"file", "strip.gltf"},
+             {"animation", "bend"},
              {"transform", {{"translate", {0, 0, -2}}}}}};
         dir.write("s.json", scene.dump());
     }
@@ -60,9 +68,11 @@ std::vector<int> expect_same_hits(const SceneAccel& a, const SceneAccel& b, size
         const Vec3 target(-3 + 6 * to_unit_float(mix64(4 * k + 2)), 0.25f, -3 + 6 * to_unit_float(mix64(4 * k + 3)));
         const Vec3 d = normalize(target - o);
         const float time = to_unit_float(mix64(k + 99999));
-        const Hit ha = a.coarse().intersect(o, d, 0, INFINITY, 0, kRayIndirect), hb = b.coarse().intersect(o, d, 0, INFINITY, 0, kRayIndirect);
+        const Hit ha = a.coarse().intersect(o, d, 0, INFINITY, 0, kRayIndirect),
+                  hb = b.coarse().intersect(o, d, 0, INFINITY, 0, kRayIndirect);
         EXPECT_TRUE(same(ha, hb)) << "coarse ray " << k;
-        const Hit fa = a.fine().intersect(o, d, 0, INFINITY, time, kRayCamera), fb = b.fine().intersect(o, d, 0, INFINITY, time, kRayCamera);
+        const Hit fa = a.fine().intersect(o, d, 0, INFINITY, time, kRayCamera),
+                  fb = b.fine().intersect(o, d, 0, INFINITY, time, kRayCamera);
         EXPECT_TRUE(same(fa, fb)) << "fine ray " << k;
         if (ha.valid()) ++hits[ha.object];
     }
@@ -137,9 +147,13 @@ TEST(BvhParts, FurPartsAreNotTakenOverByAScenesWithOtherObjects) {
     json j = test::base_scene();
     j["animation"] = {{"fps", 24}, {"frames", {1, 2}}};
     j["camera"] = {{"position", {0, 3, 3}}, {"look_at", {0, 0, 0}}, {"resolution", {16, 16}}};
-    const json lawn = {{"name", "lawn"}, {"type", "quad"}, {"vertices", {{-0.5, 0, -0.5}, {-0.5, 0, 0.5}, {0.5, 0, 0.5}, {0.5, 0, -0.5}}},
+    const json lawn = {{"name", "lawn"},
+                       {"type", "quad"},
+                       {"vertices", {{-0.5, 0, -0.5}, {-0.5, 0, 0.5}, {0.5, 0, 0.5}, {0.5, 0, -0.5}}},
                        {"fur", {{"count", 3000}, {"length", 0.1}, {"width_root", 0.004}, {"width_tip", 0.002}}}};
-    const json ball = {{"name", "ball"}, {"type", "sphere"}, {"radius", 0.2},
+    const json ball = {{"name", "ball"},
+                       {"type", "sphere"},
+                       {"radius", 0.2},
                        {"transform", {{"translate", {{"keys", {{1, {-2, 0.5, 0}}, {2, {2, 0.5, 0}}}}}}}}};
     j["objects"] = {lawn, ball};
     dir.write("two.json", j.dump());
@@ -167,7 +181,9 @@ TEST(BvhParts, FurOnARigidMoverIsBlurredWithIt) {
     json j = test::base_scene();
     j["animation"] = {{"fps", 24}, {"frames", {1, 2}}};
     j["camera"] = {{"position", {0, 3, 8}}, {"look_at", {0, 0.5, 0}}, {"resolution", {16, 16}}, {"shutter", {-0.5, 0.5}}};
-    j["objects"] = {{{"name", "ball"}, {"type", "sphere"}, {"radius", 0.5},
+    j["objects"] = {{{"name", "ball"},
+                     {"type", "sphere"},
+                     {"radius", 0.5},
                      {"transform", {{"translate", {{"keys", {{1, {-2, 0.5, 0}}, {2, {2, 0.5, 0}}}}}}}},
                      {"fur", {{"count", 40}, {"length", 0.4}, {"width_root", 0.03}, {"width_tip", 0.03}, {"lean", 0}}}}};
     dir.write("s.json", j.dump());
@@ -198,12 +214,12 @@ TEST(BvhParts, FurOnARigidMoverIsBlurredWithIt) {
     };
     const int strands = static_cast<int>(fur.strand_count());
     ASSERT_GE(strands, 30);
-    EXPECT_GE(meets(0.5f, 0, true), strands * 9 / 10);    // halfway: where the strands are
-    EXPECT_GE(meets(0.0f, -2, true), strands * 9 / 10);   // open: 2 units back
-    EXPECT_GE(meets(1.0f, 2, true), strands * 9 / 10);    // close: 2 units on
-    EXPECT_LE(meets(0.0f, 0, true), strands / 10);        // not where they are at the frame's time
+    EXPECT_GE(meets(0.5f, 0, true), strands * 9 / 10);   // halfway: where the strands are
+    EXPECT_GE(meets(0.0f, -2, true), strands * 9 / 10);  // open: 2 units back
+    EXPECT_GE(meets(1.0f, 2, true), strands * 9 / 10);   // close: 2 units on
+    EXPECT_LE(meets(0.0f, 0, true), strands / 10);       // not where they are at the frame's time
     EXPECT_LE(meets(1.0f, -2, true), strands / 10);
-    EXPECT_GE(meets(0, 0, false), strands * 9 / 10);      // shadows: at the frame's time
+    EXPECT_GE(meets(0, 0, false), strands * 9 / 10);  // shadows: at the frame's time
     EXPECT_LE(meets(0, -2, false), strands / 10);
 }
 

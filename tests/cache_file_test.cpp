@@ -171,8 +171,7 @@ TEST(CacheTools, BoxFilterKeepsExactlyTheRecordsInside) {
     f.box_lo = {-1, -2, -3};
     f.box_hi = {2, 1, 0.5f};
     size_t inside = 0;
-    for (const auto& r : a.records)
-        inside += r.p.x >= -1 && r.p.x <= 2 && r.p.y >= -2 && r.p.y <= 1 && r.p.z >= -3 && r.p.z <= 0.5f;
+    for (const auto& r : a.records) inside += r.p.x >= -1 && r.p.x <= 2 && r.p.y >= -2 && r.p.y <= 1 && r.p.z >= -3 && r.p.z <= 0.5f;
     CacheFile kept = filter_cache(a, f, false), removed = filter_cache(a, f, true);
     EXPECT_EQ(kept.records.size(), inside);
     EXPECT_EQ(removed.records.size(), a.records.size() - inside);
@@ -187,10 +186,10 @@ TEST(CacheTools, EveryWhereOperatorAndFieldReadsTheRecord) {
     Record r;
     r.p = {1, 2, 3}, r.n = {0, 0.6f, 0.8f}, r.E = Color(0.25f, 0.5f, 1.0f), r.ao = 0.75f;
     r.radius = 4, r.footprint = 0.5f, r.rays = 256, r.frame = 7;
-    const std::pair<const char*, bool> cases[] = {
-        {"p.x==1", true}, {"p.y<2", false}, {"p.z<=3", true}, {"n.x!=0", false}, {"n.y>0.5", true}, {"n.z>=0.8", true},
-        {"E.r==0.25", true}, {"E.g<0.5", false}, {"E.b>=1", true}, {"ao>0.8", false}, {"radius==4", true},
-        {"pixels==8", true}, {"rays>=256", true}, {"frame!=7", false}, {"frame > 6", true}};
+    const std::pair<const char*, bool> cases[] = {{"p.x==1", true},    {"p.y<2", false},    {"p.z<=3", true},    {"n.x!=0", false},
+                                                  {"n.y>0.5", true},   {"n.z>=0.8", true},  {"E.r==0.25", true}, {"E.g<0.5", false},
+                                                  {"E.b>=1", true},    {"ao>0.8", false},   {"radius==4", true}, {"pixels==8", true},
+                                                  {"rays>=256", true}, {"frame!=7", false}, {"frame > 6", true}};
     for (const auto& [term, holds] : cases) EXPECT_EQ(WhereTerm::parse(term).holds(r), holds) << term;
     EXPECT_NEAR(luminance(r.E), 0.25 * 0.2126 + 0.5 * 0.7152 + 0.0722, 1e-6);
     EXPECT_TRUE(WhereTerm::parse("E.y>0.48").holds(r));
@@ -276,8 +275,7 @@ TEST(CacheFile, BadFilesAreRefusedCleanly) {
 }
 
 /// Renders and, like a front end, writes the cache after the image.
-RenderResult render_with(const std::vector<std::string>& extra, RenderRequest req, Stats& stats,
-                         const std::string& cache_out = "") {
+RenderResult render_with(const std::vector<std::string>& extra, RenderRequest req, Stats& stats, const std::string& cache_out = "") {
     std::vector<Override> o = {"camera.resolution=[40,40]", "render.spp=1", "render.gi=\"cache\"", "render.rays=64"};
     o.insert(o.end(), extra.begin(), extra.end());
     RenderResult r = render(load_scene(test::cornell_scene(), o), req, stats, nullptr);
@@ -324,8 +322,9 @@ TEST(CacheReuse, CacheForOtherObjectsOrCameraIsRefusedUnlessForced) {
 TEST(CacheCli, SequencesReuseThePreviousFrameAndInfoPlaysThem) {
     test::TempDir d;
     std::string common = " --res 32x32 --spp 1 --gi cache --rays 32 -q";
-    ASSERT_EQ(test::run_bounce("render " + test::cornell_scene() + " -o " + d.file("f.####.exr") + " --cache-out " +
-                               d.file("c.####.bic") + " --frames 1-3" + common), 0);
+    ASSERT_EQ(test::run_bounce("render " + test::cornell_scene() + " -o " + d.file("f.####.exr") + " --cache-out " + d.file("c.####.bic") +
+                               " --frames 1-3" + common),
+              0);
     std::string cmd = std::string(BOUNCE_BINARY) + " cache info '" + d.file("c.####.bic") + "' --json > " + d.file("seq.json");
     ASSERT_EQ(std::system(cmd.c_str()), 0);
     std::ifstream in(d.file("seq.json"));
@@ -344,8 +343,9 @@ TEST(CacheCli, SequencesReuseThePreviousFrameAndInfoPlaysThem) {
     EXPECT_EQ(test::run_bounce("cache info " + d.file("junk.bic"), &err), 2);
     EXPECT_NE(err.find("junk.bic"), std::string::npos);
     EXPECT_EQ(test::run_bounce("cache filter " + d.file("m.bic") + " -o " + d.file("g.bic") + " --where 'colour<1'"), 2);
-    EXPECT_EQ(test::run_bounce("render " + test::cornell_scene() + " -o " + d.file("x.exr") + " --show records" + common +
-                               " --cache-in " + d.file("junk.bic")), 2);
+    EXPECT_EQ(test::run_bounce("render " + test::cornell_scene() + " -o " + d.file("x.exr") + " --show records" + common + " --cache-in " +
+                               d.file("junk.bic")),
+              2);
 }
 
 }  // namespace
@@ -354,8 +354,7 @@ TEST(CacheCli, SequencesReuseThePreviousFrameAndInfoPlaysThem) {
 namespace bounce {
 namespace {
 
-std::pair<std::string, std::string> image_and_cache_bytes(const std::vector<std::string>& settings, const std::string& file,
-                                                          Stats& s) {
+std::pair<std::string, std::string> image_and_cache_bytes(const std::vector<std::string>& settings, const std::string& file, Stats& s) {
     RenderRequest req;
     RenderResult r = render_with(settings, req, s, file);
     std::ifstream in(file, std::ios::binary);
@@ -391,8 +390,7 @@ TEST(CacheSharing, PerThreadMergesNeverDuplicateARecordAndNeverMiss) {
     test::TempDir d;
     Stats shared, per_thread;
     image_and_cache_bytes({"render.threads=2", "render.tile_size=8"}, d.file("s.bic"), shared);
-    image_and_cache_bytes({"render.threads=2", "render.tile_size=8", "render.cache_sharing=\"per-thread\""}, d.file("p.bic"),
-                          per_thread);
+    image_and_cache_bytes({"render.threads=2", "render.tile_size=8", "render.cache_sharing=\"per-thread\""}, d.file("p.bic"), per_thread);
     CacheFile f = read_cache_file(d.file("p.bic"));
     std::set<uint64_t> keys;
     for (const Record& r : f.records) EXPECT_TRUE(keys.insert(r.key).second) << "record " << r.key << " merged twice";

@@ -71,8 +71,8 @@ TEST(Hessian, AoNearAWallMatchesTheAnalyticSecondDerivative) {
 }
 
 TEST(Hessian, CacheRendersWithEllipsesWithoutMissesAndTheirFilesRoundTrip) {
-    Scene s = load_scene(test::cornell_scene(), {"camera.resolution=[40,40]", "render.spp=1", "render.gi=\"cache\"",
-                                                  "render.rays=256", "render.metric=\"hessian\"", "render.light_samples=4"});
+    Scene s = load_scene(test::cornell_scene(), {"camera.resolution=[40,40]", "render.spp=1", "render.gi=\"cache\"", "render.rays=256",
+                                                 "render.metric=\"hessian\"", "render.light_samples=4"});
     Stats stats;
     RenderResult r = render(s, {}, stats, nullptr);
     EXPECT_EQ(stats.to_json()["shading_misses"].get<double>(), 0.0);

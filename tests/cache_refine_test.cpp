@@ -57,11 +57,11 @@ TEST(Refine, TheSpreadLeavesOutWhatTheRecordsOwnNoiseExplains) {
         EXPECT_NEAR(luminance(in.E), 2.0f, 1e-5f);  // the value itself is untouched
         return in.spread;
     };
-    EXPECT_NEAR(spread(0.2f, 0), 0.5f, 1e-5f);                          // the raw spread
-    EXPECT_NEAR(spread(0.2f, 1), std::sqrt(1 - 0.2f) / 2, 1e-5f);       // 1 - 5 x 0.04
-    EXPECT_NEAR(spread(0.2f, 2), std::sqrt(1 - 0.4f) / 2, 1e-5f);       // the default
-    EXPECT_NEAR(spread(0, 2), 0.5f, 1e-5f);                             // noiseless records
-    EXPECT_EQ(spread(0.5f, 2), 0.0f);                                   // all of it noise: 2.5 > 1
+    EXPECT_NEAR(spread(0.2f, 0), 0.5f, 1e-5f);                     // the raw spread
+    EXPECT_NEAR(spread(0.2f, 1), std::sqrt(1 - 0.2f) / 2, 1e-5f);  // 1 - 5 x 0.04
+    EXPECT_NEAR(spread(0.2f, 2), std::sqrt(1 - 0.4f) / 2, 1e-5f);  // the default
+    EXPECT_NEAR(spread(0, 2), 0.5f, 1e-5f);                        // noiseless records
+    EXPECT_EQ(spread(0.5f, 2), 0.0f);                              // all of it noise: 2.5 > 1
 }
 
 // Issue 65 (ic-algorithms.md 2.4): a record whose neighbour clamp lowers its radius below the

@@ -61,7 +61,14 @@ TEST(CacheInterpolation, LinearFieldIsReproducedExactlyWithGradients) {
         r.grad_t = {g, g, g};
         cache.insert(r);
     }
-    IrradianceCache flat(unit_bounds(), [] { CacheSettings s; s.gradients = false; return s; }(), false);
+    IrradianceCache flat(
+        unit_bounds(),
+        [] {
+            CacheSettings s;
+            s.gradients = false;
+            return s;
+        }(),
+        false);
     for (size_t i = 0; i < cache.size(); ++i) flat.insert(cache.record(i));
     double err_with = 0, err_without = 0;
     for (uint64_t i = 0; i < 500; ++i) {
@@ -174,9 +181,9 @@ TEST(CacheGradients, MatchFiniteDifferencesOfGathers) {
     auto E = [&](const Vec3& p, const Vec3& n, uint64_t key) { return gatherer.gather(p, n, RandomStream(3, key), c); };
     const Vec3 p{0.4f, 0, 0.1f}, up{0, 1, 0};
     // Translational, towards the wall.
-    const Slope t = slope_towards_wall([&](const Vec3& q, uint64_t k) { return E(q, up, k); }, p,
-                                       [](const GatherResult& g) { return g.irradiance.x; },
-                                       [](const GatherResult& g) { return g.grad_trans[0]; });
+    const Slope t =
+        slope_towards_wall([&](const Vec3& q, uint64_t k) { return E(q, up, k); }, p, [](const GatherResult& g) { return g.irradiance.x; },
+                           [](const GatherResult& g) { return g.grad_trans[0]; });
     ASSERT_GT(t.fd, 0.05);  // brighter towards the wall
     EXPECT_NEAR(t.grad, t.fd, 0.1 * t.fd);
     EXPECT_NEAR(t.grad_z, 0.0, 0.05 * t.fd);  // the wall is long: no change along it
@@ -205,8 +212,8 @@ TEST(CacheGradients, AoWithACutoffMatchesFiniteDifferences) {
     Counters c;
     auto A = [&](const Vec3& p, uint64_t key) { return gatherer.gather(p, {0, 1, 0}, RandomStream(3, key), c); };
     for (float x : {0.4f, 0.8f}) {
-        const Slope t = slope_towards_wall(A, Vec3(x, 0, 0.1f), [](const GatherResult& g) { return g.ao; },
-                                           [](const GatherResult& g) { return g.ao_grad_trans; });
+        const Slope t = slope_towards_wall(
+            A, Vec3(x, 0, 0.1f), [](const GatherResult& g) { return g.ao; }, [](const GatherResult& g) { return g.ao_grad_trans; });
         ASSERT_LT(t.fd, -0.4);  // darker towards the wall
         EXPECT_NEAR(t.grad, t.fd, 0.06 * std::abs(t.fd)) << x;
         EXPECT_NEAR(t.grad_z, 0.0, 0.01) << x;  // along the wall nothing changes
@@ -218,8 +225,8 @@ Scene facing_plane(float min_spacing, float max_spacing, float min_weight) {
     j["camera"] = {{"position", {0, 0, 10}}, {"look_at", {0, 0, 0}}, {"fov", 30}, {"resolution", {96, 96}}};
     j["objects"] = {{{"type", "quad"}, {"vertices", {{-10, -10, 0}, {10, -10, 0}, {10, 10, 0}, {-10, 10, 0}}}}};
     j["lights"] = {{{"type", "sky"}, {"color", 1}}};
-    j["render"] = {{"spp", 1},           {"gi", "cache"},           {"rays", 64},
-                   {"min_spacing", min_spacing}, {"max_spacing", max_spacing}, {"min_weight", min_weight}};
+    j["render"] = {
+        {"spp", 1}, {"gi", "cache"}, {"rays", 64}, {"min_spacing", min_spacing}, {"max_spacing", max_spacing}, {"min_weight", min_weight}};
     return test::scene_from(j);
 }
 
@@ -255,8 +262,7 @@ TEST(CacheSpacing, StaysWithinThePixelBoundsOnAPlaneFacingTheCamera) {
             IrradianceCache cache = build_cache(facing_plane(lo, hi, mw), stats);
             ASSERT_GT(cache.size(), 4u);
             // Open plane: nothing occludes, so every radius is max_spacing pixels.
-            for (size_t i = 0; i < cache.size(); ++i)
-                EXPECT_NEAR(cache.record(i).radius / cache.record(i).footprint, hi, 1e-3f * hi);
+            for (size_t i = 0; i < cache.size(); ++i) EXPECT_NEAR(cache.record(i).radius / cache.record(i).footprint, hi, 1e-3f * hi);
             // Every fragment ends within R of a record, so neighbours are closer than 2R. With
             // min_weight 1/2 a record is only made where the nearest one weighs < 1/2, i.e.
             // beyond R/2; above 1 a point beside a lone record misses too (records pair up),
@@ -276,7 +282,7 @@ TEST(CacheSpacing, StaysWithinThePixelBoundsOnAPlaneFacingTheCamera) {
 TEST(CachePasses, NoMissesInTheShadingPassAndDeterministicRecords) {
     for (std::string metric : {"tl04", "ward"}) {
         std::vector<Override> o = {"camera.resolution=[64,64]", "render.spp=2", "render.gi=\"cache\"", "render.rays=128",
-                                      "render.metric=\"" + metric + "\""};
+                                   "render.metric=\"" + metric + "\""};
         Stats s1, s2;
         auto one = o, two = o;
         one.push_back("render.threads=1");
@@ -292,8 +298,8 @@ TEST(CachePasses, NoMissesInTheShadingPassAndDeterministicRecords) {
 }
 
 TEST(CachePasses, PreviewShowsEverySubPassAndEndsAtTheFinalImage) {
-    Scene s = load_scene(test::cornell_scene(), {"camera.resolution=[48,48]", "render.spp=1", "render.gi=\"cache\"",
-                                                  "render.rays=64", "render.preview=true"});
+    Scene s = load_scene(test::cornell_scene(),
+                         {"camera.resolution=[48,48]", "render.spp=1", "render.gi=\"cache\"", "render.rays=64", "render.preview=true"});
     std::vector<Image> frames;
     RenderRequest req;
     req.preview = [&](const Image& img) { frames.push_back(img); };
@@ -310,8 +316,8 @@ TEST(CachePasses, PreviewShowsEverySubPassAndEndsAtTheFinalImage) {
 
 TEST(CachePasses, AShadingOnlyReshadePreviewsOnePixelInSixteenExactly) {
     test::TempDir d;
-    const Scene s = load_scene(test::cornell_scene(), {"camera.resolution=[48,40]", "render.spp=1", "render.gi=\"cache\"",
-                                                      "render.rays=64", "render.light_samples=2", "render.preview=true"});
+    const Scene s = load_scene(test::cornell_scene(), {"camera.resolution=[48,40]", "render.spp=1", "render.gi=\"cache\"", "render.rays=64",
+                                                       "render.light_samples=2", "render.preview=true"});
     Stats s1, s2;
     RenderResult first = render(s, {}, s1, nullptr);
     write_cache_file(d.file("c.bic"), first.cache->to_file(first.cache_info));

@@ -32,7 +32,8 @@ TEST(MotionBlur, AMovingEdgeCoversEachPixelForTheShareOfTheShutterItSpendsThere)
     j["animation"] = {{"fps", 24}, {"frames", {1, 2}}};
     j["camera"] = {{"position", {0, 0, 10}}, {"look_at", {0, 0, 0}}, {"fov", 90}, {"resolution", {32, 8}}, {"shutter", {0, 1}}};
     j["render"] = {{"spp", 256}, {"light_samples", 1}};
-    j["objects"] = {{{"type", "quad"}, {"vertices", {{-100, -50, 0}, {0, -50, 0}, {0, 50, 0}, {-100, 50, 0}}},
+    j["objects"] = {{{"type", "quad"},
+                     {"vertices", {{-100, -50, 0}, {0, -50, 0}, {0, 50, 0}, {-100, 50, 0}}},
                      {"transform", {{"translate", {{"keys", {{1, {0, 0, 0}}, {2, {10, 0, 0}}}}}}}}}};
     j["lights"] = {{{"type", "distant"}, {"direction", {0, 0, -1}}}};
     const std::vector<float> a = coverage(test::scene_from(j));
@@ -57,7 +58,9 @@ TEST(MotionBlur, ACameraMovingInTheShutterBlursWhatItSeesByItsOwnMotion) {
     j["animation"] = {{"fps", 24}, {"frames", {1, 2}}};
     j["camera"] = {{"position", {{"keys", {{1, {0, 0, 10}}, {2, {-10, 0, 10}}}}}},
                    {"look_at", {{"keys", {{1, {0, 0, 0}}, {2, {-10, 0, 0}}}}}},
-                   {"fov", 90}, {"resolution", {32, 8}}, {"shutter", {0, 1}}};
+                   {"fov", 90},
+                   {"resolution", {32, 8}},
+                   {"shutter", {0, 1}}};
     j["render"] = {{"spp", 256}, {"light_samples", 1}};
     j["objects"] = {{{"type", "quad"}, {"vertices", {{-100, -50, 0}, {0, -50, 0}, {0, 50, 0}, {-100, 50, 0}}}}};
     j["lights"] = {{{"type", "distant"}, {"direction", {0, 0, -1}}}};
@@ -73,13 +76,16 @@ TEST(MotionBlur, ACameraMovingInTheShutterBlursWhatItSeesByItsOwnMotion) {
     // A pose the shutter reaches is checked as the frame's: here look_at meets position at close.
     json bad = j;
     bad["camera"]["look_at"] = {{"keys", {{1, {0, 0, 0}}, {2, {-10, 0, 10}}}}};
-    test::expect_input_error([&] { test::scene_from(bad); }, {"inline.json", "/camera/look_at", "look_at equals position at shutter close (frame 2)"});
+    test::expect_input_error([&] { test::scene_from(bad); },
+                             {"inline.json", "/camera/look_at", "look_at equals position at shutter close (frame 2)"});
     // A shutter that closes before it opens is refused, also where a key makes it so.
     json reversed = j;
     reversed["camera"]["shutter"] = {0.5, -0.5};
-    test::expect_input_error([&] { test::scene_from(reversed); }, {"inline.json", "/camera/shutter", "the shutter closes (-0.5) before it opens (0.5)"});
+    test::expect_input_error([&] { test::scene_from(reversed); },
+                             {"inline.json", "/camera/shutter", "the shutter closes (-0.5) before it opens (0.5)"});
     reversed["camera"]["shutter"] = {{"keys", {{1, {0.25, 0}}, {2, {0, 1}}}}};
-    test::expect_input_error([&] { test::scene_from(reversed); }, {"inline.json", "/camera/shutter", "the shutter closes (0) before it opens (0.25)"});
+    test::expect_input_error([&] { test::scene_from(reversed); },
+                             {"inline.json", "/camera/shutter", "the shutter closes (0) before it opens (0.25)"});
     // A camera keyed but still over the shutter (both keys alike) does not blur.
     j["camera"]["position"] = {{"keys", {{1, {0, 0, 10}}, {2, {0, 0, 10}}}}};
     j["camera"]["look_at"] = {0, 0, 0};
@@ -128,7 +134,8 @@ TEST(MotionBlur, ASkinThatMovesInTheShutterIsBlurredBetweenItsPosesAtOpenAndClos
                 for (size_t v = 0; v < strip.shutter[0].size(); ++v)
                     p.push_back(strip.shutter[0][v] + (strip.shutter[1][v] - strip.shutter[0][v]) * time);
                 for (int s = 0; s < 1024; ++s) {
-                    const double x = 1 + (px + (s % 32 + 0.5) / 32 - n / 2.0) * pixel, y = 0.5 - (py + (s / 32 + 0.5) / 32 - n / 2.0) * pixel;
+                    const double x = 1 + (px + (s % 32 + 0.5) / 32 - n / 2.0) * pixel,
+                                 y = 0.5 - (py + (s / 32 + 0.5) / 32 - n / 2.0) * pixel;
                     bool in = false;
                     for (size_t f = 0; f + 2 < strip.coarse.indices.size() && !in; f += 3)
                         in = inside(p[strip.coarse.indices[f]], p[strip.coarse.indices[f + 1]], p[strip.coarse.indices[f + 2]], x, y);
@@ -157,13 +164,18 @@ TEST(DepthOfField, APointOutOfFocusSpreadsOverItsCircleOfConfusion) {
     // of diameter 4 its circle of confusion on the plane in focus is 4 x 10 / 20 = 2 units
     // across: 64 px over 20 units there, so a disc of radius 3.2 px around an image of radius 0.8.
     json j = test::base_scene();
-    j["camera"] = {{"position", {0, 0, 10}}, {"look_at", {0, 0, 0}}, {"fov", 90}, {"resolution", {64, 64}},
-                   {"aperture", 4}, {"focus_distance", 10}};
+    j["camera"] = {{"position", {0, 0, 10}}, {"look_at", {0, 0, 0}}, {"fov", 90},
+                   {"resolution", {64, 64}}, {"aperture", 4},        {"focus_distance", 10}};
     j["render"] = {{"spp", 1024}, {"light_samples", 1}};
     j["materials"] = {{"white", {{"color", 1}}}, {"black", {{"color", 0}}}};
-    j["objects"] = {{{"type", "sphere"}, {"center", {0, 0, -10}}, {"radius", 0.5}, {"subdivisions", 4}, {"fine_subdivisions", 1},
-                     {"material", "white"}},
-                    {{"type", "quad"}, {"material", "black"}, {"vertices", {{-500, -500, -90}, {500, -500, -90}, {500, 500, -90}, {-500, 500, -90}}}}};
+    j["objects"] = {
+        {{"type", "sphere"},
+         {"center", {0, 0, -10}},
+         {"radius", 0.5},
+         {"subdivisions", 4},
+         {"fine_subdivisions", 1},
+         {"material", "white"}},
+        {{"type", "quad"}, {"material", "black"}, {"vertices", {{-500, -500, -90}, {500, -500, -90}, {500, 500, -90}, {-500, 500, -90}}}}};
     j["lights"] = {{{"type", "distant"}, {"direction", {0, 0, -1}}}};
     const auto moments = [](const std::vector<float>& a) {
         double sum = 0, r2 = 0;

@@ -49,11 +49,14 @@ TEST(BadInput, AnObjectTypeThatIsNotAStringIsNamed) {
 
 TEST(BadInput, CacheRecordsBeyondFloatRangeAreRefusedAtRead) {
     test::TempDir d;
-    ASSERT_EQ(test::run_bounce(render_cmd(test::cornell_scene(), d.file("a.exr")) + " --gi cache --rays 16 --cache-out " + d.file("c.bic")), 0);
+    ASSERT_EQ(test::run_bounce(render_cmd(test::cornell_scene(), d.file("a.exr")) + " --gi cache --rays 16 --cache-out " + d.file("c.bic")),
+              0);
     for (int which = 0; which < 2; ++which) {
         CacheFile f = read_cache_file(d.file("c.bic"));
-        if (which == 0) f.records[0].p.x = 3e38f;
-        else f.records[0].E.y = 3e38f;
+        if (which == 0)
+            f.records[0].p.x = 3e38f;
+        else
+            f.records[0].E.y = 3e38f;
         // serialize_cache_file writes valid checksums: only the values are wrong.
         std::string bytes = serialize_cache_file(f);
         d.write("bad.bic", bytes);
@@ -69,7 +72,8 @@ TEST(BadInput, FifosAndDirectoriesAreNamedNotOpened) {
     refused(render_cmd(d.file("scene.json"), d.file("x.exr")), {"scene.json", "not a regular file"});
     std::filesystem::create_directory(d.file("adir.json"));
     refused(render_cmd(d.file("adir.json"), d.file("x.exr")), {"adir.json", "is a directory"});
-    refused(render_cmd(test::cornell_scene(), d.file("y.exr")) + " --deep-in " + d.file("scene.json"), {"scene.json", "not a regular file"});
+    refused(render_cmd(test::cornell_scene(), d.file("y.exr")) + " --deep-in " + d.file("scene.json"),
+            {"scene.json", "not a regular file"});
 }
 
 TEST(BadInput, NegativeAndNanFlagsExitTwo) {
@@ -156,18 +160,23 @@ TEST(BadInput, SceneFilesThatLie) {
     refused(render_cmd(d.file("dup.json"), d.file("x.exr")), {"dup.json", "/objects", "given twice"});
     d.write("top.json", "[1, 2]");
     refused(render_cmd(d.file("top.json"), d.file("x.exr")) + " --set camera.fov=40", {"top.json", "expected an object at the top"});
-    d.write("short.ply", "ply\nformat ascii 1.0\nelement vertex 100\nproperty float x\nproperty float y\nproperty float z\n"
-                         "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    d.write("short.ply",
+            "ply\nformat ascii 1.0\nelement vertex 100\nproperty float x\nproperty float y\nproperty float z\n"
+            "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
     nlohmann::json j = test::base_scene();
     j["objects"] = {{{"file", "short.ply"}}};
     d.write("ply.json", j.dump());
-    refused(render_cmd(d.file("ply.json"), d.file("x.exr")), {"/objects/0/file", "line 13", "vertex 3: 4 values where its properties take 3"});
+    refused(render_cmd(d.file("ply.json"), d.file("x.exr")),
+            {"/objects/0/file", "line 13", "vertex 3: 4 values where its properties take 3"});
 }
 
 TEST(BadInput, CompareAndCacheToolsRefuseWhatTheyUsedToAccept) {
     test::TempDir d;
-    ASSERT_EQ(test::run_bounce(render_cmd(test::cornell_scene(), d.file("a.exr")) + " --gi cache --rays 16 --cache-out " + d.file("gi.bic")), 0);
-    ASSERT_EQ(test::run_bounce(render_cmd(test::cornell_scene(), d.file("b.exr")) + " --gi cache --ao --rays 16 --cache-out " + d.file("ao.bic")), 0);
+    ASSERT_EQ(
+        test::run_bounce(render_cmd(test::cornell_scene(), d.file("a.exr")) + " --gi cache --rays 16 --cache-out " + d.file("gi.bic")), 0);
+    ASSERT_EQ(
+        test::run_bounce(render_cmd(test::cornell_scene(), d.file("b.exr")) + " --gi cache --ao --rays 16 --cache-out " + d.file("ao.bic")),
+        0);
     Image nan = read_exr(d.file("a.exr")), black = nan;
     for (auto& l : nan.layers) std::fill(l.data.begin(), l.data.end(), std::nanf(""));
     for (auto& l : black.layers) std::fill(l.data.begin(), l.data.end(), 0.0f);
@@ -175,7 +184,8 @@ TEST(BadInput, CompareAndCacheToolsRefuseWhatTheyUsedToAccept) {
     write_exr(d.file("black.exr"), black);
     refused("compare " + d.file("nan.exr") + " " + d.file("a.exr"), {"nan.exr", "not a finite value"});
     std::string out;
-    std::string cmd = std::string(BOUNCE_BINARY) + " compare " + d.file("a.exr") + " " + d.file("black.exr") + " --layer indirect --json > " + d.file("c.json");
+    std::string cmd = std::string(BOUNCE_BINARY) + " compare " + d.file("a.exr") + " " + d.file("black.exr") +
+                      " --layer indirect --json > " + d.file("c.json");
     ASSERT_EQ(std::system(cmd.c_str()), 0);
     std::ifstream in(d.file("c.json"));
     EXPECT_TRUE(nlohmann::json::parse(in)["indirect"]["rel_rmse"].is_null());  // not "0 %"

@@ -18,8 +18,7 @@ std::string read_file(const std::string& path) {
 TEST(Cli, RendersTheCornellBoxWithAllLayers) {
     test::TempDir d;
     std::string out = d.file("c.exr");
-    ASSERT_EQ(run_bounce("render " + test::cornell_scene() + " -o " + out + " --res 32x32 --spp 2 -q --stats-json " +
-                         d.file("stats.json")),
+    ASSERT_EQ(run_bounce("render " + test::cornell_scene() + " -o " + out + " --res 32x32 --spp 2 -q --stats-json " + d.file("stats.json")),
               0);
     Image img = read_exr(out);
     for (const char* layer : {"beauty", "direct", "albedo", "N", "depth"}) EXPECT_NE(img.find(layer), nullptr) << layer;
@@ -71,8 +70,10 @@ TEST(Cli, DeepFileFromAnotherSceneIsRefused) {
     std::string deep = d.file("deep.exr");
     ASSERT_EQ(run_bounce("render " + test::cornell_scene() + " -o " + d.file("a.exr") + " --res 16x16 --spp 1 -q --deep-out " + deep), 0);
     std::string err;
-    EXPECT_EQ(run_bounce("render " + test::cornell_scene() + " -o " + d.file("b.exr") +
-                             " --res 16x16 --set camera.fov=50 -q --deep-in " + deep, &err), 2);
+    EXPECT_EQ(
+        run_bounce("render " + test::cornell_scene() + " -o " + d.file("b.exr") + " --res 16x16 --set camera.fov=50 -q --deep-in " + deep,
+                   &err),
+        2);
     EXPECT_NE(err.find("another scene or camera"), std::string::npos) << err;
 }
 
@@ -94,8 +95,8 @@ TEST(Cli, TheReadmesLightersLoopReshadesALightEditWithTheCache) {
     EXPECT_NE(err.find("f.bic: lights or materials differ from the cache's"), std::string::npos) << err;
     EXPECT_EQ(run_bounce("render " + scene + " -o " + d.file("same.exr") + common, &err), 0) << err;
     EXPECT_EQ(err.find("differ"), std::string::npos) << err;
-    EXPECT_EQ(run_bounce("render " + scene + " -o " + d.file("other.exr") + " --gi cache --res 48x48 --rays 32 --cache-in " + d.file("f.bic") +
-                             " --set objects.3.material=red",
+    EXPECT_EQ(run_bounce("render " + scene + " -o " + d.file("other.exr") + " --gi cache --res 48x48 --rays 32 --cache-in " +
+                             d.file("f.bic") + " --set objects.3.material=red",
                          &err),
               2);
     EXPECT_NE(err.find("f.bic: scene_fingerprint: error: cache was made for another scene (its objects differ"), std::string::npos) << err;
@@ -111,8 +112,8 @@ TEST(Cli, HelpAndVersionSucceed) {
 // statistics (they were most of a big scene's wall time, and invisible).
 TEST(Cli, TheStatisticsTimeTheLoadTheMeshParseAndTheRadiosityLayout) {
     test::TempDir d;
-    ASSERT_EQ(run_bounce("render " + test::cornell_scene() + " -o " + d.file("o.exr") + " --res 16x16 --spp 1 --gi cache --rays 16 -q --stats-json " +
-                         d.file("s.json")),
+    ASSERT_EQ(run_bounce("render " + test::cornell_scene() + " -o " + d.file("o.exr") +
+                         " --res 16x16 --spp 1 --gi cache --rays 16 -q --stats-json " + d.file("s.json")),
               0);
     const nlohmann::json phases = nlohmann::json::parse(test::bytes_of(d.file("s.json")))["phases_s"];
     for (const char* p : {"scene load", "mesh parse", "radiosity layout"}) {

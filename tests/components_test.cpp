@@ -22,12 +22,16 @@ Image render_image(const Scene& s) {
 /// The glossy Cornell box (emitter, coloured walls, a specular lobe) with the cache, two extra
 /// lights (`key` and `rim` their intensities), and `more` settings.
 Scene glossy_cornell(const std::string& layers, std::vector<Override> more = {}, float key = 30000, float rim = 20000) {
-    std::vector<Override> set = {
-        "camera.resolution=[32,32]", "render.spp=2", "render.rays=64", "render.gi=cache", "render.layers=" + layers,
-        "materials.white.specular=[0.3,0.3,0.3]", "materials.white.roughness=0.3",
-        fmt::format(R"(lights=[{{"type": "point", "name": "key", "position": [278, 400, 100], "intensity": {}}},
+    std::vector<Override> set = {"camera.resolution=[32,32]",
+                                 "render.spp=2",
+                                 "render.rays=64",
+                                 "render.gi=cache",
+                                 "render.layers=" + layers,
+                                 "materials.white.specular=[0.3,0.3,0.3]",
+                                 "materials.white.roughness=0.3",
+                                 fmt::format(R"(lights=[{{"type": "point", "name": "key", "position": [278, 400, 100], "intensity": {}}},
                                {{"type": "spot", "name": "rim light", "position": [100, 500, 278], "direction": [1, -1, 0], "intensity": {}}}])",
-                    key, rim)};
+                                             key, rim)};
     set.insert(set.end(), more.begin(), more.end());
     return load_scene(test::cornell_scene(), set);
 }
@@ -57,8 +61,9 @@ void expect_sums(const Image& img, const std::string& total, const std::vector<s
 
 TEST(ComponentLayers, SumToTheBeautyAndPerLightLayersToTheirTotals) {
     const Image img = render_image(glossy_cornell("components"));
-    expect_sums(img, "beauty", {"emission", "diffuse_direct", "specular_direct", "diffuse_indirect", "specular_indirect", "background",
-                                "reflection", "refraction"});
+    expect_sums(img, "beauty",
+                {"emission", "diffuse_direct", "specular_direct", "diffuse_indirect", "specular_indirect", "background", "reflection",
+                 "refraction"});
     // Lights: the two named ones (a space becomes '_') and the emissive quad (its object's name).
     expect_sums(img, "diffuse_direct", {"diffuse_direct_key", "diffuse_direct_rim_light", "diffuse_direct_light"});
     expect_sums(img, "specular_direct", {"specular_direct_key", "specular_direct_rim_light", "specular_direct_light"});
@@ -103,12 +108,13 @@ TEST(ComponentLayers, APerLightIndirectLayerIsWhatThatLightAloneBounces) {
 }
 
 TEST(ComponentLayers, MirrorsAndGlassAddReflectionAndRefractionThatStillSumToTheBeauty) {
-    const Scene s = load_scene(test::source_dir() + "/scenes/cornell/mirror-glass.json",
-                               {"camera.resolution=[32,32]", "render.spp=2", "render.rays=64", "render.gi=cache",
-                                "render.layers=components"});
+    const Scene s =
+        load_scene(test::source_dir() + "/scenes/cornell/mirror-glass.json",
+                   {"camera.resolution=[32,32]", "render.spp=2", "render.rays=64", "render.gi=cache", "render.layers=components"});
     const Image img = render_image(s);
-    expect_sums(img, "beauty", {"emission", "diffuse_direct", "specular_direct", "diffuse_indirect", "specular_indirect",
-                                "background", "reflection", "refraction"});
+    expect_sums(img, "beauty",
+                {"emission", "diffuse_direct", "specular_direct", "diffuse_indirect", "specular_indirect", "background", "reflection",
+                 "refraction"});
     for (const char* l : {"reflection", "refraction"}) {
         const Layer* layer = img.find(l);
         ASSERT_TRUE(layer) << l;
@@ -130,7 +136,8 @@ TEST(ComponentLayers, TheIdLayerNamesTheObjectAndMaterialThePixelSees) {
     json j = test::base_scene();
     j["materials"] = {{"a", {{"color", 0.5}}}, {"b", {{"color", 0.2}}}};
     j["objects"][0]["name"] = "floor", j["objects"][0]["material"] = "b";
-    j["objects"].push_back({{"name", "card"}, {"type", "quad"}, {"material", "a"}, {"vertices", {{-1, 1, -1}, {-1, 1, 1}, {1, 1, 1}, {1, 1, -1}}}});
+    j["objects"].push_back(
+        {{"name", "card"}, {"type", "quad"}, {"material", "a"}, {"vertices", {{-1, 1, -1}, {-1, 1, 1}, {1, 1, 1}, {1, 1, -1}}}});
     j["render"] = {{"layers", "components"}};
     const Image img = render_image(test::scene_from(j));
     const Layer* id = img.find("id");

@@ -18,7 +18,10 @@ namespace bounce {
 namespace {
 
 std::vector<Override> cornell_settings(const std::string& prediction) {
-    return {"camera.resolution=[32,24]", "render.spp=1", "render.rays=128", "render.gi=\"cache\"",
+    return {"camera.resolution=[32,24]",
+            "render.spp=1",
+            "render.rays=128",
+            "render.gi=\"cache\"",
             "render.correction_rays=16",  // records keep their prediction
             "render.correction_prediction=\"" + prediction + "\""};
 }

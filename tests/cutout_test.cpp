@@ -85,7 +85,7 @@ TEST(Cutouts, ABlendedCardCoversItsShareOfEachPixelAndLetsTheRestOfTheLightThrou
         for (int y = 0; y < img.height; ++y)
             for (int x = 0; x < img.width; ++x) {
                 const float *c = img.at(*d, x, y), *co = opaque.at(*dop, x, y), *cn = none.at(*dn, x, y);
-                const float *alb_o = opaque.at(*ao, x, y);
+                const float* alb_o = opaque.at(*ao, x, y);
                 // Floor pixels (white in both) that the opaque card shadows.
                 if (!(alb_o[0] > 0.65f && cn[1] > 0 && co[1] < 0.05f * cn[1])) continue;
                 lit += c[1], open += cn[1], shut += co[1];
@@ -102,14 +102,20 @@ TEST(Cutouts, AGltfMaskOrBlendIsTheSameCutoutWrittenInTheSceneFile) {
     const std::string leaf = dir.file("leaf.png");
     write_png(leaf, 4, 1, 4, {255, 255, 255, 255, 255, 255, 255, 0, 255, 255, 255, 255, 255, 255, 255, 0});
     for (const std::string mode : {"MASK", "BLEND"}) {
-        json m = {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"baseColorFactor", {1, 1, 1, 0.8}},
-                                            {"metallicFactor", 0}, {"roughnessFactor", 1}}},
-                  {"alphaMode", mode}};
+        json m = {
+            {"pbrMetallicRoughness",
+             {{"baseColorTexture", {{"index", 0}}}, {"baseColorFactor", {1, 1, 1, 0.8}}, {"metallicFactor", 0}, {"roughnessFactor", 1}}},
+            {"alphaMode", mode}};
         if (mode == "MASK") m["alphaCutoff"] = 0.7;
         const std::string file = gltf_card(dir, m);
         json from_file = stage(json::array({{{"name", "card"}, {"type", "mesh"}, {"file", file}}}), kLeaf);
-        json same = {{"color", 1}, {"color_texture", leaf}, {"specular", 0.04}, {"roughness", 1}, {"opacity", 0.8},
-                     {"alpha_mode", mode == "MASK" ? "mask" : "blend"}, {"opacity_texture", leaf}};
+        json same = {{"color", 1},
+                     {"color_texture", leaf},
+                     {"specular", 0.04},
+                     {"roughness", 1},
+                     {"opacity", 0.8},
+                     {"alpha_mode", mode == "MASK" ? "mask" : "blend"},
+                     {"opacity_texture", leaf}};
         if (mode == "MASK") same["alpha_cutoff"] = 0.7;
         const json written = stage(json::array({quad("card", "leaf", -1, 1, 0.2, 2.2, 0)}), same);
         const Image a = render_with(from_file, "brute"), b = render_with(written, "brute");
@@ -129,8 +135,9 @@ TEST(Cutouts, AnMtlsDissolveAndMapDAreBlendedOpacity) {
     const std::string stripes = dir.file("stripes.png");
     write_grey(stripes, 4, 1, {255, 0, 255, 0});
     // The stage's card as an OBJ quad (u along x, v along y), MTL's d = 1 - Tr and map_d.
-    const std::string obj = dir.write("card.obj", "mtllib card.mtl\nv -1 0.2 0\nv 1 0.2 0\nv 1 2.2 0\nv -1 2.2 0\n"
-                                                  "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl leaf\nf 1/1 2/2 3/3 4/4\n");
+    const std::string obj = dir.write("card.obj",
+                                      "mtllib card.mtl\nv -1 0.2 0\nv 1 0.2 0\nv 1 2.2 0\nv -1 2.2 0\n"
+                                      "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl leaf\nf 1/1 2/2 3/3 4/4\n");
     for (const std::string dissolve : {"d 0.6", "Tr 0.4"}) {
         dir.write("card.mtl", "newmtl leaf\nKd 0.2 0.6 0.1\n" + dissolve + "\nmap_d stripes.png\n");
         const json from_file = stage(json::array({{{"name", "card"}, {"type", "mesh"}, {"file", obj}}}), kLeaf);
@@ -186,9 +193,11 @@ TEST(UnreadMaterials, EveryUnreadFeatureIsNamedOnStderrOncePerFile) {
     test::TempDir dir;
     write_png(dir.file("leaf.png"), 4, 1, 4, {255, 255, 255, 255, 255, 255, 255, 0, 255, 255, 255, 255, 255, 255, 255, 0});
     const json tex = {{"index", 0}};
-    json m = {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}, {"extensions", {{"KHR_texture_transform", {{"scale", {2, 2}}}}}}}},
-                                        {"metallicRoughnessTexture", tex}}},
-              {"emissiveTexture", tex}, {"occlusionTexture", {{"index", 0}, {"texCoord", 1}}},
+    json m = {{"pbrMetallicRoughness",
+               {{"baseColorTexture", {{"index", 0}, {"extensions", {{"KHR_texture_transform", {{"scale", {2, 2}}}}}}}},
+                {"metallicRoughnessTexture", tex}}},
+              {"emissiveTexture", tex},
+              {"occlusionTexture", {{"index", 0}, {"texCoord", 1}}},
               {"extensions", {{"KHR_materials_clearcoat", {{"clearcoatFactor", 1}}}}}};
     const std::string file = gltf_card(dir, m);
     json g = json::parse(test::bytes_of(file));
@@ -204,10 +213,11 @@ TEST(UnreadMaterials, EveryUnreadFeatureIsNamedOnStderrOncePerFile) {
     ASSERT_EQ(test::run_bounce("render " + path + " -o " + dir.file("out.exr"), &err), 0) << err;
     // The base colour's transform and uv set are read; the textures on another set or without its
     // transform are not read, and named.
-    for (const std::string want : {"metallicRoughnessTexture on another uv set or transform than the material's first texture on 2 materials",
-                                   "emissiveTexture on another uv set or transform than the material's first texture on 2 materials",
-                                   "occlusionTexture on another uv set or transform than the material's first texture on 2 materials",
-                                   "KHR_materials_clearcoat on 2 materials", "KHR_materials_variants on 1 file"}) {
+    for (const std::string want :
+         {"metallicRoughnessTexture on another uv set or transform than the material's first texture on 2 materials",
+          "emissiveTexture on another uv set or transform than the material's first texture on 2 materials",
+          "occlusionTexture on another uv set or transform than the material's first texture on 2 materials",
+          "KHR_materials_clearcoat on 2 materials", "KHR_materials_variants on 1 file"}) {
         const std::string line = "card.gltf: ignored: " + want;
         const size_t at = err.find(line);
         EXPECT_NE(at, std::string::npos) << line << " in:\n" << err;
@@ -221,12 +231,14 @@ TEST(UnreadMaterials, EveryUnreadFeatureIsNamedOnStderrOncePerFile) {
                         "metallicRoughnessTexture on another uv set or transform than the material's first texture, "
                         "emissiveTexture on another uv set or transform than the material's first texture, "
                         "occlusionTexture on another uv set or transform than the material's first texture, KHR_materials_clearcoat\n"),
-              std::string::npos) << info;
+              std::string::npos)
+        << info;
     EXPECT_NE(info.find("material again/1:"), std::string::npos) << info;
     EXPECT_NE(info.find("card.gltf: ignored: KHR_materials_variants on 1 file"), std::string::npos) << info;
     // An MTL's statements bounce does not read, once per material that has them.
-    dir.write("card.mtl", "newmtl a\nKd 0.5 0.5 0.5\nKa 1 1 1\nillum 2\nmap_Ks s.png\nNi 1.5\nd 0.5\nnewmtl b\nNi 1.4\nillum 7\nPr 0.3\n"
-                          "newmtl c\nNi 1.5\nillum 2\n");  // c's Ni (opaque) means nothing
+    dir.write("card.mtl",
+              "newmtl a\nKd 0.5 0.5 0.5\nKa 1 1 1\nillum 2\nmap_Ks s.png\nNi 1.5\nd 0.5\nnewmtl b\nNi 1.4\nillum 7\nPr 0.3\n"
+              "newmtl c\nNi 1.5\nillum 2\n");  // c's Ni (opaque) means nothing
     const std::string obj = dir.write("card.obj", "mtllib card.mtl\nv -1 0.2 0\nv 1 0.2 0\nv 1 2.2 0\nusemtl a\nf 1 2 3\n");
     scene = stage(json::array({{{"name", "card"}, {"type", "mesh"}, {"file", obj}}}), kLeaf);
     ASSERT_EQ(test::run_bounce("render " + dir.write("obj.json", scene.dump()) + " -o " + dir.file("obj.exr"), &err), 0) << err;
@@ -309,8 +321,11 @@ TEST(GltfMaterials, EmissiveStrengthMultipliesTheEmissiveFactor) {
     for (const json& bad : {json(-1), json("bright"), json(1e39)}) {
         m["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"] = bad;
         const std::string hostile = gltf_card(dir, m);
-        test::expect_input_error([&] { test::scene_from(stage(json::array({{{"name", "card"}, {"type", "mesh"}, {"file", hostile}}}), kLeaf)); },
-                                 {"card.gltf", "KHR_materials_emissive_strength", "emissiveStrength"});
+        test::expect_input_error(
+            [&] {
+                test::scene_from(stage(json::array({{{"name", "card"}, {"type", "mesh"}, {"file", hostile}}}), kLeaf));
+            },
+            {"card.gltf", "KHR_materials_emissive_strength", "emissiveStrength"});
     }
 }
 

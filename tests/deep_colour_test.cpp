@@ -30,9 +30,9 @@ Image render_with_deep(const Scene& s, const std::string& deep_out) {
 }
 
 struct Flattened {
-    float worst = 0;      ///< largest colour difference (relative above 1) from the beauty
+    float worst = 0;  ///< largest colour difference (relative above 1) from the beauty
     float worst_alpha = 0;
-    int edges = 0;        ///< pixels of several samples
+    int edges = 0;  ///< pixels of several samples
 };
 
 /// Renders `s` with a deep colour file and flattens its samples over, front to back.
@@ -66,7 +66,8 @@ Flattened flatten(const Scene& s) {
             through *= 1 - a;
         }
         const float* want = &beauty->data[static_cast<size_t>(p) * 4];
-        for (int ch = 0; ch < 3; ++ch) f.worst = std::max(f.worst, static_cast<float>(std::abs(c[ch] - want[ch]) / std::max(1.0f, want[ch])));
+        for (int ch = 0; ch < 3; ++ch)
+            f.worst = std::max(f.worst, static_cast<float>(std::abs(c[ch] - want[ch]) / std::max(1.0f, want[ch])));
         f.worst_alpha = std::max(f.worst_alpha, static_cast<float>(std::abs(1 - through - want[3])));
         f.edges += n > 1;
     }
@@ -86,7 +87,10 @@ TEST(DeepColour, BlendedCutoutsFlattenToTheBeauty) {
     const json scene = {
         {"camera", {{"position", {0, 1.6, -6}}, {"look_at", {0, 1, 0}}, {"fov", 45}, {"resolution", {24, 18}}}},
         {"render", {{"spp", 4}, {"light_samples", 2}, {"rays", 16}, {"gi", "brute"}, {"deep_colour", true}}},
-        {"materials", {{"white", {{"color", 0.7}}}, {"leaf", {{"color", {0.2, 0.6, 0.1}}, {"opacity", 0.4}}}, {"glass", {{"color", 0.5}, {"opacity", 0.7}}}}},
+        {"materials",
+         {{"white", {{"color", 0.7}}},
+          {"leaf", {{"color", {0.2, 0.6, 0.1}}, {"opacity", 0.4}}},
+          {"glass", {{"color", 0.5}, {"opacity", 0.7}}}}},
         {"lights", {{{"type", "point"}, {"position", {0.3, 4, -3}}, {"color", 30}}}},
         {"objects",
          {{{"type", "quad"}, {"material", "white"}, {"vertices", {{-6, 0, -6}, {-6, 0, 6}, {6, 0, 6}, {6, 0, -6}}}},

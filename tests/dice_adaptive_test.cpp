@@ -69,7 +69,7 @@ TEST(Dice, AdaptiveDicingOfMixedRatesIsWatertight) {
     int border = 0;  // the 16 control edges on the grid's border (4 x 4 grid of unit / 4 quads)
     for (int i = 0; i < 4; ++i) {
         const float x0 = static_cast<float>(i) / 4, x1 = static_cast<float>(i + 1) / 4;
-        border += 2 * rate({x0, 0, 0}, {x1, 0, 0});                        // bottom and top
+        border += 2 * rate({x0, 0, 0}, {x1, 0, 0});                             // bottom and top
         border += rate({0, x0, 0}, {0, x1, 0}) + rate({1, x0, 0}, {1, x1, 0});  // left and right
     }
     EXPECT_EQ(open, static_cast<size_t>(border));

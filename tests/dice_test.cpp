@@ -104,8 +104,11 @@ std::string displaced_grid_scene(const test::TempDir& dir, float scale) {
     nlohmann::json j = {{"camera", {{"position", {2, 0.5, 1.5}}, {"look_at", {0.5, 0.5, 0}}, {"fov", 14}, {"resolution", {48, 48}}}},
                         {"render", {{"spp", 4}}},
                         {"lights", {{{"type", "sky"}, {"color", 1}}}},
-                        {"objects", {{{"name", "grid"}, {"file", "grid.obj"}, {"subdivision", "catmull-clark"},
-                                      {"displacement", {{"map", "noise.exr"}, {"scale", scale}}}}}}};
+                        {"objects",
+                         {{{"name", "grid"},
+                           {"file", "grid.obj"},
+                           {"subdivision", "catmull-clark"},
+                           {"displacement", {{"map", "noise.exr"}, {"scale", scale}}}}}}};
     return dir.write("scene.json", j.dump());
 }
 
@@ -233,8 +236,8 @@ TEST(Dice, FragmentsTiltedFromTheUndisplacedSurfaceGatherTheirOwn) {
     double error[2];
     for (int i = 0; i < 2; ++i) {
         const float tilt = i ? 30.0f : 0.0f;
-        Scene s = load_scene(scene, {"render.gi=\"cache\"", "render.rays=128", "render.refine=0",
-                                     fmt::format("render.refine_tilt={}", tilt)});
+        Scene s =
+            load_scene(scene, {"render.gi=\"cache\"", "render.rays=128", "render.refine=0", fmt::format("render.refine_tilt={}", tilt)});
         RenderResult r = render(s, RenderRequest{}, stats, nullptr);
         size_t tilted = 0;
         for (const Fragment& f : r.deep.fragments) tilted += i && dot(f.n, f.n_base) < std::cos(tilt * kPi / 180);
@@ -349,11 +352,13 @@ TEST(Dice, GathersOnFoldedDisplacementStayFinite) {
     const std::string scene = displaced_grid_scene(dir, 0.6f);
     for (const char* where : {"\"undisplaced\"", "\"displaced\""}) {
         Stats stats;
-        RenderResult r = render(load_scene(scene, {"render.gi=\"cache\"", "render.rays=64", std::string("render.displaced_records=") + where}),
-                                RenderRequest{}, stats, nullptr);
+        RenderResult r =
+            render(load_scene(scene, {"render.gi=\"cache\"", "render.rays=64", std::string("render.displaced_records=") + where}),
+                   RenderRequest{}, stats, nullptr);
         for (size_t i = 0; i < r.cache->size(); ++i) {
             const Record& rec = r.cache->record(i);
-            for (int c = 0; c < 3; ++c) ASSERT_TRUE(isfinite(rec.grad_t[static_cast<size_t>(c)]) && isfinite(rec.grad_r[static_cast<size_t>(c)]));
+            for (int c = 0; c < 3; ++c)
+                ASSERT_TRUE(isfinite(rec.grad_t[static_cast<size_t>(c)]) && isfinite(rec.grad_r[static_cast<size_t>(c)]));
             ASSERT_TRUE(isfinite(rec.E));
         }
         for (const Layer& l : r.image.layers)
@@ -387,8 +392,10 @@ TEST(Dice, RayOffsettingKeepsADisplacedSurfaceFreeOfSelfHits) {
     nlohmann::json j = {{"camera", {{"position", {0, 0, 0}}, {"look_at", {0.3, 0.2, 1}}, {"fov", 60}, {"resolution", {48, 48}}}},
                         {"render", {{"spp", 1}, {"ray_level", 1}, {"shading_rate", 0.25}}},
                         {"lights", {{{"type", "sky"}, {"color", 1}}}},
-                        {"objects", {{{"file", "cube.obj"}, {"subdivision", "catmull-clark"},
-                                      {"displacement", {{"map", "one.exr"}, {"scale", 0.2}, {"midpoint", 0}}}}}}};
+                        {"objects",
+                         {{{"file", "cube.obj"},
+                           {"subdivision", "catmull-clark"},
+                           {"displacement", {{"map", "one.exr"}, {"scale", 0.2}, {"midpoint", 0}}}}}}};
     const std::string scene = dir.write("convex.json", j.dump());
     // Occluded fragments (AO below 1) among fully covered pixels, and how many were covered.
     auto self_hits = [&](const std::vector<Override>& extra) {

@@ -14,8 +14,7 @@
 namespace bounce::test {
 
 /// A one-channel float EXR of f(u, v) at pixel centres (v up, as uvs are).
-inline std::string write_map(const test::TempDir& dir, const std::string& name, int w, int h,
-                      const std::function<float(float, float)>& f) {
+inline std::string write_map(const test::TempDir& dir, const std::string& name, int w, int h, const std::function<float(float, float)>& f) {
     std::vector<float> px(static_cast<size_t>(w) * h);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)
@@ -35,7 +34,8 @@ inline ControlMesh grid(int n, bool seam = false) {
     c.source = "grid.obj";
     auto vid = [n](int i, int j) { return j * (n + 1) + i; };
     for (int j = 0; j <= n; ++j)
-        for (int i = 0; i <= n; ++i) c.positions.push_back({static_cast<float>(i) / static_cast<float>(n), static_cast<float>(j) / static_cast<float>(n), 0});
+        for (int i = 0; i <= n; ++i)
+            c.positions.push_back({static_cast<float>(i) / static_cast<float>(n), static_cast<float>(j) / static_cast<float>(n), 0});
     c.uvs.resize(c.positions.size());
     for (size_t k = 0; k < c.positions.size(); ++k) c.uvs[k] = {c.positions[k].x, c.positions[k].y};
     const int right = static_cast<int>(c.uvs.size());

@@ -56,8 +56,7 @@ TEST(Display, ADisplayAndViewAreChosenByName) {
 
 TEST(Display, TheOcioVariableNamesTheConfigUnlessOneIsGiven) {
     EXPECT_EQ(shown(DisplayTransform({}, config().c_str()), {0.36f, 0.04f, 0.64f}), (std::array<int, 3>{204, 51, 153}));
-    EXPECT_EQ(shown(DisplayTransform({config(), "other", ""}, "/no/such.ocio"), {0.36f, 0.04f, 0.64f}),
-              (std::array<int, 3>{46, 5, 82}));
+    EXPECT_EQ(shown(DisplayTransform({config(), "other", ""}, "/no/such.ocio"), {0.36f, 0.04f, 0.64f}), (std::array<int, 3>{46, 5, 82}));
     EXPECT_TRUE(DisplayTransform({}, "").builtin());
 }
 

@@ -120,7 +120,7 @@ namespace {
 
 /// Rank 0 of two, for plans only (a plan asks how many processes there are, never exchanges).
 class TwoRanks : public SingleProcess {
-public:
+  public:
     int size() const override { return 2; }
 };
 
@@ -128,7 +128,7 @@ TEST(FramePlan, RefinementsGathersAreKeptForReprojectionInAShot) {
     RenderRequest shot;
     shot.kind = FrameKind::ShotFrame;
     EXPECT_TRUE(plan_frame(cornell(), {}, shot).keep_gathers);  // on by default
-    EXPECT_FALSE(plan_frame(cornell(), {}, {}).keep_gathers);  // a still has no next frame
+    EXPECT_FALSE(plan_frame(cornell(), {}, {}).keep_gathers);   // a still has no next frame
     EXPECT_FALSE(plan_frame(cornell({"render.temporal_refine_reuse=0"}), {}, shot).keep_gathers);
     // An MPI job's processes all hold every gather's hits (refinement_pass): each reuses what
     // one process would (Mpi.AMovingCamerasShotReprojectsTheSameGathersAtAnyRankCount).
@@ -140,8 +140,8 @@ TEST(FramePlan, RefinementsGathersAreKeptForReprojectionInAShot) {
 TEST(FramePlan, EveryDecisionIsAStepOfThePlanAndDescribed) {
     // Mirror and glass paths to the sites gathers light: only with specular materials, and only
     // when gathers light them.
-    const Scene mirrors = load_scene(test::source_dir() + "/scenes/cornell/mirror-glass.json",
-                                     {"camera.resolution=[40,40]", "render.gi=\"cache\""});
+    const Scene mirrors =
+        load_scene(test::source_dir() + "/scenes/cornell/mirror-glass.json", {"camera.resolution=[40,40]", "render.gi=\"cache\""});
     EXPECT_TRUE(plan_frame(mirrors, {}, {}).specular_sites);
     EXPECT_FALSE(plan_frame(cornell(), {}, {}).specular_sites);
     EXPECT_EQ(plan_frame(mirrors, {}, {}).describe()["specular_sites"], true);
@@ -160,8 +160,9 @@ TEST(FramePlan, EveryDecisionIsAStepOfThePlanAndDescribed) {
 }
 
 TEST(FramePlan, ASequenceIsNotGatheredAnewFrameByFrame) {
-    test::expect_refused("render " + test::source_dir() + "/scenes/shots/cornell-rolling.json --frames 1-2 --regather -o /tmp/never.####.exr",
-                         {"--regather", "--frame"});
+    test::expect_refused(
+        "render " + test::source_dir() + "/scenes/shots/cornell-rolling.json --frames 1-2 --regather -o /tmp/never.####.exr",
+        {"--regather", "--frame"});
 }
 
 }  // namespace

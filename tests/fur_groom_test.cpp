@@ -32,9 +32,19 @@ TEST(FurGroom, ARigidMoversStrandsAreTheSameInItsOwnSpaceAtEveryFrame) {
     j["animation"] = {{"fps", 24}, {"frames", {1, 9}}};
     const json roll = {{"translate", {{"keys", {{1, {-2, 0.5, 0}}, {9, {2, 0.5, 1}}}}}},
                        {"rotate", {{"keys", {{1, {0, 0, 0, 1}}, {9, {-229, 0.3, 0, 1}}}}}}};
-    j["objects"] = {{{"name", "ball"}, {"type", "sphere"}, {"radius", 0.5}, {"transform", roll},
-                     {"fur", {{"count", 600}, {"length", 0.3}, {"clump", 0.6}, {"clump_size", 0.1}, {"lean", 0.3},
-                              {"curl", 0.1}, {"curl_turns", 2}, {"gravity", 0.5}}}}};
+    j["objects"] = {{{"name", "ball"},
+                     {"type", "sphere"},
+                     {"radius", 0.5},
+                     {"transform", roll},
+                     {"fur",
+                      {{"count", 600},
+                       {"length", 0.3},
+                       {"clump", 0.6},
+                       {"clump_size", 0.1},
+                       {"lean", 0.3},
+                       {"curl", 0.1},
+                       {"curl_turns", 2},
+                       {"gravity", 0.5}}}}};
     dir.write("s.json", j.dump());
     const Scene first = load_at(dir, 1);
     const Fur& groom = *first.objects[0].fur;
@@ -59,8 +69,8 @@ TEST(FurGroom, ARigidMoversStrandsAreTheSameInItsOwnSpaceAtEveryFrame) {
 /// The skinned strip (tests/gltf_strip.h) with fur: its outer half folds about the elbow at
 /// (1, 0, 0) by 90 degrees over frames 1 to 2; of its triangles, 0 and 1 stay, 2 turns rigidly
 /// about the elbow, 3 stretches (at 45 degrees it folds flat, then turns over).
-const json kClumpedFur = {{"count", 800}, {"length", 0.2}, {"width_root", 0.01}, {"width_tip", 0.01}, {"lean", 0.4},
-                          {"clump", 0.5}, {"clump_size", 0.2}};
+const json kClumpedFur = {{"count", 800}, {"length", 0.2}, {"width_root", 0.01}, {"width_tip", 0.01},
+                          {"lean", 0.4},  {"clump", 0.5},  {"clump_size", 0.2}};
 struct FurryStrip {
     test::TempDir dir;
     explicit FurryStrip(double shutter = 0, const json& fur = kClumpedFur) {
@@ -68,8 +78,7 @@ struct FurryStrip {
         json j = test::base_scene();
         j["animation"] = {{"fps", 1}, {"frames", {1, 2}}};
         if (shutter > 0) j["camera"]["shutter"] = {-shutter / 2, shutter / 2};
-        j["objects"] = {{{"name", "strip"}, {"type", "mesh"}, {"file", "strip.gltf"}, {"animation", "bend"},
-                         {"fur", fur}}};
+        j["objects"] = {{{"name", "strip"}, {"type", "mesh"}, {"file", "strip.gltf"}, {"animation", "bend"}, {"fur", fur}}};
         dir.write("s.json", j.dump());
     }
 };

@@ -22,7 +22,8 @@ json fur_scene(const json& fur, float sky = 1.0f) {
     json j = test::base_scene();
     j["camera"] = {{"position", {0, 0.8, 1.2}}, {"look_at", {0, 0, 0}}, {"fov", 50}, {"resolution", {40, 30}}};
     j["render"] = {{"spp", 4}, {"light_samples", 4}, {"rays", 64}};
-    j["objects"] = json::array({{{"name", "lawn"}, {"type", "quad"},
+    j["objects"] = json::array({{{"name", "lawn"},
+                                 {"type", "quad"},
                                  {"vertices", {{-0.5, 0, -0.5}, {-0.5, 0, 0.5}, {0.5, 0, 0.5}, {0.5, 0, -0.5}}},
                                  {"fur", fur}}});
     j["lights"] = json::array({{{"type", "sky"}, {"color", sky}}});
@@ -70,7 +71,8 @@ TEST(Fur, ClumpingDrawsTipsToTheGuideAndLeavesRootsInPlace) {
         const float* root = &tight.vertices[12 * s];
         EXPECT_EQ(Vec3(root[0], root[1], root[2]), loose.root_p[s]);
         const Vec3 c = tight.root_p[s] / 0.5f;
-        const std::array<int, 3> cell{static_cast<int>(std::floor(c.x)), static_cast<int>(std::floor(c.y)), static_cast<int>(std::floor(c.z))};
+        const std::array<int, 3> cell{static_cast<int>(std::floor(c.x)), static_cast<int>(std::floor(c.y)),
+                                      static_cast<int>(std::floor(c.z))};
         const Vec3 tip(root[8], root[9], root[10]);
         auto [it, fresh] = guide_tip.emplace(cell, tip);
         if (!fresh) {

@@ -20,10 +20,14 @@ json lawn(const json& fur_extra, bool mirror = false) {
     j["camera"] = {{"position", {0, 0.8, 1.2}}, {"look_at", {0, 0.1, 0}}, {"fov", 50}, {"resolution", {48, 36}}};
     j["render"] = {{"spp", 1}, {"light_samples", 1}, {"layers", "components"}};
     j["materials"] = {{"mirror", {{"color", 0.5}, {"mirror", 1}}}};
-    j["objects"] = json::array({{{"name", "lawn"}, {"type", "quad"},
-                                 {"vertices", {{-0.5, 0, -0.5}, {-0.5, 0, 0.5}, {0.5, 0, 0.5}, {0.5, 0, -0.5}}}, {"fur", fur}}});
+    j["objects"] = json::array({{{"name", "lawn"},
+                                 {"type", "quad"},
+                                 {"vertices", {{-0.5, 0, -0.5}, {-0.5, 0, 0.5}, {0.5, 0, 0.5}, {0.5, 0, -0.5}}},
+                                 {"fur", fur}}});
     if (mirror)
-        j["objects"].push_back({{"name", "mirror"}, {"type", "quad"}, {"material", "mirror"},
+        j["objects"].push_back({{"name", "mirror"},
+                                {"type", "quad"},
+                                {"material", "mirror"},
                                 {"vertices", {{-0.6, 0, -0.5}, {0.6, 0, -0.5}, {0.6, 0.8, -0.5}, {-0.6, 0.8, -0.5}}}});
     j["lights"] = json::array({{{"type", "distant"}, {"direction", {1, -0.5, 0}}, {"color", 1}}});
     return j;
@@ -49,7 +53,8 @@ double ground_direct(const RenderResult& r) {
 }
 
 size_t hair_fragments(const RenderResult& r) {
-    return static_cast<size_t>(std::count_if(r.deep.fragments.begin(), r.deep.fragments.end(), [](const Fragment& f) { return f.is_hair(); }));
+    return static_cast<size_t>(
+        std::count_if(r.deep.fragments.begin(), r.deep.fragments.end(), [](const Fragment& f) { return f.is_hair(); }));
 }
 
 TEST(FurVisibility, VisibleToShadowsIsCastShadows) {
@@ -96,12 +101,21 @@ TEST(FurVisibility, MirrorsSeeLitStrandsWhenAsked) {
 }
 
 TEST(FurVisibility, OneNamePerFlag) {
-    test::expect_input_error([] { test::scene_from(lawn({{"cast_shadows", true}, {"visible_to", {{"shadows", false}}}})); },
-                             {"inline.json", "/objects/0/fur/cast_shadows", "older name of visible_to.shadows"});
-    test::expect_input_error([] { test::scene_from(lawn({{"visible_to", {{"shadow", false}}}})); },
-                             {"inline.json", "/objects/0/fur/visible_to", "shadow"});
-    test::expect_input_error([] { test::scene_from(lawn({{"visible_to", {{"camera", 2}}}})); },
-                             {"inline.json", "/objects/0/fur/visible_to/camera"});
+    test::expect_input_error(
+        [] {
+            test::scene_from(lawn({{"cast_shadows", true}, {"visible_to", {{"shadows", false}}}}));
+        },
+        {"inline.json", "/objects/0/fur/cast_shadows", "older name of visible_to.shadows"});
+    test::expect_input_error(
+        [] {
+            test::scene_from(lawn({{"visible_to", {{"shadow", false}}}}));
+        },
+        {"inline.json", "/objects/0/fur/visible_to", "shadow"});
+    test::expect_input_error(
+        [] {
+            test::scene_from(lawn({{"visible_to", {{"camera", 2}}}}));
+        },
+        {"inline.json", "/objects/0/fur/visible_to/camera"});
 }
 
 }  // namespace

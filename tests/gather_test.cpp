@@ -25,8 +25,7 @@ struct Rig {
     explicit Rig(Scene s, bool with_radiosity = false, RadiositySettings rs = {})
         : scene(std::move(s)), accel(scene), materials(scene), lighting(scene, accel) {
         if (with_radiosity)
-            radiosity = std::make_unique<RadiosityTextures>(
-                RadiosityTextures::bake(scene, materials, lighting, rs, stats, nullptr));
+            radiosity = std::make_unique<RadiosityTextures>(RadiosityTextures::bake(scene, materials, lighting, rs, stats, nullptr));
     }
     GatherResult gather(const Vec3& p, const Vec3& n, GatherSettings gs, uint64_t key = 7) {
         Gatherer g(scene, accel, materials, lighting, radiosity.get(), gs);
@@ -274,7 +273,8 @@ TEST(Radiosity, LazyBakesEqualTheEagerBakeInAnyOrderAndPartialSavesResume) {
     for (uint32_t t = 0; t < tris; ++t) {
         const bool front = t % 2 == 0;
         for (uint32_t k = eager.offset[t]; k < eager.offset[t] + (eager.level[t] + 1u) * (eager.level[t] + 2u) / 2; ++k)
-            ASSERT_EQ(front ? lazy.object(0).front.value(k) : lazy.object(0).back.value(k), front ? eager.front.value(k) : eager.back.value(k));
+            ASSERT_EQ(front ? lazy.object(0).front.value(k) : lazy.object(0).back.value(k),
+                      front ? eager.front.value(k) : eager.back.value(k));
     }
     // A partial save loads as partial; the rest bakes on demand to the same values.
     test::TempDir d;
@@ -404,7 +404,7 @@ TEST(Reproject, FromItsOwnPointItIsTheGatherItReuses) {
     Rig rig(load_scene(test::cornell_scene()), true);
     const Vec3 p{300, 0, 150}, n{0, 1, 0};
     const ReprojectMeans m = reproject_means(rig, 512, p, n, p, n, 4);
-    EXPECT_EQ(m.rays, 0);  // nothing is nearer than 16 x 0
+    EXPECT_EQ(m.rays, 0);                               // nothing is nearer than 16 x 0
     EXPECT_NEAR(m.reprojected, m.from, 1e-5 * m.from);  // every hit seen again from where it was seen
     // AO mode: occlusion alone, as a gather gives it (no light shaded at the hits).
     GatherSettings ao;

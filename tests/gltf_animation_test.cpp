@@ -61,12 +61,14 @@ TEST(GltfAnimation, AClipThatIsNotThereOrAChannelOnAMissingNodeIsRefused) {
     test::TempDir d;
     d.write("strip.gltf", skinned_strip().dump());
     d.write("s.json", strip_scene("walk").dump());
-    test::expect_refused("render " + d.file("s.json") + " -q -o " + d.file("o.exr"), {"s.json", "/objects/0/animation", "no animation \"walk\"", "bend"});
+    test::expect_refused("render " + d.file("s.json") + " -q -o " + d.file("o.exr"),
+                         {"s.json", "/objects/0/animation", "no animation \"walk\"", "bend"});
     json g = skinned_strip();
     g["animations"][0]["channels"][0]["target"]["node"] = 7;
     d.write("strip.gltf", g.dump());
     d.write("s.json", strip_scene("bend").dump());
-    test::expect_refused("render " + d.file("s.json") + " -q -o " + d.file("o.exr"), {"strip.gltf", "/animations/0/channels/0/target/node", "not a node index"});
+    test::expect_refused("render " + d.file("s.json") + " -q -o " + d.file("o.exr"),
+                         {"strip.gltf", "/animations/0/channels/0/target/node", "not a node index"});
     g = skinned_strip(9);  // the tip names joint 9 of a two-joint skin
     d.write("strip.gltf", g.dump());
     test::expect_refused("render " + d.file("s.json") + " -q -o " + d.file("o.exr"), {"strip.gltf", "vertex 2", "no joint"});

@@ -32,9 +32,7 @@ json card_from(const std::string& file) {
 const json kWrittenCard = json::array({quad("card", "leaf", -1, 1, 0.2, 2.2, 0)});
 
 /// Four texels across: dark, light, mid, light (RGB).
-void write_stripes(const std::string& path) {
-    write_png(path, 4, 1, 3, {30, 60, 90, 250, 240, 230, 120, 140, 160, 255, 255, 255});
-}
+void write_stripes(const std::string& path) { write_png(path, 4, 1, 3, {30, 60, 90, 250, 240, 230, 120, 140, 160, 255, 255, 255}); }
 
 /// The card's pixels: where the albedo is not the wall's grey 0.7 nor the floor's.
 size_t card_pixels(const Image& img) {
@@ -69,9 +67,13 @@ TEST(GltfMaterials, ATextureTransformIsTheSceneFilesUvTransform) {
     test::TempDir dir;
     write_stripes(dir.file("leaf.png"));
     const json xf = {{"offset", {0.25, -0.5}}, {"rotation", 0.3}, {"scale", {2, 1.5}}};
-    const json m = {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}, {"extensions", {{"KHR_texture_transform", xf}}}}},
-                                              {"baseColorFactor", {0.5, 0.8, 1, 1}}, {"metallicFactor", 0}, {"roughnessFactor", 1}}}};
-    const json same = {{"color", {0.5, 0.8, 1}}, {"color_texture", dir.file("leaf.png")}, {"specular", 0.04}, {"roughness", 1}, {"uv_transform", xf}};
+    const json m = {{"pbrMetallicRoughness",
+                     {{"baseColorTexture", {{"index", 0}, {"extensions", {{"KHR_texture_transform", xf}}}}},
+                      {"baseColorFactor", {0.5, 0.8, 1, 1}},
+                      {"metallicFactor", 0},
+                      {"roughnessFactor", 1}}}};
+    const json same = {
+        {"color", {0.5, 0.8, 1}}, {"color_texture", dir.file("leaf.png")}, {"specular", 0.04}, {"roughness", 1}, {"uv_transform", xf}};
     const Image a = render_with(stage(card_from(gltf_card(dir, m)), kLeaf), "brute");
     const Image b = render_with(stage(kWrittenCard, same), "brute");
     EXPECT_EQ(test::differing_values(a, b), 0u);
@@ -89,13 +91,15 @@ TEST(GltfMaterials, AnMtlTextureReplacesKdWhereAGltfFactorMultiplies) {
     test::TempDir dir;
     write_stripes(dir.file("leaf.png"));
     dir.write("card.mtl", "newmtl a\nKd 0.5 0.5 0.5\nmap_Kd leaf.png\n");
-    const std::string obj = dir.write("card.obj", "mtllib card.mtl\nv -1 0.2 0\nv 1 0.2 0\nv 1 2.2 0\nvt 0 0\nvt 1 0\nvt 1 1\nusemtl a\nf 1/1 2/2 3/3\n");
+    const std::string obj =
+        dir.write("card.obj", "mtllib card.mtl\nv -1 0.2 0\nv 1 0.2 0\nv 1 2.2 0\nvt 0 0\nvt 1 0\nvt 1 1\nusemtl a\nf 1/1 2/2 3/3\n");
     const Scene s = test::scene_from(stage(card_from(obj), kLeaf));
     const auto it = std::find_if(s.materials.begin(), s.materials.end(), [](const Material& x) { return x.name == "card/a"; });
     ASSERT_NE(it, s.materials.end());
     EXPECT_EQ(it->color, Color(1));
     EXPECT_FALSE(it->color_texture.empty());
-    const json m = {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"baseColorFactor", {0.5, 0.5, 0.5, 1}}, {"metallicFactor", 0}}}};
+    const json m = {
+        {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"baseColorFactor", {0.5, 0.5, 0.5, 1}}, {"metallicFactor", 0}}}};
     const Scene g = test::scene_from(stage(card_from(gltf_card(dir, m)), kLeaf));
     const auto gt = std::find_if(g.materials.begin(), g.materials.end(), [](const Material& x) { return x.name.starts_with("card/"); });
     ASSERT_NE(gt, g.materials.end());
@@ -106,7 +110,8 @@ TEST(GltfMaterials, AnMtlTextureReplacesKdWhereAGltfFactorMultiplies) {
 TEST(GltfMaterials, TexCoordOneReadsTheSecondUvSet) {
     test::TempDir dir;
     write_stripes(dir.file("leaf.png"));
-    json m = {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}, {"texCoord", 1}}}, {"metallicFactor", 0}, {"roughnessFactor", 1}}}};
+    json m = {
+        {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}, {"texCoord", 1}}}, {"metallicFactor", 0}, {"roughnessFactor", 1}}}};
     const json same = {{"color", 1}, {"color_texture", dir.file("leaf.png")}, {"specular", 0.04}, {"roughness", 1}};
     const Image a = render_with(stage(card_from(gltf_card(dir, m, true)), kLeaf), "brute");
     const Image b = render_with(stage(kWrittenCard, same), "brute");
@@ -126,13 +131,20 @@ TEST(GltfMaterials, AMetallicRoughnessTextureIsTheSceneFilesAndMetalsHaveNoDiffu
     // Four texels each of dielectric (blue 0, rough) and metal (blue 255, smooth).
     write_png(dir.file("mr.png"), 8, 1, 3, {0, 255, 0, 0, 255, 0, 0, 255, 0, 0, 255, 0, 0, 60, 255, 0, 60, 255, 0, 60, 255, 0, 60, 255});
     json g = json::parse(test::bytes_of(gltf_card(dir, json::object())));
-    g["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"baseColorFactor", {0.9, 0.6, 0.3, 1}},
-                                                  {"metallicRoughnessTexture", {{"index", 1}}}, {"metallicFactor", 1}, {"roughnessFactor", 0.8}}}}};
+    g["materials"] = {{{"pbrMetallicRoughness",
+                        {{"baseColorTexture", {{"index", 0}}},
+                         {"baseColorFactor", {0.9, 0.6, 0.3, 1}},
+                         {"metallicRoughnessTexture", {{"index", 1}}},
+                         {"metallicFactor", 1},
+                         {"roughnessFactor", 0.8}}}}};
     g["images"].push_back({{"uri", "mr.png"}});
     g["textures"].push_back({{"source", 1}});
     const std::string file = dir.write("card.gltf", g.dump());
-    const json same = {{"color", {0.9, 0.6, 0.3}}, {"color_texture", dir.file("leaf.png")}, {"metallic_roughness_texture", dir.file("mr.png")},
-                       {"metallic", 1}, {"roughness", 0.8}};
+    const json same = {{"color", {0.9, 0.6, 0.3}},
+                       {"color_texture", dir.file("leaf.png")},
+                       {"metallic_roughness_texture", dir.file("mr.png")},
+                       {"metallic", 1},
+                       {"roughness", 0.8}};
     const Image a = render_with(stage(card_from(file), kLeaf), "brute");
     const Image b = render_with(stage(kWrittenCard, same), "brute");
     EXPECT_EQ(test::differing_values(a, b), 0u);
@@ -148,7 +160,11 @@ TEST(GltfMaterials, AMetallicRoughnessTextureIsTheSceneFilesAndMetalsHaveNoDiffu
     EXPECT_NEAR(most, 0.9f, 0.01);  // (pixels straddling the halves blend them)
     EXPECT_LT(least, 0.01);
     // Hostile: "metallic" without the texture, or beside a specular colour.
-    test::expect_input_error([&] { test::scene_from(stage(kWrittenCard, {{"metallic", 0.5}})); }, {"/materials/leaf/metallic", "metallic_roughness_texture"});
+    test::expect_input_error(
+        [&] {
+            test::scene_from(stage(kWrittenCard, {{"metallic", 0.5}}));
+        },
+        {"/materials/leaf/metallic", "metallic_roughness_texture"});
     json both = same;
     both["specular"] = 0.5;
     test::expect_input_error([&] { test::scene_from(stage(kWrittenCard, both)); }, {"/materials/leaf/specular"});
@@ -161,10 +177,11 @@ TEST(GltfMaterials, AnEmissiveTextureLightsTheSceneAsATexturedQuadLight) {
     write_png(dir.file("leaf.png"), 4, 1, 3, std::vector<unsigned char>(12, 255));
     // Bright on the left half, dark on the right: constant along v (the quad light's texture
     // runs down from its top, the mesh's up from its bottom).
-    write_png(dir.file("glow.png"), 8, 1, 3, {255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255,
-                                                51,  51,  51,  51,  51,  51,  51,  51,  51,  51,  51,  51});
+    write_png(dir.file("glow.png"), 8, 1, 3,
+              {255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 51, 51, 51, 51, 51, 51, 51, 51, 51, 51, 51, 51});
     json g = json::parse(test::bytes_of(gltf_card(dir, json::object())));
-    g["materials"] = {{{"emissiveFactor", {1, 1, 1}}, {"emissiveTexture", {{"index", 1}}},
+    g["materials"] = {{{"emissiveFactor", {1, 1, 1}},
+                       {"emissiveTexture", {{"index", 1}}},
                        {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", 3}}}}},
                        {"pbrMetallicRoughness", {{"baseColorFactor", {0, 0, 0, 1}}, {"metallicFactor", 0}}}}};
     g["images"].push_back({{"uri", "glow.png"}});
@@ -183,7 +200,11 @@ TEST(GltfMaterials, AnEmissiveTextureLightsTheSceneAsATexturedQuadLight) {
     // The same radiance as a textured quad light over the card (its front, counter-clockwise,
     // faces +z: both light the floor and the wall behind it).
     json quad_lit = stage(json::array(), kLeaf);
-    quad_lit["lights"] = {{{"type", "quad"}, {"corner", {-1, 0.2, 0}}, {"edge_u", {2, 0, 0}}, {"edge_v", {0, 2, 0}}, {"color", 3},
+    quad_lit["lights"] = {{{"type", "quad"},
+                           {"corner", {-1, 0.2, 0}},
+                           {"edge_u", {2, 0, 0}},
+                           {"edge_v", {0, 2, 0}},
+                           {"color", 3},
                            {"texture", dir.file("glow.png")}}};
     const Image c = render_with(quad_lit, "none", {Override("render.light_samples=64")});
     const Layer *da = a.find("direct"), *dc = c.find("direct"), *albedo = a.find("albedo");
@@ -207,9 +228,10 @@ TEST(GltfMaterials, AnEmissiveTextureLightsTheSceneAsATexturedQuadLight) {
 TEST(GltfMaterials, TransmissionAndIorAreTheSceneFilesGlass) {
     test::TempDir dir;
     write_png(dir.file("leaf.png"), 4, 1, 3, std::vector<unsigned char>(12, 255));
-    const json m = {{"doubleSided", true},
-                    {"pbrMetallicRoughness", {{"baseColorFactor", {0.9, 1, 0.8, 1}}, {"metallicFactor", 0}, {"roughnessFactor", 1}}},
-                    {"extensions", {{"KHR_materials_transmission", {{"transmissionFactor", 0.5}}}, {"KHR_materials_ior", {{"ior", 1.33}}}}}};
+    const json m = {
+        {"doubleSided", true},
+        {"pbrMetallicRoughness", {{"baseColorFactor", {0.9, 1, 0.8, 1}}, {"metallicFactor", 0}, {"roughnessFactor", 1}}},
+        {"extensions", {{"KHR_materials_transmission", {{"transmissionFactor", 0.5}}}, {"KHR_materials_ior", {{"ior", 1.33}}}}}};
     const std::string file = gltf_card(dir, m);
     const json same = {{"color", {0.9, 1, 0.8}}, {"specular", 0.04}, {"roughness", 1}, {"transmission", {0.45, 0.5, 0.4}}, {"ior", 1.33}};
     const Image a = render_with(stage(card_from(file), kLeaf), "brute");
@@ -232,12 +254,13 @@ TEST(GltfMaterials, TheWholeMaterialSurvivesTheMeshCache) {
     write_stripes(dir.file("leaf.png"));
     write_png(dir.file("mr.png"), 4, 1, 3, {0, 255, 0, 0, 200, 255, 0, 60, 255, 0, 90, 0});
     json g = json::parse(test::bytes_of(gltf_card(dir, json::object(), true)));
-    g["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}, {"texCoord", 1},
-                                                                       {"extensions", {{"KHR_texture_transform", {{"rotation", 0.4}}}}}}},
-                                                  {"metallicRoughnessTexture", {{"index", 1}, {"texCoord", 1},
-                                                                                {"extensions", {{"KHR_texture_transform", {{"rotation", 0.4}}}}}}}}},
-                       {"emissiveFactor", {0.2, 0.1, 0}}, {"emissiveTexture", {{"index", 0}, {"texCoord", 1},
-                                                                                {"extensions", {{"KHR_texture_transform", {{"rotation", 0.4}}}}}}}}};
+    g["materials"] = {
+        {{"pbrMetallicRoughness",
+          {{"baseColorTexture", {{"index", 0}, {"texCoord", 1}, {"extensions", {{"KHR_texture_transform", {{"rotation", 0.4}}}}}}},
+           {"metallicRoughnessTexture",
+            {{"index", 1}, {"texCoord", 1}, {"extensions", {{"KHR_texture_transform", {{"rotation", 0.4}}}}}}}}},
+         {"emissiveFactor", {0.2, 0.1, 0}},
+         {"emissiveTexture", {{"index", 0}, {"texCoord", 1}, {"extensions", {{"KHR_texture_transform", {{"rotation", 0.4}}}}}}}}};
     g["images"].push_back({{"uri", "mr.png"}});
     g["textures"].push_back({{"source", 1}});
     const std::string file = dir.write("card.gltf", g.dump());
@@ -267,7 +290,8 @@ std::string card_with_colors(const test::TempDir& dir, const json& material, con
     for (float c : colors) test::put<float>(b, {c});
     g["buffers"].push_back({{"byteLength", b.size()}, {"uri", "data:application/octet-stream;base64," + test::base64(b)}});
     g["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 0}, {"byteLength", b.size()}});
-    g["accessors"].push_back({{"bufferView", g["bufferViews"].size() - 1}, {"componentType", 5126}, {"count", colors.size() / 3}, {"type", "VEC3"}});
+    g["accessors"].push_back(
+        {{"bufferView", g["bufferViews"].size() - 1}, {"componentType", 5126}, {"count", colors.size() / 3}, {"type", "VEC3"}});
     g["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = g["accessors"].size() - 1;
     return dir.write("card.gltf", g.dump());
 }
@@ -288,7 +312,8 @@ TEST(GltfMaterials, VertexColoursMultiplyTheBaseColour) {
     EXPECT_GT(test::differing_values(a, render_with(stage(kWrittenCard, white), "brute")), 50u);
     // Through the radiosity textures (the bounce light's other path) and the mesh cache.
     EXPECT_EQ(test::differing_values(render_with(scene, "cache", {Override("render.radiosity=true")}),
-                                     render_with(stage(kWrittenCard, same), "cache", {Override("render.radiosity=true")})), 0u);
+                                     render_with(stage(kWrittenCard, same), "cache", {Override("render.radiosity=true")})),
+              0u);
     setenv("BOUNCE_MESH_CACHE", dir.file("meshes").c_str(), 1);
     const Image stored = render_with(scene, "brute"), cached = render_with(scene, "brute");
     unsetenv("BOUNCE_MESH_CACHE");
@@ -302,7 +327,7 @@ TEST(GltfMaterials, VertexColoursMultiplyTheBaseColour) {
     for (int x = 0; x < g.width; ++x)
         if (const float v = g.at(*albedo, x, y)[1]; std::abs(v - 0.7f) > 1e-3f) row.push_back(v);  // the card, not the wall
     ASSERT_GT(row.size(), 8u);
-    row = std::vector<float>(row.begin() + 1, row.end() - 1);  // the edge pixels blend the card with the wall
+    row = std::vector<float>(row.begin() + 1, row.end() - 1);            // the edge pixels blend the card with the wall
     if (row.front() < row.back()) std::reverse(row.begin(), row.end());  // from the white edge, however the camera sees it
     EXPECT_GT(row.front(), 0.85f);
     EXPECT_LT(row.back(), 0.15f);
@@ -321,9 +346,11 @@ TEST(GltfMaterials, VertexColoursMultiplyTheBaseColour) {
     EXPECT_EQ(d.unread[1], dir.file("card.gltf") + ": ignored: KHR_materials_sheen on 1 material");
     // Hostile: a count other than the vertices', a component outside [0, 1].
     const std::string three = card_with_colors(dir, plain, {1, 1, 1, 0, 0, 0, 0, 0, 0});
-    test::expect_input_error([&] { test::scene_from(stage(card_from(three), kLeaf)); }, {"card.gltf", "attributes/COLOR_0", "3 elements", "4 vertices"});
+    test::expect_input_error([&] { test::scene_from(stage(card_from(three), kLeaf)); },
+                             {"card.gltf", "attributes/COLOR_0", "3 elements", "4 vertices"});
     const std::string bright = card_with_colors(dir, plain, {1, 1, 1, 0, 0, 0, 0, 2, 0, 1, 1, 1});
-    test::expect_input_error([&] { test::scene_from(stage(card_from(bright), kLeaf)); }, {"card.gltf", "COLOR_0", "2 is not a colour component"});
+    test::expect_input_error([&] { test::scene_from(stage(card_from(bright), kLeaf)); },
+                             {"card.gltf", "COLOR_0", "2 is not a colour component"});
 }
 
 // Images inside the file (data: URIs here, a .glb's buffer views alike) are read as the same
@@ -344,7 +371,8 @@ TEST(GltfMaterials, EmbeddedImagesAreTheSameImagesAsFiles) {
     EXPECT_EQ(written, 1u);
     // Again, and through the mesh cache: the same file, nothing more written.
     setenv("BOUNCE_MESH_CACHE", dir.file("meshes").c_str(), 1);
-    const Image stored = render_with(stage(card_from(inside), kLeaf), "brute"), cached = render_with(stage(card_from(inside), kLeaf), "brute");
+    const Image stored = render_with(stage(card_from(inside), kLeaf), "brute"),
+                cached = render_with(stage(card_from(inside), kLeaf), "brute");
     unsetenv("BOUNCE_MESH_CACHE");
     EXPECT_EQ(test::differing_values(beside, cached), 0u);
     EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.file("images")), {}), 1);
@@ -363,8 +391,9 @@ TEST(GltfMaterials, EmbeddedImagesAreTheSameImagesAsFiles) {
 TEST(GltfMaterials, WhatIsNotReadIsNamedAndHostileValuesAreRefused) {
     test::TempDir dir;
     write_png(dir.file("leaf.png"), 4, 1, 3, std::vector<unsigned char>(12, 255));
-    json m = {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"metallicRoughnessTexture", {{"index", 0}, {"texCoord", 1}}}}},
-              {"extensions", {{"KHR_materials_sheen", json::object()}}}};
+    json m = {
+        {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"metallicRoughnessTexture", {{"index", 0}, {"texCoord", 1}}}}},
+        {"extensions", {{"KHR_materials_sheen", json::object()}}}};
     Scene s = test::scene_from(stage(card_from(gltf_card(dir, m, true)), kLeaf));
     ASSERT_EQ(s.unread.size(), 2u);
     EXPECT_NE(s.unread[0].find("metallicRoughnessTexture on another uv set or transform"), std::string::npos) << s.unread[0];
@@ -383,9 +412,12 @@ TEST(GltfMaterials, WhatIsNotReadIsNamedAndHostileValuesAreRefused) {
         test::expect_input_error([&] { test::scene_from(stage(card_from(file), kLeaf)); }, parts);
     };
     const std::string base = R"("pbrMetallicRoughness":{"baseColorTexture":{"index":0,)";
-    refused("{" + base + R"("extensions":{"KHR_texture_transform":{"rotation":1e39}}}}})", {"card.gltf", "KHR_texture_transform", "rotation"});
-    refused("{" + base + R"("extensions":{"KHR_texture_transform":{"offset":[null,0]}}}}})", {"card.gltf", "KHR_texture_transform/offset/0"});
-    refused("{" + base + R"("extensions":{"KHR_texture_transform":{"scale":[0,1]}}}}})", {"card.gltf", "KHR_texture_transform", "scale of 0"});
+    refused("{" + base + R"("extensions":{"KHR_texture_transform":{"rotation":1e39}}}}})",
+            {"card.gltf", "KHR_texture_transform", "rotation"});
+    refused("{" + base + R"("extensions":{"KHR_texture_transform":{"offset":[null,0]}}}}})",
+            {"card.gltf", "KHR_texture_transform/offset/0"});
+    refused("{" + base + R"("extensions":{"KHR_texture_transform":{"scale":[0,1]}}}}})",
+            {"card.gltf", "KHR_texture_transform", "scale of 0"});
     refused("{" + base + R"("texCoord":5}}})", {"card.gltf", "baseColorTexture/texCoord"});
     refused(R"({"extensions":{"KHR_materials_ior":{"ior":10}}})", {"card.gltf", "KHR_materials_ior/ior"});
     refused(R"({"extensions":{"KHR_materials_transmission":{"transmissionFactor":2}}})", {"card.gltf", "transmissionFactor"});
@@ -398,15 +430,27 @@ TEST(GltfMaterials, WhatIsNotReadIsNamedAndHostileValuesAreRefused) {
         const std::string file = dir.write("card.gltf", g.dump());
         test::expect_input_error([&] { test::scene_from(stage(card_from(file), kLeaf)); }, {"card.gltf", "none.png"});
     }
-    test::expect_input_error([&] { test::scene_from(stage(kWrittenCard, {{"emission_texture", dir.file("none.png")}})); },
-                             {"/materials/leaf/emission_texture", "none.png"});
+    test::expect_input_error(
+        [&] {
+            test::scene_from(stage(kWrittenCard, {{"emission_texture", dir.file("none.png")}}));
+        },
+        {"/materials/leaf/emission_texture", "none.png"});
     const std::string huge = write_huge_png(dir);
-    test::expect_input_error([&] { test::scene_from(stage(kWrittenCard, {{"emission_texture", huge}})); },
-                             {"/materials/leaf/emission_texture", "30000x30000", "8192x8192"});
-    test::expect_input_error([&] { test::scene_from(stage(kWrittenCard, {{"uv_transform", {{"scale", {1, 0}}}}})); },
-                             {"/materials/leaf/uv_transform", "scale of 0"});
-    test::expect_input_error([&] { test::scene_from(stage(kWrittenCard, {{"uv_transform", {{"offset", {1, 2, 3}}}}})); },
-                             {"/materials/leaf/uv_transform/offset"});
+    test::expect_input_error(
+        [&] {
+            test::scene_from(stage(kWrittenCard, {{"emission_texture", huge}}));
+        },
+        {"/materials/leaf/emission_texture", "30000x30000", "8192x8192"});
+    test::expect_input_error(
+        [&] {
+            test::scene_from(stage(kWrittenCard, {{"uv_transform", {{"scale", {1, 0}}}}}));
+        },
+        {"/materials/leaf/uv_transform", "scale of 0"});
+    test::expect_input_error(
+        [&] {
+            test::scene_from(stage(kWrittenCard, {{"uv_transform", {{"offset", {1, 2, 3}}}}}));
+        },
+        {"/materials/leaf/uv_transform/offset"});
 }
 
 }  // namespace

@@ -32,7 +32,9 @@ TEST(Guide, AllocationGivesEveryBinARayAndTheRestByTheMixture) {
     EXPECT_EQ(std::accumulate(a.begin(), a.end(), 0), 256);
     EXPECT_EQ(a[5], 117);  // remainders all 0.5: the 16 left over go to bins 0-15
     for (size_t b = 0; b < a.size(); ++b)
-        if (b != 5) { EXPECT_TRUE(a[b] == 4 || a[b] == 5) << b; }
+        if (b != 5) {
+            EXPECT_TRUE(a[b] == 4 || a[b] == 5) << b;
+        }
     // NaN, infinite and negative spreads count as none; fewer rays than bins: no guide, one each.
     DirectionGuide hostile = one_bin(3);
     hostile.spread[4] = NAN, hostile.spread[6] = INFINITY, hostile.spread[7] = -1;
@@ -94,7 +96,8 @@ TEST(Guide, AConstantEnvironmentStaysConstantUnderAnyGuide) {
 }
 
 struct Cornell {
-    explicit Cornell(const char* resolution = "camera.resolution=[32,24]") : scene(load_scene(test::cornell_scene(), {resolution, "render.spp=1", "render.gi=\"brute\""})) {}
+    explicit Cornell(const char* resolution = "camera.resolution=[32,24]")
+        : scene(load_scene(test::cornell_scene(), {resolution, "render.spp=1", "render.gi=\"brute\""})) {}
     Scene scene;
     Stats stats;
     SceneAccel accel{scene};
@@ -146,7 +149,9 @@ TEST(Guide, TheGuidedEstimatorStaysUnbiasedWhateverTheGuideAndAGoodGuideLowersIt
             if (g == 0) var_guided += sd * sd;
             ++checked;
         }
-        const auto sd_plain = over_seeds(seeds, [&](uint64_t s) { return plain.gather(frag.p, frag.n, RandomStream(7, f, s), counters).irradiance.y; }).second;
+        const auto sd_plain = over_seeds(seeds, [&](uint64_t s) {
+                                  return plain.gather(frag.p, frag.n, RandomStream(7, f, s), counters).irradiance.y;
+                              }).second;
         var_plain += sd_plain * sd_plain;
     }
     EXPECT_GE(checked, 10);
@@ -165,7 +170,8 @@ TEST(Guide, GuidedBruteForceIsIndependentOfTheWindow) {
     for (int y = 0; y < window.height; ++y)
         for (int x = 0; x < window.width; ++x)
             for (size_t k = 0; k < window.pixel(x, y).size(); ++k, ++i) {
-                const size_t at = c.deep.offsets[static_cast<size_t>(y + 8) * static_cast<size_t>(c.deep.width) + static_cast<size_t>(x + 8)] + k;
+                const size_t at =
+                    c.deep.offsets[static_cast<size_t>(y + 8) * static_cast<size_t>(c.deep.width) + static_cast<size_t>(x + 8)] + k;
                 ASSERT_EQ(part[i].irradiance, whole[at].irradiance) << x << "," << y;
                 guided_differs += !(whole[at].irradiance == plain[at].irradiance);
             }

@@ -68,7 +68,8 @@ TEST(HostileColour, ALutThatIsAFifoIsRefusedBeforeOpenColorIoOpensIt) {
     fs::remove(d.file("luts/thelut.cube"));
     ASSERT_EQ(mkfifo(d.file("luts/thelut.cube").c_str(), 0600), 0);
     // Refused at once (OpenColorIO would block in open() for good: the test would time out).
-    test::expect_refused(small_render(d) + " --ocio-config " + d.file("lut.ocio") + " --view lut", {"lut.ocio", "thelut.cube", "not a regular file"});
+    test::expect_refused(small_render(d) + " --ocio-config " + d.file("lut.ocio") + " --view lut",
+                         {"lut.ocio", "thelut.cube", "not a regular file"});
 }
 
 TEST(HostileColour, AnEmptyConfigNameIsRefused) {
@@ -109,7 +110,8 @@ json shared_mesh_gltf() {
             {"scenes", {{{"nodes", {0, 1}}}}},
             {"nodes", {{{"mesh", 0}, {"translation", {0, 0, 0}}}, {{"mesh", 0}, {"translation", {3, 0, 0}}}}},
             {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}}}}}}},
-            {"accessors", {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}, {"min", {0, 0, 0}}, {"max", {1, 0, 1}}}}},
+            {"accessors",
+             {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}, {"min", {0, 0, 0}}, {"max", {1, 0, 1}}}}},
             {"bufferViews", {{{"buffer", 0}, {"byteLength", 36}}}},
             {"buffers", {{{"byteLength", 36}, {"uri", "data:application/octet-stream;base64," + b64}}}}};
 }

@@ -26,7 +26,8 @@ using test::write_constant_image;
 
 TEST(HostileDeep, EveryFieldOfACraftedDeepFileIsCheckedBeforeShading) {
     test::TempDir d;
-    const Scene s = load_scene(test::cornell_scene(), {"camera.resolution=[12,12]", "render.spp=1", "render.gi=\"cache\"", "render.rays=16"});
+    const Scene s =
+        load_scene(test::cornell_scene(), {"camera.resolution=[12,12]", "render.spp=1", "render.gi=\"cache\"", "render.rays=16"});
     RenderRequest req;
     req.deep_out = d.file("f.deep.exr");
     Stats stats;
@@ -242,8 +243,8 @@ TEST(HostileTextures, NanAndInfiniteTexelsInEveryMaterialSlotGiveAFiniteImage) {
         d.write("t.json", j.dump());
         for (const char* gi : {"none", "brute", "cache"}) {
             Stats stats;
-            const RenderResult r = render(load_scene(d.file("t.json"), {Override(fmt::format("render.gi=\"{}\"", gi)), "render.rays=16"}), {},
-                                          stats, nullptr);
+            const RenderResult r =
+                render(load_scene(d.file("t.json"), {Override(fmt::format("render.gi=\"{}\"", gi)), "render.rays=16"}), {}, stats, nullptr);
             for (float v : r.image.find("beauty")->data) ASSERT_TRUE(std::isfinite(v)) << gi << " texel " << bad;
         }
     }
@@ -297,8 +298,8 @@ TEST(HostileMeshes, AVertexWithThousandsOfFacesOrANanOnACageIsRefusedUpFront) {
     // A displacement map holding NaN is named, at the texel, not blamed on a transform.
     d.write("grid.obj", "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n");
     write_constant_image(d.file("nan.exr"), 4, 4, 1, NAN);
-    j["objects"] = {{{"type", "mesh"}, {"file", "grid.obj"}, {"subdivision", "catmull-clark"},
-                     {"displacement", {{"map", "nan.exr"}, {"scale", 0.1}}}}};
+    j["objects"] = {
+        {{"type", "mesh"}, {"file", "grid.obj"}, {"subdivision", "catmull-clark"}, {"displacement", {{"map", "nan.exr"}, {"scale", 0.1}}}}};
     d.write("disp.json", j.dump());
     test::expect_refused(render_cmd(d.file("disp.json"), d.file("o.exr")), {"disp.json", "displacement/map", "nan.exr", "near uv"});
 }

@@ -76,8 +76,8 @@ TEST(HostileOutputs, AKilledRenderLeavesEveryOutputOfThePreviousRun) {
         const pid_t pid = fork();
         if (pid == 0) {
             const std::string cmd = std::string(BOUNCE_BINARY) + " render " + scene +
-                                    " -q --res 256x256 --spp 4 --gi brute --rays 4096 --seed 7 --stats-json " + d.file("f.json") +
-                                    " -o " + d.file("f.exr") + " --deep-out " + d.file("f.deep.exr") + " 2>/dev/null";
+                                    " -q --res 256x256 --spp 4 --gi brute --rays 4096 --seed 7 --stats-json " + d.file("f.json") + " -o " +
+                                    d.file("f.exr") + " --deep-out " + d.file("f.deep.exr") + " 2>/dev/null";
             execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
             _exit(127);
         }
@@ -154,9 +154,11 @@ TEST(HostileOutputs, CompareBaseAndBakeAoRefuseWhatWouldMislead) {
     EXPECT_EQ(test::run_bounce(quick(cornell, d.file("c.exr")) + " --crop 0,8,0,8 --base " + d.file("a.exr")), 0);
     const std::string displaced = test::source_dir() + "/scenes/displaced/displaced.json";
     for (const char* distance : {"nan", "0", "-1"})
-        test::expect_refused(fmt::format("bake-ao {} --object rounded_cube --res 8 --rays 4 -o {} --distance {}", displaced, d.file("ao.exr"), distance),
-                             {"--distance", "a number in (0, 1e+18]"});
-    test::expect_refused(fmt::format("bake-ao {} --object rounded_cube --res 8 --rays 4 -o /proc/ao.exr", displaced), {"/proc/ao.exr", "cannot create"});
+        test::expect_refused(
+            fmt::format("bake-ao {} --object rounded_cube --res 8 --rays 4 -o {} --distance {}", displaced, d.file("ao.exr"), distance),
+            {"--distance", "a number in (0, 1e+18]"});
+    test::expect_refused(fmt::format("bake-ao {} --object rounded_cube --res 8 --rays 4 -o /proc/ao.exr", displaced),
+                         {"/proc/ao.exr", "cannot create"});
 }
 
 TEST(HostileOutputs, WhatCannotFitUnderAnAddressSpaceLimitIsRefusedWithItsEstimate) {
@@ -202,7 +204,8 @@ TEST(HostileOutputs, WhatCannotFitUnderAnAddressSpaceLimitIsRefusedWithItsEstima
     EXPECT_NE(err.find("1000000 instances"), std::string::npos) << err;
     // A scene file whose JSON alone cannot be read within the limit.
     std::string huge = text;
-    for (int copies = 0; copies < 8; ++copies) huge.insert(huge.rfind(']'), R"(,{"name":"more","instances":{"of":"ball","transforms":[)" + rows + "]}}");
+    for (int copies = 0; copies < 8; ++copies)
+        huge.insert(huge.rfind(']'), R"(,{"name":"more","instances":{"of":"ball","transforms":[)" + rows + "]}}");
     d.write("huge.json", huge);
     std::tie(rc, err) = under_limit(quick(d.file("huge.json"), d.file("o.exr")));
     EXPECT_EQ(rc, 2) << err;

@@ -93,11 +93,15 @@ TEST(HostileOutputs, CacheToolsWriteOnlyTheKindOfFileTheyMake) {
     const std::string scene = d.write("cb.json", test::bytes_of(test::cornell_scene()));
     for (const char* f : {"short_block.obj", "tall_block.obj"})
         std::filesystem::copy_file(test::source_dir() + "/scenes/cornell/" + f, d.file(f));
-    ASSERT_EQ(test::run_bounce("render " + scene + " -q --res 16x16 --gi cache --rays 16 -o " + d.file("cb.exr") + " --cache-out " + d.file("cb.bic")), 0);
+    ASSERT_EQ(test::run_bounce("render " + scene + " -q --res 16x16 --gi cache --rays 16 -o " + d.file("cb.exr") + " --cache-out " +
+                               d.file("cb.bic")),
+              0);
     const std::string before = test::bytes_of(scene);
-    expect_refused("cache export " + d.file("cb.bic") + " -o " + scene, {"-o " + scene, "the exported point cloud is written as a .ply file"});
+    expect_refused("cache export " + d.file("cb.bic") + " -o " + scene,
+                   {"-o " + scene, "the exported point cloud is written as a .ply file"});
     expect_refused("cache filter " + d.file("cb.bic") + " --sphere 0,0,0,1 -o " + scene, {"the filtered cache is written as a .bic file"});
-    expect_refused("cache merge " + d.file("cb.bic") + " " + d.file("cb.bic") + " -o " + d.file("cb.exr"), {"the merged cache is written as a .bic file"});
+    expect_refused("cache merge " + d.file("cb.bic") + " " + d.file("cb.bic") + " -o " + d.file("cb.exr"),
+                   {"the merged cache is written as a .bic file"});
     EXPECT_EQ(test::bytes_of(scene), before);
     EXPECT_EQ(test::run_bounce("cache export " + d.file("cb.bic") + " -o " + d.file("cb.PLY")), 0);
 }
@@ -155,7 +159,8 @@ TEST(HostileValues, CropsFramesDistributionAndHeadersOutOfRange) {
         ASSERT_TRUE(out && out->open(d.file("spp.deep.exr"), spec) && out->write_deep_image(deep));
         out->close();
     }
-    expect_refused(cornell + " --deep-in " + d.file("spp.deep.exr"), {"spp.deep.exr", "bounce:spp", "2000000000 samples per pixel is outside 1 .. 4096"});
+    expect_refused(cornell + " --deep-in " + d.file("spp.deep.exr"),
+                   {"spp.deep.exr", "bounce:spp", "2000000000 samples per pixel is outside 1 .. 4096"});
 }
 
 }  // namespace
@@ -177,11 +182,11 @@ TEST(HostileValues, SingularMatricesAndEmptyFileNamesAreRefused) {
     for (int i = 0; i < 16; ++i) zeros.push_back(0);
     for (const json& m : {zeros, rank2})
         expect_refused(scene_with({{"type", "sphere"}, {"radius", 1}, {"transform", {{"matrix", m}}}}),
-                {"s.json", "/objects/1/transform/matrix", "singular"});
+                       {"s.json", "/objects/1/transform/matrix", "singular"});
     json scaled = {2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 1, 0, 0, 0, 1};
     EXPECT_EQ(test::run_bounce(scene_with({{"type", "sphere"}, {"radius", 1}, {"transform", {{"matrix", scaled}}}})), 0);
     expect_refused(scene_with({{"type", "sphere"}, {"radius", 1}, {"material", "m"}}, {{"m", {{"color_texture", ""}}}}),
-            {"s.json", "/materials/m/color_texture", "an empty file name"});
+                   {"s.json", "/materials/m/color_texture", "an empty file name"});
 }
 
 }  // namespace
@@ -202,7 +207,8 @@ TEST(HostileGltf, MorphTargetSkinAndSamplerCountsAndTimesAreChecked) {
     };
     json blob = test::morphed_quad();
     blob["accessors"][2]["count"] = 3;
-    expect_refused(play("blob.gltf", blob, "rise"), {"blob.gltf", "/meshes/0/primitives/0/targets/0/POSITION", "3 elements for the primitive's 4 vertices"});
+    expect_refused(play("blob.gltf", blob, "rise"),
+                   {"blob.gltf", "/meshes/0/primitives/0/targets/0/POSITION", "3 elements for the primitive's 4 vertices"});
     json strip = test::skinned_strip();
     strip["accessors"][4]["count"] = 1;
     expect_refused(play("strip.gltf", strip, "bend"), {"strip.gltf", "/skins/0/inverseBindMatrices", "1 matrices for the skin's 2 joints"});
@@ -234,7 +240,8 @@ TEST(HostileValues, AFileValueAFlagReplacesIsStillChecked) {
         json j = test::base_scene();
         j["render"] = render;
         for (const auto& [k, v] : camera_extra.items()) j["camera"][k] = v;
-        if (camera_extra.contains("resolution") && camera_extra["resolution"].is_object()) j["animation"] = {{"fps", 24}, {"frames", {1, 2}}};
+        if (camera_extra.contains("resolution") && camera_extra["resolution"].is_object())
+            j["animation"] = {{"fps", 24}, {"frames", {1, 2}}};
         d.write("s.json", j.dump());
         return "render " + d.file("s.json") + " -q -o " + d.file("o.exr") + " " + flags;
     };
@@ -244,9 +251,9 @@ TEST(HostileValues, AFileValueAFlagReplacesIsStillChecked) {
     // A keyed resolution is refused as it is without the flag: it cannot be animated
     // (issue 65, item 20: with valid keys it was accepted).
     expect_refused(with(json::object(), {{"resolution", {{"keys", {{1, {16, 16}}, {2, {0, 16}}}}}}}, "--res 16x16"),
-            {"s.json", "/camera/resolution", "cannot be animated"});
+                   {"s.json", "/camera/resolution", "cannot be animated"});
     expect_refused(with(json::object(), {{"resolution", {{"keys", {{1, {32, 32}}, {2, {16, 16}}}}}}}, "--res 32x32"),
-            {"s.json", "/camera/resolution", "cannot be animated"});
+                   {"s.json", "/camera/resolution", "cannot be animated"});
     EXPECT_EQ(test::run_bounce(with({{"spp", 2}}, json::object(), "--spp 1 --res 16x16")), 0);
 }
 
@@ -262,12 +269,14 @@ TEST(HostileTextures, AHugeLightTextureIsRefusedAtOnceAsAColourMapIs) {
     const std::vector<std::pair<json, std::string>> lights = {
         {{{"type", "sky"}, {"texture", "huge.png"}}, "/lights/0/texture"},
         {{{"type", "spot"}, {"position", {0, 5, 0}}, {"direction", {0, -1, 0}}, {"texture", "huge.png"}}, "/lights/0/texture"},
-        {{{"type", "quad"}, {"corner", {-1, 5, -1}}, {"edge_u", {2, 0, 0}}, {"edge_v", {0, 0, 2}}, {"texture", "huge.png"}}, "/lights/0/texture"}};
+        {{{"type", "quad"}, {"corner", {-1, 5, -1}}, {"edge_u", {2, 0, 0}}, {"edge_v", {0, 0, 2}}, {"texture", "huge.png"}},
+         "/lights/0/texture"}};
     for (const auto& [light, where] : lights) {
         json j = test::base_scene();
         j["lights"] = {light};
         d.write("l.json", j.dump());
-        expect_refused("render " + d.file("l.json") + " -q --res 16x16 -o " + d.file("o.exr"), {"l.json", where, "8200x8200", "at most 8192x8192"});
+        expect_refused("render " + d.file("l.json") + " -q --res 16x16 -o " + d.file("o.exr"),
+                       {"l.json", where, "8200x8200", "at most 8192x8192"});
     }
 }
 
@@ -275,13 +284,15 @@ TEST(HostileValues, MessagesSayWhatTheUserWroteAndWhen) {
     test::TempDir d;
     // bake-ao --distance 1e39 was echoed as "--distance inf".
     const std::string displaced = test::source_dir() + "/scenes/displaced/displaced.json";
-    expect_refused("bake-ao " + displaced + " --object rounded_cube --distance 1e39 -o " + d.file("ao.exr"), {"--distance 1e+39", "(0, 1e+18]"});
+    expect_refused("bake-ao " + displaced + " --object rounded_cube --distance 1e39 -o " + d.file("ao.exr"),
+                   {"--distance 1e+39", "(0, 1e+18]"});
     // A keyed fov that leaves its range at frame 3 says so.
     json j = test::base_scene();
     j["animation"] = {{"fps", 24}, {"frames", {1, 4}}};
     j["camera"]["fov"] = {{"keys", {{1, 40}, {4, 250}}}};
     d.write("k.json", j.dump());
-    expect_refused("render " + d.file("k.json") + " -q --res 16x16 --frame 3 -o " + d.file("o.exr"), {"k.json", "/camera/fov", "at frame 3"});
+    expect_refused("render " + d.file("k.json") + " -q --res 16x16 --frame 3 -o " + d.file("o.exr"),
+                   {"k.json", "/camera/fov", "at frame 3"});
 }
 
 }  // namespace
@@ -294,8 +305,9 @@ TEST(HostilePly, BinaryListCountsAndIndicesAreReadBeforeAssimp) {
     // A list count type uint with count 0xFFFFFFFF ended in "cannot load mesh: std::bad_alloc".
     test::TempDir d;
     const auto ply = [](uint32_t count, uint32_t index) {
-        std::string b = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                        "element face 1\nproperty list uint int vertex_indices\nend_header\n";
+        std::string b =
+            "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+            "element face 1\nproperty list uint int vertex_indices\nend_header\n";
         const float v[9] = {0, 0, 0, 1, 0, 0, 0, 0, 1};
         b.append(reinterpret_cast<const char*>(v), sizeof(v));
         b.append(reinterpret_cast<const char*>(&count), 4);
@@ -303,7 +315,8 @@ TEST(HostilePly, BinaryListCountsAndIndicesAreReadBeforeAssimp) {
         b.append(reinterpret_cast<const char*>(idx), sizeof(idx));
         return b;
     };
-    expect_refused(render_cmd(ply_scene(d, ply(0xFFFFFFFFu, 2)), d.file("o.exr")), {"m.ply", "byte 36 of the body", "face 0: a list of 4.29497e+09"});
+    expect_refused(render_cmd(ply_scene(d, ply(0xFFFFFFFFu, 2)), d.file("o.exr")),
+                   {"m.ply", "byte 36 of the body", "face 0: a list of 4.29497e+09"});
     expect_refused(render_cmd(ply_scene(d, ply(3, 9)), d.file("o.exr")), {"m.ply", "face 0: vertex index 9 outside the 3 vertices"});
     expect_refused(render_cmd(ply_scene(d, ply(4, 2)), d.file("o.exr")), {"m.ply", "the file ends inside face 0"});
     EXPECT_EQ(test::run_bounce(render_cmd(ply_scene(d, ply(3, 2)), d.file("o.exr"))), 0);
@@ -322,8 +335,8 @@ TEST(ManyLights, PickingSomeOfThemStaysUnbiasedAndFewerAreAllTaken) {
     json j = test::base_scene();
     json lights = json::array();
     for (int i = 0; i < 400; ++i)
-        lights.push_back({{"type", "point"}, {"position", {std::sin(i * 1.7) * 6, 1 + (i % 7), std::cos(i * 2.3) * 6}},
-                          {"color", 0.5 + (i * 37 % 11)}});
+        lights.push_back(
+            {{"type", "point"}, {"position", {std::sin(i * 1.7) * 6, 1 + (i % 7), std::cos(i * 2.3) * 6}}, {"color", 0.5 + (i * 37 % 11)}});
     j["lights"] = lights;
     const Scene all = test::scene_from(j, {"render.light_pick=0"});
     const Scene picked = test::scene_from(j, {"render.light_pick=16"});
@@ -359,7 +372,8 @@ TEST(HostileValues, AHundredThousandSpheresAreRefusedBeforeAnyIsTessellated) {
     // They ran for minutes into 14 GB before "the camera sees no geometry".
     test::TempDir d;
     json j = test::base_scene();
-    for (int i = 0; i < 100000; ++i) j["objects"].push_back({{"type", "sphere"}, {"center", {i % 100 * 3, 1000 + i / 100 * 3, 0}}, {"radius", 1}});
+    for (int i = 0; i < 100000; ++i)
+        j["objects"].push_back({{"type", "sphere"}, {"center", {i % 100 * 3, 1000 + i / 100 * 3, 0}}, {"radius", 1}});
     d.write("s.json", j.dump());
     expect_refused("render " + d.file("s.json") + " -q --res 16x16 -o " + d.file("o.exr"),
                    {"s.json", "/objects", "100000 spheres would be tessellated into 2.18e+09 triangles", "render.memory_budget"});

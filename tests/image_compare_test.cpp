@@ -75,16 +75,15 @@ TEST(Compare, FalseColourRamp) {
     test.at(test.layers[0], 1, 0)[0] = test.at(test.layers[0], 1, 0)[1] = test.at(test.layers[0], 1, 0)[2] = 0.5f;
     test.at(test.layers[0], 2, 0)[0] = test.at(test.layers[0], 2, 0)[1] = test.at(test.layers[0], 2, 0)[2] = 5.0f;
     auto rgb = error_false_colour(test, ref, "indirect", 1.0);
-    EXPECT_EQ(rgb[0] + rgb[1] + rgb[2], 0);                // no error: black
-    EXPECT_GT(rgb[3], 0);                                  // half range: red rising
+    EXPECT_EQ(rgb[0] + rgb[1] + rgb[2], 0);        // no error: black
+    EXPECT_GT(rgb[3], 0);                          // half range: red rising
     EXPECT_EQ(rgb[6] + rgb[7] + rgb[8], 3 * 255);  // beyond range: white
 }
 
 TEST(BruteForce, CornellHasColourBleedingAndAo) {
     test::TempDir d;
     std::string out = d.file("b.exr");
-    ASSERT_EQ(test::run_bounce("render " + test::cornell_scene() + " -o " + out +
-                               " --res 32x32 --spp 2 --gi brute --rays 128 -q"), 0);
+    ASSERT_EQ(test::run_bounce("render " + test::cornell_scene() + " -o " + out + " --res 32x32 --spp 2 --gi brute --rays 128 -q"), 0);
     Image img = read_exr(out);
     const Layer* ind = img.find("indirect");
     ASSERT_NE(ind, nullptr);
@@ -164,7 +163,9 @@ TEST(SequenceCompare, AStaticSequenceHasNoFlickerAndAKnownPerturbationItsKnownVa
 
 TEST(SequenceCompare, TheStripIsAPngThatOverwritesNoFrameItReads) {
     test::TempDir d;
-    ASSERT_EQ(test::run_bounce("render " + test::cornell_scene() + " -o " + d.file("f.####.exr") + " --frames 1-2 --res 8x8 --spp 1 --gi brute --rays 8 -q"), 0);
+    ASSERT_EQ(test::run_bounce("render " + test::cornell_scene() + " -o " + d.file("f.####.exr") +
+                               " --frames 1-2 --res 8x8 --spp 1 --gi brute --rays 8 -q"),
+              0);
     for (int t : {1, 2}) std::filesystem::copy_file(d.file(fmt::format("f.{:04d}.exr", t)), d.file(fmt::format("r.{:04d}.png", t)));
     const std::string cmd = "compare --sequence " + d.file("f.####.exr") + " " + d.file("r.####.png") + " --frames 1-2 --strip ";
     const std::string frame = test::bytes_of(d.file("f.0001.exr")), ref = test::bytes_of(d.file("r.0002.png"));

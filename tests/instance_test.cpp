@@ -28,17 +28,18 @@ using nlohmann::json;
 /// A floor and a back wall under a point light; a ball prototype (centre (2.5, 1, 0.5), so
 /// that mirrors move it) and `extra` objects.
 json room(const json& extra, const json& ball_keys = json::object()) {
-    json ball = {{"name", "ball"}, {"type", "sphere"}, {"center", {2.5, 1, 0.5}}, {"radius", 1}, {"subdivisions", 2},
-                 {"fine_subdivisions", 0}, {"material", "white"}, {"prototype", true}};
+    json ball = {{"name", "ball"},    {"type", "sphere"},       {"center", {2.5, 1, 0.5}}, {"radius", 1},
+                 {"subdivisions", 2}, {"fine_subdivisions", 0}, {"material", "white"},     {"prototype", true}};
     ball.update(ball_keys);
-    json j = {{"camera", {{"position", {0, 2, -9}}, {"look_at", {0, 1, 0}}, {"fov", 50}, {"resolution", {40, 30}}}},
-              {"render", {{"spp", 2}, {"light_samples", 2}, {"seed", 3}, {"rays", 16}}},
-              {"materials", {{"white", {{"color", 0.7}}}, {"red", {{"color", {0.7, 0.1, 0.1}}}}, {"blue", {{"color", {0.1, 0.2, 0.8}}}}}},
-              {"lights", {{{"type", "point"}, {"position", {1, 5, -2}}, {"color", 40}}}},
-              {"objects",
-               {{{"name", "floor"}, {"type", "quad"}, {"material", "white"}, {"vertices", {{-8, 0, -8}, {-8, 0, 8}, {8, 0, 8}, {8, 0, -8}}}},
-                {{"name", "back"}, {"type", "quad"}, {"material", "red"}, {"vertices", {{-8, 0, 4}, {-8, 8, 4}, {8, 8, 4}, {8, 0, 4}}}},
-                ball}}};
+    json j = {
+        {"camera", {{"position", {0, 2, -9}}, {"look_at", {0, 1, 0}}, {"fov", 50}, {"resolution", {40, 30}}}},
+        {"render", {{"spp", 2}, {"light_samples", 2}, {"seed", 3}, {"rays", 16}}},
+        {"materials", {{"white", {{"color", 0.7}}}, {"red", {{"color", {0.7, 0.1, 0.1}}}}, {"blue", {{"color", {0.1, 0.2, 0.8}}}}}},
+        {"lights", {{{"type", "point"}, {"position", {1, 5, -2}}, {"color", 40}}}},
+        {"objects",
+         {{{"name", "floor"}, {"type", "quad"}, {"material", "white"}, {"vertices", {{-8, 0, -8}, {-8, 0, 8}, {8, 0, 8}, {8, 0, -8}}}},
+          {{"name", "back"}, {"type", "quad"}, {"material", "red"}, {"vertices", {{-8, 0, 4}, {-8, 8, 4}, {8, 8, 4}, {8, 0, 4}}}},
+          ball}}};
     for (const json& o : extra) j["objects"].push_back(o);
     return j;
 }
@@ -70,8 +71,10 @@ Image render_with(const json& scene, const std::string& gi) {
     return render(test::scene_from(scene, {Override("render.gi=" + gi)}), {}, stats, nullptr).image;
 }
 
-const json kExact = json::array({json::object(), {{"scale", {-1, 1, 1}}, {"name", "mirrored"}},
-                                 {{"scale", {1, 1, -1}}, {"material", "blue"}}, {{"scale", {-1, 1, -1}}}});
+const json kExact = json::array({json::object(),
+                                 {{"scale", {-1, 1, 1}}, {"name", "mirrored"}},
+                                 {{"scale", {1, 1, -1}}, {"material", "blue"}},
+                                 {{"scale", {-1, 1, -1}}}});
 
 TEST(Instances, RenderAsTheSameGeometryWrittenOutFlatBitForBit) {
     const Pair p = instanced_and_flat(kExact);
@@ -104,8 +107,10 @@ TEST(Instances, IdentityPlacementsUnderSunAndSkyAreTheFlatSceneBitForBitWithoutI
         ASSERT_TRUE(la && lb);
         double sa = 0, sb = 0;
         for (size_t i = 0; i < la->data.size(); ++i) sa += la->data[i], sb += lb->data[i];
-        if (gi == "none") EXPECT_EQ(test::differing_values(a, b), 0u);
-        else EXPECT_LE(test::differing_values(a, b), a.layers.size() * 3 * a.width * a.height / 300) << "--gi " << gi;
+        if (gi == "none")
+            EXPECT_EQ(test::differing_values(a, b), 0u);
+        else
+            EXPECT_LE(test::differing_values(a, b), a.layers.size() * 3 * a.width * a.height / 300) << "--gi " << gi;
         EXPECT_NEAR(sa / sb, 1.0, 1e-5) << "--gi " << gi;
         EXPECT_GT(sb, 0) << "--gi " << gi;
     }
@@ -159,10 +164,11 @@ TEST(Instances, TheSceneBoundsAreEveryPlacedVertexsBitForBitThoughInteriorPlacem
         return lo + (hi - lo) * static_cast<double>(state >> 11) / 9007199254740992.0;
     };
     for (int k = 0; k < 400; ++k)
-        transforms.push_back({{"rotate", {uniform(0, 360), uniform(-1, 1), 1, uniform(-1, 1)}}, {"scale", uniform(0.3, 1.7)},
+        transforms.push_back({{"rotate", {uniform(0, 360), uniform(-1, 1), 1, uniform(-1, 1)}},
+                              {"scale", uniform(0.3, 1.7)},
                               {"translate", {(k % 20) * 1.3 - 12 + uniform(-0.4, 0.4), uniform(0, 0.5), (k / 20) * 1.1 - 10}}});
-    const Scene scene = test::scene_from(room(json::array({{{"name", "forest"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}}),
-                                              {{"fine_subdivisions", 1}}));
+    const Scene scene = test::scene_from(
+        room(json::array({{{"name", "forest"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}}), {{"fine_subdivisions", 1}}));
     Bounds coarse, fine, others;
     size_t placements = 0, shortcut = 0;
     for (const Object& o : scene.objects) {
@@ -226,8 +232,10 @@ TEST(Instances, ShareOnePrototypesTrianglesAndReportTheirOwnObjectInHits) {
 }
 
 TEST(Instances, PlacementsOfEqualScaleShareTheirRadiosityLayoutAndBakeOnlyWhatIsHit) {
-    const json transforms = json::array({{{"translate", {-3, 0, 0}}}, {{"translate", {0, 0, 0}}, {"rotate", {40, 0, 1, 0}}},
-                                         {{"translate", {3, 0, 0}}}, {{"translate", {0, 0, 2}}, {"scale", 3}}});
+    const json transforms = json::array({{{"translate", {-3, 0, 0}}},
+                                         {{"translate", {0, 0, 0}}, {"rotate", {40, 0, 1, 0}}},
+                                         {{"translate", {3, 0, 0}}},
+                                         {{"translate", {0, 0, 2}}, {"scale", 3}}});
     const Scene s = test::scene_from(room(json::array({{{"name", "balls"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}})));
     const SceneAccel accel(s);
     const Materials materials(s);
@@ -276,7 +284,7 @@ TEST(Instances, TakeMaterialOverridesAndLightLinksByNameAndGlob) {
     json j = room(json::array({{{"name", "balls"}, {"material", "red"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}}));
     const Scene s = test::scene_from(j);
     const auto material = [&](const Object& o) { return s.materials[static_cast<size_t>(o.material_override)].name; };
-    EXPECT_EQ(material(s.objects[3]), "red");  // the instancer's
+    EXPECT_EQ(material(s.objects[3]), "red");   // the instancer's
     EXPECT_EQ(material(s.objects[4]), "blue");  // the entry's own
     EXPECT_EQ(s.objects[4].coarse_point(0, 0.2f, 0.2f).material, static_cast<uint32_t>(s.objects[4].material_override));
     // Unlinked from the light by glob: no direct light on either ball, the floor still lit.
@@ -318,22 +326,28 @@ json cube_nodes(Cubes how) {
     const std::vector<std::array<float, 4>> turn = {{0, 0, 0, 1}, {0, 0, 0, 1}, {0, h, 0, h}};
     std::string b;
     test::put<float>(b, {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1});  // 96 bytes
-    test::put<uint16_t>(b, {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 3, 7, 6, 3, 6, 2, 0, 4, 7, 0, 7, 3, 1, 2, 6, 1, 6, 5});  // 72
-    test::put<float>(b, {-5, 0, -5, 5, 0, -5, 5, 0, 5, -5, 0, 5});  // 48
-    test::put<uint16_t>(b, {0, 2, 1, 0, 3, 2});                    // 12
-    for (const auto& t : at) test::put<float>(b, {t[0], t[1], t[2]});                // 36 at 228
-    for (const auto& q : turn) test::put<float>(b, {q[0], q[1], q[2], q[3]});       // 48 at 264
-    for (const auto& k : scale) test::put<float>(b, {k[0], k[1], k[2]});             // 36 at 312
+    test::put<uint16_t>(
+        b, {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 3, 7, 6, 3, 6, 2, 0, 4, 7, 0, 7, 3, 1, 2, 6, 1, 6, 5});  // 72
+    test::put<float>(b, {-5, 0, -5, 5, 0, -5, 5, 0, 5, -5, 0, 5});                                                         // 48
+    test::put<uint16_t>(b, {0, 2, 1, 0, 3, 2});                                                                            // 12
+    for (const auto& t : at) test::put<float>(b, {t[0], t[1], t[2]});                                                      // 36 at 228
+    for (const auto& q : turn) test::put<float>(b, {q[0], q[1], q[2], q[3]});                                              // 48 at 264
+    for (const auto& k : scale) test::put<float>(b, {k[0], k[1], k[2]});                                                   // 36 at 312
     json g = {{"asset", {{"version", "2.0"}}}, {"scene", 0}};
     g["buffers"] = {{{"byteLength", b.size()}, {"uri", "data:application/octet-stream;base64," + test::base64(b)}}};
     const auto view = [](int offset, int length) { return json{{"buffer", 0}, {"byteOffset", offset}, {"byteLength", length}}; };
     g["bufferViews"] = {view(0, 96), view(96, 72), view(168, 48), view(216, 12), view(228, 36), view(264, 48), view(312, 36)};
-    const auto vec = [](int index, const char* type) { return json{{"bufferView", index}, {"componentType", 5126}, {"count", 3}, {"type", type}}; };
-    g["accessors"] = {{{"bufferView", 0}, {"componentType", 5126}, {"count", 8}, {"type", "VEC3"}, {"min", {0, 0, 0}}, {"max", {1, 1, 1}}},
-                      {{"bufferView", 1}, {"componentType", 5123}, {"count", 36}, {"type", "SCALAR"}},
-                      {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {-5, 0, -5}}, {"max", {5, 0, 5}}},
-                      {{"bufferView", 3}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}},
-                      vec(4, "VEC3"), vec(5, "VEC4"), vec(6, "VEC3")};
+    const auto vec = [](int index, const char* type) {
+        return json{{"bufferView", index}, {"componentType", 5126}, {"count", 3}, {"type", type}};
+    };
+    g["accessors"] = {
+        {{"bufferView", 0}, {"componentType", 5126}, {"count", 8}, {"type", "VEC3"}, {"min", {0, 0, 0}}, {"max", {1, 1, 1}}},
+        {{"bufferView", 1}, {"componentType", 5123}, {"count", 36}, {"type", "SCALAR"}},
+        {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {-5, 0, -5}}, {"max", {5, 0, 5}}},
+        {{"bufferView", 3}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}},
+        vec(4, "VEC3"),
+        vec(5, "VEC4"),
+        vec(6, "VEC3")};
     const json cube = {{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}};
     const json floor = {{"primitives", {{{"attributes", {{"POSITION", 2}}}, {"indices", 3}}}}};
     g["meshes"] = how == Cubes::Copies ? json{cube, cube, cube, floor} : json{cube, floor, floor, floor};
@@ -341,12 +355,16 @@ json cube_nodes(Cubes how) {
     const int floor_mesh = how == Cubes::Copies ? 3 : 1;
     if (how == Cubes::GpuInstanced) {
         g["extensionsUsed"] = {"EXT_mesh_gpu_instancing"};
-        g["nodes"].push_back({{"name", "cubes"}, {"mesh", 0},
-                              {"extensions", {{"EXT_mesh_gpu_instancing", {{"attributes", {{"TRANSLATION", 4}, {"ROTATION", 5}, {"SCALE", 6}}}}}}}});
+        g["nodes"].push_back(
+            {{"name", "cubes"},
+             {"mesh", 0},
+             {"extensions", {{"EXT_mesh_gpu_instancing", {{"attributes", {{"TRANSLATION", 4}, {"ROTATION", 5}, {"SCALE", 6}}}}}}}});
     } else {
         for (int k = 0; k < 3; ++k)
-            g["nodes"].push_back({{"name", "cube" + std::to_string(k)}, {"mesh", how == Cubes::Shared ? 0 : k},
-                                  {"translation", at[static_cast<size_t>(k)]}, {"rotation", turn[static_cast<size_t>(k)]},
+            g["nodes"].push_back({{"name", "cube" + std::to_string(k)},
+                                  {"mesh", how == Cubes::Shared ? 0 : k},
+                                  {"translation", at[static_cast<size_t>(k)]},
+                                  {"rotation", turn[static_cast<size_t>(k)]},
                                   {"scale", scale[static_cast<size_t>(k)]}});
     }
     g["nodes"].push_back({{"name", "floor"}, {"mesh", floor_mesh}});
@@ -508,7 +526,8 @@ TEST(Instances, TheBundledOrchardLoadsAndRendersItsPlacements) {
     const Layer* albedo = img.find("albedo");
     size_t autumn = 0;
     for (int y = 0; y < img.height; ++y)
-        for (int x = 0; x < img.width; ++x) autumn += std::abs(img.at(*albedo, x, y)[0] - 0.7f) < 1e-3f && std::abs(img.at(*albedo, x, y)[2] - 0.1f) < 1e-3f;
+        for (int x = 0; x < img.width; ++x)
+            autumn += std::abs(img.at(*albedo, x, y)[0] - 0.7f) < 1e-3f && std::abs(img.at(*albedo, x, y)[2] - 0.1f) < 1e-3f;
     EXPECT_GT(autumn, 5u);
 }
 
@@ -525,15 +544,19 @@ TEST(Instances, HostileInstancersAreRefusedWithTheirPlace) {
     refused(room(instancer({{"of", "bal"}, {"transforms", one}})), {"/objects/3/instances/of", "no object is named \"bal\"", "\"ball\""});
     refused(room(instancer({{"of", "floor"}, {"transforms", one}})), {"/objects/3/instances/of", "not a prototype"});
     refused(room(instancer({{"of", "ball"}, {"transforms", json::array()}})), {"/objects/3/instances/transforms", "non-empty"});
-    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({1, 2})}})), {"/objects/3/instances/transforms/0", "transform object"});
+    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({1, 2})}})),
+            {"/objects/3/instances/transforms/0", "transform object"});
     refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"translate", {1, 0, 0}}, {"colour", 1}}})}})),
             {"/objects/3/instances/transforms/0", "colour"});
-    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"translate", {1e39, 0, 0}}}})}})), {"/objects/3/instances/transforms/0/translate"});
-    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"scale", 1e30}}})}})), {"/objects/3/instances/transforms/0", "beyond"});
+    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"translate", {1e39, 0, 0}}}})}})),
+            {"/objects/3/instances/transforms/0/translate"});
+    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"scale", 1e30}}})}})),
+            {"/objects/3/instances/transforms/0", "beyond"});
     // Bounds are found in parallel; the first placement out of range is the one named.
     refused(room(instancer({{"of", "ball"}, {"transforms", json::array({json::object(), {{"scale", 1e30}}, {{"scale", -1e30}}})}})),
             {"/objects/3/instances/transforms/1", "beyond"});
-    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"material", "gold"}}})}})), {"/objects/3/instances/transforms/0/material", "unknown material"});
+    refused(room(instancer({{"of", "ball"}, {"transforms", json::array({{{"material", "gold"}}})}})),
+            {"/objects/3/instances/transforms/0/material", "unknown material"});
     refused(room(instancer({{"of", "ball"}, {"transforms", one}}, {{"type", "sphere"}})), {"/objects/3", "type"});
     refused(room(instancer({{"of", "ball"}, {"transforms", one}, {"count", 3}})), {"/objects/3/instances", "count"});
     refused(room(json::array(), {{"fur", {{"density", 1}}}}), {"/objects/2", "prototype", "fur"});

@@ -42,7 +42,7 @@ TEST(LatticeSide, ManyThreadsWritingOnePageShareIt) {
     LatticeSide side;
     const auto shared = offsets(1000);
     const std::vector<uint32_t>& o = *shared;
-    side.lay_out(shared, 3000, 2);  // two colours per point (light parts)
+    side.lay_out(shared, 3000, 2);                                          // two colours per point (light parts)
     parallel_for_each_index(uint32_t{0}, uint32_t{1000}, [&](uint32_t t) {  // (TBB's own loops are not instrumented under TSan)
         Color* run = side.writable_run(t, o[t]);
         for (uint32_t k = 0; k < 6; ++k) run[k] = Color(static_cast<float>(t));

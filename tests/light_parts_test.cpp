@@ -28,14 +28,18 @@ json three_light_scene(bool parts, int res = 24) {
     j["materials"] = {{"floor", {{"color", 0.7}}}, {"red", {{"color", {0.8, 0.1, 0.1}}}}, {"white", {{"color", 0.8}}}};
     j["objects"][0]["name"] = "floor";
     j["objects"][0]["material"] = "floor";
-    j["objects"].push_back({{"name", "red"}, {"type", "quad"}, {"material", "red"},
+    j["objects"].push_back({{"name", "red"},
+                            {"type", "quad"},
+                            {"material", "red"},
                             {"vertices", {{-0.5, 0, -0.2}, {-0.5, 1.2, -0.2}, {0.5, 1.2, -0.2}, {0.5, 0, -0.2}}}});
-    j["objects"].push_back({{"name", "white"}, {"type", "quad"}, {"material", "white"},
+    j["objects"].push_back({{"name", "white"},
+                            {"type", "quad"},
+                            {"material", "white"},
                             {"vertices", {{-1, 1.5, -1}, {-1, 1.5, 1}, {1, 1.5, 1}, {1, 1.5, -1}}}});
-    j["lights"] = json::array({{{"type", "distant"}, {"direction", {0.3, -1, 0.2}}, {"color", {2, 1.8, 1.5}}},
-                               {{"type", "sky"}, {"color", {0.2, 0.3, 0.5}}},
-                               {{"type", "quad"}, {"corner", {-0.3, 1.2, 0.5}}, {"edge_u", {0.6, 0, 0}}, {"edge_v", {0, 0, 0.4}},
-                                {"color", 4}}});
+    j["lights"] =
+        json::array({{{"type", "distant"}, {"direction", {0.3, -1, 0.2}}, {"color", {2, 1.8, 1.5}}},
+                     {{"type", "sky"}, {"color", {0.2, 0.3, 0.5}}},
+                     {{"type", "quad"}, {"corner", {-0.3, 1.2, 0.5}}, {"edge_u", {0.6, 0, 0}}, {"edge_v", {0, 0, 0.4}}, {"color", 4}}});
     return j;
 }
 
@@ -164,8 +168,7 @@ TEST(LightParts, PlacementDependsOnNoLightsIntensity) {
     dim_plain["lights"][0]["intensity"] = 0.01;
     const RenderResult c = fresh(three_light_scene(false, 48)), d = fresh(dim_plain);
     bool differ = c.cache->size() != d.cache->size() || c.cache->fragment_record_count() != d.cache->fragment_record_count();
-    for (size_t i = 0; !differ && i < c.cache->size(); ++i)
-        differ = c.cache->record(i).weber != d.cache->record(i).weber;
+    for (size_t i = 0; !differ && i < c.cache->size(); ++i) differ = c.cache->record(i).weber != d.cache->record(i).weber;
     EXPECT_TRUE(differ);
 }
 

@@ -49,8 +49,8 @@ TEST(DirectLighting, PointLightIsShadowedByAnOccluder) {
 
 TEST(DirectLighting, SpotLightConeAndFalloff) {
     json j = base_scene();
-    j["lights"] = {{{"type", "spot"}, {"position", {0, 1, 0}}, {"direction", {0, -1, 0}}, {"color", 1},
-                    {"cone_angle", 30}, {"cone_falloff", 10}}};
+    j["lights"] = {
+        {{"type", "spot"}, {"position", {0, 1, 0}}, {"direction", {0, -1, 0}}, {"color", 1}, {"cone_angle", 30}, {"cone_falloff", 10}}};
     Scene s = scene_from(j);
     auto at_angle = [&](float deg) {
         float x = std::tan(deg * kPi / 180);
@@ -86,8 +86,11 @@ float lambert_polygon(const std::vector<Vec3>& poly, const Vec3& p, const Vec3& 
 TEST(DirectLighting, QuadLightMatchesAnalyticFormFactor) {
     json j = base_scene();
     Vec3 corner{-0.5f, 2, -0.3f}, eu{1.2f, 0, 0}, ev{0, 0, 0.8f};  // emits along eu x ev = -y
-    j["lights"] = {{{"type", "quad"}, {"corner", {corner.x, corner.y, corner.z}}, {"edge_u", {eu.x, eu.y, eu.z}},
-                    {"edge_v", {ev.x, ev.y, ev.z}}, {"color", 5}}};
+    j["lights"] = {{{"type", "quad"},
+                    {"corner", {corner.x, corner.y, corner.z}},
+                    {"edge_u", {eu.x, eu.y, eu.z}},
+                    {"edge_v", {ev.x, ev.y, ev.z}},
+                    {"color", 5}}};
     Scene s = scene_from(j);
     std::vector<Vec3> poly = {corner, corner + eu, corner + eu + ev, corner + ev};
     for (Vec3 p : {Vec3(0, 0, 0), Vec3(1.5f, 0, 0.7f), Vec3(-2, 0, 3)}) {
@@ -105,8 +108,8 @@ TEST(DirectLighting, QuadLightMatchesAnalyticFormFactor) {
 TEST(DirectLighting, EmissiveMeshEqualsQuadLightOfSameShape) {
     json j = base_scene();
     j["materials"] = {{"glow", {{"emission", {2, 3, 4}}}}};
-    j["objects"].push_back({{"type", "quad"}, {"material", "glow"},
-                            {"vertices", {{-0.5, 2, -0.3}, {0.7, 2, -0.3}, {0.7, 2, 0.5}, {-0.5, 2, 0.5}}}});
+    j["objects"].push_back(
+        {{"type", "quad"}, {"material", "glow"}, {"vertices", {{-0.5, 2, -0.3}, {0.7, 2, -0.3}, {0.7, 2, 0.5}, {-0.5, 2, 0.5}}}});
     Scene s = scene_from(j);
     ASSERT_EQ(s.lights.size(), 1u);
     std::vector<Vec3> poly = {{-0.5f, 2, -0.3f}, {0.7f, 2, -0.3f}, {0.7f, 2, 0.5f}, {-0.5f, 2, 0.5f}};
@@ -158,7 +161,11 @@ std::string half_white(const test::TempDir& d) {
 TEST(DirectLighting, ATexturedQuadLightEmitsOnlyWhereItsTextureIsLit) {
     test::TempDir d;
     json j = base_scene();
-    j["lights"] = {{{"type", "quad"}, {"corner", {-1, 1, -1}}, {"edge_u", {2, 0, 0}}, {"edge_v", {0, 0, 2}}, {"color", 1},
+    j["lights"] = {{{"type", "quad"},
+                    {"corner", {-1, 1, -1}},
+                    {"edge_u", {2, 0, 0}},
+                    {"edge_v", {0, 0, 2}},
+                    {"color", 1},
                     {"texture", half_white(d)}}};
     const Scene s = scene_from(j);
     const Vec3 p{0.4f, 0, 0.3f};
@@ -170,7 +177,8 @@ TEST(DirectLighting, ATexturedQuadLightEmitsOnlyWhereItsTextureIsLit) {
 TEST(DirectLighting, ASpotProjectsItsSlideAndStopsAtItsBarnDoors) {
     test::TempDir d;
     json j = base_scene();
-    const json spot = {{"type", "spot"}, {"position", {0, 1, 0}}, {"direction", {0, -1, 0}}, {"color", 2}, {"cone_angle", 40}, {"cone_falloff", 0}};
+    const json spot = {{"type", "spot"}, {"position", {0, 1, 0}}, {"direction", {0, -1, 0}},
+                       {"color", 2},     {"cone_angle", 40},      {"cone_falloff", 0}};
     auto lit = [&](const json& extra, float z) {
         json l = spot;
         l.update(extra);

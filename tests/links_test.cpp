@@ -22,8 +22,7 @@ json card_scene(const json& light_extra = json::object(), const json& card_extra
     j["materials"] = {{"floor", {{"color", 0.7}}}, {"card", {{"color", 0.3}}}};
     j["objects"][0]["name"] = "floor";
     j["objects"][0]["material"] = "floor";
-    json card = {{"name", "card"}, {"type", "quad"}, {"material", "card"},
-                 {"vertices", {{-1, 1, -1}, {-1, 1, 1}, {1, 1, 1}, {1, 1, -1}}}};
+    json card = {{"name", "card"}, {"type", "quad"}, {"material", "card"}, {"vertices", {{-1, 1, -1}, {-1, 1, 1}, {1, 1, 1}, {1, 1, -1}}}};
     if (!card_extra.is_null()) card.update(card_extra);
     j["objects"].push_back(card);
     json sun = {{"type", "distant"}, {"direction", {0, -1, 0}}, {"color", kSun}};
@@ -95,12 +94,21 @@ TEST(ShadowLinking, OnlyTheLinkedObjectsCastTheLightsShadows) {
 }
 
 TEST(ShadowLinking, ALinkThatMatchesNothingOrTooManyLinkedLightsAreRefused) {
-    test::expect_input_error([] { test::scene_from(card_scene({{"shadow_link", {{"exclude", {"crad"}}}}})); },
-                             {"inline.json", "/lights/0/shadow_link/exclude/0", "\"crad\" matches no object's name"});
-    test::expect_input_error([] { test::scene_from(card_scene({{"light_link", {{"include", "card"}}}})); },
-                             {"/lights/0/light_link/include", "expected an array"});
-    test::expect_input_error([] { test::scene_from(card_scene({{"light_link", {{"include", {"card"}}, {"exclude", {"floor"}}}}})); },
-                             {"/lights/0/light_link", "expected {\"include\""});
+    test::expect_input_error(
+        [] {
+            test::scene_from(card_scene({{"shadow_link", {{"exclude", {"crad"}}}}}));
+        },
+        {"inline.json", "/lights/0/shadow_link/exclude/0", "\"crad\" matches no object's name"});
+    test::expect_input_error(
+        [] {
+            test::scene_from(card_scene({{"light_link", {{"include", "card"}}}}));
+        },
+        {"/lights/0/light_link/include", "expected an array"});
+    test::expect_input_error(
+        [] {
+            test::scene_from(card_scene({{"light_link", {{"include", {"card"}}, {"exclude", {"floor"}}}}}));
+        },
+        {"/lights/0/light_link", "expected {\"include\""});
     json j = card_scene();
     for (int i = 0; i <= kMaxShadowLinkedLights; ++i)
         j["lights"].push_back({{"type", "distant"}, {"direction", {0, -1, 0}}, {"shadow_link", {{"exclude", {"card"}}}}});

@@ -47,7 +47,7 @@ void expect_same_materials(const std::vector<Material>& a, const std::vector<Mat
 
 /// The Cornell box OBJ and its MTL copied where a test may edit them, and a cache folder.
 class MeshCache : public ::testing::Test {
-protected:
+  protected:
     test::TempDir dir, cache;
     std::string obj;
     void SetUp() override {
@@ -96,7 +96,7 @@ TEST_F(MeshCache, AHitLoadsWhatParsingLoads) {
     const Loaded reference = parsed();
     ASSERT_GT(reference.parts.once.triangle_count(), 30u);
     ASSERT_EQ(reference.materials.size(), 2u + 9u);  // the scene's two, then Assimp's default and the MTL's eight
-    EXPECT_EQ(reference.files.size(), 1u);         // the MTL
+    EXPECT_EQ(reference.files.size(), 1u);           // the MTL
     const MeshCacheCounts before = mesh_cache_counts();
     expect_same(load(), reference);  // a miss: parsed, written
     EXPECT_EQ(mesh_cache_counts().writes, before.writes + 1);
@@ -140,7 +140,8 @@ TEST_F(MeshCache, AnEditedFileOrMtlIsParsedAgain) {
     const Loaded edited = load();
     EXPECT_EQ(mesh_cache_counts().hits, before.hits);
     EXPECT_EQ(mesh_cache_counts().writes, before.writes + 1);
-    const auto left = std::find_if(edited.materials.begin(), edited.materials.end(), [](const Material& m) { return m.name == "box/leftWall"; });
+    const auto left =
+        std::find_if(edited.materials.begin(), edited.materials.end(), [](const Material& m) { return m.name == "box/leftWall"; });
     ASSERT_NE(left, edited.materials.end());
     EXPECT_EQ(left->color, Color(0.5f, 0.25f, 0.125f));
     std::ofstream(obj, std::ios::app) << "v 1 2 3\n";  // the OBJ itself: another key
@@ -203,8 +204,8 @@ TEST_F(MeshCache, ACraftedEntryNeverCrashesTheLoader) {
         for (uint32_t m : l.parts.once.face_materials) ASSERT_LT(m, l.materials.size()) << "byte " << at;
     }
     EXPECT_GT(tries, 100u);
-    EXPECT_GT(hits, 0u);          // a changed position or colour is still an entry
-    EXPECT_LT(hits, tries);       // a changed count or index is not
+    EXPECT_GT(hits, 0u);     // a changed position or colour is still an entry
+    EXPECT_LT(hits, tries);  // a changed count or index is not
     EXPECT_GT(reference.parts.once.triangle_count(), 0u);
 }
 
@@ -217,7 +218,8 @@ TEST_F(MeshCache, AFolderThatCannotTakeEntriesLeavesLoadsAsTheyWere) {
 }
 
 TEST_F(MeshCache, ARenderFromTheCacheIsTheRenderFromTheFile) {
-    const std::string scene = dir.write("box.json", R"({"camera": {"position": [0, 1, 3.5], "look_at": [0, 1, 0], "fov": 40, "resolution": [24, 24]},
+    const std::string scene =
+        dir.write("box.json", R"({"camera": {"position": [0, 1, 3.5], "look_at": [0, 1, 0], "fov": 40, "resolution": [24, 24]},
         "objects": [{"name": "box", "file": "box.obj"}]})");
     const std::string args = " --spp 1 --gi brute --rays 8 -q -o ";
     unsetenv("BOUNCE_MESH_CACHE");
@@ -237,7 +239,7 @@ TEST_F(MeshCache, AnEditedMtlIsSeenFromAnyWorkingDirectory) {
     const fs::path start = fs::current_path();
     fs::current_path(dir.path());
     obj = "box.obj";  // relative, as a scene in this folder names it
-    load();  // the entry, written from the mesh's folder
+    load();           // the entry, written from the mesh's folder
     test::TempDir elsewhere;
     fs::copy_file(dir.file("CornellBox-Original.mtl"), elsewhere.file("CornellBox-Original.mtl"));  // the old MTL
     std::string mtl = test::bytes_of(dir.file("CornellBox-Original.mtl"));

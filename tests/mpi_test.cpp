@@ -25,9 +25,7 @@ std::string mpirun(int np) {
                        BOUNCE_BINARY);
 }
 
-int run_mpi(int np, const std::string& args, std::string* err = nullptr) {
-    return test::run_bounce_shell(mpirun(np) + " " + args, err);
-}
+int run_mpi(int np, const std::string& args, std::string* err = nullptr) { return test::run_bounce_shell(mpirun(np) + " " + args, err); }
 
 // Open MPI is not built with the sanitizers (its own threads would be reported): the plain
 // build runs these tests; the sanitized build checks the threads of one process.
@@ -77,8 +75,12 @@ TEST(Mpi, AStillBakesEveryRadiositySideOnceAShareEachRank) {
     const auto stats_at = [&](int np) {  // rank 0's stats of a render over np ranks
         const std::string json = d.file(fmt::format("np{}.json", np));
         std::string err;
-        EXPECT_EQ(run_mpi(np, fmt::format("render {} --res 48x48 --gi cache -q --threads 1 -o {} --stats-json {}",
-                                          test::cornell_scene(), d.file(fmt::format("np{}.exr", np)), json), &err), 0) << err;
+        EXPECT_EQ(run_mpi(np,
+                          fmt::format("render {} --res 48x48 --gi cache -q --threads 1 -o {} --stats-json {}", test::cornell_scene(),
+                                      d.file(fmt::format("np{}.exr", np)), json),
+                          &err),
+                  0)
+            << err;
         return nlohmann::json::parse(test::bytes_of(json));
     };
     const auto stats = stats_at(3);
@@ -145,9 +147,12 @@ TEST(Mpi, BruteForceAndTheFramesOfAShotAreByteIdentical) {
     expect_same_layers(d.file("b1.exr"), d.file("b3.exr"));
     // A shot: records kept, moved and redone from frame to frame (docs/animation.md).
     const std::string shot = test::source_dir() + "/scenes/shots/cornell-rolling.json --res 48x48 --gi cache -q --frames 1-3";
-    ASSERT_EQ(test::run_bounce(fmt::format("render {} -o {} --cache-out {} --threads 2", shot, d.file("s1.####.exr"), d.file("s1.####.bic"))), 0);
+    ASSERT_EQ(
+        test::run_bounce(fmt::format("render {} -o {} --cache-out {} --threads 2", shot, d.file("s1.####.exr"), d.file("s1.####.bic"))), 0);
     std::string err;
-    ASSERT_EQ(run_mpi(3, fmt::format("render {} -o {} --cache-out {} --threads 1", shot, d.file("s3.####.exr"), d.file("s3.####.bic")), &err), 0) << err;
+    ASSERT_EQ(
+        run_mpi(3, fmt::format("render {} -o {} --cache-out {} --threads 1", shot, d.file("s3.####.exr"), d.file("s3.####.bic")), &err), 0)
+        << err;
     for (int f = 1; f <= 3; ++f) {
         expect_same_layers(d.file(fmt::format("s1.{:04d}.exr", f)), d.file(fmt::format("s3.{:04d}.exr", f)));
         EXPECT_EQ(test::bytes_of(d.file(fmt::format("s1.{:04d}.bic", f))), test::bytes_of(d.file(fmt::format("s3.{:04d}.bic", f)))) << f;
@@ -183,15 +188,16 @@ TEST(Mpi, AMovingCamerasShotReprojectsTheSameGathersAtAnyRankCount) {
     j["camera"]["position"] = {{"keys", {{1, {278, 273, -800}}, {48, {258, 283, -560}}}}};
     std::ofstream(d.file("dolly.json")) << j.dump();
     const std::string shot = d.file("dolly.json") + " --res 48x48 --gi cache -q --frames 1-4 --refine 0.02";
-    ASSERT_EQ(test::run_bounce(fmt::format("render {} -o {} --stats-json {} --threads 2", shot, d.file("s1.####.exr"),
-                                           d.file("s1.####.json"))),
-              0);
+    ASSERT_EQ(
+        test::run_bounce(fmt::format("render {} -o {} --stats-json {} --threads 2", shot, d.file("s1.####.exr"), d.file("s1.####.json"))),
+        0);
     std::string err;
     ASSERT_EQ(run_mpi(2, fmt::format("render {} -o {} --threads 1", shot, d.file("s2.####.exr")), &err), 0) << err;
     double reprojected = 0;
     for (int f = 1; f <= 4; ++f) {
         expect_same_layers(d.file(fmt::format("s1.{:04d}.exr", f)), d.file(fmt::format("s2.{:04d}.exr", f)));
-        reprojected += nlohmann::json::parse(test::bytes_of(d.file(fmt::format("s1.{:04d}.json", f))))["refined_from_earlier_gathers"].get<double>();
+        reprojected +=
+            nlohmann::json::parse(test::bytes_of(d.file(fmt::format("s1.{:04d}.json", f))))["refined_from_earlier_gathers"].get<double>();
     }
     EXPECT_GT(reprojected, 10);  // the case is tested, not skipped
 }
@@ -243,9 +249,10 @@ TEST(Mpi, AKilledRankEndsTheJobWithinSecondsAndThePreviousOutputsStay) {
 TEST(Mpi, AShotKilledMidwayResumesWhereItStopped) {
     SKIP_UNDER_SANITIZER();
     test::TempDir d;
-    const std::string args = fmt::format("render {}/scenes/shots/cornell-rolling.json --res 96x96 --gi cache --threads 1 -q "
-                                         "--frames 1-9 --distribute frames -o {} --cache-out {}",
-                                         test::source_dir(), d.file("k.####.exr"), d.file("k.####.bic"));
+    const std::string args = fmt::format(
+        "render {}/scenes/shots/cornell-rolling.json --res 96x96 --gi cache --threads 1 -q "
+        "--frames 1-9 --distribute frames -o {} --cache-out {}",
+        test::source_dir(), d.file("k.####.exr"), d.file("k.####.bic"));
     std::thread killer([&] {
         // Once rank 0 has written its first frame, rank 2 dies in the middle of its chunk.
         for (int tries = 0; tries < 600 && !std::filesystem::exists(d.file("k.0001.exr")); ++tries)
@@ -258,7 +265,8 @@ TEST(Mpi, AShotKilledMidwayResumesWhereItStopped) {
     ASSERT_NE(rc, 0) << "the kill came too late: " << err;
     std::map<int, std::string> done;  // frames whose outputs are complete, and their bytes
     for (int f = 1; f <= 9; ++f)
-        if (std::filesystem::exists(d.file(fmt::format("k.{:04d}.bic", f)))) done[f] = test::bytes_of(d.file(fmt::format("k.{:04d}.exr", f)));
+        if (std::filesystem::exists(d.file(fmt::format("k.{:04d}.bic", f))))
+            done[f] = test::bytes_of(d.file(fmt::format("k.{:04d}.exr", f)));
     EXPECT_LT(done.size(), 9u);
     ASSERT_EQ(run_mpi(3, args + " --resume", &err), 0) << err;
     for (int f = 1; f <= 9; ++f) {
@@ -276,13 +284,18 @@ TEST(Mpi, RanksOfAnotherSceneOrThatCannotReadItAreRefusedNamingTheRank) {
     // Multiple programs, multiple data: rank 1 runs another command line.
     const std::string mpmd = std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe --bind-to none");
     std::string err;
-    EXPECT_EQ(test::run_bounce_shell(fmt::format("{} -np 1 {} {} : -np 1 {} {} --set camera.fov=30", mpmd, BOUNCE_BINARY, one,
-                                                 BOUNCE_BINARY, one), &err), 2) << err;
+    EXPECT_EQ(test::run_bounce_shell(
+                  fmt::format("{} -np 1 {} {} : -np 1 {} {} --set camera.fov=30", mpmd, BOUNCE_BINARY, one, BOUNCE_BINARY, one), &err),
+              2)
+        << err;
     EXPECT_NE(err.find("rank 1: error: runs another binary or reads another scene"), std::string::npos) << err;
     EXPECT_NE(err.find("camera.fov=30"), std::string::npos) << err;
     const std::string missing = d.file("nowhere.json");
     EXPECT_EQ(test::run_bounce_shell(fmt::format("{} -np 1 {} {} : -np 1 {} render {} -o {} -q", mpmd, BOUNCE_BINARY, one, BOUNCE_BINARY,
-                                                 missing, d.file("o.exr")), &err), 2) << err;
+                                                 missing, d.file("o.exr")),
+                                     &err),
+              2)
+        << err;
     EXPECT_NE(err.find("bounce: rank 1: " + missing), std::string::npos) << err;
     EXPECT_FALSE(std::filesystem::exists(d.file("o.exr")));
     // Only render runs as a job of many ranks (the tools would write their outputs N times).
@@ -294,9 +307,7 @@ TEST(Mpi, FramesAreDistributedInChunksAndAResumedJobRendersOnlyWhatIsMissing) {
     SKIP_UNDER_SANITIZER();
     test::TempDir d;
     const std::string shot = test::source_dir() + "/scenes/shots/cornell-rolling.json --res 40x40 --gi cache --threads 1 -q";
-    const auto files = [&](const std::string& tag) {
-        return fmt::format("-o {0}.####.exr --cache-out {0}.####.bic", d.file(tag));
-    };
+    const auto files = [&](const std::string& tag) { return fmt::format("-o {0}.####.exr --cache-out {0}.####.bic", d.file(tag)); };
     std::string err;
     ASSERT_EQ(run_mpi(3, fmt::format("render {} --frames 1-6 --distribute frames {}", shot, files("job")), &err), 0) << err;
     // Rank 0 rendered frames 1-2 as one process renders that range; rank 1 started frame 3
@@ -304,7 +315,8 @@ TEST(Mpi, FramesAreDistributedInChunksAndAResumedJobRendersOnlyWhatIsMissing) {
     ASSERT_EQ(test::run_bounce(fmt::format("render {} --frames 1-2 {}", shot, files("alone"))), 0);
     ASSERT_EQ(test::run_bounce(fmt::format("render {} --frame 3 {}", shot, files("alone"))), 0);
     for (int f = 1; f <= 3; ++f)
-        EXPECT_EQ(test::bytes_of(d.file(fmt::format("job.{:04d}.bic", f))), test::bytes_of(d.file(fmt::format("alone.{:04d}.bic", f)))) << f;
+        EXPECT_EQ(test::bytes_of(d.file(fmt::format("job.{:04d}.bic", f))), test::bytes_of(d.file(fmt::format("alone.{:04d}.bic", f))))
+            << f;
     for (int f = 4; f <= 6; ++f) EXPECT_TRUE(std::filesystem::exists(d.file(fmt::format("job.{:04d}.exr", f)))) << f;
     // A job killed before frames 5 and 6 were written: the resumed job renders only those,
     // frame 5 starting from frame 4's cache.
@@ -314,7 +326,8 @@ TEST(Mpi, FramesAreDistributedInChunksAndAResumedJobRendersOnlyWhatIsMissing) {
     EXPECT_EQ(test::bytes_of(d.file("job.0004.exr")), kept);
     EXPECT_TRUE(std::filesystem::exists(d.file("job.0005.exr")));
     EXPECT_TRUE(std::filesystem::exists(d.file("job.0006.bic")));
-    test::expect_refused(fmt::format("render {} --frames 1-2 --distribute rows {}", shot, files("x")), {"--distribute rows", "tiles or frames"});
+    test::expect_refused(fmt::format("render {} --frames 1-2 --distribute rows {}", shot, files("x")),
+                         {"--distribute rows", "tiles or frames"});
 }
 
 /// docs/parallel.md's Slurm batch script, run as sbatch would on 2 tasks of 1 CPU: srun is
@@ -324,15 +337,17 @@ TEST(Mpi, TheSlurmBatchScriptRendersAShotAsOneProcessDoes) {
     SKIP_UNDER_SANITIZER();
     test::TempDir d;
     std::filesystem::create_directories(d.file("bin"));
-    d.write("bin/srun", "#!/bin/sh\nwhile [ \"${1#--}\" != \"$1\" ]; do shift; done\n"
-                        "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 exec mpirun --oversubscribe --bind-to none "
-                        "-np \"$SLURM_NTASKS\" \"$@\"\n");
+    d.write("bin/srun",
+            "#!/bin/sh\nwhile [ \"${1#--}\" != \"$1\" ]; do shift; done\n"
+            "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 exec mpirun --oversubscribe --bind-to none "
+            "-np \"$SLURM_NTASKS\" \"$@\"\n");
     std::filesystem::permissions(d.file("bin/srun"), std::filesystem::perms::owner_all);
     const std::string shot = test::source_dir() + "/scenes/shots/cornell-rolling.json";
     const std::string extra = " --res 40x40 --gi cache --rays 64";
     ASSERT_EQ(test::run_bounce(fmt::format("render {} -o {} --frames 1-3 --threads 2 -q {}", shot, d.file("one.####.exr"), extra)), 0);
-    const std::string sbatch = fmt::format("PATH={}:$PATH SLURM_NTASKS=2 SLURM_CPUS_PER_TASK=1 BOUNCE={} bash {}/scripts/farm/shot.sbatch {} {} 1-3 {}",
-                                           d.file("bin"), BOUNCE_BINARY, test::source_dir(), shot, d.file("job.####.exr"), extra);
+    const std::string sbatch =
+        fmt::format("PATH={}:$PATH SLURM_NTASKS=2 SLURM_CPUS_PER_TASK=1 BOUNCE={} bash {}/scripts/farm/shot.sbatch {} {} 1-3 {}",
+                    d.file("bin"), BOUNCE_BINARY, test::source_dir(), shot, d.file("job.####.exr"), extra);
     std::string err;
     ASSERT_EQ(test::run_bounce_shell(sbatch, &err), 0) << err;
     for (int f = 1; f <= 3; ++f) {

@@ -26,9 +26,8 @@ TEST(Params, EveryRowRoundTripsItsDefaultAndEveryKeyIsUnique) {
         }
         EXPECT_FALSE(p.doc.empty()) << p.key;
         // The default passes its own validation and setting it changes nothing.
-        nlohmann::json v = check_param(p, p.default_value(), [&](const std::string&, const std::string& m) {
-            throw std::runtime_error(p.key + ": " + m);
-        });
+        nlohmann::json v = check_param(p, p.default_value(),
+                                       [&](const std::string&, const std::string& m) { throw std::runtime_error(p.key + ": " + m); });
         if (!p.required) {
             p.set(s, v);
             EXPECT_EQ(p.get(s), p.default_value()) << p.key;
@@ -150,8 +149,8 @@ TEST(Params, SceneFileAndFlagsShareTheNamesAndErrorsNameTheFlag) {
 TEST(Params, CacheIdentityHoldsEveryRecordChangingSettingAndNoShadingOne) {
     Scene s;
     nlohmann::json id = cache_file_info(s, 0).parameters;
-    for (const char* key : {"render.metric", "render.min_spacing", "render.max_spacing", "render.max_angle",
-                            "render.gradient_limit", "render.rays", "render.gradients", "render.ao", "render.seed"})
+    for (const char* key : {"render.metric", "render.min_spacing", "render.max_spacing", "render.max_angle", "render.gradient_limit",
+                            "render.rays", "render.gradients", "render.ao", "render.seed"})
         EXPECT_TRUE(id.contains(key)) << key;
     for (const char* key : {"render.shading_reach", "render.light_per_channel", "render.threads", "render.light_samples"})
         EXPECT_FALSE(id.contains(key)) << key;

@@ -51,7 +51,8 @@ void fill(IrradianceCache& cache, Field field, float noise, uint64_t seed = 7) {
 TEST(RecordFilter, AConstantFieldStaysConstantBitForBit) {
     IrradianceCache cache(box(), filtering(2), false);
     const Color E(0.25f, 0.5f, 1.0f);
-    fill(cache, [&](const Vec3&) { return E; }, 0.1f);
+    fill(
+        cache, [&](const Vec3&) { return E; }, 0.1f);
     auto f = cache.filtered_values();
     ASSERT_EQ(f.size(), cache.size());
     for (const FilteredValue& v : f) {
@@ -86,7 +87,8 @@ TEST(RecordFilter, AnEdgeFarBeyondTheNoiseIsKeptExactly) {
     // 1 on one side of x = 0, 4 on the other, 2 % noise: the range kernel gives every record
     // across the edge a weight that underflows to 0, and records on its own side agree exactly.
     IrradianceCache cache(box(), filtering(3), false);
-    fill(cache, [](const Vec3& p) { return Color(p.x < 0 ? 1.0f : 4.0f); }, 0.02f);
+    fill(
+        cache, [](const Vec3& p) { return Color(p.x < 0 ? 1.0f : 4.0f); }, 0.02f);
     auto f = cache.filtered_values();
     for (size_t i = 0; i < cache.size(); ++i) EXPECT_EQ(f[i].E, cache.record(i).E) << i;
 }
@@ -98,7 +100,8 @@ TEST(RecordFilter, IndependentNoiseShrinks) {
     std::mt19937 rng(11);
     std::normal_distribution<float> noise(0, 0.1f);
     IrradianceCache cache(box(), filtering(2), false);
-    fill(cache, [&](const Vec3&) { return Color(1 + noise(rng)); }, 0.1f);
+    fill(
+        cache, [&](const Vec3&) { return Color(1 + noise(rng)); }, 0.1f);
     auto f = cache.filtered_values();
     double before = 0, after = 0;
     for (size_t i = 0; i < cache.size(); ++i) {
@@ -114,7 +117,8 @@ TEST(RecordFilter, DoesNotDependOnTheThreadCount) {
     std::mt19937 rng(13);
     std::normal_distribution<float> noise(0, 0.1f);
     IrradianceCache cache(box(), filtering(2), false);
-    fill(cache, [&](const Vec3&) { return Color(1 + noise(rng), 0.5f, 0.25f + noise(rng)); }, 0.1f);
+    fill(
+        cache, [&](const Vec3&) { return Color(1 + noise(rng), 0.5f, 0.25f + noise(rng)); }, 0.1f);
     std::vector<FilteredValue> one, many = filter_record_values(cache, 2);
     tbb::task_arena(1).execute([&] { one = filter_record_values(cache, 2); });
     ASSERT_EQ(one.size(), many.size());
@@ -159,9 +163,11 @@ TEST(RecordFilter, LookupsFromManyThreadsFilterOnceAndAgree) {
     std::mt19937 rng(19);
     std::normal_distribution<float> noise(0, 0.1f);
     IrradianceCache cache(box(), filtering(2), false), serial(box(), filtering(2), false);
-    fill(cache, [&](const Vec3&) { return Color(1 + noise(rng)); }, 0.1f, 9);
+    fill(
+        cache, [&](const Vec3&) { return Color(1 + noise(rng)); }, 0.1f, 9);
     rng.seed(19);
-    fill(serial, [&](const Vec3&) { return Color(1 + noise(rng)); }, 0.1f, 9);
+    fill(
+        serial, [&](const Vec3&) { return Color(1 + noise(rng)); }, 0.1f, 9);
     std::vector<Color> got(cache.size());
     parallel_for_each_index(size_t(0), got.size(), [&](size_t i) { got[i] = cache.lookup(cache.record(i).p, {0, 1, 0}, true).E; });
     for (size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i], serial.lookup(serial.record(i).p, {0, 1, 0}, true).E);

@@ -87,7 +87,8 @@ TEST(DeepBuffer, FragmentsLieOnTheSurfaceAtARidge) {
     const float t = std::tan(10 * kPi / 180);
     const std::string obj = dir.write("ridge.obj", fmt::format("v -10 {0} -10\nv -10 {0} 10\nv 0 0 10\nv 0 0 -10\n"
                                                                "v 10 {0} -10\nv 10 {0} 10\n"
-                                                               "f 1 2 3\nf 1 3 4\nf 4 3 6\nf 4 6 5\n", -10 * t));
+                                                               "f 1 2 3\nf 1 3 4\nf 4 3 6\nf 4 6 5\n",
+                                                               -10 * t));
     nlohmann::json j = test::base_scene();
     j["objects"] = {{{"file", obj}}};
     j["camera"]["position"] = {0.3, 10, 0.001};

@@ -46,7 +46,8 @@ TEST(SceneLoad, OverridesSetAnyValueByPath) {
 
 TEST(SceneLoad, TransformsApplyTranslateRotateScale) {
     json j = base_scene();
-    j["objects"] = {{{"type", "quad"}, {"vertices", {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}},
+    j["objects"] = {{{"type", "quad"},
+                     {"vertices", {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}},
                      {"transform", {{"translate", {10, 0, 0}}, {"rotate", {90, 0, 0, 1}}, {"scale", 2}}}}};
     Scene s = scene_from(j);
     Vec3 p = s.objects[0].coarse.positions[1];  // (1,0,0) -> scale (2,0,0) -> rotate (0,2,0) -> (10,2,0)
@@ -199,18 +200,19 @@ std::string write_gltf(const test::TempDir& d) {
         {"extensions", {{"KHR_lights_punctual", {{"lights", {{{"type", "point"}, {"color", {1, 0.5, 0.25}}, {"intensity", 10}}}}}}}},
         {"scene", 0},
         {"scenes", {{{"nodes", {0, 1, 2}}}}},
-        {"nodes", {{{"mesh", 0}}, {{"camera", 0}, {"translation", {0, 0, 5}}},
-                   {{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}, {"translation", {0, 0, 2}}}}},
+        {"nodes",
+         {{{"mesh", 0}},
+          {{"camera", 0}, {"translation", {0, 0, 5}}},
+          {{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}, {"translation", {0, 0, 2}}}}},
         {"cameras", {{{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"aspectRatio", 1.5}, {"znear", 0.1}}}}}},
         {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}, {"material", 0}}}}}}},
-        {"materials", {{{"pbrMetallicRoughness", {{"baseColorFactor", {0.5, 0.6, 0.7, 1}}, {"metallicFactor", 0.25},
-                                                    {"roughnessFactor", 0.3}}}}}},
+        {"materials",
+         {{{"pbrMetallicRoughness", {{"baseColorFactor", {0.5, 0.6, 0.7, 1}}, {"metallicFactor", 0.25}, {"roughnessFactor", 0.3}}}}}},
         {"buffers", {{{"byteLength", 60}, {"uri", "data:application/octet-stream;base64," + base64(buf)}}}},
-        {"bufferViews", {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 48}},
-                         {{"buffer", 0}, {"byteOffset", 48}, {"byteLength", 12}}}},
-        {"accessors", {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"},
-                        {"min", {-2, -2, 0}}, {"max", {2, 2, 0}}},
-                       {{"bufferView", 1}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}}}};
+        {"bufferViews", {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 48}}, {{"buffer", 0}, {"byteOffset", 48}, {"byteLength", 12}}}},
+        {"accessors",
+         {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {-2, -2, 0}}, {"max", {2, 2, 0}}},
+          {{"bufferView", 1}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}}}};
     return d.write("quad.gltf", g.dump());
 }
 

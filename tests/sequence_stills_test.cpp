@@ -33,7 +33,10 @@ json character_shot(bool keyed) {
                     {{"name", "wall"}, {"type", "quad"}, {"vertices", {{-4, -0.01, -1}, {8, -0.01, -1}, {8, 4, -1}, {-4, 4, -1}}}},
                     {{"name", "strip"}, {"type", "mesh"}, {"file", "strip.gltf"}, {"animation", "bend"}},
                     {{"name", "blob"}, {"type", "mesh"}, {"file", "blob.gltf"}, {"animation", "rise"}},
-                    {{"name", "ball"}, {"type", "sphere"}, {"radius", 0.3}, {"subdivisions", 2},
+                    {{"name", "ball"},
+                     {"type", "sphere"},
+                     {"radius", 0.3},
+                     {"subdivisions", 2},
                      {"transform", {{"translate", keyed ? json{{"keys", {{1, {5, 0.3, 1}}, {4, {5.6, 0.5, 0.5}}}}} : json{5, 0.3, 1}}}}}};
     j["lights"] = {{{"type", "point"}, {"position", {3, 4, 4}}, {"color", 40}}, {{"type", "sky"}, {"color", 0.2}}};
     return j;
@@ -58,7 +61,8 @@ void expect_sequence_equals_stills(const std::string& gi, bool keyed) {
         const std::string alone = "alone" + std::to_string(frame) + ".exr";
         ASSERT_EQ(test::run_bounce(f.render("--frame " + std::to_string(frame), alone, gi)), 0);
         const Image seq = read_exr(f.d.file("s.000" + std::to_string(frame) + ".exr"));
-        EXPECT_EQ(test::differing_values(seq, read_exr(f.d.file(alone))), 0u) << "--gi " << gi << ", frame " << frame << (keyed ? ", keyed" : "");
+        EXPECT_EQ(test::differing_values(seq, read_exr(f.d.file(alone))), 0u)
+            << "--gi " << gi << ", frame " << frame << (keyed ? ", keyed" : "");
     }
     // The frames differ from each other where the strip bends and the quad rises (the frozen
     // first pose gave depth and normals equal to frame 1's).
@@ -90,8 +94,7 @@ TEST(SequenceEqualsStills, ThroughTheCacheVisibilityIsExactAndTheBounceLightWith
     // The bounce light comes from kept and updated records: close to a fresh cache's, not equal
     // (records kept within render.temporal_tolerance, 2 %, of their irradiance; interpolation
     // from other record sets). A frozen surface under a bent strip was tens of percent off.
-    for (const LayerError& e : compare_images(seq, alone, "indirect", "s.0004.exr", "alone.exr"))
-    {
+    for (const LayerError& e : compare_images(seq, alone, "indirect", "s.0004.exr", "alone.exr")) {
         std::printf("%s: relative RMSE %.4f\n", e.layer.c_str(), e.rel_rmse);
         EXPECT_LT(e.rel_rmse, 0.08) << e.layer;
     }

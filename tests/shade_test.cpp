@@ -101,18 +101,25 @@ TEST(ShadingRender, BumpStrengthZeroIsTheUnbumpedImage) {
 /// floor by a black occluder: the floor's beauty is its glossy reflection of the indirect light
 /// alone (no diffuse part, no direct light), so it shows where that light comes from.
 double highlight_centroid_x(float occluder_x0, float occluder_x1) {
-    json j = {{"camera", {{"position", {0, 0.9, 3.0}}, {"look_at", {0, 0, 0}}, {"fov", 60}, {"resolution", {40, 30}}}},
-              {"render", {{"spp", 1}, {"gi", "brute"}, {"rays", 256}, {"light_samples", 1}}},
-              {"materials", {{"floor", {{"color", 0.0}, {"specular", 1.0}, {"roughness", 0.35}}},
-                             {"card", {{"color", 1.0}}},
-                             {"black", {{"color", 0.0}}}}},
-              {"objects", {{{"type", "quad"}, {"material", "floor"}, {"vertices", {{-3, 0, -3}, {-3, 0, 3}, {3, 0, 3}, {3, 0, -3}}}},
-                           {{"type", "quad"}, {"material", "card"}, {"vertices", {{-4, 2, -4}, {4, 2, -4}, {4, 2, 4}, {-4, 2, 4}}}},
-                           {{"type", "quad"}, {"material", "black"},
-                            {"vertices", {{occluder_x0, 1.2, -4}, {occluder_x1, 1.2, -4}, {occluder_x1, 1.2, 4}, {occluder_x0, 1.2, 4}}}}}},
-              // A spot pointing up: the floor gets no direct light, so no direct highlight.
-              {"lights", {{{"type", "spot"}, {"position", {0, 1.9, 0}}, {"direction", {0, 1, 0}}, {"cone_angle", 80},
-                           {"cone_falloff", 5}, {"color", 30.0}}}}};
+    json j = {
+        {"camera", {{"position", {0, 0.9, 3.0}}, {"look_at", {0, 0, 0}}, {"fov", 60}, {"resolution", {40, 30}}}},
+        {"render", {{"spp", 1}, {"gi", "brute"}, {"rays", 256}, {"light_samples", 1}}},
+        {"materials",
+         {{"floor", {{"color", 0.0}, {"specular", 1.0}, {"roughness", 0.35}}}, {"card", {{"color", 1.0}}}, {"black", {{"color", 0.0}}}}},
+        {"objects",
+         {{{"type", "quad"}, {"material", "floor"}, {"vertices", {{-3, 0, -3}, {-3, 0, 3}, {3, 0, 3}, {3, 0, -3}}}},
+          {{"type", "quad"}, {"material", "card"}, {"vertices", {{-4, 2, -4}, {4, 2, -4}, {4, 2, 4}, {-4, 2, 4}}}},
+          {{"type", "quad"},
+           {"material", "black"},
+           {"vertices", {{occluder_x0, 1.2, -4}, {occluder_x1, 1.2, -4}, {occluder_x1, 1.2, 4}, {occluder_x0, 1.2, 4}}}}}},
+        // A spot pointing up: the floor gets no direct light, so no direct highlight.
+        {"lights",
+         {{{"type", "spot"},
+           {"position", {0, 1.9, 0}},
+           {"direction", {0, 1, 0}},
+           {"cone_angle", 80},
+           {"cone_falloff", 5},
+           {"color", 30.0}}}}};
     Stats stats;
     Image img = render(test::scene_from(j), {}, stats, nullptr).image;
     const Layer& b = *img.find("beauty");
@@ -143,7 +150,8 @@ TEST(ShadingRender, GlossAndBumpsKeepACacheValidButAlbedoMakesItsBounceLightStal
     Stats stats;
     // Gloss and bumps do not change what a record holds; an albedo does (the light the other
     // surfaces send): the records are kept and said to be stale.
-    EXPECT_FALSE(render(showcase({"materials.gold.roughness=0.8", "materials.gold.bump_strength=1"}), reuse, stats, nullptr).cache_other_lighting);
+    EXPECT_FALSE(
+        render(showcase({"materials.gold.roughness=0.8", "materials.gold.bump_strength=1"}), reuse, stats, nullptr).cache_other_lighting);
     EXPECT_TRUE(render(showcase({"materials.white.color=0.5"}), reuse, stats, nullptr).cache_other_lighting);
 }
 

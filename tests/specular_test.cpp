@@ -58,17 +58,20 @@ TEST(Fresnel, TheSplitOfAnyMaterialSumsToOne) {
 /// A mirror at z = 0 facing the camera (z = 5); behind the camera, an emitter covering the
 /// left half of what the mirror shows; a sky of radiance 0.5 elsewhere.
 json mirror_scene(const json& card = nullptr) {
-    json j = {{"camera", {{"position", {0, 0, 5}}, {"look_at", {0, 0, 0}}, {"fov", 20}, {"resolution", {16, 16}}}},
-              {"render", {{"gi", "none"}, {"spp", 4}}},
-              {"materials", {{"mirror", {{"color", 0}, {"mirror", {0.8, 0.6, 0.4}}}},
-                             {"emitter", {{"color", 0}, {"emission", {2, 3, 4}}}},
-                             {"black", {{"color", 0}}}}},
-              {"lights", {{{"type", "sky"}, {"color", 0.5}}}},
-              {"objects",
-               {{{"name", "mirror"}, {"type", "quad"}, {"material", "mirror"},
-                 {"vertices", {{-5, -5, 0}, {5, -5, 0}, {5, 5, 0}, {-5, 5, 0}}}},
-                {{"name", "emitter"}, {"type", "quad"}, {"material", "emitter"},
-                 {"vertices", {{-50, -50, 10}, {-50, 50, 10}, {0, 50, 10}, {0, -50, 10}}}}}}};
+    json j = {
+        {"camera", {{"position", {0, 0, 5}}, {"look_at", {0, 0, 0}}, {"fov", 20}, {"resolution", {16, 16}}}},
+        {"render", {{"gi", "none"}, {"spp", 4}}},
+        {"materials",
+         {{"mirror", {{"color", 0}, {"mirror", {0.8, 0.6, 0.4}}}},
+          {"emitter", {{"color", 0}, {"emission", {2, 3, 4}}}},
+          {"black", {{"color", 0}}}}},
+        {"lights", {{{"type", "sky"}, {"color", 0.5}}}},
+        {"objects",
+         {{{"name", "mirror"}, {"type", "quad"}, {"material", "mirror"}, {"vertices", {{-5, -5, 0}, {5, -5, 0}, {5, 5, 0}, {-5, 5, 0}}}},
+          {{"name", "emitter"},
+           {"type", "quad"},
+           {"material", "emitter"},
+           {"vertices", {{-50, -50, 10}, {-50, 50, 10}, {0, 50, 10}, {0, -50, 10}}}}}}};
     if (!card.is_null()) j["objects"].push_back(card);
     return j;
 }
@@ -85,8 +88,8 @@ TEST(Mirror, ShowsAKnownEmitterAndTheSkyTimesItsTint) {
 
 TEST(Mirror, AnObjectHiddenFromReflectionsDisappearsFromTheMirrorOnly) {
     // A black card behind the camera, in front of the emitter.
-    json card = {{"name", "card"}, {"type", "quad"}, {"material", "black"},
-                 {"vertices", {{-50, -50, 8}, {-50, 50, 8}, {0, 50, 8}, {0, -50, 8}}}};
+    json card = {
+        {"name", "card"}, {"type", "quad"}, {"material", "black"}, {"vertices", {{-50, -50, 8}, {-50, 50, 8}, {0, 50, 8}, {0, -50, 8}}}};
     EXPECT_EQ(at(render_image(test::scene_from(mirror_scene(card))), "beauty", 2, 8), 0.0f);
     card["visible_to"] = {{"reflections", false}};
     EXPECT_NEAR(at(render_image(test::scene_from(mirror_scene(card))), "beauty", 2, 8), 1.6f, 1e-5f);
@@ -119,11 +122,17 @@ TEST(Glass, ASlabShiftsTheRayByTheAnalyticDistance) {
     json j = {{"camera", {{"position", {-5, 0, 5}}, {"look_at", {0, 0, 0}}, {"resolution", {8, 8}}}},
               {"materials", {{"glass", {{"color", 0}, {"transmission", 1}, {"ior", 1.5}}}, {"wall", {{"color", 0.5}}}}},
               {"objects",
-               {{{"name", "front"}, {"type", "quad"}, {"material", "glass"},
+               {{{"name", "front"},
+                 {"type", "quad"},
+                 {"material", "glass"},
                  {"vertices", {{-50, -50, 0}, {50, -50, 0}, {50, 50, 0}, {-50, 50, 0}}}},
-                {{"name", "back"}, {"type", "quad"}, {"material", "glass"},
+                {{"name", "back"},
+                 {"type", "quad"},
+                 {"material", "glass"},
                  {"vertices", {{-50, -50, -1}, {-50, 50, -1}, {50, 50, -1}, {50, -50, -1}}}},
-                {{"name", "wall"}, {"type", "quad"}, {"material", "wall"},
+                {{"name", "wall"},
+                 {"type", "quad"},
+                 {"material", "wall"},
                  {"vertices", {{-50, -50, -5}, {50, -50, -5}, {50, 50, -5}, {-50, 50, -5}}}}}}};
     const Scene s = test::scene_from(j);
     SceneAccel accel(s);
@@ -161,8 +170,14 @@ json sphere_scene(const json& glass) {
             {"render", {{"gi", "none"}, {"spp", 4}}},
             {"materials", {{"glass", glass}}},
             {"lights", {{{"type", "sky"}, {"color", 1}}}},
-            {"objects", {{{"name", "ball"}, {"type", "sphere"}, {"center", {0, 0, 0}}, {"radius", 1}, {"subdivisions", 5},
-                          {"fine_subdivisions", 1}, {"material", "glass"}}}}};
+            {"objects",
+             {{{"name", "ball"},
+               {"type", "sphere"},
+               {"center", {0, 0, 0}},
+               {"radius", 1},
+               {"subdivisions", 5},
+               {"fine_subdivisions", 1},
+               {"material", "glass"}}}}};
 }
 
 TEST(Glass, ASphereReflectsTheFresnelShareAtNormalAndGrazingIncidence) {
@@ -245,7 +260,9 @@ TEST(Glass, APileOfSheetsAtAGrazingAngleStopsAtTheRayBudget) {
               {"objects", json::array()}};
     for (int i = 0; i < 60; ++i) {
         const double y = -0.05 * i;
-        j["objects"].push_back({{"name", "sheet" + std::to_string(i)}, {"type", "quad"}, {"material", "glass"},
+        j["objects"].push_back({{"name", "sheet" + std::to_string(i)},
+                                {"type", "quad"},
+                                {"material", "glass"},
                                 {"vertices", {{-50, y, -50}, {-50, y, 50}, {50, y, 50}, {50, y, -50}}}});
     }
     Stats stats;

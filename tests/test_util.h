@@ -22,7 +22,7 @@ namespace bounce::test {
 
 /// A fresh directory under the build's temp area, removed at destruction.
 class TempDir {
-public:
+  public:
     TempDir() {
         auto base = std::filesystem::temp_directory_path() / "bounce-tests";
         std::filesystem::create_directories(base);
@@ -40,7 +40,7 @@ public:
     }
     const std::filesystem::path& path() const { return path_; }
 
-private:
+  private:
     std::filesystem::path path_;
 };
 
@@ -120,8 +120,8 @@ inline void write_constant_image(const std::string& path, int w, int h, int chan
 
 /// A large floor quad (y = 0, normal +y) as a JSON object list.
 inline nlohmann::json floor_objects(float half = 1000.0f) {
-    return nlohmann::json::array({{{"type", "quad"},
-                                   {"vertices", {{-half, 0, -half}, {-half, 0, half}, {half, 0, half}, {half, 0, -half}}}}});
+    return nlohmann::json::array(
+        {{{"type", "quad"}, {"vertices", {{-half, 0, -half}, {-half, 0, half}, {half, 0, half}, {half, 0, -half}}}}});
 }
 
 /// A minimal valid scene (camera looking down at the floor) to modify in tests.
@@ -160,8 +160,7 @@ inline size_t differing_values(const Image& a, const Image& b) {
             continue;
         }
         size_t here = 0;
-        for (size_t i = 0; i < la.data.size(); ++i)
-            here += std::memcmp(&la.data[i], &lb->data[i], sizeof(float)) != 0;
+        for (size_t i = 0; i < la.data.size(); ++i) here += std::memcmp(&la.data[i], &lb->data[i], sizeof(float)) != 0;
         if (here) std::printf("layer %s: %zu values differ\n", la.name.c_str(), here);
         n += here;
     }

@@ -111,7 +111,8 @@ TEST(LightingToolConnections, AChunkedBodyIsRefusedBeforeItIsRead) {
     const int c = connect_to(s.port);
     ASSERT_GE(c, 0);
     ASSERT_TRUE(send_all(c, request_head(s, "POST", "/api/edit") +
-                                "Content-Type: application/json\r\nTransfer-Encoding: chunked\r\n\r\n100000\r\n" + std::string(1 << 20, ' ')));
+                                "Content-Type: application/json\r\nTransfer-Encoding: chunked\r\n\r\n100000\r\n" +
+                                std::string(1 << 20, ' ')));
     // Refused at once, although 300 MB more could follow.
     const std::string answer = read_answer(c, 10);
     ::close(c);
@@ -137,9 +138,12 @@ TEST(LightingToolConnections, ABurstOfPostsIsAnsweredNeverReset) {
     const std::vector<std::string> answers = read_answers(sockets, 180);
     int ok = 0, busy = 0;
     for (const std::string& a : answers) {
-        if (a.rfind("HTTP/1.1 200", 0) == 0) ++ok;
-        else if (a.rfind("HTTP/1.1 503", 0) == 0 && a.find("Retry-After: 1") != std::string::npos) ++busy;
-        else ADD_FAILURE() << "not answered: " << a.substr(0, 80);
+        if (a.rfind("HTTP/1.1 200", 0) == 0)
+            ++ok;
+        else if (a.rfind("HTTP/1.1 503", 0) == 0 && a.find("Retry-After: 1") != std::string::npos)
+            ++busy;
+        else
+            ADD_FAILURE() << "not answered: " << a.substr(0, 80);
     }
     EXPECT_EQ(ok + busy, kBurst);
     EXPECT_GT(ok, 0);

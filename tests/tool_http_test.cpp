@@ -150,7 +150,8 @@ TEST(LightingToolHttp, OnlyThePageOfThePrintedUrlDrivesTheTool) {
     };
     // A cross-origin "simple" POST (text/plain needs no preflight), with the right token even.
     refused(s.client.Post("/api/edit", httplib::Headers{{"Origin", "http://evil.example"}}, edit, "text/plain"), "foreign origin");
-    refused(s.client.Post("/api/edit", httplib::Headers{{"Origin", "http://127.0.0.1:" + std::to_string(s.port + 1)}}, edit, "application/json"),
+    refused(s.client.Post("/api/edit", httplib::Headers{{"Origin", "http://127.0.0.1:" + std::to_string(s.port + 1)}}, edit,
+                          "application/json"),
             "another port of this machine");
     refused(s.client.Post("/api/edit", httplib::Headers{{"Origin", "null"}}, edit, "application/json"), "an opaque origin");
     refused(s.client.Post("/api/edit", edit, "text/plain"), "a state change without JSON");
@@ -163,7 +164,8 @@ TEST(LightingToolHttp, OnlyThePageOfThePrintedUrlDrivesTheTool) {
     refused(bare.Get("/api/params"), "no token, reading");
     refused(bare.Get("/index.html"), "the page without a token");
     refused(bare.Post("/api/edit", httplib::Headers{{"Authorization", "token " + token + "x"}}, edit, "application/json"), "wrong token");
-    refused(bare.Post("/api/edit", httplib::Headers{{"Cookie", "bounce-token-" + std::to_string(s.port + 1) + "=" + token}}, edit, "application/json"),
+    refused(bare.Post("/api/edit", httplib::Headers{{"Cookie", "bounce-token-" + std::to_string(s.port + 1) + "=" + token}}, edit,
+                      "application/json"),
             "another tool's cookie name");
     refused(bare.Post("/api/render", R"({"action": "rasterize"})", "application/json"), "a render without a token");
     EXPECT_EQ(spacing(), before);
@@ -177,8 +179,8 @@ TEST(LightingToolHttp, OnlyThePageOfThePrintedUrlDrivesTheTool) {
     EXPECT_NE(cookie.find("HttpOnly"), std::string::npos) << cookie;
     const std::string pair = cookie.substr(0, cookie.find(';'));
     EXPECT_EQ(pair, "bounce-token-" + std::to_string(s.port) + "=" + token);
-    r = bare.Post("/api/edit", httplib::Headers{{"Cookie", "other=1; " + pair}, {"Origin", "http://127.0.0.1:" + std::to_string(s.port)}}, edit,
-                  "application/json; charset=utf-8");
+    r = bare.Post("/api/edit", httplib::Headers{{"Cookie", "other=1; " + pair}, {"Origin", "http://127.0.0.1:" + std::to_string(s.port)}},
+                  edit, "application/json; charset=utf-8");
     ASSERT_TRUE(r);
     EXPECT_EQ(r->status, 200) << r->body;
     EXPECT_EQ(spacing(), 2.5);

@@ -42,7 +42,7 @@ void wait_done(LightingSession& s) {
 }
 
 /// The statistics that say what a frame kept, moved and gathered.
-constexpr const char* kRecordStats[] = {"records", "records_new", "records_kept", "records_moved", "records_regathered",
+constexpr const char* kRecordStats[] = {"records",          "records_new",      "records_kept", "records_moved", "records_regathered",
                                         "records_reshaded", "refined_fragments"};
 
 TEST(LightingToolShot, FrameTwoAfterFrameOneIsTheSequencesFrameTwoWithItsStatistics) {
@@ -114,11 +114,11 @@ TEST(LightingToolShot, AFrameReachedByAJumpForwardOrBackIsTheSequencesFrame) {
     wait_done(s);
     EXPECT_EQ(s.status()["frame"], 4);
     same_frame(4);
-    same_cache(3);  // the frame in between is the sequence's too
+    same_cache(3);                         // the frame in between is the sequence's too
     EXPECT_EQ(s.set_frame(2)["from"], 1);  // back: the sequence again from frame 1
     wait_done(s);
     same_frame(2);
-    same_cache(4);  // frame 4's cache was left as the sequence made it
+    same_cache(4);   // frame 4's cache was left as the sequence made it
     s.set_frame(3);  // and a step from there is the next frame
     wait_done(s);
     same_frame(3);

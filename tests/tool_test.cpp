@@ -134,7 +134,8 @@ TEST(LightingTool, TheFilesAMeshNamesAreConfinedAsTheMeshItself) {
             ADD_FAILURE() << file << " was taken";
         } catch (const InputError& e) {
             const std::string what = e.what();
-            EXPECT_NE(what.find(named + "' is outside the scene's folder and the output folder"), std::string::npos) << file << ": " << what;
+            EXPECT_NE(what.find(named + "' is outside the scene's folder and the output folder"), std::string::npos)
+                << file << ": " << what;
         }
     }
     // The same mesh with its MTL beside it is taken.

@@ -30,8 +30,11 @@ json slab(const json& direction) {
             {"render", {{"spp", 1}, {"light_samples", 1}, {"seed", 3}}},
             {"materials", {{"leaf", leaf_material(kT)}}},
             {"lights", {{{"type", "distant"}, {"direction", direction}, {"intensity", kSun}}}},
-            {"objects", {{{"name", "card"}, {"type", "quad"}, {"material", "leaf"},
-                          {"vertices", {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}}}}}}};
+            {"objects",
+             {{{"name", "card"},
+               {"type", "quad"},
+               {"material", "leaf"},
+               {"vertices", {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}}}}}}};
 }
 
 /// Every pixel's `layer` against `expected` (per channel), within `rel` of it.
@@ -64,14 +67,20 @@ TEST(Translucency, ABackLitCardIsTheThinSlabsAnalyticValue) {
 /// to the horizon, under a sun at cosine 0.8 whose shadows the card does not cast: the floor
 /// is uniformly lit, so the card's back hemisphere takes E_back = 0.5 x 0.8 kSun and its front none.
 json card_over_floor(double t) {
-    json j = {{"camera", {{"position", {0, 1.9, -0.6}}, {"look_at", {0, 1, 0}}, {"fov", 25}, {"resolution", {16, 12}}}},
-              {"render", {{"spp", 1}, {"light_samples", 1}, {"seed", 5}, {"rays", 64}}},
-              {"materials", {{"leaf", leaf_material(t)}, {"ground", {{"color", 0.5}}}}},
-              {"lights", {{{"type", "distant"}, {"direction", {0.6, -0.8, 0}}, {"intensity", kSun}, {"shadow_link", {{"exclude", {"card"}}}}}}},
-              {"objects", {{{"name", "floor"}, {"type", "quad"}, {"material", "ground"},
-                            {"vertices", {{-3000, 0, -3000}, {-3000, 0, 3000}, {3000, 0, 3000}, {3000, 0, -3000}}}},
-                           {{"name", "card"}, {"type", "quad"}, {"material", "leaf"},
-                            {"vertices", {{-0.5, 1, -0.5}, {-0.5, 1, 0.5}, {0.5, 1, 0.5}, {0.5, 1, -0.5}}}}}}};
+    json j = {
+        {"camera", {{"position", {0, 1.9, -0.6}}, {"look_at", {0, 1, 0}}, {"fov", 25}, {"resolution", {16, 12}}}},
+        {"render", {{"spp", 1}, {"light_samples", 1}, {"seed", 5}, {"rays", 64}}},
+        {"materials", {{"leaf", leaf_material(t)}, {"ground", {{"color", 0.5}}}}},
+        {"lights", {{{"type", "distant"}, {"direction", {0.6, -0.8, 0}}, {"intensity", kSun}, {"shadow_link", {{"exclude", {"card"}}}}}}},
+        {"objects",
+         {{{"name", "floor"},
+           {"type", "quad"},
+           {"material", "ground"},
+           {"vertices", {{-3000, 0, -3000}, {-3000, 0, 3000}, {3000, 0, 3000}, {3000, 0, -3000}}}},
+          {{"name", "card"},
+           {"type", "quad"},
+           {"material", "leaf"},
+           {"vertices", {{-0.5, 1, -0.5}, {-0.5, 1, 0.5}, {0.5, 1, 0.5}, {0.5, 1, -0.5}}}}}}};
     return j;
 }
 
@@ -84,15 +93,16 @@ TEST(Translucency, BounceLightThroughACardIsItsBackSidesIrradiance) {
     for (const char* gi : {"brute", "cache"}) {
         SCOPED_TRACE(gi);
         Stats stats;
-        const RenderResult r = render(test::scene_from(card_over_floor(kT), {Override(std::string("render.gi=") + gi)}), {}, stats, nullptr);
+        const RenderResult r =
+            render(test::scene_from(card_over_floor(kT), {Override(std::string("render.gi=") + gi)}), {}, stats, nullptr);
         expect_everywhere(r.image, "indirect", Color(static_cast<float>(kT * e_back)), 2e-3);
         expect_everywhere(r.image, "beauty", beauty, 2e-3);
         if (std::string(gi) == "cache") {
             EXPECT_EQ(r.shading_misses, 0u);
             size_t back = 0;
             for (size_t i = 0; i < r.cache->size(); ++i) back += r.cache->record(i).n.y < -0.99f;
-            EXPECT_GT(back, 0u);                    // the card's back side has records of its own
-            EXPECT_LT(back, r.cache->size());       // and its front too
+            EXPECT_GT(back, 0u);               // the card's back side has records of its own
+            EXPECT_LT(back, r.cache->size());  // and its front too
         }
     }
     // Opaque, nothing comes through: the card's front sees nothing to bounce light.
@@ -102,17 +112,19 @@ TEST(Translucency, BounceLightThroughACardIsItsBackSidesIrradiance) {
 TEST(Translucency, GltfsDiffuseTransmissionIsTheSceneFiles) {
     test::TempDir dir;
     write_png(dir.file("leaf.png"), 1, 1, 3, {255, 255, 255});
-    const json m = {{"pbrMetallicRoughness", {{"baseColorFactor", {0.2, 0.6, 0.1, 1}}, {"metallicFactor", 0}, {"roughnessFactor", 1}}},
-                    {"doubleSided", true},
-                    {"extensions", {{"KHR_materials_diffuse_transmission",
-                                     {{"diffuseTransmissionFactor", kT}, {"diffuseTransmissionColorFactor", kRhoT}}}}}};
+    const json m = {
+        {"pbrMetallicRoughness", {{"baseColorFactor", {0.2, 0.6, 0.1, 1}}, {"metallicFactor", 0}, {"roughnessFactor", 1}}},
+        {"doubleSided", true},
+        {"extensions",
+         {{"KHR_materials_diffuse_transmission", {{"diffuseTransmissionFactor", kT}, {"diffuseTransmissionColorFactor", kRhoT}}}}}};
     json same = leaf_material(kT);
     same["specular"] = 0.04, same["roughness"] = 1;
     json card = {{"name", "card"}, {"type", "mesh"}, {"file", gltf_card(dir, m)}};
     // Lit from both sides: the stage's light in front of the card and a second one behind it.
     json a = stage(json::array({card}), kLeaf), b = stage(json::array({quad("card", "leaf", -1, 1, 0.2, 2.2, 0)}), same);
     for (json* s : {&a, &b})
-        (*s)["lights"].push_back({{"type", "quad"}, {"corner", {-0.2, 1, 1.5}}, {"edge_u", {0, 0.4, 0}}, {"edge_v", {0.4, 0, 0}}, {"color", 100}});
+        (*s)["lights"].push_back(
+            {{"type", "quad"}, {"corner", {-0.2, 1, 1.5}}, {"edge_u", {0, 0.4, 0}}, {"edge_v", {0.4, 0, 0}}, {"color", 100}});
     const Image ga = render_with(a, "brute"), gb = render_with(b, "brute");
     EXPECT_EQ(test::differing_values(ga, gb), 0u);
     json opaque = same;

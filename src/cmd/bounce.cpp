@@ -36,8 +36,10 @@ bool unknown_command(const CLI::App& app, const std::string& word, const std::st
 }
 
 int run_params(bool json, bool markdown) {
-    if (json) std::printf("%s\n", params_listing().dump(2).c_str());
-    else if (markdown) std::printf("%s", params_markdown().c_str());
+    if (json)
+        std::printf("%s\n", params_listing().dump(2).c_str());
+    else if (markdown)
+        std::printf("%s", params_markdown().c_str());
     else
         for (const Param& p : scene_params())
             std::printf("%-32s %-10s %-24s %s\n", p.key.c_str(), p.stage.c_str(), p.default_value().dump().c_str(), p.doc.c_str());
@@ -53,8 +55,10 @@ void report_failure(const Communicator* comm, const std::string& text) {
     if (comm && comm->size() > 1) {
         if (comm->rank() > 0) std::this_thread::sleep_for(std::chrono::milliseconds(300));
         // A refusal that names the rank at fault (check_same_job) is printed as it is.
-        if (text.starts_with("rank ")) std::fprintf(stderr, "bounce: %s\n", text.c_str());
-        else std::fprintf(stderr, "bounce: rank %d: %s\n", comm->rank(), text.c_str());
+        if (text.starts_with("rank "))
+            std::fprintf(stderr, "bounce: %s\n", text.c_str());
+        else
+            std::fprintf(stderr, "bounce: rank %d: %s\n", comm->rank(), text.c_str());
     } else {
         std::fprintf(stderr, "bounce: %s\n", text.c_str());
     }
@@ -101,7 +105,9 @@ void add_tool_commands(CLI::App& app, Commands& c) {
     c.compare = app.add_subcommand("compare", "error of a render against a reference, per layer");
     c.compare->add_option("test", c.ca.test, "the render to judge (EXR)")->required();
     c.compare->add_option("reference", c.ca.reference, "the reference (EXR)")->required();
-    c.compare->add_option("--layer", c.ca.layer, "only this layer (beauty, direct, indirect, ao, ..., or beauty_ref_direct: the beauty with the reference's direct light)");
+    c.compare->add_option(
+        "--layer", c.ca.layer,
+        "only this layer (beauty, direct, indirect, ao, ..., or beauty_ref_direct: the beauty with the reference's direct light)");
     c.compare->add_option("--diff", c.ca.diff, "false-colour difference PNG (default: TEST.diff.png)");
     c.compare->add_flag("--json", c.ca.json, "print JSON");
     c.compare->add_flag("--sequence", c.ca.sequence, "TEST and REFERENCE are #### frame patterns: per-frame error, flicker, popping");
@@ -151,7 +157,9 @@ int dispatch(const Commands& c, Communicator* comm, const char* command) {
         return 2;
     } catch (const std::bad_alloc&) {
         // Estimates refuse what cannot fit before allocating; this is what slipped past them.
-        report_failure(comm, "error: out of memory while rendering (lower the resolution, the dicing rate, the fur density or the number of placements)");
+        report_failure(
+            comm,
+            "error: out of memory while rendering (lower the resolution, the dicing rate, the fur density or the number of placements)");
         return 2;
     } catch (const Cancelled&) {
         report_failure(comm, "cancelled");

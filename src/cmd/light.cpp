@@ -20,7 +20,8 @@ std::pair<std::string, std::string> page_folders() {
     std::error_code ec;
     const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
     const std::filesystem::path share = exe.parent_path().parent_path() / "share" / "bounce";
-    if (!ec && std::filesystem::is_regular_file(share / "web" / "index.html", ec)) return {(share / "web").string(), (share / "three").string()};
+    if (!ec && std::filesystem::is_regular_file(share / "web" / "index.html", ec))
+        return {(share / "web").string(), (share / "three").string()};
     return {BOUNCE_WEB_DIR, BOUNCE_THREE_DIR};
 }
 

@@ -39,14 +39,13 @@ Scene load_render_scene(const RenderArgs& a, std::optional<double> frame) {
     if (!cache && !a.files.cache_out.empty())
         throw InputError("command line", "--cache-out " + a.files.cache_out, "only a --gi cache render makes a cache");
     if (!cache && !a.files.cache_in.empty() && a.show != "records")
-        throw InputError("command line", "--cache-in " + a.files.cache_in,
-                         "only a --gi cache render (or --show records) uses a cache");
+        throw InputError("command line", "--cache-in " + a.files.cache_in, "only a --gi cache render (or --show records) uses a cache");
     if (!a.files.base.empty() && !scene.render.visibility.has_crop())
         throw InputError("command line", "--base " + a.files.base, "--base fills the pixels outside --crop; give a crop");
-    if (a.reuse_any && a.regather)
-        throw InputError("command line", "--cache-reuse-any", "cannot be combined with --regather");
+    if (a.reuse_any && a.regather) throw InputError("command line", "--cache-reuse-any", "cannot be combined with --regather");
     if (a.regather && !a.frames.empty())
-        throw InputError("command line", "--regather", "a sequence's frames start from the frame before; render a frame alone (--frame) to gather it anew");
+        throw InputError("command line", "--regather",
+                         "a sequence's frames start from the frame before; render a frame alone (--frame) to gather it anew");
     return scene;
 }
 
@@ -83,9 +82,9 @@ void check_ranks(const RenderArgs& a, const Scene& scene) {
     if (!a.comm || a.comm->size() == 1) return;
     std::string command;
     for (const auto& o : a.sets) command += " --set " + o;
-    const std::string identity = fmt::format("bounce {} ({}), {} {}{} (scene {:016x})", bounce_version(), bounce_revision(),
-                                             a.files.scene, a.files.output, command,
-                                             scene.fingerprint({"objects", "materials", "lights", "camera", "render"}));
+    const std::string identity =
+        fmt::format("bounce {} ({}), {} {}{} (scene {:016x})", bounce_version(), bounce_revision(), a.files.scene, a.files.output, command,
+                    scene.fingerprint({"objects", "materials", "lights", "camera", "render"}));
     check_same_job(*a.comm, identity);
 }
 
@@ -112,7 +111,8 @@ void report(const RenderArgs& a, const RenderResult& r, const FrameFiles& files,
         std::fprintf(stderr, "bounce: %s: records reused although gathered with other settings (--cache-reuse-any)\n",
                      files.cache_in.c_str());
     if (r.cache_other_lighting && !a.quiet)
-        std::fprintf(stderr, "bounce: %s: lights or materials differ from the cache's: its bounce light is theirs (--regather gathers it anew)\n",
+        std::fprintf(stderr,
+                     "bounce: %s: lights or materials differ from the cache's: its bounce light is theirs (--regather gathers it anew)\n",
                      files.cache_in.c_str());
     if (a.stats) print_stats(stats, scene);
     if (!a.quiet) std::fprintf(stderr, "wrote %s\n", files.output.c_str());
@@ -176,7 +176,8 @@ bool outputs_complete(const FrameFiles& f) {
     const auto json = [](const std::string& p) {
         if (nlohmann::json::parse(read_text_file(p)).is_discarded()) throw std::runtime_error(p);
     };
-    return reads_back(f.output, image) && reads_back(f.png(), png) && reads_back(f.deep_out, [](const std::string& p) { (void)read_deep(p); }) &&
+    return reads_back(f.output, image) && reads_back(f.png(), png) &&
+           reads_back(f.deep_out, [](const std::string& p) { (void)read_deep(p); }) &&
            reads_back(f.cache_out, [](const std::string& p) { (void)read_cache_file(p); }) && reads_back(f.stats_json, json);
 }
 
@@ -228,8 +229,8 @@ int render_frame_chunks(const RenderArgs& a, int first, int last) {
     const int ranks = a.comm->size(), r = a.comm->rank(), n = last - first + 1;
     const int lo = first + static_cast<int>(static_cast<int64_t>(n) * r / ranks);
     const int hi = first + static_cast<int>(static_cast<int64_t>(n) * (r + 1) / ranks) - 1;
-    const bool before_ok = lo > first && !a.files.cache_out.empty() &&
-                           std::filesystem::is_regular_file(expand_frame_pattern(a.files.cache_out, lo - 1));
+    const bool before_ok =
+        lo > first && !a.files.cache_out.empty() && std::filesystem::is_regular_file(expand_frame_pattern(a.files.cache_out, lo - 1));
     a.comm->allgather("");  // every rank has looked before any renders
     if (lo > hi) return 0;  // more ranks than frames
     return render_sequence(a, lo, hi, first, nullptr, before_ok);
@@ -243,8 +244,9 @@ std::unique_ptr<ProgressSink> make_progress(bool quiet) {
 }
 
 void add_display_options(CLI::App& command, DisplaySettings& display) {
-    command.add_option("--ocio-config", display.config,
-                       "OpenColorIO config for the PNG and the tool's view (default: $OCIO, else built-in sRGB); EXRs stay scene-linear")
+    command
+        .add_option("--ocio-config", display.config,
+                    "OpenColorIO config for the PNG and the tool's view (default: $OCIO, else built-in sRGB); EXRs stay scene-linear")
         ->each([&display](const std::string&) { display.config_given = true; });
     command.add_option("--display", display.display, "the config's display (default: its default display)");
     command.add_option("--view", display.view, "the display's view (default: its default view)");
@@ -265,7 +267,8 @@ int run_render(const RenderArgs& given) {
         if (chunks) throw InputError("command line", "--distribute frames", "goes with --frames");
         // The range a key's frame may have (a still has no shot to refuse the frame otherwise).
         if (a.frame && !is_frame_number(*a.frame))
-            throw InputError("command line", fmt::format("--frame {:g}", *a.frame), fmt::format("a frame must be a finite number within +-{:g}", kMaxFrame));
+            throw InputError("command line", fmt::format("--frame {:g}", *a.frame),
+                             fmt::format("a frame must be a finite number within +-{:g}", kMaxFrame));
         const int whole = a.frame ? static_cast<int>(std::lround(*a.frame)) : 0;
         // A subframe's #### would be a neighbouring frame's name, and overwrite its files.
         if (a.frame && *a.frame != whole && a.files.patterned())

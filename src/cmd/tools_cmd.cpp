@@ -82,7 +82,9 @@ std::vector<std::pair<int, std::string>> sequence_files(const std::string& patte
 /// channel), for a material's ao_texture.
 namespace {
 
-std::string rgb(const Color& c) { return c.x == c.y && c.y == c.z ? fmt::format("{:g}", c.x) : fmt::format("{:g} {:g} {:g}", c.x, c.y, c.z); }
+std::string rgb(const Color& c) {
+    return c.x == c.y && c.y == c.z ? fmt::format("{:g}", c.x) : fmt::format("{:g} {:g} {:g}", c.x, c.y, c.z);
+}
 
 /// What a material reads, as one line: every field off its default, and its files by name.
 std::string described(const Material& m) {
@@ -90,9 +92,11 @@ std::string described(const Material& m) {
     std::vector<std::string> parts{"colour " + rgb(m.color)};
     const auto file = [](const std::string& path) { return std::filesystem::path(path).filename().string(); };
     if (!m.color_texture.empty()) parts.back() += " x " + file(m.color_texture);
-    if (m.is_emissive()) parts.push_back("emission " + rgb(m.emission) + (m.emission_texture.empty() ? "" : " x " + file(m.emission_texture)));
+    if (m.is_emissive())
+        parts.push_back("emission " + rgb(m.emission) + (m.emission_texture.empty() ? "" : " x " + file(m.emission_texture)));
     if (m.has_specular()) parts.push_back(fmt::format("specular {}, roughness {:g}", rgb(m.specular), m.roughness));
-    if (!m.metallic_roughness_texture.empty()) parts.push_back(fmt::format("metallic {:g} x {}", m.metallic, file(m.metallic_roughness_texture)));
+    if (!m.metallic_roughness_texture.empty())
+        parts.push_back(fmt::format("metallic {:g} x {}", m.metallic, file(m.metallic_roughness_texture)));
     if (!m.bump_texture.empty()) parts.push_back("bump " + file(m.bump_texture));
     if (!m.normal_texture.empty()) parts.push_back("normal map " + file(m.normal_texture));
     if (!m.ao_texture.empty()) parts.push_back("occlusion " + file(m.ao_texture));
@@ -181,8 +185,6 @@ int run_bake_ao(const BakeAoArgs& a) {
     return 0;
 }
 
-
-
 /// `bounce compare --sequence`: per-frame error, flicker and popping (sequence_compare.h).
 int run_compare_sequence(const CompareArgs& a) {
     if (a.frames.empty()) throw InputError("command line", "--sequence", "give the frames: --frames FIRST-LAST");
@@ -205,7 +207,7 @@ int run_compare_sequence(const CompareArgs& a) {
         const std::vector<uint8_t> rgb = sequence_strip(test, first, last, layer, 6, w, h);
         write_png_rgb8(a.strip, w, h, rgb);
     }
-    nlohmann::json j = {{"layer", layer}, {"frames", e.frames}, {"rel_rmse", e.rel_rmse}, {"mean_rel_rmse", e.mean_rel_rmse},
+    nlohmann::json j = {{"layer", layer},       {"frames", e.frames},  {"rel_rmse", e.rel_rmse}, {"mean_rel_rmse", e.mean_rel_rmse},
                         {"flicker", e.flicker}, {"popping", e.popping}};
     if (a.json) {
         std::printf("%s\n", j.dump(2).c_str());
@@ -213,8 +215,8 @@ int run_compare_sequence(const CompareArgs& a) {
     }
     std::printf("%-8s %10s\n", "frame", "rel_rmse");
     for (size_t i = 0; i < e.frames.size(); ++i) std::printf("%-8d %9.4f%%\n", e.frames[i], 100 * e.rel_rmse[i]);
-    std::printf("mean per-frame error %.4f%%, flicker %.4f%%, popping (99.9th percentile) %.4f%%\n", 100 * e.mean_rel_rmse,
-                100 * e.flicker, 100 * e.popping);
+    std::printf("mean per-frame error %.4f%%, flicker %.4f%%, popping (99.9th percentile) %.4f%%\n", 100 * e.mean_rel_rmse, 100 * e.flicker,
+                100 * e.popping);
     return 0;
 }
 
@@ -239,21 +241,20 @@ int run_compare(const CompareArgs& a) {
     if (a.json) {
         nlohmann::json j = nlohmann::json::object();
         for (const auto& e : errors)
-            j[e.layer] = {{"rmse", e.rmse}, {"rel_rmse", std::isnan(e.rel_rmse) ? nlohmann::json() : nlohmann::json(e.rel_rmse)}, {"relmse", e.relmse},
-                          {"mean_abs", e.mean_abs}, {"max_abs", e.max_abs}, {"mean_ref", e.mean_ref}};
+            j[e.layer] = {{"rmse", e.rmse},       {"rel_rmse", std::isnan(e.rel_rmse) ? nlohmann::json() : nlohmann::json(e.rel_rmse)},
+                          {"relmse", e.relmse},   {"mean_abs", e.mean_abs},
+                          {"max_abs", e.max_abs}, {"mean_ref", e.mean_ref}};
         std::printf("%s\n", j.dump(2).c_str());
     } else {
         std::printf("%-18s %12s %10s %12s %12s %12s %12s\n", "layer", "rmse", "rel_rmse", "relmse", "mean_abs", "max_abs", "mean_ref");
         for (const auto& e : errors)
             std::printf("%-18s %12.6g %10s %12.6g %12.6g %12.6g %12.6g\n", e.layer.c_str(), e.rmse,
-                        std::isnan(e.rel_rmse) ? "n/a" : fmt::format("{:.4f}%", 100 * e.rel_rmse).c_str(), e.relmse, e.mean_abs,
-                        e.max_abs, e.mean_ref);
+                        std::isnan(e.rel_rmse) ? "n/a" : fmt::format("{:.4f}%", 100 * e.rel_rmse).c_str(), e.relmse, e.mean_abs, e.max_abs,
+                        e.mean_ref);
         std::printf("difference image (%s, full scale = 10%% of the reference mean): %s\n", diff_layer.c_str(), diff.c_str());
     }
     return 0;
 }
-
-
 
 int run_cache_info(const CacheArgs& a) {
     const std::string& path = a.inputs.at(0);
@@ -266,8 +267,8 @@ int run_cache_info(const CacheArgs& a) {
             CacheFile f = read_cache_file(file);
             size_t fresh = 0;
             for (const Record& r : f.records) fresh += r.frame == frame;
-            seq.push_back({{"frame", frame}, {"file", file}, {"records", f.records.size()},
-                           {"reused", f.records.size() - fresh}, {"new", fresh}});
+            seq.push_back(
+                {{"frame", frame}, {"file", file}, {"records", f.records.size()}, {"reused", f.records.size() - fresh}, {"new", fresh}});
             if (!a.json) std::printf("%-8d %10zu %10zu %10zu\n", frame, f.records.size(), f.records.size() - fresh, fresh);
         }
         if (a.json) std::printf("%s\n", seq.dump(2).c_str());
@@ -282,7 +283,8 @@ int run_cache_info(const CacheArgs& a) {
 namespace {
 /// A tool's output of the kind it writes: a scene or an image named by mistake is never overwritten.
 void check_output_kind(const std::string& path, const char* extension, const char* what) {
-    if (lower_extension(path) != extension) throw InputError("command line", "-o " + path, fmt::format("{} is written as a {} file", what, extension));
+    if (lower_extension(path) != extension)
+        throw InputError("command line", "-o " + path, fmt::format("{} is written as a {} file", what, extension));
 }
 }  // namespace
 

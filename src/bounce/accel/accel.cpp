@@ -43,8 +43,10 @@ SceneAccel::SceneAccel(const Scene& scene, const SceneAccel* previous) {
     // A prototype's triangles count once, each placement about 200 bytes of Embree instance.
     double triangles = 0, segments = 0, instances = 0;
     for (const auto& o : scene.objects) {
-        triangles += static_cast<double>(o.coarse.triangle_count() + o.fine.triangle_count());  // (none of their own: instances, prototypes)
-        if (o.prototype) triangles += 2.0 * static_cast<double>(o.local_coarse->triangle_count() + (o.local_fine ? o.local_fine->triangle_count() : 0));
+        triangles +=
+            static_cast<double>(o.coarse.triangle_count() + o.fine.triangle_count());  // (none of their own: instances, prototypes)
+        if (o.prototype)
+            triangles += 2.0 * static_cast<double>(o.local_coarse->triangle_count() + (o.local_fine ? o.local_fine->triangle_count() : 0));
         instances += o.instance ? 1 : 0;
         if (o.fur) segments += 2.0 * static_cast<double>(o.fur->segment_count());
     }
@@ -88,7 +90,9 @@ void SceneAccel::build_flat(const Scene& scene) {
         fine.meshes.push_back(o.placed() ? &o.visible() : nullptr);
         fine.motion.push_back(o.shutter[0].empty() ? nullptr : &o.shutter);  // camera rays see motion blur
         coarse.cutouts.push_back(o.placed() ? CutoutMesh::make(scene.materials, o.coarse) : nullptr);
-        fine.cutouts.push_back(!o.placed() ? nullptr : o.has_fine() ? CutoutMesh::make(scene.materials, o.visible()) : coarse.cutouts.back());
+        fine.cutouts.push_back(!o.placed()    ? nullptr
+                               : o.has_fine() ? CutoutMesh::make(scene.materials, o.visible())
+                                              : coarse.cutouts.back());
         any_fine |= o.has_fine() || fine.motion.back();
     }
     fine.masks = coarse.masks;
@@ -167,8 +171,7 @@ void SceneAccel::measure_offsets(const Scene& scene) {
         gap_ = *at;
     }
     // Default distance: cover the measured gap for rays up to ~75 degrees off the normal.
-    ray_offset_ = scene.render.lighting.ray_offset >= 0 ? scene.render.lighting.ray_offset
-                                               : std::max(1e-4f * diag, 4.0f * gap_);
+    ray_offset_ = scene.render.lighting.ray_offset >= 0 ? scene.render.lighting.ray_offset : std::max(1e-4f * diag, 4.0f * gap_);
     min_epsilon_ = 1e-7f * diag;
 }
 

@@ -32,7 +32,7 @@ class BvhParts;
 /// from the previous frame's takes over every part whose content is unchanged; a frame built
 /// alone builds the same parts, so both trace alike, bit for bit.
 class SceneAccel {
-public:
+  public:
     /// `previous`: the shot's frame before (null: none) whose parts may be taken over.
     explicit SceneAccel(const Scene& scene, const SceneAccel* previous = nullptr);
     ~SceneAccel();
@@ -73,7 +73,7 @@ public:
     /// (at least 1e-7 of the scene diagonal), above float rounding, far below delta.
     float self_epsilon(const Vec3& p) const;
 
-private:
+  private:
     /// Parameter along the ray from p - delta*d at which the traced ray starts.
     float offset_start(const Vec3& p, const Vec3& d) const;
     /// The offset trace proper: from the coarse crossing nearest to p (t measured from p).

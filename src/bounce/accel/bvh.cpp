@@ -48,7 +48,8 @@ void Bvh::add_fur(RTCDevice device, const BvhGeometry& geometry, size_t id) {
     if (moving) {
         rtcSetGeometryTimeStepCount(g, 2);
         for (unsigned slot = 0; slot < 2; ++slot) {
-            auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, slot, RTC_FORMAT_FLOAT4, 4 * sizeof(float), points));
+            auto* vb =
+                static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, slot, RTC_FORMAT_FLOAT4, 4 * sizeof(float), points));
             std::copy((*moving)[slot].begin(), (*moving)[slot].end(), vb);
         }
     } else {
@@ -88,8 +89,7 @@ Bvh::Bvh(RTCDevice device, const std::vector<Placed>& placed, unsigned mesh_coun
         rtcSetGeometryInstancedScene(g, p.bvh->scene_);
         // Two poses are interpolated linearly, as the vertices of a mesh moving in the shutter are.
         rtcSetGeometryTimeStepCount(g, p.moving ? 2 : 1);
-        for (unsigned k = 0; k < (p.moving ? 2u : 1u); ++k)
-            rtcSetGeometryTransform(g, k, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, p.at[k].m.data());
+        for (unsigned k = 0; k < (p.moving ? 2u : 1u); ++k) rtcSetGeometryTransform(g, k, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, p.at[k].m.data());
         rtcSetGeometryMask(g, p.mask);
         rtcCommitGeometry(g);
         const unsigned id = rtcAttachGeometry(scene_, g);
@@ -120,8 +120,8 @@ void Bvh::begin(RTCDevice device, const BvhGeometry& geometry) {
             rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, slot, RTC_FORMAT_FLOAT3, 3 * sizeof(float), pos.size());
             fill_vertices(g, slot, pos);
         }
-        auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
-            g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), m.triangle_count()));
+        auto* ib = static_cast<uint32_t*>(
+            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), m.triangle_count()));
         std::copy(m.indices.begin(), m.indices.end(), ib);
         if (id < geometry.masks.size()) rtcSetGeometryMask(g, geometry.masks[id]);
         if (const auto& cut = at_or<std::shared_ptr<const CutoutMesh>>(geometry.cutouts, id, nullptr)) {
@@ -202,9 +202,9 @@ void Bvh::intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear
         }
         rtcIntersect16(valid, scene_, &ctx, &rh);
         for (size_t i = 0; i < n; ++i) {
-            out[base + i] = rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID
-                                ? Hit{}
-                                : make_hit(rh.hit.geomID[i], rh.hit.instID[0][i], rh.hit.primID[i], rh.ray.tfar[i], rh.hit.u[i], rh.hit.v[i]);
+            out[base + i] = rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID ? Hit{}
+                                                                        : make_hit(rh.hit.geomID[i], rh.hit.instID[0][i], rh.hit.primID[i],
+                                                                                   rh.ray.tfar[i], rh.hit.u[i], rh.hit.v[i]);
         }
     }
 }

@@ -23,24 +23,21 @@ inline constexpr uint32_t kNoHit = 0xffffffffu;
 /// bits of the rays that see them (Object::visible_to); a light with a shadow link has a bit
 /// of its own (kRayShadowLink << Light::shadow_slot) that only the objects casting its shadows hold.
 /// Mirror and glass rays take the top bit, above the shadow links' (kMaxShadowLinkedLights).
-inline constexpr unsigned kRayCamera = 1u, kRayShadow = 2u, kRayIndirect = 4u, kRayShadowLink = 8u, kRayReflect = 1u << 31,
-                          kRayAll = ~0u;
+inline constexpr unsigned kRayCamera = 1u, kRayShadow = 2u, kRayIndirect = 4u, kRayShadowLink = 8u, kRayReflect = 1u << 31, kRayAll = ~0u;
 static_assert((kRayShadowLink << (kMaxShadowLinkedLights - 1)) < kRayReflect);
 /// The mask of object `index`'s geometry.
 unsigned object_ray_mask(const Scene& scene, size_t index);
 /// The same for object `index`'s fur (FurParams::visible_to).
 unsigned fur_ray_mask(const Scene& scene, size_t index);
 /// The mask of a shadow ray towards `light`.
-inline unsigned shadow_ray_mask(const Light& light) {
-    return light.shadow_slot < 0 ? kRayShadow : kRayShadowLink << light.shadow_slot;
-}
+inline unsigned shadow_ray_mask(const Light& light) { return light.shadow_slot < 0 ? kRayShadow : kRayShadowLink << light.shadow_slot; }
 
 struct Hit {
     float t = INFINITY;
     uint32_t object = kNoHit;  ///< index into Scene::objects
     uint32_t prim = 0;
     float u = 0, v = 0;
-    bool hair = false;         ///< a fur segment of `object` (prim = segment, u along it)
+    bool hair = false;  ///< a fur segment of `object` (prim = segment, u along it)
     bool valid() const { return object != kNoHit; }
 };
 
@@ -52,13 +49,13 @@ using FurShutter = std::array<std::vector<float>, 2>;
 /// What a BVH of meshes and fur holds, per id (an object's index); every list may be shorter
 /// than `meshes` (missing entries: none, still, every ray).
 struct BvhGeometry {
-    std::vector<const TriangleMesh*> meshes;      ///< geometry id = index (null: none)
-    std::vector<const ShutterPositions*> motion;  ///< mesh i at shutter open and close (Embree's motion blur)
-    std::vector<unsigned> masks;                  ///< mesh i's ray mask
+    std::vector<const TriangleMesh*> meshes;                 ///< geometry id = index (null: none)
+    std::vector<const ShutterPositions*> motion;             ///< mesh i at shutter open and close (Embree's motion blur)
+    std::vector<unsigned> masks;                             ///< mesh i's ray mask
     std::vector<std::shared_ptr<const CutoutMesh>> cutouts;  ///< mesh i's cutouts (null: none, no filter)
-    std::vector<const Fur*> furs;                 ///< geometry id = meshes.size() + i: object i's fur
-    std::vector<const FurShutter*> fur_motion;    ///< fur i at shutter open and close
-    std::vector<unsigned> fur_masks;              ///< fur i's ray mask
+    std::vector<const Fur*> furs;                            ///< geometry id = meshes.size() + i: object i's fur
+    std::vector<const FurShutter*> fur_motion;               ///< fur i at shutter open and close
+    std::vector<unsigned> fur_masks;                         ///< fur i's ray mask
     /// Its meshes may later take new positions (`refit`); it holds its vertices itself.
     bool refittable = false;
 };
@@ -68,7 +65,7 @@ struct BvhGeometry {
 /// placed BVH's own geometry ids, so every BVH of a scene decodes its hits the same way.
 /// Motion blur: ray time 0 = shutter open, 1 = close; what does not move is where it is.
 class Bvh {
-public:
+  public:
     Bvh(RTCDevice device, const BvhGeometry& geometry);
     /// Meshes plus an instance of `fur`, a BVH of fur only over as many mesh ids (so its hits
     /// decode the same): fur traced by several BVHs is built once.
@@ -104,7 +101,7 @@ public:
     void intersect_from(const Vec3& o, const Vec3* d, size_t count, float tnear, Hit* out, unsigned mask = kRayAll) const;
     bool occluded(const Vec3& o, const Vec3& d, float tnear, float tfar, unsigned mask = kRayAll) const;
 
-private:
+  private:
     /// A new scene holding `g`'s meshes (not committed).
     void begin(RTCDevice device, const BvhGeometry& g);
     void add_fur(RTCDevice device, const BvhGeometry& g, size_t id);
@@ -114,8 +111,8 @@ private:
     unsigned mesh_count_ = 0;
     bool empty_ = true;
     uint64_t refits_ = 0;
-    std::vector<std::shared_ptr<const Bvh>> placed_;  ///< kept alive while this one traces them
-    std::vector<uint32_t> object_of_;                  ///< per placed geometry id: Placed::object
+    std::vector<std::shared_ptr<const Bvh>> placed_;          ///< kept alive while this one traces them
+    std::vector<uint32_t> object_of_;                         ///< per placed geometry id: Placed::object
     std::vector<std::shared_ptr<const CutoutMesh>> cutouts_;  ///< its filters' data, kept while it traces
 };
 

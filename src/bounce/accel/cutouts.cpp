@@ -68,8 +68,8 @@ uint64_t ray_hash(const RTCFilterFunctionNArguments* args, unsigned i, unsigned 
     const unsigned n = args->N;
     RTCRayN* r = args->ray;
     uint64_t h = 0x6a09e667f3bcc909ULL;
-    for (float f : {RTCRayN_org_x(r, n, i), RTCRayN_org_y(r, n, i), RTCRayN_org_z(r, n, i), RTCRayN_dir_x(r, n, i),
-                    RTCRayN_dir_y(r, n, i), RTCRayN_dir_z(r, n, i)})
+    for (float f : {RTCRayN_org_x(r, n, i), RTCRayN_org_y(r, n, i), RTCRayN_org_z(r, n, i), RTCRayN_dir_x(r, n, i), RTCRayN_dir_y(r, n, i),
+                    RTCRayN_dir_z(r, n, i)})
         h = hash_combine(h, std::bit_cast<uint32_t>(f));
     return hash_combine(h, prim);
 }

@@ -17,7 +17,7 @@ namespace bounce {
 /// What a filter needs to cut one mesh: its uvs and faces' materials and the cutouts of the
 /// materials it uses, copied, so a BVH kept by a shot's later frames needs nothing of this one's scene.
 class CutoutMesh {
-public:
+  public:
     /// Null when no face of `mesh` has a cutout material (scene.materials).
     static std::shared_ptr<const CutoutMesh> make(const std::vector<Material>& materials, const TriangleMesh& mesh);
     /// What `make` would hold, hashed (0 when it would be null): a BVH part built with other
@@ -34,7 +34,7 @@ public:
     /// Sets the filter on Embree geometry `g` (intersect and occluded) with this as its user data.
     void attach(RTCGeometry g) const;
 
-private:
+  private:
     struct Cut {
         AlphaMode mode = AlphaMode::Opaque;
         float opacity = 1, cutoff = 0.5f;

@@ -12,7 +12,7 @@ namespace {
 /// What a part is built from, hashed (xxHash): equal keys, equal parts. Every key holds the
 /// number of objects: fur's geometry ids (and so its hits) depend on it.
 class PartKey {
-public:
+  public:
     PartKey(uint64_t kind, size_t objects) : h_(hash_combine(mix64(kind + 1), objects)) {}
     PartKey& add(uint64_t v) {
         h_ = hash_combine(h_, v);
@@ -26,7 +26,7 @@ public:
     }
     uint64_t value() const { return h_; }
 
-private:
+  private:
     uint64_t h_;
 };
 
@@ -64,8 +64,8 @@ bool FurLists::any(const std::vector<const Fur*>& furs) {
     return std::any_of(furs.begin(), furs.end(), [](const Fur* f) { return f != nullptr; });
 }
 
-BvhPart BvhParts::take(const BvhPart* before, uint64_t key, uint64_t layout,
-                       const std::function<std::shared_ptr<Bvh>()>& build, const std::function<void(Bvh&)>& refit) {
+BvhPart BvhParts::take(const BvhPart* before, uint64_t key, uint64_t layout, const std::function<std::shared_ptr<Bvh>()>& build,
+                       const std::function<void(Bvh&)>& refit) {
     // A part a later frame refit traces other positions than its key says: never taken.
     if (before && before->bvh && before->bvh->refits() == before->refits) {
         if (before->key == key) {
@@ -147,8 +147,10 @@ void BvhParts::take_movers(RTCDevice device, const Scene& scene, const BvhParts*
         };
         if (o.local_coarse) {  // rigid: its shape before the placement, placed at every frame
             const TriangleMesh &lc = *o.local_coarse, &lf = o.local_fine ? *o.local_fine : lc;
-            const uint64_t kc = PartKey(kLocal, n).add(i).add(lc.positions).add(lc.indices).add(CutoutMesh::key(scene.materials, lc)).value();
-            const uint64_t kf = PartKey(kLocal, n).add(i).add(lf.positions).add(lf.indices).add(CutoutMesh::key(scene.materials, lf)).value();
+            const uint64_t kc =
+                PartKey(kLocal, n).add(i).add(lc.positions).add(lc.indices).add(CutoutMesh::key(scene.materials, lc)).value();
+            const uint64_t kf =
+                PartKey(kLocal, n).add(i).add(lf.positions).add(lf.indices).add(CutoutMesh::key(scene.materials, lf)).value();
             auto none = [](Bvh&) {};
             coarse_[i] = take(was_coarse, kc, 0, build(lc, nullptr, false), none);
             fine_[i] = kf == kc ? coarse_[i] : take(was_fine, kf, 0, build(lf, nullptr, false), none);
@@ -165,16 +167,20 @@ void BvhParts::take_movers(RTCDevice device, const Scene& scene, const BvhParts*
         if (motion) kf.add((*motion)[0]).add((*motion)[1]);
         // A refit keeps the part's cutouts: their uvs and materials must be the same.
         auto layout = [&](const TriangleMesh& m, bool moving) {
-            return o.deforms ? PartKey(kLayout, n).add(i).add(m.indices).add(m.positions.size()).add(moving ? 2 : 1)
-                                   .add(CutoutMesh::key(scene.materials, m)).value()
+            return o.deforms ? PartKey(kLayout, n)
+                                   .add(i)
+                                   .add(m.indices)
+                                   .add(m.positions.size())
+                                   .add(moving ? 2 : 1)
+                                   .add(CutoutMesh::key(scene.materials, m))
+                                   .value()
                              : 0;
         };
         coarse_[i] = take(was_coarse, kc.value(), layout(c, false), build(c, nullptr, o.deforms),
                           [&](Bvh& b) { b.refit(static_cast<unsigned>(i), c, nullptr); });
-        fine_[i] = kf.value() == kc.value()
-                       ? coarse_[i]
-                       : take(was_fine, kf.value(), layout(v, motion != nullptr), build(v, motion, o.deforms),
-                              [&](Bvh& b) { b.refit(static_cast<unsigned>(i), v, motion); });
+        fine_[i] = kf.value() == kc.value() ? coarse_[i]
+                                            : take(was_fine, kf.value(), layout(v, motion != nullptr), build(v, motion, o.deforms),
+                                                   [&](Bvh& b) { b.refit(static_cast<unsigned>(i), v, motion); });
     }
 }
 
@@ -188,7 +194,8 @@ void BvhParts::take_fur(RTCDevice device, const Scene& scene, const BvhParts* be
         BvhGeometry g;
         g.meshes.assign(n, nullptr), g.furs = furs, g.fur_masks = masks, g.fur_motion = motion;
         BvhPart& part = this->*slot;
-        part = take(before ? &(before->*slot) : nullptr, fur_key(g), 0, [&] { return std::make_shared<Bvh>(device, g); }, [](Bvh&) {});
+        part = take(
+            before ? &(before->*slot) : nullptr, fur_key(g), 0, [&] { return std::make_shared<Bvh>(device, g); }, [](Bvh&) {});
         if (part.furs.empty())  // built now: it traces this scene's fur buffers, which must outlive it
             for (size_t i = 0; i < n; ++i)
                 if (g.furs[i]) part.furs.push_back(scene.objects[i].fur);
@@ -197,8 +204,10 @@ void BvhParts::take_fur(RTCDevice device, const Scene& scene, const BvhParts* be
     take_list(&BvhParts::shadow_fur_, lists.shadow, {}, {});
     // The camera sees all fur, still: when that is the shadow part's, the same part.
     const bool blurred = std::any_of(lists.motion.begin(), lists.motion.end(), [](const FurShutter* m) { return m != nullptr; });
-    if (lists.visible == lists.shadow && !blurred) fine_fur_ = shadow_fur_;
-    else take_list(&BvhParts::fine_fur_, lists.visible, {}, lists.motion);
+    if (lists.visible == lists.shadow && !blurred)
+        fine_fur_ = shadow_fur_;
+    else
+        take_list(&BvhParts::fine_fur_, lists.visible, {}, lists.motion);
     needs_fine_ = needs_fine_ || fine_fur_.bvh != nullptr;
 }
 
@@ -280,9 +289,7 @@ std::unique_ptr<Bvh> BvhParts::fine(RTCDevice device, const Scene& scene) const 
     return std::make_unique<Bvh>(device, placed, static_cast<unsigned>(scene.objects.size()));
 }
 
-const Bvh* BvhParts::coarse_part(size_t id) const {
-    return id < coarse_.size() ? coarse_[id].bvh.get() : nullptr;
-}
+const Bvh* BvhParts::coarse_part(size_t id) const { return id < coarse_.size() ? coarse_[id].bvh.get() : nullptr; }
 
 bool BvhParts::current() const {
     auto ok = [](const BvhPart& p) { return !p.bvh || p.bvh->refits() == p.refits; };

@@ -12,10 +12,10 @@ namespace bounce {
 
 /// One part and what it was built from.
 struct BvhPart {
-    std::shared_ptr<Bvh> bvh;  ///< null: nothing to trace
-    uint64_t key = 0;          ///< hash of everything it was built from
-    uint64_t layout = 0;       ///< what a refit keeps (triangles, time steps); 0: it cannot be refit
-    uint64_t refits = 0;       ///< bvh->refits() when this frame took it
+    std::shared_ptr<Bvh> bvh;                      ///< null: nothing to trace
+    uint64_t key = 0;                              ///< hash of everything it was built from
+    uint64_t layout = 0;                           ///< what a refit keeps (triangles, time steps); 0: it cannot be refit
+    uint64_t refits = 0;                           ///< bvh->refits() when this frame took it
     std::vector<std::shared_ptr<const Fur>> furs;  ///< whose buffers it traces (shared, not copied)
 };
 
@@ -31,7 +31,7 @@ struct FurLists {
 };
 
 class BvhParts {
-public:
+  public:
     /// The parts of `scene`'s BVHs; those of `before` (the previous frame's) are taken over
     /// where their key matches, and refit where only positions changed.
     BvhParts(RTCDevice device, const Scene& scene, const BvhParts* before);
@@ -56,7 +56,7 @@ public:
     /// No part it holds was refit since (by a later frame).
     bool current() const;
 
-private:
+  private:
     BvhPart take(const BvhPart* before, uint64_t key, uint64_t layout, const std::function<std::shared_ptr<Bvh>()>& build,
                  const std::function<void(Bvh&)>& refit);
     void take_still(RTCDevice device, const Scene& scene, const BvhParts* before);
@@ -66,7 +66,7 @@ private:
     /// The instances' placements in the coarse or the fine BVH.
     void place_instances(const Scene& scene, bool fine, std::vector<Bvh::Placed>& placed) const;
 
-    BvhPart still_coarse_, still_fine_;  ///< the objects that do not move
+    BvhPart still_coarse_, still_fine_;   ///< the objects that do not move
     std::vector<BvhPart> coarse_, fine_;  ///< per object: the movers'
     BvhPart coarse_fur_, fine_fur_, shadow_fur_;
     std::vector<Prototype> prototypes_;

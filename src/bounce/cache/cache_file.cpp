@@ -30,14 +30,38 @@ struct Field {
     int count;
 };
 const Field kFields[] = {
-    {"p", "f32", 3},         {"n", "f32", 3},         {"E", "f32", 3},          {"ao", "f32", 1},
-    {"bent", "f32", 3},      {"dir", "f32", 9},       {"grad_r", "f32", 9},     {"grad_t", "f32", 9},
-    {"ao_grad_r", "f32", 3}, {"ao_grad_t", "f32", 3}, {"radius", "f32", 1},     {"raw_radius", "f32", 1},
-    {"footprint", "f32", 1}, {"harmonic", "f32", 1},  {"dmin", "f32", 1},       {"weber", "f32", 1},
-    {"radius_long", "f32", 1}, {"axis", "f32", 3},    {"key", "u64", 1},       {"rays", "u32", 1},      {"frame", "i32", 1},
-    {"origin", "f32", 3},    {"reach", "f32", kReachBins}, {"anchor", "u32", 1}, {"anchor_p", "f32", 3},  {"anchor_n", "f32", 3},
-    {"gathered", "i32", 1},  {"drift", "f32", 1},       {"near", "f32", 1},        {"anchor_prim", "u32", 1},
-    {"noise", "f32", 1},     {"bins", "f32", 3 * kReachBins},
+    {"p", "f32", 3},
+    {"n", "f32", 3},
+    {"E", "f32", 3},
+    {"ao", "f32", 1},
+    {"bent", "f32", 3},
+    {"dir", "f32", 9},
+    {"grad_r", "f32", 9},
+    {"grad_t", "f32", 9},
+    {"ao_grad_r", "f32", 3},
+    {"ao_grad_t", "f32", 3},
+    {"radius", "f32", 1},
+    {"raw_radius", "f32", 1},
+    {"footprint", "f32", 1},
+    {"harmonic", "f32", 1},
+    {"dmin", "f32", 1},
+    {"weber", "f32", 1},
+    {"radius_long", "f32", 1},
+    {"axis", "f32", 3},
+    {"key", "u64", 1},
+    {"rays", "u32", 1},
+    {"frame", "i32", 1},
+    {"origin", "f32", 3},
+    {"reach", "f32", kReachBins},
+    {"anchor", "u32", 1},
+    {"anchor_p", "f32", 3},
+    {"anchor_n", "f32", 3},
+    {"gathered", "i32", 1},
+    {"drift", "f32", 1},
+    {"near", "f32", 1},
+    {"anchor_prim", "u32", 1},
+    {"noise", "f32", 1},
+    {"bins", "f32", 3 * kReachBins},
 };
 constexpr size_t kFloats = 3 + 3 + 3 + 1 + 3 + 9 + 9 + 9 + 3 + 3 + 6 + 4 + 3 + kReachBins + 3 + 3 + 1 + 1 + 1 + 3 * kReachBins;
 constexpr size_t kRecordBytes = kFloats * 4 + 8 + 4 + 4 + 4 + 4 + 4;
@@ -63,8 +87,7 @@ void write_record(std::string& out, const Record& r) {
     for (const auto& v : r.grad_r) put_vec(out, v);
     for (const auto& v : r.grad_t) put_vec(out, v);
     put_vec(out, r.ao_grad_r), put_vec(out, r.ao_grad_t);
-    put(out, r.radius), put(out, r.raw_radius), put(out, r.footprint), put(out, r.harmonic), put(out, r.dmin),
-        put(out, r.weber);
+    put(out, r.radius), put(out, r.raw_radius), put(out, r.footprint), put(out, r.harmonic), put(out, r.dmin), put(out, r.weber);
     put(out, r.radius_long), put_vec(out, r.axis);
     put(out, r.key), put(out, r.rays), put(out, r.frame);
     put_vec(out, r.origin);
@@ -76,7 +99,7 @@ void write_record(std::string& out, const Record& r) {
 
 /// Sequential reader over the file's bytes with bounds checks.
 class Cursor {
-public:
+  public:
     Cursor(const std::string& b, const std::string& name) : b_(b), name_(name) {}
     template <typename T>
     T get(const char* what) {
@@ -100,7 +123,7 @@ public:
     size_t pos() const { return pos_; }
     [[noreturn]] void fail(const std::string& msg) const { throw InputError(name_, fmt::format("byte {}", pos_), msg); }
 
-private:
+  private:
     void need(size_t n, const char* what) const {
         if (n > remaining()) fail(fmt::format("file is truncated (reading {})", what));
     }
@@ -210,7 +233,8 @@ bool part_in_range(const LightPart& p) {
 bool keeps_light_parts(const CacheFile& file, size_t lights) {
     const auto has = [lights](const Record& r) { return r.parts && r.parts->light.size() == lights; };
     return lights > 0 && (!file.records.empty() || !file.fragment_records.empty()) &&
-           std::all_of(file.records.begin(), file.records.end(), has) && std::all_of(file.fragment_records.begin(), file.fragment_records.end(), has);
+           std::all_of(file.records.begin(), file.records.end(), has) &&
+           std::all_of(file.fragment_records.begin(), file.fragment_records.end(), has);
 }
 
 std::string serialize_records(std::span<const Record> records) {
@@ -223,7 +247,8 @@ std::string serialize_records(std::span<const Record> records) {
         put(out, static_cast<uint32_t>(h ? h->t.size() : 0));
         if (!h) continue;
         put(out, h->m), put(out, h->n);
-        for (size_t c = 0; c < h->t.size(); ++c) put(out, h->t[c]), put(out, h->u[c]), put(out, h->v[c]), put(out, h->object[c]), put(out, h->prim[c]);
+        for (size_t c = 0; c < h->t.size(); ++c)
+            put(out, h->t[c]), put(out, h->u[c]), put(out, h->v[c]), put(out, h->object[c]), put(out, h->prim[c]);
     }
     return out;
 }
@@ -330,7 +355,8 @@ namespace {
 void read_parts(Cursor& c, const std::string& name, size_t lights, std::vector<Record>& records) {
     const size_t record_bytes = (lights + 1) * kPartFloats * 4;
     if (records.size() > c.remaining() / record_bytes)
-        c.fail(fmt::format("{} records' parts for {} lights cannot fit in the {} bytes that follow", records.size(), lights, c.remaining()));
+        c.fail(
+            fmt::format("{} records' parts for {} lights cannot fit in the {} bytes that follow", records.size(), lights, c.remaining()));
     for (size_t done = 0; done < records.size();) {
         const size_t block_at = c.pos();
         const auto n = c.get<uint32_t>("parts block size");
@@ -359,11 +385,13 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
     Cursor c(bytes, name);
     if (bytes.empty()) c.fail("empty file (not an irradiance cache)");
     std::string magic = c.bytes(std::min<size_t>(8, bytes.size()), "magic");
-    if (magic.size() < 8 || std::memcmp(magic.data(), kMagic, 8) != 0) throw InputError(name, "byte 0", "not a bounce irradiance cache (bad magic)");
+    if (magic.size() < 8 || std::memcmp(magic.data(), kMagic, 8) != 0)
+        throw InputError(name, "byte 0", "not a bounce irradiance cache (bad magic)");
     auto version = c.get<uint32_t>("version");
     // Version 4 is version 5 without light parts: still read.
     if (version != kCacheFileVersion && version != 4)
-        throw InputError(name, "byte 8", fmt::format("unsupported cache version {} (this bounce reads versions 4 and {})", version, kCacheFileVersion));
+        throw InputError(name, "byte 8",
+                         fmt::format("unsupported cache version {} (this bounce reads versions 4 and {})", version, kCacheFileVersion));
     auto hlen = c.get<uint32_t>("header length");
     if (hlen > kMaxHeader || hlen > c.remaining()) c.fail(fmt::format("header length {} is impossible for this file", hlen));
     std::string header = c.bytes(hlen, "header");
@@ -403,7 +431,9 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
             f.info.unscaled_fingerprint = std::stoull(h.at("unscaled_fingerprint").get<std::string>(), nullptr, 16);
         const uint64_t lights = count_of("light_parts", false);
         if (lights > kMaxPartLights || (lights > 0 && version < 5))
-            throw InputError(name, "header/light_parts", fmt::format("{} lights' parts cannot be in a version {} file of at most {} lights", lights, version, kMaxPartLights));
+            throw InputError(
+                name, "header/light_parts",
+                fmt::format("{} lights' parts cannot be in a version {} file of at most {} lights", lights, version, kMaxPartLights));
         f.info.parameters = h.at("parameters");
         f.info.luminance_floor = h.at("luminance_floor").get<float>();
         // A frame number is an integer within the shots' bound (1e39 was read as -2147483648).
@@ -424,8 +454,7 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
             Cursor rc(payload, name);
             for (uint32_t i = 0; i < n; ++i) {
                 Record r = read_record(rc);
-                if (const char* why = record_problem(r))
-                    throw InputError(name, fmt::format("record {}", f.records.size()), why);
+                if (const char* why = record_problem(r)) throw InputError(name, fmt::format("record {}", f.records.size()), why);
                 f.records.push_back(r);
             }
         }
@@ -456,8 +485,7 @@ std::string expand_frame_pattern(const std::string& pattern, int frame) {
     if (start == std::string::npos) return pattern;
     auto end = pattern.find_first_not_of('#', start);
     size_t width = (end == std::string::npos ? pattern.size() : end) - start;
-    return pattern.substr(0, start) + fmt::format("{:0{}}", frame, width) +
-           (end == std::string::npos ? "" : pattern.substr(end));
+    return pattern.substr(0, start) + fmt::format("{:0{}}", frame, width) + (end == std::string::npos ? "" : pattern.substr(end));
 }
 
 }  // namespace bounce

@@ -45,7 +45,8 @@ LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, 
     // AO and irradiance records hold different quantities: never mixed, whatever the flags.
     const std::string ao_key = "render.ao";
     if (f.info.parameters.contains(ao_key) && f.info.parameters[ao_key] != want.parameters[ao_key])
-        throw InputError(path, "parameters/" + ao_key, scene.render.indirect.ao ? "cache holds irradiance, not AO" : "cache holds AO, not irradiance");
+        throw InputError(path, "parameters/" + ao_key,
+                         scene.render.indirect.ao ? "cache holds irradiance, not AO" : "cache holds AO, not irradiance");
     LoadedCache out;
     // Records that keep a part per light (scales factored out) take this scene's colours and
     // intensities exactly when nothing else about the lights and materials differs.
@@ -60,8 +61,10 @@ LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, 
     cache.set_luminance_floor(f.info.luminance_floor);
     const std::vector<Color> scales = light_scales(scene);
     const auto scaled = [&](Record r) {
-        if (r.parts && r.parts->light.size() == scales.size()) apply_light_scales(r, scales);
-        else r.parts.reset();
+        if (r.parts && r.parts->light.size() == scales.size())
+            apply_light_scales(r, scales);
+        else
+            r.parts.reset();
         return r;
     };
     for (const Record& r : f.records)

@@ -35,7 +35,7 @@ CacheFit cache_fit(const CacheFile& file, const CacheFileInfo& want, size_t ligh
 
 struct LoadedCache {
     size_t records = 0;
-    size_t fragment_records = 0;  ///< per-fragment refinement's records
+    size_t fragment_records = 0;           ///< per-fragment refinement's records
     std::vector<std::string> differences;  ///< "key: was -> now", for the settings that differ
     /// Same objects, other lights or materials: the records hold the bounce light of those.
     bool other_lighting = false;
@@ -45,9 +45,8 @@ struct LoadedCache {
 };
 
 /// Loads `path` into `cache`. Refuses (InputError, exit 2) a cache made for other objects or
-/// another camera unless `force` (other lights or materials only: loaded, `other_lighting`), and one whose record-changing settings differ unless reuse is Any,
-/// naming each differing key with both values.
-/// Records for which `keep` is false are left out.
+/// another camera unless `force` (other lights or materials only: loaded, `other_lighting`), and one whose record-changing settings differ
+/// unless reuse is Any, naming each differing key with both values. Records for which `keep` is false are left out.
 LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, CacheReuse reuse, IrradianceCache& cache,
                        const std::function<bool(const Record&)>& keep = {});
 

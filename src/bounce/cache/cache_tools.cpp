@@ -46,7 +46,7 @@ nlohmann::json cache_info(const CacheFile& f, size_t file_bytes) {
     }
     nlohmann::json h = nlohmann::json::array();
     for (size_t k = 0; k < hist.size(); ++k) {
-        std::string label = k == 0 ? fmt::format("<{}", edges[0])
+        std::string label = k == 0              ? fmt::format("<{}", edges[0])
                             : k == edges.size() ? fmt::format(">={}", edges.back())
                                                 : fmt::format("{}-{}", edges[k - 1], edges[k]);
         h.push_back({{"pixels", label}, {"records", hist[k]}});
@@ -63,8 +63,7 @@ nlohmann::json cache_info(const CacheFile& f, size_t file_bytes) {
 std::string cache_info_text(const nlohmann::json& j, const std::string& path) {
     std::string s = fmt::format("{}: {} records, {} fragment records (frame {})\n", path, j["records"].get<size_t>(),
                                 j["fragment_records"].get<size_t>(), j["frame"].get<int>());
-    if (j.contains("bounds"))
-        s += fmt::format("  bounds       {} .. {}\n", j["bounds"][0].dump(), j["bounds"][1].dump());
+    if (j.contains("bounds")) s += fmt::format("  bounds       {} .. {}\n", j["bounds"][0].dump(), j["bounds"][1].dump());
     if (j.contains("mean_rays_per_record"))
         s += fmt::format("  rays/record  {:.0f}\n  mean E (Y)   {:.4g}\n", j["mean_rays_per_record"].get<double>(),
                          j["mean_irradiance_luminance"].get<double>());
@@ -97,11 +96,9 @@ CacheSettings settings_from(const nlohmann::json& parameters) {
     for (const Param& p : scene_params()) {
         if (!parameters.contains(p.key)) continue;
         try {
-            p.set(scene, check_param(p, parameters[p.key], [](const std::string&, const std::string& msg) {
-                      throw std::invalid_argument(msg);
-                  }));
-        } catch (const std::invalid_argument&) {
-        }
+            p.set(scene,
+                  check_param(p, parameters[p.key], [](const std::string&, const std::string& msg) { throw std::invalid_argument(msg); }));
+        } catch (const std::invalid_argument&) {}
     }
     return scene.render.cache;
 }
@@ -114,14 +111,14 @@ std::string record_bytes(const Record& r) {
 
 }  // namespace
 
-CacheFile merge_caches(const CacheFile& a, const CacheFile& b, const std::string& name_a, const std::string& name_b,
-                       bool force) {
+CacheFile merge_caches(const CacheFile& a, const CacheFile& b, const std::string& name_a, const std::string& name_b, bool force) {
     if (!force && (a.info.scene_fingerprint != b.info.scene_fingerprint || a.info.camera_fingerprint != b.info.camera_fingerprint))
         throw InputError(name_b, "fingerprint", "cache belongs to another scene or camera than " + name_a + " (--force merges anyway)");
     const bool ao_a = a.info.parameters.value("render.ao", false), ao_b = b.info.parameters.value("render.ao", false);
     if (!force && ao_a != ao_b)
-        throw InputError(name_b, "parameters/render.ao", fmt::format("cache holds {} but {} holds {} (--force merges anyway)",
-                                                                      ao_b ? "AO" : "irradiance", name_a, ao_a ? "AO" : "irradiance"));
+        throw InputError(name_b, "parameters/render.ao",
+                         fmt::format("cache holds {} but {} holds {} (--force merges anyway)", ao_b ? "AO" : "irradiance", name_a,
+                                     ao_a ? "AO" : "irradiance"));
     // Records made under other settings (metric, spacings, rays ...) would be judged by the
     // first file's settings and the result accepted by --cache-in as if made with them.
     if (const std::vector<std::string> differ = param_differences(a.info.parameters, b.info.parameters); !force && !differ.empty())
@@ -167,34 +164,61 @@ CacheFile merge_caches(const CacheFile& a, const CacheFile& b, const std::string
 namespace {
 
 /// The --where fields, by the names the CLI takes.
-constexpr std::array<std::pair<std::string_view, WhereTerm::Field>, 15> kWhereFields{{
-    {"p.x", WhereTerm::Field::PX}, {"p.y", WhereTerm::Field::PY}, {"p.z", WhereTerm::Field::PZ},
-    {"n.x", WhereTerm::Field::NX}, {"n.y", WhereTerm::Field::NY}, {"n.z", WhereTerm::Field::NZ},
-    {"E.r", WhereTerm::Field::ER}, {"E.g", WhereTerm::Field::EG}, {"E.b", WhereTerm::Field::EB},
-    {"E.y", WhereTerm::Field::EY}, {"ao", WhereTerm::Field::Ao}, {"radius", WhereTerm::Field::Radius},
-    {"pixels", WhereTerm::Field::Pixels}, {"rays", WhereTerm::Field::Rays}, {"frame", WhereTerm::Field::Frame}}};
-constexpr std::array<std::pair<std::string_view, WhereTerm::Op>, 6> kWhereOps{{
-    {"<", WhereTerm::Op::Less}, {"<=", WhereTerm::Op::LessEqual}, {">", WhereTerm::Op::Greater},
-    {">=", WhereTerm::Op::GreaterEqual}, {"==", WhereTerm::Op::Equal}, {"!=", WhereTerm::Op::NotEqual}}};
+constexpr std::array<std::pair<std::string_view, WhereTerm::Field>, 15> kWhereFields{{{"p.x", WhereTerm::Field::PX},
+                                                                                      {"p.y", WhereTerm::Field::PY},
+                                                                                      {"p.z", WhereTerm::Field::PZ},
+                                                                                      {"n.x", WhereTerm::Field::NX},
+                                                                                      {"n.y", WhereTerm::Field::NY},
+                                                                                      {"n.z", WhereTerm::Field::NZ},
+                                                                                      {"E.r", WhereTerm::Field::ER},
+                                                                                      {"E.g", WhereTerm::Field::EG},
+                                                                                      {"E.b", WhereTerm::Field::EB},
+                                                                                      {"E.y", WhereTerm::Field::EY},
+                                                                                      {"ao", WhereTerm::Field::Ao},
+                                                                                      {"radius", WhereTerm::Field::Radius},
+                                                                                      {"pixels", WhereTerm::Field::Pixels},
+                                                                                      {"rays", WhereTerm::Field::Rays},
+                                                                                      {"frame", WhereTerm::Field::Frame}}};
+constexpr std::array<std::pair<std::string_view, WhereTerm::Op>, 6> kWhereOps{{{"<", WhereTerm::Op::Less},
+                                                                               {"<=", WhereTerm::Op::LessEqual},
+                                                                               {">", WhereTerm::Op::Greater},
+                                                                               {">=", WhereTerm::Op::GreaterEqual},
+                                                                               {"==", WhereTerm::Op::Equal},
+                                                                               {"!=", WhereTerm::Op::NotEqual}}};
 
 double field_value(const Record& r, WhereTerm::Field f) {
     using F = WhereTerm::Field;
     switch (f) {
-        case F::PX: return r.p.x;
-        case F::PY: return r.p.y;
-        case F::PZ: return r.p.z;
-        case F::NX: return r.n.x;
-        case F::NY: return r.n.y;
-        case F::NZ: return r.n.z;
-        case F::ER: return r.E.x;
-        case F::EG: return r.E.y;
-        case F::EB: return r.E.z;
-        case F::EY: return luminance(r.E);
-        case F::Ao: return r.ao;
-        case F::Radius: return r.radius;
-        case F::Pixels: return r.radius / r.footprint;
-        case F::Rays: return r.rays;
-        case F::Frame: return r.frame;
+        case F::PX:
+            return r.p.x;
+        case F::PY:
+            return r.p.y;
+        case F::PZ:
+            return r.p.z;
+        case F::NX:
+            return r.n.x;
+        case F::NY:
+            return r.n.y;
+        case F::NZ:
+            return r.n.z;
+        case F::ER:
+            return r.E.x;
+        case F::EG:
+            return r.E.y;
+        case F::EB:
+            return r.E.z;
+        case F::EY:
+            return luminance(r.E);
+        case F::Ao:
+            return r.ao;
+        case F::Radius:
+            return r.radius;
+        case F::Pixels:
+            return r.radius / r.footprint;
+        case F::Rays:
+            return r.rays;
+        case F::Frame:
+            return r.frame;
     }
     return 0;
 }
@@ -227,19 +251,24 @@ WhereTerm WhereTerm::parse(const std::string& term) {
 bool WhereTerm::holds(const Record& r) const {
     const double v = field_value(r, field);
     switch (op) {
-        case Op::Less: return v < value;
-        case Op::LessEqual: return v <= value;
-        case Op::Greater: return v > value;
-        case Op::GreaterEqual: return v >= value;
-        case Op::Equal: return v == value;
-        case Op::NotEqual: return v != value;
+        case Op::Less:
+            return v < value;
+        case Op::LessEqual:
+            return v <= value;
+        case Op::Greater:
+            return v > value;
+        case Op::GreaterEqual:
+            return v >= value;
+        case Op::Equal:
+            return v == value;
+        case Op::NotEqual:
+            return v != value;
     }
     return false;
 }
 
 bool RecordFilter::matches(const Record& r) const {
-    if (has_box && (r.p.x < box_lo.x || r.p.y < box_lo.y || r.p.z < box_lo.z || r.p.x > box_hi.x || r.p.y > box_hi.y ||
-                    r.p.z > box_hi.z))
+    if (has_box && (r.p.x < box_lo.x || r.p.y < box_lo.y || r.p.z < box_lo.z || r.p.x > box_hi.x || r.p.y > box_hi.y || r.p.z > box_hi.z))
         return false;
     if (has_sphere && length(r.p - center) > radius) return false;
     return std::all_of(where.begin(), where.end(), [&](const WhereTerm& w) { return w.holds(r); });

@@ -19,8 +19,7 @@ std::string cache_info_text(const nlohmann::json& info, const std::string& path)
 /// in a canonical order, and one is dropped when records already kept from the *other* input
 /// cover it (weights sum >= min_weight under `a`'s settings). Merging a cache with itself
 /// gives it back. Throws InputError if the caches belong to different scenes or cameras.
-CacheFile merge_caches(const CacheFile& a, const CacheFile& b, const std::string& name_a,
-                       const std::string& name_b, bool force);
+CacheFile merge_caches(const CacheFile& a, const CacheFile& b, const std::string& name_a, const std::string& name_b, bool force);
 
 /// One --where term, parsed: a record field compared with a number.
 struct WhereTerm {

@@ -64,7 +64,8 @@ int blend_bins(const IrradianceCache& cache, const Vec3& p, const Vec3& n, const
 
 BinPrediction predict_bins(const IrradianceCache& cache, const Vec3& p, const Vec3& n, const Vec3& gather_n) {
     BinPrediction out;
-    out.records = blend_bins(cache, p, n, gather_n, [](const Record& r) { return &r.bin_values(); }, out.bin);
+    out.records = blend_bins(
+        cache, p, n, gather_n, [](const Record& r) { return &r.bin_values(); }, out.bin);
     return out;
 }
 
@@ -84,8 +85,7 @@ Color prediction_correction(const BinPrediction& prediction, std::span<const Vec
     return (integral / static_cast<float>(kReachBins) - along / static_cast<float>(local.size())) * scale;
 }
 
-Color plane_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& n, std::span<const Vec3> local, float scale,
-                       int& records) {
+Color plane_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& n, std::span<const Vec3> local, float scale, int& records) {
     Color integral(0), along(0);
     float wsum = 0;
     records = 0;
@@ -166,8 +166,10 @@ void correction_pass(const Scene& scene, const DeepBuffer& deep, const Irradianc
             c = prediction_correction(pred, local, scale), records = pred.records;
         }
         Indirect& out = light[b.index];
-        if (ao) out.ao = g.ao + c.x;
-        else out.irradiance = g.irradiance + c;
+        if (ao)
+            out.ao = g.ao + c.x;
+        else
+            out.irradiance = g.irradiance + c;
         ++fragments.local();
         predicted.local() += records > 0;
     });

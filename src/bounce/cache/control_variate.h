@@ -47,8 +47,7 @@ Color prediction_correction(const BinPrediction& prediction, std::span<const Vec
 /// The same from the records on the fragment's own plane (normal `n` to the bit) that keep
 /// their every cell: a ray's prediction is the radiance of the cell of each record's grid it
 /// falls in, blended; the integral is each record's own mean. `records`: how many.
-Color plane_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& n, std::span<const Vec3> local, float scale,
-                       int& records);
+Color plane_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& n, std::span<const Vec3> local, float scale, int& records);
 
 /// The same from the records' cells' hit points (Record::cell_hits) seen from the fragment's
 /// gather point `at` (normal gather_n), records looked up at (p, n): each hit, weighed by its

@@ -25,25 +25,31 @@ struct Candidate {
 
 /// What one sub-pass collected, per tile.
 struct TileWork {
-    std::vector<Record> made;            ///< new records
-    std::vector<uint32_t> requests;      ///< stale records that cover a fragment
-    std::vector<Candidate> deferred;     ///< misses waiting for those to be redone
+    std::vector<Record> made;         ///< new records
+    std::vector<uint32_t> requests;   ///< stale records that cover a fragment
+    std::vector<Candidate> deferred;  ///< misses waiting for those to be redone
 };
 
 class Gathering {
-public:
+  public:
     Gathering(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, IrradianceCache& cache, Stats& stats,
               const GatheringOptions& o)
-        : scene_(scene), deep_(deep), gatherer_(gatherer), cache_(cache), stats_(stats), o_(o),
+        : scene_(scene),
+          deep_(deep),
+          gatherer_(gatherer),
+          cache_(cache),
+          stats_(stats),
+          o_(o),
           per_tile_(scene.render.parallel.cache_sharing == CacheSharing::PerThread),
           tiles_(make_tiles(deep.width, deep.height, scene.render.parallel.tile_size, scene.render.parallel.tile_order)),
-          mine_(owned(tiles_, o.comm)), work_(tiles_.size()) {}
+          mine_(owned(tiles_, o.comm)),
+          work_(tiles_.size()) {}
 
     void subpass(const SubPass& sp);
     size_t gathered = 0, dropped = 0;
     tbb::enumerable_thread_specific<size_t> full_gathers{0};
 
-private:
+  private:
     Record gather_at(const Candidate& c, Counters& counters);
     void judge_tile(const SubPass& sp, const Tile& t);
     /// One side of one fragment of a tile: a record where the cache misses (`covering`: scratch).

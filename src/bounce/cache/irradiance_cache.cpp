@@ -18,13 +18,23 @@ float raised_share(float raw, float rmin) { return raw < rmin && rmin > 0 ? std:
 }  // namespace
 
 IrradianceCache::IrradianceCache(const Bounds& scene_bounds, CacheSettings settings, bool ao_only)
-    : scene_bounds_(scene_bounds), settings_(std::move(settings)), shading_settings_(settings_.for_shading()), ao_only_(ao_only),
+    : scene_bounds_(scene_bounds),
+      settings_(std::move(settings)),
+      shading_settings_(settings_.for_shading()),
+      ao_only_(ao_only),
       octree_(scene_bounds) {}
 
 IrradianceCache::IrradianceCache(const IrradianceCache& o)
-    : scene_bounds_(o.scene_bounds_), settings_(o.settings_), shading_settings_(o.shading_settings_), ao_only_(o.ao_only_),
-      records_(o.records_), fragment_records_(o.fragment_records_), fragment_index_(o.fragment_index_), octree_(o.octree_),
-      luminance_floor_(o.luminance_floor_), light_scales_(o.light_scales_) {}
+    : scene_bounds_(o.scene_bounds_),
+      settings_(o.settings_),
+      shading_settings_(o.shading_settings_),
+      ao_only_(o.ao_only_),
+      records_(o.records_),
+      fragment_records_(o.fragment_records_),
+      fragment_index_(o.fragment_index_),
+      octree_(o.octree_),
+      luminance_floor_(o.luminance_floor_),
+      light_scales_(o.light_scales_) {}
 
 std::unique_ptr<IrradianceCache> IrradianceCache::clone() const { return std::unique_ptr<IrradianceCache>(new IrradianceCache(*this)); }
 
@@ -76,7 +86,6 @@ bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Recor
     for (const Record& r : extra) add(r);
     return sum < (min_weight > 0 ? min_weight : settings_.min_weight) && top < own;
 }
-
 
 bool IrradianceCache::has_light_parts(size_t lights) const {
     const auto has = [lights](const Record& r) { return r.parts && r.parts->light.size() == lights; };
@@ -177,7 +186,8 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
     // bring beyond the interpolation's own (sum(w^2 s^2)/W^2 of independent records): with few
     // rays per record refinement made the error worse (Cornell box, 128 rays: 8.36 % against
     // 8.17 % without it). Judged on what is left over.
-    if (settings_.refine_noise > 0) var = std::max(0.0, var - settings_.refine_noise * std::max(0.0, own / wsum - (nsum / wsum) * (w2sum / (wsum * wsum))));
+    if (settings_.refine_noise > 0)
+        var = std::max(0.0, var - settings_.refine_noise * std::max(0.0, own / wsum - (nsum / wsum) * (w2sum / (wsum * wsum))));
     const double floor = ao_only_ ? 1e-3 : std::max<double>(luminance_floor_, 1e-12);
     out.spread = static_cast<float>(std::sqrt(var) / std::max(mean, floor));
     auto inv = static_cast<float>(1 / wsum);
@@ -204,8 +214,7 @@ void IrradianceCache::light_shares(const Vec3& p, const Vec3& n, bool shading, c
     normalise_shares(out);
 }
 
-Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const Vec3& n, float footprint,
-                                    uint64_t key) const {
+Record IrradianceCache::make_record(const GatherResult& g, const Vec3& p, const Vec3& n, float footprint, uint64_t key) const {
     Record r;
     r.p = p;
     r.n = n;

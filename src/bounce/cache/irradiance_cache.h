@@ -33,7 +33,7 @@ struct Interpolated {
 };
 
 class IrradianceCache {
-public:
+  public:
     IrradianceCache(const Bounds& scene_bounds, CacheSettings settings, bool ao_only);
     IrradianceCache(IrradianceCache&&) = default;
     IrradianceCache& operator=(IrradianceCache&&) = default;
@@ -59,8 +59,7 @@ public:
     /// `at_p`, `at_n` (default p, n): where the gradients extrapolate each record's value to,
     /// when records are looked up on another surface (the displaced point and normal of a
     /// fragment whose records live on the un-displaced surface).
-    Interpolated lookup(const Vec3& p, const Vec3& n, bool shading = false, const Vec3* at_p = nullptr,
-                        const Vec3* at_n = nullptr) const;
+    Interpolated lookup(const Vec3& p, const Vec3& n, bool shading = false, const Vec3* at_p = nullptr, const Vec3* at_n = nullptr) const;
     /// Each light's share of that interpolation (records need light parts): light i's part of
     /// every record, times its scale, weighed and extrapolated as lookup does the value, then
     /// divided per channel by the lights' sum, so the shares sum to 1 (0 where there is no
@@ -143,7 +142,7 @@ public:
     /// every gradient look infinite); the passes set it to 1e-3 of the first sub-pass's mean.
     void set_luminance_floor(float f) { luminance_floor_ = f; }
 
-private:
+  private:
     IrradianceCache(const IrradianceCache& other);  ///< clone()
     Bounds scene_bounds_;
     CacheSettings settings_, shading_settings_;
@@ -152,8 +151,8 @@ private:
     std::deque<Record> fragment_records_;
     std::unordered_map<uint64_t, uint32_t> fragment_index_;  ///< key -> fragment_records_ index
     RecordOctree octree_;
-    float luminance_floor_ = -1;  ///< Weber floor, fixed from the first record batch
-    std::vector<Color> light_scales_;  ///< light_parts: per scene light
+    float luminance_floor_ = -1;                                                        ///< Weber floor, fixed from the first record batch
+    std::vector<Color> light_scales_;                                                   ///< light_parts: per scene light
     std::unique_ptr<std::shared_mutex> mutex_ = std::make_unique<std::shared_mutex>();  // keeps the cache movable
     /// filtered_values(): made once per state of the records (reset by every change).
     struct Filtered {

@@ -28,8 +28,8 @@ void RecordOctree::insert(uint32_t id, const Vec3& p, float support) {
     insert(root_, bounds_.lo, bounds_.hi, Entry{p, 1.0001f * support * support, id}, blo, bhi, diag2, 0);
 }
 
-void RecordOctree::insert(Node& node, const Vec3& lo, const Vec3& hi, const Entry& e, const Vec3& blo,
-                          const Vec3& bhi, float diag2, int depth) {
+void RecordOctree::insert(Node& node, const Vec3& lo, const Vec3& hi, const Entry& e, const Vec3& blo, const Vec3& bhi, float diag2,
+                          int depth) {
     Vec3 d = hi - lo;
     // Stop at nodes no bigger than the support box (or at depth 16).
     if (depth == 16 || dot(d, d) < diag2) {
@@ -45,8 +45,7 @@ void RecordOctree::insert(Node& node, const Vec3& lo, const Vec3& hi, const Entr
     for (int c = 0; c < 8; ++c) {
         Vec3 clo{c & 1 ? mid.x : lo.x, c & 2 ? mid.y : lo.y, c & 4 ? mid.z : lo.z};
         Vec3 chi{c & 1 ? hi.x : mid.x, c & 2 ? hi.y : mid.y, c & 4 ? hi.z : mid.z};
-        if (bhi.x < clo.x || blo.x > chi.x || bhi.y < clo.y || blo.y > chi.y || bhi.z < clo.z || blo.z > chi.z)
-            continue;
+        if (bhi.x < clo.x || blo.x > chi.x || bhi.y < clo.y || blo.y > chi.y || bhi.z < clo.z || blo.z > chi.z) continue;
         insert((*node.children)[static_cast<size_t>(c)], clo, chi, e, blo, bhi, diag2, depth + 1);
     }
 }

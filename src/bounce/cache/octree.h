@@ -14,7 +14,7 @@
 namespace bounce {
 
 class RecordOctree {
-public:
+  public:
     explicit RecordOctree(const Bounds& bounds);
     RecordOctree(const RecordOctree& other);  ///< a deep copy
     RecordOctree& operator=(const RecordOctree&) = delete;
@@ -43,7 +43,7 @@ public:
     }
     size_t memory_bytes() const;
 
-private:
+  private:
     /// A record as the walk needs it: most records on a path lie outside their support sphere
     /// (nodes hold support boxes), and are skipped without touching the record itself.
     struct Entry {
@@ -56,8 +56,7 @@ private:
         std::unique_ptr<std::array<Node, 8>> children;
     };
     static Node copy(const Node& node);
-    void insert(Node& node, const Vec3& lo, const Vec3& hi, const Entry& e, const Vec3& blo, const Vec3& bhi,
-                float diag2, int depth);
+    void insert(Node& node, const Vec3& lo, const Vec3& hi, const Entry& e, const Vec3& blo, const Vec3& bhi, float diag2, int depth);
     Bounds bounds_;
     Node root_;
     size_t nodes_ = 1, refs_ = 0;

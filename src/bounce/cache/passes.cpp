@@ -96,8 +96,7 @@ Indirect front_indirect_at(const Scene& scene, const IrradianceCache& cache, con
 /// The light at fragment k: through its front (front_indirect_at) and, on a thin translucent
 /// surface, through its back, interpolated from the back side's records (refinement and
 /// corrections are the front's alone).
-Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
-                     Origin& from) {
+Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k, Origin& from) {
     Indirect out = front_indirect_at(scene, cache, deep, wx, wy, k, from);
     const Fragment& f = deep.pixel(wx, wy)[k];
     if (!takes_back_light(scene, f)) return out;
@@ -128,8 +127,8 @@ void front_shares_at(const Scene& scene, const IrradianceCache& cache, const Dee
 /// Each light's share of what indirect_at gave fragment k (`in`, `from`), into `out`: on a
 /// thin translucent surface the two sides' shares weighed by what the indirect layer takes of
 /// each, (1 - t) E_front and t E_back.
-void shares_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k,
-               const Indirect& in, const Origin& from, std::span<Color> out) {
+void shares_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k, const Indirect& in,
+               const Origin& from, std::span<Color> out) {
     front_shares_at(scene, cache, deep, wx, wy, k, from, out);
     const Fragment& f = deep.pixel(wx, wy)[k];
     if (!takes_back_light(scene, f) || from.back_missed) return;
@@ -166,8 +165,8 @@ std::optional<DirectionGuide> records_guide(const IrradianceCache& cache, const 
 }
 }  // namespace
 
-size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,
-                       Stats& stats, ProgressSink* sink, const RefinementOptions& options) {
+size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache, Stats& stats,
+                       ProgressSink* sink, const RefinementOptions& options) {
     const int frame = options.frame;
     const CacheSettings& cs = cache.settings();
     const float threshold = cs.refine;
@@ -177,61 +176,64 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
         // Lookups only: nobody inserts until every fragment is judged, so the decision sees the
         // finished cache whatever the thread count.
         auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache, stats.local());
-        for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "refining", [&](int wx, int wy, size_t) {
-            auto frags = deep.pixel(wx, wy);
-            for (uint32_t k = 0; k < frags.size(); ++k) {
-                const Fragment& f = frags[k];
-                if (f.is_hair()) continue;  // hair keeps its strand's value (no fragment gathers)
-                if (!needs_bounce_light(scene, f)) continue;
-                const uint64_t key = candidate_key(deep, wx, wy, k);
-                if (cache.fragment_record(key, f.p)) continue;  // refined by an earlier render
-                // An earlier render's record of this very fragment, stale (what it saw changed).
-                const Record* before = nullptr;
-                if (options.stale)
-                    if (auto it = options.stale->find(key); it != options.stale->end() && it->second.p == f.p) before = &it->second;
-                if (!tilted_off_records(cs, f)) {
-                    const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cs));
-                    // Hysteresis: refined in an earlier frame, a fragment keeps its own gather
-                    // until its records agree within refine_hold x refine, so that a spread
-                    // hovering about the threshold does not switch it on and off frame by frame.
-                    // (Not within a frame: the lighting tool re-rendering it shows what a
-                    // render of that frame gives.)
-                    const bool held = before ? before->gathered < frame
-                                             : options.refined_before && options.refined_before->nearest(f.p, f.n, f.footprint);
-                    const float at = held ? threshold * cs.refine_hold : threshold;
-                    if (in.weight > 0 && (threshold <= 0 || in.spread <= at)) continue;
+        for_each_pixel_in_tiles(
+            deep, scene.render.parallel.tile_size, sink, "refining",
+            [&](int wx, int wy, size_t) {
+                auto frags = deep.pixel(wx, wy);
+                for (uint32_t k = 0; k < frags.size(); ++k) {
+                    const Fragment& f = frags[k];
+                    if (f.is_hair()) continue;  // hair keeps its strand's value (no fragment gathers)
+                    if (!needs_bounce_light(scene, f)) continue;
+                    const uint64_t key = candidate_key(deep, wx, wy, k);
+                    if (cache.fragment_record(key, f.p)) continue;  // refined by an earlier render
+                    // An earlier render's record of this very fragment, stale (what it saw changed).
+                    const Record* before = nullptr;
+                    if (options.stale)
+                        if (auto it = options.stale->find(key); it != options.stale->end() && it->second.p == f.p) before = &it->second;
+                    if (!tilted_off_records(cs, f)) {
+                        const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cs));
+                        // Hysteresis: refined in an earlier frame, a fragment keeps its own gather
+                        // until its records agree within refine_hold x refine, so that a spread
+                        // hovering about the threshold does not switch it on and off frame by frame.
+                        // (Not within a frame: the lighting tool re-rendering it shows what a
+                        // render of that frame gives.)
+                        const bool held = before ? before->gathered < frame
+                                                 : options.refined_before && options.refined_before->nearest(f.p, f.n, f.footprint);
+                        const float at = held ? threshold * cs.refine_hold : threshold;
+                        if (in.weight > 0 && (threshold <= 0 || in.spread <= at)) continue;
+                    }
+                    if (before) {  // updated rather than gathered anew
+                        made.local().push_back(options.update(*before, stats.local()));
+                        continue;
+                    }
+                    // Gathered about the fragment's own (displaced) point and normal, as brute force
+                    // does; with an earlier gather near it on its surface, mostly from that one's rays
+                    // (then it keeps no hits: never reused itself).
+                    const RandomStream rng = fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k);
+                    const Record* near = options.earlier ? options.earlier->nearest(f.p, f.n, f.footprint) : nullptr;
+                    auto hits = options.keep_hits && !near ? std::make_shared<GatherHits>() : nullptr;
+                    // Guided by the records that cover it where they kept a guide (render.guided),
+                    // unless its hits are to be kept (a guided gather has no grid to re-shade).
+                    const std::optional<DirectionGuide> guide =
+                        !near && !hits && refiner.settings().guided > 0 ? records_guide(cache, scene, f) : std::nullopt;
+                    const GatherResult g =
+                        near    ? refiner.reproject(f.p, f.n, rng,
+                                                    {near->origin, near->n,
+                                                     record_stream(*near, scene.render.visibility.seed, scene.camera.width), *near->hits},
+                                                    stats.local())
+                        : guide ? refiner.gather_guided(f.p, f.n, rng, *guide, stats.local())
+                                : refiner.gather(f.p, f.n, rng, stats.local(), 0, hits.get());
+                    reused.local() += near != nullptr;
+                    Record r;
+                    r.hits = std::move(hits);
+                    place_fragment_record(r, f, key, frame);
+                    cache.set_values(r, g, false);  // a fragment's own value: no gradients
+                    r.harmonic = g.harmonic_distance, r.dmin = g.min_distance;
+                    r.rays = static_cast<uint32_t>(g.rays);
+                    made.local().push_back(r);
                 }
-                if (before) {  // updated rather than gathered anew
-                    made.local().push_back(options.update(*before, stats.local()));
-                    continue;
-                }
-                // Gathered about the fragment's own (displaced) point and normal, as brute force
-                // does; with an earlier gather near it on its surface, mostly from that one's rays
-                // (then it keeps no hits: never reused itself).
-                const RandomStream rng = fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k);
-                const Record* near = options.earlier ? options.earlier->nearest(f.p, f.n, f.footprint) : nullptr;
-                auto hits = options.keep_hits && !near ? std::make_shared<GatherHits>() : nullptr;
-                // Guided by the records that cover it where they kept a guide (render.guided),
-                // unless its hits are to be kept (a guided gather has no grid to re-shade).
-                const std::optional<DirectionGuide> guide =
-                    !near && !hits && refiner.settings().guided > 0 ? records_guide(cache, scene, f) : std::nullopt;
-                const GatherResult g =
-                    near ? refiner.reproject(f.p, f.n, rng,
-                                             {near->origin, near->n, record_stream(*near, scene.render.visibility.seed, scene.camera.width),
-                                              *near->hits},
-                                             stats.local())
-                    : guide ? refiner.gather_guided(f.p, f.n, rng, *guide, stats.local())
-                            : refiner.gather(f.p, f.n, rng, stats.local(), 0, hits.get());
-                reused.local() += near != nullptr;
-                Record r;
-                r.hits = std::move(hits);
-                place_fragment_record(r, f, key, frame);
-                cache.set_values(r, g, false);  // a fragment's own value: no gradients
-                r.harmonic = g.harmonic_distance, r.dmin = g.min_distance;
-                r.rays = static_cast<uint32_t>(g.rays);
-                made.local().push_back(r);
-            }
-        }, scene.render.parallel.tile_order, options.comm);
+            },
+            scene.render.parallel.tile_order, options.comm);
     }
     std::vector<Record> records;
     for (auto& v : made) records.insert(records.end(), v.begin(), v.end());
@@ -260,8 +262,8 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
     return records.size() - taken;
 }
 
-InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
-                                     Stats& stats, ProgressSink* sink, bool report, bool per_light) {
+InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache, Stats& stats,
+                                     ProgressSink* sink, bool report, bool per_light) {
     InterpolatedLight out;
     out.light.resize(deep.fragments.size());
     out.refined.assign(deep.fragments.size(), 0);
@@ -273,20 +275,23 @@ InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep,
     tbb::enumerable_thread_specific<uint64_t> misses(0), lookups(0), own(0);
     // The pass holds the shared lock for its workers: no writer can interleave.
     auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache, stats.local());
-    for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "interpolate", [&](int wx, int wy, size_t first) {
-        auto frags = deep.pixel(wx, wy);
-        for (uint32_t k = 0; k < frags.size(); ++k) {
-            Origin from;
-            out.light[first + k] = indirect_at(scene, cache, deep, wx, wy, k, from);
-            if (per_light) shares_at(scene, cache, deep, wx, wy, k, out.light[first + k], from, out.shares.at(first + k));
-            ++lookups.local();
-            if (from.src == Source::Own) {
-                ++own.local();
-                out.refined[first + k] = 1;
+    for_each_pixel_in_tiles(
+        deep, scene.render.parallel.tile_size, sink, "interpolate",
+        [&](int wx, int wy, size_t first) {
+            auto frags = deep.pixel(wx, wy);
+            for (uint32_t k = 0; k < frags.size(); ++k) {
+                Origin from;
+                out.light[first + k] = indirect_at(scene, cache, deep, wx, wy, k, from);
+                if (per_light) shares_at(scene, cache, deep, wx, wy, k, out.light[first + k], from, out.shares.at(first + k));
+                ++lookups.local();
+                if (from.src == Source::Own) {
+                    ++own.local();
+                    out.refined[first + k] = 1;
+                }
+                misses.local() += from.src == Source::Missed || from.back_missed;
             }
-            misses.local() += from.src == Source::Missed || from.back_missed;
-        }
-    }, scene.render.parallel.tile_order);
+        },
+        scene.render.parallel.tile_order);
     uint64_t m = 0, l = 0, o = 0;
     for (auto v : misses) m += v;
     for (auto v : lookups) l += v;
@@ -320,7 +325,8 @@ std::vector<Indirect> preview_indirect(const Scene& scene, const DeepBuffer& dee
             auto frags = deep.pixel(wx, wy);
             const auto n = static_cast<uint32_t>(deep.pixel(lx, ly).size());
             Origin unused;
-            for (uint32_t k = 0; k < frags.size(); ++k) out[first + k] = indirect_at(scene, cache, deep, lx, ly, std::min(k, n - 1), unused);
+            for (uint32_t k = 0; k < frags.size(); ++k)
+                out[first + k] = indirect_at(scene, cache, deep, lx, ly, std::min(k, n - 1), unused);
         }
     });
     return out;

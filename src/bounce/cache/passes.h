@@ -22,7 +22,7 @@ namespace bounce {
 /// (2 for the first level's) and a record made in it rarely covers another candidate of it.
 struct SubPass {
     int step = 1;
-    int parity = 0;  ///< bit 0: x/step odd, bit 1: y/step odd
+    int parity = 0;    ///< bit 0: x/step odd, bit 1: y/step odd
     bool all = false;  ///< first level: every parity
     int quarter = 0;   ///< bit 0: x/(2 step) odd, bit 1: y/(2 step) odd (x/step, y/step at the first level)
     bool contains(int x, int y) const;
@@ -97,8 +97,8 @@ struct RefinementOptions {
     Communicator* comm = nullptr;  ///< as GatheringOptions::comm: each process refines its own tiles
 };
 
-size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache,
-                       Stats& stats, ProgressSink* progress, const RefinementOptions& options = {});
+size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache, Stats& stats,
+                       ProgressSink* progress, const RefinementOptions& options = {});
 
 /// What the shading pass's interpolation gives every fragment.
 struct InterpolatedLight {
@@ -114,8 +114,8 @@ struct InterpolatedLight {
 /// bug shows.
 /// `report`: sets the stats (shading_misses, lookups, fragment_records_used).
 /// `per_light` (the records must keep light parts): also each light's share of every fragment's light.
-InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache,
-                                     Stats& stats, ProgressSink* progress, bool report = true, bool per_light = false);
+InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache, Stats& stats,
+                                     ProgressSink* progress, bool report = true, bool per_light = false);
 
 /// Progressive preview after a sub-pass of step `step`: each fragment takes the interpolated
 /// light at the nearest pixel (on that step's lattice, then coarser ones) a finished sub-pass

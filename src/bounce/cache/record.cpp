@@ -24,8 +24,7 @@ void apply_light_scales(Record& r, std::span<const Color> scales) {
     r.E = v.E, r.dir = v.dir, r.grad_r = v.grad_r, r.grad_t = v.grad_t;
 }
 
-Color extrapolated(const Color& E, const std::array<Vec3, 3>& grad_t, const std::array<Vec3, 3>& grad_r, const Vec3& dp,
-                   const Vec3& rot) {
+Color extrapolated(const Color& E, const std::array<Vec3, 3>& grad_t, const std::array<Vec3, 3>& grad_r, const Vec3& dp, const Vec3& rot) {
     Color e = E;
     for (int c = 0; c < 3; ++c) {
         auto k = static_cast<size_t>(c);

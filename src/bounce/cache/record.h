@@ -18,30 +18,29 @@ namespace bounce {
 
 inline constexpr uint32_t kNoAnchor = 0xffffffffu;
 
-
 /// One cache record: a full gather's result at (p, n), with its reach.
 struct Record {
-    Vec3 p, n;                   ///< where it was gathered (un-displaced, un-bumped)
-    Color E{0};                  ///< irradiance
+    Vec3 p, n;   ///< where it was gathered (un-displaced, un-bumped)
+    Color E{0};  ///< irradiance
     float ao = 1;
-    Vec3 bent{0, 0, 1};          ///< bent normal (unit)
-    std::array<Vec3, 3> dir{};   ///< per-channel light directions (unnormalised, see gather.h)
+    Vec3 bent{0, 0, 1};                      ///< bent normal (unit)
+    std::array<Vec3, 3> dir{};               ///< per-channel light directions (unnormalised, see gather.h)
     std::array<Vec3, 3> grad_r{}, grad_t{};  ///< irradiance gradients per channel
     Vec3 ao_grad_r{0}, ao_grad_t{0};
-    float radius = 0;            ///< validity radius R_i (world), after all clamps; hessian: the short one
-    float radius_long = 0;       ///< hessian: the radius along `axis` (>= radius); 0 = round
-    Vec3 axis{0};                ///< hessian: unit tangent direction of the long radius
-    float raw_radius = 0;        ///< radius before the screen-space clamps (neighbour clamping)
-    float footprint = 0;         ///< world width of a pixel at p
+    float radius = 0;              ///< validity radius R_i (world), after all clamps; hessian: the short one
+    float radius_long = 0;         ///< hessian: the radius along `axis` (>= radius); 0 = round
+    Vec3 axis{0};                  ///< hessian: unit tangent direction of the long radius
+    float raw_radius = 0;          ///< radius before the screen-space clamps (neighbour clamping)
+    float footprint = 0;           ///< world width of a pixel at p
     float harmonic = 0, dmin = 0;  ///< gather distances (harmonic mean, qualifying minimum)
-    float weber = INFINITY;      ///< distance at which the gradient change reaches tau E (world)
-    float support = 0;           ///< weights are zero beyond this distance (octree placement)
-    uint64_t key = 0;            ///< creation key (pixel, fragment): deterministic order and its random stream
+    float weber = INFINITY;        ///< distance at which the gradient change reaches tau E (world)
+    float support = 0;             ///< weights are zero beyond this distance (octree placement)
+    uint64_t key = 0;              ///< creation key (pixel, fragment): deterministic order and its random stream
     uint32_t rays = 0;
-    float noise = 0;             ///< its gather's relative standard error (GatherResult::rel_stderr)
-    int32_t frame = 0;           ///< frame it was created in (sequences: reused vs new)
+    float noise = 0;    ///< its gather's relative standard error (GatherResult::rel_stderr)
+    int32_t frame = 0;  ///< frame it was created in (sequences: reused vs new)
     // Frames of a shot (temporal.h).
-    Vec3 origin{0};              ///< where the gather's rays left from (world)
+    Vec3 origin{0};                         ///< where the gather's rays left from (world)
     std::array<float, kReachBins> reach{};  ///< farthest hit per direction bin (INFINITY: a ray escaped)
     /// Mean radiance per direction bin (GatherResult::bins; unoccluded fraction in AO mode): the
     /// record's prediction for a fragment's correction rays (control_variate.h). Null when every
@@ -64,16 +63,16 @@ struct Record {
     /// With correction_prediction "hits": its cells' hit points (GatherResult::cell_hits; not in files).
     std::shared_ptr<const std::vector<Vec3>> cell_hits;
     GatherGrid grid;
-    uint32_t anchor = kNoAnchor; ///< the moving object whose surface carries it, or kNoAnchor (static)
+    uint32_t anchor = kNoAnchor;  ///< the moving object whose surface carries it, or kNoAnchor (static)
     /// Rigid objects: p and n in the object's own space (before its placement). Deforming
     /// objects: the triangle of its visible mesh (anchor_prim) and p's barycentrics (anchor_p.x, .y).
     Vec3 anchor_p{0}, anchor_n{0};
     uint32_t anchor_prim = kNoAnchor;
-    int32_t gathered = 0;        ///< frame of its last gather or re-shade
-    float near = 0;              ///< its gather's `near` (Gatherer::gather), to gather it again alike
-    float drift = 0;             ///< bound on how far its irradiance may have moved since (relative to E)
-    std::shared_ptr<const GatherHits> hits;  ///< kept only when a shot may re-shade it (not in files)
-    std::shared_ptr<const LightParts> parts; ///< CacheSettings::light_parts only (in files from version 5)
+    int32_t gathered = 0;                     ///< frame of its last gather or re-shade
+    float near = 0;                           ///< its gather's `near` (Gatherer::gather), to gather it again alike
+    float drift = 0;                          ///< bound on how far its irradiance may have moved since (relative to E)
+    std::shared_ptr<const GatherHits> hits;   ///< kept only when a shot may re-shade it (not in files)
+    std::shared_ptr<const LightParts> parts;  ///< CacheSettings::light_parts only (in files from version 5)
     /// render.guided only (not in files): how its gather's cells varied per direction bin, the
     /// guide of the refinement gathers of fragments it covers (guide.h).
     std::shared_ptr<const DirectionGuide> guide;
@@ -91,18 +90,17 @@ void apply_light_scales(Record& r, std::span<const Color> scales);
 
 /// A record's value E extrapolated by its gradients over dp (translation) and rot (n_i x n),
 /// clamped to [0, 4 E] per channel.
-Color extrapolated(const Color& E, const std::array<Vec3, 3>& grad_t, const std::array<Vec3, 3>& grad_r, const Vec3& dp,
-                   const Vec3& rot);
+Color extrapolated(const Color& E, const std::array<Vec3, 3>& grad_t, const std::array<Vec3, 3>& grad_r, const Vec3& dp, const Vec3& rot);
 
 /// A record's AO extrapolated the same way, clamped to [0, 1].
 float extrapolated_ao(float ao, const Vec3& grad_t, const Vec3& grad_r, const Vec3& dp, const Vec3& rot);
 
 /// Normalised error terms of record `r` at (p, n); each reaches 1 exactly at its bound.
 struct MetricTerms {
-    float position = 0;  ///< |p - p_i| / R_i
-    float normal = 0;    ///< sqrt(1 - n.n_i) / sqrt(1 - cos(max_angle))
-    float gradient = 0;  ///< |grad| |p - p_i| / (tau E_i), floored so records reach R_min
-    bool behind = false; ///< p is in front of the record (sees what it did not) or faces away
+    float position = 0;   ///< |p - p_i| / R_i
+    float normal = 0;     ///< sqrt(1 - n.n_i) / sqrt(1 - cos(max_angle))
+    float gradient = 0;   ///< |grad| |p - p_i| / (tau E_i), floored so records reach R_min
+    bool behind = false;  ///< p is in front of the record (sees what it did not) or faces away
 };
 
 MetricTerms metric_terms(const Record& r, const Vec3& p, const Vec3& n, const CacheSettings& s);

@@ -53,8 +53,7 @@ std::vector<FilteredValue> filter_record_values(const IrradianceCache& cache, fl
     }
     // Each value reads only the records as they are, so the order (and thread count) does
     // not matter: the result is deterministic.
-    parallel_for_each_index(size_t(0), out.size(),
-                            [&](size_t i) { out[i] = filtered_record(cache, static_cast<uint32_t>(i), width); });
+    parallel_for_each_index(size_t(0), out.size(), [&](size_t i) { out[i] = filtered_record(cache, static_cast<uint32_t>(i), width); });
     return out;
 }
 

@@ -24,8 +24,8 @@ enum class Side : uint8_t { Front, Back };
 /// its gathers leave from there too.
 struct Site {
     Vec3 p, n;
-    Vec3 origin;      ///< where the gather's rays leave from
-    float near = 0;   ///< hits nearer than this do not size the record (Gatherer::gather)
+    Vec3 origin;     ///< where the gather's rays leave from
+    float near = 0;  ///< hits nearer than this do not size the record (Gatherer::gather)
 };
 inline Site record_site(const Scene& scene, const Fragment& f, const CacheSettings& cs, Side side = Side::Front) {
     if (side == Side::Back) {
@@ -70,8 +70,7 @@ inline void light_shares_at(const IrradianceCache& cache, const Fragment& f, con
 inline constexpr uint64_t kBackSideKey = uint64_t{1} << 63;
 
 inline uint64_t candidate_key(const DeepBuffer& deep, int wx, int wy, uint32_t k, Side side = Side::Front) {
-    uint64_t pix = static_cast<uint64_t>(wy + deep.y0) * static_cast<uint64_t>(deep.full_width) +
-                   static_cast<uint64_t>(wx + deep.x0);
+    uint64_t pix = static_cast<uint64_t>(wy + deep.y0) * static_cast<uint64_t>(deep.full_width) + static_cast<uint64_t>(wx + deep.x0);
     return (pix << 8) | k | (side == Side::Back ? kBackSideKey : 0);
 }
 
@@ -80,8 +79,8 @@ template <typename Lock>
 Lock lock_cache(const IrradianceCache& cache, Counters& counters) {
     auto t0 = std::chrono::steady_clock::now();
     Lock lock(cache.mutex());
-    counters.lock_wait_ns += static_cast<uint64_t>(
-        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
+    counters.lock_wait_ns +=
+        static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
     return lock;
 }
 

@@ -101,8 +101,8 @@ void respace(Record& r, const CameraRays& camera, const CacheSettings& s) {
 }
 
 /// How far `r`'s irradiance (relative to it) may have moved this frame.
-float drift_bound(const Record& r, const SceneChanges& changes, std::span<const LightChange> light, float brightest,
-                  float floor, bool ao_only) {
+float drift_bound(const Record& r, const SceneChanges& changes, std::span<const LightChange> light, float brightest, float floor,
+                  bool ao_only) {
     double bound = 0;
     for (size_t o = 0; o < changes.objects.size(); ++o) {
         const ObjectMotion& m = changes.objects[o];
@@ -138,8 +138,7 @@ bool hits_unchanged(const Record& r, const Scene& now, const SceneChanges& chang
     }
     if (boxes.empty()) return true;
     std::vector<uint32_t> cells;
-    cells_through(GatherGrid{h.m, h.n}, r.origin, r.n,
-                  record_stream(r, now.render.visibility.seed, now.camera.width), h, boxes, cells);
+    cells_through(GatherGrid{h.m, h.n}, r.origin, r.n, record_stream(r, now.render.visibility.seed, now.camera.width), h, boxes, cells);
     return cells.empty();
 }
 
@@ -200,7 +199,8 @@ std::vector<Bounds> moving_bounds(const SceneChanges& changes, uint32_t except) 
 RandomStream record_stream(const Record& r, uint64_t seed, int full_width) {
     const uint64_t pixel = (r.key & ~kBackSideKey) >> 8;
     const auto w = static_cast<uint64_t>(std::max(1, full_width));
-    const RandomStream front = fragment_stream(seed, static_cast<int>(pixel % w), static_cast<int>(pixel / w), static_cast<uint32_t>(r.key & 0xff));
+    const RandomStream front =
+        fragment_stream(seed, static_cast<int>(pixel % w), static_cast<int>(pixel / w), static_cast<uint32_t>(r.key & 0xff));
     return r.key & kBackSideKey ? back_side_stream(front) : front;
 }
 
@@ -221,7 +221,13 @@ struct FrameChange {
 
     FrameChange(const Scene& now_, const SceneChanges& c, std::span<const LightChange> l, float bright, float floor_,
                 const CacheSettings& s, bool ao)
-        : now(now_), changes(c), light(l), brightest(bright), floor(floor_), tolerance(s.temporal_tolerance), ao_only(ao),
+        : now(now_),
+          changes(c),
+          light(l),
+          brightest(bright),
+          floor(floor_),
+          tolerance(s.temporal_tolerance),
+          ao_only(ao),
           boxes(moving_bounds(c)) {
         for (const LightChange& lc : l) changed_sides.push_back((static_cast<uint64_t>(lc.object) << 32) | lc.triangle);
         std::sort(changed_sides.begin(), changed_sides.end());
@@ -261,7 +267,8 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
         ++out.anchored;
         bool ok = true;
         if (own == ObjectMotion::Kind::Rigid) move_rigidly(r, changes.objects[r.anchor].delta);
-        if (own == ObjectMotion::Kind::Deforming) ok = move_on_surface(r, before.objects[r.anchor].visible(), now.objects[r.anchor].visible());
+        if (own == ObjectMotion::Kind::Deforming)
+            ok = move_on_surface(r, before.objects[r.anchor].visible(), now.objects[r.anchor].visible());
         out.anchors_kept += ok;
         return ok;
     };
@@ -305,7 +312,9 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
         } else if (role == Role::Fragment && v == Verdict::Update) {
             out.fragment_stale.emplace(r.key, r);  // updated where refinement still wants it
         } else if (role == Role::Record) {
-            const StaleReason why = v == Verdict::Update ? StaleReason::Update : v == Verdict::View ? StaleReason::View : StaleReason::Light;
+            const StaleReason why = v == Verdict::Update ? StaleReason::Update
+                                    : v == Verdict::View ? StaleReason::View
+                                                         : StaleReason::Light;
             ++(why == StaleReason::View ? out.view : out.light);
             out.stale.push_back(r), out.why.push_back(why);
         } else {

@@ -32,12 +32,12 @@ enum class StaleReason : uint8_t {
 
 /// What the previous frame's cache becomes at this frame.
 struct TemporalJudgement {
-    std::vector<Record> valid;           ///< kept as they were (their reach respaced for this camera)
-    std::vector<Record> stale;           ///< to be redone before they serve
-    std::vector<StaleReason> why;        ///< parallel to stale
-    std::vector<Record> fragment_valid;  ///< per-fragment refinement's records still valid
+    std::vector<Record> valid;                            ///< kept as they were (their reach respaced for this camera)
+    std::vector<Record> stale;                            ///< to be redone before they serve
+    std::vector<StaleReason> why;                         ///< parallel to stale
+    std::vector<Record> fragment_valid;                   ///< per-fragment refinement's records still valid
     std::unordered_map<uint64_t, Record> fragment_stale;  ///< ... to update where refinement still wants them (by key)
-    std::vector<Record> earlier_gathers;  ///< refinement gathers of earlier frames still valid (EarlierGathers)
+    std::vector<Record> earlier_gathers;                  ///< refinement gathers of earlier frames still valid (EarlierGathers)
     size_t kept = 0, moved = 0, view = 0, light = 0, dropped = 0;
     /// Records of the previous frame on objects that moved, and those of them that followed their
     /// anchor to this frame (the rest could not and were dropped).
@@ -51,8 +51,8 @@ struct TemporalJudgement {
 /// are. Records on a deforming object ride on their triangle from `before`'s mesh to `now`'s
 /// (turned with it).
 TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, std::span<const Record> gathers,
-                                const Scene& before, const Scene& now, const SceneChanges& changes,
-                                std::span<const LightChange> light, float brightest);
+                                const Scene& before, const Scene& now, const SceneChanges& changes, std::span<const LightChange> light,
+                                float brightest);
 
 /// Anchors a new record on object `object` (which moves in the shot): in its own space for a
 /// rigid one, at its barycentrics on triangle `prim` of its visible mesh for a deforming one.
@@ -80,7 +80,7 @@ RandomStream record_stream(const Record& r, uint64_t seed, int full_width);
 /// is never itself reused (it keeps no hits), and a gather serves kLifespan frames, then its
 /// neighbourhood gathers again: memory stays bounded over a shot.
 class EarlierGathers {
-public:
+  public:
     static constexpr int kLifespan = 12;
     /// With `need_hits` false, any record in reach counts (refinement's hold: docs/animation.md).
     EarlierGathers(std::vector<Record> records, const Bounds& bounds, float reach, bool need_hits = true);
@@ -90,7 +90,7 @@ public:
     /// The gathers that still serve at `frame`.
     std::vector<Record> lasting(int frame) const;
 
-private:
+  private:
     std::vector<Record> records_;
     RecordOctree index_;
     float reach_;
@@ -100,10 +100,10 @@ private:
 /// Stale records waiting for a new gather. The gathering pass asks which of them cover each
 /// fragment's point; those are redone (by `redo`), and a miss they cover makes no new record.
 class StaleRecords {
-public:
+  public:
     using Redo = std::function<Record(const Record&, StaleReason, Counters&)>;
-    StaleRecords(std::vector<Record> records, std::vector<StaleReason> why, const Bounds& bounds, const CacheSettings& s,
-                 bool ao_only, Redo redo);
+    StaleRecords(std::vector<Record> records, std::vector<StaleReason> why, const Bounds& bounds, const CacheSettings& s, bool ao_only,
+                 Redo redo);
     /// Indices of records not yet redone whose weight at (p, n) is positive.
     void covering(const Vec3& p, const Vec3& n, std::vector<uint32_t>& out) const;
     /// Redoes `ids` (sorted, unique; in parallel) and returns them in that order, marked done.
@@ -112,7 +112,7 @@ public:
     std::vector<Record> waiting() const;
     size_t regathered = 0, reshaded = 0;
 
-private:
+  private:
     IrradianceCache index_;
     std::vector<StaleReason> why_;
     std::vector<uint8_t> done_;

@@ -11,7 +11,8 @@ void blend_with_previous(Record& r, const Record& old, float f) {
     r.parts.reset();  // a blend is no longer its light parts' sum
     const auto mix = [f](auto now, auto was) { return now * (1 - f) + was * f; };
     r.E = mix(r.E, old.E), r.ao = mix(r.ao, old.ao);
-    for (size_t c = 0; c < 3; ++c) r.dir[c] = mix(r.dir[c], old.dir[c]), r.grad_r[c] = mix(r.grad_r[c], old.grad_r[c]), r.grad_t[c] = mix(r.grad_t[c], old.grad_t[c]);
+    for (size_t c = 0; c < 3; ++c)
+        r.dir[c] = mix(r.dir[c], old.dir[c]), r.grad_r[c] = mix(r.grad_r[c], old.grad_r[c]), r.grad_t[c] = mix(r.grad_t[c], old.grad_t[c]);
     r.ao_grad_r = mix(r.ao_grad_r, old.ao_grad_r), r.ao_grad_t = mix(r.ao_grad_t, old.ao_grad_t);
     const Vec3 bent = mix(r.bent, old.bent);
     if (dot(bent, bent) > 0) r.bent = normalize(bent);
@@ -59,7 +60,7 @@ StaleRecords::Redo redo_function(const TemporalFrame& now, const IrradianceCache
 /// How an earlier frame's fragment record is updated: the rays through moving objects' swept
 /// bounds traced again, every hit re-shaded (a fresh gather with its stream, for less).
 std::function<Record(const Record&, Counters&)> fragment_update_function(const TemporalFrame& now, const Gatherer& refiner,
-                                                                          const IrradianceCache& cache) {
+                                                                         const IrradianceCache& cache) {
     std::vector<Bounds> boxes = now.changes ? moving_bounds(*now.changes) : std::vector<Bounds>();
     return [&refiner, &cache, seed = now.scene.render.visibility.seed, width = now.scene.camera.width, frame = now.frame,
             boxes = std::move(boxes), filter = now.scene.render.cache.temporal_filter](const Record& old, Counters& counters) {
@@ -83,17 +84,16 @@ std::vector<Record> gathers_to_keep(const EarlierGathers& earlier, const Irradia
     std::vector<Record> out = earlier.lasting(frame);
     for (size_t i = 0; i < cache.fragment_record_count(); ++i)
         if (const Record& r = cache.fragment_record_at(i); r.gathered == frame && r.hits) out.push_back(r);
-    std::sort(out.begin(), out.end(), [](const Record& a, const Record& b) {
-        return a.gathered != b.gathered ? a.gathered < b.gathered : a.key < b.key;
-    });
+    std::sort(out.begin(), out.end(),
+              [](const Record& a, const Record& b) { return a.gathered != b.gathered ? a.gathered < b.gathered : a.key < b.key; });
     return out;
 }
 
 /// Where refinement gathered in the frame before, for a moving camera's hold (its fragments
 /// never land on those points): this frame's fragment near one keeps CacheSettings::refine_hold.
 /// Null when there is no hold.
-std::unique_ptr<EarlierGathers> refined_the_frame_before(const IrradianceCache& cache, const TemporalJudgement& judged,
-                                                         const Scene& scene, int frame) {
+std::unique_ptr<EarlierGathers> refined_the_frame_before(const IrradianceCache& cache, const TemporalJudgement& judged, const Scene& scene,
+                                                         int frame) {
     const CacheSettings& cs = scene.render.cache;
     if (cs.refine_hold_reach <= 0 || cs.refine_hold >= 1) return nullptr;
     std::vector<Record> last;
@@ -105,6 +105,5 @@ std::unique_ptr<EarlierGathers> refined_the_frame_before(const IrradianceCache& 
     std::sort(last.begin(), last.end(), [](const Record& a, const Record& b) { return a.key < b.key; });
     return std::make_unique<EarlierGathers>(std::move(last), scene.bounds(), cs.refine_hold_reach, false);
 }
-
 
 }  // namespace bounce

@@ -31,11 +31,11 @@ void blend_with_previous(Record& r, const Record& old, float f);
 StaleRecords::Redo redo_function(const TemporalFrame& now, const IrradianceCache& cache, const Gatherer& gatherer);
 /// How an earlier frame's fragment record is updated (refinement's RefinementOptions::update).
 std::function<Record(const Record&, Counters&)> fragment_update_function(const TemporalFrame& now, const Gatherer& refiner,
-                                                                          const IrradianceCache& cache);
+                                                                         const IrradianceCache& cache);
 /// The refinement gathers whose rays the next frame may reuse, by frame and key.
 std::vector<Record> gathers_to_keep(const EarlierGathers& earlier, const IrradianceCache& cache, int frame);
 /// Where refinement gathered in the frame before, for a moving camera's hold; null when there is none.
-std::unique_ptr<EarlierGathers> refined_the_frame_before(const IrradianceCache& cache, const TemporalJudgement& judged,
-                                                         const Scene& scene, int frame);
+std::unique_ptr<EarlierGathers> refined_the_frame_before(const IrradianceCache& cache, const TemporalJudgement& judged, const Scene& scene,
+                                                         int frame);
 
 }  // namespace bounce

@@ -6,8 +6,7 @@
 
 namespace bounce {
 
-void write_atomically(const std::filesystem::path& path,
-                      const std::function<void(const std::string& tmp_path)>& write) {
+void write_atomically(const std::filesystem::path& path, const std::function<void(const std::string& tmp_path)>& write) {
     namespace fs = std::filesystem;
     if (path.has_parent_path()) {
         std::error_code ec;
@@ -16,8 +15,7 @@ void write_atomically(const std::filesystem::path& path,
     }
     // Keep the extension last: image writers choose the format from it.
     fs::path tmp = path;
-    tmp.replace_filename(path.stem().string() + ".tmp" + std::to_string(::getpid()) +
-                         path.extension().string());
+    tmp.replace_filename(path.stem().string() + ".tmp" + std::to_string(::getpid()) + path.extension().string());
     try {
         write(tmp.string());
     } catch (...) {

@@ -10,7 +10,6 @@ namespace bounce {
 
 /// Calls `write(tmp_path)`; if it returns normally, renames tmp_path to `path`.
 /// On exception the temporary file is removed and the exception propagates.
-void write_atomically(const std::filesystem::path& path,
-                      const std::function<void(const std::string& tmp_path)>& write);
+void write_atomically(const std::filesystem::path& path, const std::function<void(const std::string& tmp_path)>& write);
 
 }  // namespace bounce

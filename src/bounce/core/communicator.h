@@ -11,7 +11,7 @@
 namespace bounce {
 
 class Communicator {
-public:
+  public:
     virtual ~Communicator() = default;
     virtual int rank() const = 0;
     virtual int size() const = 0;
@@ -29,7 +29,7 @@ public:
 
 /// This process alone: owns everything, exchanges with nobody.
 class SingleProcess : public Communicator {
-public:
+  public:
     int rank() const override { return 0; }
     int size() const override { return 1; }
     std::vector<std::string> allgather(const std::string& mine) override { return {mine}; }

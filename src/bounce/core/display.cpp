@@ -116,8 +116,8 @@ DisplayTransform::DisplayTransform(const DisplaySettings& s, const char* env_oci
         const OCIO::ConstConfigRcPtr c = OCIO::Config::CreateFromFile(config.c_str());
         files_ = config_files(c, config);
         files_.insert(files_.begin(), config);
-        const std::string display = pick(config, "display", s.display, c->getDefaultDisplay(),
-                                         names(c->getNumDisplays(), [&](int i) { return c->getDisplay(i); }));
+        const std::string display =
+            pick(config, "display", s.display, c->getDefaultDisplay(), names(c->getNumDisplays(), [&](int i) { return c->getDisplay(i); }));
         const std::string view = pick(config, "view", s.view, c->getDefaultView(display.c_str()),
                                       names(c->getNumViews(display.c_str()), [&](int i) { return c->getView(display.c_str(), i); }));
         const OCIO::DisplayViewTransformRcPtr t = OCIO::DisplayViewTransform::Create();

@@ -19,7 +19,7 @@ struct DisplaySettings {
 /// A display transform made once (a config is parsed and its processor built) and applied to
 /// many pixels from any thread.
 class DisplayTransform {
-public:
+  public:
     /// The built-in sRGB curve (the sRGB piecewise encoding of linear Rec.709 values).
     DisplayTransform();
     /// `settings` resolved against `env_ocio` (the OCIO environment variable's value, or null).
@@ -39,7 +39,7 @@ public:
     /// The config and every file (LUT) its transforms name, as read: inputs no output may overwrite.
     const std::vector<std::string>& files() const { return files_; }
 
-private:
+  private:
     struct Ocio;
     std::unique_ptr<const Ocio> ocio_;  ///< null: the built-in curve
     std::string name_ = "sRGB (built-in)";

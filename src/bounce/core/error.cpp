@@ -31,8 +31,7 @@ std::string closest_match(const std::string& word, const std::vector<std::string
     return best;
 }
 
-std::string closest_match(const std::string& word,
-                          const std::initializer_list<std::string>& options) {
+std::string closest_match(const std::string& word, const std::initializer_list<std::string>& options) {
     return closest_match(word, std::vector<std::string>(options));
 }
 

@@ -10,19 +10,16 @@
 namespace bounce {
 
 class InputError : public std::runtime_error {
-public:
+  public:
     /// `file`: the offending file (or "command line"); `place`: "12:5", "/lights/0/intensity",
     /// "--res" or empty.
     InputError(std::string file, std::string place, const std::string& message)
-        : std::runtime_error(format(file, place, message)),
-          file_(std::move(file)),
-          place_(std::move(place)) {}
+        : std::runtime_error(format(file, place, message)), file_(std::move(file)), place_(std::move(place)) {}
     const std::string& file() const { return file_; }
     const std::string& place() const { return place_; }
 
-private:
-    static std::string format(const std::string& file, const std::string& place,
-                              const std::string& message) {
+  private:
+    static std::string format(const std::string& file, const std::string& place, const std::string& message) {
         std::string s = file;
         if (!place.empty()) s += ": " + place;
         if (!s.empty()) s += ": ";

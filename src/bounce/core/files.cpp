@@ -40,13 +40,11 @@ namespace {
 void check_output_folder(const std::string& path, const fs::path& dir) {
     std::error_code ec;
     const fs::file_status st = fs::status(dir, ec);
-    if (ec || st.type() == fs::file_type::not_found)
-        throw InputError(path, "", "its folder " + dir.string() + " does not exist");
+    if (ec || st.type() == fs::file_type::not_found) throw InputError(path, "", "its folder " + dir.string() + " does not exist");
     if (st.type() != fs::file_type::directory) throw InputError(path, "", dir.string() + " is not a folder");
     std::string probe = (dir / ".bounce-probe-XXXXXX").string();
     const int fd = ::mkstemp(probe.data());
-    if (fd < 0)
-        throw InputError(path, "", "cannot create a file in " + dir.string() + ": " + std::strerror(errno));
+    if (fd < 0) throw InputError(path, "", "cannot create a file in " + dir.string() + ": " + std::strerror(errno));
     ::close(fd);
     ::unlink(probe.c_str());
 }
@@ -65,13 +63,14 @@ bool inside(const std::filesystem::path& path, const std::filesystem::path& fold
     const fs::path p = fs::weakly_canonical(path, ec), f = fs::weakly_canonical(folder, ec);
     auto pi = p.begin();
     for (auto fi = f.begin(); fi != f.end(); ++fi, ++pi)
-        if (fi->empty()) continue;  // a trailing separator
-        else if (pi == p.end() || *pi != *fi) return false;
+        if (fi->empty())
+            continue;  // a trailing separator
+        else if (pi == p.end() || *pi != *fi)
+            return false;
     return true;
 }
 
-void check_output_file(const std::string& path, const std::vector<std::string>& inputs,
-                       const std::vector<std::string>& input_folders) {
+void check_output_file(const std::string& path, const std::vector<std::string>& inputs, const std::vector<std::string>& input_folders) {
     std::error_code ec;
     fs::file_status st = fs::status(path, ec);
     if (!ec && st.type() == fs::file_type::directory) throw InputError(path, "", "output is a directory");
@@ -80,8 +79,7 @@ void check_output_file(const std::string& path, const std::vector<std::string>& 
     for (const auto& in : inputs) {
         if (in.empty()) continue;
         std::error_code e1;
-        bool same = fs::equivalent(path, in, e1) ||
-                    fs::weakly_canonical(path, e1) == fs::weakly_canonical(in, e1);
+        bool same = fs::equivalent(path, in, e1) || fs::weakly_canonical(path, e1) == fs::weakly_canonical(in, e1);
         if (same) throw InputError(path, "", "output names an input (" + in + "); it would be overwritten");
     }
     for (const auto& folder : input_folders)

@@ -18,8 +18,7 @@ void check_input_file(const std::string& path);
 /// but a regular file or a new name, when it is the same file as one of `inputs` or lies
 /// inside one of `input_folders`, or when its folder does not exist or cannot take a new file
 /// (a read-only or pseudo file system such as /proc: a file is created there and removed).
-void check_output_file(const std::string& path, const std::vector<std::string>& inputs,
-                       const std::vector<std::string>& input_folders = {});
+void check_output_file(const std::string& path, const std::vector<std::string>& inputs, const std::vector<std::string>& input_folders = {});
 /// The extension of `path`, lower case (".PLY" -> ".ply"; "" for none).
 std::string lower_extension(const std::string& path);
 /// `s` with its ASCII letters in lower case (extensions, HTTP header values).

@@ -71,8 +71,7 @@ void write_exr(const std::string& path, const Image& image) {
     }
     write_atomically(path, [&](const std::string& tmp) {
         auto out = OIIO::ImageOutput::create("openexr");
-        if (!out || !out->open(tmp, spec))
-            throw InputError(path, "", "cannot write image: " + (out ? out->geterror() : OIIO::geterror()));
+        if (!out || !out->open(tmp, spec)) throw InputError(path, "", "cannot write image: " + (out ? out->geterror() : OIIO::geterror()));
         if (!out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close())
             throw InputError(path, "", "cannot write image: " + out->geterror());
     });
@@ -101,8 +100,10 @@ Image read_exr(const std::string& path) {
         auto dot = n.rfind('.');
         std::string layer = dot == std::string::npos ? (n == "Z" ? "depth" : "beauty") : n.substr(0, dot);
         auto it = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == layer; });
-        if (it == groups.end()) groups.push_back({layer, {c}});
-        else it->second.push_back(c);
+        if (it == groups.end())
+            groups.push_back({layer, {c}});
+        else
+            it->second.push_back(c);
     }
     for (const auto& [name, idx] : groups) {
         std::vector<std::string> chans;
@@ -126,8 +127,7 @@ void write_png_rgb8(const std::string& path, int width, int height, const std::v
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
     write_atomically(path, [&](const std::string& tmp) {
         auto out = OIIO::ImageOutput::create("png");
-        if (!out || !out->open(tmp, spec))
-            throw InputError(path, "", "cannot write image: " + (out ? out->geterror() : OIIO::geterror()));
+        if (!out || !out->open(tmp, spec)) throw InputError(path, "", "cannot write image: " + (out ? out->geterror() : OIIO::geterror()));
         if (!out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) || !out->close())
             throw InputError(path, "", "cannot write image: " + out->geterror());
     });
@@ -185,8 +185,10 @@ std::string texture_problem(const std::string& path) {
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) return "the image has no pixels";
     const bool mipmapped = in->seek_subimage(0, 1);
     if (static_cast<int64_t>(spec.width) * spec.height > int64_t{8192} * 8192 && !(spec.tile_width > 0 && mipmapped))
-        return fmt::format("a {}x{} image that is not tiled and MIP-mapped would be read whole for every lookup; convert it "
-                           "with OpenImageIO's maketx", spec.width, spec.height);
+        return fmt::format(
+            "a {}x{} image that is not tiled and MIP-mapped would be read whole for every lookup; convert it "
+            "with OpenImageIO's maketx",
+            spec.width, spec.height);
     return "";
 }
 

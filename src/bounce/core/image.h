@@ -25,19 +25,15 @@ struct Layer {
 struct Image {
     int full_width = 0, full_height = 0;
     int x0 = 0, y0 = 0, width = 0, height = 0;
-    std::deque<Layer> layers;  ///< deque: add_layer never moves earlier layers
+    std::deque<Layer> layers;                     ///< deque: add_layer never moves earlier layers
     std::map<std::string, std::string> metadata;  ///< written as "bounce:<key>" attributes
 
     /// Adds a zero-filled layer; returns it.
     Layer& add_layer(const std::string& name, const std::vector<std::string>& channels);
     const Layer* find(const std::string& name) const;
     Layer* find(const std::string& name);
-    float* at(Layer& l, int x, int y) {
-        return &l.data[(static_cast<size_t>(y) * width + x) * l.channels.size()];
-    }
-    const float* at(const Layer& l, int x, int y) const {
-        return &l.data[(static_cast<size_t>(y) * width + x) * l.channels.size()];
-    }
+    float* at(Layer& l, int x, int y) { return &l.data[(static_cast<size_t>(y) * width + x) * l.channels.size()]; }
+    const float* at(const Layer& l, int x, int y) const { return &l.data[(static_cast<size_t>(y) * width + x) * l.channels.size()]; }
 };
 
 /// An image as bytes for another process of the same build (an MPI exchange), and back.
@@ -55,8 +51,7 @@ Image read_exr(const std::string& path);
 /// Layer `l` of `image` as 8-bit RGB for a screen: colours through `display` after `exposure`
 /// stops; directions (N, bentnormal) as 0.5 + 0.5 x; depth as a grey ramp from the nearest
 /// (white) to the farthest (dark) surface, pixels that see nothing black; one channel as grey.
-std::vector<uint8_t> display_rgb8(const Image& image, const Layer& l, float exposure,
-                                  const DisplayTransform& display = *srgb_display());
+std::vector<uint8_t> display_rgb8(const Image& image, const Layer& l, float exposure, const DisplayTransform& display = *srgb_display());
 /// Writes layer `layer` as an 8-bit PNG (display_rgb8). InputError(path) if there is no such layer.
 void write_png(const std::string& path, const Image& image, const std::string& layer, const DisplayTransform& display);
 /// Writes raw 8-bit RGB pixels as a PNG (used for false-colour and diagnostic images).

@@ -13,8 +13,8 @@ namespace {
 // Accumulates the error of one layer; `test_value(i)` is the test's value at element i of the
 // reference layer `rl`.
 template <class TestValue>
-LayerError layer_error(const std::string& name, const Layer& rl, const Image& test, TestValue test_value,
-                       const std::string& test_path, const std::string& ref_path) {
+LayerError layer_error(const std::string& name, const Layer& rl, const Image& test, TestValue test_value, const std::string& test_path,
+                       const std::string& ref_path) {
     LayerError e;
     e.layer = name;
     double se = 0, sr = 0, sa = 0, rel = 0;
@@ -56,12 +56,12 @@ LayerError layer_error(const std::string& name, const Layer& rl, const Image& te
 
 }  // namespace
 
-std::vector<LayerError> compare_images(const Image& test, const Image& ref, const std::string& layer,
-                                       const std::string& test_path, const std::string& ref_path) {
+std::vector<LayerError> compare_images(const Image& test, const Image& ref, const std::string& layer, const std::string& test_path,
+                                       const std::string& ref_path) {
     if (test.width != ref.width || test.height != ref.height || test.x0 != ref.x0 || test.y0 != ref.y0)
-        throw InputError(test_path, "", fmt::format("image window {}x{}+{}+{} differs from the reference's {}x{}+{}+{}",
-                                                    test.width, test.height, test.x0, test.y0, ref.width, ref.height,
-                                                    ref.x0, ref.y0));
+        throw InputError(test_path, "",
+                         fmt::format("image window {}x{}+{}+{} differs from the reference's {}x{}+{}+{}", test.width, test.height, test.x0,
+                                     test.y0, ref.width, ref.height, ref.x0, ref.y0));
     std::vector<LayerError> out;
     for (const Layer& rl : ref.layers) {
         if (!layer.empty() && rl.name != layer) continue;
@@ -70,9 +70,9 @@ std::vector<LayerError> compare_images(const Image& test, const Image& ref, cons
             if (!layer.empty()) throw InputError(test_path, "", "no layer \"" + rl.name + "\"");
             continue;
         }
-        if (tl->channels != rl.channels)
-            throw InputError(test_path, rl.name, "the layer's channels differ from the reference's");
-        out.push_back(layer_error(rl.name, rl, test, [&](size_t i) { return double(tl->data[i]); }, test_path, ref_path));
+        if (tl->channels != rl.channels) throw InputError(test_path, rl.name, "the layer's channels differ from the reference's");
+        out.push_back(layer_error(
+            rl.name, rl, test, [&](size_t i) { return double(tl->data[i]); }, test_path, ref_path));
     }
     if (!layer.empty() && layer != kBeautyRefDirect && out.empty())
         throw InputError(test_path, "", "reference has no layer \"" + layer + "\"");
@@ -82,11 +82,14 @@ std::vector<LayerError> compare_images(const Image& test, const Image& ref, cons
     if ((layer.empty() || layer == kBeautyRefDirect) && tb && td && rb && rd && tb->channels == rb->channels &&
         td->channels == rd->channels && td->channels.size() == 3 && rb->channels.size() >= 3) {
         const size_t nb = rb->channels.size();
-        out.push_back(layer_error(kBeautyRefDirect, *rb, test, [&](size_t i) {
-            size_t pixel = i / nb, c = i % nb;
-            if (c >= 3) return double(tb->data[i]);
-            return double(tb->data[i]) - td->data[pixel * 3 + c] + rd->data[pixel * 3 + c];
-        }, test_path, ref_path));
+        out.push_back(layer_error(
+            kBeautyRefDirect, *rb, test,
+            [&](size_t i) {
+                size_t pixel = i / nb, c = i % nb;
+                if (c >= 3) return double(tb->data[i]);
+                return double(tb->data[i]) - td->data[pixel * 3 + c] + rd->data[pixel * 3 + c];
+            },
+            test_path, ref_path));
     } else if (layer == kBeautyRefDirect) {
         throw InputError(test_path, "", "\"" + layer + "\" needs beauty and direct layers in both images");
     }

@@ -27,12 +27,11 @@ inline constexpr const char* kBeautyRefDirect = "beauty_ref_direct";
 /// cover the same window. Throws InputError (naming `test_path`) on mismatched sizes or a
 /// missing layer, and naming `ref_path` where the reference is not finite (the depth layer's
 /// background aside).
-std::vector<LayerError> compare_images(const Image& test, const Image& reference, const std::string& layer,
-                                       const std::string& test_path, const std::string& ref_path = "reference");
+std::vector<LayerError> compare_images(const Image& test, const Image& reference, const std::string& layer, const std::string& test_path,
+                                       const std::string& ref_path = "reference");
 
 /// False-colour map of the per-pixel error of `layer` (mean over channels of |a - b|), black
 /// at 0 through blue, red and yellow to white at `range`.
-std::vector<uint8_t> error_false_colour(const Image& test, const Image& reference, const std::string& layer,
-                                        double range);
+std::vector<uint8_t> error_false_colour(const Image& test, const Image& reference, const std::string& layer, double range);
 
 }  // namespace bounce

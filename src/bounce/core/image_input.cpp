@@ -18,7 +18,8 @@ void keep_first_error(exr_const_context_t ctx, exr_result_t, const char* message
     if (exr_get_user_data(ctx, reinterpret_cast<void**>(&first)) != EXR_ERR_SUCCESS || !first || !first->empty()) return;
     *first = message ? message : "";
     // A damaged header's names are arbitrary bytes.
-    std::replace_if(first->begin(), first->end(), [](char c) { return c < 0x20 || c > 0x7e; }, '?');
+    std::replace_if(
+        first->begin(), first->end(), [](char c) { return c < 0x20 || c > 0x7e; }, '?');
     if (first->size() > 200) first->resize(200);
 }
 

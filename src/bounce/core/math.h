@@ -30,10 +30,30 @@ struct Vec3 {
     constexpr float operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
     constexpr float& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
     constexpr Vec3 operator-() const { return {-x, -y, -z}; }
-    constexpr Vec3& operator+=(const Vec3& o) { x += o.x; y += o.y; z += o.z; return *this; }
-    constexpr Vec3& operator-=(const Vec3& o) { x -= o.x; y -= o.y; z -= o.z; return *this; }
-    constexpr Vec3& operator*=(float s) { x *= s; y *= s; z *= s; return *this; }
-    constexpr Vec3& operator*=(const Vec3& o) { x *= o.x; y *= o.y; z *= o.z; return *this; }
+    constexpr Vec3& operator+=(const Vec3& o) {
+        x += o.x;
+        y += o.y;
+        z += o.z;
+        return *this;
+    }
+    constexpr Vec3& operator-=(const Vec3& o) {
+        x -= o.x;
+        y -= o.y;
+        z -= o.z;
+        return *this;
+    }
+    constexpr Vec3& operator*=(float s) {
+        x *= s;
+        y *= s;
+        z *= s;
+        return *this;
+    }
+    constexpr Vec3& operator*=(const Vec3& o) {
+        x *= o.x;
+        y *= o.y;
+        z *= o.z;
+        return *this;
+    }
     constexpr Vec3& operator/=(float s) { return *this *= (1.0f / s); }
     constexpr bool operator==(const Vec3&) const = default;
 };
@@ -48,25 +68,17 @@ constexpr Vec3 operator*(Vec3 a, float s) { return a *= s; }
 constexpr Vec3 operator*(float s, Vec3 a) { return a *= s; }
 constexpr Vec3 operator/(Vec3 a, float s) { return a /= s; }
 constexpr float dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-constexpr Vec3 cross(const Vec3& a, const Vec3& b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
+constexpr Vec3 cross(const Vec3& a, const Vec3& b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 inline float length(const Vec3& a) { return std::sqrt(dot(a, a)); }
 inline Vec3 normalize(const Vec3& a) {
     float l = length(a);
     return l > 0 ? a / l : Vec3(0, 0, 1);
 }
-inline Vec3 vmin(const Vec3& a, const Vec3& b) {
-    return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
-}
-inline Vec3 vmax(const Vec3& a, const Vec3& b) {
-    return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
-}
+inline Vec3 vmin(const Vec3& a, const Vec3& b) { return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)}; }
+inline Vec3 vmax(const Vec3& a, const Vec3& b) { return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)}; }
 /// Every coordinate within [-limit, limit] (false for NaN).
 inline bool within(const Vec3& v, float limit) { return std::fabs(v.x) <= limit && std::fabs(v.y) <= limit && std::fabs(v.z) <= limit; }
-inline bool isfinite(const Vec3& a) {
-    return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
-}
+inline bool isfinite(const Vec3& a) { return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z); }
 /// Rec. 709 luminance.
 constexpr float luminance(const Color& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
@@ -88,8 +100,14 @@ struct Frame {
 /// Axis-aligned bounding box.
 struct Bounds {
     Vec3 lo{INFINITY}, hi{-INFINITY};
-    void extend(const Vec3& p) { lo = vmin(lo, p); hi = vmax(hi, p); }
-    void extend(const Bounds& b) { lo = vmin(lo, b.lo); hi = vmax(hi, b.hi); }
+    void extend(const Vec3& p) {
+        lo = vmin(lo, p);
+        hi = vmax(hi, p);
+    }
+    void extend(const Bounds& b) {
+        lo = vmin(lo, b.lo);
+        hi = vmax(hi, b.hi);
+    }
     bool empty() const { return !(lo.x <= hi.x); }
     Vec3 diagonal() const { return empty() ? Vec3(0) : hi - lo; }
 };
@@ -100,12 +118,16 @@ struct Transform {
 
     static Transform translate(const Vec3& t) {
         Transform r;
-        r.m[3] = t.x; r.m[7] = t.y; r.m[11] = t.z;
+        r.m[3] = t.x;
+        r.m[7] = t.y;
+        r.m[11] = t.z;
         return r;
     }
     static Transform scale(const Vec3& s) {
         Transform r;
-        r.m[0] = s.x; r.m[5] = s.y; r.m[10] = s.z;
+        r.m[0] = s.x;
+        r.m[5] = s.y;
+        r.m[10] = s.z;
         return r;
     }
     /// Rotation by `degrees` about `axis` (right-handed).
@@ -113,10 +135,22 @@ struct Transform {
         Vec3 a = normalize(axis);
         float th = degrees * kPi / 180.0f, c = std::cos(th), s = std::sin(th), t = 1 - c;
         Transform r;
-        r.m = {t * a.x * a.x + c,       t * a.x * a.y - s * a.z, t * a.x * a.z + s * a.y, 0,
-               t * a.x * a.y + s * a.z, t * a.y * a.y + c,       t * a.y * a.z - s * a.x, 0,
-               t * a.x * a.z - s * a.y, t * a.y * a.z + s * a.x, t * a.z * a.z + c,       0,
-               0, 0, 0, 1};
+        r.m = {t * a.x * a.x + c,
+               t * a.x * a.y - s * a.z,
+               t * a.x * a.z + s * a.y,
+               0,
+               t * a.x * a.y + s * a.z,
+               t * a.y * a.y + c,
+               t * a.y * a.z - s * a.x,
+               0,
+               t * a.x * a.z - s * a.y,
+               t * a.y * a.z + s * a.x,
+               t * a.z * a.z + c,
+               0,
+               0,
+               0,
+               0,
+               1};
         return r;
     }
     Transform operator*(const Transform& o) const {
@@ -130,17 +164,13 @@ struct Transform {
         return r;
     }
     Vec3 point(const Vec3& p) const {
-        return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3],
-                m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+        return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
                 m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
     }
     /// The most it stretches a length (the longest image of a unit axis).
-    float largest_scale() const {
-        return std::max({length(vector({1, 0, 0})), length(vector({0, 1, 0})), length(vector({0, 0, 1}))});
-    }
+    float largest_scale() const { return std::max({length(vector({1, 0, 0})), length(vector({0, 1, 0})), length(vector({0, 0, 1}))}); }
     Vec3 vector(const Vec3& v) const {
-        return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
-                m[8] * v.x + m[9] * v.y + m[10] * v.z};
+        return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z, m[8] * v.x + m[9] * v.y + m[10] * v.z};
     }
     /// Whether the transform flattens space (a zero scale, an all-zero or rank-2 matrix): it
     /// has no normals to give. Relative to the axes' lengths, so a tiny but whole scale is not.
@@ -158,7 +188,7 @@ struct Transform {
         if (det == 0) return {};
         Transform r;
         r.m = {r0.x / det, r0.y / det, r0.z / det, 0, r1.x / det, r1.y / det, r1.z / det, 0,
-               r2.x / det, r2.y / det, r2.z / det, 0, 0, 0, 0, 1};
+               r2.x / det, r2.y / det, r2.z / det, 0, 0,          0,          0,          1};
         const Vec3 t = r.vector({m[3], m[7], m[11]});
         r.m[3] = -t.x, r.m[7] = -t.y, r.m[11] = -t.z;
         return r;

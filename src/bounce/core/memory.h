@@ -18,8 +18,7 @@ double available_memory_bytes();
 std::string memory_shortfall(double bytes, const std::string& what, double share = 0.8);
 
 /// Throws InputError(file, place) with memory_shortfall's message when there is one.
-void check_memory(double bytes, const std::string& file, const std::string& place, const std::string& what,
-                  double share = 0.8);
+void check_memory(double bytes, const std::string& file, const std::string& place, const std::string& what, double share = 0.8);
 
 /// Asks the kernel for 2 MiB pages under [p, p + bytes) (madvise MADV_HUGEPAGE over the whole
 /// 2 MiB pages inside; nothing under 4 MiB). An array first touched in 4 KiB pages faults once

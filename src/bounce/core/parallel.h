@@ -39,8 +39,7 @@ void parallel_ranges(Index begin, Index end, Index grain, Fn&& fn, bool simple =
     std::exception_ptr failed;  // the first exception, rethrown after the join (as TBB does)
     auto worker = [&] {
         try {
-            for (Index lo = next.fetch_add(grain); lo < end; lo = next.fetch_add(grain))
-                fn(lo, std::min<Index>(end, lo + grain));
+            for (Index lo = next.fetch_add(grain); lo < end; lo = next.fetch_add(grain)) fn(lo, std::min<Index>(end, lo + grain));
         } catch (...) {
             next.store(end);
             std::lock_guard lock(failed_mutex);

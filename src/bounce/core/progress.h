@@ -19,19 +19,19 @@ struct Cancelled : std::exception {
 
 /// Set from any thread to stop a running render; passes check it per row, tile and gather.
 class CancelToken {
-public:
+  public:
     void cancel() { flag_.store(true, std::memory_order_relaxed); }
     bool cancelled() const { return flag_.load(std::memory_order_relaxed); }
     void check() const {
         if (cancelled()) throw Cancelled();
     }
 
-private:
+  private:
     std::atomic<bool> flag_{false};
 };
 
 class ProgressSink {
-public:
+  public:
     virtual ~ProgressSink() = default;
     /// `done` of `total` units of phase `name`, `elapsed` seconds in. Called under a lock.
     virtual void update(const std::string& name, uint64_t done, uint64_t total, double elapsed) = 0;
@@ -52,14 +52,14 @@ std::unique_ptr<ProgressSink> make_null_progress();
 
 /// Thread-safe counter for one phase; throttles calls into the sink.
 class Progress {
-public:
+  public:
     Progress(ProgressSink* sink, std::string name, uint64_t total);
     ~Progress();
     void add(uint64_t n = 1);
     Progress(const Progress&) = delete;
     Progress& operator=(const Progress&) = delete;
 
-private:
+  private:
     ProgressSink* sink_;
     std::string name_;
     uint64_t total_;

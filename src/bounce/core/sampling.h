@@ -24,8 +24,10 @@ inline Vec2 concentric_disc(float u, float v) {
     const float a = 2 * u - 1, b = 2 * v - 1;
     if (a == 0 && b == 0) return {0, 0};
     float r, phi;
-    if (std::abs(a) > std::abs(b)) r = a, phi = 0.25f * kPi * (b / a);
-    else r = b, phi = 0.5f * kPi - 0.25f * kPi * (a / b);
+    if (std::abs(a) > std::abs(b))
+        r = a, phi = 0.25f * kPi * (b / a);
+    else
+        r = b, phi = 0.5f * kPi - 0.25f * kPi * (a / b);
     return {r * std::cos(phi), r * std::sin(phi)};
 }
 

@@ -64,8 +64,8 @@ SequenceError compare_sequences(const std::function<Image(int)>& test, const std
     return out;
 }
 
-std::vector<uint8_t> sequence_strip(const std::function<Image(int)>& frames, int first, int last, const std::string& layer,
-                                    int tiles, int& width, int& height) {
+std::vector<uint8_t> sequence_strip(const std::function<Image(int)>& frames, int first, int last, const std::string& layer, int tiles,
+                                    int& width, int& height) {
     const int count = std::max(1, std::min(tiles, last - first + 1));
     std::vector<int> picked;
     for (int i = 0; i < count; ++i)

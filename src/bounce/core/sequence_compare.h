@@ -33,7 +33,7 @@ SequenceError compare_sequences(const std::function<Image(int)>& test, const std
 /// A strip of up to `tiles` frames evenly spaced over [first, last]: one row of layer `layer`
 /// of `frames(t)` and, when the frames have one, a row of their record dots. 8-bit RGB; its
 /// size in `width`, `height`.
-std::vector<uint8_t> sequence_strip(const std::function<Image(int)>& frames, int first, int last, const std::string& layer,
-                                    int tiles, int& width, int& height);
+std::vector<uint8_t> sequence_strip(const std::function<Image(int)>& frames, int first, int last, const std::string& layer, int tiles,
+                                    int& width, int& height);
 
 }  // namespace bounce

@@ -45,11 +45,8 @@ nlohmann::json Stats::to_json() const {
     j["phases_s"] = phases;
     j["total_s"] = total_time;
     uint64_t rays = t.camera_rays + t.shadow_rays + t.gather_rays + t.specular_rays;
-    j["rays"] = {{"camera", t.camera_rays},
-                 {"shadow", t.shadow_rays},
-                 {"gather", t.gather_rays},
-                 {"specular", t.specular_rays},
-                 {"total", rays}};
+    j["rays"] = {
+        {"camera", t.camera_rays}, {"shadow", t.shadow_rays}, {"gather", t.gather_rays}, {"specular", t.specular_rays}, {"total", rays}};
     j["rays_per_s"] = total_time > 0 ? static_cast<double>(rays) / total_time : 0.0;
     j["fragments_shaded"] = t.fragments_shaded;
     j["lock_wait_s"] = static_cast<double>(t.lock_wait_ns) * 1e-9;
@@ -70,10 +67,8 @@ std::string Stats::to_text() const {
     s += fmt::format("  {:<24} {:>10.3f} M/s\n", "rays/s", j["rays_per_s"].get<double>() * 1e-6);
     s += fmt::format("  {:<24} {:>10.6f} s\n", "cache lock wait", j["lock_wait_s"].get<double>());
     s += fmt::format("  {:<24} {:>10.6f} s (CPU, inside gathering)\n", "radiosity bake", j["radiosity_bake_cpu_s"].get<double>());
-    for (auto it = extra_.begin(); it != extra_.end(); ++it)
-        s += fmt::format("  {:<24} {:>10}\n", it.key(), it.value().dump());
-    s += fmt::format("  {:<24} {:>10.1f} MiB\n", "peak memory",
-                     static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0));
+    for (auto it = extra_.begin(); it != extra_.end(); ++it) s += fmt::format("  {:<24} {:>10}\n", it.key(), it.value().dump());
+    s += fmt::format("  {:<24} {:>10.1f} MiB\n", "peak memory", static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0));
     return s;
 }
 
@@ -107,10 +102,10 @@ std::string seed_table(const nlohmann::json& s) {
     double rays = static_cast<double>(s["rays"]["gather"].get<uint64_t>());
     std::string per_record = s.contains("records") ? fmt::format("{}", s.value("rays_per_gather", 0)) : "-";
     std::string records = s.contains("records") ? fmt::format("{}", s["records"].get<double>()) : "-";
-    return fmt::format("| radiosity bake | gathering | shading | total | rays/record | records | rays/MP |\n"
-                       "| {} | {} | {} | {} | {} | {} | {:.1f} M |\n",
-                       clock(bake), clock(gathering), clock(shading), clock(total), per_record, records,
-                       pixels > 0 ? rays / pixels : 0.0);
+    return fmt::format(
+        "| radiosity bake | gathering | shading | total | rays/record | records | rays/MP |\n"
+        "| {} | {} | {} | {} | {} | {} | {:.1f} M |\n",
+        clock(bake), clock(gathering), clock(shading), clock(total), per_record, records, pixels > 0 ? rays / pixels : 0.0);
 }
 
 }  // namespace bounce

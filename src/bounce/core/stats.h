@@ -19,14 +19,14 @@ struct Counters {
     uint64_t gather_rays = 0;
     uint64_t specular_rays = 0;  ///< mirror and glass rays (reflection, refraction)
     uint64_t fragments_shaded = 0;
-    uint64_t lock_wait_ns = 0;  ///< time spent waiting for the cache's reader-writer lock
+    uint64_t lock_wait_ns = 0;       ///< time spent waiting for the cache's reader-writer lock
     uint64_t radiosity_bake_ns = 0;  ///< time spent baking radiosity texture sides (lazily, inside gathers)
     Counters& operator+=(const Counters& o);
 };
 
 /// Per-render statistics. Threads call `local()` to get their own counters.
 class Stats {
-public:
+  public:
     Counters& local() { return per_thread_.local(); }
     Counters total() const;
 
@@ -43,7 +43,7 @@ public:
     /// Human-readable block for `--stats`.
     std::string to_text() const;
 
-private:
+  private:
     tbb::enumerable_thread_specific<Counters> per_thread_;
     std::vector<std::pair<std::string, double>> phases_;
     nlohmann::json extra_ = nlohmann::json::object();
@@ -51,15 +51,14 @@ private:
 
 /// Measures a phase from construction to destruction (or `stop()`), adding it to `stats`.
 class PhaseTimer {
-public:
-    PhaseTimer(Stats& stats, std::string name)
-        : stats_(stats), name_(std::move(name)), start_(std::chrono::steady_clock::now()) {}
+  public:
+    PhaseTimer(Stats& stats, std::string name) : stats_(stats), name_(std::move(name)), start_(std::chrono::steady_clock::now()) {}
     ~PhaseTimer() { stop(); }
     double stop();
     PhaseTimer(const PhaseTimer&) = delete;
     PhaseTimer& operator=(const PhaseTimer&) = delete;
 
-private:
+  private:
     Stats& stats_;
     std::string name_;
     std::chrono::steady_clock::time_point start_;

@@ -13,9 +13,9 @@
 namespace bounce {
 
 struct Tile {
-    int index = 0;           ///< row-major index: results that depend on tiles use this order
-    int x0 = 0, y0 = 0;      ///< first pixel (window coordinates)
-    int x1 = 0, y1 = 0;      ///< one past the last
+    int index = 0;       ///< row-major index: results that depend on tiles use this order
+    int x0 = 0, y0 = 0;  ///< first pixel (window coordinates)
+    int x1 = 0, y1 = 0;  ///< one past the last
 };
 
 /// The order threads take tiles in: row-major, or centre first and outwards (the subject
@@ -33,11 +33,14 @@ template <typename Fn>
 void for_each_tile(const std::vector<Tile>& tiles, Fn&& fn) {
     std::atomic<size_t> next{0};
     const int workers = std::min<int>(tbb::this_task_arena::max_concurrency(), static_cast<int>(tiles.size()));
-    parallel_ranges(0, workers, 1, [&](int, int) {
-        for (size_t i = next.fetch_add(1, std::memory_order_relaxed); i < tiles.size();
-             i = next.fetch_add(1, std::memory_order_relaxed))
-            fn(tiles[i]);
-    }, true);
+    parallel_ranges(
+        0, workers, 1,
+        [&](int, int) {
+            for (size_t i = next.fetch_add(1, std::memory_order_relaxed); i < tiles.size();
+                 i = next.fetch_add(1, std::memory_order_relaxed))
+                fn(tiles[i]);
+        },
+        true);
 }
 
 }  // namespace bounce

@@ -75,8 +75,8 @@ bool CameraRays::project(const Vec3& p, float& px, float& py) const {
 
 bool CameraRays::projects_into(const Vec3& p, const std::array<int, 4>& w) const {
     float px, py;
-    return project(p, px, py) && px >= static_cast<float>(w[0]) && px < static_cast<float>(w[1]) &&
-           py >= static_cast<float>(w[2]) && py < static_cast<float>(w[3]);
+    return project(p, px, py) && px >= static_cast<float>(w[0]) && px < static_cast<float>(w[1]) && py >= static_cast<float>(w[2]) &&
+           py < static_cast<float>(w[3]);
 }
 
 // ------------------------------------------------------------------------------------------

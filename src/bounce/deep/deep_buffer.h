@@ -3,7 +3,6 @@
 // re-shaded without re-tracing primary visibility. Stored as an OpenEXR deep image.
 #pragma once
 
-
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -25,18 +24,18 @@ namespace bounce {
 /// One visible surface in a pixel: the jittered subsamples that hit the same surface, merged.
 /// Normals face the camera.
 struct Fragment {
-    Vec3 p;        ///< position (fine surface)
-    Vec3 n;        ///< shading normal
-    Vec3 ng;       ///< geometric normal
-    Vec3 p_base;   ///< un-displaced position (where cache records live); = p without displacement
-    Vec3 n_base;   ///< un-displaced (un-bumped) normal
+    Vec3 p;       ///< position (fine surface)
+    Vec3 n;       ///< shading normal
+    Vec3 ng;      ///< geometric normal
+    Vec3 p_base;  ///< un-displaced position (where cache records live); = p without displacement
+    Vec3 n_base;  ///< un-displaced (un-bumped) normal
     Vec2 uv;
     uint32_t material = 0;
     uint32_t object = 0;
-    uint32_t prim = 0;     ///< fine-tessellation triangle of the first subsample
-    float depth = 0;       ///< distance from the camera
-    float weight = 0;      ///< fraction of the pixel's subsamples (coverage)
-    float footprint = 0;   ///< world-space width of one pixel at p (ray differentials)
+    uint32_t prim = 0;    ///< fine-tessellation triangle of the first subsample
+    float depth = 0;      ///< distance from the camera
+    float weight = 0;     ///< fraction of the pixel's subsamples (coverage)
+    float footprint = 0;  ///< world-space width of one pixel at p (ray differentials)
     /// Fur: the strand's unit tangent (root to tip; zero on surfaces) and the position along
     /// it (0 root, 1 tip). A hair fragment's p_base / n_base are its strand's root and the
     /// growing surface's normal there, uv the root's, prim the strand.
@@ -48,7 +47,7 @@ struct Fragment {
 
 /// Fragments of a window of the image (the crop, or the full frame).
 struct DeepBuffer {
-    int full_width = 0, full_height = 0;  ///< the whole image
+    int full_width = 0, full_height = 0;        ///< the whole image
     int x0 = 0, y0 = 0, width = 0, height = 0;  ///< the window this buffer covers
     int spp = 0;
     uint64_t seed = 0;
@@ -70,8 +69,8 @@ struct DeepBuffer {
 /// per tile under `name`. Work order never affects results: each pixel writes its own slots.
 /// With `comm`, only the tiles this process owns (it holds only their fragments).
 template <typename PixelFn>
-void for_each_pixel_in_tiles(const DeepBuffer& deep, int tile, ProgressSink* sink, const char* name,
-                             PixelFn&& pixel, TileOrder order = TileOrder::Rows, const Communicator* comm = nullptr) {
+void for_each_pixel_in_tiles(const DeepBuffer& deep, int tile, ProgressSink* sink, const char* name, PixelFn&& pixel,
+                             TileOrder order = TileOrder::Rows, const Communicator* comm = nullptr) {
     auto tiles = make_tiles(deep.width, deep.height, tile, order);
     if (comm) std::erase_if(tiles, [comm](const Tile& t) { return !comm->owns(static_cast<size_t>(t.index)); });
     Progress progress(sink, name, tiles.size());
@@ -91,7 +90,7 @@ inline RandomStream fragment_stream(uint64_t seed, int x, int y, uint32_t k) {
 
 /// The pinhole camera of a scene: rays through continuous full-image pixel coordinates.
 class CameraRays {
-public:
+  public:
     explicit CameraRays(const Camera& cam);
     /// Unnormalised direction through pixel position (px, py) (0..width, 0..height, y down).
     Vec3 direction(float px, float py) const;
@@ -113,7 +112,7 @@ public:
     /// [x0, x1) x [y0, y1) (full-image coordinates).
     bool projects_into(const Vec3& p, const std::array<int, 4>& window) const;
 
-private:
+  private:
     /// A pose's frame: where rays leave and their directions' axes (forward has unit length).
     struct View {
         Vec3 pos, forward, right, up;
@@ -132,8 +131,7 @@ private:
 /// Traces `spp` jittered subsamples per pixel against the fine tessellation and merges those
 /// that hit the same surface into fragments. Deterministic for a given seed, whatever the
 /// thread count or crop.
-DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats,
-                             ProgressSink* progress);
+DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* progress);
 /// Same, for window {x0, x1, y0, y1} (full-image pixels, ends exclusive).
 DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* progress,
                              const std::array<int, 4>& window);

@@ -27,26 +27,24 @@ struct Channel {
 // Z and A first: the layout deep-aware compositors expect.
 const std::vector<Channel>& deep_channels() {
     static const std::vector<Channel> ch = {
-        {"Z", OIIO::TypeDesc::FLOAT},       {"A", OIIO::TypeDesc::FLOAT},
-        {"P.X", OIIO::TypeDesc::FLOAT},     {"P.Y", OIIO::TypeDesc::FLOAT},     {"P.Z", OIIO::TypeDesc::FLOAT},
-        {"N.X", OIIO::TypeDesc::FLOAT},     {"N.Y", OIIO::TypeDesc::FLOAT},     {"N.Z", OIIO::TypeDesc::FLOAT},
-        {"Ng.X", OIIO::TypeDesc::FLOAT},    {"Ng.Y", OIIO::TypeDesc::FLOAT},    {"Ng.Z", OIIO::TypeDesc::FLOAT},
-        {"Pref.X", OIIO::TypeDesc::FLOAT},  {"Pref.Y", OIIO::TypeDesc::FLOAT},  {"Pref.Z", OIIO::TypeDesc::FLOAT},
-        {"Nref.X", OIIO::TypeDesc::FLOAT},  {"Nref.Y", OIIO::TypeDesc::FLOAT},  {"Nref.Z", OIIO::TypeDesc::FLOAT},
-        {"uv.U", OIIO::TypeDesc::FLOAT},    {"uv.V", OIIO::TypeDesc::FLOAT},
-        {"id.material", OIIO::TypeDesc::UINT}, {"id.object", OIIO::TypeDesc::UINT}, {"id.prim", OIIO::TypeDesc::UINT},
-        {"footprint", OIIO::TypeDesc::FLOAT},
-        {"T.X", OIIO::TypeDesc::FLOAT},     {"T.Y", OIIO::TypeDesc::FLOAT},     {"T.Z", OIIO::TypeDesc::FLOAT},
-        {"v", OIIO::TypeDesc::FLOAT},
+        {"Z", OIIO::TypeDesc::FLOAT},      {"A", OIIO::TypeDesc::FLOAT},          {"P.X", OIIO::TypeDesc::FLOAT},
+        {"P.Y", OIIO::TypeDesc::FLOAT},    {"P.Z", OIIO::TypeDesc::FLOAT},        {"N.X", OIIO::TypeDesc::FLOAT},
+        {"N.Y", OIIO::TypeDesc::FLOAT},    {"N.Z", OIIO::TypeDesc::FLOAT},        {"Ng.X", OIIO::TypeDesc::FLOAT},
+        {"Ng.Y", OIIO::TypeDesc::FLOAT},   {"Ng.Z", OIIO::TypeDesc::FLOAT},       {"Pref.X", OIIO::TypeDesc::FLOAT},
+        {"Pref.Y", OIIO::TypeDesc::FLOAT}, {"Pref.Z", OIIO::TypeDesc::FLOAT},     {"Nref.X", OIIO::TypeDesc::FLOAT},
+        {"Nref.Y", OIIO::TypeDesc::FLOAT}, {"Nref.Z", OIIO::TypeDesc::FLOAT},     {"uv.U", OIIO::TypeDesc::FLOAT},
+        {"uv.V", OIIO::TypeDesc::FLOAT},   {"id.material", OIIO::TypeDesc::UINT}, {"id.object", OIIO::TypeDesc::UINT},
+        {"id.prim", OIIO::TypeDesc::UINT}, {"footprint", OIIO::TypeDesc::FLOAT},  {"T.X", OIIO::TypeDesc::FLOAT},
+        {"T.Y", OIIO::TypeDesc::FLOAT},    {"T.Z", OIIO::TypeDesc::FLOAT},        {"v", OIIO::TypeDesc::FLOAT},
     };
     return ch;
 }
 
 /// Float channel values of a fragment in deep_channels() order (ids handled separately).
 std::array<float, 27> float_values(const Fragment& f) {
-    return {f.depth, f.weight, f.p.x, f.p.y, f.p.z, f.n.x, f.n.y, f.n.z, f.ng.x, f.ng.y, f.ng.z,
-            f.p_base.x, f.p_base.y, f.p_base.z, f.n_base.x, f.n_base.y, f.n_base.z, f.uv.x, f.uv.y,
-            0, 0, 0, f.footprint, f.tangent.x, f.tangent.y, f.tangent.z, f.strand_v};
+    return {f.depth, f.weight, f.p.x,      f.p.y,      f.p.z,       f.n.x,       f.n.y,       f.n.z,       f.ng.x,
+            f.ng.y,  f.ng.z,   f.p_base.x, f.p_base.y, f.p_base.z,  f.n_base.x,  f.n_base.y,  f.n_base.z,  f.uv.x,
+            f.uv.y,  0,        0,          0,          f.footprint, f.tangent.x, f.tangent.y, f.tangent.z, f.strand_v};
 }
 
 }  // namespace
@@ -107,8 +105,7 @@ void write_deep(const std::string& path, const DeepBuffer& deep, const std::vect
     spec.attribute("Software", std::string("bounce ") + bounce_version());
 
     OIIO::DeepData dd;
-    dd.init(static_cast<int64_t>(deep.pixel_count()), static_cast<int>(chans.size()),
-            spec.channelformats, spec.channelnames);
+    dd.init(static_cast<int64_t>(deep.pixel_count()), static_cast<int>(chans.size()), spec.channelformats, spec.channelnames);
     for (size_t i = 0; i < deep.pixel_count(); ++i)
         dd.set_samples(static_cast<int64_t>(i), static_cast<int>(deep.offsets[i + 1] - deep.offsets[i]));
     for (size_t i = 0; i < deep.pixel_count(); ++i) {
@@ -177,8 +174,7 @@ std::vector<int> deep_channel_index(const OIIO::ImageSpec& spec, int version, co
         if (index[c] < 0) throw InputError(path, "channels", fmt::format("missing channel \"{}\"", chans[c].name));
         if (spec.channelformat(index[c]) != chans[c].type)
             throw InputError(path, fmt::format("channel {}", chans[c].name),
-                             fmt::format("expected type {}, found {}", chans[c].type.c_str(),
-                                         spec.channelformat(index[c]).c_str()));
+                             fmt::format("expected type {}, found {}", chans[c].type.c_str(), spec.channelformat(index[c]).c_str()));
     }
     // A deep file with colour keeps the coverage in its own channel (A is then the over-alpha).
     for (int k = 0; k < spec.nchannels; ++k)
@@ -200,8 +196,8 @@ DeepBuffer deep_header(const OIIO::ImageSpec& spec, const std::string& path) {
     }
     // render.spp's range (1 .. 4096): a crafted 2e9 would size every later buffer by it.
     if (deep.spp > 4096) throw InputError(path, "header/bounce:spp", fmt::format("{} samples per pixel is outside 1 .. 4096", deep.spp));
-    if (deep.spp <= 0 || deep.width <= 0 || deep.height <= 0 || deep.x0 < 0 || deep.y0 < 0 ||
-        deep.x0 + deep.width > deep.full_width || deep.y0 + deep.height > deep.full_height)
+    if (deep.spp <= 0 || deep.width <= 0 || deep.height <= 0 || deep.x0 < 0 || deep.y0 < 0 || deep.x0 + deep.width > deep.full_width ||
+        deep.y0 + deep.height > deep.full_height)
         throw InputError(path, "header", "inconsistent image window or sample count");
     return deep;
 }
@@ -237,9 +233,11 @@ void read_fragments(const OIIO::DeepData& dd, const std::vector<int>& index, con
             f.footprint = v(22);
             f.tangent = {v(23), v(24), v(25)}, f.strand_v = v(26);
             if (const char* bad = invalid_fragment_field(f))
-                throw InputError(path, fmt::format("pixel ({}, {}) fragment {} channel {}", deep.x0 + static_cast<int>(i % static_cast<size_t>(deep.width)),
-                                                   deep.y0 + static_cast<int>(i / static_cast<size_t>(deep.width)), s, bad),
-                                 "value out of range (not finite, beyond +-1e18, or a normal that is not unit length)");
+                throw InputError(
+                    path,
+                    fmt::format("pixel ({}, {}) fragment {} channel {}", deep.x0 + static_cast<int>(i % static_cast<size_t>(deep.width)),
+                                deep.y0 + static_cast<int>(i / static_cast<size_t>(deep.width)), s, bad),
+                    "value out of range (not finite, beyond +-1e18, or a normal that is not unit length)");
         }
     }
 }
@@ -261,8 +259,7 @@ DeepBuffer read_deep(const std::string& path) {
     const std::vector<int> index = deep_channel_index(spec, version, path);
     DeepBuffer deep = deep_header(spec, path);
     OIIO::DeepData dd;
-    if (!in->read_native_deep_image(0, 0, dd))
-        throw InputError(path, "", "cannot read deep data: " + in->geterror());
+    if (!in->read_native_deep_image(0, 0, dd)) throw InputError(path, "", "cannot read deep data: " + in->geterror());
     read_fragments(dd, index, path, deep);
     return deep;
 }

@@ -17,7 +17,7 @@ namespace {
 
 struct Accum {
     Vec3 p, n, ng;
-    Vec3 p0, ng0;  ///< the first subsample's point and geometric normal: the group's plane
+    Vec3 p0, ng0;         ///< the first subsample's point and geometric normal: the group's plane
     float off_plane = 0;  ///< largest distance of a merged subsample from that plane
     Vec2 uv;
     uint32_t material, object, prim;
@@ -95,7 +95,6 @@ bool hidden(const SceneAccel& accel, const CameraRays& camera, const Vec3& p) {
     return dist > 0 && accel.fine().intersect(o, (p - o) / dist, 0, dist * (1 - 1e-5f), 0, kRayCamera).valid();
 }
 
-
 /// How many surfaces one camera subsample passes through (blended cutouts), and the share of
 /// it below which what is behind is not looked for: past either the rest shows the background.
 constexpr int kMaxLayers = 32;
@@ -103,9 +102,8 @@ constexpr float kLeastThrough = 1e-4f;
 
 /// One pixel's camera subsamples grouped into fragments: subsamples of the same surface merge.
 class PixelFragments {
-public:
-    PixelFragments(const Scene& scene, const SceneAccel& accel, const CameraRays& camera)
-        : scene_(scene), accel_(accel), camera_(camera) {}
+  public:
+    PixelFragments(const Scene& scene, const SceneAccel& accel, const CameraRays& camera) : scene_(scene), accel_(accel), camera_(camera) {}
     void clear() { groups_.clear(), subsamples_.clear(); }
     /// Hit `h` of the ray leaving `origin` along unit `dn` (pixel direction `d`), reached by
     /// `through` of its subsample: adds what the surface covers of it and returns the surface's
@@ -114,7 +112,7 @@ public:
     /// The pixel's fragments (`spp` subsamples), in the order their groups were made.
     void emit(int spp, std::vector<Fragment>& out) const;
 
-private:
+  private:
     const Scene& scene_;
     const SceneAccel& accel_;
     const CameraRays& camera_;
@@ -127,8 +125,7 @@ float PixelFragments::add(const Hit& h, const Vec3& origin, const Vec3& d, const
     std::vector<Accum>& groups = groups_;
     const Object& obj = scene_.objects[h.object];
     const uint32_t prim = h.hair ? obj.fur->strand_of(h.prim) : h.prim;
-    SurfacePoint sp = h.hair ? hair_point(*obj.fur, h, origin, dn, obj.visible())
-                             : obj.visible_point(h.prim, h.u, h.v);
+    SurfacePoint sp = h.hair ? hair_point(*obj.fur, h, origin, dn, obj.visible()) : obj.visible_point(h.prim, h.u, h.v);
     const Material& material = scene_.materials[sp.material];
     const float alpha = h.hair || material.alpha_mode != AlphaMode::Blend ? 1.0f : material.opacity_at(sp.uv);
     if (!(alpha > 0)) return 0;
@@ -145,8 +142,7 @@ float PixelFragments::add(const Hit& h, const Vec3& origin, const Vec3& d, const
         if (a.hair != h.hair || (h.hair && (a.object != h.object || a.prim != prim))) continue;
         const float off = std::abs(dot(sp.p - a.p0, a.ng0));
         if (h.hair ||  // subsamples of one strand are one fragment
-            (a.object == h.object && a.material == sp.material &&
-             dot(normalize(a.ng), sp.ng) > 0.9f &&
+            (a.object == h.object && a.material == sp.material && dot(normalize(a.ng), sp.ng) > 0.9f &&
              std::abs(a.depth / static_cast<float>(a.count) - h.t) < 0.05f * h.t + 4 * fp && off < fp)) {
             g = &a;
             g->off_plane = std::max(g->off_plane, off / fp);
@@ -154,8 +150,7 @@ float PixelFragments::add(const Hit& h, const Vec3& origin, const Vec3& d, const
         }
     }
     if (!g) {
-        groups.push_back({Vec3(0), Vec3(0), Vec3(0), sp.p, sp.ng, 0, {}, sp.material, h.object, prim,
-                          0, 0, 0});
+        groups.push_back({Vec3(0), Vec3(0), Vec3(0), sp.p, sp.ng, 0, {}, sp.material, h.object, prim, 0, 0, 0});
         g = &groups.back();
         g->hair = h.hair;
     }
@@ -265,7 +260,8 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
                     Vec3 d = camera.direction(px, py), dn;
                     // Depth of field: the ray leaves a point of the lens; motion blur: it sees the
                     // scene at its time in the shutter. Shading stays at the frame's time.
-                    const float time = blur ? (static_cast<float>(time_strata[su]) + rng.get(su, kDimTime)) / static_cast<float>(spp) : 0.0f;
+                    const float time =
+                        blur ? (static_cast<float>(time_strata[su]) + rng.get(su, kDimTime)) / static_cast<float>(spp) : 0.0f;
                     const Vec3 origin = camera.lens_ray(px, py, rng.get(su, kDimLensU), rng.get(su, kDimLensV), dn, time);
                     // Blended cutouts cover their share of the subsample and let the rest on.
                     float through = 1, tnear = 0;
@@ -288,8 +284,7 @@ DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats&
 
     deep.offsets.resize(deep.pixel_count() + 1);
     deep.offsets[0] = 0;
-    for (size_t i = 0; i < per_pixel.size(); ++i)
-        deep.offsets[i + 1] = deep.offsets[i] + static_cast<uint32_t>(per_pixel[i].size());
+    for (size_t i = 0; i < per_pixel.size(); ++i) deep.offsets[i + 1] = deep.offsets[i] + static_cast<uint32_t>(per_pixel[i].size());
     deep.fragments.reserve(deep.offsets.back());
     for (auto& v : per_pixel) deep.fragments.insert(deep.fragments.end(), v.begin(), v.end());
     stats.set("fragments", static_cast<double>(deep.fragments.size()));
@@ -318,7 +313,8 @@ DeepBuffer parse_window(const std::string& bytes) {
     };
     get(head, sizeof(head));
     d.full_width = static_cast<int>(head[0]), d.full_height = static_cast<int>(head[1]), d.x0 = static_cast<int>(head[2]);
-    d.y0 = static_cast<int>(head[3]), d.width = static_cast<int>(head[4]), d.height = static_cast<int>(head[5]), d.spp = static_cast<int>(head[6]);
+    d.y0 = static_cast<int>(head[3]), d.width = static_cast<int>(head[4]), d.height = static_cast<int>(head[5]),
+    d.spp = static_cast<int>(head[6]);
     get(&d.seed, sizeof(d.seed)), get(&d.scene_fingerprint, sizeof(d.scene_fingerprint));
     d.offsets.resize(d.pixel_count() + 1);
     get(d.offsets.data(), d.offsets.size() * sizeof(uint32_t));
@@ -354,13 +350,11 @@ void check_camera_sees_geometry(const Scene& scene, const SceneAccel& accel) {
         for (int i = 0; i < n; ++i) {
             float px = (static_cast<float>(i) + 0.5f) / n * static_cast<float>(scene.camera.width);
             float py = (static_cast<float>(j) + 0.5f) / n * static_cast<float>(scene.camera.height);
-            if (accel.fine().intersect(camera.origin(), normalize(camera.direction(px, py)), 0, INFINITY).valid())
-                return;
+            if (accel.fine().intersect(camera.origin(), normalize(camera.direction(px, py)), 0, INFINITY).valid()) return;
         }
     const Vec3 &p = scene.camera.position, &l = scene.camera.look_at;
     throw InputError(scene.path, "/camera",
-                     fmt::format("the camera at ({}, {}, {}) looking at ({}, {}, {}) sees no geometry", p.x, p.y,
-                                 p.z, l.x, l.y, l.z));
+                     fmt::format("the camera at ({}, {}, {}) looking at ({}, {}, {}) sees no geometry", p.x, p.y, p.z, l.x, l.y, l.z));
 }
 
 }  // namespace bounce

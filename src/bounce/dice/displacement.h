@@ -10,7 +10,7 @@
 namespace bounce {
 
 class DisplacementMap {
-public:
+  public:
     /// Opens `path` (throws InputError naming it when it is missing or not an image).
     explicit DisplacementMap(const std::string& path);
     ~DisplacementMap();
@@ -22,7 +22,7 @@ public:
     float height(const Vec2& uv) const;
     const std::string& path() const { return path_; }
 
-private:
+  private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
     std::string path_;

@@ -52,7 +52,7 @@ std::unique_ptr<Far::TopologyRefiner> make_refiner(const SubdivSurface& s) {
     }
     Sdc::Options options;
     options.SetVtxBoundaryInterpolation(s.boundary == SubdivBoundary::EdgeOnly ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
-                                                                                : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+                                                                               : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
     // uvs stay smooth inside each uv chart and pinned at chart corners, as modelling tools do.
     options.SetFVarLinearInterpolation(Sdc::Options::FVAR_LINEAR_ALL);
     const Sdc::SchemeType type = s.scheme == SubdivScheme::Loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK;
@@ -65,8 +65,10 @@ std::unique_ptr<Far::TopologyRefiner> make_refiner(const SubdivSurface& s) {
 /// `tangents2`), oriented by `around` (the diced faces' normals at the point), which stands in
 /// where the cross product degenerates (extraordinary vertices).
 Vec3 limit_normal(Vec3 n, float tangents2, const Vec3& around) {
-    if (!(length(n) > 1e-12f * tangents2)) n = around;
-    else if (dot(n, around) < 0) n = -n;
+    if (!(length(n) > 1e-12f * tangents2))
+        n = around;
+    else if (dot(n, around) < 0)
+        n = -n;
     return dot(n, n) > 0 ? normalize(n) : Vec3(0, 0, 1);
 }
 
@@ -110,7 +112,8 @@ void check_control_mesh(const ControlMesh& c, SubdivScheme scheme) {
         if (v >= 0 && v < nv && ++valence[static_cast<size_t>(v)] > kMaxValence)
             throw InputError(c.source, fmt::format("vertex {}", v),
                              fmt::format("more than {} faces meet at this vertex (subdividing it would take minutes); "
-                                         "split the fan", kMaxValence));
+                                         "split the fan",
+                                         kMaxValence));
     // Directed edge -> face that uses it; an undirected edge may appear once each way.
     std::unordered_map<uint64_t, size_t> directed;
     directed.reserve(c.face_vertices.size());
@@ -129,14 +132,15 @@ void check_control_mesh(const ControlMesh& c, SubdivScheme scheme) {
             if (!fresh)
                 throw InputError(c.source, fmt::format("face {}", f),
                                  fmt::format("edge {}-{} is also used in the same direction by face {}: the mesh is "
-                                             "non-manifold or its faces disagree on orientation", a, b, it->second));
+                                             "non-manifold or its faces disagree on orientation",
+                                             a, b, it->second));
         }
         corner += static_cast<size_t>(n);
     }
 }
 
-int dicing_level(const ControlMesh& c, const std::function<float(const Vec3&)>& pixels_per_unit, float shading_rate,
-                 int min_level, int max_level) {
+int dicing_level(const ControlMesh& c, const std::function<float(const Vec3&)>& pixels_per_unit, float shading_rate, int min_level,
+                 int max_level) {
     std::vector<float> px;
     size_t corner = 0;
     for (size_t f = 0; f < c.face_count(); ++f) {
@@ -168,11 +172,13 @@ struct DicedPoint {
 };
 
 /// Each control edge's segment count (at least 1).
-std::vector<int> edge_rates(const Far::TopologyLevel& base, const ControlMesh& c, const std::function<int(const Vec3&, const Vec3&)>& edge_rate) {
+std::vector<int> edge_rates(const Far::TopologyLevel& base, const ControlMesh& c,
+                            const std::function<int(const Vec3&, const Vec3&)>& edge_rate) {
     std::vector<int> rates(static_cast<size_t>(base.GetNumEdges()));
     for (int e = 0; e < base.GetNumEdges(); ++e) {
         const auto ev = base.GetEdgeVertices(e);
-        rates[static_cast<size_t>(e)] = std::max(1, edge_rate(c.positions[static_cast<size_t>(ev[0])], c.positions[static_cast<size_t>(ev[1])]));
+        rates[static_cast<size_t>(e)] =
+            std::max(1, edge_rate(c.positions[static_cast<size_t>(ev[0])], c.positions[static_cast<size_t>(ev[1])]));
     }
     return rates;
 }

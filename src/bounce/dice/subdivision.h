@@ -21,12 +21,12 @@ enum class SubdivBoundary { EdgeOnly, EdgeAndCorner };
 /// A polygon control mesh: vertices welded by position (so uv seams do not cut the surface),
 /// uvs per face corner (face-varying).
 struct ControlMesh {
-    std::string source;                  ///< file, for error messages
+    std::string source;  ///< file, for error messages
     std::vector<Vec3> positions;
-    std::vector<int> face_sizes;         ///< corners per face (>= 3)
-    std::vector<int> face_vertices;      ///< corner -> vertex
-    std::vector<Vec2> uvs;               ///< distinct uv values
-    std::vector<int> face_uvs;           ///< corner -> uv value (empty = no uvs)
+    std::vector<int> face_sizes;     ///< corners per face (>= 3)
+    std::vector<int> face_vertices;  ///< corner -> vertex
+    std::vector<Vec2> uvs;           ///< distinct uv values
+    std::vector<int> face_uvs;       ///< corner -> uv value (empty = no uvs)
     std::vector<uint32_t> face_materials;
     /// The file had vertex colours (glTF's COLOR_0), which subdivision does not carry.
     bool dropped_vertex_colors = false;
@@ -83,7 +83,7 @@ ControlMesh refine_cage(const SubdivSurface& surface, int level);
 /// The refinement level at which the fine tessellation's edges are about `shading_rate`
 /// pixels: log2 of the median of the control edges' projected lengths, rounded
 /// (`pixels_per_unit(p)`: pixels per world unit at p, 0 behind the camera), in [min, max].
-int dicing_level(const ControlMesh& control, const std::function<float(const Vec3&)>& pixels_per_unit,
-                 float shading_rate, int min_level, int max_level);
+int dicing_level(const ControlMesh& control, const std::function<float(const Vec3&)>& pixels_per_unit, float shading_rate, int min_level,
+                 int max_level);
 
 }  // namespace bounce

@@ -17,7 +17,7 @@ bool launched_by_mpi();
 /// The job's ranks over MPI_COMM_WORLD. MPI is initialised on construction and finalised on
 /// destruction; one per process.
 class MpiCommunicator : public Communicator {
-public:
+  public:
     MpiCommunicator(int* argc, char*** argv);
     ~MpiCommunicator() override;
     MpiCommunicator(const MpiCommunicator&) = delete;
@@ -29,7 +29,7 @@ public:
     /// Ends every rank of the job with `code` (a rank that failed says why first).
     [[noreturn]] static void abort(int code);
 
-private:
+  private:
     std::vector<std::string> exchange(const std::string& mine, bool everyone);
     int rank_ = 0, size_ = 1;
 };

@@ -31,7 +31,8 @@ Coverage rasterize_uvs(const TriangleMesh& m, int res) {
         // Texel (x, y) has its centre at u = (x + 0.5) / res, v = 1 - (y + 0.5) / res.
         const float u0 = std::min({a.x, b.x, d.x}), u1 = std::max({a.x, b.x, d.x});
         const float v0 = std::min({a.y, b.y, d.y}), v1 = std::max({a.y, b.y, d.y});
-        const int x0 = std::max(0, static_cast<int>(std::floor(u0 * fres - 0.5f))), x1 = std::min(res - 1, static_cast<int>(std::ceil(u1 * fres)));
+        const int x0 = std::max(0, static_cast<int>(std::floor(u0 * fres - 0.5f))),
+                  x1 = std::min(res - 1, static_cast<int>(std::ceil(u1 * fres)));
         const int y0 = std::max(0, static_cast<int>(std::floor((1 - v1) * fres - 0.5f))),
                   y1 = std::min(res - 1, static_cast<int>(std::ceil((1 - v0) * fres)));
         for (int y = y0; y <= y1; ++y)
@@ -55,7 +56,8 @@ std::vector<float> bake_ao(const Scene& scene, const SceneAccel& accel, uint32_t
                            ProgressSink* sink) {
     const TriangleMesh& m = scene.objects[id].visible();
     if (scene.objects[id].instance || scene.objects[id].prototype)  // its uvs are every placement's
-        throw InputError(scene.path, "object " + scene.objects[id].name, "is an instance or a prototype: its uvs are shared by every placement, its occlusion is not");
+        throw InputError(scene.path, "object " + scene.objects[id].name,
+                         "is an instance or a prototype: its uvs are shared by every placement, its occlusion is not");
     if (m.uvs.empty()) throw InputError(scene.path, "object " + scene.objects[id].name, "has no uvs to bake occlusion into");
     const int res = s.resolution;
     const Coverage cov = rasterize_uvs(m, res);

@@ -25,7 +25,7 @@ struct AoBakeSettings {
 /// at the top (v = 1), against every object's fine surface; texels no triangle covers take
 /// their nearest covered neighbour's value within 4 texels (so filtering at uv seams does not
 /// pull in black), else 1. Throws InputError naming `scene.path` when the object has no uvs.
-std::vector<float> bake_ao(const Scene& scene, const SceneAccel& accel, uint32_t id, const AoBakeSettings& settings,
-                           Stats& stats, ProgressSink* progress);
+std::vector<float> bake_ao(const Scene& scene, const SceneAccel& accel, uint32_t id, const AoBakeSettings& settings, Stats& stats,
+                           ProgressSink* progress);
 
 }  // namespace bounce

@@ -33,7 +33,7 @@ struct CutoffCells {
 /// cutoff or the falloff), not from an edge. Each pair is judged at most once per gather, when
 /// one of the two sums first asks.
 class SurfacePairs {
-public:
+  public:
     SurfacePairs(const GatherGrid& grid, const CutoffCells& cells);
     /// Whether neighbouring cells a and b (either order) are such a pair.
     bool operator()(size_t a, size_t b) const;
@@ -43,7 +43,7 @@ public:
     /// crossing both families is counted once.
     Vec3 gradient() const;
 
-private:
+  private:
     GatherGrid grid_;
     const CutoffCells& cells_;
     /// Cell c with its azimuthal (k + 1) and radial (j + 1) neighbour: 1 one surface, 0 not,

@@ -14,8 +14,8 @@
 
 namespace bounce {
 
-Gatherer::Gatherer(const Scene& scene, const SceneAccel& accel, const Materials& materials,
-                   const DirectLighting& lighting, const RadiosityTextures* radiosity, GatherSettings settings)
+Gatherer::Gatherer(const Scene& scene, const SceneAccel& accel, const Materials& materials, const DirectLighting& lighting,
+                   const RadiosityTextures* radiosity, GatherSettings settings)
     : scene_(scene),
       accel_(accel),
       materials_(materials),
@@ -42,8 +42,8 @@ Color part_sum(std::span<const Color> parts) {
 }
 }  // namespace
 
-Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray,
-                             Counters& counters, std::span<Color> parts) const {
+Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray, Counters& counters,
+                             std::span<Color> parts) const {
     bool front = dot(sp.ng, d) < 0;
     if (radiosity_ && !parts.empty()) {
         radiosity_->lookup_parts(h.object, h.prim, h.u, h.v, front, counters, parts);
@@ -53,11 +53,12 @@ Color Gatherer::hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d
     const Vec3 n = front ? sp.ng : -sp.ng;
     const RandomStream hit_rng(rng.bits(ray, kDimGather + 3), ray);
     return lighting_.diffuse_radiance(sp.p, n, h.object, materials_.secondary_albedo(sp) * kInvPi,
-                                      materials_.secondary_translucency(sp) * kInvPi, hit_rng, settings_.hit_light_samples, counters, parts);
+                                      materials_.secondary_translucency(sp) * kInvPi, hit_rng, settings_.hit_light_samples, counters,
+                                      parts);
 }
 
-Color Gatherer::hair_radiance(const Hit& h, const Vec3& at, const Vec3& d, const RandomStream& rng, uint64_t ray,
-                              Counters& counters, std::span<Color> parts) const {
+Color Gatherer::hair_radiance(const Hit& h, const Vec3& at, const Vec3& d, const RandomStream& rng, uint64_t ray, Counters& counters,
+                              std::span<Color> parts) const {
     const RandomStream hit_rng(rng.bits(ray, kDimGather + 3), ray);
     return lighting_.strand_radiance(h, at, d, hit_rng, settings_.hit_light_samples, counters, parts);
 }
@@ -153,7 +154,6 @@ GatherResult Gatherer::update(const Vec3& p, const Vec3& n, const RandomStream& 
     return reshade(p, n, rng, kept, counters, near);
 }
 
-
 LightPart Gatherer::light_part(const detail::Cells& cells, const Color* L, size_t stride, const Frame& frame, float near,
                                bool gradients) const {
     const size_t S = static_cast<size_t>(grid_.rays());
@@ -173,7 +173,6 @@ LightPart Gatherer::light_part(const detail::Cells& cells, const Color* L, size_
     for (size_t ch = 0; ch < 3; ++ch) out.grad_r[ch] = out.grad_r[ch] * w;
     return out;
 }
-
 
 Color Gatherer::cell_radiance(detail::Cells& cells, const Vec3& p, size_t c, const RandomStream& rng, Counters& counters,
                               std::span<Color> parts) const {
@@ -242,7 +241,8 @@ GatherResult Gatherer::finish(detail::Cells& cells, const Vec3& p, const Vec3& n
     res.bent_normal = dot(sum_u_dir, sum_u_dir) > 0 ? normalize(sum_u_dir) : n;
     res.harmonic_distance = inv_r_sum > 0 ? static_cast<float>(S / inv_r_sum) : INFINITY;
     // Only records use it (adaptive rays); brute force skips it.
-    if (settings_.record_terms) res.rel_stderr = relative_stderr(grid_, settings_.ao, L, U, settings_.ao ? res.ao : luminance(res.irradiance));
+    if (settings_.record_terms)
+        res.rel_stderr = relative_stderr(grid_, settings_.ao, L, U, settings_.ao ? res.ao : luminance(res.irradiance));
     if (!settings_.record_terms) return res;
     // The view summary: per direction bin, the farthest the rays went (INFINITY: one escaped).
     for (int j = 0; j < M; ++j)

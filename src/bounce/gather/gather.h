@@ -24,10 +24,10 @@ namespace bounce {
 /// The scene's gather parameters (scene/settings.h) with `ao_distance` resolved (<= 0 =
 /// unlimited), plus what the caller decides per pass.
 struct GatherSettings : IndirectSettings {
-    bool record_terms = true;    ///< distances and gradients (what a cache record needs); brute
-                                 ///< force turns them off and gathers only E, AO and directions
+    bool record_terms = true;             ///< distances and gradients (what a cache record needs); brute
+                                          ///< force turns them off and gathers only E, AO and directions
     const CancelToken* cancel = nullptr;  ///< checked once per gather
-    bool hessian = false;        ///< also the irradiance Hessian (record_terms only)
+    bool hessian = false;                 ///< also the irradiance Hessian (record_terms only)
     /// Also the bounce light per light (GatherResult::parts; not in AO mode). Then
     /// every value of the result is its `signal` (every light at scale 1): what decides where
     /// records go and how many rays they take depends on no light's colour or intensity.
@@ -53,14 +53,14 @@ inline constexpr float kEscapedHit = 1e20f;
 /// What a gather returns; gradients follow Ward-Heckbert (rotational) and Ward-Heckbert with
 /// Krivanek's occlusion-aware distances (translational), see docs/gather.md.
 struct GatherResult {
-    Color irradiance{0};                ///< E, one bounce plus the sky
-    float ao = 1;                       ///< cosine-weighted unoccluded fraction
-    Vec3 bent_normal{0, 0, 1};          ///< mean unoccluded direction (unit)
-    std::array<Vec3, 3> light_dir{};    ///< per channel c: (pi/S) sum L_c w (not normalised)
-    float harmonic_distance = INFINITY; ///< Ward's R: S / sum(1/r)
-    float min_distance = INFINITY;      ///< TL04's: min r over qualifying rays
-    std::array<Vec3, 3> grad_rot{};     ///< dE_c/d(rotation): E(n') ~ E + (n x n') . grad
-    std::array<Vec3, 3> grad_trans{};   ///< dE_c/dx
+    Color irradiance{0};                 ///< E, one bounce plus the sky
+    float ao = 1;                        ///< cosine-weighted unoccluded fraction
+    Vec3 bent_normal{0, 0, 1};           ///< mean unoccluded direction (unit)
+    std::array<Vec3, 3> light_dir{};     ///< per channel c: (pi/S) sum L_c w (not normalised)
+    float harmonic_distance = INFINITY;  ///< Ward's R: S / sum(1/r)
+    float min_distance = INFINITY;       ///< TL04's: min r over qualifying rays
+    std::array<Vec3, 3> grad_rot{};      ///< dE_c/d(rotation): E(n') ~ E + (n x n') . grad
+    std::array<Vec3, 3> grad_trans{};    ///< dE_c/dx
     Vec3 ao_grad_rot{0}, ao_grad_trans{0};
     int rays = 0;
     /// With record_terms: estimated relative standard error of the irradiance's luminance (AO in AO mode), from
@@ -91,10 +91,10 @@ struct GatherResult {
 
 /// Gathers at `p` (on the fine surface) over the hemisphere of unit normal `n`.
 class Gatherer {
-public:
+  public:
     /// `radiosity` may be null: hits are then shaded with shadow rays.
-    Gatherer(const Scene& scene, const SceneAccel& accel, const Materials& materials,
-             const DirectLighting& lighting, const RadiosityTextures* radiosity, GatherSettings settings);
+    Gatherer(const Scene& scene, const SceneAccel& accel, const Materials& materials, const DirectLighting& lighting,
+             const RadiosityTextures* radiosity, GatherSettings settings);
 
     /// `near`: hits nearer than this neither limit the record radius (TL04's d_min) nor steepen
     /// the translational gradients (their cell distances are floored at it). Records on the
@@ -119,8 +119,7 @@ public:
     /// hits, seen from p; the cells whose rays met anything nearer, and a margin around them,
     /// are traced again from p with `rng` for what is near. `rays` in the result counts those.
     /// E, AO, bent normal and light directions only (no gradients, no light parts).
-    GatherResult reproject(const Vec3& p, const Vec3& n, const RandomStream& rng, const EarlierGather& from,
-                           Counters& counters) const;
+    GatherResult reproject(const Vec3& p, const Vec3& n, const RandomStream& rng, const EarlierGather& from, Counters& counters) const;
     static constexpr float kReprojectNear = 16;
     /// A plain gather that also reports, per direction bin of n's frame, how much its cells'
     /// values varied there: the guide of nearby guided gathers (guide.h).
@@ -139,15 +138,14 @@ public:
     }
     GatherGrid grid() const { return grid_; }
 
-private:
+  private:
     /// This thread's scratch of the current gather: the cells' directions, hits and values, which
     /// every entry point fills and hands to the steps below (a pool per gatherer, one per thread).
     detail::Cells& scratch() const;
     /// The directions of the gather's cells (stratified, cosine-weighted) about n, into `cells`.
     void cell_directions(detail::Cells& cells, const Vec3& n, const RandomStream& rng) const;
     /// Everything a gather computes from its cells' directions and hits.
-    GatherResult finish(detail::Cells& cells, const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters,
-                        float near) const;
+    GatherResult finish(detail::Cells& cells, const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters, float near) const;
     /// The current gather's cells' spread per direction bin of n's frame (DirectionGuide).
     DirectionGuide cells_guide(const detail::Cells& cells, const Vec3& n) const;
     /// The radiance cell c of the current gather brings (its hit's or the sky's; 0 in AO mode),
@@ -156,8 +154,8 @@ private:
                         std::span<Color> parts) const;
     /// Radiance leaving a hit towards the gather point (direction -d). With `parts` (one per
     /// light): per light, scales factored out, and their sum is returned (the signal).
-    Color hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray,
-                       Counters& counters, std::span<Color> parts) const;
+    Color hit_radiance(const Hit& h, const SurfacePoint& sp, const Vec3& d, const RandomStream& rng, uint64_t ray, Counters& counters,
+                       std::span<Color> parts) const;
     /// The same from a strand of fur at `at` (fur.cast_indirect), and from the sky where a ray escapes.
     Color hair_radiance(const Hit& h, const Vec3& at, const Vec3& d, const RandomStream& rng, uint64_t ray, Counters& counters,
                         std::span<Color> parts) const;
@@ -177,9 +175,9 @@ private:
     GatherGrid grid_;
     float cos_concave_;
     std::vector<uint32_t> packet_order_;  ///< grid cells in 4x4 blocks: coherent packets of 16
-    float far_;  ///< where a ray that leaves the scene is taken to end, for the Hessian's mesh
-    size_t lights_;  ///< GatherSettings::light_parts: the scene's lights (0: no parts)
-    std::vector<Color> unit_scales_;  ///< every light at scale 1 (the signal)
+    float far_;                           ///< where a ray that leaves the scene is taken to end, for the Hessian's mesh
+    size_t lights_;                       ///< GatherSettings::light_parts: the scene's lights (0: no parts)
+    std::vector<Color> unit_scales_;      ///< every light at scale 1 (the signal)
     struct Scratch;
     std::shared_ptr<Scratch> scratch_;  ///< per thread (copies of a gatherer share it)
 };
@@ -261,7 +259,7 @@ GatherSettings gather_settings(const Scene& scene);
 /// Brute force: gathers at every fragment of `deep` (tiles in parallel; guided by pilot gathers
 /// with GatherSettings::guided, guide.h); the result is parallel to deep.fragments and
 /// independent of thread count.
-std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
-                                            Stats& stats, ProgressSink* progress);
+std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, Stats& stats,
+                                            ProgressSink* progress);
 
 }  // namespace bounce

@@ -51,7 +51,6 @@ TangentHessian cells_hessian(const GatherGrid& grid, const Vec3& p, const Vec3& 
     return gather_hessian(p, n, hm, hn, pts, vals, dist);
 }
 
-
 /// GatherResult::bins: each bin's mean over the cells whose directions fall in it.
 void set_bins(GatherResult& res, const Frame& frame, std::span<const float> ao, const std::vector<Color>& L, const std::vector<Vec3>& D) {
     std::array<int, kReachBins> count{};

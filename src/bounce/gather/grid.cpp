@@ -53,8 +53,7 @@ std::vector<uint32_t> gather_packet_order(const GatherGrid& grid) {
     for (int j0 = 0; j0 < grid.m; j0 += 4)
         for (int k0 = 0; k0 < grid.n; k0 += 4)
             for (int j = j0; j < std::min(j0 + 4, grid.m); ++j)
-                for (int k = k0; k < std::min(k0 + 4, grid.n); ++k)
-                    order.push_back(static_cast<uint32_t>(j * grid.n + k));
+                for (int k = k0; k < std::min(k0 + 4, grid.n); ++k) order.push_back(static_cast<uint32_t>(j * grid.n + k));
     return order;
 }
 

@@ -33,9 +33,8 @@ std::array<int, kReachBins> guided_allocation(const DirectionGuide& guide, int r
     // Largest remainders, ties to the lower bin: the same guide always gives the same split.
     std::array<size_t, kReachBins> order{};
     std::iota(order.begin(), order.end(), size_t{0});
-    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-        return want[a] - std::floor(want[a]) > want[b] - std::floor(want[b]);
-    });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return want[a] - std::floor(want[a]) > want[b] - std::floor(want[b]); });
     for (size_t i = 0; given < rays; ++i, ++given) ++out[order[i % order.size()]];
     return out;
 }
@@ -57,8 +56,8 @@ void guided_rays(const std::array<int, kReachBins>& allocation, const RandomStre
             const float w = 1.0f / (kReachBins * static_cast<float>(rows) * static_cast<float>(cols));
             const GatherGrid sub{kReachBands * rows, kReachSectors * cols};
             for (int k = 0; k < cols; ++k, ++i) {
-                out.local.push_back(gather_cell_direction(sub, band * rows + r, sector * cols + k, rng.get(i, kDimGather),
-                                                          rng.get(i, kDimGather + 1)));
+                out.local.push_back(
+                    gather_cell_direction(sub, band * rows + r, sector * cols + k, rng.get(i, kDimGather), rng.get(i, kDimGather + 1)));
                 out.weight.push_back(w);
             }
         }
@@ -145,7 +144,7 @@ std::optional<std::pair<HairSite, uint32_t>> first_site(const Scene& scene, cons
 /// edges follow the grid: each block's centre pixel, clamped into the window. A block whose
 /// centre pixel takes no bounce light has none.
 class Pilots {
-public:
+  public:
     Pilots(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, Stats& stats)
         : bx0_(deep.x0 / kGuideBlock), by0_(deep.y0 / kGuideBlock), bw_(blocks(deep.x0, deep.width)) {
         guides_.resize(static_cast<size_t>(bw_) * static_cast<size_t>(blocks(deep.y0, deep.height)));
@@ -153,7 +152,8 @@ public:
         // At least kPilotRays, so that each bin's spread rests on a few dozen cells.
         const Gatherer pilot = gatherer.with_rays(std::max(gatherer.grid().rays(), kPilotRays));
         parallel_for_each_index(size_t{0}, guides_.size(), [&](size_t i) {
-            const int bx = bx0_ + static_cast<int>(i % static_cast<size_t>(bw_)), by = by0_ + static_cast<int>(i / static_cast<size_t>(bw_));
+            const int bx = bx0_ + static_cast<int>(i % static_cast<size_t>(bw_)),
+                      by = by0_ + static_cast<int>(i / static_cast<size_t>(bw_));
             const int x = std::clamp(bx * kGuideBlock + kGuideBlock / 2, deep.x0, deep.x0 + deep.width - 1);
             const int y = std::clamp(by * kGuideBlock + kGuideBlock / 2, deep.y0, deep.y0 + deep.height - 1);
             if (const auto site = first_site(scene, deep, x, y))
@@ -162,11 +162,12 @@ public:
     }
     /// The guide of full-image pixel (x, y)'s block (null: its pilot was not made).
     const DirectionGuide* at(int x, int y) const {
-        const auto& g = guides_[static_cast<size_t>(y / kGuideBlock - by0_) * static_cast<size_t>(bw_) + static_cast<size_t>(x / kGuideBlock - bx0_)];
+        const auto& g =
+            guides_[static_cast<size_t>(y / kGuideBlock - by0_) * static_cast<size_t>(bw_) + static_cast<size_t>(x / kGuideBlock - bx0_)];
         return g ? &*g : nullptr;
     }
 
-private:
+  private:
     /// Blocks over [from, from + size) pixels.
     static int blocks(int from, int size) { return size > 0 ? (from + size - 1) / kGuideBlock - from / kGuideBlock + 1 : 0; }
     int bx0_, by0_, bw_;
@@ -175,8 +176,8 @@ private:
 
 }  // namespace
 
-std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer,
-                                            Stats& stats, ProgressSink* sink) {
+std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, Stats& stats,
+                                            ProgressSink* sink) {
     const std::optional<Pilots> pilots =
         gatherer.settings().guided > 0 ? std::optional<Pilots>(std::in_place, scene, deep, gatherer, stats) : std::nullopt;
     std::vector<Indirect> out(deep.fragments.size());

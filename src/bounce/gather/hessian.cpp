@@ -97,8 +97,8 @@ TangentHessian gather_hessian(const Vec3& p, const Vec3& n, int M, int N, const 
             const double outer = j == 0 ? (N >= 3 ? cap : 0.0) : vb[cell(j - 1, k)];
             edge(j, k, j, k + 1, inner - outer);
             if (j + 1 < M) {
-                edge(j, k + 1, j + 1, k, va[cell(j, k)] - vb[cell(j, k)]);      // the diagonal
-                edge(j + 1, k, j, k, va[cell(j, k)] - vb[cell(j, k - 1)]);      // the column at k
+                edge(j, k + 1, j + 1, k, va[cell(j, k)] - vb[cell(j, k)]);  // the diagonal
+                edge(j + 1, k, j, k, va[cell(j, k)] - vb[cell(j, k - 1)]);  // the column at k
             }
         }
 

@@ -17,7 +17,7 @@ namespace bounce {
 /// The Hessian of relative irradiance (irradiance over its mean, so 1/length^2) restricted to
 /// the tangent plane, as principal curvatures and directions.
 struct TangentHessian {
-    Vec3 axis{0};            ///< unit tangent direction of the slower change (the long axis); 0 = none
+    Vec3 axis{0};              ///< unit tangent direction of the slower change (the long axis); 0 = none
     float slow = 0, fast = 0;  ///< |eigenvalues| along `axis` and across it (fast >= slow)
 };
 

@@ -19,7 +19,6 @@
 
 namespace bounce {
 
-
 namespace {
 
 /// The largest ratio of densities a far hit may carry (a hit seen edge-on from p'): bounds the
@@ -129,8 +128,8 @@ GatherResult Gatherer::reproject(const Vec3& p, const Vec3& n, const RandomStrea
         if (cos_now <= 0 || (cos_x_now > 0) != (cos_x_then > 0)) continue;  // p cannot see it
         if (traced_again(d)) continue;
         const float t = kept.t[c];
-        const float w = std::min(cos_now * std::abs(cos_x_now) * t * t / std::max(cos_then * std::abs(cos_x_then) * r * r, 1e-20f),
-                                 kMaxWeight);
+        const float w =
+            std::min(cos_now * std::abs(cos_x_now) * t * t / std::max(cos_then * std::abs(cos_x_then) * r * r, 1e-20f), kMaxWeight);
         const Hit h{r, object, kept.prim[c], kept.u[c], kept.v[c], false};
         sums.add(d, radiance(h, &sp, d, c), unoccluded(r), w);
     }

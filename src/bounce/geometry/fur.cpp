@@ -24,7 +24,8 @@ float FurParams::falloff(float v) const {
 
 size_t FurParams::memory_bytes(uint64_t strands) const {
     const auto s = static_cast<size_t>(segments);
-    const size_t per_strand = (s + 1) * 4 * sizeof(float) + s * (sizeof(uint32_t) + 64) + 2 * sizeof(Vec3) + 2 * sizeof(Vec2) + sizeof(uint32_t);
+    const size_t per_strand =
+        (s + 1) * 4 * sizeof(float) + s * (sizeof(uint32_t) + 64) + 2 * sizeof(Vec3) + 2 * sizeof(Vec2) + sizeof(uint32_t);
     return static_cast<size_t>(strands) * per_strand;
 }
 
@@ -119,8 +120,7 @@ Fur grow_fur(const TriangleMesh& surface, const FurParams& params) {
             axis = axis + dir * step;
             if (params.gravity > 0) dir = normalize(dir + down * (2 * params.gravity / static_cast<float>(params.segments)));
         }
-        for (int k = 0; k < params.segments; ++k)
-            fur.segment_first.push_back(static_cast<uint32_t>(strand * per + static_cast<size_t>(k)));
+        for (int k = 0; k < params.segments; ++k) fur.segment_first.push_back(static_cast<uint32_t>(strand * per + static_cast<size_t>(k)));
         fur.root_p.push_back(sp.p);
         fur.root_n.push_back(sp.n);
         fur.root_uv.push_back(sp.uv);
@@ -164,9 +164,7 @@ SurfacePoint carry_strand(const Fur& fur, size_t s, const TriangleMesh& from, co
     return now;
 }
 
-bool same_pose(const TriangleMesh& from, const TriangleMesh& to) {
-    return from.positions == to.positions && from.normals == to.normals;
-}
+bool same_pose(const TriangleMesh& from, const TriangleMesh& to) { return from.positions == to.positions && from.normals == to.normals; }
 
 }  // namespace
 
@@ -198,8 +196,8 @@ Color kajiya_kay(const Vec3& t, const Vec3& wi, const Vec3& wo, const Color& alb
     return albedo * (kDiffuse * si) + Color(specular * std::pow(cone, exponent));
 }
 
-Color hair_indirect(const Vec3& t, const Vec3& d, const Vec3& n, const Vec3& wo, const Color& e, const Color& albedo,
-                    float specular, float exponent) {
+Color hair_indirect(const Vec3& t, const Vec3& d, const Vec3& n, const Vec3& wo, const Color& e, const Color& albedo, float specular,
+                    float exponent) {
     Color out = albedo * e * kInvPi;
     if (specular > 0) {
         // As surfaces do: a grazing mean direction carries no reliable direction (brdf.h).

@@ -32,23 +32,23 @@ enum class FurIndirectAt : uint8_t { Root, Fragment };
 
 /// An object's "fur" block: how strands grow and how they are shaded.
 struct FurParams {
-    uint64_t count = 0;            ///< strands grown (before the density map thins them)
-    float length = 0.1f;           ///< world units
-    float length_variation = 0.2f; ///< each strand's length is length x (1 +- this), uniform
+    uint64_t count = 0;                             ///< strands grown (before the density map thins them)
+    float length = 0.1f;                            ///< world units
+    float length_variation = 0.2f;                  ///< each strand's length is length x (1 +- this), uniform
     float width_root = 0.004f, width_tip = 0.001f;  ///< world units
-    int segments = 4;              ///< linear segments per strand
-    float curl = 0;                ///< helix radius as a fraction of the length
-    float curl_turns = 2;          ///< helix turns over the strand
-    float gravity = 0;             ///< bend towards -Y: tip drop as a fraction of the length (0..1)
-    float clump = 0;               ///< how far tips are drawn to their clump's guide strand (0..1)
-    float clump_size = 0.05f;      ///< clumps: strands whose roots share a cell of this size (world units)
-    float lean = 0.15f;            ///< random tilt of the root direction from the normal (radians)
+    int segments = 4;                               ///< linear segments per strand
+    float curl = 0;                                 ///< helix radius as a fraction of the length
+    float curl_turns = 2;                           ///< helix turns over the strand
+    float gravity = 0;                              ///< bend towards -Y: tip drop as a fraction of the length (0..1)
+    float clump = 0;                                ///< how far tips are drawn to their clump's guide strand (0..1)
+    float clump_size = 0.05f;                       ///< clumps: strands whose roots share a cell of this size (world units)
+    float lean = 0.15f;                             ///< random tilt of the root direction from the normal (radians)
     uint64_t seed = 1;
     Color color_root{0.3f}, color_tip{0.6f};  ///< diffuse albedo, root to tip
-    float specular = 0.04f;        ///< Kajiya-Kay specular strength
-    float specular_exponent = 40;  ///< Kajiya-Kay specular exponent
-    float falloff_root = 0.35f;    ///< self-shadowing f(v) at the root (f = 1 at the tip)
-    float falloff_exponent = 1;    ///< f(v) = root + (1 - root) v^exponent
+    float specular = 0.04f;                   ///< Kajiya-Kay specular strength
+    float specular_exponent = 40;             ///< Kajiya-Kay specular exponent
+    float falloff_root = 0.35f;               ///< self-shadowing f(v) at the root (f = 1 at the tip)
+    float falloff_exponent = 1;               ///< f(v) = root + (1 - root) v^exponent
     /// Which rays see the strands: the camera and shadow rays, not gathers nor mirrors unless
     /// asked ("cast_indirect" and "cast_shadows" are the older names of indirect and shadows).
     RayVisibility visible_to{true, true, false, false};
@@ -67,8 +67,8 @@ struct FurParams {
 /// The strands of one object.
 struct Fur {
     FurParams params;
-    int segments = 0;                ///< per strand
-    std::vector<float> vertices;     ///< (x, y, z, radius) per control point, segments+1 per strand
+    int segments = 0;                     ///< per strand
+    std::vector<float> vertices;          ///< (x, y, z, radius) per control point, segments+1 per strand
     std::vector<uint32_t> segment_first;  ///< per segment: index of its first control point
     std::vector<Vec3> root_p, root_n;     ///< per strand, on the growing surface
     std::vector<Vec2> root_uv;
@@ -76,7 +76,7 @@ struct Fur {
     /// (Embree's u, v). A pose of the same surface carries the strand there (carry_fur).
     std::vector<uint32_t> root_tri;
     std::vector<Vec2> root_bary;
-    double seconds = 0;              ///< generation time
+    double seconds = 0;  ///< generation time
 
     size_t strand_count() const { return root_p.size(); }
     size_t segment_count() const { return segment_first.size(); }
@@ -122,7 +122,7 @@ Color kajiya_kay(const Vec3& t, const Vec3& wi, const Vec3& wo, const Color& alb
 /// albedo E / pi whatever its orientation (sin(t, w) is even in w, so its integral over any
 /// hemisphere is half the sphere's). Specular: the pair read as surfaces read it (shade/brdf.h),
 /// all of the light from d with radiance x solid angle E / (n . d).
-Color hair_indirect(const Vec3& t, const Vec3& d, const Vec3& n, const Vec3& wo, const Color& e, const Color& albedo,
-                    float specular, float exponent);
+Color hair_indirect(const Vec3& t, const Vec3& d, const Vec3& n, const Vec3& wo, const Color& e, const Color& albedo, float specular,
+                    float exponent);
 
 }  // namespace bounce

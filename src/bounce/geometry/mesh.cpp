@@ -46,12 +46,18 @@ void TriangleMesh::append(const TriangleMesh& o) {
     // Dicing makes each displaced object's mesh whole; nothing appends to one.
     if (displaced() || o.displaced()) throw std::logic_error("TriangleMesh::append: displaced meshes are not appended");
     positions.insert(positions.end(), o.positions.begin(), o.positions.end());
-    if (!o.normals.empty()) normals.insert(normals.end(), o.normals.begin(), o.normals.end());
-    else if (!normals.empty()) normals.resize(positions.size(), Vec3(0));
-    if (!o.uvs.empty()) uvs.insert(uvs.end(), o.uvs.begin(), o.uvs.end());
-    else if (!uvs.empty()) uvs.resize(positions.size(), Vec2{});
-    if (!o.colors.empty()) colors.insert(colors.end(), o.colors.begin(), o.colors.end());
-    else if (!colors.empty()) colors.resize(positions.size(), Color(1));
+    if (!o.normals.empty())
+        normals.insert(normals.end(), o.normals.begin(), o.normals.end());
+    else if (!normals.empty())
+        normals.resize(positions.size(), Vec3(0));
+    if (!o.uvs.empty())
+        uvs.insert(uvs.end(), o.uvs.begin(), o.uvs.end());
+    else if (!uvs.empty())
+        uvs.resize(positions.size(), Vec2{});
+    if (!o.colors.empty())
+        colors.insert(colors.end(), o.colors.begin(), o.colors.end());
+    else if (!colors.empty())
+        colors.resize(positions.size(), Color(1));
     for (uint32_t i : o.indices) indices.push_back(i + base);
     face_materials.insert(face_materials.end(), o.face_materials.begin(), o.face_materials.end());
 }
@@ -74,8 +80,7 @@ TriangleMesh split_once(const TriangleMesh& m, Project project) {
         auto idx = static_cast<uint32_t>(r.positions.size());
         r.positions.push_back((r.positions[a] + r.positions[b]) * 0.5f);
         if (!r.normals.empty()) r.normals.push_back(normalize(r.normals[a] + r.normals[b]));
-        if (!r.uvs.empty())
-            r.uvs.push_back({(r.uvs[a].x + r.uvs[b].x) * 0.5f, (r.uvs[a].y + r.uvs[b].y) * 0.5f});
+        if (!r.uvs.empty()) r.uvs.push_back({(r.uvs[a].x + r.uvs[b].x) * 0.5f, (r.uvs[a].y + r.uvs[b].y) * 0.5f});
         if (!r.colors.empty()) r.colors.push_back(r.colors[a] + (r.colors[b] - r.colors[a]) * 0.5f);
         project(r, idx);
         midpoints.emplace(key, idx);
@@ -108,8 +113,7 @@ TriangleMesh with_spherical_uvs(const TriangleMesh& m, const Vec3& center) {
             id[k] = m.indices[3 * t + static_cast<size_t>(k)];
             Vec3 d = normalize(m.positions[id[k]] - center);
             pole[k] = d.x * d.x + d.z * d.z < 1e-10f;
-            uv[k] = {pole[k] ? 0.0f : 0.5f + std::atan2(d.z, d.x) / (2 * kPi),
-                     1 - std::acos(std::clamp(d.y, -1.0f, 1.0f)) / kPi};
+            uv[k] = {pole[k] ? 0.0f : 0.5f + std::atan2(d.z, d.x) / (2 * kPi), 1 - std::acos(std::clamp(d.y, -1.0f, 1.0f)) / kPi};
         }
         float umax = 0;
         for (int k = 0; k < 3; ++k)
@@ -142,15 +146,14 @@ TriangleMesh subdivide_linear(const TriangleMesh& mesh, int levels) {
 TriangleMesh make_icosphere(const Vec3& center, float radius, int level, uint32_t material) {
     const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
     TriangleMesh m;
-    Vec3 v[12] = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                  {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    Vec3 v[12] = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                  {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
     for (auto& p : v) {
         m.normals.push_back(normalize(p));
         m.positions.push_back(center + normalize(p) * radius);
     }
-    m.indices = {0, 11, 5, 0, 5, 1,  0, 1, 7,  0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4,
-                 11, 10, 2, 10, 7, 6, 7, 1, 8, 3, 9, 4,  3, 4, 2,  3, 2, 6, 3, 6, 8,
-                 3, 8, 9,  4, 9, 5,  2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+    m.indices = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4,  11, 10, 2,  10, 7, 6, 7, 1, 8,
+                 3, 9,  4, 3, 4, 2, 3, 2, 6, 3, 6, 8,  3, 8,  9,  4, 9, 5, 2, 4,  11, 6,  2,  10, 8,  6, 7, 9, 8, 1};
     m.face_materials.assign(20, material);
     auto onto_sphere = [&](TriangleMesh& r, uint32_t i) {
         Vec3 n = normalize(r.positions[i] - center);
@@ -161,8 +164,7 @@ TriangleMesh make_icosphere(const Vec3& center, float radius, int level, uint32_
     return with_spherical_uvs(m, center);
 }
 
-TriangleMesh make_quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
-                       uint32_t material) {
+TriangleMesh make_quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, uint32_t material) {
     TriangleMesh m;
     m.positions = {a, b, c, d};
     m.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};

@@ -47,8 +47,7 @@ TriangleMesh subdivide_linear(const TriangleMesh& mesh, int levels);
 TriangleMesh make_icosphere(const Vec3& center, float radius, int level, uint32_t material);
 
 /// A planar quad from four corners in order (two triangles), uvs (0,0) (1,0) (1,1) (0,1).
-TriangleMesh make_quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
-                       uint32_t material);
+TriangleMesh make_quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, uint32_t material);
 
 }  // namespace bounce
 

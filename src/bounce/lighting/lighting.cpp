@@ -28,8 +28,7 @@ Color spot_filter(const Light& l, const Vec3& d) {
 
 }  // namespace
 
-DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel)
-    : scene_(scene), accel_(accel), emitters_(scene.lights.size()) {
+DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel) : scene_(scene), accel_(accel), emitters_(scene.lights.size()) {
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const Light& l = scene.lights[i];
         if (l.type != LightType::Mesh) continue;
@@ -47,9 +46,8 @@ DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel)
     }
 }
 
-Color DirectLighting::irradiance(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng,
-                                 int samples, Counters& counters, bool include_sky, const LightSampleFn* each,
-                                 float hair_start) const {
+Color DirectLighting::irradiance(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng, int samples, Counters& counters,
+                                 bool include_sky, const LightSampleFn* each, float hair_start) const {
     Color e(0);
     const int pick = scene_.render.lighting.light_pick;
     thread_local std::vector<size_t> pool;
@@ -58,8 +56,10 @@ Color DirectLighting::irradiance(const Vec3& p, const Vec3& n, uint32_t object, 
         const Light& l = scene_.lights[i];
         if (!(include_sky || l.type != LightType::Sky) || !l.lights(object)) continue;
         const bool pickable = l.type == LightType::Point || l.type == LightType::Spot || l.type == LightType::Quad;
-        if (pick > 0 && pickable) pool.push_back(i);
-        else e += sample_light(i, p, n, rng, samples, counters, each, hair_start);
+        if (pick > 0 && pickable)
+            pool.push_back(i);
+        else
+            e += sample_light(i, p, n, rng, samples, counters, each, hair_start);
     }
     if (pool.size() <= static_cast<size_t>(pick)) {  // few enough: every one, as always
         for (size_t i : pool) e += sample_light(i, p, n, rng, samples, counters, each, hair_start);
@@ -88,8 +88,8 @@ float unshadowed_estimate(const Light& l, const Vec3& p, const Vec3& n) {
 
 }  // namespace
 
-Color DirectLighting::picked_irradiance(const std::vector<size_t>& pool, const Vec3& p, const Vec3& n, const RandomStream& rng,
-                                        int samples, Counters& counters, const LightSampleFn* each, float hair_start) const {
+Color DirectLighting::picked_irradiance(const std::vector<size_t>& pool, const Vec3& p, const Vec3& n, const RandomStream& rng, int samples,
+                                        Counters& counters, const LightSampleFn* each, float hair_start) const {
     thread_local std::vector<double> cdf;
     cdf.resize(pool.size());
     double total = 0;
@@ -106,9 +106,12 @@ Color DirectLighting::picked_irradiance(const std::vector<size_t>& pool, const V
         const double u = rng.get(static_cast<uint64_t>(j), kDimLightPick);
         const auto count = static_cast<double>(pool.size());
         size_t k = 0;
-        if (total <= 0) k = static_cast<size_t>(u * count);  // nothing to go by: even
-        else if (u < 0.1) k = static_cast<size_t>(u / 0.1 * count);  // the even tenth
-        else k = static_cast<size_t>(std::upper_bound(cdf.begin(), cdf.end(), (u - 0.1) / 0.9 * total) - cdf.begin());
+        if (total <= 0)
+            k = static_cast<size_t>(u * count);  // nothing to go by: even
+        else if (u < 0.1)
+            k = static_cast<size_t>(u / 0.1 * count);  // the even tenth
+        else
+            k = static_cast<size_t>(std::upper_bound(cdf.begin(), cdf.end(), (u - 0.1) / 0.9 * total) - cdf.begin());
         k = std::min(k, pool.size() - 1);
         const float weight = static_cast<float>(1.0 / (static_cast<double>(picks) * chance(k)));
         const LightSampleFn scaled = [&](size_t light, const Vec3& w, const Color& c) { (*each)(light, w, c * weight); };
@@ -148,8 +151,8 @@ Color DirectLighting::diffuse_radiance(const Vec3& p, const Vec3& n, uint32_t ob
     return sum;
 }
 
-Color DirectLighting::strand_radiance(const Hit& h, const Vec3& at, const Vec3& d, const RandomStream& rng, int samples,
-                                      Counters& counters, std::span<Color> parts) const {
+Color DirectLighting::strand_radiance(const Hit& h, const Vec3& at, const Vec3& d, const RandomStream& rng, int samples, Counters& counters,
+                                      std::span<Color> parts) const {
     const Fur& fur = *scene_.objects[h.object].fur;
     const Color albedo = fur.params.albedo(fur.v_of(h.prim, h.u));
     if (parts.empty()) return albedo * kInvPi * irradiance(at, -d, h.object, rng, samples, counters, true, nullptr, fur.max_width());
@@ -173,8 +176,8 @@ Color DirectLighting::background(const Vec3& dir) const {
     return c;
 }
 
-Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng,
-                                   int samples, Counters& counters, const LightSampleFn* each, float hair_start, bool unit) const {
+Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng, int samples, Counters& counters,
+                                   const LightSampleFn* each, float hair_start, bool unit) const {
     const Light& l = scene_.lights[index];
     const Color colour = unit ? Color(1) : l.color;
     const auto dim = [&](uint32_t d) { return static_cast<uint32_t>(kDimLight + 16 * index + d); };
@@ -220,8 +223,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
             ln = ln / area;
             Color e(0);
             for (int s = 0; s < samples; ++s) {
-                Vec2 uv = stratified_2d(s, samples, rng.get(static_cast<uint64_t>(s), dim(1)),
-                                        rng.get(static_cast<uint64_t>(s), dim(2)));
+                Vec2 uv = stratified_2d(s, samples, rng.get(static_cast<uint64_t>(s), dim(1)), rng.get(static_cast<uint64_t>(s), dim(2)));
                 Vec3 to = l.corner + l.edge_u * uv.x + l.edge_v * uv.y - p;
                 float r2 = dot(to, to), r = std::sqrt(r2);
                 Vec3 w = to / r;
@@ -239,8 +241,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
             Frame f(n);
             Color e(0);
             for (int s = 0; s < samples; ++s) {
-                Vec2 uv = stratified_2d(s, samples, rng.get(static_cast<uint64_t>(s), dim(1)),
-                                        rng.get(static_cast<uint64_t>(s), dim(2)));
+                Vec2 uv = stratified_2d(s, samples, rng.get(static_cast<uint64_t>(s), dim(1)), rng.get(static_cast<uint64_t>(s), dim(2)));
                 Vec3 w = f.to_world(cosine_hemisphere(uv.x, uv.y));
                 ++counters.shadow_rays;
                 if (accel_.occluded(p, w, INFINITY, hair_start, mask)) continue;
@@ -257,8 +258,7 @@ Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, c
             const TriangleMesh& m = scene_.objects[em.object].coarse;
             Color e(0);
             for (int s = 0; s < samples; ++s) {
-                Vec2 uv = stratified_2d(s, samples, rng.get(static_cast<uint64_t>(s), dim(1)),
-                                        rng.get(static_cast<uint64_t>(s), dim(2)));
+                Vec2 uv = stratified_2d(s, samples, rng.get(static_cast<uint64_t>(s), dim(1)), rng.get(static_cast<uint64_t>(s), dim(2)));
                 // First coordinate picks a triangle by area and is reused inside it, which keeps
                 // the stratification across the whole emitter.
                 float a = uv.x * em.area;

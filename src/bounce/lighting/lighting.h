@@ -37,7 +37,7 @@ std::vector<Color> light_scales(const Scene& scene);
 
 /// Direct lighting over all of a scene's lights.
 class DirectLighting {
-public:
+  public:
     DirectLighting(const Scene& scene, const SceneAccel& accel);
 
     /// Irradiance E arriving at `p` (on the fine surface of object `object`) through the
@@ -46,15 +46,14 @@ public:
     /// Diffuse radiance leaving the point is albedo * E / pi.
     /// `include_sky = false` leaves sky lights out (when the gather brings the sky instead).
     /// `hair_start` > 0: p is on a strand of that width (SceneAccel::occluded).
-    Color irradiance(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng, int samples,
-                     Counters& counters, bool include_sky = true, const LightSampleFn* each = nullptr,
-                     float hair_start = 0) const;
+    Color irradiance(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng, int samples, Counters& counters,
+                     bool include_sky = true, const LightSampleFn* each = nullptr, float hair_start = 0) const;
 
     /// The same irradiance per light with each light's scale (light_scales) factored out:
     /// out[i] (size: the scene's lights) is light i's unit part, 0 for a light not linked to
     /// `object`. Nothing in it depends on any light's colour or intensity.
-    void irradiance_parts(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng, int samples,
-                          Counters& counters, std::span<Color> out, float hair_start = 0) const;
+    void irradiance_parts(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng, int samples, Counters& counters,
+                          std::span<Color> out, float hair_start = 0) const;
 
     /// Diffuse radiance leaving a point of a thin surface on the side of unit normal `n`:
     /// reflect E(n) + transmit E(-n), for the BRDF `reflect` and BTDF `transmit` (albedo / pi
@@ -76,15 +75,15 @@ public:
     void background_parts(const Vec3& dir, std::span<Color> out) const;
     const SceneAccel& accel() const { return accel_; }
 
-private:
+  private:
     /// irradiance() over more pickable lights than LightingSettings::light_pick: that many
     /// picks among `pool`, each by its unshadowed contribution with a tenth spread evenly (so
     /// every light that may light p can be chosen), weighed by one over its chance.
     Color picked_irradiance(const std::vector<size_t>& pool, const Vec3& p, const Vec3& n, const RandomStream& rng, int samples,
                             Counters& counters, const LightSampleFn* each, float hair_start) const;
     /// `unit`: with the light's scale (light_scales) factored out.
-    Color sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng,
-                       int samples, Counters& counters, const LightSampleFn* each, float hair_start, bool unit = false) const;
+    Color sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng, int samples, Counters& counters,
+                       const LightSampleFn* each, float hair_start, bool unit = false) const;
 
     const Scene& scene_;
     const SceneAccel& accel_;

@@ -32,8 +32,8 @@ namespace {
 
 /// Texture lookup at uv with an axis-aligned filter of (du, dv) uv units; image rows run
 /// top-down while v runs bottom-up. Returns false when the file cannot be read.
-bool lookup(OIIO::TextureSystem* ts, const char* file, const Vec2& uv, float du, float dv, int channels,
-            float* out, float* d_ds = nullptr, float* d_dt = nullptr) {
+bool lookup(OIIO::TextureSystem* ts, const char* file, const Vec2& uv, float du, float dv, int channels, float* out, float* d_ds = nullptr,
+            float* d_dt = nullptr) {
     OIIO::TextureOpt opt;
     opt.swrap = opt.twrap = OIIO::TextureOpt::WrapPeriodic;
     return ts->texture(OIIO::ustring::from_unique(file), opt, uv.x, 1 - uv.y, du, 0, 0, dv, channels, out, d_ds, d_dt);
@@ -56,7 +56,8 @@ bool all_finite(const float* v, int n) {
 Color Materials::base_colour(uint32_t material, const Vec2& st, float du, float dv) const {
     const Material& m = scene_.materials[material];
     float rgb[3] = {1, 1, 1};
-    if (!m.color_texture.empty() && textures_ && lookup(textures_, names_[material].color, st, du, dv, 3, rgb)) return m.color * albedo_of(rgb);
+    if (!m.color_texture.empty() && textures_ && lookup(textures_, names_[material].color, st, du, dv, 3, rgb))
+        return m.color * albedo_of(rgb);
     return m.color;
 }
 
@@ -189,8 +190,7 @@ SurfaceShading Materials::surface(uint32_t material, uint32_t object, uint32_t p
     if (!m.has_bump() || !tangents || !textures_) return s;
     if (!m.bump_texture.empty()) {
         float h = 0, dh_ds = 0, dh_dt = 0;
-        if (lookup(textures_, names_[material].bump, st, du, dv, 1, &h, &dh_ds, &dh_dt) && std::isfinite(dh_ds) &&
-            std::isfinite(dh_dt))
+        if (lookup(textures_, names_[material].bump, st, du, dv, 1, &h, &dh_ds, &dh_dt) && std::isfinite(dh_ds) && std::isfinite(dh_dt))
             s.normal = bumped_normal(n, dpdu, dpdv, m.bump_strength * dh_ds, -m.bump_strength * dh_dt);  // t = 1 - v
         return s;
     }

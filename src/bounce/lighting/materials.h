@@ -19,7 +19,7 @@ namespace bounce {
 /// A material evaluated where the camera sees it: everything a surface shader needs.
 struct SurfaceShading {
     Color albedo{0};
-    Color specular{0};     ///< GGX F0 (0 = no glossy lobe)
+    Color specular{0};  ///< GGX F0 (0 = no glossy lobe)
     float roughness = 1;
     Vec3 normal{0, 0, 1};  ///< shading normal after bump / normal mapping (unit; = n without)
     float occlusion = 1;   ///< the material's baked AO (ao_texture), multiplying indirect light and AO
@@ -29,7 +29,7 @@ struct SurfaceShading {
 };
 
 class Materials {
-public:
+  public:
     explicit Materials(const Scene& scene);
     ~Materials();
     Materials(const Materials&) = delete;
@@ -51,13 +51,13 @@ public:
     Color emission(uint32_t material, const Vec2& uv) const { return scene_.materials[material].emission_at(uv); }
 
     /// The material at a visible point: triangle `prim` of object `object`'s visible mesh, at
-    /// `p` and `uv` (the albedo times the vertex colour there), with interpolated normal `n` and pixel footprint `footprint` (world units; the
-    /// texture filter width). Bump maps displace by bump_strength x texture value (world
-    /// units); normal maps are tangent-space, tilted by bump_strength.
+    /// `p` and `uv` (the albedo times the vertex colour there), with interpolated normal `n` and pixel footprint `footprint` (world units;
+    /// the texture filter width). Bump maps displace by bump_strength x texture value (world units); normal maps are tangent-space, tilted
+    /// by bump_strength.
     SurfaceShading surface(uint32_t material, uint32_t object, uint32_t prim, const Vec3& p, const Vec2& uv, const Vec3& n,
                            float footprint) const;
 
-private:
+  private:
     /// Texture file names as OpenImageIO unique strings (ustring::c_str()), made once here:
     /// making them per lookup would take the global string table's lock every time.
     struct TextureNames {

@@ -18,7 +18,7 @@ namespace bounce {
 /// page is all zeros to its users. What LatticeSide and SideStates share.
 template <class T>
 class LazyPages {
-public:
+  public:
     LazyPages() = default;
     explicit LazyPages(size_t pages) : pages_(std::make_unique<std::atomic<T*>[]>(pages)), count_(pages) {
         for (size_t p = 0; p < count_; ++p) pages_[p].store(nullptr, std::memory_order_relaxed);
@@ -49,7 +49,7 @@ public:
         return page;
     }
 
-private:
+  private:
     void clear() {
         for (size_t p = 0; p < count_; ++p) delete[] pages_[p].load(std::memory_order_relaxed);
         pages_.reset(), count_ = 0;
@@ -59,7 +59,7 @@ private:
 };
 
 class LatticeSide {
-public:
+  public:
     static constexpr uint32_t kPage = 32;  ///< triangles per page
 
     LatticeSide() = default;
@@ -85,7 +85,7 @@ public:
     size_t points() const { return total_; }
     size_t allocated_bytes() const;
 
-private:
+  private:
     std::shared_ptr<const std::vector<uint32_t>> offset_;
     LazyPages<Color> pages_;
     uint32_t width_ = 1, total_ = 0;
@@ -99,7 +99,7 @@ private:
 /// of 2 kPage allocated by the first side that leaves 0: a placement whose triangles no gather
 /// hits holds a pointer per page, not a byte per side.
 class SideStates {
-public:
+  public:
     explicit SideStates(size_t sides = 0) : pages_((sides + kSides - 1) / kSides), sides_(sides) {}
 
     size_t size() const { return sides_; }
@@ -115,7 +115,7 @@ public:
         if (v != 0 || pages_.get(i / kSides)) at(i).store(v, order);
     }
 
-private:
+  private:
     static constexpr size_t kSides = 2 * LatticeSide::kPage;
     LazyPages<std::atomic<uint8_t>> pages_;
     size_t sides_ = 0;

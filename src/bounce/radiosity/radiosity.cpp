@@ -24,14 +24,9 @@ namespace {
 constexpr int kRadiosityVersion = 2;  // 2: per-side "baked" flags (lazy bakes)
 
 /// Index of lattice point (i, j) (i + j <= n) in a triangle's block.
-inline uint32_t lattice_index(int i, int j, int n) {
-    return static_cast<uint32_t>(j * (n + 1) - j * (j - 1) / 2 + i);
-}
+inline uint32_t lattice_index(int i, int j, int n) { return static_cast<uint32_t>(j * (n + 1) - j * (j - 1) / 2 + i); }
 
-
-float effective_texel(const Scene& scene, const RadiositySettings& s) {
-    return s.texel > 0 ? s.texel : scene.size() / 128.0f;
-}
+float effective_texel(const Scene& scene, const RadiositySettings& s) { return s.texel > 0 ? s.texel : scene.size() / 128.0f; }
 
 int effective_light_samples(const Scene& scene, const RadiositySettings& s) {
     return s.light_samples > 0 ? s.light_samples : scene.render.lighting.light_samples;
@@ -86,8 +81,7 @@ LatticeBlend lattice_blend(const RadiosityMap& m, uint32_t prim, float u, float 
     if (a + b <= 1 || i + j >= n - 1)  // lower sub-triangle (i,j) (i+1,j) (i,j+1)
         return {{lattice_index(i, j, n), lattice_index(i + 1, j, n), lattice_index(i, j + 1, n)}, {1 - a - b, a, b}};
     // upper sub-triangle (i+1,j+1) (i,j+1) (i+1,j)
-    return {{lattice_index(i + 1, j + 1, n), lattice_index(i, j + 1, n), lattice_index(i + 1, j, n)},
-            {a + b - 1, 1 - a, 1 - b}};
+    return {{lattice_index(i + 1, j + 1, n), lattice_index(i, j + 1, n), lattice_index(i + 1, j, n)}, {a + b - 1, 1 - a, 1 - b}};
 }
 
 }  // namespace
@@ -112,7 +106,8 @@ void RadiosityMap::lookup_parts(uint32_t prim, float u, float v, bool front_side
 constexpr uint64_t kBakeVersion = 3;
 
 uint64_t RadiosityTextures::fingerprint(const Scene& scene, const RadiositySettings& s) {
-    uint64_t h = hash_combine(scene.fingerprint({"objects", "materials", "lights"}, true), kBakeVersion);  // gloss, bumps, baked AO: not in the bake
+    uint64_t h =
+        hash_combine(scene.fingerprint({"objects", "materials", "lights"}, true), kBakeVersion);  // gloss, bumps, baked AO: not in the bake
     h = hash_combine(h, std::bit_cast<uint32_t>(effective_texel(scene, s)));
     h = hash_combine(h, static_cast<uint64_t>(effective_light_samples(scene, s)));
     return hash_combine(h, static_cast<uint64_t>(s.max_level));
@@ -126,7 +121,8 @@ size_t RadiosityTextures::lattice_points() const {
 
 size_t RadiosityTextures::allocated_bytes() const {
     size_t n = 0;
-    for (const auto& m : maps_) n += m.front.allocated_bytes() + m.back.allocated_bytes() + m.front_parts.allocated_bytes() + m.back_parts.allocated_bytes();
+    for (const auto& m : maps_)
+        n += m.front.allocated_bytes() + m.back.allocated_bytes() + m.front_parts.allocated_bytes() + m.back_parts.allocated_bytes();
     return n;
 }
 
@@ -220,8 +216,8 @@ void RadiosityTextures::ensure_baked(uint32_t id, uint32_t tri, bool front, Coun
         const auto t0 = std::chrono::steady_clock::now();
         bake_side(id, tri, front, counters);
         st.store(2, std::memory_order_release);
-        counters.radiosity_bake_ns += static_cast<uint64_t>(
-            std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
+        counters.radiosity_bake_ns +=
+            static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
         return;
     }
     while (st.load(std::memory_order_acquire) != 2) std::this_thread::yield();  // another thread bakes it
@@ -270,9 +266,8 @@ void RadiosityTextures::bake_all(Stats& stats, ProgressSink* sink, int share, in
     }
 }
 
-RadiosityTextures RadiosityTextures::bake(const Scene& scene, const Materials& materials,
-                                          const DirectLighting& lighting, const RadiositySettings& settings,
-                                          Stats& stats, ProgressSink* sink) {
+RadiosityTextures RadiosityTextures::bake(const Scene& scene, const Materials& materials, const DirectLighting& lighting,
+                                          const RadiositySettings& settings, Stats& stats, ProgressSink* sink) {
     RadiosityTextures rt = lazy(scene, materials, lighting, settings);
     rt.bake_all(stats, sink);
     stats.set("radiosity_points", static_cast<double>(rt.lattice_points()));
@@ -304,7 +299,8 @@ void RadiosityTextures::save(const std::string& dir) const {
             const bool f = state_[id].load(2 * t, std::memory_order_acquire) == 2;
             const bool b = state_[id].load(2 * t + 1, std::memory_order_acquire) == 2;
             const uint32_t first = m.offset[t];
-            const Color *fv = f ? m.front.run(static_cast<uint32_t>(t), first) : nullptr, *bv = b ? m.back.run(static_cast<uint32_t>(t), first) : nullptr;
+            const Color *fv = f ? m.front.run(static_cast<uint32_t>(t), first) : nullptr,
+                        *bv = b ? m.back.run(static_cast<uint32_t>(t), first) : nullptr;
             for (uint32_t k = first; k < first + lattice_count(m.level[t]); ++k) {
                 for (int c = 0; c < 3; ++c) px[8 * k + c] = fv ? fv[k - first][c] : 0, px[8 * k + 3 + c] = bv ? bv[k - first][c] : 0;
                 px[8 * k + 6] = f, px[8 * k + 7] = b;
@@ -319,9 +315,8 @@ void RadiosityTextures::save(const std::string& dir) const {
     }
 }
 
-bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const RadiositySettings& settings,
-                             const Materials& materials, const DirectLighting& lighting, RadiosityTextures& out,
-                             std::string& why) {
+bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const RadiositySettings& settings, const Materials& materials,
+                             const DirectLighting& lighting, RadiosityTextures& out, std::string& why) {
     RadiosityTextures rt = lazy(scene, materials, lighting, settings);
     for (size_t id = 0; id < scene.objects.size(); ++id) {
         std::string path = (fs::path(dir) / file_name(id, scene.objects[id].name)).string();

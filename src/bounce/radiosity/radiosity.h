@@ -32,7 +32,7 @@ namespace bounce {
 /// similar scales: docs/instancing.md), read as a vector.
 template <class T>
 class SharedArray {
-public:
+  public:
     SharedArray() : v_(std::make_shared<const std::vector<T>>()) {}
     explicit SharedArray(std::shared_ptr<const std::vector<T>> v) : v_(std::move(v)) {}
     const T& operator[](size_t i) const { return (*v_)[i]; }
@@ -41,15 +41,15 @@ public:
     const std::vector<T>& vec() const { return *v_; }
     const std::shared_ptr<const std::vector<T>>& shared() const { return v_; }
 
-private:
+  private:
     std::shared_ptr<const std::vector<T>> v_;
 };
 
 /// Baked radiosity of one object's coarse triangles.
 struct RadiosityMap {
-    SharedArray<uint8_t> level;     ///< per triangle lattice level n (>= 1)
-    SharedArray<uint32_t> offset;   ///< per triangle first lattice point
-    LatticeSide front, back;        ///< radiosity per lattice point, on each side of ng (sparse)
+    SharedArray<uint8_t> level;    ///< per triangle lattice level n (>= 1)
+    SharedArray<uint32_t> offset;  ///< per triangle first lattice point
+    LatticeSide front, back;       ///< radiosity per lattice point, on each side of ng (sparse)
     /// CacheSettings::light_parts: per lattice point, `lights` unit parts (light_scales factored
     /// out) whose scaled sum is front / back.
     LatticeSide front_parts, back_parts;
@@ -74,7 +74,7 @@ struct LightChange {
 /// (random numbers keyed by object, triangle and lattice point), so images never depend on
 /// which thread baked what first.
 class RadiosityTextures {
-public:
+  public:
     RadiosityTextures();
     ~RadiosityTextures();
     RadiosityTextures(RadiosityTextures&&) noexcept;
@@ -85,9 +85,8 @@ public:
     static RadiosityTextures lazy(const Scene& scene, const Materials& materials, const DirectLighting& lighting,
                                   const RadiositySettings& settings);
     /// Lays out and bakes every lattice (in parallel over triangles).
-    static RadiosityTextures bake(const Scene& scene, const Materials& materials,
-                                  const DirectLighting& lighting, const RadiositySettings& settings,
-                                  Stats& stats, ProgressSink* progress);
+    static RadiosityTextures bake(const Scene& scene, const Materials& materials, const DirectLighting& lighting,
+                                  const RadiositySettings& settings, Stats& stats, ProgressSink* progress);
     /// Bakes every side not baked yet (needs the lazy sources); with `shares` > 1, only the
     /// triangles of share `share` (every shares-th triangle, counted over all objects), for the
     /// processes of an MPI job that split the bake and exchange the sides (take_baked).
@@ -98,9 +97,8 @@ public:
     /// Loads textures baked for exactly this scene, lights and settings; returns false (with
     /// `why`) if any file is missing or was baked for something else. Corrupt files throw.
     /// Sides the files do not hold are baked lazily from `materials` and `lighting`.
-    static bool load(const std::string& dir, const Scene& scene, const RadiositySettings& settings,
-                     const Materials& materials, const DirectLighting& lighting, RadiosityTextures& out,
-                     std::string& why);
+    static bool load(const std::string& dir, const Scene& scene, const RadiositySettings& settings, const Materials& materials,
+                     const DirectLighting& lighting, RadiosityTextures& out, std::string& why);
 
     /// The previous frame's textures carried to this frame's `scene` (docs/animation.md): the same
     /// layout (texel size and levels, so texels keep their place) and values, but for deforming
@@ -140,13 +138,13 @@ public:
     size_t baked_sides() const;
     size_t sides() const;
 
-private:
+  private:
     /// What a lazy bake reads (this frame's).
     struct Sources {
         const Scene* scene;
         const Materials* materials;
         const DirectLighting* lighting;
-        int light_samples;  ///< resolved (never 0)
+        int light_samples;          ///< resolved (never 0)
         std::vector<Color> scales;  ///< light_parts: every light's (light_scales); else empty
     };
     /// Object `id`'s map laid out for its shape in `scene`, nothing baked (with room for light
@@ -156,7 +154,7 @@ private:
     void ensure_baked(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
 
     mutable std::vector<RadiosityMap> maps_;  ///< values written once per side, under its state flag
-    mutable std::vector<SideStates> state_;  ///< per object, 2 per triangle: 0 new, 1 baking, 2 baked (lattice.h)
+    mutable std::vector<SideStates> state_;   ///< per object, 2 per triangle: 0 new, 1 baking, 2 baked (lattice.h)
     std::vector<std::string> names_;
     /// Layouts laid out so far, by a hash of their levels (placements share theirs).
     std::unordered_map<uint64_t, std::vector<std::pair<SharedArray<uint8_t>, SharedArray<uint32_t>>>> layouts_;

@@ -12,8 +12,8 @@ namespace bounce {
 namespace {
 
 bool boxes_overlap(const Bounds& a, const Bounds& b) {
-    return !a.empty() && !b.empty() && a.lo.x <= b.hi.x && b.lo.x <= a.hi.x && a.lo.y <= b.hi.y && b.lo.y <= a.hi.y &&
-           a.lo.z <= b.hi.z && b.lo.z <= a.hi.z;
+    return !a.empty() && !b.empty() && a.lo.x <= b.hi.x && b.lo.x <= a.hi.x && a.lo.y <= b.hi.y && b.lo.y <= a.hi.y && a.lo.z <= b.hi.z &&
+           b.lo.z <= a.hi.z;
 }
 
 /// Conservatively, can `box` stand between triangle side (a, b, c; facing `n`) and `light`,
@@ -24,10 +24,12 @@ bool may_shadow(const Light& light, const Vec3& a, const Vec3& b, const Vec3& c,
     for (const Vec3& p : {a, b, c}) hull.extend(p);
     switch (light.type) {
         case LightType::Point:
-        case LightType::Spot: hull.extend(light.position); break;
+        case LightType::Spot:
+            hull.extend(light.position);
+            break;
         case LightType::Quad:
-            for (const Vec3& p : {light.corner, light.corner + light.edge_u, light.corner + light.edge_v,
-                                  light.corner + light.edge_u + light.edge_v})
+            for (const Vec3& p :
+                 {light.corner, light.corner + light.edge_u, light.corner + light.edge_v, light.corner + light.edge_u + light.edge_v})
                 hull.extend(p);
             break;
         case LightType::Distant:
@@ -39,8 +41,8 @@ bool may_shadow(const Light& light, const Vec3& a, const Vec3& b, const Vec3& c,
             // hemisphere reaches along every axis but the one straight behind it (a floor's sky is
             // hidden by a wall beside it, not only by what is overhead).
             for (const Vec3& p : {a, b, c})
-                for (const Vec3& d : {Vec3{far, 0, 0}, Vec3{-far, 0, 0}, Vec3{0, far, 0}, Vec3{0, -far, 0}, Vec3{0, 0, far},
-                                      Vec3{0, 0, -far}})
+                for (const Vec3& d :
+                     {Vec3{far, 0, 0}, Vec3{-far, 0, 0}, Vec3{0, far, 0}, Vec3{0, -far, 0}, Vec3{0, 0, far}, Vec3{0, 0, -far}})
                     if (dot(d, n) > -0.9999f * far) hull.extend(p + d);
             break;
     }
@@ -64,8 +66,8 @@ float RadiosityTextures::brightest() const {
 }
 
 RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, const Scene& scene, const Materials& materials,
-                                           const DirectLighting& lighting, const SceneChanges& changes,
-                                           std::vector<LightChange>& changed, Stats& stats) {
+                                           const DirectLighting& lighting, const SceneChanges& changes, std::vector<LightChange>& changed,
+                                           Stats& stats) {
     RadiosityTextures rt;
     rt.texel_size_ = previous.texel_size_;
     rt.fingerprint_ = fingerprint(scene, scene.render.radiosity);
@@ -114,7 +116,8 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
             const bool front = s % 2 == 0;
             rt.ensure_baked(id, t, front, counters);
             const RadiosityMap &now = rt.maps_[id], &was = previous.maps_[id];
-            const Color *vn = (front ? now.front : now.back).run(t, now.offset[t]), *vw = (front ? was.front : was.back).run(t, was.offset[t]);
+            const Color *vn = (front ? now.front : now.back).run(t, now.offset[t]),
+                        *vw = (front ? was.front : was.back).run(t, was.offset[t]);
             const uint32_t count = lattice_count(now.level[t]);
             float delta = 0;
             for (uint32_t k = 0; vn && vw && k < count; ++k)
@@ -158,11 +161,11 @@ void RadiosityTextures::take_baked(const std::string& bytes) {
         RadiosityMap& m = maps_.at(id);
         const uint32_t t = s / 2;
         // (Bytes from this build's ranks; a side that does not fit would write past its page.)
-        if (s >= state_[id].size() || count != lattice_count(m.level[t]) ||
-            at + size_t{count} * sizeof(Color) > bytes.size())
+        if (s >= state_[id].size() || count != lattice_count(m.level[t]) || at + size_t{count} * sizeof(Color) > bytes.size())
             throw std::runtime_error("radiosity exchange: a side that does not exist");
         if (state_[id].load(s, std::memory_order_acquire) != 2) {
-            std::memcpy(static_cast<void*>((s % 2 == 0 ? m.front : m.back).writable_run(t, m.offset.at(t))), bytes.data() + at, count * sizeof(Color));
+            std::memcpy(static_cast<void*>((s % 2 == 0 ? m.front : m.back).writable_run(t, m.offset.at(t))), bytes.data() + at,
+                        count * sizeof(Color));
             state_[id].store(s, 2, std::memory_order_release);
         }
         at += count * sizeof(Color);

@@ -6,9 +6,7 @@
 
 namespace bounce {
 
-std::array<int, 4> window_of(const DeepBuffer& deep) {
-    return {deep.x0, deep.x0 + deep.width, deep.y0, deep.y0 + deep.height};
-}
+std::array<int, 4> window_of(const DeepBuffer& deep) { return {deep.x0, deep.x0 + deep.width, deep.y0, deep.y0 + deep.height}; }
 
 std::vector<std::string> in_tiles(Communicator& comm, const std::array<int, 4>& window, int tile, TilesTo to,
                                   const std::function<std::string(const std::array<int, 4>&)>& work) {
@@ -41,10 +39,9 @@ std::vector<std::string> in_tiles(Communicator& comm, const std::array<int, 4>& 
 DeepBuffer visibility_in_tiles(Communicator& comm, const Scene& scene, const SceneAccel& accel, Stats& stats,
                                const std::array<int, 4>& window, bool everyone) {
     std::vector<DeepBuffer> parts;
-    for (const std::string& b : in_tiles(comm, window, scene.render.parallel.tile_size, everyone ? TilesTo::Everyone : TilesTo::Mine,
-                                         [&](const std::array<int, 4>& tile) {
-                                             return serialize_window(render_visibility(scene, accel, stats, nullptr, tile));
-                                         }))
+    for (const std::string& b :
+         in_tiles(comm, window, scene.render.parallel.tile_size, everyone ? TilesTo::Everyone : TilesTo::Mine,
+                  [&](const std::array<int, 4>& tile) { return serialize_window(render_visibility(scene, accel, stats, nullptr, tile)); }))
         if (!b.empty()) parts.push_back(parse_window(b));
     return assemble_tiles(scene, window, parts);
 }
@@ -67,7 +64,8 @@ std::vector<Indirect> indirect_in_tiles(Communicator& comm, const DeepBuffer& de
         size_t next = 0;
         for (int y = w[2] - deep.y0; y < w[3] - deep.y0; ++y) {
             const size_t row = static_cast<size_t>(y) * deep.width;
-            for (uint32_t i = deep.offsets[row + static_cast<size_t>(w[0] - deep.x0)]; i < deep.offsets[row + static_cast<size_t>(w[1] - deep.x0)]; ++i)
+            for (uint32_t i = deep.offsets[row + static_cast<size_t>(w[0] - deep.x0)];
+                 i < deep.offsets[row + static_cast<size_t>(w[1] - deep.x0)]; ++i)
                 out[i] = l[next++];
         }
         return std::string();

@@ -38,8 +38,7 @@ void FrameFiles::check(const Scene& loaded) const {
         check_output_file(outputs[i].second, inputs, loaded.input_folders);
         for (size_t j = 0; j < i; ++j)
             if (fs::path(outputs[i].second).lexically_normal() == fs::path(outputs[j].second).lexically_normal())
-                throw InputError("command line", outputs[i].first + " " + outputs[i].second,
-                                 "names the same file as " + outputs[j].first);
+                throw InputError("command line", outputs[i].first + " " + outputs[i].second, "names the same file as " + outputs[j].first);
     }
     for (const auto& [flag, path] : outputs) remove_stale_temporaries(path);
 }
@@ -99,9 +98,10 @@ std::vector<std::string> frame_layers(const Scene& scene, bool with_cache) {
 void check_show_layer(const std::string& show, const Scene& scene, bool with_cache) {
     const std::vector<std::string> layers = frame_layers(scene, with_cache);
     if (std::find(layers.begin(), layers.end(), show) != layers.end()) return;
-    if (show == "records") throw InputError("command line", "--show " + show, "no records to show (render with --gi cache or give --cache-in)");
-    throw InputError("command line", "--show " + show, fmt::format("this render writes no layer \"{}\" (its layers: {})", show,
-                                                                    fmt::join(layers, ", ")));
+    if (show == "records")
+        throw InputError("command line", "--show " + show, "no records to show (render with --gi cache or give --cache-in)");
+    throw InputError("command line", "--show " + show,
+                     fmt::format("this render writes no layer \"{}\" (its layers: {})", show, fmt::join(layers, ", ")));
 }
 
 void check_base(const std::string& base, const Scene& scene) {
@@ -112,8 +112,9 @@ void check_base(const std::string& base, const Scene& scene) {
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.full_width != scene.camera.width || spec.full_height != scene.camera.height || spec.width != spec.full_width ||
         spec.height != spec.full_height)
-        throw InputError(base, "", fmt::format("base image is {}x{} ({}x{} stored); the render is a {}x{} frame", spec.full_width,
-                                               spec.full_height, spec.width, spec.height, scene.camera.width, scene.camera.height));
+        throw InputError(base, "",
+                         fmt::format("base image is {}x{} ({}x{} stored); the render is a {}x{} frame", spec.full_width, spec.full_height,
+                                     spec.width, spec.height, scene.camera.width, scene.camera.height));
     const std::string want = fmt::format("{:016x}", scene.visibility_fingerprint());
     const std::string have = spec.get_string_attribute("bounce:scene_fingerprint");
     if (have != want)
@@ -134,8 +135,8 @@ void write_frame_outputs(const RenderResult& result, const FrameFiles& files, co
         write_exr(files.output, *image);
         write_png(files.png(), *image, show, *files.display);
     }
-    if (!files.deep_out.empty() && result.gathered_deep) write_deep(files.deep_out, *result.gathered_deep,
-                                                                           result.deep_colour.empty() ? nullptr : &result.deep_colour);
+    if (!files.deep_out.empty() && result.gathered_deep)
+        write_deep(files.deep_out, *result.gathered_deep, result.deep_colour.empty() ? nullptr : &result.deep_colour);
     if (result.cache && !files.cache_out.empty()) write_cache_file(files.cache_out, result.cache->to_file(result.cache_info));
     t.stop();
     if (files.stats_json.empty()) return;

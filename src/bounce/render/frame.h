@@ -17,10 +17,10 @@
 namespace bounce {
 
 struct FrameFiles {
-    std::string scene;       ///< input
-    std::string output;      ///< the EXR; the PNG is written beside it
+    std::string scene;   ///< input
+    std::string output;  ///< the EXR; the PNG is written beside it
     std::string deep_in, deep_out, cache_in, cache_out, stats_json;
-    std::string base;        ///< with a crop: an earlier full-frame EXR the crop is pasted over
+    std::string base;  ///< with a crop: an earlier full-frame EXR the crop is pasted over
     /// How the PNG's colours are encoded (an OpenColorIO display and view, or the built-in sRGB).
     std::shared_ptr<const DisplayTransform> display = srgb_display();
     /// The PNG written beside `output`.

@@ -31,7 +31,7 @@ struct FrameContext {
     const Materials& materials;
     const DirectLighting& lighting;
     Stats& stats;
-    ProgressSink* progress;        ///< carries the cancel token (null: no progress, no cancel)
+    ProgressSink* progress;  ///< carries the cancel token (null: no progress, no cancel)
     const CancelToken* cancel;
     /// The processes the frame is spread over (an MPI job's ranks, or this process alone):
     /// visibility, gathering, refinement and shading split their work among them.
@@ -65,7 +65,7 @@ struct CacheStartResult {
     size_t records_loaded = 0;
     std::vector<std::string> differences;  ///< settings that differ from a reused file's (cache_reuse Any)
     bool other_lighting = false;           ///< the file's records hold other lights' bounce light
-    TemporalJudgement judged;               ///< CacheStart::Temporal: what became of the previous frame's records
+    TemporalJudgement judged;              ///< CacheStart::Temporal: what became of the previous frame's records
 };
 CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous,
                                   const RadiosityResult& radiosity);
@@ -88,8 +88,8 @@ struct SpecularSitesResult {
 SpecularSitesResult specular_sites_pass(const FrameContext& ctx, const FramePlan& plan, const DeepBuffer& shaded);
 /// The sites' part of the gathering pass: records where the cache does not cover a site.
 /// Returns how many it made.
-size_t specular_gather_pass(const FrameContext& ctx, const FramePlan& plan, const DeepBuffer& sites,
-                            const Gatherer& gatherer, IrradianceCache& cache);
+size_t specular_gather_pass(const FrameContext& ctx, const FramePlan& plan, const DeepBuffer& sites, const Gatherer& gatherer,
+                            IrradianceCache& cache);
 /// Brute force: a gather at every site (into `specular.brute`).
 void specular_brute_pass(const FrameContext& ctx, const Gatherer& gatherer, SpecularSitesResult& specular);
 /// The light the shading pass gives a window's sites: the cache's interpolation (its misses
@@ -107,9 +107,9 @@ SiteLightResult site_light_for(const FrameContext& ctx, const SpecularSitesResul
 
 /// What the gathering pass made.
 struct GatherPassResult {
-    size_t records_new = 0;           ///< records in the cache that it did not start with (new and redone)
-    size_t fragment_records_new = 0;  ///< per-fragment refinement's gathers
-    size_t site_records_new = 0;      ///< records made for the sites of mirrors and glass (in records_new too)
+    size_t records_new = 0;               ///< records in the cache that it did not start with (new and redone)
+    size_t fragment_records_new = 0;      ///< per-fragment refinement's gathers
+    size_t site_records_new = 0;          ///< records made for the sites of mirrors and glass (in records_new too)
     size_t regathered = 0, reshaded = 0;  ///< stale records of earlier frames redone
     std::vector<Record> waiting;          ///< stale records no fragment needed (for the next frame)
     std::vector<Record> gathers;          ///< refinement's gathers that still serve (plan.keep_gathers)
@@ -126,18 +126,18 @@ std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffe
 /// The shading pass: the image of the shaded window.
 struct ShadeResult {
     Image image;
-    size_t shading_misses = 0;         ///< fragments no record covered (left black)
-    std::vector<float> refined;        ///< per pixel: the coverage of fragments that used their own record
-    std::vector<Color> colours;        ///< render.deep_colour: what each fragment adds to the beauty (shade's `colours`)
+    size_t shading_misses = 0;   ///< fragments no record covered (left black)
+    std::vector<float> refined;  ///< per pixel: the coverage of fragments that used their own record
+    std::vector<Color> colours;  ///< render.deep_colour: what each fragment adds to the beauty (shade's `colours`)
 };
 /// Shades `deep` with the cache's interpolation (cache non-null), `brute` light (non-null) or
 /// direct light only. With a cache and `quick_look`, first calls it with every 4th pixel
 /// shaded standing for its 4x4 block (a re-shade's preview).
 /// `specular`: the frame's sites (lit as site_light_for says; `radiosity` for
 /// indirect_at_specular_hits = radiosity).
-ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
-                         const std::vector<Indirect>* brute, const SpecularSitesResult& specular,
-                         const RadiosityTextures* radiosity, const std::function<void(const Image&)>& quick_look = {});
+ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache, const std::vector<Indirect>* brute,
+                         const SpecularSitesResult& specular, const RadiosityTextures* radiosity,
+                         const std::function<void(const Image&)>& quick_look = {});
 
 /// The scene's gather settings for this frame's gathers: with gradients (`record_terms`) for
 /// records, without for brute force, refinement and the correction; the frame's cancel token.

@@ -26,46 +26,61 @@ namespace {
 
 const char* name(VisibilityStep s) {
     switch (s) {
-        case VisibilityStep::Trace: return "trace";
-        case VisibilityStep::ReadFile: return "read deep file";
-        case VisibilityStep::Previous: return "previous frame's";
+        case VisibilityStep::Trace:
+            return "trace";
+        case VisibilityStep::ReadFile:
+            return "read deep file";
+        case VisibilityStep::Previous:
+            return "previous frame's";
     }
     return "?";
 }
 const char* name(RadiosityStep s) {
     switch (s) {
-        case RadiosityStep::None: return "none";
-        case RadiosityStep::Bake: return "bake as hit";
-        case RadiosityStep::BakeSplit: return "bake all, a share per rank, exchanged";
-        case RadiosityStep::Load: return "load, bake what is missing";
-        case RadiosityStep::Carry: return "previous frame's, re-bake what changed";
+        case RadiosityStep::None:
+            return "none";
+        case RadiosityStep::Bake:
+            return "bake as hit";
+        case RadiosityStep::BakeSplit:
+            return "bake all, a share per rank, exchanged";
+        case RadiosityStep::Load:
+            return "load, bake what is missing";
+        case RadiosityStep::Carry:
+            return "previous frame's, re-bake what changed";
     }
     return "?";
 }
 const char* name(CacheStart s) {
     switch (s) {
-        case CacheStart::None: return "none";
-        case CacheStart::Empty: return "empty";
-        case CacheStart::File: return "cache file";
-        case CacheStart::Previous: return "previous frame's";
-        case CacheStart::Temporal: return "previous frame's records, judged";
+        case CacheStart::None:
+            return "none";
+        case CacheStart::Empty:
+            return "empty";
+        case CacheStart::File:
+            return "cache file";
+        case CacheStart::Previous:
+            return "previous frame's";
+        case CacheStart::Temporal:
+            return "previous frame's records, judged";
     }
     return "?";
 }
 const char* name(GatherStep s) {
     switch (s) {
-        case GatherStep::None: return "none";
-        case GatherStep::Brute: return "brute force";
-        case GatherStep::Cache: return "gathering pass";
-        case GatherStep::WhereMissing: return "only where records are missing";
+        case GatherStep::None:
+            return "none";
+        case GatherStep::Brute:
+            return "brute force";
+        case GatherStep::Cache:
+            return "gathering pass";
+        case GatherStep::WhereMissing:
+            return "only where records are missing";
     }
     return "?";
 }
 
 /// A re-shade or re-gather starts from the previous frame's deep buffer and cache when it holds them.
-bool reuses_previous(const RenderRequest& request) {
-    return request.kind == FrameKind::Reshade || request.kind == FrameKind::Regather;
-}
+bool reuses_previous(const RenderRequest& request) { return request.kind == FrameKind::Reshade || request.kind == FrameKind::Regather; }
 
 /// Where the cache starts: the previous frame's, a file, or empty (a full re-gather).
 CacheStart cache_start(const Scene& scene, const FrameState& previous, const RenderRequest& request) {
@@ -101,14 +116,16 @@ bool lights_keyed(const Scene& scene) {
 /// what an MPI job's ranks cannot make together yet.
 void refuse_what_cannot_run(const Scene& scene, const FramePlan& plan, const RenderRequest& request) {
     if (double need = estimate_render_bytes(scene), have = available_memory_bytes(); need > 0.8 * have)
-        throw InputError(scene.path, "camera.resolution",
-                         fmt::format("a {}x{} frame needs about {:.2f} GiB; it may use {:.2f} GiB (80 % of the {:.2f} GiB available; "
-                                     "render a crop)", scene.camera.width, scene.camera.height, need / 1073741824.0,
-                                     0.8 * have / 1073741824.0, have / 1073741824.0));
+        throw InputError(
+            scene.path, "camera.resolution",
+            fmt::format("a {}x{} frame needs about {:.2f} GiB; it may use {:.2f} GiB (80 % of the {:.2f} GiB available; "
+                        "render a crop)",
+                        scene.camera.width, scene.camera.height, need / 1073741824.0, 0.8 * have / 1073741824.0, have / 1073741824.0));
     if (request.comm && request.comm->size() > 1 && scene.render.shading.deep_colour && !plan.deep_out.empty())
         throw InputError(scene.path, "render.deep_colour", "a deep file with colour is written by one process (not under MPI yet)");
     if (request.comm && request.comm->size() > 1 && scene.render.cache.light_parts && scene.render.indirect.gi == GiMode::Cache)
-        throw InputError(scene.path, "render.light_parts", "records with light parts are made by one process (the lighting tool's; not under MPI)");
+        throw InputError(scene.path, "render.light_parts",
+                         "records with light parts are made by one process (the lighting tool's; not under MPI)");
     // A rank's tiles find the pilots one process would only where tiles follow the pilots' grid.
     if (request.comm && request.comm->size() > 1 && scene.render.indirect.guided > 0 && scene.render.parallel.tile_size % kGuideBlock != 0)
         throw InputError(scene.path, "render.tile_size",
@@ -133,8 +150,8 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
     const bool comparable = plan.changes && plan.changes->comparable;
     // (A previous deep buffer made for another camera or objects is refused by the pass, saying so;
     // a frame of a shot takes it only when its camera and objects are the same.)
-    const bool same_view = previous.deep && previous.deep->scene_fingerprint == scene.visibility_fingerprint() &&
-                           !scene.render.visibility.has_crop();
+    const bool same_view =
+        previous.deep && previous.deep->scene_fingerprint == scene.visibility_fingerprint() && !scene.render.visibility.has_crop();
     if ((reuses_previous(request) && previous.deep) || (shot && same_view))
         plan.visibility = VisibilityStep::Previous;
     else if (!request.deep_in.empty())
@@ -145,8 +162,10 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
 
     // A later frame that refit a part the previous BVHs trace (the tool going back) leaves them stale.
     const bool accel_usable = previous.accel && previous.accel->current();
-    if (comparable && accel_usable && plan.changes->visible_geometry_same) plan.accel = AccelStep::Keep;
-    else if (shot && accel_usable) plan.accel = AccelStep::Update;
+    if (comparable && accel_usable && plan.changes->visible_geometry_same)
+        plan.accel = AccelStep::Keep;
+    else if (shot && accel_usable)
+        plan.accel = AccelStep::Update;
     plan.cache = cache_start(scene, previous, request);
     if (plan.cache == CacheStart::Temporal && !comparable) plan.cache = CacheStart::Empty;  // other objects: nothing to keep
     if (plan.cache == CacheStart::File) plan.cache_in = request.cache_in;
@@ -196,7 +215,9 @@ nlohmann::json FramePlan::describe() const {
             {"gather_window", gather_window},
             {"visibility", name(visibility)},
             {"deep_out", !deep_out.empty()},
-            {"accel", accel == AccelStep::Keep ? "keep" : accel == AccelStep::Update ? "update" : "build"},
+            {"accel", accel == AccelStep::Keep     ? "keep"
+                      : accel == AccelStep::Update ? "update"
+                                                   : "build"},
             {"keep_hits", keep_hits},
             {"radiosity", name(radiosity)},
             {"share_radiosity", share_radiosity},

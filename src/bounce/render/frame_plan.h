@@ -47,12 +47,12 @@ struct RenderRequest {
     /// sub-pass, pixelated first and finer after; a re-shade calls it once, with every 4th
     /// pixel in x and y shaded and standing for its 4x4 block, before shading the rest.
     std::function<void(const Image&)> preview;
-    std::string cache_in;   ///< start the irradiance cache from this file (gathers only where it misses)
-    bool force = false;     ///< accept a cache made for another scene or camera
+    std::string cache_in;                         ///< start the irradiance cache from this file (gathers only where it misses)
+    bool force = false;                           ///< accept a cache made for another scene or camera
     CacheReuse cache_reuse = CacheReuse::Strict;  ///< keep a cache made with other settings
-    int frame = 0;          ///< frame number stamped on new records (sequences)
-    const CancelToken* cancel = nullptr;  ///< stops the render (throws Cancelled) when set
-    Communicator* comm = nullptr;         ///< an MPI job's ranks the frame is spread over (null: this process)
+    int frame = 0;                                ///< frame number stamped on new records (sequences)
+    const CancelToken* cancel = nullptr;          ///< stops the render (throws Cancelled) when set
+    Communicator* comm = nullptr;                 ///< an MPI job's ranks the frame is spread over (null: this process)
 };
 
 class SceneAccel;
@@ -75,7 +75,7 @@ struct FrameState {
     const std::vector<Record>& waiting_records() const { return waiting ? *waiting : none(); }
     const std::vector<Record>& kept_gathers() const { return gathers ? *gathers : none(); }
 
-private:
+  private:
     static const std::vector<Record>& none() {
         static const std::vector<Record> empty;
         return empty;
@@ -96,15 +96,15 @@ enum class AccelStep : uint8_t {
 };
 /// Radiosity textures for the gather's hits.
 enum class RadiosityStep : uint8_t {
-    None,  ///< no gather, AO, or render.radiosity off: hits are shaded with shadow rays
-    Bake,  ///< laid out and baked lazily as rays hit them
+    None,       ///< no gather, AO, or render.radiosity off: hits are shaded with shadow rays
+    Bake,       ///< laid out and baked lazily as rays hit them
     BakeSplit,  ///< an MPI job's still: every side baked at once, a share per rank, and exchanged
-    Load,  ///< from render.radiosity_textures (baked lazily where the folder does not match)
-    Carry, ///< the previous frame's, re-baked where its direct light may have changed
+    Load,       ///< from render.radiosity_textures (baked lazily where the folder does not match)
+    Carry,      ///< the previous frame's, re-baked where its direct light may have changed
 };
 /// Where the irradiance cache starts.
 enum class CacheStart : uint8_t {
-    None,      ///< no cache (brute force, direct only)
+    None,  ///< no cache (brute force, direct only)
     Empty,
     File,      ///< plan.cache_in (with the identity checks of load_cache)
     Previous,  ///< the previous frame's cache, in memory, as it is
@@ -138,11 +138,11 @@ struct FramePlan {
     /// light them (a scene with specular materials whose bounce light comes from gathers).
     bool specular_sites = false;
     GatherStep gather = GatherStep::None;
-    bool refine = false;      ///< per-fragment refinement after the gathering pass
-    bool correct = false;     ///< every fragment's own rays correct the records' prediction (cache.correction_rays)
-    bool keep_hits = false;   ///< records keep their gather's hits: the shot's lights change, re-shading is cheaper
+    bool refine = false;        ///< per-fragment refinement after the gathering pass
+    bool correct = false;       ///< every fragment's own rays correct the records' prediction (cache.correction_rays)
+    bool keep_hits = false;     ///< records keep their gather's hits: the shot's lights change, re-shading is cheaper
     bool keep_gathers = false;  ///< refinement's gathers are kept for the next frames to reuse (EarlierGathers)
-    bool preview = false;     ///< progressive images through the request's callback
+    bool preview = false;       ///< progressive images through the request's callback
     int threads = 1;
     /// Frames of a shot: what changed since the previous frame (null otherwise).
     std::shared_ptr<const SceneChanges> changes;

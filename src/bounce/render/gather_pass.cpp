@@ -26,8 +26,8 @@ TemporalFrame temporal_frame(const FrameContext& ctx, const FramePlan& plan) {
 /// visited pixel's interpolation standing for the pixels around it.
 SubPassCallback preview_after_subpass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache& cache,
                                       const std::function<void(const Image&)>& preview) {
-    auto direct = std::make_shared<std::vector<Color>>(
-        fragment_direct_radiance(ctx.scene, deep, ctx.materials, ctx.lighting, false, ctx.stats));
+    auto direct =
+        std::make_shared<std::vector<Color>>(fragment_direct_radiance(ctx.scene, deep, ctx.materials, ctx.lighting, false, ctx.stats));
     auto visited = std::make_shared<std::vector<uint8_t>>(deep.pixel_count(), 0);
     return [&ctx, &deep, &cache, preview, direct, visited](const SubPass& sp, size_t, size_t) {
         for (int wy = 0; wy < deep.height; ++wy)
@@ -124,11 +124,11 @@ GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& pla
 std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffer& deep, const RadiosityTextures* radiosity,
                                         SpecularSitesResult& specular) {
     Gatherer gatherer(ctx.scene, ctx.accel, ctx.materials, ctx.lighting, radiosity, frame_gather_settings(ctx, false));
-    std::vector<Indirect> light =
-        ctx.comm.size() == 1 ? gather_every_fragment(ctx.scene, deep, gatherer, ctx.stats, ctx.progress)
-                             : indirect_in_tiles(ctx.comm, deep, ctx.scene.render.parallel.tile_size, [&](const DeepBuffer& tile) {
-                                   return gather_every_fragment(ctx.scene, tile, gatherer, ctx.stats, nullptr);
-                               });
+    std::vector<Indirect> light = ctx.comm.size() == 1
+                                      ? gather_every_fragment(ctx.scene, deep, gatherer, ctx.stats, ctx.progress)
+                                      : indirect_in_tiles(ctx.comm, deep, ctx.scene.render.parallel.tile_size, [&](const DeepBuffer& tile) {
+                                            return gather_every_fragment(ctx.scene, tile, gatherer, ctx.stats, nullptr);
+                                        });
     specular_brute_pass(ctx, gatherer, specular);
     ctx.stats.set("gathers", static_cast<double>(deep.fragments.size() + specular.brute.size()));
     ctx.stats.set("rays_per_gather", gatherer.grid().rays());

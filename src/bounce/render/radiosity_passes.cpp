@@ -31,8 +31,8 @@ RadiosityResult radiosity_pass(const FrameContext& ctx, const FramePlan& plan, c
     out.textures = std::make_unique<RadiosityTextures>();
     if (plan.radiosity == RadiosityStep::Carry) {
         PhaseTimer t(ctx.stats, "radiosity carry");
-        *out.textures = RadiosityTextures::carry(*previous.radiosity, ctx.scene, ctx.materials, ctx.lighting, *plan.changes,
-                                                 out.changed, ctx.stats);
+        *out.textures =
+            RadiosityTextures::carry(*previous.radiosity, ctx.scene, ctx.materials, ctx.lighting, *plan.changes, out.changed, ctx.stats);
         // What a moving object can show or hide: the brightest texel, emission or sky.
         out.brightest = out.textures->brightest();
         for (const Material& m : ctx.scene.materials) out.brightest = std::max(out.brightest, luminance(m.peak_emission()));
@@ -47,8 +47,7 @@ RadiosityResult radiosity_pass(const FrameContext& ctx, const FramePlan& plan, c
             ctx.stats.set("radiosity_reused", 1);
             return out;
         }
-        if (ctx.progress)
-            std::fprintf(stderr, "radiosity textures in %s not reused: %s; baking\n", settings.folder.c_str(), why.c_str());
+        if (ctx.progress) std::fprintf(stderr, "radiosity textures in %s not reused: %s; baking\n", settings.folder.c_str(), why.c_str());
     }
     {
         PhaseTimer t(ctx.stats, "radiosity layout");  // every side's lattice laid out (pages come as they are baked)

@@ -116,7 +116,7 @@ void report_instances(const Scene& scene, Stats& stats) {
 
 /// Forwards progress to the caller's sink (if any) and carries the request's cancel token.
 class CancellableSink : public ProgressSink {
-public:
+  public:
     CancellableSink(ProgressSink* inner, const CancelToken* token) : inner_(inner) { cancel = token; }
     void update(const std::string& name, uint64_t done, uint64_t total, double elapsed) override {
         if (inner_) inner_->update(name, done, total, elapsed);
@@ -125,7 +125,7 @@ public:
         if (inner_) inner_->finish(name, total, elapsed);
     }
 
-private:
+  private:
     ProgressSink* inner_;
 };
 
@@ -145,9 +145,9 @@ void set_metadata(Image& image, const Scene& scene, const DeepBuffer& deep, Stat
 Image paste_over(const Image& base, const Image& window, const std::string& base_name) {
     if (base.full_width != window.full_width || base.full_height != window.full_height || base.x0 != 0 || base.y0 != 0 ||
         base.width != base.full_width || base.height != base.full_height)
-        throw InputError(base_name, "", fmt::format("base image is {}x{} (window {}x{} at {},{}); the render is a {}x{} frame",
-                                                    base.full_width, base.full_height, base.width, base.height, base.x0,
-                                                    base.y0, window.full_width, window.full_height));
+        throw InputError(base_name, "",
+                         fmt::format("base image is {}x{} (window {}x{} at {},{}); the render is a {}x{} frame", base.full_width,
+                                     base.full_height, base.width, base.height, base.x0, base.y0, window.full_width, window.full_height));
     Image out = base;
     out.metadata = window.metadata;
     for (const Layer& l : window.layers) {
@@ -179,16 +179,15 @@ void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const Visi
                       RadiosityResult& radiosity, CacheStartResult& start, const RenderRequest& request, RenderResult& result) {
     size_t baked_before = 0;
     const SpecularSitesResult specular = specular_sites_pass(ctx, plan, deep.shaded());
-    if (specular.mirrors && !radiosity.textures &&
-        ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity)
+    if (specular.mirrors && !radiosity.textures && ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity)
         radiosity = radiosity_pass(ctx, plan, previous);
     auto gather = [&] {
         if (!radiosity.textures) radiosity = radiosity_pass(ctx, plan, previous);
         baked_before = radiosity.textures ? radiosity.textures->baked_sides() : 0;
         PhaseTimer t(ctx.stats, "gather");
         const uint64_t rays_before = ctx.stats.total().gather_rays;
-        GatherPassResult g = cache_gather_pass(ctx, plan, deep, radiosity.textures.get(), *start.cache, std::move(start.judged),
-                                               request.preview, specular);
+        GatherPassResult g =
+            cache_gather_pass(ctx, plan, deep, radiosity.textures.get(), *start.cache, std::move(start.judged), request.preview, specular);
         const double secs = t.stop();
         const uint64_t rays = ctx.stats.total().gather_rays - rays_before;
         ctx.stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
@@ -244,8 +243,8 @@ void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const V
         result.gathered = true;
         if (radiosity.textures) finish_radiosity(ctx, plan, *radiosity.textures, baked_before);
     }
-    ShadeResult shaded = shading_pass(ctx, deep.shaded(), nullptr, plan.gather == GatherStep::Brute ? &light : nullptr, specular,
-                                      radiosity.textures.get());
+    ShadeResult shaded =
+        shading_pass(ctx, deep.shaded(), nullptr, plan.gather == GatherStep::Brute ? &light : nullptr, specular, radiosity.textures.get());
     result.image = std::move(shaded.image);
     result.deep_colour = std::move(shaded.colours);
     if (result.cache) {
@@ -328,8 +327,8 @@ void report_ranks(Communicator& comm, Stats& stats, uint64_t sent0, double wait0
 
 }  // namespace
 
-RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameState& previous, const RenderRequest& request,
-                       Stats& stats, ProgressSink* progress) {
+RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameState& previous, const RenderRequest& request, Stats& stats,
+                       ProgressSink* progress) {
     const uint64_t sent0 = request.comm ? request.comm->bytes_sent : 0;
     const double wait0 = request.comm ? request.comm->wait_s : 0;
     tbb::task_arena arena(plan.threads);
@@ -396,8 +395,7 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
     if (plan.cache == CacheStart::Temporal) report_temporal(result, stats);
     stats.set("pixels", static_cast<double>(result.deep.pixel_count()));
     if (result.deep.pixel_count() > 0)
-        stats.set("gather_rays_per_pixel", static_cast<double>(stats.total().gather_rays) /
-                                               static_cast<double>(result.deep.pixel_count()));
+        stats.set("gather_rays_per_pixel", static_cast<double>(stats.total().gather_rays) / static_cast<double>(result.deep.pixel_count()));
     stats.set("plan", plan.describe());
     set_metadata(result.image, scene, result.deep, stats);
     return result;

@@ -22,13 +22,13 @@ namespace bounce {
 
 /// What became of the previous frame's records in a frame of a shot (temporal.h).
 struct TemporalCounts {
-    size_t kept = 0;        ///< kept as they were
-    size_t moved = 0;       ///< travelled with their object (then gathered again where needed)
-    size_t view = 0;        ///< something in their view moved
-    size_t light = 0;       ///< only the light in their view changed
-    size_t dropped = 0;     ///< on a deforming object, or the objects changed
-    size_t regathered = 0;  ///< stale records gathered again in place
-    size_t reshaded = 0;    ///< stale records re-shaded from their hits (no ray traced)
+    size_t kept = 0;                        ///< kept as they were
+    size_t moved = 0;                       ///< travelled with their object (then gathered again where needed)
+    size_t view = 0;                        ///< something in their view moved
+    size_t light = 0;                       ///< only the light in their view changed
+    size_t dropped = 0;                     ///< on a deforming object, or the objects changed
+    size_t regathered = 0;                  ///< stale records gathered again in place
+    size_t reshaded = 0;                    ///< stale records re-shaded from their hits (no ray traced)
     size_t anchored = 0, anchors_kept = 0;  ///< records on moving objects, and those that followed them
 };
 
@@ -54,11 +54,11 @@ struct RenderResult {
     std::vector<std::string> cache_differences;
     /// The loaded cache was gathered under other lights or materials: its bounce light is theirs.
     bool cache_other_lighting = false;
-    TemporalCounts temporal;                       ///< CacheStart::Temporal
-    std::shared_ptr<const SceneAccel> accel;       ///< for the next frame of a shot
+    TemporalCounts temporal;                  ///< CacheStart::Temporal
+    std::shared_ptr<const SceneAccel> accel;  ///< for the next frame of a shot
     std::shared_ptr<const RadiosityTextures> radiosity;
-    std::vector<Record> waiting;                   ///< stale records no fragment needed
-    std::vector<Record> gathers;                   ///< refinement's gathers that still serve
+    std::vector<Record> waiting;  ///< stale records no fragment needed
+    std::vector<Record> gathers;  ///< refinement's gathers that still serve
     /// True when the cache differs from the one the frame started from.
     bool cache_changed() const { return records_new > 0 || fragment_records_new > 0 || plan.cache == CacheStart::Empty; }
     /// What the next frame's plan may start from: moves the deep buffer and the cache out of
@@ -68,8 +68,8 @@ struct RenderResult {
 
 /// Runs `plan` (plan_frame) on `scene`. Throws InputError on bad input (a deep file from
 /// another scene ...) and Cancelled when the request's token is set.
-RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameState& previous, const RenderRequest& request,
-                       Stats& stats, ProgressSink* progress);
+RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameState& previous, const RenderRequest& request, Stats& stats,
+                       ProgressSink* progress);
 
 /// A still: the plan of `request` with nothing from a previous frame, run; the deep file (if
 /// asked for) written once it has finished. With a crop, the gathering pass covers the crop

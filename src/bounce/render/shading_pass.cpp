@@ -44,9 +44,8 @@ void fill_blocks(Image& img, int step) {
     }
 }
 
-ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
-                         const std::vector<Indirect>* brute, const SpecularSitesResult& specular,
-                         const RadiosityTextures* radiosity, ProgressSink* progress) {
+ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache, const std::vector<Indirect>* brute,
+                         const SpecularSitesResult& specular, const RadiosityTextures* radiosity, ProgressSink* progress) {
     const Scene& scene = ctx.scene;
     ShadeResult out;
     const SiteLightResult sites = site_light_for(ctx, specular, window_of(deep), cache, radiosity);
@@ -55,8 +54,8 @@ ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const 
     if (cache && scene.render.indirect.gi == GiMode::Cache) {
         auto t0 = std::chrono::steady_clock::now();
         // Per-light indirect layers: each light's share of the records' light parts.
-        const bool per_light = scene.render.shading.layers == LayerSet::Components && !scene.render.indirect.ao &&
-                               !scene.lights.empty() && cache->has_light_parts(scene.lights.size());
+        const bool per_light = scene.render.shading.layers == LayerSet::Components && !scene.render.indirect.ao && !scene.lights.empty() &&
+                               cache->has_light_parts(scene.lights.size());
         InterpolatedLight light = interpolation_pass(scene, deep, *cache, ctx.stats, progress, true, per_light);
         ctx.stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         interpolated = std::move(light.light);
@@ -73,26 +72,24 @@ ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const 
         if (specular.any()) ctx.stats.set("shading_misses", static_cast<double>(out.shading_misses));
         brute = &interpolated;
     }
-    out.image = shade(scene, deep, ctx.materials, ctx.lighting, scene.render.indirect.any() ? brute : nullptr, ctx.stats,
-                      progress, nullptr, sites.view(), scene.render.shading.deep_colour ? &out.colours : nullptr,
-                      shares.lights > 0 ? &shares : nullptr);
+    out.image = shade(scene, deep, ctx.materials, ctx.lighting, scene.render.indirect.any() ? brute : nullptr, ctx.stats, progress, nullptr,
+                      sites.view(), scene.render.shading.deep_colour ? &out.colours : nullptr, shares.lights > 0 ? &shares : nullptr);
     return out;
 }
 
 /// Each process shades its tiles; rank 0 takes the whole image (the others' stays empty).
 ShadeResult shade_in_tiles(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
-                           const std::vector<Indirect>* brute, const SpecularSitesResult& specular,
-                           const RadiosityTextures* radiosity) {
-    const auto tiles = in_tiles(ctx.comm, window_of(deep), ctx.scene.render.parallel.tile_size, TilesTo::First,
-                                [&](const std::array<int, 4>& w) {
-        const DeepBuffer sub = sub_window(deep, w);
-        const std::vector<Indirect> light = brute ? window_slice(deep, *brute, w) : std::vector<Indirect>();
-        ShadeResult r = shade_window(ctx, sub, cache, brute ? &light : nullptr, specular, radiosity, nullptr);
-        // The refined mask travels as a layer of the tile's image.
-        if (!r.refined.empty()) add_mask_layer(r.image, r.refined, "refined");
-        const uint64_t misses = r.shading_misses;
-        return std::string(reinterpret_cast<const char*>(&misses), sizeof(misses)) + serialize_image(r.image);
-    });
+                           const std::vector<Indirect>* brute, const SpecularSitesResult& specular, const RadiosityTextures* radiosity) {
+    const auto tiles =
+        in_tiles(ctx.comm, window_of(deep), ctx.scene.render.parallel.tile_size, TilesTo::First, [&](const std::array<int, 4>& w) {
+            const DeepBuffer sub = sub_window(deep, w);
+            const std::vector<Indirect> light = brute ? window_slice(deep, *brute, w) : std::vector<Indirect>();
+            ShadeResult r = shade_window(ctx, sub, cache, brute ? &light : nullptr, specular, radiosity, nullptr);
+            // The refined mask travels as a layer of the tile's image.
+            if (!r.refined.empty()) add_mask_layer(r.image, r.refined, "refined");
+            const uint64_t misses = r.shading_misses;
+            return std::string(reinterpret_cast<const char*>(&misses), sizeof(misses)) + serialize_image(r.image);
+        });
     ShadeResult out;
     if (ctx.comm.rank() != 0) return out;  // rank 0 writes the image
     std::vector<Image> images;
@@ -113,9 +110,9 @@ ShadeResult shade_in_tiles(const FrameContext& ctx, const DeepBuffer& deep, cons
 
 }  // namespace
 
-ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
-                         const std::vector<Indirect>* brute, const SpecularSitesResult& specular,
-                         const RadiosityTextures* radiosity, const std::function<void(const Image&)>& quick_look) {
+ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache, const std::vector<Indirect>* brute,
+                         const SpecularSitesResult& specular, const RadiosityTextures* radiosity,
+                         const std::function<void(const Image&)>& quick_look) {
     const Scene& scene = ctx.scene;
     PhaseTimer t(ctx.stats, "shading");
     if (cache && quick_look) {

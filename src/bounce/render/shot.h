@@ -11,7 +11,7 @@
 namespace bounce {
 
 class Shot {
-public:
+  public:
     /// Plans and renders `scene` (the shot at request.frame) after the frame kept last.
     RenderResult render(const std::shared_ptr<const Scene>& scene, RenderRequest request, Stats& stats, ProgressSink* progress);
     /// Keeps what `result` leaves for the next frame (once its outputs are written).
@@ -23,7 +23,7 @@ public:
     void forget() { state_ = {}; }
     bool has_previous() const { return state_.scene != nullptr; }
 
-private:
+  private:
     FrameState state_;
 };
 

@@ -18,8 +18,9 @@ DeepBuffer window_of(const DeepBuffer& deep, const FramePlan& plan, const std::s
     if (!cropped) return deep;
     const auto& c = plan.window;
     if (c[0] < deep.x0 || c[2] < deep.y0 || c[1] > deep.x0 + deep.width || c[3] > deep.y0 + deep.height)
-        throw InputError(origin, "", fmt::format("the deep file covers pixels [{}, {}) x [{}, {}), not the crop", deep.x0,
-                                                 deep.x0 + deep.width, deep.y0, deep.y0 + deep.height));
+        throw InputError(origin, "",
+                         fmt::format("the deep file covers pixels [{}, {}) x [{}, {}), not the crop", deep.x0, deep.x0 + deep.width,
+                                     deep.y0, deep.y0 + deep.height));
     const auto& g = plan.gather_window;
     return sub_window(deep, {std::max(deep.x0, g[0]), std::min(deep.x0 + deep.width, g[1]), std::max(deep.y0, g[2]),
                              std::min(deep.y0 + deep.height, g[3])});
@@ -55,8 +56,8 @@ VisibilityResult visibility_pass(const FrameContext& ctx, const FramePlan& plan,
             }
             // Each process keeps the fragments of its own tiles, unless a crop's tiles differ
             // from the gathered window's or rank 0 writes the deep file.
-            out.gathered = visibility_in_tiles(ctx.comm, scene, ctx.accel, ctx.stats, plan.gather_window,
-                                               cropped || !plan.deep_out.empty());
+            out.gathered =
+                visibility_in_tiles(ctx.comm, scene, ctx.accel, ctx.stats, plan.gather_window, cropped || !plan.deep_out.empty());
             break;
         }
     }

@@ -25,14 +25,15 @@ Bounds object_bounds(const Object& o) {
     Bounds b = o.coarse_bounds();
     if (o.has_fine()) b.extend(o.visible_mesh_bounds());
     if (o.fur)
-        for (size_t i = 0; i + 2 < o.fur->vertices.size(); i += 4) b.extend(Vec3{o.fur->vertices[i], o.fur->vertices[i + 1], o.fur->vertices[i + 2]});
+        for (size_t i = 0; i + 2 < o.fur->vertices.size(); i += 4)
+            b.extend(Vec3{o.fur->vertices[i], o.fur->vertices[i + 1], o.fur->vertices[i + 2]});
     return b;
 }
 
 /// Two frames' meshes compared once per pair: a prototype's thousands of placements share one
 /// pair of tessellations, which would otherwise be compared once per placement.
 class MeshComparisons {
-public:
+  public:
     bool same_positions(const TriangleMesh& a, const TriangleMesh& b) {
         std::optional<bool>& same = known_[{&a, &b}].positions;
         if (!same) same = a.positions == b.positions;
@@ -53,7 +54,7 @@ public:
                (!now.local_fine || same_positions(*before.local_fine, *now.local_fine));
     }
 
-private:
+  private:
     struct Same {
         std::optional<bool> positions, indices;  ///< (each compared when first asked)
     };

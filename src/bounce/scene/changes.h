@@ -26,13 +26,13 @@ struct ObjectMotion {
 struct SceneChanges {
     /// The same objects with the same triangles (and cutouts) in both frames: anything at all may be kept.
     bool comparable = false;
-    std::vector<ObjectMotion> objects;  ///< per object of this frame (when comparable)
-    bool lights = false;     ///< a light, an emissive material or the sky changed: every bake is redone
-    bool sky = false;        ///< the sky changed: every ray that escaped now sees another light
-    bool camera = false;     ///< the camera's pose or resolution changed: a pixel covers another footprint
-    std::vector<uint8_t> materials;  ///< per material: 1 when its albedo (colour, texture) changed
+    std::vector<ObjectMotion> objects;   ///< per object of this frame (when comparable)
+    bool lights = false;                 ///< a light, an emissive material or the sky changed: every bake is redone
+    bool sky = false;                    ///< the sky changed: every ray that escaped now sees another light
+    bool camera = false;                 ///< the camera's pose or resolution changed: a pixel covers another footprint
+    std::vector<uint8_t> materials;      ///< per material: 1 when its albedo (colour, texture) changed
     bool visible_geometry_same = false;  ///< also the fine tessellations and fur: BVHs may be kept
-    bool moving() const;  ///< any object not Static
+    bool moving() const;                 ///< any object not Static
 };
 
 /// Compares the scene of the previous frame with this frame's.

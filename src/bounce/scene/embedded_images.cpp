@@ -34,8 +34,7 @@ bool is_embedded_image(const std::string& file) {
 }
 
 std::string embedded_image_file(const aiTexture& texture, const std::string& path, const std::string& where) {
-    if (texture.mHeight != 0)
-        throw InputError(path, where, "an embedded image of raw texels (not an encoded PNG or JPEG) is not read");
+    if (texture.mHeight != 0) throw InputError(path, where, "an embedded image of raw texels (not an encoded PNG or JPEG) is not read");
     // The format hint names the file's type ("png", "jpg"); anything else is kept out of the name.
     std::string ext;
     for (const char* c = texture.achFormatHint; *c && ext.size() < 8; ++c)
@@ -55,8 +54,9 @@ std::string embedded_image_file(const aiTexture& texture, const std::string& pat
             if (!out) throw std::runtime_error("cannot write " + tmp);
         });
     } catch (const std::exception& e) {
-        throw InputError(path, where, fmt::format("its embedded image cannot be written to {} ({}); set BOUNCE_IMAGE_CACHE to a folder bounce can write",
-                                                  folder.string(), e.what()));
+        throw InputError(path, where,
+                         fmt::format("its embedded image cannot be written to {} ({}); set BOUNCE_IMAGE_CACHE to a folder bounce can write",
+                                     folder.string(), e.what()));
     }
     return file.string();
 }

@@ -12,16 +12,39 @@
 namespace bounce {
 
 const std::vector<std::string>& fur_keys() {
-    static const std::vector<std::string> keys = {
-        "count", "density", "length", "length_variation", "width_root", "width_tip", "segments", "curl", "curl_turns",
-        "gravity", "clump", "clump_size", "lean", "seed", "color_root", "color_tip", "specular", "specular_exponent", "falloff_root",
-        "falloff_exponent", "cast_indirect", "cast_shadows", "visible_to", "indirect_at", "density_texture", "length_texture"};
+    static const std::vector<std::string> keys = {"count",
+                                                  "density",
+                                                  "length",
+                                                  "length_variation",
+                                                  "width_root",
+                                                  "width_tip",
+                                                  "segments",
+                                                  "curl",
+                                                  "curl_turns",
+                                                  "gravity",
+                                                  "clump",
+                                                  "clump_size",
+                                                  "lean",
+                                                  "seed",
+                                                  "color_root",
+                                                  "color_tip",
+                                                  "specular",
+                                                  "specular_exponent",
+                                                  "falloff_root",
+                                                  "falloff_exponent",
+                                                  "cast_indirect",
+                                                  "cast_shadows",
+                                                  "visible_to",
+                                                  "indirect_at",
+                                                  "density_texture",
+                                                  "length_texture"};
     return keys;
 }
 
 const std::vector<std::string>& fur_lighting_keys() {
-    static const std::vector<std::string> keys = {"color_root", "color_tip", "specular", "specular_exponent", "falloff_root",
-                                                  "falloff_exponent", "cast_indirect", "cast_shadows", "indirect_at"};  // visible_to: its camera flag is visibility
+    static const std::vector<std::string> keys = {
+        "color_root",       "color_tip",     "specular",     "specular_exponent", "falloff_root",
+        "falloff_exponent", "cast_indirect", "cast_shadows", "indirect_at"};  // visible_to: its camera flag is visibility
     return keys;
 }
 
@@ -110,8 +133,8 @@ std::shared_ptr<Fur> read_fur(const JsonReader& r, const TriangleMesh& surface, 
     const auto bytes = static_cast<double>(p.memory_bytes(p.count));
     const std::string key = r.has("count") ? "count" : "density";
     if (bytes > budget)
-        r.fail(key, fmt::format("{} strands would take {:.1f} GiB, over render.memory_budget ({:g} GiB)", p.count,
-                                bytes / 1073741824.0, scene.render.dicing.memory_budget));
+        r.fail(key, fmt::format("{} strands would take {:.1f} GiB, over render.memory_budget ({:g} GiB)", p.count, bytes / 1073741824.0,
+                                scene.render.dicing.memory_budget));
     if (std::string why = memory_shortfall(bytes, fmt::format("growing {} strands", p.count)); !why.empty()) r.fail(key, why);
     return std::make_shared<Fur>(grow_fur(surface, p));
 }

@@ -24,8 +24,13 @@ std::string decode_base64(const std::string& in, const std::string& path, const 
     uint32_t bits = 0;
     int held = 0;
     for (char c : in) {
-        int v = c >= 'A' && c <= 'Z' ? c - 'A' : c >= 'a' && c <= 'z' ? c - 'a' + 26 : c >= '0' && c <= '9' ? c - '0' + 52
-              : c == '+' ? 62 : c == '/' ? 63 : c == '=' ? -2 : -1;
+        int v = c >= 'A' && c <= 'Z'   ? c - 'A'
+                : c >= 'a' && c <= 'z' ? c - 'a' + 26
+                : c >= '0' && c <= '9' ? c - '0' + 52
+                : c == '+'             ? 62
+                : c == '/'             ? 63
+                : c == '='             ? -2
+                                       : -1;
         if (v == -2) break;
         if (v < 0) throw InputError(path, at, "the data URI is not base64");
         bits = (bits << 6) | static_cast<uint32_t>(v), held += 6;
@@ -37,7 +42,7 @@ std::string decode_base64(const std::string& in, const std::string& path, const 
 /// The bytes of the file's buffers, read when first asked for (a data URI, a file beside the
 /// glTF, or a .glb's BIN chunk).
 class Buffers {
-public:
+  public:
     Buffers(const json& j, std::string path, std::string_view bin) : j_(j), path_(std::move(path)), bin_(bin) {}
     const std::string& get(size_t index) {
         if (auto it = loaded_.find(index); it != loaded_.end()) return it->second;
@@ -62,7 +67,7 @@ public:
         return loaded_.emplace(index, std::move(bytes)).first->second;
     }
 
-private:
+  private:
     const json& j_;
     std::string path_;
     std::string_view bin_;  ///< a .glb's BIN chunk (empty: none)
@@ -71,18 +76,22 @@ private:
 
 /// Accessor `index` as `components` floats per element (float, or for a rotation normalized
 /// bytes and shorts, as the extension allows).
-std::vector<float> read_accessor(const json& j, const json& index, int components, bool rotation, Buffers& buffers,
-                                 const std::string& path, const std::string& at) {
+std::vector<float> read_accessor(const json& j, const json& index, int components, bool rotation, Buffers& buffers, const std::string& path,
+                                 const std::string& at) {
     const auto fail = [&](const std::string& why) -> std::vector<float> { throw InputError(path, at, why); };
-    if (!index.is_number_unsigned() || !j.contains("accessors") || index.get<size_t>() >= j["accessors"].size()) return fail("not an accessor");
+    if (!index.is_number_unsigned() || !j.contains("accessors") || index.get<size_t>() >= j["accessors"].size())
+        return fail("not an accessor");
     const json& a = j["accessors"][index.get<size_t>()];
-    if (!a.is_object() || !a.contains("bufferView") || a.contains("sparse")) return fail("an accessor with a bufferView (and not sparse) is needed");
+    if (!a.is_object() || !a.contains("bufferView") || a.contains("sparse"))
+        return fail("an accessor with a bufferView (and not sparse) is needed");
     const int type = a.value("componentType", 0);
     const size_t size = type == 5126 ? 4 : rotation && type == 5122 ? 2 : rotation && type == 5120 ? 1 : 0;
     if (size == 0) return fail(rotation ? "ROTATION must be floats or normalized bytes or shorts" : "expected floats (componentType 5126)");
     if (size < 4 && !a.value("normalized", false)) return fail("ROTATION of bytes or shorts must be normalized (\"normalized\": true)");
-    if (a.value("type", std::string()) != (components == 3 ? "VEC3" : "VEC4")) return fail(components == 3 ? "expected a VEC3 accessor" : "expected a VEC4 accessor");
-    const size_t count = a.value("count", size_t{0}), view_index = a["bufferView"].is_number_unsigned() ? a["bufferView"].get<size_t>() : SIZE_MAX;
+    if (a.value("type", std::string()) != (components == 3 ? "VEC3" : "VEC4"))
+        return fail(components == 3 ? "expected a VEC3 accessor" : "expected a VEC4 accessor");
+    const size_t count = a.value("count", size_t{0}),
+                 view_index = a["bufferView"].is_number_unsigned() ? a["bufferView"].get<size_t>() : SIZE_MAX;
     if (!j.contains("bufferViews") || view_index >= j["bufferViews"].size()) return fail("its bufferView does not exist");
     const json& v = j["bufferViews"][view_index];
     const size_t element = size * static_cast<size_t>(components), stride = v.value("byteStride", element);
@@ -100,14 +109,16 @@ std::vector<float> read_accessor(const json& j, const json& index, int component
         for (size_t c = 0; c < static_cast<size_t>(components); ++c) {
             const char* p = bytes.data() + first + e * stride + c * size;
             float x = 0;
-            if (size == 4) std::memcpy(&x, p, 4);
+            if (size == 4)
+                std::memcpy(&x, p, 4);
             else if (size == 2) {
                 int16_t v16 = 0;
                 std::memcpy(&v16, p, 2);
                 x = std::max(static_cast<float>(v16) / 32767.0f, -1.0f);
-            }
-            else x = std::max(static_cast<float>(static_cast<int8_t>(*p)) / 127.0f, -1.0f);
-            if (!std::isfinite(x) || std::abs(x) > kMaxCoordinate) return fail(fmt::format("element {} is not finite or beyond +-{:g}", e, kMaxCoordinate));
+            } else
+                x = std::max(static_cast<float>(static_cast<int8_t>(*p)) / 127.0f, -1.0f);
+            if (!std::isfinite(x) || std::abs(x) > kMaxCoordinate)
+                return fail(fmt::format("element {} is not finite or beyond +-{:g}", e, kMaxCoordinate));
             out.push_back(x);
         }
     return out;
@@ -118,10 +129,22 @@ Transform trs(const float* t, const float* q, const float* s) {
     const float len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     const float x = q[0] / len, y = q[1] / len, z = q[2] / len, w = q[3] / len;
     Transform r;
-    r.m = {1 - 2 * (y * y + z * z), 2 * (x * y - z * w),     2 * (x * z + y * w),     t[0],
-           2 * (x * y + z * w),     1 - 2 * (x * x + z * z), 2 * (y * z - x * w),     t[1],
-           2 * (x * z - y * w),     2 * (y * z + x * w),     1 - 2 * (x * x + y * y), t[2],
-           0, 0, 0, 1};
+    r.m = {1 - 2 * (y * y + z * z),
+           2 * (x * y - z * w),
+           2 * (x * z + y * w),
+           t[0],
+           2 * (x * y + z * w),
+           1 - 2 * (x * x + z * z),
+           2 * (y * z - x * w),
+           t[1],
+           2 * (x * z - y * w),
+           2 * (y * z + x * w),
+           1 - 2 * (x * x + y * y),
+           t[2],
+           0,
+           0,
+           0,
+           1};
     return r * Transform::scale({s[0], s[1], s[2]});
 }
 
@@ -134,7 +157,8 @@ GpuInstances node_instances(const json& j, size_t node, const json& ext, Buffers
     const json& attributes = ext["attributes"];
     std::vector<float> t, r, s;
     const auto read = [&](const char* key, int components, std::vector<float>& out) {
-        if (attributes.contains(key)) out = read_accessor(j, attributes[key], components, components == 4, buffers, path, g.pointer + "/attributes/" + key);
+        if (attributes.contains(key))
+            out = read_accessor(j, attributes[key], components, components == 4, buffers, path, g.pointer + "/attributes/" + key);
     };
     read("TRANSLATION", 3, t), read("ROTATION", 4, r), read("SCALE", 3, s);
     const size_t count = !t.empty() ? t.size() / 3 : !r.empty() ? r.size() / 4 : s.size() / 3;
@@ -156,9 +180,11 @@ GpuInstances node_instances(const json& j, size_t node, const json& ext, Buffers
 std::unordered_map<size_t, const aiNode*> match_nodes(const json& j, const aiScene* s, const std::string& path) {
     std::unordered_map<size_t, const aiNode*> out;
     const size_t scene = j.value("scene", size_t{0});
-    const json roots = j.contains("scenes") && scene < j["scenes"].size() ? j["scenes"][scene].value("nodes", json::array()) : json::array();
+    const json roots =
+        j.contains("scenes") && scene < j["scenes"].size() ? j["scenes"][scene].value("nodes", json::array()) : json::array();
     std::vector<std::pair<size_t, const aiNode*>> stack;
-    if (roots.size() == 1) stack.emplace_back(roots[0].get<size_t>(), s->mRootNode);
+    if (roots.size() == 1)
+        stack.emplace_back(roots[0].get<size_t>(), s->mRootNode);
     else if (roots.size() == s->mRootNode->mNumChildren)
         for (size_t c = 0; c < roots.size(); ++c) stack.emplace_back(roots[c].get<size_t>(), s->mRootNode->mChildren[c]);
     while (!stack.empty()) {
@@ -202,7 +228,8 @@ std::unordered_map<const aiNode*, GpuInstances> gltf_gpu_instances(const std::st
         // A count, offset, index or name of the wrong JSON type where the extension reads it.
         std::string why = e.what();
         const auto at = why.find("] ");
-        throw InputError(path, "", "malformed glTF where EXT_mesh_gpu_instancing reads it: " + (at == std::string::npos ? why : why.substr(at + 2)));
+        throw InputError(path, "",
+                         "malformed glTF where EXT_mesh_gpu_instancing reads it: " + (at == std::string::npos ? why : why.substr(at + 2)));
     }
 }
 

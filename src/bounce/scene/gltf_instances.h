@@ -16,8 +16,8 @@ namespace bounce {
 
 /// One node's instances.
 struct GpuInstances {
-    std::string pointer;          ///< "/nodes/N/extensions/EXT_mesh_gpu_instancing", for errors
-    std::vector<Transform> at;    ///< per instance: translation x rotation x scale, in the node's space
+    std::string pointer;        ///< "/nodes/N/extensions/EXT_mesh_gpu_instancing", for errors
+    std::vector<Transform> at;  ///< per instance: translation x rotation x scale, in the node's space
 };
 
 /// The GPU instances of glTF file `path` (read by Assimp as `s`), per Assimp node; empty for

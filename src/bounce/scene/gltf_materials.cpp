@@ -21,7 +21,7 @@ const std::set<std::string> kReadExtensions = {"KHR_materials_emissive_strength"
 
 /// One material's reading, its values checked where they are (a JSON pointer each).
 class MaterialJson {
-public:
+  public:
     explicit MaterialJson(const std::string& path) : path_(path) {}
 
     /// A number at `key` of `j` inside [lo, hi] (`def` when absent).
@@ -74,12 +74,13 @@ public:
     float number(const json& array, size_t i, const std::string& where, double lo = -1e6, double hi = 1e6) const {
         const json& v = array[i];
         if (!v.is_number() || !(v.get<double>() >= lo && v.get<double>() <= hi))
-            throw InputError(path_, fmt::format("{}/{}", where, i), fmt::format("{} is not a number in [{:g}, {:g}]", v.dump().substr(0, 40), lo, hi));
+            throw InputError(path_, fmt::format("{}/{}", where, i),
+                             fmt::format("{} is not a number in [{:g}, {:g}]", v.dump().substr(0, 40), lo, hi));
         return v.get<float>();
     }
     const std::string& path() const { return path_; }
 
-private:
+  private:
     const std::string& path_;
     bool seen_ = false;
 };
@@ -91,7 +92,8 @@ void read_diffuse_transmission(const MaterialJson& r, const json& d, const std::
     if (d.is_object() && d.contains("diffuseTransmissionColorFactor")) {
         const json& c = d["diffuseTransmissionColorFactor"];
         if (!c.is_array() || c.size() != 3) throw InputError(r.path(), at + "/diffuseTransmissionColorFactor", "expected three numbers");
-        for (size_t i = 0; i < 3; ++i) out.diffuse_transmission_color[static_cast<int>(i)] = r.number(c, i, at + "/diffuseTransmissionColorFactor", 0, 1);
+        for (size_t i = 0; i < 3; ++i)
+            out.diffuse_transmission_color[static_cast<int>(i)] = r.number(c, i, at + "/diffuseTransmissionColorFactor", 0, 1);
     }
     for (const char* t : {"diffuseTransmissionTexture", "diffuseTransmissionColorTexture"})
         if (d.is_object() && d.contains(t)) r.note(out, std::string("KHR_materials_diffuse_transmission.") + t);
@@ -138,7 +140,8 @@ std::vector<GltfMaterialJson> read_gltf_materials(const std::string& path) {
 std::vector<GltfMaterialJson> read_gltf_materials(const nlohmann::json& j, const std::string& path) {
     std::vector<GltfMaterialJson> out;
     if (!j.is_object() || !j.contains("materials") || !j["materials"].is_array()) return out;
-    for (size_t i = 0; i < j["materials"].size(); ++i) out.push_back(read_material(j["materials"][i], path, fmt::format("/materials/{}", i)));
+    for (size_t i = 0; i < j["materials"].size(); ++i)
+        out.push_back(read_material(j["materials"][i], path, fmt::format("/materials/{}", i)));
     return out;
 }
 

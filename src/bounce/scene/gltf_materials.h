@@ -23,9 +23,9 @@ struct GltfMaterialJson {
     UvTransform uv_transform;
     uint8_t uv_set = 0;
     std::vector<std::string> skipped;
-    std::optional<float> transmission;  ///< KHR_materials_transmission's factor
-    float ior = 1.5f;                   ///< KHR_materials_ior's (with transmission)
-    float diffuse_transmission = 0;     ///< KHR_materials_diffuse_transmission's factor
+    std::optional<float> transmission;    ///< KHR_materials_transmission's factor
+    float ior = 1.5f;                     ///< KHR_materials_ior's (with transmission)
+    float diffuse_transmission = 0;       ///< KHR_materials_diffuse_transmission's factor
     Color diffuse_transmission_color{1};  ///< and its colour factor
     /// Features bounce does not read ("KHR_materials_sheen", "COLOR_0 ..."), each once.
     std::vector<std::string> unread;

@@ -32,7 +32,8 @@ const Object& find_prototype(const JsonReader& in, const json& entries, const Sc
     for (const json& e : entries)
         if (places_instances(e) && e.value("name", json()) == of)
             in.fail("of", fmt::format("\"{}\" is not a prototype but places instances itself; instances of instances are not "
-                                      "supported: place its prototype", of));
+                                      "supported: place its prototype",
+                                      of));
     std::vector<std::string> names;
     for (const Object& o : scene.objects) {
         if (o.name != of) {
@@ -41,7 +42,8 @@ const Object& find_prototype(const JsonReader& in, const json& entries, const Sc
         }
         if (!o.prototype)
             in.fail("of", fmt::format("\"{}\" is not a prototype: give that object \"prototype\": true (it is then only placed "
-                                      "by instances)", of));
+                                      "by instances)",
+                                      of));
         return o;
     }
     const std::string hint = closest_match(of, names);
@@ -142,8 +144,10 @@ struct Prototype {
     void build_tree(const TriangleMesh& m, size_t placements) {
         vertices = m.positions;
         if (vertices.empty()) return;
-        if (placements > kPlacementsWorthATree) split(0, vertices.size());
-        else nodes.push_back({local, 0, vertices.size()});
+        if (placements > kPlacementsWorthATree)
+            split(0, vertices.size());
+        else
+            nodes.push_back({local, 0, vertices.size()});
     }
     void split(size_t begin, size_t end) {
         const size_t node = nodes.size();
@@ -155,7 +159,8 @@ struct Prototype {
         const int axis = size.x >= size.y && size.x >= size.z ? 0 : size.y >= size.z ? 1 : 2;
         const auto mid = static_cast<std::ptrdiff_t>(begin + (end - begin) / 2);
         std::nth_element(vertices.begin() + static_cast<std::ptrdiff_t>(begin), vertices.begin() + mid,
-                         vertices.begin() + static_cast<std::ptrdiff_t>(end), [axis](const Vec3& p, const Vec3& q) { return p[axis] < q[axis]; });
+                         vertices.begin() + static_cast<std::ptrdiff_t>(end),
+                         [axis](const Vec3& p, const Vec3& q) { return p[axis] < q[axis]; });
         split(begin, static_cast<size_t>(mid));
         nodes[node].right = nodes.size();
         split(static_cast<size_t>(mid), end);
@@ -242,14 +247,17 @@ KnownBounds still_bounds(std::span<const Object> objects) {
 
 void bound_instances(std::span<Object> placed, const std::function<const JsonReader(size_t)>& at, const KnownBounds& known) {
     std::vector<uint8_t> beyond(placed.size(), 0);
-    bound_tessellation(placed, [](const Object& o) { return o.local_coarse.get(); }, [](Object& o) -> Bounds& { return o.instance_bounds; },
-                       known.coarse, beyond);
-    bound_tessellation(placed, [](const Object& o) { return o.local_fine.get(); }, [](Object& o) -> Bounds& { return o.instance_visible_bounds; },
-                       known.visible, beyond);
+    bound_tessellation(
+        placed, [](const Object& o) { return o.local_coarse.get(); }, [](Object& o) -> Bounds& { return o.instance_bounds; }, known.coarse,
+        beyond);
+    bound_tessellation(
+        placed, [](const Object& o) { return o.local_fine.get(); }, [](Object& o) -> Bounds& { return o.instance_visible_bounds; },
+        known.visible, beyond);
     for (Object& o : placed)
         if (!o.local_fine) o.instance_visible_bounds = o.instance_bounds;
     for (size_t k = 0; k < placed.size(); ++k)
-        if (beyond[k]) at(k).fail("", fmt::format("this placement moves vertices to non-finite positions or beyond +-{:g}", kMaxCoordinate));
+        if (beyond[k])
+            at(k).fail("", fmt::format("this placement moves vertices to non-finite positions or beyond +-{:g}", kMaxCoordinate));
 }
 
 void read_instances(const JsonReader& r, const json& entries, Scene& scene, size_t index, std::span<const Object> file_instances) {
@@ -260,7 +268,8 @@ void read_instances(const JsonReader& r, const json& entries, Scene& scene, size
         r.fail("instances", "instances cannot be keyed (yet): give a moving copy an object of its own");
     const Object& proto = find_prototype(in, entries, scene);
     if (!in.has("transforms") || !in.raw("transforms").is_array() || in.raw("transforms").empty())
-        in.fail(in.has("transforms") ? "transforms" : "", "expected \"transforms\": a non-empty array of {translate, rotate, scale} or {matrix}");
+        in.fail(in.has("transforms") ? "transforms" : "",
+                "expected \"transforms\": a non-empty array of {translate, rotate, scale} or {matrix}");
     const json& list = in.raw("transforms");
     // Each placement is an Object (no triangles of its own), an Embree instance, its share of
     // the radiosity layout and of every per-object table: refused before it could exhaust memory.

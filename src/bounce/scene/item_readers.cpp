@@ -27,18 +27,41 @@ json to_json(const Vec3& v) { return {v.x, v.y, v.z}; }
 
 json material_defaults() {
     const Material m;
-    return {{"color", to_json(m.color)}, {"emission", to_json(m.emission)}, {"specular", to_json(m.specular)},
-            {"roughness", m.roughness}, {"bump_strength", m.bump_strength}, {"mirror", to_json(m.mirror)},
-            {"transmission", to_json(m.transmission)}, {"ior", m.ior}, {"absorption", to_json(m.absorption)}};
+    return {{"color", to_json(m.color)},
+            {"emission", to_json(m.emission)},
+            {"specular", to_json(m.specular)},
+            {"roughness", m.roughness},
+            {"bump_strength", m.bump_strength},
+            {"mirror", to_json(m.mirror)},
+            {"transmission", to_json(m.transmission)},
+            {"ior", m.ior},
+            {"absorption", to_json(m.absorption)}};
 }
 
 const std::vector<std::string>& material_keys() {
-    static const std::vector<std::string> keys = {"color",          "color_texture", "emission",      "specular",  "roughness",
-                                                  "bump_texture",   "normal_texture", "bump_strength", "ao_texture",
-                                                  "mirror",         "transmission",  "ior",           "absorption",
-                                                  "alpha_mode",     "opacity",       "opacity_texture", "alpha_cutoff",
-                                                  "emission_texture", "metallic_roughness_texture", "metallic", "uv_transform",
-                                                  "diffuse_transmission", "diffuse_transmission_color"};
+    static const std::vector<std::string> keys = {"color",
+                                                  "color_texture",
+                                                  "emission",
+                                                  "specular",
+                                                  "roughness",
+                                                  "bump_texture",
+                                                  "normal_texture",
+                                                  "bump_strength",
+                                                  "ao_texture",
+                                                  "mirror",
+                                                  "transmission",
+                                                  "ior",
+                                                  "absorption",
+                                                  "alpha_mode",
+                                                  "opacity",
+                                                  "opacity_texture",
+                                                  "alpha_cutoff",
+                                                  "emission_texture",
+                                                  "metallic_roughness_texture",
+                                                  "metallic",
+                                                  "uv_transform",
+                                                  "diffuse_transmission",
+                                                  "diffuse_transmission_color"};
     return keys;
 }
 
@@ -48,9 +71,9 @@ const std::vector<std::string>& surface_shading_keys() {
 }
 
 const std::vector<std::string>& light_keys() {
-    static const std::vector<std::string> keys = {"type",   "color",  "intensity", "position", "direction", "cone_angle", "cone_falloff",
-                                                  "corner", "edge_u", "edge_v",    "texture",  "rotation",  "name",
-                                                  "light_link", "shadow_link", "barn_doors"};
+    static const std::vector<std::string> keys = {"type",         "color",      "intensity",   "position",  "direction", "cone_angle",
+                                                  "cone_falloff", "corner",     "edge_u",      "edge_v",    "texture",   "rotation",
+                                                  "name",         "light_link", "shadow_link", "barn_doors"};
     return keys;
 }
 
@@ -59,8 +82,7 @@ namespace {
 /// A light's texture (a sky, a quad's radiance, a spot's slide), every texel checked: a NaN,
 /// infinite or absurd radiance is an error naming the pixel (it is read whole: any ray may
 /// look anywhere in it).
-std::shared_ptr<const LatLongMap> load_latlong(const std::string& path, const JsonReader& r,
-                                               const std::string& key) {
+std::shared_ptr<const LatLongMap> load_latlong(const std::string& path, const JsonReader& r, const std::string& key) {
     std::string unreadable;
     auto in = open_image(path, unreadable);
     if (!in) r.fail(key, "cannot read image \"" + path + "\": " + unreadable);
@@ -73,7 +95,8 @@ std::shared_ptr<const LatLongMap> load_latlong(const std::string& path, const Js
     // of 1.2 MB took minutes).
     if (texels > 8192.0 * 8192.0)
         r.fail(key, fmt::format("image \"{}\" is {}x{}: a light's texture is read whole and must hold at most 8192x8192 pixels; "
-                                "resize it (e.g. OpenImageIO's oiiotool --resize)", path, spec.width, spec.height));
+                                "resize it (e.g. OpenImageIO's oiiotool --resize)",
+                                path, spec.width, spec.height));
     if (std::string why = memory_shortfall(texels * (spec.nchannels + 3) * sizeof(float), "reading " + path); !why.empty())
         r.fail(key, why);
     auto map = std::make_shared<LatLongMap>();
@@ -89,8 +112,7 @@ std::shared_ptr<const LatLongMap> load_latlong(const std::string& path, const Js
             const float v = all[i * nc + std::min(c, nc - 1)];
             if (!(v >= 0 && v <= kMaxRadiometric))
                 r.fail(key, fmt::format("image \"{}\" pixel ({}, {}) holds {} (radiance must be finite, in [0, {:g}])", path,
-                                        i % static_cast<size_t>(spec.width), i / static_cast<size_t>(spec.width), v,
-                                        kMaxRadiometric));
+                                        i % static_cast<size_t>(spec.width), i / static_cast<size_t>(spec.width), v, kMaxRadiometric));
             map->rgb[3 * i + c] = v;
         }
     return map;
@@ -108,12 +130,11 @@ void read_barn_doors(const JsonReader& r, Light& l) {
 /// color, intensity, name and the links).
 using LightTypeKeys = std::vector<std::pair<std::string, std::vector<std::string>>>;
 const LightTypeKeys& light_types() {
-    static const LightTypeKeys types = {
-        {"point", {"position"}},
-        {"spot", {"position", "direction", "cone_angle", "cone_falloff", "texture", "barn_doors"}},
-        {"distant", {"direction"}},
-        {"quad", {"corner", "edge_u", "edge_v", "texture"}},
-        {"sky", {"texture", "rotation"}}};
+    static const LightTypeKeys types = {{"point", {"position"}},
+                                        {"spot", {"position", "direction", "cone_angle", "cone_falloff", "texture", "barn_doors"}},
+                                        {"distant", {"direction"}},
+                                        {"quad", {"corner", "edge_u", "edge_v", "texture"}},
+                                        {"sky", {"texture", "rotation"}}};
     return types;
 }
 
@@ -142,7 +163,8 @@ json light_defaults(const std::string& type) {
 
 Transform read_transform(const JsonReader& obj) {
     if (!obj.has("transform")) return {};
-    return read_transform_keys(JsonReader(obj.raw("transform"), obj.at("transform"), obj.ctx(), {"translate", "rotate", "scale", "matrix"}));
+    return read_transform_keys(
+        JsonReader(obj.raw("transform"), obj.at("transform"), obj.ctx(), {"translate", "rotate", "scale", "matrix"}));
 }
 
 Transform read_transform_keys(const JsonReader& t) {
@@ -162,8 +184,7 @@ Transform read_transform_keys(const JsonReader& t) {
     if (t.has("translate")) r = Transform::translate(t.vec3("translate", {}));
     if (t.has("rotate")) {
         const json& rot = t.raw("rotate");
-        if (!rot.is_array() || rot.size() != 4)
-            t.fail("rotate", "expected [degrees, axis_x, axis_y, axis_z]");
+        if (!rot.is_array() || rot.size() != 4) t.fail("rotate", "expected [degrees, axis_x, axis_y, axis_z]");
         float v[4];
         for (size_t i = 0; i < 4; ++i)
             v[i] = static_cast<float>(t.check_number(rot[i], t.at("rotate") + "/" + std::to_string(i), -INFINITY, INFINITY));
@@ -173,14 +194,12 @@ Transform read_transform_keys(const JsonReader& t) {
     }
     if (t.has("scale")) {
         const json& s = t.raw("scale");
-        Vec3 sc = s.is_number() ? Vec3(static_cast<float>(t.check_number(s, t.at("scale"), -INFINITY, INFINITY)))
-                                : t.vec3("scale", {});
+        Vec3 sc = s.is_number() ? Vec3(static_cast<float>(t.check_number(s, t.at("scale"), -INFINITY, INFINITY))) : t.vec3("scale", {});
         if (sc.x == 0 || sc.y == 0 || sc.z == 0) t.fail("scale", "scale must not be zero");
         r = r * Transform::scale(sc);
     }
     return r;
 }
-
 
 namespace {
 
@@ -332,6 +351,5 @@ Light read_light(const JsonReader& r) {
     }
     return l;
 }
-
 
 }  // namespace bounce

@@ -26,18 +26,23 @@ void JsonContext::fail(const std::string& ptr, const std::string& msg) const {
 
 const char* json_type_name(const json& j) {
     switch (j.type()) {
-        case json::value_t::object: return "an object";
-        case json::value_t::array: return "an array";
-        case json::value_t::string: return "a string";
-        case json::value_t::boolean: return "a boolean";
-        case json::value_t::null: return "null";
-        default: return "a number";
+        case json::value_t::object:
+            return "an object";
+        case json::value_t::array:
+            return "an array";
+        case json::value_t::string:
+            return "a string";
+        case json::value_t::boolean:
+            return "a boolean";
+        case json::value_t::null:
+            return "null";
+        default:
+            return "a number";
     }
 }
 
 float json_float(const json& v, double lo, double hi, const std::function<void(const std::string&)>& fail) {
-    if (!v.is_number())
-        fail(fmt::format("expected a number, got {}", v.is_string() ? "a string (" + v.dump() + ")" : json_type_name(v)));
+    if (!v.is_number()) fail(fmt::format("expected a number, got {}", v.is_string() ? "a string (" + v.dump() + ")" : json_type_name(v)));
     const double x = v.get<double>();
     if (!std::isfinite(x)) fail("number is not finite");
     if (std::fabs(x) > FLT_MAX) fail(fmt::format("{} does not fit a float", x));
@@ -77,7 +82,7 @@ namespace {
 /// container knows its current key, so a duplicate's pointer is put together only when there
 /// is one (a per-key set and name strings took most of a 14 400-placement scene's parse).
 class DomBuilder {
-public:
+  public:
     explicit DomBuilder(json& root) : root_(root) {}
     std::string duplicate;  ///< pointer of the first duplicate key
 
@@ -105,7 +110,7 @@ public:
         throw e;  // (as nlohmann's DOM parser: its type kept for the byte offset)
     }
 
-private:
+  private:
     struct Open {
         json* value;
         const std::string* key = nullptr;  ///< an object's key being read
@@ -158,8 +163,10 @@ json parse_json_text(const std::string& text, const std::string& path) {
     } catch (const json::parse_error& e) {
         size_t line = 1, col = 1;
         for (size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
-            if (text[i] == '\n') ++line, col = 1;
-            else ++col;
+            if (text[i] == '\n')
+                ++line, col = 1;
+            else
+                ++col;
         }
         std::string msg = e.what();
         auto pos = msg.find(": ", msg.find("column"));
@@ -210,8 +217,7 @@ std::string apply_override(json& doc, const Override& o) {
         } else {
             // An index into nothing: the scene has no such list ("lights.0" without lights).
             const bool index = !part.empty() && part.size() <= 9 && std::all_of(part.begin(), part.end(), ::isdigit);
-            if (node->is_null() && index)
-                fail(fmt::format("the scene has no \"{}\" list to index", i > 0 ? parts[i - 1] : std::string()));
+            if (node->is_null() && index) fail(fmt::format("the scene has no \"{}\" list to index", i > 0 ? parts[i - 1] : std::string()));
             if (node->is_null()) *node = json::object();
             if (!node->is_object()) fail("\"" + part + "\" is inside a value that is not an object");
             node = &(*node)[part];
@@ -301,8 +307,7 @@ std::string JsonReader::file(const std::string& key, bool required) const {
     if (s.empty()) return s;
     fs::path p = fs::path(s).is_absolute() ? fs::path(s) : ctx_.dir / s;
     if (ctx_.check_path) ctx_.check_path(p.lexically_normal().string(), at(key));
-    if (std::string why = not_a_regular_file(p.string()); !why.empty())
-        ctx_.fail(at(key), fmt::format("{}: \"{}\"", why, p.string()));
+    if (std::string why = not_a_regular_file(p.string()); !why.empty()) ctx_.fail(at(key), fmt::format("{}: \"{}\"", why, p.string()));
     const std::string path = p.lexically_normal().string();
     if (ctx_.inputs) ctx_.inputs->push_back({path, at(key)});
     return path;

@@ -72,7 +72,7 @@ int64_t json_integer(const nlohmann::json& v, double lo, double hi, const std::f
 
 /// A JSON object whose keys must be among `allowed` (unknown keys fail with a suggestion).
 class JsonReader {
-public:
+  public:
     JsonReader(const nlohmann::json& j, std::string ptr, const JsonContext& ctx, std::vector<std::string> allowed);
 
     std::string at(const std::string& key) const { return ptr_ + "/" + key; }
@@ -83,8 +83,7 @@ public:
     const std::string& pointer() const { return ptr_; }
 
     /// A number checked as the float it becomes: finite, representable, inside [lo, hi].
-    float number(const std::string& key, float def, double lo = -kMaxCoordinate, double hi = kMaxCoordinate,
-                 bool required = false) const;
+    float number(const std::string& key, float def, double lo = -kMaxCoordinate, double hi = kMaxCoordinate, bool required = false) const;
     int integer(const std::string& key, int def, int lo, int hi) const;
     /// A point or vector: three floats within +-kMaxCoordinate.
     Vec3 vec3(const std::string& key, Vec3 def, bool required = false) const;
@@ -102,7 +101,7 @@ public:
     void only(const std::vector<std::string>& keys, const std::string& what) const;
     Vec3 to_vec3(const nlohmann::json& v, const std::string& ptr) const;
 
-private:
+  private:
     const nlohmann::json& j_;
     std::string ptr_;
     const JsonContext& ctx_;

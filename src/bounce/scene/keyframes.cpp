@@ -33,10 +33,14 @@ Track read_track(const json& keyed, const std::string& ptr, const JsonContext& c
     if (keyed.contains("interpolation")) {
         const json& i = keyed["interpolation"];
         const std::string name = i.is_string() ? i.get<std::string>() : "";
-        if (name == "linear") tr.interp = Interp::Linear;
-        else if (name == "smooth") tr.interp = Interp::Smooth;
-        else if (name == "step") tr.interp = Interp::Step;
-        else ctx.fail(ptr + "/interpolation", fmt::format("unknown interpolation {} (valid: linear, smooth, step)", i.dump()));
+        if (name == "linear")
+            tr.interp = Interp::Linear;
+        else if (name == "smooth")
+            tr.interp = Interp::Smooth;
+        else if (name == "step")
+            tr.interp = Interp::Step;
+        else
+            ctx.fail(ptr + "/interpolation", fmt::format("unknown interpolation {} (valid: linear, smooth, step)", i.dump()));
     }
     const json& keys = keyed["keys"];
     if (!keys.is_array() || keys.empty()) ctx.fail(ptr + "/keys", "expected a non-empty array of [frame, value] keys");
@@ -64,8 +68,7 @@ Track read_track(const json& keyed, const std::string& ptr, const JsonContext& c
             ctx.fail(kp + "/1", "a keyed value is a number or an array of numbers");
         }
         for (size_t i = 0; i < nums.size(); ++i)
-            if (!std::isfinite(nums[i]) || std::fabs(nums[i]) > 1e30)
-                ctx.fail(kp + "/1", fmt::format("{} is not a finite value", nums[i]));
+            if (!std::isfinite(nums[i]) || std::fabs(nums[i]) > 1e30) ctx.fail(kp + "/1", fmt::format("{} is not a finite value", nums[i]));
         if (!tr.v.empty() && (nums.size() != tr.v.back().size() || value.is_number() != tr.scalar))
             ctx.fail(kp + "/1", "every key must hold a value of the same shape");
         tr.t.push_back(t);
@@ -179,8 +182,10 @@ ShotSettings read_shot(const json& doc, const JsonContext& ctx) {
     if (!a.has("frames")) a.fail("", "missing required key \"frames\" ([first, last])");
     const json& f = a.raw("frames");
     if (!f.is_array() || f.size() != 2) a.fail("frames", "expected [first, last]");
-    shot.first = static_cast<int>(json_integer(f[0], -kMaxFrame, kMaxFrame, [&](const std::string& m) { ctx.fail("/animation/frames/0", m); }));
-    shot.last = static_cast<int>(json_integer(f[1], -kMaxFrame, kMaxFrame, [&](const std::string& m) { ctx.fail("/animation/frames/1", m); }));
+    shot.first =
+        static_cast<int>(json_integer(f[0], -kMaxFrame, kMaxFrame, [&](const std::string& m) { ctx.fail("/animation/frames/0", m); }));
+    shot.last =
+        static_cast<int>(json_integer(f[1], -kMaxFrame, kMaxFrame, [&](const std::string& m) { ctx.fail("/animation/frames/1", m); }));
     if (shot.last < shot.first) a.fail("frames", fmt::format("the last frame {} comes before the first {}", shot.last, shot.first));
     return shot;
 }

@@ -14,7 +14,8 @@ void read_object_visibility(const JsonReader& r, Object& obj) {
 
 void read_visibility(const JsonReader& r, RayVisibility& to) {
     if (!r.has("visible_to")) return;
-    if (!r.raw("visible_to").is_object()) r.fail("visible_to", "expected an object {\"camera\", \"shadows\", \"indirect\", \"reflections\"}");
+    if (!r.raw("visible_to").is_object())
+        r.fail("visible_to", "expected an object {\"camera\", \"shadows\", \"indirect\", \"reflections\"}");
     JsonReader v(r.raw("visible_to"), r.at("visible_to"), r.ctx(), {"camera", "shadows", "indirect", "reflections"});
     to.camera = v.boolean("camera", to.camera);
     to.shadows = v.boolean("shadows", to.shadows);

@@ -24,7 +24,7 @@ namespace {
 
 /// Counts of what is not read, by feature, in the order first seen.
 class Tally {
-public:
+  public:
     /// `material`: the file's name of the material that carries it (none for other units).
     void add(const std::string& what, const std::string& unit, const std::string& material = "") {
         auto [it, fresh] = index_.emplace(what, out_.size());
@@ -36,16 +36,21 @@ public:
     }
     std::vector<UnreadFeature> take() { return std::move(out_); }
 
-private:
+  private:
     std::map<std::string, size_t> index_;
     std::vector<UnreadFeature> out_;
 };
 
 // Top-level extensions bounce (or Assimp for it) reads; material ones are named per material
 // (gltf_materials.h).
-const std::set<std::string> kGltfReadFileExtensions = {"KHR_lights_punctual", "EXT_mesh_gpu_instancing", "KHR_materials_emissive_strength",
-                                                       "KHR_mesh_quantization", "KHR_texture_transform", "KHR_materials_transmission",
-                                                       "KHR_materials_ior", "KHR_materials_diffuse_transmission"};
+const std::set<std::string> kGltfReadFileExtensions = {"KHR_lights_punctual",
+                                                       "EXT_mesh_gpu_instancing",
+                                                       "KHR_materials_emissive_strength",
+                                                       "KHR_mesh_quantization",
+                                                       "KHR_texture_transform",
+                                                       "KHR_materials_transmission",
+                                                       "KHR_materials_ior",
+                                                       "KHR_materials_diffuse_transmission"};
 
 std::vector<UnreadFeature> gltf_unread(const std::string& path) {
     const json j = json::parse(gltf_json_text(path), nullptr, false);
@@ -79,8 +84,8 @@ std::vector<UnreadFeature> gltf_unread(const std::string& path) {
 
 // MTL statements mesh_import reads (through Assimp), and those that mean nothing to a renderer
 // of light (ambient colour and the legacy illumination model number).
-const std::set<std::string> kMtlRead = {"newmtl", "Kd", "map_Kd", "Ks", "Ns", "Ke", "bump", "map_bump", "map_Bump",
-                                        "d", "Tr", "map_d", "Ka", "illum"};
+const std::set<std::string> kMtlRead = {"newmtl",   "Kd",       "map_Kd", "Ks", "Ns",    "Ke", "bump",
+                                        "map_bump", "map_Bump", "d",      "Tr", "map_d", "Ka", "illum"};
 
 /// One MTL material's statements not read. Ni (the index of refraction) matters only to a
 /// transparent material (d < 1, Tr > 0, or an illumination model of refraction): the Cornell
@@ -130,9 +135,7 @@ std::vector<UnreadFeature> obj_unread(const std::string& path) {
 
 }  // namespace
 
-std::string UnreadFeature::line() const {
-    return fmt::format("{} on {} {}{}", what, count, unit, count == 1 ? "" : "s");
-}
+std::string UnreadFeature::line() const { return fmt::format("{} on {} {}{}", what, count, unit, count == 1 ? "" : "s"); }
 
 std::vector<UnreadFeature> unread_material_features(const std::string& path) {
     const std::string ext = lower_extension(path);

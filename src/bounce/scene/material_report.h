@@ -11,9 +11,9 @@ namespace bounce {
 struct UnreadFeature {
     std::string what;  ///< "KHR_materials_clearcoat", "emissiveTexture", "MTL map_Ks"
     int count = 0;
-    std::string unit;  ///< "material", "primitive", "file"
+    std::string unit;                    ///< "material", "primitive", "file"
     std::vector<std::string> materials;  ///< the file's names of the materials that carry it (unit "material")
-    std::string line() const;  ///< "emissiveTexture on 3 materials"
+    std::string line() const;            ///< "emissiveTexture on 3 materials"
 };
 
 /// A glTF's (from its JSON) or an OBJ's (from its MTL files) unread material features; other

@@ -90,8 +90,9 @@ int find_clip(const aiScene* s, const std::string& name, const std::string& path
             return static_cast<int>(i);
         }
     }
-    throw NoSuchClip(path, "animations", fmt::format("no animation \"{}\" (the file has {})", name,
-                                                     names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", "))));
+    throw NoSuchClip(path, "animations",
+                     fmt::format("no animation \"{}\" (the file has {})", name,
+                                 names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", "))));
 }
 
 std::unordered_map<const aiNode*, aiMatrix4x4> posed_nodes(const aiScene* s, const MeshTime& t, const std::string& path) {
@@ -129,8 +130,8 @@ std::unordered_map<const aiNode*, aiMatrix4x4> posed_nodes(const aiScene* s, con
 }
 
 void pose_mesh(const aiScene* s, const aiMesh* mesh, const MeshTime& t, const aiMatrix4x4& node_world,
-               const std::unordered_map<const aiNode*, aiMatrix4x4>& nodes, std::vector<Vec3>& positions,
-               std::vector<Vec3>& normals, const std::string& path) {
+               const std::unordered_map<const aiNode*, aiMatrix4x4>& nodes, std::vector<Vec3>& positions, std::vector<Vec3>& normals,
+               const std::string& path) {
     const unsigned nv = mesh->mNumVertices;
     // Morph targets first (in the mesh's own space): base + sum of weights x (target - base).
     std::vector<aiVector3D> base(mesh->mVertices, mesh->mVertices + nv);
@@ -153,7 +154,8 @@ void pose_mesh(const aiScene* s, const aiMesh* mesh, const MeshTime& t, const ai
         }
         for (unsigned k = 0; k < mesh->mNumAnimMeshes; ++k) {
             const aiAnimMesh* am = mesh->mAnimMeshes[k];
-            if (!std::isfinite(weights[k])) throw InputError(path, fmt::format("mesh {} morph target {}", mesh->mName.C_Str(), k), "weight is not finite");
+            if (!std::isfinite(weights[k]))
+                throw InputError(path, fmt::format("mesh {} morph target {}", mesh->mName.C_Str(), k), "weight is not finite");
             if (weights[k] == 0 || !am->mVertices || am->mNumVertices != nv) continue;
             for (unsigned v = 0; v < nv; ++v) base[v] += (am->mVertices[v] - mesh->mVertices[v]) * static_cast<ai_real>(weights[k]);
         }

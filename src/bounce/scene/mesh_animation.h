@@ -17,7 +17,7 @@ namespace bounce {
 /// A mesh file has no clip of the name an object plays: the object's "animation" is at fault,
 /// not its "file" (object_reader names the key by the type, not by the message).
 class NoSuchClip : public InputError {
-public:
+  public:
     using InputError::InputError;
 };
 
@@ -40,7 +40,7 @@ std::unordered_map<const aiNode*, aiMatrix4x4> posed_nodes(const aiScene* s, con
 /// moved by `node_world` like a rigid instance. InputError(path) for weights that are negative or
 /// not finite, or joints naming vertices the mesh does not have.
 void pose_mesh(const aiScene* s, const aiMesh* mesh, const MeshTime& t, const aiMatrix4x4& node_world,
-               const std::unordered_map<const aiNode*, aiMatrix4x4>& nodes, std::vector<Vec3>& positions,
-               std::vector<Vec3>& normals, const std::string& path);
+               const std::unordered_map<const aiNode*, aiMatrix4x4>& nodes, std::vector<Vec3>& positions, std::vector<Vec3>& normals,
+               const std::string& path);
 
 }  // namespace bounce

@@ -134,12 +134,12 @@ TriangleMesh read_mesh(In& in, size_t materials, bool overridden) {
     m.indices = in.array<uint32_t>();
     m.face_materials = in.array<uint32_t>();
     const size_t n = m.positions.size();
-    if ((!m.normals.empty() && m.normals.size() != n) || (!m.uvs.empty() && m.uvs.size() != n) || (!m.colors.empty() && m.colors.size() != n))
+    if ((!m.normals.empty() && m.normals.size() != n) || (!m.uvs.empty() && m.uvs.size() != n) ||
+        (!m.colors.empty() && m.colors.size() != n))
         throw Damaged{"normals, uvs or colours do not match the vertices"};
     for (const Color& c : m.colors)
         if (!(finite_in(c.x, 0, 1) && finite_in(c.y, 0, 1) && finite_in(c.z, 0, 1))) throw Damaged{"a vertex colour is out of range"};
-    if (m.indices.size() % 3 != 0 || m.face_materials.size() != m.indices.size() / 3)
-        throw Damaged{"faces do not match their materials"};
+    if (m.indices.size() % 3 != 0 || m.face_materials.size() != m.indices.size() / 3) throw Damaged{"faces do not match their materials"};
     for (uint32_t i : m.indices)
         if (i >= n) throw Damaged{"a face names a vertex it does not have"};
     for (uint32_t f : m.face_materials)
@@ -250,7 +250,8 @@ void check_textures(LoadedMeshFile& loaded) {
             throw Damaged{"a material's emission texture is not one a parse would take"};
         if (m.opacity_texture.empty()) continue;
         // glTF's base colour alpha (AlphaOnly) or a grey map: whichever the parse read.
-        m.opacity_map = load_opacity_map(m.opacity_texture, m.opacity_texture == m.color_texture ? OpacityChannel::AlphaOnly : OpacityChannel::AlphaOrFirst, why);
+        m.opacity_map = load_opacity_map(
+            m.opacity_texture, m.opacity_texture == m.color_texture ? OpacityChannel::AlphaOnly : OpacityChannel::AlphaOrFirst, why);
         if (!m.opacity_map) throw Damaged{"a material's opacity texture is not one a parse would take"};
     }
 }

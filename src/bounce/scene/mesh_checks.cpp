@@ -101,12 +101,12 @@ void check_data_uri(const std::string& uri, size_t bytes, const std::string& whe
         throw InputError(path, where, "a data: URI must be \"data:<media type>;base64,<data>\"");
     const std::string_view data(uri.data() + comma + 1, uri.size() - comma - 1);
     const size_t pad = data.ends_with("==") ? 2 : data.ends_with("=") ? 1 : 0;
-    const bool alphabet = std::all_of(data.begin(), data.end() - static_cast<std::ptrdiff_t>(pad), [](char c) {
-        return std::isalnum(static_cast<unsigned char>(c)) || c == '+' || c == '/';
-    });
+    const bool alphabet = std::all_of(data.begin(), data.end() - static_cast<std::ptrdiff_t>(pad),
+                                      [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '+' || c == '/'; });
     if (data.size() % 4 != 0 || !alphabet)
-        throw InputError(path, where, fmt::format("the data of a data: URI is not base64 ({} characters{})", data.size(),
-                                                  alphabet ? ", not a multiple of 4" : ", some outside its alphabet"));
+        throw InputError(path, where,
+                         fmt::format("the data of a data: URI is not base64 ({} characters{})", data.size(),
+                                     alphabet ? ", not a multiple of 4" : ", some outside its alphabet"));
     if (const size_t holds = data.size() / 4 * 3 - pad; holds < bytes)
         throw InputError(path, where, fmt::format("the data: URI holds {} bytes, fewer than the byteLength {}", holds, bytes));
 }
@@ -276,8 +276,7 @@ std::vector<std::string> check_obj(const std::string& path, const MeshCheckOptio
                 ++lineno;
                 const size_t at = l.find_first_not_of(" \t");
                 if (at != std::string::npos && l.compare(at, 6, "newmtl") == 0 && ++count > kMaxMtlMaterials)
-                    throw InputError(mtl.string(), fmt::format("line {}", lineno),
-                                     fmt::format("more than {} materials", kMaxMtlMaterials));
+                    throw InputError(mtl.string(), fmt::format("line {}", lineno), fmt::format("more than {} materials", kMaxMtlMaterials));
             }
             out.push_back(mtl.string());
         }

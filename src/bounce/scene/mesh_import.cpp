@@ -52,8 +52,8 @@ aiMatrix4x4 node_world(const aiNode* n) {
     return m;
 }
 
-const unsigned kAssimpFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                              aiProcess_SortByPType | aiProcess_ValidateDataStructure;
+const unsigned kAssimpFlags =
+    aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
 
 /// Reads `path` through Assimp after mesh_checks.h's checks; the files it names (a glTF's
 /// buffers and images, an OBJ's MTL files) pass `files_read` before Assimp opens them.
@@ -114,7 +114,8 @@ std::vector<MeshFileParts::Use> node_placements(const aiNode* node, const aiMesh
     };
     const auto it = gpu.find(node);
     if (it == gpu.end()) return {{node->mName.C_Str(), flat(to_transform(world), fmt::format("node \"{}\"", node->mName.C_Str()))}};
-    if (am->HasBones() || am->mNumAnimMeshes > 0) throw InputError(path, it->second.pointer, "instances of a skinned or morphed mesh are not supported");
+    if (am->HasBones() || am->mNumAnimMeshes > 0)
+        throw InputError(path, it->second.pointer, "instances of a skinned or morphed mesh are not supported");
     std::vector<MeshFileParts::Use> at;
     for (size_t i = 0; i < it->second.at.size(); ++i)
         at.push_back({fmt::format("{}/{}", node->mName.C_Str(), i),
@@ -180,8 +181,7 @@ std::optional<GltfCamera> gltf_camera(const std::string& path) {
         text = text.substr(20, len);
     }
     json j = json::parse(text, nullptr, false);
-    if (j.is_discarded() || !j.contains("cameras") || !j["cameras"].is_array() || j["cameras"].empty())
-        return std::nullopt;
+    if (j.is_discarded() || !j.contains("cameras") || !j["cameras"].is_array() || j["cameras"].empty()) return std::nullopt;
     const json& c = j["cameras"][0];
     if (!c.contains("perspective") || !c["perspective"].contains("yfov")) return std::nullopt;
     const json& p = c["perspective"];
@@ -199,8 +199,7 @@ json describe_mesh_file(const std::string& path) {
     const aiScene* s = import_file(imp, path, kAssimpFlags, nullptr, true);
     json doc;
     doc["objects"] = json::array({{{"name", fs::path(path).stem().string()}, {"file", fs::path(path).filename().string()}}});
-    if (s->mNumCameras == 0)
-        throw InputError(path, "", "the file has no camera; write a JSON scene that names one (docs/scene-format.md)");
+    if (s->mNumCameras == 0) throw InputError(path, "", "the file has no camera; write a JSON scene that names one (docs/scene-format.md)");
     const aiCamera* cam = s->mCameras[0];
     const aiNode* node = s->mRootNode->FindNode(cam->mName);
     Transform w = node ? to_transform(node_world(node)) : Transform{};
@@ -256,7 +255,8 @@ json describe_mesh_file(const std::string& path) {
                 jl["type"] = "distant";
                 jl["direction"] = {d.x, d.y, d.z};
                 break;
-            default: continue;  // area/ambient lights of other formats are not punctual
+            default:
+                continue;  // area/ambient lights of other formats are not punctual
         }
         lights.push_back(jl);
     }
@@ -265,11 +265,10 @@ json describe_mesh_file(const std::string& path) {
     return doc;
 }
 
-
 namespace {
 
-TriangleMesh import_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                              int override_material, MeshInputs* files_read, const MeshPose& pose) {
+TriangleMesh import_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials, int override_material,
+                              MeshInputs* files_read, const MeshPose& pose) {
     Assimp::Importer imp;
     const aiScene* s = import_file(imp, path, kAssimpFlags, files_read, override_material < 0);
     const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material, files_read);
@@ -291,8 +290,8 @@ TriangleMesh import_mesh_file(const std::string& path, const std::string& prefix
     return out;
 }
 
-MeshFileParts import_mesh_parts(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                                int override_material, MeshInputs* files_read) {
+MeshFileParts import_mesh_parts(const std::string& path, const std::string& prefix, std::vector<Material>& materials, int override_material,
+                                MeshInputs* files_read) {
     Assimp::Importer imp;
     const aiScene* s = import_file(imp, path, kAssimpFlags, files_read, override_material < 0);
     const std::vector<uint32_t> mat_map = import_materials(s, path, prefix, materials, override_material, files_read);
@@ -354,8 +353,10 @@ MeshFileParts through_cache(const std::string& path, const std::string& prefix, 
     auto to_scene = [&](uint32_t f) { return override_material >= 0 ? static_cast<uint32_t>(override_material) : base + f; };
     if (std::optional<LoadedMeshFile> hit = read_mesh_cache(folder, key)) {
         for (const auto& input : hit->inputs)
-            if (files_read && is_embedded_image(input.first)) files_read->files.push_back(input.first);  // bounce's own, as on a parse
-            else if (files_read) files_read->add(input.first);
+            if (files_read && is_embedded_image(input.first))
+                files_read->files.push_back(input.first);  // bounce's own, as on a parse
+            else if (files_read)
+                files_read->add(input.first);
         materials.insert(materials.end(), hit->materials.begin(), hit->materials.end());
         for_each_face_material(hit->parts, to_scene);
         return std::move(hit->parts);
@@ -377,25 +378,26 @@ MeshFileParts through_cache(const std::string& path, const std::string& prefix, 
 
 }  // namespace
 
-TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                            int override_material, MeshInputs* files_read, const MeshPose& pose) {
+TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials, int override_material,
+                            MeshInputs* files_read, const MeshPose& pose) {
     if (!pose.clip.empty()) return import_mesh_file(path, prefix, materials, override_material, files_read, pose);
-    return through_cache(path, prefix, false, materials, override_material, files_read, [&](MeshInputs* read) {
-               MeshFileParts p;
-               p.once = import_mesh_file(path, prefix, materials, override_material, read, pose);
-               return p;
-           }).once;
+    return through_cache(path, prefix, false, materials, override_material, files_read,
+                         [&](MeshInputs* read) {
+                             MeshFileParts p;
+                             p.once = import_mesh_file(path, prefix, materials, override_material, read, pose);
+                             return p;
+                         })
+        .once;
 }
 
-MeshFileParts load_mesh_parts(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                              int override_material, MeshInputs* files_read) {
-    return through_cache(path, prefix, true, materials, override_material, files_read, [&](MeshInputs* read) {
-        return import_mesh_parts(path, prefix, materials, override_material, read);
-    });
+MeshFileParts load_mesh_parts(const std::string& path, const std::string& prefix, std::vector<Material>& materials, int override_material,
+                              MeshInputs* files_read) {
+    return through_cache(path, prefix, true, materials, override_material, files_read,
+                         [&](MeshInputs* read) { return import_mesh_parts(path, prefix, materials, override_material, read); });
 }
 
-ControlMesh load_control_mesh(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                              int override_material, const Transform& transform, MeshInputs* files_read) {
+ControlMesh load_control_mesh(const std::string& path, const std::string& prefix, std::vector<Material>& materials, int override_material,
+                              const Transform& transform, MeshInputs* files_read) {
     // Faces stay polygons; vertices are welded by position here (Assimp keeps uv seams apart,
     // which would cut the subdivision surface) and uvs become face-varying values.
     Assimp::Importer imp;

@@ -37,8 +37,8 @@ struct MeshPose {
     double seconds = 0;
 };
 
-TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                            int override_material, MeshInputs* files_read = nullptr, const MeshPose& pose = {});
+TriangleMesh load_mesh_file(const std::string& path, const std::string& prefix, std::vector<Material>& materials, int override_material,
+                            MeshInputs* files_read = nullptr, const MeshPose& pose = {});
 
 /// A still mesh file's triangles split for instancing (docs/instancing.md): the meshes its nodes
 /// use once, placed as load_mesh_file places them, and each mesh several nodes use (glTF shares
@@ -56,15 +56,14 @@ struct MeshFileParts {
     TriangleMesh once;
     std::vector<Shared> shared;
 };
-MeshFileParts load_mesh_parts(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                              int override_material, MeshInputs* files_read = nullptr);
+MeshFileParts load_mesh_parts(const std::string& path, const std::string& prefix, std::vector<Material>& materials, int override_material,
+                              MeshInputs* files_read = nullptr);
 
 /// Loads a mesh file's polygons as a subdivision control mesh (faces not triangulated,
 /// vertices welded by position, uvs face-varying), node transforms and then `transform`
 /// applied; materials as load_mesh_file.
-ControlMesh load_control_mesh(const std::string& path, const std::string& prefix, std::vector<Material>& materials,
-                              int override_material, const Transform& transform,
-                              MeshInputs* files_read = nullptr);
+ControlMesh load_control_mesh(const std::string& path, const std::string& prefix, std::vector<Material>& materials, int override_material,
+                              const Transform& transform, MeshInputs* files_read = nullptr);
 
 /// Describes a bare mesh file as a JSON scene: the file's camera and punctual lights.
 nlohmann::json describe_mesh_file(const std::string& path);

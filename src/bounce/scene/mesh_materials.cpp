@@ -29,8 +29,7 @@ Vec3 to_vec3(const aiColor3D& v) { return {v.r, v.g, v.b}; }
 /// A file material's cutout: glTF's alphaMode, alphaCutoff and base colour alpha (factor times
 /// the base colour texture's alpha, if it has one); MTL's d (or 1 - Tr) and map_d, as blend,
 /// as Blender's importer reads them. `map_d`: the OPACITY texture's path (empty: none).
-void read_file_cutout(const aiMaterial& am, const std::string& path, const std::string& where, const std::string& map_d,
-                      Material& m) {
+void read_file_cutout(const aiMaterial& am, const std::string& path, const std::string& where, const std::string& map_d, Material& m) {
     std::string why;
     aiString mode;
     if (am.Get(AI_MATKEY_GLTF_ALPHAMODE, mode) == AI_SUCCESS) {
@@ -58,9 +57,10 @@ void read_file_cutout(const aiMaterial& am, const std::string& path, const std::
             m.opacity_map = load_opacity_map(map_d, OpacityChannel::AlphaOrFirst, why);
         }
     }
-    if (!why.empty()) throw InputError(path, where, fmt::format("opacity texture \"{}\": {}", m.opacity_texture.empty() ? m.color_texture : m.opacity_texture, why));
-    if (!(m.opacity >= 0 && m.opacity <= 1))
-        throw InputError(path, where, fmt::format("opacity {} is not in [0, 1]", m.opacity));
+    if (!why.empty())
+        throw InputError(path, where,
+                         fmt::format("opacity texture \"{}\": {}", m.opacity_texture.empty() ? m.color_texture : m.opacity_texture, why));
+    if (!(m.opacity >= 0 && m.opacity <= 1)) throw InputError(path, where, fmt::format("opacity {} is not in [0, 1]", m.opacity));
     if (!(m.alpha_cutoff >= 0 && m.alpha_cutoff <= 1))
         throw InputError(path, where, fmt::format("alphaCutoff {} is not in [0, 1]", m.alpha_cutoff));
 }
@@ -120,8 +120,7 @@ void read_gltf_parts(const GltfMaterialJson& g, const Texture& texture, const st
 /// The file's materials appended to `materials` (named "<prefix>/<name>"), or `override_material`
 /// for all: the scene index of each of the file's materials.
 std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path, const std::string& prefix,
-                                       std::vector<Material>& materials, int override_material,
-                                       MeshInputs* files_read) {
+                                       std::vector<Material>& materials, int override_material, MeshInputs* files_read) {
     std::vector<uint32_t> mat_map(s->mNumMaterials);
     if (override_material < 0) {
         const std::vector<GltfMaterialJson> gltf = read_gltf_materials(path);
@@ -133,8 +132,10 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
             m.name = prefix + "/" + (name.length ? name.C_Str() : std::to_string(i));
             aiColor4D base;
             aiColor3D diffuse;
-            if (am->Get(AI_MATKEY_BASE_COLOR, base) == AI_SUCCESS) m.color = {base.r, base.g, base.b};
-            else if (am->Get(AI_MATKEY_COLOR_DIFFUSE, diffuse) == AI_SUCCESS) m.color = to_vec3(diffuse);
+            if (am->Get(AI_MATKEY_BASE_COLOR, base) == AI_SUCCESS)
+                m.color = {base.r, base.g, base.b};
+            else if (am->Get(AI_MATKEY_COLOR_DIFFUSE, diffuse) == AI_SUCCESS)
+                m.color = to_vec3(diffuse);
             const std::string where = "material " + m.name.substr(prefix.size() + 1);
             // As a JSON material's: an albedo above 1 creates energy, a radiance above 1e20 overflows.
             for (int c = 0; c < 3; ++c)
@@ -143,8 +144,10 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
             aiColor3D ke;
             if (am->Get(AI_MATKEY_COLOR_EMISSIVE, ke) == AI_SUCCESS) m.emission = to_vec3(ke);
             float strength = 1;
-            if (am->Get(AI_MATKEY_EMISSIVE_INTENSITY, strength) == AI_SUCCESS) m.emission = m.emission * strength;
-            else if (i < gltf.size()) m.emission = m.emission * gltf[i].emissive_strength;
+            if (am->Get(AI_MATKEY_EMISSIVE_INTENSITY, strength) == AI_SUCCESS)
+                m.emission = m.emission * strength;
+            else if (i < gltf.size())
+                m.emission = m.emission * gltf[i].emissive_strength;
             for (int c = 0; c < 3; ++c)
                 if (!(m.emission[c] >= 0 && m.emission[c] <= kMaxRadiometric))
                     throw InputError(path, where, fmt::format("emission {} is not in [0, {:g}]", m.emission[c], kMaxRadiometric));
@@ -164,7 +167,9 @@ std::vector<uint32_t> import_materials(const aiScene* s, const std::string& path
                 if (am->Get(AI_MATKEY_SHININESS, ns) == AI_SUCCESS && ns > 0)
                     m.roughness = std::clamp(std::sqrt(std::sqrt(2 / (ns + 2))), 0.01f, 1.0f);
             }
-            const auto texture = [&](std::initializer_list<aiTextureType> types) { return file_texture(*s, *am, types, path, where, files_read); };
+            const auto texture = [&](std::initializer_list<aiTextureType> types) {
+                return file_texture(*s, *am, types, path, where, files_read);
+            };
             m.color_texture = texture({aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE});
             // glTF's base colour factor multiplies its texture; an MTL's map_Kd replaces Kd, as
             // Blender's importer (and so Cycles) reads it.

@@ -22,10 +22,10 @@ namespace bounce {
 using nlohmann::json;
 
 const std::vector<std::string>& object_keys() {
-    static const std::vector<std::string> keys = {"name",     "type",        "file",     "material",     "transform",
-                                                  "fine_subdivisions", "vertices", "center", "radius", "subdivisions",
-                                                  "subdivision", "boundary", "displacement", "fur", "animation",
-                                                  "visible_to", "matte", "prototype", "instances"};
+    static const std::vector<std::string> keys = {"name",         "type",   "file",      "material",     "transform",   "fine_subdivisions",
+                                                  "vertices",     "center", "radius",    "subdivisions", "subdivision", "boundary",
+                                                  "displacement", "fur",    "animation", "visible_to",   "matte",       "prototype",
+                                                  "instances"};
     return keys;
 }
 
@@ -50,18 +50,20 @@ namespace {
 
 /// The keys each object type reads.
 const std::vector<std::string>& keys_of_type(const std::string& type, bool subdivision) {
-    static const std::vector<std::string> mesh = {"name", "type", "file", "material", "transform", "fine_subdivisions", "subdivision", "fur",
-                                                  "animation"};
-    static const std::vector<std::string> subdiv = {"name", "type", "file", "material", "transform", "subdivision", "boundary", "displacement", "fur"};
+    static const std::vector<std::string> mesh = {"name",        "type", "file",     "material", "transform", "fine_subdivisions",
+                                                  "subdivision", "fur",  "animation"};
+    static const std::vector<std::string> subdiv = {"name",        "type",     "file",         "material", "transform",
+                                                    "subdivision", "boundary", "displacement", "fur"};
     static const std::vector<std::string> quad = {"name", "type", "vertices", "material", "transform", "fine_subdivisions", "fur"};
-    static const std::vector<std::string> sphere = {"name", "type", "center", "radius", "subdivisions", "fine_subdivisions", "material", "transform", "fur"};
+    static const std::vector<std::string> sphere = {"name",     "type",      "center", "radius", "subdivisions", "fine_subdivisions",
+                                                    "material", "transform", "fur"};
     // Every type also takes the lighter's controls (link_reader.h).
     static const auto with_controls = [](std::vector<std::string> keys) {
         keys.insert(keys.end(), {"visible_to", "matte", "prototype"});
         return keys;
     };
-    static const std::vector<std::string> mesh_c = with_controls(mesh), subdiv_c = with_controls(subdiv),
-                                          quad_c = with_controls(quad), sphere_c = with_controls(sphere);
+    static const std::vector<std::string> mesh_c = with_controls(mesh), subdiv_c = with_controls(subdiv), quad_c = with_controls(quad),
+                                          sphere_c = with_controls(sphere);
     if (type == "mesh") return subdivision ? subdiv_c : mesh_c;
     return type == "quad" ? quad_c : sphere_c;
 }
@@ -74,9 +76,12 @@ MeshPose mesh_pose(const JsonReader& r, const Scene& scene, double frame) {
     MeshPose pose;
     if (!r.has("animation")) return pose;
     const nlohmann::json& a = r.raw("animation");
-    if (a.is_number_unsigned()) pose.clip = std::to_string(a.get<uint64_t>());
-    else if (a.is_string() && !a.get<std::string>().empty()) pose.clip = a.get<std::string>();
-    else r.fail("animation", "expected the name or the number of one of the file's animations");
+    if (a.is_number_unsigned())
+        pose.clip = std::to_string(a.get<uint64_t>());
+    else if (a.is_string() && !a.get<std::string>().empty())
+        pose.clip = a.get<std::string>();
+    else
+        r.fail("animation", "expected the name or the number of one of the file's animations");
     pose.seconds = (frame - scene.shot.first) / scene.shot.fps;
     return pose;
 }
@@ -169,7 +174,8 @@ std::vector<Object> place_shared_meshes(const JsonReader& r, const Object& obj, 
             placed.back().visible_to = obj.visible_to, placed.back().matte = obj.matte;
         }
     }
-    bound_instances(placed, [&](size_t) { return r; }, known);
+    bound_instances(
+        placed, [&](size_t) { return r; }, known);
     return placed;
 }
 
@@ -178,7 +184,8 @@ std::vector<Object> place_shared_meshes(const JsonReader& r, const Object& obj, 
 void make_prototype(const JsonReader& r, const Scene& scene, Object& obj) {
     const auto refuse = [&](const std::string& key, const std::string& why) {
         r.fail(key, fmt::format("a prototype (\"prototype\": true) {}: instances share one tessellation, still, "
-                                "placed as it is (docs/scene-format.md, \"Instances\")", why));
+                                "placed as it is (docs/scene-format.md, \"Instances\")",
+                                why));
     };
     if (obj.surface) refuse("subdivision", "cannot be a subdivision surface (it is diced for where it stands)");
     if (obj.fur) refuse("fur", "cannot grow fur");
@@ -319,8 +326,9 @@ void read_object(const JsonReader& r, Scene& scene, size_t index, std::vector<Ob
     obj.prototype = r.boolean("prototype", false);
     std::string type = r.choice("type", r.has("file") ? "mesh" : "", {"mesh", "quad", "sphere"});
     const bool subdivided = type == "mesh" && r.has("subdivision") && r.raw("subdivision") != "none";
-    r.only(keys_of_type(type, subdivided),
-           type != "mesh" ? "a " + type : subdivided ? "a subdivision surface" : "a mesh without \"subdivision\"");
+    r.only(keys_of_type(type, subdivided), type != "mesh" ? "a " + type
+                                           : subdivided   ? "a subdivision surface"
+                                                          : "a mesh without \"subdivision\"");
     const int mat = read_material_name(r, "material", scene);
     int fine = 0;
     std::vector<MeshFileParts::Shared> shared;  // a mesh file's meshes that several of its nodes place
@@ -335,7 +343,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index, std::vector<Ob
         fine = read_sphere_object(r, scene, mat, obj);
     }
     read_object_visibility(r, obj);  // (before its shared meshes are placed: they take its controls)
-    KnownBounds known;  // (only a file with shared meshes needs it)
+    KnownBounds known;               // (only a file with shared meshes needs it)
     if (!shared.empty()) {
         known = still_bounds(scene.objects);
         const KnownBounds earlier = still_bounds(later);
@@ -346,8 +354,10 @@ void read_object(const JsonReader& r, Scene& scene, size_t index, std::vector<Ob
         obj = std::move(placed.front());
         placed.erase(placed.begin());
     }
-    if (later.empty()) later = std::move(placed);  // (the Objects stay where they are)
-    else later.insert(later.end(), std::make_move_iterator(placed.begin()), std::make_move_iterator(placed.end()));
+    if (later.empty())
+        later = std::move(placed);  // (the Objects stay where they are)
+    else
+        later.insert(later.end(), std::make_move_iterator(placed.begin()), std::make_move_iterator(placed.end()));
     if (obj.coarse.triangle_count() == 0 && !obj.instance) r.fail(type == "mesh" ? "file" : "", "mesh has no triangles");
     for (const auto& p : obj.coarse.positions)
         if (!within(p, kMaxCoordinate))

@@ -18,18 +18,16 @@ namespace bounce {
 float OpacityMap::at(const Vec2& uv) const {
     // A uv that is not finite is opaque (texel (0, 0) would cut it at random).
     if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return 1;
-    return periodic_bilinear(width, height, uv, [&](size_t x, size_t y) {
-               return static_cast<float>(texels[y * static_cast<size_t>(width) + x]);
-           }) / 65535.0f;
+    return periodic_bilinear(width, height, uv,
+                             [&](size_t x, size_t y) { return static_cast<float>(texels[y * static_cast<size_t>(width) + x]); }) /
+           65535.0f;
 }
 
 std::shared_ptr<const OpacityMap> load_opacity_map(const std::string& path, OpacityChannel channel, std::string& error) {
     auto in = open_whole_texture(path, "opacity", error);
     if (!in) return nullptr;
     const OIIO::ImageSpec& spec = in->spec();
-    int c = spec.alpha_channel >= 0 && spec.alpha_channel < spec.nchannels ? spec.alpha_channel
-            : spec.nchannels == 2                                           ? 1
-                                                                            : -1;
+    int c = spec.alpha_channel >= 0 && spec.alpha_channel < spec.nchannels ? spec.alpha_channel : spec.nchannels == 2 ? 1 : -1;
     if (c < 0 && channel == OpacityChannel::AlphaOnly) return nullptr;
     if (c < 0) c = 0;
     const double texels = static_cast<double>(spec.width) * spec.height;
@@ -61,16 +59,20 @@ uint64_t cutout_identity(const Material& m) {
     h = hash_combine(hash_combine(h, std::bit_cast<uint32_t>(m.opacity)), std::bit_cast<uint32_t>(m.alpha_cutoff));
     h = hash_combine(h, m.opacity_map ? m.opacity_map->hash : 0);
     if (!m.opacity_map) return h;  // the transform moves the texture, nothing else
-    for (float f : {m.uv_transform.offset.x, m.uv_transform.offset.y, m.uv_transform.rotation, m.uv_transform.scale.x, m.uv_transform.scale.y})
+    for (float f :
+         {m.uv_transform.offset.x, m.uv_transform.offset.y, m.uv_transform.rotation, m.uv_transform.scale.x, m.uv_transform.scale.y})
         h = hash_combine(h, std::bit_cast<uint32_t>(f));
     return h;
 }
 
 const char* alpha_mode_name(AlphaMode mode) {
     switch (mode) {
-        case AlphaMode::Mask: return "mask";
-        case AlphaMode::Blend: return "blend";
-        case AlphaMode::Opaque: break;
+        case AlphaMode::Mask:
+            return "mask";
+        case AlphaMode::Blend:
+            return "blend";
+        case AlphaMode::Opaque:
+            break;
     }
     return "opaque";
 }

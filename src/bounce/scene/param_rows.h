@@ -20,25 +20,35 @@ Param field(const char* key, const char* stage, Group RenderSettings::*group, T 
     Param p;
     p.key = std::string("render.") + key;
     p.stage = stage;
-    if constexpr (std::is_same_v<T, int>) p.type = ParamType::Int;
-    else if constexpr (std::is_same_v<T, uint64_t>) p.type = ParamType::UInt64;
-    else if constexpr (std::is_same_v<T, float>) p.type = ParamType::Float;
-    else if constexpr (std::is_same_v<T, bool>) p.type = ParamType::Bool;
-    else if constexpr (std::is_same_v<T, std::string>) p.type = ParamType::Path;
-    else if constexpr (std::is_enum_v<T>) p.type = ParamType::Enum;
+    if constexpr (std::is_same_v<T, int>)
+        p.type = ParamType::Int;
+    else if constexpr (std::is_same_v<T, uint64_t>)
+        p.type = ParamType::UInt64;
+    else if constexpr (std::is_same_v<T, float>)
+        p.type = ParamType::Float;
+    else if constexpr (std::is_same_v<T, bool>)
+        p.type = ParamType::Bool;
+    else if constexpr (std::is_same_v<T, std::string>)
+        p.type = ParamType::Path;
+    else if constexpr (std::is_enum_v<T>)
+        p.type = ParamType::Enum;
     else {
         p.type = ParamType::IntList;
         p.count = std::tuple_size_v<T>;
     }
     p.get = [group, member](const Scene& s) -> json {
         const T& v = s.render.*group.*member;
-        if constexpr (std::is_enum_v<T>) return static_cast<int>(v);  // named by Row::choices
-        else return v;
+        if constexpr (std::is_enum_v<T>)
+            return static_cast<int>(v);  // named by Row::choices
+        else
+            return v;
     };
     p.set = [group, member](Scene& s, const json& v) {
         T& dst = s.render.*group.*member;
-        if constexpr (std::is_enum_v<T>) dst = static_cast<T>(v.get<int>());
-        else dst = v.get<T>();
+        if constexpr (std::is_enum_v<T>)
+            dst = static_cast<T>(v.get<int>());
+        else
+            dst = v.get<T>();
     };
     return p;
 }
@@ -46,11 +56,26 @@ Param field(const char* key, const char* stage, Group RenderSettings::*group, T 
 /// Chained setters keep each row of the table on a few readable lines.
 struct Row {
     Param p;
-    Row& range(double lo, double hi) { p.lo = lo, p.hi = hi; return *this; }
-    Row& unit(const char* u) { p.unit = u; return *this; }
-    Row& doc(const char* d) { p.doc = d; return *this; }
-    Row& id(unsigned mask) { p.identity = mask; return *this; }
-    Row& animate() { p.animatable = true; return *this; }
+    Row& range(double lo, double hi) {
+        p.lo = lo, p.hi = hi;
+        return *this;
+    }
+    Row& unit(const char* u) {
+        p.unit = u;
+        return *this;
+    }
+    Row& doc(const char* d) {
+        p.doc = d;
+        return *this;
+    }
+    Row& id(unsigned mask) {
+        p.identity = mask;
+        return *this;
+    }
+    Row& animate() {
+        p.animatable = true;
+        return *this;
+    }
     /// The CLI flag: "--" and the key's name with dashes, unless given.
     Row& flag(std::string f = "") {
         if (f.empty()) {
@@ -93,6 +118,6 @@ Row row(const char* key, const char* stage, Group RenderSettings::*group, T Grou
 void add_camera_rows(std::vector<Row>& rows);
 void add_pipeline_rows(std::vector<Row>& rows);  ///< visibility, dicing, lighting, radiosity, gather
 void add_cache_rows(std::vector<Row>& rows);
-void add_output_rows(std::vector<Row>& rows);    ///< shading, parallel
+void add_output_rows(std::vector<Row>& rows);  ///< shading, parallel
 
 }  // namespace bounce::param_rows

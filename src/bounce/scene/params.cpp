@@ -30,16 +30,26 @@ ParamTable make_table() {
 
 std::string type_name(const Param& p) {
     switch (p.type) {
-        case ParamType::Int: return "integer";
-        case ParamType::UInt64: return "unsigned integer";
-        case ParamType::Float: return "number";
-        case ParamType::FloatAuto: return "number or \"auto\"";
-        case ParamType::Bool: return "boolean";
-        case ParamType::Enum: return "enum";
-        case ParamType::Path: return "path";
-        case ParamType::Vec3: return "[x, y, z]";
-        case ParamType::IntList: return fmt::format("{} integers", p.count);
-        case ParamType::FloatList: return fmt::format("{} numbers", p.count);
+        case ParamType::Int:
+            return "integer";
+        case ParamType::UInt64:
+            return "unsigned integer";
+        case ParamType::Float:
+            return "number";
+        case ParamType::FloatAuto:
+            return "number or \"auto\"";
+        case ParamType::Bool:
+            return "boolean";
+        case ParamType::Enum:
+            return "enum";
+        case ParamType::Path:
+            return "path";
+        case ParamType::Vec3:
+            return "[x, y, z]";
+        case ParamType::IntList:
+            return fmt::format("{} integers", p.count);
+        case ParamType::FloatList:
+            return fmt::format("{} numbers", p.count);
     }
     return "";
 }
@@ -70,7 +80,8 @@ const Param* find_param(const ParamTable& table, const std::string& key) {
 
 json check_param(const Param& p, const json& v, const ParamFail& fail) {
     switch (p.type) {
-        case ParamType::Int: return check_int(v, p.lo, p.hi, "", fail);
+        case ParamType::Int:
+            return check_int(v, p.lo, p.hi, "", fail);
         case ParamType::UInt64:
             if (!v.is_number_unsigned() && !(v.is_number_integer() && v.get<int64_t>() >= 0))
                 fail("", fmt::format("expected a non-negative integer, got {}", v.is_number() ? v.dump() : json_type_name(v)));
@@ -78,7 +89,8 @@ json check_param(const Param& p, const json& v, const ParamFail& fail) {
         case ParamType::FloatAuto:
             if (v.is_string() && v.get<std::string>() == "auto") return v;
             [[fallthrough]];
-        case ParamType::Float: return check_float(v, p.lo, p.hi, "", fail);
+        case ParamType::Float:
+            return check_float(v, p.lo, p.hi, "", fail);
         case ParamType::Bool:
             if (!v.is_boolean()) fail("", fmt::format("expected true or false, got {}", json_type_name(v)));
             return v;
@@ -96,13 +108,15 @@ json check_param(const Param& p, const json& v, const ParamFail& fail) {
             const bool floats = p.type != ParamType::IntList;
             size_t n = p.type == ParamType::Vec3 ? 3 : p.count;
             if (!v.is_array() || v.size() != n)
-                fail("", fmt::format("expected an array of {} {}, got {}{}", n, floats ? "numbers" : "integers",
-                                     json_type_name(v), v.is_array() ? fmt::format(" of {}", v.size()) : ""));
+                fail("", fmt::format("expected an array of {} {}, got {}{}", n, floats ? "numbers" : "integers", json_type_name(v),
+                                     v.is_array() ? fmt::format(" of {}", v.size()) : ""));
             json out = json::array();
             for (size_t i = 0; i < n; ++i) {
                 const std::string sub = fmt::format("/{}", i);  // not "/" + to_string: GCC 12 -Wrestrict false positive
-                if (floats) out.push_back(check_float(v[i], p.lo, p.hi, sub, fail));
-                else out.push_back(check_int(v[i], p.lo, p.hi, sub, fail));
+                if (floats)
+                    out.push_back(check_float(v[i], p.lo, p.hi, sub, fail));
+                else
+                    out.push_back(check_int(v[i], p.lo, p.hi, sub, fail));
             }
             return out;
         }
@@ -120,8 +134,10 @@ json param_values(const Scene& scene, unsigned mask, const ParamTable& table) {
 std::vector<std::string> param_differences(const json& was, const json& now) {
     std::vector<std::string> out;
     for (const auto& [key, value] : now.items()) {
-        if (!was.contains(key)) out.push_back(fmt::format("{}: (not recorded) -> {}", key, value.dump()));
-        else if (was[key] != value) out.push_back(fmt::format("{}: {} -> {}", key, was[key].dump(), value.dump()));
+        if (!was.contains(key))
+            out.push_back(fmt::format("{}: (not recorded) -> {}", key, value.dump()));
+        else if (was[key] != value)
+            out.push_back(fmt::format("{}: {} -> {}", key, was[key].dump(), value.dump()));
     }
     for (const auto& [key, value] : was.items())
         if (!now.contains(key)) out.push_back(fmt::format("{}: {} -> (not a parameter)", key, value.dump()));
@@ -139,8 +155,14 @@ std::string identity_names(unsigned mask) {
 json params_listing(const ParamTable& table) {
     json out = json::array();
     for (const Param& p : table) {
-        json j = {{"key", p.key}, {"stage", p.stage}, {"type", type_name(p)}, {"default", p.default_value()},
-                  {"unit", p.unit}, {"doc", p.doc}, {"identity", identity_names(p.identity)}, {"flag", p.flag}};
+        json j = {{"key", p.key},
+                  {"stage", p.stage},
+                  {"type", type_name(p)},
+                  {"default", p.default_value()},
+                  {"unit", p.unit},
+                  {"doc", p.doc},
+                  {"identity", identity_names(p.identity)},
+                  {"flag", p.flag}};
         if (p.type == ParamType::Enum) j["choices"] = p.choices;
         if (p.lo != p.hi) j["range"] = {p.lo, p.hi};
         if (p.required) j["required"] = true;
@@ -151,11 +173,12 @@ json params_listing(const ParamTable& table) {
 }
 
 std::string params_markdown(const ParamTable& table) {
-    std::string s = "| key | type | default | range | unit | invalidates | animatable | CLI | meaning |\n|---|---|---|---|---|---|---|---|---|\n";
+    std::string s =
+        "| key | type | default | range | unit | invalidates | animatable | CLI | meaning |\n|---|---|---|---|---|---|---|---|---|\n";
     for (const Param& p : table) {
         std::string range = p.type == ParamType::Enum ? fmt::format("{}", fmt::join(p.choices, ", "))
-                            : p.lo != p.hi          ? fmt::format("{:g} .. {:g}", p.lo, p.hi)
-                                                    : "";
+                            : p.lo != p.hi            ? fmt::format("{:g} .. {:g}", p.lo, p.hi)
+                                                      : "";
         std::string def = p.required ? "required" : p.default_value().dump();
         s += fmt::format("| `{}` | {} | `{}` | {} | {} | {} | {} | {} | {} |\n", p.key, type_name(p), def, range, p.unit,
                          identity_names(p.identity), p.animatable ? "yes" : "", p.flag.empty() ? "" : "`" + p.flag + "`", p.doc);

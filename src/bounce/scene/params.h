@@ -26,15 +26,15 @@ enum ParamIdentity : unsigned {
 enum class ParamType { Int, UInt64, Float, FloatAuto, Bool, Enum, Path, Vec3, IntList, FloatList };
 
 struct Param {
-    std::string key;      ///< "render.min_spacing": the JSON path, the --set key, the name everywhere
-    std::string stage;    ///< the settings struct it belongs to ("cache", "gather", ...)
+    std::string key;    ///< "render.min_spacing": the JSON path, the --set key, the name everywhere
+    std::string stage;  ///< the settings struct it belongs to ("cache", "gather", ...)
     ParamType type = ParamType::Float;
-    double lo = 0, hi = 0;              ///< numeric range (IntList: per element)
-    std::vector<std::string> choices;   ///< Enum: the values, in enum order
-    size_t count = 0;                   ///< IntList, FloatList: number of elements
+    double lo = 0, hi = 0;             ///< numeric range (IntList: per element)
+    std::vector<std::string> choices;  ///< Enum: the values, in enum order
+    size_t count = 0;                  ///< IntList, FloatList: number of elements
     std::string unit, doc;
     unsigned identity = kImageOnly;
-    std::string flag;     ///< CLI flag ("--min-spacing"); empty = only --set
+    std::string flag;  ///< CLI flag ("--min-spacing"); empty = only --set
     bool required = false;
     bool animatable = false;  ///< may be keyed in a shot (keyframes.h)
     std::function<nlohmann::json(const Scene&)> get;

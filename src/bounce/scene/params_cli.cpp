@@ -8,9 +8,13 @@ Override flag_override(const Param& p, const std::string& text) {
     const std::string origin = p.flag + " " + text;
     std::string value;
     switch (p.type) {
-        case ParamType::Bool: value = text; break;
+        case ParamType::Bool:
+            value = text;
+            break;
         case ParamType::Enum:
-        case ParamType::Path: value = nlohmann::json(text).dump(); break;
+        case ParamType::Path:
+            value = nlohmann::json(text).dump();
+            break;
         case ParamType::Vec3:
         case ParamType::FloatList:
         case ParamType::IntList: {
@@ -39,10 +43,11 @@ void add_param_flags(CLI::App& app, const ParamTable& table, std::vector<Overrid
             const bool sets = p.flag.rfind("--no-", 0) != 0;
             // The doc says what the setting does when on; a --no- flag turns that off.
             if (!sets) help = "turn off: " + help;
-            app.add_flag_callback(p.flag, [&out, &p, sets] { out.push_back(flag_override(p, sets ? "true" : "false")); }, help);
+            app.add_flag_callback(
+                p.flag, [&out, &p, sets] { out.push_back(flag_override(p, sets ? "true" : "false")); }, help);
         } else {
-            app.add_option_function<std::string>(p.flag, [&out, &p](const std::string& text) { out.push_back(flag_override(p, text)); },
-                                                 help);
+            app.add_option_function<std::string>(
+                p.flag, [&out, &p](const std::string& text) { out.push_back(flag_override(p, text)); }, help);
         }
     }
 }

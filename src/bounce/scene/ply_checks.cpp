@@ -30,10 +30,10 @@ enum class Scalar : uint8_t { None, I8, U8, I16, U16, I32, U32, F32, F64 };
 
 Scalar scalar_of(const std::string& t) {
     static const std::map<std::string, Scalar> kinds = {
-        {"char", Scalar::I8},    {"int8", Scalar::I8},     {"uchar", Scalar::U8},  {"uint8", Scalar::U8},   {"short", Scalar::I16},
-        {"int16", Scalar::I16},  {"ushort", Scalar::U16},  {"uint16", Scalar::U16}, {"int", Scalar::I32},   {"int32", Scalar::I32},
-        {"uint", Scalar::U32},   {"uint32", Scalar::U32},  {"float", Scalar::F32},  {"float32", Scalar::F32}, {"double", Scalar::F64},
-        {"float64", Scalar::F64}};
+        {"char", Scalar::I8},   {"int8", Scalar::I8},     {"uchar", Scalar::U8},   {"uint8", Scalar::U8},
+        {"short", Scalar::I16}, {"int16", Scalar::I16},   {"ushort", Scalar::U16}, {"uint16", Scalar::U16},
+        {"int", Scalar::I32},   {"int32", Scalar::I32},   {"uint", Scalar::U32},   {"uint32", Scalar::U32},
+        {"float", Scalar::F32}, {"float32", Scalar::F32}, {"double", Scalar::F64}, {"float64", Scalar::F64}};
     auto it = kinds.find(t);
     return it == kinds.end() ? Scalar::None : it->second;
 }
@@ -41,11 +41,20 @@ Scalar scalar_of(const std::string& t) {
 /// Bytes of one value (0 for None).
 uint64_t size_of(Scalar s) {
     switch (s) {
-        case Scalar::I8: case Scalar::U8: return 1;
-        case Scalar::I16: case Scalar::U16: return 2;
-        case Scalar::I32: case Scalar::U32: case Scalar::F32: return 4;
-        case Scalar::F64: return 8;
-        case Scalar::None: break;
+        case Scalar::I8:
+        case Scalar::U8:
+            return 1;
+        case Scalar::I16:
+        case Scalar::U16:
+            return 2;
+        case Scalar::I32:
+        case Scalar::U32:
+        case Scalar::F32:
+            return 4;
+        case Scalar::F64:
+            return 8;
+        case Scalar::None:
+            break;
     }
     return 0;
 }
@@ -106,8 +115,9 @@ void check_ascii_body(std::istream& in, const std::string& path, size_t line_no,
                 uint64_t n = 1;
                 if (p.count != Scalar::None) {
                     if (at >= tokens.size() || !read_value(tokens[at], p.count, v) || v < 0 || v > static_cast<double>(kMaxListCount))
-                        throw InputError(path, where, fmt::format("{}: '{}' is not a list count of {} (0 to {})", what,
-                                                                  at < tokens.size() ? tokens[at] : "", p.name, kMaxListCount));
+                        throw InputError(path, where,
+                                         fmt::format("{}: '{}' is not a list count of {} (0 to {})", what,
+                                                     at < tokens.size() ? tokens[at] : "", p.name, kMaxListCount));
                     n = static_cast<uint64_t>(v), ++at;
                 }
                 for (uint64_t k = 0; k < n; ++k, ++at) {
@@ -116,7 +126,8 @@ void check_ascii_body(std::istream& in, const std::string& path, size_t line_no,
                     if (!read_value(tokens[at], p.type, v))
                         throw InputError(path, where, fmt::format("{}: '{}' is not a {} ({})", what, tokens[at], p.type_name, p.name));
                     if (indexes_vertices(e, p) && (v < 0 || v >= static_cast<double>(vertices)))
-                        throw InputError(path, where, fmt::format("{}: vertex index {} outside the {} vertices", what, tokens[at], vertices));
+                        throw InputError(path, where,
+                                         fmt::format("{}: vertex index {} outside the {} vertices", what, tokens[at], vertices));
                 }
             }
             if (at != tokens.size())
@@ -134,16 +145,29 @@ double binary_value(const char* p, Scalar type, bool swap) {
     char b[8];
     const uint64_t n = size_of(type);
     for (uint64_t i = 0; i < n; ++i) b[i] = p[swap ? n - 1 - i : i];
-    const auto as = [&b]<typename T>(T) { T v; std::memcpy(&v, b, sizeof(T)); return static_cast<double>(v); };
+    const auto as = [&b]<typename T>(T) {
+        T v;
+        std::memcpy(&v, b, sizeof(T));
+        return static_cast<double>(v);
+    };
     switch (type) {
-        case Scalar::I8: return as(int8_t{});
-        case Scalar::U8: return as(uint8_t{});
-        case Scalar::I16: return as(int16_t{});
-        case Scalar::U16: return as(uint16_t{});
-        case Scalar::I32: return as(int32_t{});
-        case Scalar::U32: return as(uint32_t{});
-        case Scalar::F32: return as(float{});
-        case Scalar::F64: case Scalar::None: break;
+        case Scalar::I8:
+            return as(int8_t{});
+        case Scalar::U8:
+            return as(uint8_t{});
+        case Scalar::I16:
+            return as(int16_t{});
+        case Scalar::U16:
+            return as(uint16_t{});
+        case Scalar::I32:
+            return as(int32_t{});
+        case Scalar::U32:
+            return as(uint32_t{});
+        case Scalar::F32:
+            return as(float{});
+        case Scalar::F64:
+        case Scalar::None:
+            break;
     }
     return as(double{});
 }
@@ -209,7 +233,8 @@ void check_ply_counts(const std::string& path) {
             if (!format.empty()) throw InputError(path, where, "a second format line");
             ls >> format;
             if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
-                throw InputError(path, where, "format \"" + format.substr(0, 40) + "\" is not ascii, binary_little_endian or binary_big_endian");
+                throw InputError(path, where,
+                                 "format \"" + format.substr(0, 40) + "\" is not ascii, binary_little_endian or binary_big_endian");
         } else if (word == "element") {
             PlyElement e;
             ls >> e.name >> e.count;

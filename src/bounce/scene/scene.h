@@ -27,8 +27,8 @@ struct Camera {
     float fov = 45.0f;  ///< vertical field of view, degrees
     int width = 512, height = 512;
     std::array<float, 2> shutter{0, 0};  ///< [open, close] in frames around the frame's time (motion blur)
-    float aperture = 0;        ///< lens diameter (depth of field); 0 = pinhole
-    float focus_distance = 0;  ///< plane in focus along the view; 0 = the distance to look_at
+    float aperture = 0;                  ///< lens diameter (depth of field); 0 = pinhole
+    float focus_distance = 0;            ///< plane in focus along the view; 0 = the distance to look_at
     bool has_motion_blur() const { return shutter[1] > shutter[0]; }
 
     /// The keyable placement of a camera.
@@ -41,9 +41,7 @@ struct Camera {
     /// With motion blur: the pose at shutter open and close (set by the scene's loader).
     std::array<Pose, 2> shutter_pose{};
     /// A keyed camera that moves in the shutter: camera rays interpolate between its poses.
-    bool moves_in_shutter() const {
-        return has_motion_blur() && !(shutter_pose[0] == pose() && shutter_pose[1] == pose());
-    }
+    bool moves_in_shutter() const { return has_motion_blur() && !(shutter_pose[0] == pose() && shutter_pose[1] == pose()); }
 };
 
 /// A float RGB lat-long image (the textured sky dome); +Y is up, u grows with azimuth.
@@ -97,22 +95,22 @@ enum class LightType { Point, Spot, Distant, Quad, Sky, Mesh };
 
 struct Light {
     LightType type = LightType::Point;
-    std::string name;          ///< "name" in the scene file, else "lightN"; a mesh light's is its object's
-    Color color{1};            ///< point/spot: intensity (W/sr); distant: irradiance; quad/sky: radiance
-    Vec3 position{0};          ///< point, spot
-    Vec3 direction{0, -1, 0};  ///< spot: where it points; distant: direction light travels
-    float cone_angle = 30;     ///< spot: half-angle of full intensity, degrees
-    float cone_falloff = 5;    ///< spot: width of the smooth edge beyond cone_angle, degrees
+    std::string name;                                  ///< "name" in the scene file, else "lightN"; a mesh light's is its object's
+    Color color{1};                                    ///< point/spot: intensity (W/sr); distant: irradiance; quad/sky: radiance
+    Vec3 position{0};                                  ///< point, spot
+    Vec3 direction{0, -1, 0};                          ///< spot: where it points; distant: direction light travels
+    float cone_angle = 30;                             ///< spot: half-angle of full intensity, degrees
+    float cone_falloff = 5;                            ///< spot: width of the smooth edge beyond cone_angle, degrees
     Vec3 corner{0}, edge_u{1, 0, 0}, edge_v{0, 0, 1};  ///< quad; emits towards edge_u x edge_v
-    std::shared_ptr<const LatLongMap> sky_map;          ///< sky: optional texture (times color)
+    std::shared_ptr<const LatLongMap> sky_map;         ///< sky: optional texture (times color)
     /// quad: radiance texture over the quad (u along edge_u, v along edge_v, times color);
     /// spot: a slide projected over its outer cone (a gobo). Null = none.
     std::shared_ptr<const LatLongMap> texture;
     /// spot: barn doors, the largest angles (degrees, 0-90) from the axis towards the spot's
     /// left, right, top and bottom (right = direction x +Y; top = right x direction) it lights.
     std::array<float, 4> barn_doors{90, 90, 90, 90};
-    float sky_rotation = 0;                             ///< sky: rotation about +Y, degrees
-    uint32_t object = 0;  ///< mesh: the object whose emissive faces emit
+    float sky_rotation = 0;  ///< sky: rotation about +Y, degrees
+    uint32_t object = 0;     ///< mesh: the object whose emissive faces emit
     /// Light linking, per object index (scene file: "light_link"): 1 = lit by this light.
     /// Empty = every object.
     std::vector<uint8_t> lit;
@@ -135,39 +133,39 @@ struct Material {
     /// Absolute path, empty = none: multiplies `emission` (read whole into emission_map).
     std::string emission_texture;
     std::shared_ptr<const EmissionMap> emission_map;
-    Color specular{0};          ///< GGX lobe's reflectance at normal incidence (F0); 0 = no lobe
-    float roughness = 0.5f;     ///< GGX roughness (alpha = roughness^2), in (0, 1]
+    Color specular{0};       ///< GGX lobe's reflectance at normal incidence (F0); 0 = no lobe
+    float roughness = 0.5f;  ///< GGX roughness (alpha = roughness^2), in (0, 1]
     /// glTF's metallic-roughness texture (absolute path, empty = none): where it is given,
     /// roughness x its green channel is the roughness and metallic x its blue channel the
     /// metalness m, so the albedo is color x (1 - m) and F0 = 0.04 (1 - m) + color x m
     /// (`specular` is not read).
     std::string metallic_roughness_texture;
     float metallic = 1;
-    std::string bump_texture;   ///< height map (texture units per uv unit x bump_strength)
-    std::string normal_texture; ///< tangent-space normal map (used when there is no bump map)
-    float bump_strength = 1.0f; ///< scales the bump height or the normal map's tilt; 0 = off
-    std::string ao_texture;     ///< baked occlusion (bounce bake-ao) multiplying the indirect light and AO
+    std::string bump_texture;    ///< height map (texture units per uv unit x bump_strength)
+    std::string normal_texture;  ///< tangent-space normal map (used when there is no bump map)
+    float bump_strength = 1.0f;  ///< scales the bump height or the normal map's tilt; 0 = off
+    std::string ao_texture;      ///< baked occlusion (bounce bake-ao) multiplying the indirect light and AO
     /// An ideal mirror's reflectance (a conductor: the same at every angle, tinted for metals);
     /// 0 = none. The rest of the light (1 - mirror) meets the surface's other lobes.
     Color mirror{0};
     /// A smooth dielectric (glass, water): Fresnel reflection at index `ior`, and this share of
     /// the light let in is refracted (its tint); 0 = opaque, 1 = clear.
     Color transmission{0};
-    float ior = 1.5f;           ///< the dielectric's index of refraction (with transmission)
-    Color absorption{0};        ///< inside the dielectric: Beer-Lambert coefficient per world unit
+    float ior = 1.5f;     ///< the dielectric's index of refraction (with transmission)
+    Color absorption{0};  ///< inside the dielectric: Beer-Lambert coefficient per world unit
     /// Thin diffuse transmission (glTF's KHR_materials_diffuse_transmission): this share of the
     /// diffuse light leaves by the other side of the surface, tinted by
     /// `diffuse_transmission_color` (not by `color`); the rest is reflected with `color`.
     float diffuse_transmission = 0;
     Color diffuse_transmission_color{1};
     AlphaMode alpha_mode = AlphaMode::Opaque;
-    float opacity = 1;          ///< multiplies the opacity texture (glTF: the base colour factor's alpha)
+    float opacity = 1;  ///< multiplies the opacity texture (glTF: the base colour factor's alpha)
     /// Absolute path, empty = none: its alpha channel, or its only channel (MTL's map_d).
     std::string opacity_texture;
     std::shared_ptr<const OpacityMap> opacity_map;  ///< opacity_texture read (null = none)
-    float alpha_cutoff = 0.5f;  ///< mask: opacity below it is cut away
-    UvTransform uv_transform;  ///< where every texture of the material is read
-    uint8_t uv_set = 0;         ///< a mesh file's uv set its textures read (glTF texCoord)
+    float alpha_cutoff = 0.5f;                      ///< mask: opacity below it is cut away
+    UvTransform uv_transform;                       ///< where every texture of the material is read
+    uint8_t uv_set = 0;                             ///< a mesh file's uv set its textures read (glTF texCoord)
     /// A mesh file's material: what it carries that bounce does not read ("KHR_materials_sheen", ...).
     std::vector<std::string> unread;
     bool is_cutout() const { return alpha_mode != AlphaMode::Opaque; }
@@ -185,7 +183,8 @@ struct Material {
     bool has_bump() const { return bump_strength != 0 && (!bump_texture.empty() || !normal_texture.empty()); }
     /// Every texture file it names, empty or not (for what treats them alike: the mesh cache).
     std::array<std::string*, 7> texture_files() {
-        return {&color_texture, &bump_texture, &normal_texture, &ao_texture, &opacity_texture, &emission_texture, &metallic_roughness_texture};
+        return {
+            &color_texture, &bump_texture, &normal_texture, &ao_texture, &opacity_texture, &emission_texture, &metallic_roughness_texture};
     }
     /// The most it emits anywhere (its emission texture's brightest texel).
     Color peak_emission() const { return emission_map ? emission * emission_map->peak : emission; }
@@ -199,18 +198,18 @@ struct SubdivSurface;
 
 struct Object {
     std::string name;
-    TriangleMesh coarse;        ///< traced by all secondary rays
-    TriangleMesh fine;          ///< seen by primary visibility (empty = same as coarse)
-    int dicing_level = 0;       ///< subdivision surfaces: the fine tessellation's level (0 = not one)
-    double dicing_seconds = 0;  ///< time the loader spent dicing it
+    TriangleMesh coarse;           ///< traced by all secondary rays
+    TriangleMesh fine;             ///< seen by primary visibility (empty = same as coarse)
+    int dicing_level = 0;          ///< subdivision surfaces: the fine tessellation's level (0 = not one)
+    double dicing_seconds = 0;     ///< time the loader spent dicing it
     float displacement_bound = 0;  ///< largest distance displacement moves a point (0 = none)
     /// Strands grown on the visible surface (null = none); a mover's are grown as it stands at the
     /// shot's first frame and carried to this frame's pose (carry_fur).
     std::shared_ptr<const Fur> fur;
     std::shared_ptr<const SubdivSurface> surface;  ///< subdivision objects: what was diced (null = none)
-    Transform placement;    ///< the scene file's transform, already applied to both tessellations
-    bool deforms = false;   ///< its shape changes over the shot (a skin, morph targets), not only its placement
-    bool moves = false;     ///< its placement is keyed or it deforms: its cache records travel with it
+    Transform placement;                           ///< the scene file's transform, already applied to both tessellations
+    bool deforms = false;                          ///< its shape changes over the shot (a skin, morph targets), not only its placement
+    bool moves = false;                            ///< its placement is keyed or it deforms: its cache records travel with it
     RayVisibility visible_to;
     /// A holdout: where the camera sees it, black with alpha 0, hiding what is behind it.
     bool matte = false;
@@ -248,8 +247,12 @@ struct Object {
     /// What places coarse_mesh() and visible_mesh() in the world (null: they are in place).
     const Transform* to_world() const { return instance ? &placement : nullptr; }
     /// Points of the two tessellations in world space, with an instance's material override.
-    SurfacePoint coarse_point(uint32_t prim, float u, float v) const { return with_material(surface_point(coarse_mesh(), to_world(), prim, u, v)); }
-    SurfacePoint visible_point(uint32_t prim, float u, float v) const { return with_material(surface_point(visible_mesh(), to_world(), prim, u, v)); }
+    SurfacePoint coarse_point(uint32_t prim, float u, float v) const {
+        return with_material(surface_point(coarse_mesh(), to_world(), prim, u, v));
+    }
+    SurfacePoint visible_point(uint32_t prim, float u, float v) const {
+        return with_material(surface_point(visible_mesh(), to_world(), prim, u, v));
+    }
     /// Triangle `prim`'s material (coarse tessellation).
     uint32_t material_of(uint32_t prim) const {
         return material_override >= 0 ? static_cast<uint32_t>(material_override) : coarse_mesh().face_materials[prim];
@@ -260,7 +263,7 @@ struct Object {
     Bounds coarse_bounds() const { return instance ? instance_bounds : coarse.bounds(); }
     Bounds visible_mesh_bounds() const { return instance ? instance_visible_bounds : visible().bounds(); }
 
-private:
+  private:
     SurfacePoint with_material(SurfacePoint sp) const {
         if (material_override >= 0) sp.material = static_cast<uint32_t>(material_override);
         return sp;

@@ -47,7 +47,8 @@ void read_params(const json& j, const std::string& section, Scene& scene, const 
         const std::string ptr = r.at(p.name());
         json v = check_param(p, r.raw(p.name()), [&](const std::string& sub, const std::string& msg) { ctx.fail(ptr + sub, msg); });
         if (p.type == ParamType::Path && !v.get<std::string>().empty()) {
-            if (fs::path(v.get<std::string>()).is_relative() && !ctx.relative_to_working_dir(ptr)) v = (ctx.dir / v.get<std::string>()).string();
+            if (fs::path(v.get<std::string>()).is_relative() && !ctx.relative_to_working_dir(ptr))
+                v = (ctx.dir / v.get<std::string>()).string();
             if (ctx.check_path) ctx.check_path(v.get<std::string>(), ptr);
             // A folder the render reads and writes: a file of that name is refused now, not after the render.
             std::error_code ec;
@@ -65,7 +66,8 @@ void check_camera(const Camera& cam, const JsonContext& ctx, const std::string& 
     if (length(cross(cam.look_at - cam.position, cam.up)) == 0) ctx.fail("/camera/up", "up is parallel to the view direction" + when);
     // A reversed interval would blur over the same times; refused as the typo it most likely is.
     if (cam.shutter[1] < cam.shutter[0])
-        ctx.fail("/camera/shutter", fmt::format("the shutter closes ({:g}) before it opens ({:g}){}", cam.shutter[1], cam.shutter[0], when));
+        ctx.fail("/camera/shutter",
+                 fmt::format("the shutter closes ({:g}) before it opens ({:g}){}", cam.shutter[1], cam.shutter[0], when));
 }
 
 /// Fur control points moved rigidly (widths kept).
@@ -86,7 +88,8 @@ void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
         docs[k] = scene.keyed.is_object() ? evaluate_keys(scene.keyed, scene.frame + scene.camera.shutter[k], ctx) : scene.description;
         Scene then;  // the camera section alone, checked as the frame's is
         read_params(docs[k]["camera"], "camera", then, ctx);
-        check_camera(then.camera, ctx, fmt::format(" at shutter {} (frame {:g})", k ? "close" : "open", scene.frame + scene.camera.shutter[k]));
+        check_camera(then.camera, ctx,
+                     fmt::format(" at shutter {} (frame {:g})", k ? "close" : "open", scene.frame + scene.camera.shutter[k]));
         scene.camera.shutter_pose[k] = then.camera.pose();
     }
     for (size_t i = 0; i < scene.objects.size(); ++i) {
@@ -162,10 +165,9 @@ void check_frame_settings(const Scene& scene, const JsonContext& ctx) {
     const auto& crop = scene.render.visibility.crop;
     // Only all zeros means the full frame: [4, 4, 4, 4] is an empty window, not no crop.
     const bool crop_given = crop[0] != 0 || crop[1] != 0 || crop[2] != 0 || crop[3] != 0;
-    if (crop_given &&
-        (crop[0] >= crop[1] || crop[2] >= crop[3] || crop[1] > cam.width || crop[3] > cam.height))
-        ctx.fail("/render/crop", fmt::format("crop [{}, {}, {}, {}] is empty or outside the {}x{} image",
-                                            crop[0], crop[1], crop[2], crop[3], cam.width, cam.height));
+    if (crop_given && (crop[0] >= crop[1] || crop[2] >= crop[3] || crop[1] > cam.width || crop[3] > cam.height))
+        ctx.fail("/render/crop", fmt::format("crop [{}, {}, {}, {}] is empty or outside the {}x{} image", crop[0], crop[1], crop[2],
+                                             crop[3], cam.width, cam.height));
 }
 
 /// Every object: instancers last (their prototypes may come after them), each holding its index
@@ -178,8 +180,10 @@ void read_objects(const JsonReader& root, Scene& scene, const JsonContext& ctx) 
     // Instancers last (their prototypes may come after them), each holding its index meanwhile.
     std::vector<Object> file_instances;  // meshes shared by a mesh file's nodes, after every entry
     for (size_t i = 0; i < objs.size(); ++i) {
-        if (places_instances(objs[i])) scene.objects.emplace_back().instance = true;
-        else read_object(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), scene, i, file_instances);
+        if (places_instances(objs[i]))
+            scene.objects.emplace_back().instance = true;
+        else
+            read_object(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), scene, i, file_instances);
     }
     // Room for every placement at once: a vector of Objects that grew as they came would move
     // them all at each doubling (most of a 14 400-placement scene's load).
@@ -188,7 +192,8 @@ void read_objects(const JsonReader& root, Scene& scene, const JsonContext& ctx) 
     if (memory_shortfall((placements + static_cast<double>(scene.objects.size())) * sizeof(Object), "").empty())
         reserve_huge(scene.objects, scene.objects.size() + static_cast<size_t>(placements));
     for (size_t i = 0; i < objs.size(); ++i)
-        if (places_instances(objs[i])) read_instances(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), objs, scene, i, file_instances);
+        if (places_instances(objs[i]))
+            read_instances(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), objs, scene, i, file_instances);
     reserve_huge(scene.objects, scene.objects.size() + file_instances.size());
     for (Object& o : file_instances) scene.objects.push_back(std::move(o));
 }
@@ -208,7 +213,8 @@ void read_lights(const JsonReader& root, Scene& scene, const JsonContext& ctx) {
     }
     for (size_t i = 0; i < scene.objects.size(); ++i) {
         bool emits = false;  // (an instance may not emit: instance_reader refuses it; a prototype is not placed)
-        for (uint32_t m : scene.objects[i].placed() ? scene.objects[i].coarse.face_materials : std::vector<uint32_t>{}) emits |= scene.materials[m].is_emissive();
+        for (uint32_t m : scene.objects[i].placed() ? scene.objects[i].coarse.face_materials : std::vector<uint32_t>{})
+            emits |= scene.materials[m].is_emissive();
         if (emits) {
             Light l;
             l.type = LightType::Mesh;
@@ -234,8 +240,8 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     scene.shot = read_shot(doc, ctx);
     scene.frame = options.frame.value_or(scene.shot.first);
     if (scene.shot.animated && !scene.shot.contains(scene.frame))
-        throw InputError(options.frame_origin.empty() ? path : "command line", options.frame_origin.empty() ? "/animation/frames" : options.frame_origin,
-                         scene.shot.outside(scene.frame));
+        throw InputError(options.frame_origin.empty() ? path : "command line",
+                         options.frame_origin.empty() ? "/animation/frames" : options.frame_origin, scene.shot.outside(scene.frame));
     if (has_keys(doc)) {
         scene.keyed = doc;
         doc = evaluate_keys(doc, scene.frame, ctx);
@@ -296,8 +302,10 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
         }
     } catch (const std::bad_alloc&) {
         // What slipped past the estimates: said with the file, not as a crash.
-        throw InputError(path, "", fmt::format("out of memory while loading it ({:.2f} GiB available); fewer placements, objects or "
-                                               "texels would fit", available_memory_bytes() / 1073741824.0));
+        throw InputError(path, "",
+                         fmt::format("out of memory while loading it ({:.2f} GiB available); fewer placements, objects or "
+                                     "texels would fit",
+                                     available_memory_bytes() / 1073741824.0));
     }
     scene.load_times.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return scene;
@@ -339,8 +347,7 @@ uint64_t Scene::fingerprint(const std::vector<std::string>& parts, bool without_
         if (without_surface_shading && part == "materials" && value.is_object())
             for (auto& [name, m] : value.items())
                 if (m.is_object())
-                    for (const std::string& key : surface_shading_keys())
-                        m.erase(key);
+                    for (const std::string& key : surface_shading_keys()) m.erase(key);
         std::string s = part + "=" + (value.is_null() ? "" : value.dump());
         for (unsigned char c : s) h = hash_combine(h, c);
         h = hash_combine(h, inputs_hash(part, without_surface_shading));
@@ -409,7 +416,8 @@ uint64_t Scene::visibility_fingerprint() const {
         // A camera keyed to move in the shutter: the same pose at the frame can blur otherwise.
         json poses = json::array();
         for (const Camera::Pose& p : camera.shutter_pose)
-            poses.push_back({p.position.x, p.position.y, p.position.z, p.look_at.x, p.look_at.y, p.look_at.z, p.up.x, p.up.y, p.up.z, p.fov});
+            poses.push_back(
+                {p.position.x, p.position.y, p.position.z, p.look_at.x, p.look_at.y, p.look_at.z, p.up.x, p.up.y, p.up.z, p.fov});
         copy.description["camera"]["shutter poses"] = poses;
     }
     for (auto& o : copy.description["objects"])
@@ -442,8 +450,8 @@ uint64_t Scene::visibility_fingerprint() const {
     const bool diced = std::any_of(objects.begin(), objects.end(), [](const Object& o) { return o.surface != nullptr; });
     if (!diced) return copy.fingerprint(parts);
     const DicingSettings& d = render.dicing;
-    copy.description["dicing"] = {{"rule", "per-edge"}, {"shading_rate", d.shading_rate}, {"ray_level", d.ray_level},
-                                  {"max_level", d.max_level}};
+    copy.description["dicing"] = {
+        {"rule", "per-edge"}, {"shading_rate", d.shading_rate}, {"ray_level", d.ray_level}, {"max_level", d.max_level}};
     parts.push_back("dicing");
     return copy.fingerprint(parts);
 }

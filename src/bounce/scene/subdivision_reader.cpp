@@ -46,8 +46,11 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
     SubdivSurface surf;
     surf.scheme = scheme;
     surf.boundary = r.choice("boundary", "edge-and-corner", {"edge-only", "edge-and-corner"}) == "edge-only"
-                        ? SubdivBoundary::EdgeOnly : SubdivBoundary::EdgeAndCorner;
-    if (r.has("fine_subdivisions")) r.fail("fine_subdivisions", "a subdivision surface is diced from the camera by render.shading_rate (rays see render.ray_level), not fine_subdivisions");
+                        ? SubdivBoundary::EdgeOnly
+                        : SubdivBoundary::EdgeAndCorner;
+    if (r.has("fine_subdivisions"))
+        r.fail("fine_subdivisions",
+               "a subdivision surface is diced from the camera by render.shading_rate (rays see render.ray_level), not fine_subdivisions");
     const std::string file = r.file("file", true);
     MeshInputs read = mesh_inputs(r, "file");
     try {
@@ -75,8 +78,8 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
     }
     const DicingSettings& ds = scene.render.dicing;
     const int ray_level = std::min(ds.ray_level, ds.max_level);
-    const int level = dicing_level(surf.control, [&](const Vec3& p) { return pixels_per_unit(scene.camera, p); },
-                                   ds.shading_rate, ray_level, ds.max_level);
+    const int level = dicing_level(
+        surf.control, [&](const Vec3& p) { return pixels_per_unit(scene.camera, p); }, ds.shading_rate, ray_level, ds.max_level);
     // The fine tessellation per control edge: about shading_rate pixels per diced edge from the
     // camera, never coarser than the ray tessellation (docs/displacement.md).
     const auto rate = [&](const Vec3& a, const Vec3& b) {
@@ -91,8 +94,9 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
         const int n = surf.control.face_sizes[f];
         int rmax = 1;
         for (int i = 0; i < n; ++i)
-            rmax = std::max(rmax, rate(surf.control.positions[static_cast<size_t>(surf.control.face_vertices[k + static_cast<size_t>(i)])],
-                                       surf.control.positions[static_cast<size_t>(surf.control.face_vertices[k + static_cast<size_t>((i + 1) % n)])]));
+            rmax = std::max(
+                rmax, rate(surf.control.positions[static_cast<size_t>(surf.control.face_vertices[k + static_cast<size_t>(i)])],
+                           surf.control.positions[static_cast<size_t>(surf.control.face_vertices[k + static_cast<size_t>((i + 1) % n)])]));
         largest = std::max(largest, rmax);
         const double cells = static_cast<double>(rmax) * rmax, coarse = std::pow(4.0, ray_level);
         micropolygons += (n == 3 ? 1.0 : n == 4 ? 2.0 : n / 2.0) * (cells + coarse);
@@ -101,7 +105,8 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
         r.fail("", fmt::format("dicing {} gives {:.3g} micropolygons (about {:.0f} GiB); the limit is {:.0e}: raise "
                                "render.shading_rate or lower render.max_level / render.ray_level",
                                obj.name, micropolygons, micropolygons * 150 / (1 << 30), kMaxMicropolygons));
-    if (std::string why = memory_shortfall(micropolygons * 150, fmt::format("dicing {} into {:.3g} micropolygons", obj.name, micropolygons));
+    if (std::string why =
+            memory_shortfall(micropolygons * 150, fmt::format("dicing {} into {:.3g} micropolygons", obj.name, micropolygons));
         !why.empty())
         r.fail("", why + ": raise render.shading_rate or lower render.max_level / render.ray_level");
     const auto t0 = std::chrono::steady_clock::now();
@@ -114,8 +119,8 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
     }
     obj.dicing_level = level;
     if (surf.displacement.active())
-        obj.displacement_bound = std::abs(surf.displacement.scale) *
-                                 std::max(std::abs(surf.displacement.midpoint), std::abs(1 - surf.displacement.midpoint));
+        obj.displacement_bound =
+            std::abs(surf.displacement.scale) * std::max(std::abs(surf.displacement.midpoint), std::abs(1 - surf.displacement.midpoint));
     obj.dicing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     obj.surface = std::make_shared<const SubdivSurface>(std::move(surf));
 }

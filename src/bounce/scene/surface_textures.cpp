@@ -39,8 +39,10 @@ std::unique_ptr<OIIO::ImageInput> open_whole_texture(const std::string& path, co
         return nullptr;
     }
     if (static_cast<double>(spec.width) * spec.height > kMaxWholeTextureTexels) {
-        error = fmt::format("a {}x{} {} texture is read whole and may hold at most 8192x8192 pixels; resize it "
-                            "(e.g. OpenImageIO's oiiotool --resize)", spec.width, spec.height, kind);
+        error = fmt::format(
+            "a {}x{} {} texture is read whole and may hold at most 8192x8192 pixels; resize it "
+            "(e.g. OpenImageIO's oiiotool --resize)",
+            spec.width, spec.height, kind);
         return nullptr;
     }
     return in;

@@ -37,14 +37,14 @@ IndirectLobes one_pair(const Color& E, const Vec3& D, const Vec3& n_lookup, cons
     const float ratio = std::max(dot(s.normal, d), 0.0f) / cos_lookup;
     IndirectLobes out;
     out.diffuse = s.albedo * E * (kInvPi * ratio);
-    if (s.specular.x > 0 || s.specular.y > 0 || s.specular.z > 0) out.specular = ggx_specular(s.normal, wo, d, s.specular, s.roughness) * E * ratio;
+    if (s.specular.x > 0 || s.specular.y > 0 || s.specular.z > 0)
+        out.specular = ggx_specular(s.normal, wo, d, s.specular, s.roughness) * E * ratio;
     return out;
 }
 
 }  // namespace
 
-IndirectLobes indirect_lobes(const Indirect& in, const Vec3& n_lookup, const SurfaceShading& s, const Vec3& wo,
-                             bool per_channel) {
+IndirectLobes indirect_lobes(const Indirect& in, const Vec3& n_lookup, const SurfaceShading& s, const Vec3& wo, bool per_channel) {
     if (!per_channel) {
         const Vec3 D = in.light_dir[0] * 0.2126f + in.light_dir[1] * 0.7152f + in.light_dir[2] * 0.0722f;
         return one_pair(in.irradiance, D, n_lookup, s, wo);
@@ -59,8 +59,7 @@ IndirectLobes indirect_lobes(const Indirect& in, const Vec3& n_lookup, const Sur
     return out;
 }
 
-Color indirect_radiance(const Indirect& in, const Vec3& n_lookup, const SurfaceShading& s, const Vec3& wo,
-                        bool per_channel) {
+Color indirect_radiance(const Indirect& in, const Vec3& n_lookup, const SurfaceShading& s, const Vec3& wo, bool per_channel) {
     const IndirectLobes l = indirect_lobes(in, n_lookup, s, wo, per_channel);
     return l.diffuse + l.specular;
 }

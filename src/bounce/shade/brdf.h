@@ -24,14 +24,12 @@ Color ggx_specular(const Vec3& n, const Vec3& wo, const Vec3& wi, const Color& f
 /// normal (bumped) and the glossy lobe then see light from d. When d grazes the surface
 /// (n_lookup . d < 0.05) it carries no reliable direction and the light is taken along
 /// n_lookup instead.
-Color indirect_radiance(const Indirect& in, const Vec3& n_lookup, const SurfaceShading& s, const Vec3& wo,
-                        bool per_channel);
+Color indirect_radiance(const Indirect& in, const Vec3& n_lookup, const SurfaceShading& s, const Vec3& wo, bool per_channel);
 
 /// indirect_radiance's two lobes apart: their sum is indirect_radiance, bit for bit.
 struct IndirectLobes {
     Color diffuse{0}, specular{0};
 };
-IndirectLobes indirect_lobes(const Indirect& in, const Vec3& n_lookup, const SurfaceShading& s, const Vec3& wo,
-                             bool per_channel);
+IndirectLobes indirect_lobes(const Indirect& in, const Vec3& n_lookup, const SurfaceShading& s, const Vec3& wo, bool per_channel);
 
 }  // namespace bounce

@@ -18,9 +18,7 @@ std::string layer_name_of(const std::string& name) {
 
 namespace {
 
-Layer& rgb_layer(Image& image, const std::string& name) {
-    return image.add_layer(name, {name + ".R", name + ".G", name + ".B"});
-}
+Layer& rgb_layer(Image& image, const std::string& name) { return image.add_layer(name, {name + ".R", name + ".G", name + ".B"}); }
 
 }  // namespace
 

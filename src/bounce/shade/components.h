@@ -1,8 +1,8 @@
 // The beauty's components as EXR layers for compositing (render.layers = components), named as
 // Nuke users know them from other renderers: emission, diffuse_direct, specular_direct (and
 // per light: diffuse_direct_<light>, specular_direct_<light>), diffuse_indirect,
-// specular_indirect (per light too when the records keep light parts), background, reflection and refraction (what mirrors and glass show), and an id layer (id.object, id.material: index + 1, 0 where
-// nothing is seen) whose names are in the header. The parts sum to the beauty.
+// specular_indirect (per light too when the records keep light parts), background, reflection and refraction (what mirrors and glass show),
+// and an id layer (id.object, id.material: index + 1, 0 where nothing is seen) whose names are in the header. The parts sum to the beauty.
 #pragma once
 
 #include <span>
@@ -26,7 +26,7 @@ struct ShadedParts {
 std::string layer_name_of(const std::string& name);
 
 class ComponentLayers {
-public:
+  public:
     /// With `on`, adds the layers to `image` and the id tables to its metadata
     /// (bounce:object_ids, bounce:material_ids: JSON arrays of names); else does nothing.
     /// `per_light_indirect`: the indirect layers per light as well.
@@ -37,15 +37,14 @@ public:
     /// Adds `p` x `weight` (emission and direct light) to pixel (wx, wy) of the window.
     void add(int wx, int wy, const ShadedParts& p, float weight);
     /// Adds the indirect light's lobes x `weight`; per light, times each light's `shares`.
-    void add_indirect(int wx, int wy, const Color& diffuse, const Color& specular, float weight,
-                      std::span<const Color> shares = {});
+    void add_indirect(int wx, int wy, const Color& diffuse, const Color& specular, float weight, std::span<const Color> shares = {});
     void background(int wx, int wy, const Color& c);
     /// Light a mirror's or glass's paths bring (already weighted), by their first bounce.
     void add_specular(int wx, int wy, bool refraction, const Color& c);
     /// The object and material (indices) of the pixel's largest fragment.
     void ids(int wx, int wy, uint32_t object, uint32_t material);
 
-private:
+  private:
     void put(Layer* l, int wx, int wy, const Color& c, float weight);
     Image& image_;
     bool on_ = false;

@@ -12,8 +12,8 @@ namespace {
 /// Emission plus direct light reflected by the fragment's bumped, glossy surface towards wo;
 /// with `parts`, also its components (per light as well when they are sized).
 Color fragment_direct(const Scene& scene, const Materials& materials, const DirectLighting& lighting, const Fragment& f,
-                      const SurfaceShading& surf, const Vec3& wo, int x, int y, uint32_t k, bool include_sky,
-                      Counters& counters, ShadedParts* parts) {
+                      const SurfaceShading& surf, const Vec3& wo, int x, int y, uint32_t k, bool include_sky, Counters& counters,
+                      ShadedParts* parts) {
     // Glossy surfaces reflect the same light samples the diffuse estimate draws.
     Color gloss(0);
     const bool glossy = surf.specular != Color(0), per_light = parts && !parts->light_diffuse.empty();
@@ -29,9 +29,13 @@ Color fragment_direct(const Scene& scene, const Materials& materials, const Dire
     Color diffuse = surf.albedo * e * kInvPi;
     if (surf.translucency != Color(0)) {
         // A thin translucent surface: the light through its other side, diffusely transmitted.
-        const LightSampleFn through = [&](size_t light, const Vec3&, const Color& eb) { parts->light_diffuse[light] += surf.translucency * eb * kInvPi; };
-        diffuse += surf.translucency * lighting.irradiance(f.p, -surf.normal, f.object, back_side_stream(rng), scene.render.lighting.light_samples,
-                                                           counters, include_sky, per_light ? &through : nullptr) * kInvPi;
+        const LightSampleFn through = [&](size_t light, const Vec3&, const Color& eb) {
+            parts->light_diffuse[light] += surf.translucency * eb * kInvPi;
+        };
+        diffuse += surf.translucency *
+                   lighting.irradiance(f.p, -surf.normal, f.object, back_side_stream(rng), scene.render.lighting.light_samples, counters,
+                                       include_sky, per_light ? &through : nullptr) *
+                   kInvPi;
     }
     if (parts) parts->emission = emission, parts->diffuse_direct = diffuse, parts->specular_direct = gloss;
     return emission + diffuse + gloss;
@@ -40,8 +44,8 @@ Color fragment_direct(const Scene& scene, const Materials& materials, const Dire
 /// Emission-free direct light reflected by a strand towards wo: Kajiya-Kay over light samples
 /// from both sides of the strand (light reaches a fibre from the whole sphere), with shadow
 /// rays that skip the strand itself.
-Color hair_direct(const Scene& scene, const DirectLighting& lighting, const Fragment& f, const Vec3& wo, int x, int y,
-                  uint32_t k, bool include_sky, Counters& counters, ShadedParts* parts) {
+Color hair_direct(const Scene& scene, const DirectLighting& lighting, const Fragment& f, const Vec3& wo, int x, int y, uint32_t k,
+                  bool include_sky, Counters& counters, ShadedParts* parts) {
     const Fur& fur = *scene.objects[f.object].fur;
     const Color albedo = fur.params.albedo(f.strand_v);
     Color out(0);
@@ -130,16 +134,16 @@ Color site_radiance(const ShadeContext& c, const PathSite& s, int x, int y, uint
     surf.albedo = c.materials.albedo(f.material, f.uv) * c.materials.vertex_color(f.object, f.prim, f.p);
     surf.translucency = c.materials.translucency(f.material, f.uv);
     surf.specular = m.specular, surf.roughness = m.roughness, surf.normal = f.n;
-    Color out = fragment_direct(c.scene, c.materials, c.lighting, f, surf, s.wo, x, y, kSiteStream + j, c.indirect == nullptr,
-                                counters, nullptr);
+    Color out =
+        fragment_direct(c.scene, c.materials, c.lighting, f, surf, s.wo, x, y, kSiteStream + j, c.indirect == nullptr, counters, nullptr);
     if (in) out += indirect_radiance(*in, f.n, surf, s.wo, c.scene.render.shading.light_per_channel) + transmitted_indirect(surf, *in);
     return out;
 }
 
 /// Adds what the specular paths of a pixel's fragments bring (paths.sites shaded) to `sum`.
 /// `colours` (if given): the pixel's fragments' entries of shade's `colours`.
-void add_paths(const ShadeContext& c, const PixelPaths& paths, std::span<const Fragment> frags, int x, int y, int wx, int wy,
-               PixelSum& sum, ComponentLayers& comps, Counters& counters, Color* colours) {
+void add_paths(const ShadeContext& c, const PixelPaths& paths, std::span<const Fragment> frags, int x, int y, int wx, int wy, PixelSum& sum,
+               ComponentLayers& comps, Counters& counters, Color* colours) {
     const auto held = [&](uint32_t k) { return c.scene.objects[frags[k].object].matte; };
     for (uint32_t k = 0; k < frags.size(); ++k) {
         if (held(k)) continue;
@@ -166,8 +170,8 @@ void add_paths(const ShadeContext& c, const PixelPaths& paths, std::span<const F
 /// Adds fragment k of pixel (x, y) (its index `at` in the deep buffer) to `sum`; with layer
 /// components on, also to `comps` at window pixel (wx, wy).
 /// `base`: the share of the light its own lobes reflect (a mirror's or glass's base share, else 1).
-void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint32_t k, size_t at, const Color& base,
-                    PixelSum& sum, ComponentLayers& comps, int wx, int wy, Counters& counters) {
+void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint32_t k, size_t at, const Color& base, PixelSum& sum,
+                    ComponentLayers& comps, int wx, int wy, Counters& counters) {
     // A holdout: hides what is behind it and adds nothing, alpha included.
     if (c.scene.objects[f.object].matte) {
         sum.held += f.weight;
@@ -197,14 +201,15 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
         lobes.diffuse += transmitted_indirect(surf, in);
         lobes.diffuse *= base, lobes.specular *= base;
         sum.beauty += (lobes.diffuse + lobes.specular) * w;
-        if (comps.on()) comps.add_indirect(wx, wy, lobes.diffuse, lobes.specular, w, c.shares ? c.shares->at(at) : std::span<const Color>());
+        if (comps.on())
+            comps.add_indirect(wx, wy, lobes.diffuse, lobes.specular, w, c.shares ? c.shares->at(at) : std::span<const Color>());
     }
     if (!c.ao_only) {
         ShadedParts parts = comps.on() ? comps.parts() : ShadedParts{};
-        const Color radiance = base * (c.direct_radiance && !comps.on()
-                                           ? (*c.direct_radiance)[at]
-                                           : direct_at(c.scene, c.materials, c.lighting, f, surf, wo, x, y, k, c.indirect == nullptr,
-                                                       counters, comps.on() ? &parts : nullptr));
+        const Color radiance =
+            base * (c.direct_radiance && !comps.on() ? (*c.direct_radiance)[at]
+                                                     : direct_at(c.scene, c.materials, c.lighting, f, surf, wo, x, y, k,
+                                                                 c.indirect == nullptr, counters, comps.on() ? &parts : nullptr));
         parts.scale(base);
         sum.direct += radiance * f.weight;
         sum.beauty += radiance * f.weight;
@@ -220,25 +225,19 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
 
 }  // namespace
 
-Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
-            const DirectLighting& lighting, const std::vector<Indirect>* indirect, Stats& stats,
-            ProgressSink* sink, const std::vector<Color>* direct_radiance, const SiteLight& sites,
-            std::vector<Color>* colours, const LightShares* shares) {
+Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials, const DirectLighting& lighting,
+            const std::vector<Indirect>* indirect, Stats& stats, ProgressSink* sink, const std::vector<Color>* direct_radiance,
+            const SiteLight& sites, std::vector<Color>* colours, const LightShares* shares) {
     if (colours) colours->assign(deep.fragments.size(), Color(0));
     const bool ao_only = scene.render.indirect.ao && indirect;
     Image img;
     img.full_width = deep.full_width, img.full_height = deep.full_height;
     img.x0 = deep.x0, img.y0 = deep.y0, img.width = deep.width, img.height = deep.height;
     Layer& beauty = img.add_layer("beauty", {"R", "G", "B", "A"});
-    Layer* direct =
-        ao_only ? nullptr : &img.add_layer("direct", {"direct.R", "direct.G", "direct.B"});
-    Layer* ind = indirect && !ao_only
-                     ? &img.add_layer("indirect", {"indirect.R", "indirect.G", "indirect.B"})
-                     : nullptr;
+    Layer* direct = ao_only ? nullptr : &img.add_layer("direct", {"direct.R", "direct.G", "direct.B"});
+    Layer* ind = indirect && !ao_only ? &img.add_layer("indirect", {"indirect.R", "indirect.G", "indirect.B"}) : nullptr;
     Layer* ao = indirect ? &img.add_layer("ao", {"ao.Y"}) : nullptr;
-    Layer* bent =
-        indirect ? &img.add_layer("bentnormal", {"bentnormal.X", "bentnormal.Y", "bentnormal.Z"})
-                 : nullptr;
+    Layer* bent = indirect ? &img.add_layer("bentnormal", {"bentnormal.X", "bentnormal.Y", "bentnormal.Z"}) : nullptr;
     Layer& albedo = img.add_layer("albedo", {"albedo.R", "albedo.G", "albedo.B"});
     Layer& normal = img.add_layer("N", {"N.X", "N.Y", "N.Z"});
     Layer& depth = img.add_layer("depth", {"Z"});
@@ -255,39 +254,38 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
         p[0] = v.x, p[1] = v.y, p[2] = v.z;
     };
 
-    for_each_pixel_in_tiles(
-        deep, scene.render.parallel.tile_size, sink, "shading", [&](int wx, int wy, size_t first) {
-            Counters& counters = stats.local();
-            int x = wx + deep.x0, y = wy + deep.y0;
-            PixelSum sum;
-            auto frags = deep.pixel(wx, wy);
-            thread_local PixelPaths paths;
-            if (specular) tracer.trace(frags, camera.origin(), paths, counters);
-            for (uint32_t k = 0; k < frags.size(); ++k) {
-                const Color before = sum.beauty;
-                shade_fragment(ctx, frags[k], x, y, k, first + k, specular ? paths.base[k] : Color(1), sum, comps, wx, wy, counters);
-                if (colours) (*colours)[first + k] = sum.beauty - before;
-            }
-            if (specular) add_paths(ctx, paths, frags, x, y, wx, wy, sum, comps, counters, colours ? colours->data() + first : nullptr);
-            if (const float open = 1 - sum.cover - sum.held; open > 0 && !ao_only) {
-                // Escaping camera rays see the sky (in beauty and direct).
-                const Color seen = lighting.background(normalize(
-                    camera.direction(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f))) * open;
-                sum.beauty += seen;
-                sum.direct += seen;
-                if (comps.on()) comps.background(wx, wy, seen);
-            }
-            if (comps.on() && sum.largest > 0) comps.ids(wx, wy, sum.object, sum.material);
-            float* pb = img.at(beauty, wx, wy);
-            pb[0] = sum.beauty.x, pb[1] = sum.beauty.y, pb[2] = sum.beauty.z, pb[3] = sum.cover;
-            put3(direct, wx, wy, sum.direct);
-            put3(ind, wx, wy, sum.indirect);
-            if (ao) *img.at(*ao, wx, wy) = sum.ao;
-            put3(bent, wx, wy, dot(sum.bent, sum.bent) > 0 ? normalize(sum.bent) : Vec3(0));
-            put3(&albedo, wx, wy, sum.albedo);
-            put3(&normal, wx, wy, sum.cover > 0 ? normalize(sum.n) : Vec3(0));
-            *img.at(depth, wx, wy) = sum.z;
-        });
+    for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "shading", [&](int wx, int wy, size_t first) {
+        Counters& counters = stats.local();
+        int x = wx + deep.x0, y = wy + deep.y0;
+        PixelSum sum;
+        auto frags = deep.pixel(wx, wy);
+        thread_local PixelPaths paths;
+        if (specular) tracer.trace(frags, camera.origin(), paths, counters);
+        for (uint32_t k = 0; k < frags.size(); ++k) {
+            const Color before = sum.beauty;
+            shade_fragment(ctx, frags[k], x, y, k, first + k, specular ? paths.base[k] : Color(1), sum, comps, wx, wy, counters);
+            if (colours) (*colours)[first + k] = sum.beauty - before;
+        }
+        if (specular) add_paths(ctx, paths, frags, x, y, wx, wy, sum, comps, counters, colours ? colours->data() + first : nullptr);
+        if (const float open = 1 - sum.cover - sum.held; open > 0 && !ao_only) {
+            // Escaping camera rays see the sky (in beauty and direct).
+            const Color seen =
+                lighting.background(normalize(camera.direction(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f))) * open;
+            sum.beauty += seen;
+            sum.direct += seen;
+            if (comps.on()) comps.background(wx, wy, seen);
+        }
+        if (comps.on() && sum.largest > 0) comps.ids(wx, wy, sum.object, sum.material);
+        float* pb = img.at(beauty, wx, wy);
+        pb[0] = sum.beauty.x, pb[1] = sum.beauty.y, pb[2] = sum.beauty.z, pb[3] = sum.cover;
+        put3(direct, wx, wy, sum.direct);
+        put3(ind, wx, wy, sum.indirect);
+        if (ao) *img.at(*ao, wx, wy) = sum.ao;
+        put3(bent, wx, wy, dot(sum.bent, sum.bent) > 0 ? normalize(sum.bent) : Vec3(0));
+        put3(&albedo, wx, wy, sum.albedo);
+        put3(&normal, wx, wy, sum.cover > 0 ? normalize(sum.n) : Vec3(0));
+        *img.at(depth, wx, wy) = sum.z;
+    });
     return img;
 }
 
@@ -302,8 +300,8 @@ std::vector<Color> fragment_direct_radiance(const Scene& scene, const DeepBuffer
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = frags[k];
-                out[first + k] = direct_at(scene, materials, lighting, f, fragment_surface(materials, f),
-                                           normalize(camera.origin() - f.p), wx + deep.x0, wy + deep.y0, k, include_sky, counters);
+                out[first + k] = direct_at(scene, materials, lighting, f, fragment_surface(materials, f), normalize(camera.origin() - f.p),
+                                           wx + deep.x0, wy + deep.y0, k, include_sky, counters);
             }
         }
     });

@@ -31,10 +31,10 @@ struct SiteLight {
     const std::vector<Indirect>* light = nullptr;  ///< per site: its bounce light (null: none)
     const RadiosityTextures* radiosity = nullptr;  ///< indirect_at_specular_hits = radiosity: sites are looked up here
 };
-Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
-            const DirectLighting& lighting, const std::vector<Indirect>* indirect, Stats& stats,
-            ProgressSink* progress, const std::vector<Color>* direct_radiance = nullptr, const SiteLight& sites = {},
-            std::vector<Color>* colours = nullptr, const LightShares* shares = nullptr);
+Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials, const DirectLighting& lighting,
+            const std::vector<Indirect>* indirect, Stats& stats, ProgressSink* progress,
+            const std::vector<Color>* direct_radiance = nullptr, const SiteLight& sites = {}, std::vector<Color>* colours = nullptr,
+            const LightShares* shares = nullptr);
 /// `colours` (if given) receives, parallel to deep.fragments, what each fragment adds to the
 /// beauty (its coverage included; the sky seen past the fragments is no fragment's): the
 /// colour of a deep file's samples (write_deep).

@@ -30,8 +30,7 @@ struct SpecularTracer::Branch {
     uint32_t fragment = 0;
 };
 
-SpecularTracer::SpecularTracer(const Scene& scene, const SceneAccel& accel, const DirectLighting& lighting,
-                               const Materials& materials)
+SpecularTracer::SpecularTracer(const Scene& scene, const SceneAccel& accel, const DirectLighting& lighting, const Materials& materials)
     : scene_(scene), accel_(accel), lighting_(lighting), materials_(materials) {
     active_ = std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) { return m.is_specular(); });
 }
@@ -204,8 +203,7 @@ void measure_footprints(std::vector<std::vector<Fragment>>& per_pixel, int width
 
 }  // namespace
 
-DeepBuffer specular_sites(const Scene& scene, const DeepBuffer& deep, const SpecularTracer& tracer, Stats& stats,
-                          ProgressSink* progress) {
+DeepBuffer specular_sites(const Scene& scene, const DeepBuffer& deep, const SpecularTracer& tracer, Stats& stats, ProgressSink* progress) {
     DeepBuffer sites;
     sites.full_width = deep.full_width, sites.full_height = deep.full_height;
     sites.x0 = deep.x0, sites.y0 = deep.y0, sites.width = deep.width, sites.height = deep.height;

@@ -27,8 +27,8 @@ struct PathSite {
     /// uv, object, material, the coarse triangle, depth = the path's length, weight 1 and
     /// the path's pixel footprint (the camera pixel's cone over the whole length).
     Fragment at;
-    Color weight{0};  ///< what the path lets through (mirror and Fresnel shares, tints, absorption) x the base share there
-    Vec3 wo;          ///< unit, back along the path
+    Color weight{0};     ///< what the path lets through (mirror and Fresnel shares, tints, absorption) x the base share there
+    Vec3 wo;             ///< unit, back along the path
     float u = 0, v = 0;  ///< barycentrics on the coarse triangle (radiosity textures)
     bool front = true;   ///< the path met the triangle's front side
     PathKind kind = PathKind::Reflection;
@@ -51,7 +51,7 @@ inline constexpr size_t kMaxSitesPerPixel = 255;
 inline constexpr uint32_t kMaxRaysPerPixel = 4096;
 
 class SpecularTracer {
-public:
+  public:
     /// `materials` tilt a fragment's mirror normal by its bump or normal map.
     SpecularTracer(const Scene& scene, const SceneAccel& accel, const DirectLighting& lighting, const Materials& materials);
     /// Whether any material is a mirror or glass (with render.specular_depth 0 their base shares still apply).
@@ -61,7 +61,7 @@ public:
     /// beyond kMaxRaysPerPixel too.
     void trace(std::span<const Fragment> frags, const Vec3& eye, PixelPaths& out, Counters& counters) const;
 
-private:
+  private:
     struct Branch;
     /// Where a fragment's paths start: a point and the shading and geometric normals (both outwards).
     struct Start {
@@ -72,8 +72,8 @@ private:
     Vec3 bumped(const Fragment& f, const Start& at, const Vec3& d) const;
     void follow(const Branch& b, PixelPaths& out, Counters& counters) const;
     /// Continues a branch that met a specular surface: its reflected and refracted branches.
-    void split(const Branch& b, const Vec3& p, const Vec3& n, bool entering, const Material& m, float travelled,
-               PixelPaths& out, Counters& counters) const;
+    void split(const Branch& b, const Vec3& p, const Vec3& n, bool entering, const Material& m, float travelled, PixelPaths& out,
+               Counters& counters) const;
     /// Radiance of the quad lights a ray from o along d meets before distance `t_max`.
     Color quads_seen(const Vec3& o, const Vec3& d, float t_max) const;
 
@@ -86,7 +86,6 @@ private:
 
 /// Every pixel's sites, as the fragments of a deep buffer over `deep`'s window (per pixel in
 /// trace order): what the gathering pass covers with records.
-DeepBuffer specular_sites(const Scene& scene, const DeepBuffer& deep, const SpecularTracer& tracer, Stats& stats,
-                          ProgressSink* progress);
+DeepBuffer specular_sites(const Scene& scene, const DeepBuffer& deep, const SpecularTracer& tracer, Stats& stats, ProgressSink* progress);
 
 }  // namespace bounce

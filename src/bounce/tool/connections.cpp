@@ -24,9 +24,10 @@ constexpr const char* kBusy = "the lighting tool is busy: try again";
 /// is framed no more than an answer is).
 std::string error_response(int status, const char* reason, const char* message) {
     const std::string body = fmt::format("{{\"error\":\"{}\"}}", message);
-    std::string head = fmt::format("HTTP/1.1 {} {}\r\nContent-Type: application/json; charset=utf-8\r\nContent-Length: {}\r\n"
-                                   "Connection: close\r\n",
-                                   status, reason, body.size());
+    std::string head = fmt::format(
+        "HTTP/1.1 {} {}\r\nContent-Type: application/json; charset=utf-8\r\nContent-Length: {}\r\n"
+        "Connection: close\r\n",
+        status, reason, body.size());
     for (const auto& [name, value] : kNoFramingHeaders) head += fmt::format("{}: {}\r\n", name, value);
     if (status == 503) head += "Retry-After: 1\r\n";
     return head + "\r\n" + body;
@@ -138,8 +139,7 @@ void ConnectionGate::poll_loop() {
         ::poll(fds.data(), fds.size(), 200);
         if (fds[0].revents & POLLIN) {
             char drain[64];
-            while (::read(wake_pipe_[0], drain, sizeof drain) > 0) {
-            }
+            while (::read(wake_pipe_[0], drain, sizeof drain) > 0) {}
         }
         std::vector<Waiting> now_waiting;
         std::swap(now_waiting, waiting_);
@@ -151,15 +151,21 @@ void ConnectionGate::poll_loop() {
             if (w.closing) {  // drain what the refused client still sends; close at its end
                 char sink[4096];
                 const bool open = w.deadline > now && (!readable || ::recv(w.socket, sink, sizeof sink, MSG_DONTWAIT) > 0);
-                if (open) waiting_.push_back(w), ++held_;
-                else ::close(w.socket);
+                if (open)
+                    waiting_.push_back(w), ++held_;
+                else
+                    ::close(w.socket);
                 continue;
             }
             const Headers h = readable ? peek(w.socket) : Headers::Partial;
-            if (h == Headers::Whole) hand_over(w.socket);
-            else if (h == Headers::Gone) ::close(w.socket);
-            else if (w.deadline <= now) refuse(w.socket, 408, "Request Timeout", "the request's headers did not arrive in time");
-            else waiting_.push_back(w), ++held_;
+            if (h == Headers::Whole)
+                hand_over(w.socket);
+            else if (h == Headers::Gone)
+                ::close(w.socket);
+            else if (w.deadline <= now)
+                refuse(w.socket, 408, "Request Timeout", "the request's headers did not arrive in time");
+            else
+                waiting_.push_back(w), ++held_;
         }
     }
 }

@@ -32,15 +32,15 @@ inline constexpr std::array<std::pair<const char*, const char*>, 2> kNoFramingHe
 
 struct GateLimits {
     std::chrono::milliseconds header_time{5000};  ///< from accept to the headers' blank line
-    size_t max_waiting = 512;   ///< connections whose headers are still arriving
-    size_t max_queued = 256;    ///< connections with whole headers that no worker has taken yet
-    size_t workers = 32;        ///< a browser keeps six connections a page; two tabs and a test
-    size_t max_header_bytes = 16384;  ///< past this the request goes on as it is (httplib refuses it)
+    size_t max_waiting = 512;                     ///< connections whose headers are still arriving
+    size_t max_queued = 256;                      ///< connections with whole headers that no worker has taken yet
+    size_t workers = 32;                          ///< a browser keeps six connections a page; two tabs and a test
+    size_t max_header_bytes = 16384;              ///< past this the request goes on as it is (httplib refuses it)
 };
 
 /// Holds connections until their headers are whole, then runs `serve(socket)` on a worker.
 class ConnectionGate {
-public:
+  public:
     using Serve = std::function<void(int socket)>;
     ConnectionGate(GateLimits limits, Serve serve);
     ~ConnectionGate();  ///< closes what waits, joins its threads
@@ -53,7 +53,7 @@ public:
     /// with unread bytes would reset the connection, and the client could lose the answer).
     void close_gently(int socket);
 
-private:
+  private:
     struct Waiting {
         int socket;
         std::chrono::steady_clock::time_point deadline;
@@ -77,7 +77,7 @@ private:
     std::condition_variable work_;
     std::vector<Waiting> admitted_;  ///< new (or refused) sockets for the poll loop
     std::atomic<size_t> held_{0};    ///< sockets in admitted_ and waiting_
-    std::vector<Waiting> waiting_;  ///< the poll loop's own
+    std::vector<Waiting> waiting_;   ///< the poll loop's own
     std::deque<int> ready_;
     bool quit_ = false;
     std::thread poller_;

@@ -84,9 +84,7 @@ std::string RequestGuard::url(const std::string& host) const {
 
 std::string RequestGuard::cookie_name() const { return fmt::format("bounce-token-{}", port_); }
 
-std::string RequestGuard::cookie() const {
-    return fmt::format("{}={}; Path=/; HttpOnly; SameSite=Strict", cookie_name(), token_);
-}
+std::string RequestGuard::cookie() const { return fmt::format("{}={}; Path=/; HttpOnly; SameSite=Strict", cookie_name(), token_); }
 
 Verdict RequestGuard::check(const RequestFacts& r) const {
     Verdict v;
@@ -96,7 +94,8 @@ Verdict RequestGuard::check(const RequestFacts& r) const {
     };
     if (!loopback_at(r.host, port_))
         return refuse(Refusal::Host, fmt::format("Host '{}' is not this machine's loopback address at port {} (the tool serves "
-                                                 "only the URL it printed)", r.host, port_));
+                                                 "only the URL it printed)",
+                                                 r.host, port_));
     if (!r.origin.empty() && !(ascii_lower(r.origin).rfind("http://", 0) == 0 && loopback_at(r.origin.substr(7), port_)))
         return refuse(Refusal::Origin, fmt::format("a page of origin '{}' may not use the lighting tool", r.origin));
     const std::string auth = trim(r.authorization);

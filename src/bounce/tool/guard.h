@@ -13,13 +13,13 @@ namespace bounce {
 
 /// What the guard reads of a request.
 struct RequestFacts {
-    std::string method;        ///< "GET", "POST" ...
-    std::string host;          ///< the Host header ("" when absent)
-    std::string origin;        ///< the Origin header ("" when absent)
-    std::string content_type;  ///< the Content-Type header
-    std::string authorization; ///< the Authorization header ("token T")
-    std::string cookie;        ///< the Cookie header
-    std::string query_token;   ///< the URL's ?token= ("" when absent)
+    std::string method;         ///< "GET", "POST" ...
+    std::string host;           ///< the Host header ("" when absent)
+    std::string origin;         ///< the Origin header ("" when absent)
+    std::string content_type;   ///< the Content-Type header
+    std::string authorization;  ///< the Authorization header ("token T")
+    std::string cookie;         ///< the Cookie header
+    std::string query_token;    ///< the URL's ?token= ("" when absent)
 };
 
 enum class Refusal {
@@ -32,12 +32,12 @@ enum class Refusal {
 
 struct Verdict {
     Refusal refusal = Refusal::None;
-    std::string message;  ///< why, for the 403 body (empty when served)
+    std::string message;      ///< why, for the 403 body (empty when served)
     bool set_cookie = false;  ///< the token came in the URL: give the page its cookie
 };
 
 class RequestGuard {
-public:
+  public:
     /// A new random token (128 bits from the system's entropy source) unless `token` is given.
     explicit RequestGuard(std::string token = {});
     void bind(int port) { port_ = port; }
@@ -51,7 +51,7 @@ public:
     std::string cookie() const;
     Verdict check(const RequestFacts& r) const;
 
-private:
+  private:
     std::string token_;
     int port_ = 0;
 };

@@ -31,7 +31,7 @@ namespace {
 
 /// A connected socket as httplib reads and writes it (its own stream type is not public).
 class SocketStream : public httplib::Stream {
-public:
+  public:
     explicit SocketStream(int socket) : socket_(socket) {}
     bool is_readable() const override { return wait(POLLIN); }
     bool is_writable() const override { return wait(POLLOUT); }
@@ -50,14 +50,12 @@ public:
         }
         return is_readable() ? ::recv(socket_, ptr, size, 0) : -1;
     }
-    ssize_t write(const char* ptr, size_t size) override {
-        return is_writable() ? ::send(socket_, ptr, size, MSG_NOSIGNAL) : -1;
-    }
+    ssize_t write(const char* ptr, size_t size) override { return is_writable() ? ::send(socket_, ptr, size, MSG_NOSIGNAL) : -1; }
     void get_remote_ip_and_port(std::string& ip, int& port) const override { address(::getpeername, ip, port); }
     void get_local_ip_and_port(std::string& ip, int& port) const override { address(::getsockname, ip, port); }
     socket_t socket() const override { return socket_; }
 
-private:
+  private:
     /// A client (a token holder: the guard has run) gets this long for each read or write.
     bool wait(short events) const {
         pollfd p{socket_, events, 0};
@@ -83,7 +81,7 @@ private:
 /// httplib's server with its connections passed through a ConnectionGate (connections.h): a
 /// worker takes a connection only once its headers are whole, and each serves one request.
 class GatedHttpServer : public httplib::Server {
-public:
+  public:
     explicit GatedHttpServer(GateLimits limits)
         : gate_(limits, [this](int socket) {
               SocketStream stream(socket);
@@ -97,7 +95,7 @@ public:
     /// was reset. Linux takes a second listen() as a new backlog.
     void raise_backlog() { ::listen(svr_sock_, SOMAXCONN); }
 
-private:
+  private:
     // httplib's accept loop hands each socket here (a private virtual may be overridden).
     bool process_and_close_socket(socket_t sock) override {
         gate_.admit(sock);
@@ -164,8 +162,7 @@ long long int_param(const httplib::Request& req, const char* key, long long def,
         size_t used = 0;
         long long x = std::stoll(v, &used);
         if (used == v.size() && x >= lo && x <= hi) return x;
-    } catch (const std::exception&) {
-    }
+    } catch (const std::exception&) {}
     throw InputError("request", key, fmt::format("'{}' is not an integer in [{}, {}]", v, lo, hi));
 }
 
@@ -176,8 +173,7 @@ float float_param(const httplib::Request& req, const char* key, float def) {
         size_t used = 0;
         float x = std::stof(v, &used);
         if (used == v.size() && std::isfinite(x)) return x;
-    } catch (const std::exception&) {
-    }
+    } catch (const std::exception&) {}
     throw InputError("request", key, fmt::format("'{}' is not a finite number", v));
 }
 
@@ -215,9 +211,13 @@ std::optional<std::array<int, 4>> region_param(const httplib::Request& req) {
 }  // namespace
 
 LightingServer::LightingServer(LightingSession& session, ServerOptions options)
-    : session_(session), options_(std::move(options)), guard_(options_.token), http_(std::make_unique<GatedHttpServer>(GateLimits{options_.header_time})) {
+    : session_(session),
+      options_(std::move(options)),
+      guard_(options_.token),
+      http_(std::make_unique<GatedHttpServer>(GateLimits{options_.header_time})) {
     if (!is_loopback_host(options_.host))
-        throw InputError("command line", "--bind", fmt::format("'{}' is not a loopback address; the tool serves this machine only", options_.host));
+        throw InputError("command line", "--bind",
+                         fmt::format("'{}' is not a loopback address; the tool serves this machine only", options_.host));
     if (options_.port < 0 || options_.port > 65535) throw InputError("command line", "--port", "must be in [0, 65535]");
     routes();
 }
@@ -277,7 +277,9 @@ void LightingServer::routes() {
     });
     s.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
         if (res.body.empty())
-            reply(res, res.status, {{"error", res.status == 413 ? "request body too large" : fmt::format("{} {}: status {}", req.method, req.path, res.status)}});
+            reply(res, res.status,
+                  {{"error",
+                    res.status == 413 ? "request body too large" : fmt::format("{} {}: status {}", req.method, req.path, res.status)}});
     });
     render_routes(s);
     view_routes(s);

@@ -29,7 +29,7 @@ struct ServerOptions {
 };
 
 class LightingServer {
-public:
+  public:
     /// InputError (exit 2) when the host is not a loopback address.
     LightingServer(LightingSession& session, ServerOptions options);
     ~LightingServer();
@@ -41,8 +41,8 @@ public:
     std::string url() const { return guard_.url(options_.host); }
     const std::string& token() const { return guard_.token(); }
 
-private:
-    void routes();  ///< guard, errors, static files
+  private:
+    void routes();                           ///< guard, errors, static files
     void render_routes(httplib::Server& s);  ///< edits, renders, frames, status
     void view_routes(httplib::Server& s);    ///< image, records, scene, files
     LightingSession& session_;

@@ -36,21 +36,30 @@ SessionAction parse_session_action(const std::string& name) {
 
 const char* session_state_name(SessionState s) {
     switch (s) {
-        case SessionState::Idle: return "idle";
-        case SessionState::Running: return "running";
-        case SessionState::Done: return "done";
-        case SessionState::Cancelled: return "cancelled";
-        case SessionState::Failed: return "failed";
+        case SessionState::Idle:
+            return "idle";
+        case SessionState::Running:
+            return "running";
+        case SessionState::Done:
+            return "done";
+        case SessionState::Cancelled:
+            return "cancelled";
+        case SessionState::Failed:
+            return "failed";
     }
     return "?";
 }
 
 const char* session_action_name(SessionAction a) {
     switch (a) {
-        case SessionAction::Reshade: return "reshade";
-        case SessionAction::Regather: return "regather";
-        case SessionAction::Rasterize: return "rasterize";
-        case SessionAction::Frame: return "frame";
+        case SessionAction::Reshade:
+            return "reshade";
+        case SessionAction::Regather:
+            return "regather";
+        case SessionAction::Rasterize:
+            return "rasterize";
+        case SessionAction::Frame:
+            return "frame";
     }
     return "?";
 }
@@ -86,24 +95,31 @@ void add_scene_rows(const json& description, json& rows) {
         for (const auto& [k, v] : item.items())
             if (editable(v)) keys[k] = v;
         for (const auto& [k, v] : keys.items())
-            rows.push_back({{"key", prefix + k}, {"stage", stage}, {"value", v},
-                            {"default", defaults.contains(k) ? defaults[k] : json(nullptr)}, {"unit", ""}, {"range", nullptr},
-                            {"doc", doc}, {"needs", "reshade"}});
+            rows.push_back({{"key", prefix + k},
+                            {"stage", stage},
+                            {"value", v},
+                            {"default", defaults.contains(k) ? defaults[k] : json(nullptr)},
+                            {"unit", ""},
+                            {"range", nullptr},
+                            {"doc", doc},
+                            {"needs", "reshade"}});
     };
     if (description.contains("lights") && description["lights"].is_array())
         for (size_t i = 0; i < description["lights"].size(); ++i) {
             const json& l = description["lights"][i];
             if (!l.is_object()) continue;
             const std::string type = l.value("type", "?");
-            add("light", fmt::format("lights.{}.", i), l, light_defaults(type), fmt::format("{} light {}; a re-gather updates its bounce light", type, i));
+            add("light", fmt::format("lights.{}.", i), l, light_defaults(type),
+                fmt::format("{} light {}; a re-gather updates its bounce light", type, i));
         }
     if (description.contains("materials") && description["materials"].is_object())
         for (const auto& [name, m] : description["materials"].items())
-            if (m.is_object()) add("material", "materials." + name + ".", m, material_defaults(), "material " + name + "; a re-gather updates its bounce light");
+            if (m.is_object())
+                add("material", "materials." + name + ".", m, material_defaults(),
+                    "material " + name + "; a re-gather updates its bounce light");
 }
 
 }  // namespace
-
 
 LightingSession::LightingSession(SessionOptions options) : options_(std::move(options)) {
     scene_ = load_scene(options_.scene);
@@ -139,9 +155,9 @@ LightingSession::LightingSession(SessionOptions options) : options_(std::move(op
     copy_in(options_.cache_in, cache_path_locked(), [&](const std::string& f) { adopt_cache_locked(read_cache_file(f), f); });
     // Nothing rendered yet: the first render makes what the session has no file of.
     const bool cached = scene_.render.indirect.gi == GiMode::Cache;
-    pending_ = static_cast<int>(!fs::exists(deep_path_)                     ? SessionAction::Rasterize
+    pending_ = static_cast<int>(!fs::exists(deep_path_)                      ? SessionAction::Rasterize
                                 : cached && !fs::exists(cache_path_locked()) ? SessionAction::Regather
-                                                                              : SessionAction::Reshade);
+                                                                             : SessionAction::Reshade);
 }
 
 LightingSession::~LightingSession() {
@@ -207,8 +223,7 @@ json LightingSession::edit(const std::string& key, const json& value, const std:
     // instance, a material's cutout) that changes what the camera sees needs a new deep file:
     // the old one is another scene's. Lights and other material keys are re-shaded (or
     // re-gathered) over it.
-    if (!p && !key.starts_with("lights") && s.visibility_fingerprint() != scene_.visibility_fingerprint())
-        needs = SessionAction::Rasterize;
+    if (!p && !key.starts_with("lights") && s.visibility_fingerprint() != scene_.visibility_fingerprint()) needs = SessionAction::Rasterize;
     if (!edits_.count(key)) edit_order_.push_back(key);
     edits_[key] = value;
     ++edit_count_;
@@ -240,8 +255,7 @@ json LightingSession::set_frame(double frame) {
     {
         std::lock_guard lock(mutex_);
         if (!scene_.shot.animated) throw InputError("request", "frame", "the scene has no shot (no \"animation\" block)");
-        if (!std::isfinite(frame) || !scene_.shot.contains(frame))
-            throw InputError("request", "frame", scene_.shot.outside(frame));
+        if (!std::isfinite(frame) || !scene_.shot.contains(frame)) throw InputError("request", "frame", scene_.shot.outside(frame));
         // A shot steps in whole frames, as --frames does (each frame's cache is named by it).
         if (frame != std::floor(frame)) throw InputError("request", "frame", fmt::format("{:g} is not a whole frame", frame));
         frame_asked_ = static_cast<int>(frame);
@@ -285,21 +299,22 @@ json LightingSession::status() const {
     std::lock_guard lock(mutex_);
     json layers = json::array();
     for (const Layer& l : image_.layers) layers.push_back(l.name);
-    return {{"state", session_state_name(state_)},
-            {"serial", ++status_serial_},
-            {"edits", edit_count_},
-            {"action", action_ ? json(session_action_name(*action_)) : json(nullptr)},
-            {"message", message_},
-            {"progress", {{"phase", phase_}, {"done", done_}, {"total", total_}}},
-            {"stats", stats_},
-            {"image", {{"version", version_}, {"width", image_.width}, {"height", image_.height}, {"layers", layers}}},
-            {"pending", pending_ < 0 ? json(nullptr) : json(session_action_name(static_cast<SessionAction>(pending_)))},
-            {"bounce_stale", bounce_stale_},
-            {"frame", frame_},
-            {"replay", running_ && action_ == SessionAction::Frame ? json{{"from", replay_.first}, {"to", replay_.target}} : json(nullptr)},
-            {"shot", {{"animated", scene_.shot.animated}, {"first", scene_.shot.first}, {"last", scene_.shot.last}, {"fps", scene_.shot.fps}}},
-            {"scene", options_.scene},
-            {"unread", scene_.unread}};
+    return {
+        {"state", session_state_name(state_)},
+        {"serial", ++status_serial_},
+        {"edits", edit_count_},
+        {"action", action_ ? json(session_action_name(*action_)) : json(nullptr)},
+        {"message", message_},
+        {"progress", {{"phase", phase_}, {"done", done_}, {"total", total_}}},
+        {"stats", stats_},
+        {"image", {{"version", version_}, {"width", image_.width}, {"height", image_.height}, {"layers", layers}}},
+        {"pending", pending_ < 0 ? json(nullptr) : json(session_action_name(static_cast<SessionAction>(pending_)))},
+        {"bounce_stale", bounce_stale_},
+        {"frame", frame_},
+        {"replay", running_ && action_ == SessionAction::Frame ? json{{"from", replay_.first}, {"to", replay_.target}} : json(nullptr)},
+        {"shot", {{"animated", scene_.shot.animated}, {"first", scene_.shot.first}, {"last", scene_.shot.last}, {"fps", scene_.shot.fps}}},
+        {"scene", options_.scene},
+        {"unread", scene_.unread}};
 }
 
 }  // namespace bounce

@@ -72,7 +72,7 @@ const char* session_action_name(SessionAction a);
 
 /// Where the session's render is; the status carries its name and the page switches on it.
 enum class SessionState : uint8_t {
-    Idle,       ///< nothing rendered yet
+    Idle,  ///< nothing rendered yet
     Running,
     Done,       ///< the last render finished: its image, deep file and cache are the session's
     Cancelled,  ///< stopped (or replaced by a newer request): the image before it stays
@@ -81,7 +81,7 @@ enum class SessionState : uint8_t {
 const char* session_state_name(SessionState s);
 
 class LightingSession {
-public:
+  public:
     /// Loads the scene (InputError on bad input); creates out_dir.
     explicit LightingSession(SessionOptions options);
     ~LightingSession();  ///< cancels and joins a running render
@@ -155,7 +155,7 @@ public:
     /// (every frame rendered keeps its own, for the 3D view's cache sequence).
     std::filesystem::path cache_path() const;
 
-private:
+  private:
     class Sink;
     void run(SessionAction action, std::optional<std::array<int, 4>> crop);
     /// Renders `action` (a slider move: each frame of its replay in turn); `stats` ends as the
@@ -186,7 +186,7 @@ private:
     std::condition_variable idle_;
     std::map<std::string, nlohmann::json> edits_;  ///< key -> value, in the order of the table
     std::vector<std::string> edit_order_;
-    Scene scene_;  ///< with every edit, at frame_
+    Scene scene_;       ///< with every edit, at frame_
     double frame_ = 1;  ///< the shot's frame the session shows
     /// In a shot: the frame whose state last_ holds as the sequence left it (`--frames F-k`'s
     /// frame k, F = sequence_first_), so the next frame steps from it; none before a first frame.
@@ -203,7 +203,7 @@ private:
     /// replay_ for frame_asked_, from the sequence as the last render left it (so called by
     /// start() once the render before has stopped: a move during a move starts from its end).
     void start_replay_locked();
-    int pending_ = -1;  ///< SessionAction, or -1 = nothing to show
+    int pending_ = -1;         ///< SessionAction, or -1 = nothing to show
     uint64_t edit_count_ = 0;  ///< edits so far (a render clears pending_ only if none came while it ran)
     /// A light or material edit was re-shaded over records gathered with the old lights: the
     /// bounce light is the old one until a full-frame re-gather (or new deep file) is done.
@@ -224,7 +224,7 @@ private:
     std::string phase_;
     uint64_t done_ = 0, total_ = 0;
     nlohmann::json stats_ = nlohmann::json::object();
-    Image image_;          ///< the last full frame (a sub-viewport render is pasted over it)
+    Image image_;  ///< the last full frame (a sub-viewport render is pasted over it)
     /// What the last render left, whole (frame_plan.h): its deep buffer and cache as the
     /// session's files hold them (kept for re-shades), and for the next frame of a shot the
     /// scene last rendered in full, its BVHs, radiosity textures, the records no fragment

@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 class LightingSession::Sink : public ProgressSink {
-public:
+  public:
     explicit Sink(LightingSession& s) : s_(s) {}
     void update(const std::string& name, uint64_t done, uint64_t total, double) override {
         std::lock_guard lock(s_.mutex_);
@@ -29,7 +29,7 @@ public:
         s_.phase_ = name, s_.done_ = total, s_.total_ = total;
     }
 
-private:
+  private:
     LightingSession& s_;
 };
 
@@ -41,8 +41,9 @@ void LightingSession::start(SessionAction action, std::optional<std::array<int, 
     if (crop) {
         const auto& c = *crop;
         if (c[0] < 0 || c[2] < 0 || c[1] > scene_.camera.width || c[3] > scene_.camera.height || c[0] >= c[1] || c[2] >= c[3])
-            throw InputError("request", "crop", fmt::format("[{}, {}, {}, {}] is not a rectangle inside the {}x{} frame", c[0], c[1],
-                                                            c[2], c[3], scene_.camera.width, scene_.camera.height));
+            throw InputError("request", "crop",
+                             fmt::format("[{}, {}, {}, {}] is not a rectangle inside the {}x{} frame", c[0], c[1], c[2], c[3],
+                                         scene_.camera.width, scene_.camera.height));
         if (image_.width != scene_.camera.width || image_.height != scene_.camera.height || !fs::exists(deep_path_))
             throw InputError("request", "crop", "render the whole frame once before a sub-viewport");
         if (action == SessionAction::Rasterize) throw InputError("request", "crop", "a new deep file is always the whole frame");
@@ -66,8 +67,7 @@ void LightingSession::wait() {
     idle_.wait(lock, [&] { return !running_; });
 }
 
-void LightingSession::render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats,
-                                  ProgressSink& sink) {
+void LightingSession::render_once(SessionAction action, std::optional<std::array<int, 4>> crop, Stats& stats, ProgressSink& sink) {
     Scene scene;
     RenderRequest req;
     uint64_t edits_seen = 0;
@@ -175,7 +175,7 @@ void LightingSession::keep_locked(SessionAction action, bool crop, uint64_t edit
     }
     FrameState next = r.release_state();
     if (!next.cache) next.cache = last_.cache;  // what the file still holds
-    if (crop) {  // the frame's deep buffer, scene and BVHs stay; the cache is what the file now holds
+    if (crop) {                                 // the frame's deep buffer, scene and BVHs stay; the cache is what the file now holds
         last_.cache = next.cache;
         return;
     }

@@ -46,7 +46,8 @@ fs::path LightingSession::confined(const std::string& name, const std::string& w
     if (name.empty() || name.size() > 1024 || name.find('\0') != std::string::npos)
         throw InputError("request", what, "a file name of 1..1024 characters is required");
     const fs::path p(name);
-    if (p.is_absolute()) throw InputError("request", what, fmt::format("'{}' is absolute; give a name inside the scene or output folder", name));
+    if (p.is_absolute())
+        throw InputError("request", what, fmt::format("'{}' is absolute; give a name inside the scene or output folder", name));
     for (const auto& part : p)
         if (part == "..") throw InputError("request", what, fmt::format("'{}' climbs out with '..'", name));
     for (const fs::path& base : {out_dir_, scene_dir_}) {
@@ -81,8 +82,12 @@ ViewArrays LightingSession::records(const std::string& file, size_t limit, std::
         e.insert(e.end(), {rec.E.x, rec.E.y, rec.E.z});
         ao.push_back(rec.ao);
     }
-    return {{{"file", path.filename().string()}, {"count", all}, {"in_region", f.records.size()}, {"fragment_records", f.fragment_records.size()},
-             {"shown", n}, {"frame", f.info.frame}},
+    return {{{"file", path.filename().string()},
+             {"count", all},
+             {"in_region", f.records.size()},
+             {"fragment_records", f.fragment_records.size()},
+             {"shown", n},
+             {"frame", f.info.frame}},
             {{"p", std::move(p)}, {"n", std::move(nn)}, {"r", std::move(r)}, {"E", std::move(e)}, {"ao", std::move(ao)}}};
 }
 
@@ -118,8 +123,12 @@ json LightingSession::cache_files() const {
 ViewArrays LightingSession::scene_view(size_t max_triangles) const {
     std::lock_guard lock(mutex_);
     const json values = param_values(scene_, ~0u);
-    json cam = {{"position", values["camera.position"]}, {"look_at", values["camera.look_at"]}, {"up", values["camera.up"]},
-                {"fov", scene_.camera.fov}, {"width", scene_.camera.width}, {"height", scene_.camera.height}};
+    json cam = {{"position", values["camera.position"]},
+                {"look_at", values["camera.look_at"]},
+                {"up", values["camera.up"]},
+                {"fov", scene_.camera.fov},
+                {"width", scene_.camera.width},
+                {"height", scene_.camera.height}};
     json lights = json::array();
     for (size_t i = 0; i < scene_.lights.size(); ++i) {
         const Light& l = scene_.lights[i];
@@ -152,8 +161,9 @@ ViewArrays LightingSession::scene_view(size_t max_triangles) const {
             for (const Vec3& v : triangle_vertices(o.coarse_mesh(), o.to_world(), i)) tris.insert(tris.end(), {v.x, v.y, v.z});
         }
     const Bounds b = scene_.bounds();
-    return {{{"camera", cam}, {"lights", lights}, {"triangles_total", total}, {"bounds", {{b.lo.x, b.lo.y, b.lo.z}, {b.hi.x, b.hi.y, b.hi.z}}}},
-            {{"triangles", std::move(tris)}}};
+    return {
+        {{"camera", cam}, {"lights", lights}, {"triangles_total", total}, {"bounds", {{b.lo.x, b.lo.y, b.lo.z}, {b.hi.x, b.hi.y, b.hi.z}}}},
+        {{"triangles", std::move(tris)}}};
 }
 
 std::string LightingSession::save_scene(const std::string& name) const {
@@ -210,9 +220,11 @@ void LightingSession::adopt_cache_locked(const CacheFile& f, const std::string& 
     const CacheFileInfo want = cache_file_info(scene_, 0);
     const CacheFit fit = cache_fit(f, want, scene_.lights.size());
     if (fit == CacheFit::OtherObjects)
-        throw InputError(name, "scene_fingerprint", "the cache was gathered on other objects (or a file they read has changed since): Re-gather instead");
+        throw InputError(name, "scene_fingerprint",
+                         "the cache was gathered on other objects (or a file they read has changed since): Re-gather instead");
     if (f.info.camera_fingerprint != want.camera_fingerprint)
-        throw InputError(name, "camera_fingerprint", "the cache was gathered for another camera (its spacing is in that camera's pixels): Re-gather instead");
+        throw InputError(name, "camera_fingerprint",
+                         "the cache was gathered for another camera (its spacing is in that camera's pixels): Re-gather instead");
     bounce_stale_ = fit == CacheFit::OtherLighting;
     file_parts_lights_ = keeps_light_parts(f, scene_.lights.size()) ? scene_.lights.size() : 0;
 }
