@@ -25,6 +25,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include "frontend/environment.h"
 #include "bounce/accel/accel.h"
 #include "bounce/core/parallel.h"
 #include "bounce/scene/scene_load.h"
@@ -121,13 +122,13 @@ std::pair<double, double> read_rate(const Scene& scene, int repeat) {
 /// Best load of `path` with its mesh files parsed, and with them read from a mesh cache
 /// (scene/mesh_cache.h; a fresh folder, filled by one load first).
 std::pair<double, double> load_rates(const std::string& path, int repeat, Scene& scene) {
-    unsetenv("BOUNCE_MESH_CACHE");
-    const double parsed = best_of(repeat, [&] { scene = load_scene(path); });
+    LoadOptions options = load_options_from_environment();
+    options.folders.mesh_cache.clear();
+    const double parsed = best_of(repeat, [&] { scene = load_scene(path, {}, options); });
     const auto folder = std::filesystem::temp_directory_path() / fmt::format("bounce-build-rate-{}", getpid());
-    setenv("BOUNCE_MESH_CACHE", folder.c_str(), 1);
-    scene = load_scene(path);
-    const double cached = best_of(repeat, [&] { scene = load_scene(path); });
-    unsetenv("BOUNCE_MESH_CACHE");
+    options.folders.mesh_cache = folder.string();
+    scene = load_scene(path, {}, options);
+    const double cached = best_of(repeat, [&] { scene = load_scene(path, {}, options); });
     std::filesystem::remove_all(folder);
     return {parsed, cached};
 }
@@ -166,7 +167,7 @@ void measure_once(const std::string& path) {
     RTCDevice device = rtcNewDevice("threads=0");
     parallel_for_each_index(size_t{0}, size_t{64}, [](size_t) {});
     const auto t0 = Clock::now();
-    const Scene scene = load_scene(path);
+    const Scene scene = load_scene(path, {}, load_options_from_environment());
     const double load = seconds_since(t0);
     const auto t1 = Clock::now();
     { SceneAccel a(scene); }

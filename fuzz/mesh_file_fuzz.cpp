@@ -26,15 +26,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const std::string path = "fuzz-" + std::to_string(getpid()) + ext;
     std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(data + 2), static_cast<std::streamsize>(size - 2));
     // Embedded images go to a folder of the working directory, not the user's cache.
-    setenv("BOUNCE_IMAGE_CACHE", "images", 1);
+    bounce::MeshInputs read;
+    read.folders.images = "images";
     std::vector<bounce::Material> materials;
     bounce::MeshPose pose;
     if (data[0] % 3 == 1 && data[1] & 1) pose.clip = "0", pose.seconds = (data[1] >> 1) / 64.0;
     try {
         if (pose.clip.empty() && (data[1] & 2))
-            (void)bounce::load_mesh_parts(path, "m", materials, -1, nullptr);
+            (void)bounce::load_mesh_parts(path, "m", materials, -1, &read);
         else
-            (void)bounce::load_mesh_file(path, "m", materials, -1, nullptr, pose);
+            (void)bounce::load_mesh_file(path, "m", materials, -1, &read, pose);
     } catch (const bounce::InputError&) {}
     std::remove(path.c_str());
     std::error_code ec;

@@ -71,6 +71,7 @@ class MeshCache : public ::testing::Test {
         l.materials[0].name = "white";
         l.materials[1].name = "lamp", l.materials[1].emission = Color(4);
         MeshInputs read;
+        read.folders = load_folders_from_environment();
         l.parts = load_mesh_parts(obj, "box", l.materials, override_material, &read);
         l.files = read.files;
         return l;
@@ -107,8 +108,10 @@ TEST_F(MeshCache, AHitLoadsWhatParsingLoads) {
     // load_mesh_file's entries are apart from load_mesh_parts' and hold the same triangles.
     const std::vector<Material> scene_materials(reference.materials.begin(), reference.materials.begin() + 2);
     std::vector<Material> first = scene_materials, second = scene_materials;
-    const TriangleMesh flat = load_mesh_file(obj, "box", first, -1);
-    const TriangleMesh again = load_mesh_file(obj, "box", second, -1);
+    MeshInputs read;
+    read.folders = load_folders_from_environment();
+    const TriangleMesh flat = load_mesh_file(obj, "box", first, -1, &read);
+    const TriangleMesh again = load_mesh_file(obj, "box", second, -1, &read);
     expect_same_materials(second, reference.materials);
     expect_same_mesh(flat, reference.parts.once);
     expect_same_mesh(again, reference.parts.once);

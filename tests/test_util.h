@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "frontend/environment.h"
 #include "bounce/core/error.h"
 #include "bounce/core/image.h"
 #include "bounce/scene/scene_load.h"
@@ -131,8 +132,10 @@ inline nlohmann::json base_scene() {
             {"lights", nlohmann::json::array()}};
 }
 
+/// A scene from inline JSON, loaded as the command line loads one (its folders from the
+/// environment: the tests that set BOUNCE_MESH_CACHE or BOUNCE_IMAGE_CACHE drive it so).
 inline Scene scene_from(const nlohmann::json& j, const std::vector<Override>& overrides = {}) {
-    return load_scene_text(j.dump(), "inline.json", overrides);
+    return load_scene_text(j.dump(), "inline.json", overrides, load_options_from_environment());
 }
 
 /// Runs `f`, expects an InputError whose message contains every string of `parts`.

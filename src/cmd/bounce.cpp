@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include "frontend/environment.h"
 #include "bounce/core/error.h"
 #include "bounce/core/progress.h"
 #include "bounce/dist/mpi.h"

@@ -10,6 +10,7 @@
 #include <memory>
 #include <regex>
 
+#include "frontend/environment.h"
 #include "bounce/core/error.h"
 #include "bounce/core/image.h"
 #include "bounce/core/image_input.h"
@@ -31,7 +32,7 @@ namespace {
 Scene load_render_scene(const RenderArgs& a, std::optional<double> frame) {
     std::vector<Override> o(a.sets.begin(), a.sets.end());
     o.insert(o.end(), a.flags.begin(), a.flags.end());  // dedicated flags win over --set
-    LoadOptions options;
+    LoadOptions options = load_options_from_environment();
     options.frame = frame;
     if (frame) options.frame_origin = a.frames.empty() ? fmt::format("--frame {:g}", *frame) : "--frames " + a.frames;
     Scene scene = load_scene(a.files.scene, o, options);

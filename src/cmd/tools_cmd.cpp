@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "frontend/environment.h"
 #include "bounce/accel/accel.h"
 #include "bounce/cache/cache_file.h"
 #include "bounce/cache/cache_tools.h"
@@ -129,7 +130,7 @@ std::string described(const Material& m) {
 }  // namespace
 
 int run_info(const InfoArgs& a) {
-    const Scene scene = load_scene(a.scene);
+    const Scene scene = load_scene(a.scene, {}, load_options_from_environment());
     std::printf("%s: %zu objects, %zu materials, %zu lights\n", a.scene.c_str(), scene.objects.size(), scene.materials.size(),
                 scene.lights.size());
     for (const Material& m : scene.materials) std::printf("material %s: %s\n", m.name.c_str(), described(m).c_str());
@@ -147,7 +148,7 @@ int run_bake_ao(const BakeAoArgs& a) {
                          fmt::format("the occlusion distance must be a number in (0, {:g}]", kMaxCoordinate));
     const double texels = static_cast<double>(a.resolution) * a.resolution;
     check_memory(texels * 3 * sizeof(float), "command line", fmt::format("--res {}", a.resolution), "the occlusion map");
-    Scene scene = load_scene(a.scene);
+    Scene scene = load_scene(a.scene, {}, load_options_from_environment());
     check_output_file(a.output, scene.input_paths(), scene.input_folders);
     const auto it = std::find_if(scene.objects.begin(), scene.objects.end(), [&](const Object& o) { return o.name == a.object; });
     const auto id = static_cast<uint32_t>(it - scene.objects.begin());

@@ -11,8 +11,6 @@
 
 namespace bounce {
 
-bool launched_by_mpi() { return std::getenv("OMPI_COMM_WORLD_SIZE") || std::getenv("PMIX_RANK") || std::getenv("PMI_RANK"); }
-
 MpiCommunicator::MpiCommunicator(int* argc, char*** argv) {
     int provided = 0;
     // Only the main thread calls MPI; TBB's workers never do.

@@ -11,9 +11,6 @@
 
 namespace bounce {
 
-/// True when this process was started by mpirun (or srun with Open MPI's PMIx).
-bool launched_by_mpi();
-
 /// The job's ranks over MPI_COMM_WORLD. MPI is initialised on construction and finalised on
 /// destruction; one per process.
 class MpiCommunicator : public Communicator {

@@ -3,10 +3,8 @@
 #include <OpenImageIO/hash.h>
 #include <assimp/texture.h>
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <cctype>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <system_error>
@@ -18,22 +16,11 @@ namespace bounce {
 
 namespace fs = std::filesystem;
 
-std::string embedded_image_folder() {
-    const auto env = [](const char* name) -> std::string {
-        const char* v = std::getenv(name);
-        return v && *v ? v : "";
-    };
-    if (std::string f = env("BOUNCE_IMAGE_CACHE"); !f.empty()) return f;
-    if (std::string f = env("XDG_CACHE_HOME"); !f.empty()) return (fs::path(f) / "bounce" / "images").string();
-    if (std::string f = env("HOME"); !f.empty()) return (fs::path(f) / ".cache" / "bounce" / "images").string();
-    return fmt::format("/tmp/bounce-images-{}", ::getuid());
+bool is_embedded_image(const std::string& file, const std::string& folder) {
+    return !folder.empty() && fs::absolute(file).lexically_normal().parent_path() == fs::absolute(folder).lexically_normal();
 }
 
-bool is_embedded_image(const std::string& file) {
-    return fs::absolute(file).lexically_normal().parent_path() == fs::absolute(embedded_image_folder()).lexically_normal();
-}
-
-std::string embedded_image_file(const aiTexture& texture, const std::string& path, const std::string& where) {
+std::string embedded_image_file(const aiTexture& texture, const std::string& images, const std::string& path, const std::string& where) {
     if (texture.mHeight != 0) throw InputError(path, where, "an embedded image of raw texels (not an encoded PNG or JPEG) is not read");
     // The format hint names the file's type ("png", "jpg"); anything else is kept out of the name.
     std::string ext;
@@ -42,7 +29,10 @@ std::string embedded_image_file(const aiTexture& texture, const std::string& pat
     if (ext.empty()) ext = "img";
     const auto* bytes = reinterpret_cast<const char*>(texture.pcData);
     const size_t size = texture.mWidth;
-    const fs::path folder = embedded_image_folder();
+    if (images.empty())
+        throw InputError(path, where,
+                         "it embeds an image and no folder was given to write it to (LoadFolders::images; BOUNCE_IMAGE_CACHE)");
+    const fs::path folder = images;
     const fs::path file = folder / fmt::format("{:016x}.{}", OIIO::xxhash::XXH64(bytes, size, 61), ext);
     std::error_code ec;
     if (fs::is_regular_file(file, ec) && fs::file_size(file, ec) == size) return file.string();

@@ -9,16 +9,12 @@ struct aiTexture;
 
 namespace bounce {
 
-/// The folder embedded images are written to: $BOUNCE_IMAGE_CACHE, else
-/// $XDG_CACHE_HOME/bounce/images, else ~/.cache/bounce/images, else /tmp/bounce-images-<uid>.
-std::string embedded_image_folder();
+/// Whether `file` is one embedded_image_file wrote into `folder` (LoadFolders::images).
+bool is_embedded_image(const std::string& file, const std::string& folder);
 
-/// Whether `file` is one embedded_image_file wrote (in embedded_image_folder()).
-bool is_embedded_image(const std::string& file);
-
-/// The file holding `texture`'s bytes (written there atomically unless it is already there).
-/// Throws InputError naming `path` and `where` when the image is not an encoded file (raw texels)
-/// or the folder cannot take it.
-std::string embedded_image_file(const aiTexture& texture, const std::string& path, const std::string& where);
+/// The file of `folder` holding `texture`'s bytes (written there atomically unless it is already
+/// there). Throws InputError naming `path` and `where` when the image is not an encoded file (raw
+/// texels), no folder is given or the folder cannot take it.
+std::string embedded_image_file(const aiTexture& texture, const std::string& folder, const std::string& path, const std::string& where);
 
 }  // namespace bounce

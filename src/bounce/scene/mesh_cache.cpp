@@ -262,16 +262,16 @@ uint64_t body_hash(const std::string& bytes, size_t from) {
 
 }  // namespace
 
-std::string mesh_cache_folder() {
-    const char* env = std::getenv("BOUNCE_MESH_CACHE");
-    if (!env || !*env) return "";
+std::string usable_mesh_cache(const std::string& folder) {
+    if (folder.empty()) return "";
     std::error_code ec;
-    fs::create_directories(env, ec);
-    if (!fs::is_directory(env, ec)) {
-        say_once(said_folder, fmt::format("BOUNCE_MESH_CACHE={} is not a folder bounce can make; meshes are parsed", env));
+    fs::create_directories(folder, ec);
+    if (!fs::is_directory(folder, ec)) {
+        say_once(said_folder,
+                 fmt::format("the mesh cache {} is not a folder bounce can make (BOUNCE_MESH_CACHE); meshes are parsed", folder));
         return "";
     }
-    return env;
+    return folder;
 }
 
 std::string mesh_cache_entry(const std::string& folder, const MeshCacheKey& key) {

@@ -33,8 +33,9 @@ struct LoadedMeshFile {
     std::vector<std::pair<std::string, uint64_t>> inputs;
 };
 
-/// The folder BOUNCE_MESH_CACHE names (created if missing), or empty: no cache.
-std::string mesh_cache_folder();
+/// `folder` (LoadFolders::mesh_cache) made if missing, or empty when it is empty or cannot be
+/// made (said once on stderr: meshes are then parsed).
+std::string usable_mesh_cache(const std::string& folder);
 
 /// The entry for `key` in `folder` when it is sound and the file and its inputs are unchanged.
 /// A damaged entry is said once on stderr; a missing or stale one silently; both are misses.

@@ -345,7 +345,7 @@ void for_each_face_material(MeshFileParts& parts, Fn&& fn) {
 /// check, the file's materials appended to `materials`).
 MeshFileParts through_cache(const std::string& path, const std::string& prefix, bool parts, std::vector<Material>& materials,
                             int override_material, MeshInputs* files_read, const std::function<MeshFileParts(MeshInputs*)>& import) {
-    const std::string folder = mesh_cache_folder();
+    const std::string folder = usable_mesh_cache(files_read ? files_read->folders.mesh_cache : std::string());
     if (folder.empty()) return import(files_read);
     const MeshCacheKey key{fs::absolute(path).lexically_normal().string(), prefix, override_material >= 0,
                            override_material >= 0 && materials[static_cast<size_t>(override_material)].is_emissive(), parts};
@@ -353,7 +353,7 @@ MeshFileParts through_cache(const std::string& path, const std::string& prefix, 
     auto to_scene = [&](uint32_t f) { return override_material >= 0 ? static_cast<uint32_t>(override_material) : base + f; };
     if (std::optional<LoadedMeshFile> hit = read_mesh_cache(folder, key)) {
         for (const auto& input : hit->inputs)
-            if (files_read && is_embedded_image(input.first))
+            if (files_read && is_embedded_image(input.first, files_read->folders.images))
                 files_read->files.push_back(input.first);  // bounce's own, as on a parse
             else if (files_read)
                 files_read->add(input.first);
@@ -361,7 +361,7 @@ MeshFileParts through_cache(const std::string& path, const std::string& prefix, 
         for_each_face_material(hit->parts, to_scene);
         return std::move(hit->parts);
     }
-    MeshInputs read{files_read ? files_read->check : nullptr, {}};
+    MeshInputs read{files_read->check, {}, files_read->folders};  // (a cache folder came from files_read)
     LoadedMeshFile entry{import(&read), {materials.begin() + base, materials.end()}, {}};
     if (files_read) files_read->files.insert(files_read->files.end(), read.files.begin(), read.files.end());
     // By absolute path: a later run from another working directory reads the same files.

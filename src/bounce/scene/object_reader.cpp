@@ -91,7 +91,8 @@ TriangleMesh posed_visible_mesh(const JsonReader& r, const Scene& scene, double 
     std::vector<Material> materials = scene.materials;  // the file's own are added to a copy
     TriangleMesh mesh;
     try {
-        mesh = load_mesh_file(r.file("file", true), "", materials, -1, nullptr, mesh_pose(r, scene, frame));
+        MeshInputs read = mesh_inputs(r, "file");  // (its inputs were recorded when the object was read)
+        mesh = load_mesh_file(r.file("file", true), "", materials, -1, &read, mesh_pose(r, scene, frame));
     } catch (const NoSuchClip& e) {
         r.fail("animation", e.what());
     } catch (const InputError& e) {

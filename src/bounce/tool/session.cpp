@@ -122,7 +122,9 @@ void add_scene_rows(const json& description, json& rows) {
 }  // namespace
 
 LightingSession::LightingSession(SessionOptions options) : options_(std::move(options)) {
-    scene_ = load_scene(options_.scene);
+    LoadOptions first;
+    first.folders = options_.folders;
+    scene_ = load_scene(options_.scene, {}, first);
     frame_ = scene_.frame;
     scene_dir_ = fs::weakly_canonical(fs::absolute(options_.scene)).parent_path();
     std::error_code ec;
@@ -215,6 +217,7 @@ json LightingSession::edit(const std::string& key, const json& value, const std:
     o.push_back(cli_origin.empty() ? edit_override(key, value) : Override(key + "=" + value.dump(), cli_origin));
     LoadOptions at;
     at.frame = frame_;
+    at.folders = options_.folders;
     if (cli_origin.empty()) at.check_path = edit_path_check(key);
     Scene s = load_scene(options_.scene, o, at);  // throws with the file and place on a bad value
     const Param* p = find_param(scene_params(), key);
