@@ -360,8 +360,9 @@ try {
   let moved = 0;
   for (let i = 0; i < f1.length; i++) moved += f1[i] !== f3[i];
   check(s.state === 'done' && s.frame === 3 && moved > 100, `frame 3 rendered (${s.state}, frame ${s.frame}, ${moved} values changed)`);
-  check(s.stats.plan && s.stats.plan.cache === "previous frame's records, judged",
-    `frame 3 was planned from frame 2's records (${s.stats.plan && s.stats.plan.cache})`);
+  const cacheStart = s.stats.plan && s.stats.plan.steps.find((step) => step.step === "cache start");
+  check(cacheStart && cacheStart.from === "previous frame's records, judged",
+    `frame 3 was planned from frame 2's records (${cacheStart && cacheStart.from})`);
   const count = (frame) => JSON.parse(execFileSync(bin, ['cache', 'info', path.join(work, `shot-out/session.000${frame}.bic`), '--json'])).records;
   const shownCount = async (n) => {
     await page.waitForFunction((m) => +document.getElementById('record-count').dataset.count === m, n, { timeout: 60000 }).catch(() => {});

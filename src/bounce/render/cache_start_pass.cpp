@@ -17,15 +17,14 @@ std::unique_ptr<IrradianceCache> copy_cache(const IrradianceCache& from, const S
     return cache;
 }
 
-CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous,
+CacheStartResult cache_start_pass(const FrameContext& ctx, const CacheStartStep& step, const FramePlan& plan, const FrameState& previous,
                                   const RadiosityResult& radiosity) {
     const Scene& scene = ctx.scene;
     CacheStartResult out;
-    if (plan.cache == CacheStart::None) return out;
     PhaseTimer t(ctx.stats, "cache read");
     out.cache = std::make_unique<IrradianceCache>(scene.bounds(), scene.render.cache, scene.render.indirect.ao);
-    if (scene.render.cache.light_parts) out.cache->set_light_scales(light_scales(scene));
-    if (plan.cache == CacheStart::Temporal) {
+    if (step.light_parts) out.cache->set_light_scales(light_scales(scene));
+    if (step.start == CacheStart::Temporal) {
         // The previous frame's records and those still waiting from before, judged for this frame.
         out.judged = judge_records(*previous.cache, previous.waiting_records(), previous.kept_gathers(), *previous.scene, scene,
                                    *plan.changes, radiosity.changed, radiosity.brightest);
@@ -36,9 +35,9 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan
         return out;
     }
     std::function<bool(const Record&)> keep;
-    if (plan.flush_crop)
+    if (step.flush_crop)
         keep = [crop = plan.window, camera = CameraRays(scene.camera)](const Record& r) { return !camera.projects_into(r.p, crop); };
-    if (plan.cache == CacheStart::Previous) {
+    if (step.start == CacheStart::Previous) {
         const IrradianceCache& from = *previous.cache;
         // Records that keep their light parts show today's light colours and intensities: the
         // bounce light of a light edit, exactly (docs/lighting-tool.md).
@@ -56,8 +55,8 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan
         out.records_loaded = out.cache->size();
         return out;
     }
-    if (plan.cache == CacheStart::File) {
-        LoadedCache loaded = load_cache(plan.cache_in, scene, plan.force, plan.cache_reuse, *out.cache, keep);
+    if (step.start == CacheStart::File) {
+        LoadedCache loaded = load_cache(step.cache_in, scene, step.force, step.reuse, *out.cache, keep);
         out.records_loaded = loaded.records;
         out.differences = loaded.differences;
         out.other_lighting = loaded.other_lighting;

@@ -1,6 +1,7 @@
 // The passes of a frame as the plan runs them. Every pass receives the one FrameContext
-// (scene, BVHs, materials, lights, stats, progress, cancel) and returns a typed result;
-// run_frame (render.h) calls them in the plan's order and nothing else does.
+// (scene, BVHs, materials, lights, stats, progress, cancel) and its step of the plan (what it
+// is to do, decided by plan_frame), and returns a typed result; run_frame (render.h) calls
+// them in the plan's order and nothing else does: no pass calls a pass.
 #pragma once
 
 #include <memory>
@@ -9,6 +10,7 @@
 
 #include "bounce/accel/accel.h"
 #include "bounce/cache/irradiance_cache.h"
+#include "bounce/cache/passes.h"
 #include "bounce/cache/temporal.h"
 #include "bounce/core/communicator.h"
 #include "bounce/core/image.h"
@@ -46,18 +48,18 @@ struct VisibilityResult {
     /// The fragments the shading pass shades (the crop, or the gathered window itself).
     const DeepBuffer& shaded() const { return crop ? *crop : gathered; }
 };
-/// Traces, reads or takes over the previous frame's deep buffer, as the plan says (plan.deep_out
-/// is written by the front end, with the frame's other outputs).
-VisibilityResult visibility_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous);
+/// Traces, reads or takes over the previous frame's deep buffer, as the step says, over the
+/// plan's windows (plan.deep_out is written by the front end, with the frame's other outputs).
+VisibilityResult visibility_pass(const FrameContext& ctx, const VisibilityStep& step, const FramePlan& plan, const FrameState& previous);
 
-/// Radiosity textures as the plan says (null for RadiosityStep::None), and for a carried one
-/// where its radiosity changed since the previous frame.
+/// Radiosity textures as the step says, and for a carried one where its radiosity changed
+/// since the previous frame.
 struct RadiosityResult {
     std::unique_ptr<RadiosityTextures> textures;
     std::vector<LightChange> changed;
     float brightest = 0;  ///< the largest radiance a moving object may show or hide (temporal.h)
 };
-RadiosityResult radiosity_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous);
+RadiosityResult radiosity_pass(const FrameContext& ctx, const RadiosityStep& step, const FramePlan& plan, const FrameState& previous);
 
 /// The cache a frame starts from (null when the plan has none).
 struct CacheStartResult {
@@ -67,33 +69,23 @@ struct CacheStartResult {
     bool other_lighting = false;           ///< the file's records hold other lights' bounce light
     TemporalJudgement judged;              ///< CacheStart::Temporal: what became of the previous frame's records
 };
-CacheStartResult cache_start_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous,
+CacheStartResult cache_start_pass(const FrameContext& ctx, const CacheStartStep& step, const FramePlan& plan, const FrameState& previous,
                                   const RadiosityResult& radiosity);
-/// Under MPI: every process takes the sides the others baked (RadiosityTextures::take_baked).
-void share_radiosity_pass(const FrameContext& ctx, RadiosityTextures& rt);
-/// Saves radiosity textures that this frame baked into render.radiosity_textures.
-void save_radiosity_pass(const FrameContext& ctx, const RadiosityTextures& rt, size_t baked_before);
+/// After the last pass that may bake: the sides exchanged among an MPI job's ranks and saved
+/// (by rank 0) as the step says; `baked_before`: the sides baked before the frame's gathers.
+void finish_radiosity_pass(const FrameContext& ctx, const FinishRadiosityStep& step, RadiosityTextures& rt, size_t baked_before);
 
 /// What mirrors and glass show in the shaded window: the surfaces where their paths end
-/// (specular.h: sites, as fragments; empty when the scene has no mirror or glass) and, under
-/// brute force, the gather at each.
+/// (specular.h: sites, as fragments) and, under brute force, the gather at each. Empty
+/// without a SpecularSitesStep.
 struct SpecularSitesResult {
-    bool mirrors = false;  ///< the scene has mirrors or glass (sites are traced only when gathers light them)
     DeepBuffer sites;
     std::vector<Indirect> brute;
     bool any() const { return !sites.fragments.empty(); }
-    /// Whether the cache (or brute force) lights the sites: indirect_at_specular_hits = cache.
-    static bool lit_by_gathers(const Scene& scene);
 };
-SpecularSitesResult specular_sites_pass(const FrameContext& ctx, const FramePlan& plan, const DeepBuffer& shaded);
-/// The sites' part of the gathering pass: records where the cache does not cover a site.
-/// Returns how many it made.
-size_t specular_gather_pass(const FrameContext& ctx, const FramePlan& plan, const DeepBuffer& sites, const Gatherer& gatherer,
-                            IrradianceCache& cache);
-/// Brute force: a gather at every site (into `specular.brute`).
-void specular_brute_pass(const FrameContext& ctx, const Gatherer& gatherer, SpecularSitesResult& specular);
+SpecularSitesResult specular_sites_pass(const FrameContext& ctx, const DeepBuffer& shaded);
 /// The light the shading pass gives a window's sites: the cache's interpolation (its misses
-/// counted), brute force's gathers, or the radiosity textures.
+/// counted), brute force's gathers, or the radiosity textures, as `from` says.
 struct SiteLightResult {
     DeepBuffer sites;  ///< the window's own (a tile of the frame's)
     std::vector<Indirect> light;
@@ -102,26 +94,34 @@ struct SiteLightResult {
     size_t misses = 0;
     SiteLight view() const { return {sites.offsets.empty() ? nullptr : &sites, has_light ? &light : nullptr, radiosity}; }
 };
-SiteLightResult site_light_for(const FrameContext& ctx, const SpecularSitesResult& specular, const std::array<int, 4>& window,
-                               const IrradianceCache* cache, const RadiosityTextures* radiosity);
+SiteLightResult site_light_for(const FrameContext& ctx, SiteLightFrom from, const SpecularSitesResult& specular,
+                               const std::array<int, 4>& window, const IrradianceCache* cache, const RadiosityTextures* radiosity);
 
-/// What the gathering pass made.
+/// What the gathering steps made.
 struct GatherPassResult {
     size_t records_new = 0;               ///< records in the cache that it did not start with (new and redone)
     size_t fragment_records_new = 0;      ///< per-fragment refinement's gathers
-    size_t site_records_new = 0;          ///< records made for the sites of mirrors and glass (in records_new too)
     size_t regathered = 0, reshaded = 0;  ///< stale records of earlier frames redone
     std::vector<Record> waiting;          ///< stale records no fragment needed (for the next frame)
-    std::vector<Record> gathers;          ///< refinement's gathers that still serve (plan.keep_gathers)
+    std::vector<Record> gathers;          ///< refinement's gathers that still serve (RefineStep::keep_gathers)
+    SubPassCallback after_subpass;        ///< the preview after each sub-pass (GatherRecordsStep::preview)
 };
-/// The gathering pass (and refinement) into `cache`, redoing the judged stale records where
-/// they are needed; `preview`, if set, gets an image after each sub-pass.
-GatherPassResult cache_gather_pass(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep,
-                                   const RadiosityTextures* radiosity, IrradianceCache& cache, TemporalJudgement judged,
-                                   const std::function<void(const Image&)>& preview, const SpecularSitesResult& specular);
-/// A gather at every fragment of the shaded window (and at every site of `specular`).
-std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const DeepBuffer& deep, const RadiosityTextures* radiosity,
-                                        SpecularSitesResult& specular);
+/// The gathering pass into `cache`, redoing the judged stale records (taken from `judged`)
+/// where they are needed; `preview`, if the step asks, gets an image after each sub-pass.
+GatherPassResult record_gather_pass(const FrameContext& ctx, const GatherRecordsStep& step, const FramePlan& plan,
+                                    const VisibilityResult& deep, const RadiosityTextures* radiosity, IrradianceCache& cache,
+                                    TemporalJudgement& judged, const std::function<void(const Image&)>& preview);
+/// Per-fragment refinement over the shaded window: the fragments' own gathers (their earlier
+/// frames' taken from `judged`) into `cache`; `gathered` gets what it made.
+void refine_pass(const FrameContext& ctx, const RefineStep& step, const FramePlan& plan, const VisibilityResult& deep,
+                 const RadiosityTextures* radiosity, IrradianceCache& cache, TemporalJudgement& judged, GatherPassResult& gathered);
+/// Records where the cache does not cover the sites of mirrors and glass. Returns how many it made.
+size_t site_gather_pass(const FrameContext& ctx, const GatherSitesStep& step, const FramePlan& plan, const DeepBuffer& sites,
+                        const RadiosityTextures* radiosity, IrradianceCache& cache);
+/// A gather at every fragment of the shaded window (and, as the step says, at every site of
+/// `specular`, into `specular.brute`).
+std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const BruteGatherStep& step, const DeepBuffer& deep,
+                                        const RadiosityTextures* radiosity, SpecularSitesResult& specular);
 
 /// The shading pass: the image of the shaded window.
 struct ShadeResult {
@@ -130,18 +130,19 @@ struct ShadeResult {
     std::vector<float> refined;  ///< per pixel: the coverage of fragments that used their own record
     std::vector<Color> colours;  ///< render.deep_colour: what each fragment adds to the beauty (shade's `colours`)
 };
-/// Shades `deep` with the cache's interpolation (cache non-null), `brute` light (non-null) or
-/// direct light only. With a cache and `quick_look`, first calls it with every 4th pixel
-/// shaded standing for its 4x4 block (a re-shade's preview).
+/// Shades `deep` with the light the step names: the cache's interpolation (of `cache`), `brute`
+/// or direct light only. With the step's quick look, first calls `quick_look` with every 4th
+/// pixel shaded standing for its 4x4 block (a re-shade's preview).
 /// `specular`: the frame's sites (lit as site_light_for says; `radiosity` for
 /// indirect_at_specular_hits = radiosity).
-ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache, const std::vector<Indirect>* brute,
-                         const SpecularSitesResult& specular, const RadiosityTextures* radiosity,
-                         const std::function<void(const Image&)>& quick_look = {});
+ShadeResult shading_pass(const FrameContext& ctx, const ShadeStep& step, const DeepBuffer& deep, const IrradianceCache* cache,
+                         const std::vector<Indirect>* brute, const SpecularSitesResult& specular, const RadiosityTextures* radiosity,
+                         const std::function<void(const Image&)>& quick_look);
 
-/// The scene's gather settings for this frame's gathers: with gradients (`record_terms`) for
-/// records, without for brute force, refinement and the correction; the frame's cancel token.
-GatherSettings frame_gather_settings(const FrameContext& ctx, bool record_terms);
+/// The scene's gather settings for this frame's gathers: with gradients (`record_terms`, and
+/// the Hessian's terms with `hessian`) for records, without for brute force, refinement and the
+/// correction; the frame's cancel token.
+GatherSettings frame_gather_settings(const FrameContext& ctx, bool record_terms, bool hessian = false);
 
 /// A copy of `cache` that a frame may add records to.
 std::unique_ptr<IrradianceCache> copy_cache(const IrradianceCache& cache, const Scene& scene);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "bounce/accel/accel.h"
 #include "bounce/cache/passes.h"
@@ -24,28 +25,37 @@ int crop_margin(const Scene& scene) {
 
 namespace {
 
-const char* name(VisibilityStep s) {
+const char* name(DeepSource s) {
     switch (s) {
-        case VisibilityStep::Trace:
+        case DeepSource::Trace:
             return "trace";
-        case VisibilityStep::ReadFile:
+        case DeepSource::ReadFile:
             return "read deep file";
-        case VisibilityStep::Previous:
+        case DeepSource::Previous:
             return "previous frame's";
     }
     return "?";
 }
-const char* name(RadiosityStep s) {
+const char* name(AccelSource s) {
     switch (s) {
-        case RadiosityStep::None:
-            return "none";
-        case RadiosityStep::Bake:
+        case AccelSource::Build:
+            return "build";
+        case AccelSource::Keep:
+            return "keep";
+        case AccelSource::Update:
+            return "update";
+    }
+    return "?";
+}
+const char* name(RadiositySource s) {
+    switch (s) {
+        case RadiositySource::Bake:
             return "bake as hit";
-        case RadiosityStep::BakeSplit:
+        case RadiositySource::BakeSplit:
             return "bake all, a share per rank, exchanged";
-        case RadiosityStep::Load:
+        case RadiositySource::Load:
             return "load, bake what is missing";
-        case RadiosityStep::Carry:
+        case RadiositySource::Carry:
             return "previous frame's, re-bake what changed";
     }
     return "?";
@@ -65,51 +75,120 @@ const char* name(CacheStart s) {
     }
     return "?";
 }
-const char* name(GatherStep s) {
+const char* name(IndirectFrom s) {
     switch (s) {
-        case GatherStep::None:
+        case IndirectFrom::None:
             return "none";
-        case GatherStep::Brute:
+        case IndirectFrom::Brute:
             return "brute force";
-        case GatherStep::Cache:
-            return "gathering pass";
-        case GatherStep::WhereMissing:
-            return "only where records are missing";
+        case IndirectFrom::Cache:
+            return "cache";
+    }
+    return "?";
+}
+const char* name(SiteLightFrom s) {
+    switch (s) {
+        case SiteLightFrom::None:
+            return "none";
+        case SiteLightFrom::Radiosity:
+            return "radiosity";
+        case SiteLightFrom::Cache:
+            return "cache";
+        case SiteLightFrom::Brute:
+            return "brute force";
     }
     return "?";
 }
 
+/// Which gathering a frame runs (the plan lists its steps).
+enum class Gathering : uint8_t {
+    None,          ///< direct light only
+    Brute,         ///< a gather at every fragment
+    Cache,         ///< gathering pass (and refinement) where the starting cache misses
+    WhereMissing,  ///< shade the starting cache; only if a fragment has no record, gather and shade again
+};
+
+/// Frames of a shot: a point where a kept record weighs this much is covered by it alone (its
+/// centre moved a little in the image since the frame that made it). Measured on shot A; asking
+/// only 1 of kept records saved 9 % of its rays for 0.15 points more error and 7 % more flicker
+/// (docs/animation.md).
+constexpr float kTemporalOwnWeight = 0.9f;
+
+/// What a plan decides from: the scene, the previous frame's state, the request, and what
+/// follows from them once.
+struct Inputs {
+    const Scene& scene;
+    const FrameState& previous;
+    const RenderRequest& request;
+    bool shot;        ///< a frame of a shot
+    bool comparable;  ///< a shot's frame whose objects are the previous frame's
+    bool cached;      ///< gi cache
+    bool parts;       ///< records and textures keep per-light parts
+};
+
 /// A re-shade or re-gather starts from the previous frame's deep buffer and cache when it holds them.
 bool reuses_previous(const RenderRequest& request) { return request.kind == FrameKind::Reshade || request.kind == FrameKind::Regather; }
 
+DeepSource deep_source(const Inputs& in) {
+    const Scene& scene = in.scene;
+    // (A previous deep buffer made for another camera or objects is refused by the pass, saying
+    // so; a frame of a shot takes it only when its camera and objects are the same.)
+    const bool same_view =
+        in.previous.deep && in.previous.deep->scene_fingerprint == scene.visibility_fingerprint() && !scene.render.visibility.has_crop();
+    if ((reuses_previous(in.request) && in.previous.deep) || (in.shot && same_view)) return DeepSource::Previous;
+    return in.request.deep_in.empty() ? DeepSource::Trace : DeepSource::ReadFile;
+}
+
+AccelSource accel_source(const Inputs& in, const SceneChanges* changes) {
+    // A later frame that refit a part the previous BVHs trace (the tool going back) leaves them stale.
+    const bool usable = in.previous.accel && in.previous.accel->current();
+    if (in.comparable && usable && changes->visible_geometry_same) return AccelSource::Keep;
+    return in.shot && usable ? AccelSource::Update : AccelSource::Build;
+}
+
 /// Where the cache starts: the previous frame's, a file, or empty (a full re-gather).
-CacheStart cache_start(const Scene& scene, const FrameState& previous, const RenderRequest& request) {
-    const bool cached = scene.render.indirect.gi == GiMode::Cache;
-    const bool crop = scene.render.visibility.has_crop();
+CacheStart cache_start(const Inputs& in) {
+    const RenderRequest& request = in.request;
     // Without a cache render, a cache file is only read for its records layer.
-    if (!cached) return request.cache_in.empty() ? CacheStart::None : CacheStart::File;
-    if (request.kind == FrameKind::Regather && !crop) return CacheStart::Empty;
-    if (request.kind == FrameKind::ShotFrame && previous.cache) return CacheStart::Temporal;
-    if (reuses_previous(request) && previous.cache) return CacheStart::Previous;
+    if (!in.cached) return request.cache_in.empty() ? CacheStart::None : CacheStart::File;
+    if (request.kind == FrameKind::Regather && !in.scene.render.visibility.has_crop()) return CacheStart::Empty;
+    if (request.kind == FrameKind::ShotFrame && in.previous.cache) return in.comparable ? CacheStart::Temporal : CacheStart::Empty;
+    if (reuses_previous(request) && in.previous.cache) return CacheStart::Previous;
     return request.cache_in.empty() ? CacheStart::Empty : CacheStart::File;
 }
 
-GatherStep gather_step(const Scene& scene, CacheStart cache, const RenderRequest& request) {
-    const IndirectSettings& ind = scene.render.indirect;
-    if (!ind.any()) return GatherStep::None;
-    if (ind.gi != GiMode::Cache) return GatherStep::Brute;
-    const bool starts_full = cache == CacheStart::Previous || cache == CacheStart::File || cache == CacheStart::Temporal;
-    return request.kind == FrameKind::Reshade && starts_full ? GatherStep::WhereMissing : GatherStep::Cache;
+Gathering gathering(const Inputs& in, CacheStart start) {
+    if (!in.scene.render.indirect.any()) return Gathering::None;
+    if (!in.cached) return Gathering::Brute;
+    const bool starts_full = start == CacheStart::Previous || start == CacheStart::File || start == CacheStart::Temporal;
+    return in.request.kind == FrameKind::Reshade && starts_full ? Gathering::WhereMissing : Gathering::Cache;
 }
 
-/// Any light (or emissive material) of the shot keyed.
-bool lights_keyed(const Scene& scene) {
-    if (!scene.keyed.is_object()) return false;
-    if (scene.keyed.contains("lights") && has_keys(scene.keyed["lights"])) return true;
-    if (scene.keyed.contains("materials") && scene.keyed["materials"].is_object())
-        for (const auto& [name, m] : scene.keyed["materials"].items())
-            if (m.is_object() && m.contains("emission") && has_keys(m["emission"])) return true;
-    return false;
+/// Where the radiosity textures come from (none: no gather, AO, or render.radiosity off).
+std::optional<RadiositySource> radiosity_source(const Inputs& in, Gathering g) {
+    const Scene& scene = in.scene;
+    if (g == Gathering::None || !scene.render.radiosity.enabled || scene.render.indirect.ao) return std::nullopt;
+    // Textures with light parts are baked, not loaded (files hold the sum), and carried only
+    // between frames that keep parts for as many lights.
+    RadiositySource s = scene.render.radiosity.folder.empty() || in.parts ? RadiositySource::Bake : RadiositySource::Load;
+    // An MPI job's still bakes every side once, a share per rank, instead of each rank baking
+    // what its own gathers hit (about half the sides each on Sponza at 2 ranks, more as ranks
+    // grow; docs/parallel.md measures both). Not for a shot (its next frame re-bakes only the
+    // sides baked before, as one process does) nor for saved textures (Load: they hold the
+    // sides one process would bake).
+    const bool ranks = in.request.comm && in.request.comm->size() > 1;
+    if (s == RadiositySource::Bake && ranks && !in.shot) s = RadiositySource::BakeSplit;
+    const FrameState& p = in.previous;
+    if (in.comparable && p.radiosity && p.radiosity->has_parts() == in.parts &&
+        (!in.parts || p.scene->lights.size() == scene.lights.size()))
+        s = RadiositySource::Carry;
+    return s;
+}
+
+/// Whether gathers light the sites of mirrors and glass (indirect_at_specular_hits = cache).
+bool sites_lit_by_gathers(const Scene& scene) {
+    return scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Cache && scene.render.indirect.any() &&
+           !scene.render.indirect.ao;
 }
 
 /// What the frame cannot do, refused before any work: a frame larger than memory allows, and
@@ -134,12 +213,101 @@ void refuse_what_cannot_run(const Scene& scene, const FramePlan& plan, const Ren
 
 }  // namespace
 
+namespace {
+
+/// The steps that make records where fragments need them: radiosity textures first when the
+/// plan has not made them yet, the gathering pass, refinement, the sites of mirrors and glass.
+void add_record_gathers(FramePlan& plan, const Inputs& in, std::optional<RadiosityStep> radiosity_first, bool sites, RunWhen when) {
+    const Scene& scene = in.scene;
+    const CacheSettings& c = scene.render.cache;
+    const CacheStart start = plan.cache_start();
+    if (radiosity_first) plan.steps.push_back({*radiosity_first, when});
+    GatherRecordsStep g;
+    g.hessian = c.metric == Metric::Hessian;
+    g.first_rays = c.min_rays > 0 && c.min_rays < scene.render.indirect.rays ? c.min_rays : 0;
+    g.own_weight = start == CacheStart::Temporal ? kTemporalOwnWeight : 0;
+    // A shot in which anything moves keeps records' hits: a record is then updated (the rays a
+    // moving object may meet traced again, every hit re-shaded) rather than gathered again.
+    g.keep_hits = in.shot && (keys_light(scene.keyed) || scene.objects_move());
+    g.preview = scene.render.parallel.preview && in.request.preview != nullptr;
+    plan.steps.push_back({g, when});
+    if (refinement_runs(scene)) {
+        RefineStep r;
+        r.rays = c.refine_rays > 0 ? c.refine_rays : scene.render.indirect.rays;
+        // Refinement's gathers lend their rays to the next frames' (EarlierGathers; not with
+        // light parts: per-light layers of a shot are not measured with it). In an MPI job every
+        // process takes every process's gathers with their hits, so each reuses the same.
+        r.keep_gathers = in.shot && c.temporal_refine_reuse > 0 && !in.parts;
+        r.keep_rays = g.keep_hits || r.keep_gathers;
+        r.refined_before = start == CacheStart::Temporal && plan.changes && plan.changes->camera;
+        plan.steps.push_back({r, when});
+    }
+    if (sites) plan.steps.push_back({GatherSitesStep{g.hessian, g.keep_hits}, when});
+}
+
+ShadeStep shade_step(const Inputs& in, Gathering g, bool specular) {
+    const Scene& scene = in.scene;
+    ShadeStep s;
+    s.indirect = g == Gathering::None ? IndirectFrom::None : g == Gathering::Brute ? IndirectFrom::Brute : IndirectFrom::Cache;
+    if (!specular || (!sites_lit_by_gathers(scene) && scene.render.shading.indirect_at_specular_hits != SpecularHitLight::Radiosity))
+        s.sites = SiteLightFrom::None;
+    else if (scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity)
+        s.sites = SiteLightFrom::Radiosity;
+    else
+        s.sites = s.indirect == IndirectFrom::Cache ? SiteLightFrom::Cache : SiteLightFrom::Brute;
+    if (s.indirect == IndirectFrom::Cache) {
+        s.correction_rays = scene.render.cache.correction_rays;
+        s.per_light = scene.render.shading.layers == LayerSet::Components && !scene.render.indirect.ao && !scene.lights.empty();
+        s.refined_layer = refinement_runs(scene);
+    }
+    s.deep_colour = scene.render.shading.deep_colour;
+    return s;
+}
+
+/// The steps from the radiosity textures (where the plan makes them) to the image.
+void add_light_steps(FramePlan& plan, const Inputs& in, Gathering g, std::optional<RadiosityStep> radiosity) {
+    const Scene& scene = in.scene;
+    const bool specular = std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) { return m.is_specular(); });
+    const bool sites = specular && sites_lit_by_gathers(scene);
+    if (sites) plan.steps.push_back({SpecularSitesStep{}});
+    // Paths to mirrors and glass look their sites up in the textures: made before any shading.
+    if (radiosity && specular && scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity) {
+        plan.steps.push_back({*radiosity});
+        radiosity.reset();
+    }
+    const ShadeStep shade = shade_step(in, g, specular);
+    switch (g) {
+        case Gathering::None:
+            break;
+        case Gathering::Brute:
+            if (radiosity) plan.steps.push_back({*radiosity});
+            plan.steps.push_back({BruteGatherStep{sites}});
+            break;
+        case Gathering::Cache:
+            add_record_gathers(plan, in, radiosity, sites, RunWhen::Always);
+            break;
+        case Gathering::WhereMissing: {
+            ShadeStep first = shade;
+            first.quick_look = scene.render.parallel.preview && in.request.preview != nullptr;
+            plan.steps.push_back({first});
+            add_record_gathers(plan, in, radiosity, sites, RunWhen::ShadingMissed);
+            plan.steps.push_back({shade, RunWhen::ShadingMissed});
+            return;
+        }
+    }
+    plan.steps.push_back({shade});
+}
+
+}  // namespace
+
 FramePlan plan_frame(const Scene& scene, const FrameState& previous, const RenderRequest& request) {
     FramePlan plan;
     plan.frame = request.frame;
     plan.window = frame_window(scene);
     plan.gather_window = plan.window;
-    if (scene.render.visibility.has_crop() && scene.render.indirect.gi == GiMode::Cache) {
+    const bool crop = scene.render.visibility.has_crop();
+    const bool cached = scene.render.indirect.gi == GiMode::Cache;
+    if (crop && cached) {
         const int m = crop_margin(scene);
         const auto& w = plan.window;
         plan.gather_window = {std::max(0, w[0] - m), std::min(scene.camera.width, w[1] + m), std::max(0, w[2] - m),
@@ -147,88 +315,82 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
     }
     const bool shot = request.kind == FrameKind::ShotFrame;
     if (shot && previous.scene) plan.changes = std::make_shared<const SceneChanges>(scene_changes(*previous.scene, scene));
-    const bool comparable = plan.changes && plan.changes->comparable;
-    // (A previous deep buffer made for another camera or objects is refused by the pass, saying so;
-    // a frame of a shot takes it only when its camera and objects are the same.)
-    const bool same_view =
-        previous.deep && previous.deep->scene_fingerprint == scene.visibility_fingerprint() && !scene.render.visibility.has_crop();
-    if ((reuses_previous(request) && previous.deep) || (shot && same_view))
-        plan.visibility = VisibilityStep::Previous;
-    else if (!request.deep_in.empty())
-        plan.visibility = VisibilityStep::ReadFile, plan.deep_in = request.deep_in;
-    else
-        plan.visibility = VisibilityStep::Trace;
-    plan.deep_out = request.deep_out;
-
-    // A later frame that refit a part the previous BVHs trace (the tool going back) leaves them stale.
-    const bool accel_usable = previous.accel && previous.accel->current();
-    if (comparable && accel_usable && plan.changes->visible_geometry_same)
-        plan.accel = AccelStep::Keep;
-    else if (shot && accel_usable)
-        plan.accel = AccelStep::Update;
-    plan.cache = cache_start(scene, previous, request);
-    if (plan.cache == CacheStart::Temporal && !comparable) plan.cache = CacheStart::Empty;  // other objects: nothing to keep
-    if (plan.cache == CacheStart::File) plan.cache_in = request.cache_in;
-    plan.flush_crop = request.kind == FrameKind::Regather && scene.render.visibility.has_crop() && plan.cache != CacheStart::Empty;
-    plan.force = request.force;
-    plan.cache_reuse = request.cache_reuse;
-    plan.gather = gather_step(scene, plan.cache, request);
-    const bool specular = std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) { return m.is_specular(); });
-    plan.specular_sites = specular && SpecularSitesResult::lit_by_gathers(scene);
-    plan.refine = (plan.gather == GatherStep::Cache || plan.gather == GatherStep::WhereMissing) && refinement_runs(scene);
-    plan.correct = scene.render.indirect.any() && scene.render.indirect.gi == GiMode::Cache && scene.render.cache.correction_rays > 0;
-    const IndirectSettings& ind = scene.render.indirect;
-    if (plan.gather != GatherStep::None && scene.render.radiosity.enabled && !ind.ao)
-        plan.radiosity = scene.render.radiosity.folder.empty() ? RadiosityStep::Bake : RadiosityStep::Load;
-    // Textures with light parts are baked, not loaded (files hold the sum), and carried only
-    // between frames that keep parts for as many lights.
-    const bool parts = scene.render.cache.light_parts;
-    if (parts && plan.radiosity == RadiosityStep::Load) plan.radiosity = RadiosityStep::Bake;
-    // An MPI job's still bakes every side once, a share per rank, instead of each rank baking
-    // what its own gathers hit (about half the sides each on Sponza at 2 ranks, more as ranks
-    // grow; docs/parallel.md measures both). Not for a shot (its next frame re-bakes only the
-    // sides baked before, as one process does) nor for saved textures (Load: they hold the
-    // sides one process would bake).
-    if (plan.radiosity == RadiosityStep::Bake && request.comm && request.comm->size() > 1 && !shot)
-        plan.radiosity = RadiosityStep::BakeSplit;
-    if (plan.radiosity != RadiosityStep::None && comparable && previous.radiosity && previous.radiosity->has_parts() == parts &&
-        (!parts || previous.scene->lights.size() == scene.lights.size()))
-        plan.radiosity = RadiosityStep::Carry;
-    plan.share_radiosity = plan.radiosity != RadiosityStep::None && request.comm && request.comm->size() > 1 &&
-                           (shot || !scene.render.radiosity.folder.empty());
-    // A shot in which anything moves keeps records' hits: a record is then updated (the rays a
-    // moving object may meet traced again, every hit re-shaded) rather than gathered again.
-    plan.keep_hits = shot && scene.render.indirect.gi == GiMode::Cache && (lights_keyed(scene) || scene.objects_move());
-    // Refinement's gathers lend their rays to the next frames' (EarlierGathers; not with light
-    // parts: per-light layers of a shot are not measured with it). In an MPI job every process
-    // takes every process's gathers with their hits (refinement_pass), so each reuses the same.
-    plan.keep_gathers = shot && plan.refine && scene.render.cache.temporal_refine_reuse > 0 && !parts;
-    plan.preview = scene.render.parallel.preview && request.preview != nullptr;
     plan.threads = scene.render.parallel.threads > 0 ? scene.render.parallel.threads : tbb::this_task_arena::max_concurrency();
+    const Inputs in{scene, previous, request, shot, plan.changes && plan.changes->comparable, cached, scene.render.cache.light_parts};
+
+    plan.steps.push_back({AccelStep{accel_source(in, plan.changes.get())}});
+    const DeepSource deep = deep_source(in);
+    plan.deep_out = !request.deep_out.empty() ? request.deep_out : deep == DeepSource::Trace ? request.deep_out_if_traced : "";
+    plan.steps.push_back({VisibilityStep{deep, deep == DeepSource::ReadFile ? request.deep_in : "", crop, crop || !plan.deep_out.empty()}});
+
+    const CacheStart start = cache_start(in);
+    const Gathering g = gathering(in, start);
+    std::optional<RadiosityStep> radiosity;
+    if (const auto source = radiosity_source(in, g)) radiosity = RadiosityStep{*source, scene.render.radiosity.folder};
+    // A carried radiosity says what light changed, which the records' judgement needs first.
+    const bool carried = radiosity && radiosity->source == RadiositySource::Carry;
+    if (carried) plan.steps.push_back({*radiosity});
+    if (start != CacheStart::None) {
+        CacheStartStep c;
+        c.start = start;
+        if (start == CacheStart::File) c.cache_in = request.cache_in;
+        c.flush_crop = request.kind == FrameKind::Regather && crop && start != CacheStart::Empty;
+        c.force = request.force;
+        c.reuse = request.cache_reuse;
+        c.light_parts = in.parts;
+        plan.steps.push_back({c});
+    }
+    add_light_steps(plan, in, g, carried ? std::nullopt : radiosity);
+    if (radiosity) {
+        const bool ranks = request.comm && request.comm->size() > 1;
+        plan.steps.push_back(
+            {FinishRadiosityStep{ranks && (shot || !scene.render.radiosity.folder.empty()), scene.render.radiosity.folder}});
+    }
     refuse_what_cannot_run(scene, plan, request);
     return plan;
 }
 
+namespace {
+
+// Each step as JSON: its name and its configuration.
+using J = nlohmann::json;
+J step_json(const AccelStep& s) { return {{"step", "accel"}, {"from", name(s.source)}}; }
+J step_json(const VisibilityStep& s) { return {{"step", "visibility"}, {"from", name(s.source)}, {"crop", s.crop}}; }
+J step_json(const RadiosityStep& s) { return {{"step", "radiosity"}, {"from", name(s.source)}}; }
+J step_json(const FinishRadiosityStep& s) { return {{"step", "finish radiosity"}, {"share", s.share}, {"save", !s.folder.empty()}}; }
+J step_json(const CacheStartStep& s) {
+    return {{"step", "cache start"}, {"from", name(s.start)}, {"flush_crop", s.flush_crop}, {"light_parts", s.light_parts}};
+}
+J step_json(const SpecularSitesStep&) { return {{"step", "specular sites"}}; }
+J step_json(const GatherRecordsStep& s) {
+    return {{"step", "gather records"},   {"hessian", s.hessian},     {"first_rays", s.first_rays},
+            {"own_weight", s.own_weight}, {"keep_hits", s.keep_hits}, {"preview", s.preview}};
+}
+J step_json(const RefineStep& s) {
+    return {{"step", "refine"},
+            {"rays", s.rays},
+            {"keep_rays", s.keep_rays},
+            {"keep_gathers", s.keep_gathers},
+            {"refined_before", s.refined_before}};
+}
+J step_json(const GatherSitesStep& s) { return {{"step", "gather sites"}, {"keep_hits", s.keep_hits}}; }
+J step_json(const BruteGatherStep& s) { return {{"step", "brute force"}, {"sites", s.sites}}; }
+J step_json(const ShadeStep& s) {
+    return {{"step", "shade"},          {"indirect", name(s.indirect)}, {"sites", name(s.sites)}, {"correction_rays", s.correction_rays},
+            {"per_light", s.per_light}, {"quick_look", s.quick_look}};
+}
+
+}  // namespace
+
 nlohmann::json FramePlan::describe() const {
-    return {{"frame", frame},
-            {"window", window},
-            {"gather_window", gather_window},
-            {"visibility", name(visibility)},
-            {"deep_out", !deep_out.empty()},
-            {"accel", accel == AccelStep::Keep     ? "keep"
-                      : accel == AccelStep::Update ? "update"
-                                                   : "build"},
-            {"keep_hits", keep_hits},
-            {"radiosity", name(radiosity)},
-            {"share_radiosity", share_radiosity},
-            {"cache", name(cache)},
-            {"flush_crop", flush_crop},
-            {"specular_sites", specular_sites},
-            {"gather", name(gather)},
-            {"refine", refine},
-            {"correct", correct},
-            {"keep_gathers", keep_gathers},
-            {"threads", threads}};
+    nlohmann::json list = nlohmann::json::array();
+    for (const PlannedStep& s : steps) {
+        nlohmann::json j = std::visit([](const auto& step) { return step_json(step); }, s.step);
+        if (s.when == RunWhen::ShadingMissed) j["when"] = "if shading missed";
+        list.push_back(std::move(j));
+    }
+    return {{"frame", frame},     {"window", window},        {"gather_window", gather_window}, {"deep_out", !deep_out.empty()},
+            {"threads", threads}, {"steps", std::move(list)}};
 }
 
 }  // namespace bounce

@@ -1,7 +1,9 @@
 // A frame as a plan (docs/architecture.md, "A frame is a plan"): built once from the scene at the
-// frame's time, what the previous frame left (FrameState) and the front end's request, it says
-// which passes run and on what. The CLI, a sequence, the lighting tool and an MPI rank all
-// drive frames through it; a new capability adds a step or a plan rule, never a flag.
+// frame's time, what the previous frame left (FrameState) and the front end's request, it lists
+// the steps that run, in order, each with its resolved configuration; run_frame is a loop over
+// them. plan_frame is the only code that reads settings to decide what runs. The CLI, a
+// sequence, the lighting tool and an MPI rank all drive frames through it; a new capability
+// adds a step or a plan rule, never a flag.
 #pragma once
 
 #include <array>
@@ -9,6 +11,8 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <variant>
+#include <vector>
 
 #include "bounce/cache/cache_identity.h"
 #include "bounce/core/image.h"
@@ -43,6 +47,9 @@ struct RenderRequest {
     FrameKind kind = FrameKind::Still;
     std::string deep_in;   ///< start from this deep file instead of tracing visibility
     std::string deep_out;  ///< write the deep buffer (of the gathered window) here
+    /// Write the deep buffer here when the frame traces a new one (the lighting tool's session
+    /// file: a frame that keeps the last one has it on disk already). deep_out wins.
+    std::string deep_out_if_traced;
     /// Preview mode (render.preview with gi cache): called with the whole image after every
     /// sub-pass, pixelated first and finer after; a re-shade calls it once, with every 4th
     /// pixel in x and y shaded and standing for its 4x4 block, before shading the rest.
@@ -71,7 +78,7 @@ struct FrameState {
     /// Shared like the rest, so a front end that keeps the state (the lighting tool) hands it to
     /// the next plan without copying records (a shot's kept gathers hold their rays' hits).
     std::shared_ptr<const std::vector<Record>> waiting;
-    std::shared_ptr<const std::vector<Record>> gathers;  ///< refinement's gathers that still serve (plan.keep_gathers)
+    std::shared_ptr<const std::vector<Record>> gathers;  ///< refinement's gathers that still serve (RefineStep::keep_gathers)
     const std::vector<Record>& waiting_records() const { return waiting ? *waiting : none(); }
     const std::vector<Record>& kept_gathers() const { return gathers ? *gathers : none(); }
 
@@ -82,72 +89,159 @@ struct FrameState {
     }
 };
 
-/// Primary visibility.
-enum class VisibilityStep : uint8_t {
-    Trace,     ///< trace the fine tessellation (a new deep buffer)
-    ReadFile,  ///< read plan.deep_in
-    Previous,  ///< the previous frame's deep buffer, in memory
+/// When a step runs.
+enum class RunWhen : uint8_t {
+    Always,
+    /// Only if the shading step before it left fragments no record covers: a re-shade gathers
+    /// (and shades again) only where its starting cache misses.
+    ShadingMissed,
 };
-/// The ray-tracing structures.
-enum class AccelStep : uint8_t {
+
+/// Where the ray-tracing structures come from.
+enum class AccelSource : uint8_t {
     Build,
     Keep,    ///< the previous frame's: nothing rays or the camera see has moved
     Update,  ///< built from the previous frame's: unchanged parts taken over, movers placed, skins refit
 };
-/// Radiosity textures for the gather's hits.
-enum class RadiosityStep : uint8_t {
-    None,       ///< no gather, AO, or render.radiosity off: hits are shaded with shadow rays
+struct AccelStep {
+    AccelSource source = AccelSource::Build;
+};
+
+/// Where the frame's deep buffer comes from.
+enum class DeepSource : uint8_t {
+    Trace,     ///< trace the fine tessellation (a new deep buffer)
+    ReadFile,  ///< read `deep_in`
+    Previous,  ///< the previous frame's deep buffer, in memory
+};
+struct VisibilityStep {
+    DeepSource source = DeepSource::Trace;
+    std::string deep_in;
+    bool crop = false;  ///< the shaded window is a crop of the gathered one
+    /// Under MPI every rank keeps every tile's fragments (a crop's tiles differ from the gathered
+    /// window's, or rank 0 writes the deep file), not only its own.
+    bool every_tile = false;
+};
+
+/// Where the radiosity textures for the gathers' hits come from.
+enum class RadiositySource : uint8_t {
     Bake,       ///< laid out and baked lazily as rays hit them
     BakeSplit,  ///< an MPI job's still: every side baked at once, a share per rank, and exchanged
-    Load,       ///< from render.radiosity_textures (baked lazily where the folder does not match)
+    Load,       ///< from `folder` (baked lazily where the folder does not match)
     Carry,      ///< the previous frame's, re-baked where its direct light may have changed
 };
+/// Radiosity textures for the gathers' hits (without this step, hits are shaded with shadow rays).
+struct RadiosityStep {
+    RadiositySource source = RadiositySource::Bake;
+    std::string folder;  ///< render.radiosity_textures (Load)
+};
+/// After the last pass that may bake sides: MPI ranks exchange the sides each baked (textures
+/// saved by rank 0, or carried to a shot's next frame, whose list of changed sides must be the
+/// same on every rank), and the textures are saved to `folder` if it names one.
+struct FinishRadiosityStep {
+    bool share = false;
+    std::string folder;
+};
+
 /// Where the irradiance cache starts.
 enum class CacheStart : uint8_t {
-    None,  ///< no cache (brute force, direct only)
+    None,  ///< no cache (brute force, direct only): no step
     Empty,
-    File,      ///< plan.cache_in (with the identity checks of load_cache)
+    File,      ///< `cache_in` (with the identity checks of load_cache)
     Previous,  ///< the previous frame's cache, in memory, as it is
     Temporal,  ///< the previous frame's records judged for this frame: kept, moved or redone (temporal.h)
 };
-/// Which gathering runs.
-enum class GatherStep : uint8_t {
-    None,          ///< direct light only, or shade the starting cache (a re-shade)
-    Brute,         ///< a gather at every fragment
-    Cache,         ///< gathering pass (and refinement) where the starting cache misses
-    WhereMissing,  ///< shade the starting cache; only if a fragment has no record, gather and shade again
+struct CacheStartStep {
+    CacheStart start = CacheStart::Empty;
+    std::string cache_in;
+    bool flush_crop = false;  ///< leave out the starting cache's records seen inside the crop
+    bool force = false;
+    CacheReuse reuse = CacheReuse::Strict;
+    bool light_parts = false;  ///< records keep per-light parts, scaled by today's lights
+};
+
+/// Mirror and glass paths traced from the visible fragments to the sites where gathers light
+/// them (a scene with specular materials whose bounce light comes from gathers).
+struct SpecularSitesStep {};
+
+/// The gathering pass: records where fragments need them, earlier frames' stale records redone
+/// where they are needed.
+struct GatherRecordsStep {
+    bool hessian = false;    ///< records carry the Hessian metric's terms
+    int first_rays = 0;      ///< adaptive records: rays of a first estimate (0: every record gathers render.rays)
+    float own_weight = 0;    ///< the weight at which one record covers a point alone (0: the settings')
+    bool keep_hits = false;  ///< records keep their gather's hits: the shot's lights change, re-shading is cheaper
+    bool preview = false;    ///< progressive images through the request's callback
+};
+/// Per-fragment refinement where the records disagree.
+struct RefineStep {
+    int rays = 0;                 ///< of a refined fragment's own gather
+    bool keep_rays = false;       ///< the gathers keep their hits (a shot: the next frames reuse them)
+    bool keep_gathers = false;    ///< refinement's gathers kept for the next frames to reuse (EarlierGathers)
+    bool refined_before = false;  ///< a moving camera's frame: the fragments refined the frame before keep their gathers (hysteresis)
+    bool preview = false;
+};
+/// Records where the cache does not cover the sites of mirrors and glass.
+struct GatherSitesStep {
+    bool hessian = false;
+    bool keep_hits = false;
+};
+/// A gather at every fragment of the shaded window (and at every site of mirrors and glass).
+struct BruteGatherStep {
+    bool sites = false;
+};
+
+/// The light the shading step gives the fragments.
+enum class IndirectFrom : uint8_t {
+    None,   ///< direct light only
+    Brute,  ///< brute force's gathers
+    Cache,  ///< the cache's interpolation
+};
+/// The light the shading step gives the sites of mirrors and glass.
+enum class SiteLightFrom : uint8_t {
+    None,       ///< direct light only (or AO), traced by the shading pass
+    Radiosity,  ///< the radiosity textures (render.indirect_at_specular_hits = radiosity)
+    Cache,      ///< the cache's interpolation at the sites
+    Brute,      ///< brute force's gathers at the sites
+};
+struct ShadeStep {
+    IndirectFrom indirect = IndirectFrom::None;
+    SiteLightFrom sites = SiteLightFrom::None;
+    int correction_rays = 0;     ///< records as a control variate: every fragment's own rays correct their prediction
+    bool per_light = false;      ///< per-light indirect layers from the records' light parts
+    bool deep_colour = false;    ///< what each fragment adds to the beauty (render.deep_colour)
+    bool quick_look = false;     ///< a re-shade's preview first: every 4th pixel shaded, standing for its 4x4 block
+    bool refined_layer = false;  ///< the `refined` layer (refinement ran, or the cache holds fragments' own records)
+};
+
+using Step = std::variant<AccelStep, VisibilityStep, RadiosityStep, CacheStartStep, SpecularSitesStep, GatherRecordsStep, RefineStep,
+                          GatherSitesStep, BruteGatherStep, ShadeStep, FinishRadiosityStep>;
+struct PlannedStep {
+    Step step;
+    RunWhen when = RunWhen::Always;
 };
 
 struct FramePlan {
     int frame = 0;
     std::array<int, 4> window{};         ///< pixels shaded: the crop or the frame (x0, x1, y0, y1)
     std::array<int, 4> gather_window{};  ///< pixels gathered in: the window and its margin
-    VisibilityStep visibility = VisibilityStep::Trace;
-    std::string deep_in, deep_out;
-    AccelStep accel = AccelStep::Build;
-    RadiosityStep radiosity = RadiosityStep::None;
-    /// An MPI job's ranks exchange the sides each baked: textures saved by rank 0, or carried to
-    /// a shot's next frame, whose list of changed sides must be the same on every rank.
-    bool share_radiosity = false;
-    CacheStart cache = CacheStart::None;
-    std::string cache_in;
-    bool flush_crop = false;  ///< leave out the starting cache's records seen inside the crop
-    bool force = false;
-    CacheReuse cache_reuse = CacheReuse::Strict;
-    /// Mirror and glass paths traced from the visible fragments to the sites where gathers
-    /// light them (a scene with specular materials whose bounce light comes from gathers).
-    bool specular_sites = false;
-    GatherStep gather = GatherStep::None;
-    bool refine = false;        ///< per-fragment refinement after the gathering pass
-    bool correct = false;       ///< every fragment's own rays correct the records' prediction (cache.correction_rays)
-    bool keep_hits = false;     ///< records keep their gather's hits: the shot's lights change, re-shading is cheaper
-    bool keep_gathers = false;  ///< refinement's gathers are kept for the next frames to reuse (EarlierGathers)
-    bool preview = false;       ///< progressive images through the request's callback
+    std::string deep_out;                ///< where the front end writes the gathered window's deep buffer
     int threads = 1;
     /// Frames of a shot: what changed since the previous frame (null otherwise).
     std::shared_ptr<const SceneChanges> changes;
+    /// What runs, in order: run_frame is a loop over it.
+    std::vector<PlannedStep> steps;
 
-    /// The plan as JSON (in --stats-json and the tool's status): one entry per step.
+    /// The first step of type S, or null.
+    template <class S>
+    const S* find() const {
+        for (const PlannedStep& s : steps)
+            if (const S* p = std::get_if<S>(&s.step)) return p;
+        return nullptr;
+    }
+    /// Where the cache starts (None without a cache step).
+    CacheStart cache_start() const { return find<CacheStartStep>() ? find<CacheStartStep>()->start : CacheStart::None; }
+    /// The plan as JSON (in --stats-json and the tool's status): the frame, its windows and one
+    /// entry per step, in order.
     nlohmann::json describe() const;
 };
 

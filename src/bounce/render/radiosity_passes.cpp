@@ -24,46 +24,8 @@ float sky_brightest(const Light& l) {
 
 }  // namespace
 
-RadiosityResult radiosity_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous) {
-    RadiosityResult out;
-    if (plan.radiosity == RadiosityStep::None) return out;
-    const RadiositySettings& settings = ctx.scene.render.radiosity;
-    out.textures = std::make_unique<RadiosityTextures>();
-    if (plan.radiosity == RadiosityStep::Carry) {
-        PhaseTimer t(ctx.stats, "radiosity carry");
-        *out.textures =
-            RadiosityTextures::carry(*previous.radiosity, ctx.scene, ctx.materials, ctx.lighting, *plan.changes, out.changed, ctx.stats);
-        // What a moving object can show or hide: the brightest texel, emission or sky.
-        out.brightest = out.textures->brightest();
-        for (const Material& m : ctx.scene.materials) out.brightest = std::max(out.brightest, luminance(m.peak_emission()));
-        for (const Light& l : ctx.scene.lights)
-            if (l.type == LightType::Sky) out.brightest = std::max(out.brightest, sky_brightest(l));
-        return out;
-    }
-    if (plan.radiosity == RadiosityStep::Load) {
-        PhaseTimer t(ctx.stats, "radiosity load");
-        std::string why;
-        if (RadiosityTextures::load(settings.folder, ctx.scene, settings, ctx.materials, ctx.lighting, *out.textures, why)) {
-            ctx.stats.set("radiosity_reused", 1);
-            return out;
-        }
-        if (ctx.progress) std::fprintf(stderr, "radiosity textures in %s not reused: %s; baking\n", settings.folder.c_str(), why.c_str());
-    }
-    {
-        PhaseTimer t(ctx.stats, "radiosity layout");  // every side's lattice laid out (pages come as they are baked)
-        *out.textures = RadiosityTextures::lazy(ctx.scene, ctx.materials, ctx.lighting, settings);
-    }
-    ctx.stats.set("radiosity_reused", 0);
-    if (plan.radiosity == RadiosityStep::BakeSplit) {
-        PhaseTimer t(ctx.stats, "radiosity");
-        out.textures->bake_all(ctx.stats, ctx.progress, ctx.comm.rank(), ctx.comm.size());
-        ctx.stats.set("radiosity_sides_split_here", static_cast<double>(out.textures->baked_sides()));
-        share_radiosity_pass(ctx, *out.textures);
-    }
-    return out;
-}
-
-void share_radiosity_pass(const FrameContext& ctx, RadiosityTextures& rt) {
+/// Under MPI: every process takes the sides the others baked (RadiosityTextures::take_baked).
+void exchange_baked_sides(const FrameContext& ctx, RadiosityTextures& rt) {
     if (ctx.comm.size() == 1) return;
     const std::vector<std::string> all = ctx.comm.allgather(rt.baked_bytes());
     size_t bytes = 0;  // counted as exchange_bytes counts: what every rank sent
@@ -74,15 +36,53 @@ void share_radiosity_pass(const FrameContext& ctx, RadiosityTextures& rt) {
     ctx.stats.set("radiosity_sides_exchanged_bytes", static_cast<double>(bytes));
 }
 
-void save_radiosity_pass(const FrameContext& ctx, const RadiosityTextures& rt, size_t baked_before) {
+RadiosityResult radiosity_pass(const FrameContext& ctx, const RadiosityStep& step, const FramePlan& plan, const FrameState& previous) {
+    RadiosityResult out;
+    const RadiositySettings& settings = ctx.scene.render.radiosity;
+    out.textures = std::make_unique<RadiosityTextures>();
+    if (step.source == RadiositySource::Carry) {
+        PhaseTimer t(ctx.stats, "radiosity carry");
+        *out.textures =
+            RadiosityTextures::carry(*previous.radiosity, ctx.scene, ctx.materials, ctx.lighting, *plan.changes, out.changed, ctx.stats);
+        // What a moving object can show or hide: the brightest texel, emission or sky.
+        out.brightest = out.textures->brightest();
+        for (const Material& m : ctx.scene.materials) out.brightest = std::max(out.brightest, luminance(m.peak_emission()));
+        for (const Light& l : ctx.scene.lights)
+            if (l.type == LightType::Sky) out.brightest = std::max(out.brightest, sky_brightest(l));
+        return out;
+    }
+    if (step.source == RadiositySource::Load) {
+        PhaseTimer t(ctx.stats, "radiosity load");
+        std::string why;
+        if (RadiosityTextures::load(step.folder, ctx.scene, settings, ctx.materials, ctx.lighting, *out.textures, why)) {
+            ctx.stats.set("radiosity_reused", 1);
+            return out;
+        }
+        if (ctx.progress) std::fprintf(stderr, "radiosity textures in %s not reused: %s; baking\n", step.folder.c_str(), why.c_str());
+    }
+    {
+        PhaseTimer t(ctx.stats, "radiosity layout");  // every side's lattice laid out (pages come as they are baked)
+        *out.textures = RadiosityTextures::lazy(ctx.scene, ctx.materials, ctx.lighting, settings);
+    }
+    ctx.stats.set("radiosity_reused", 0);
+    if (step.source == RadiositySource::BakeSplit) {
+        PhaseTimer t(ctx.stats, "radiosity");
+        out.textures->bake_all(ctx.stats, ctx.progress, ctx.comm.rank(), ctx.comm.size());
+        ctx.stats.set("radiosity_sides_split_here", static_cast<double>(out.textures->baked_sides()));
+        exchange_baked_sides(ctx, *out.textures);
+    }
+    return out;
+}
+
+void finish_radiosity_pass(const FrameContext& ctx, const FinishRadiosityStep& step, RadiosityTextures& rt, size_t baked_before) {
+    if (step.share) exchange_baked_sides(ctx, rt);
     const size_t baked = rt.baked_sides();
     ctx.stats.set("radiosity_sides_baked", static_cast<double>(baked - baked_before));
     ctx.stats.set("radiosity_sides", static_cast<double>(rt.sides()));
     ctx.stats.set("radiosity_bytes", static_cast<double>(rt.allocated_bytes()));
-    const std::string& folder = ctx.scene.render.radiosity.folder;
-    if (folder.empty() || baked == baked_before || ctx.comm.rank() != 0) return;  // rank 0 writes
+    if (step.folder.empty() || baked == baked_before || ctx.comm.rank() != 0) return;  // rank 0 writes
     PhaseTimer t(ctx.stats, "radiosity save");
-    rt.save(folder);
+    rt.save(step.folder);
 }
 
 }  // namespace bounce

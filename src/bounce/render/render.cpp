@@ -15,6 +15,7 @@
 #include "bounce/render/distributed.h"
 #include "bounce/render/frame.h"
 #include "bounce/render/frame_passes.h"
+#include "bounce/render/frame_steps.h"
 #include "bounce/cache/passes.h"
 #include "bounce/core/error.h"
 #include "bounce/core/memory.h"
@@ -164,95 +165,6 @@ Image paste_over(const Image& base, const Image& window, const std::string& base
 
 namespace {
 
-/// Under MPI each rank bakes the sides its own gathers hit. They are exchanged only when they
-/// outlive the frame: saved by rank 0, or carried to a shot's next frame, whose list of changed
-/// sides (temporal.h) must be the same on every rank. Values are the same wherever baked.
-void finish_radiosity(const FrameContext& ctx, const FramePlan& plan, RadiosityTextures& rt, size_t baked_before) {
-    if (plan.share_radiosity) share_radiosity_pass(ctx, rt);
-    save_radiosity_pass(ctx, rt, baked_before);
-}
-
-/// The cache, gathering and shading passes of a cache render: the plan's gathering, or for a
-/// re-shade (GatherStep::WhereMissing) shading first and gathering only where records miss.
-/// `radiosity` is the frame's when the plan carried it; else it is made when a gather runs.
-void run_cache_passes(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep, const FrameState& previous,
-                      RadiosityResult& radiosity, CacheStartResult& start, const RenderRequest& request, RenderResult& result) {
-    size_t baked_before = 0;
-    const SpecularSitesResult specular = specular_sites_pass(ctx, plan, deep.shaded());
-    if (specular.mirrors && !radiosity.textures && ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity)
-        radiosity = radiosity_pass(ctx, plan, previous);
-    auto gather = [&] {
-        if (!radiosity.textures) radiosity = radiosity_pass(ctx, plan, previous);
-        baked_before = radiosity.textures ? radiosity.textures->baked_sides() : 0;
-        PhaseTimer t(ctx.stats, "gather");
-        const uint64_t rays_before = ctx.stats.total().gather_rays;
-        GatherPassResult g =
-            cache_gather_pass(ctx, plan, deep, radiosity.textures.get(), *start.cache, std::move(start.judged), request.preview, specular);
-        const double secs = t.stop();
-        const uint64_t rays = ctx.stats.total().gather_rays - rays_before;
-        ctx.stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
-        result.records_new += g.records_new;
-        result.fragment_records_new += g.fragment_records_new;
-        result.temporal.regathered = g.regathered, result.temporal.reshaded = g.reshaded;
-        result.waiting = std::move(g.waiting);
-        result.gathers = std::move(g.gathers);
-        result.gathered = true;
-    };
-    const auto quick_look = plan.preview ? request.preview : std::function<void(const Image&)>();
-    ShadeResult shaded;
-    if (plan.gather == GatherStep::WhereMissing) {
-        shaded = shading_pass(ctx, deep.shaded(), start.cache.get(), nullptr, specular, radiosity.textures.get(), quick_look);
-        if (shaded.shading_misses > 0) {
-            gather();
-            shaded = shading_pass(ctx, deep.shaded(), start.cache.get(), nullptr, specular, radiosity.textures.get());
-        }
-    } else {
-        gather();
-        shaded = shading_pass(ctx, deep.shaded(), start.cache.get(), nullptr, specular, radiosity.textures.get());
-    }
-    result.shading_misses = shaded.shading_misses;
-    result.image = std::move(shaded.image);
-    result.deep_colour = std::move(shaded.colours);
-    const IrradianceCache& cache = *start.cache;
-    ctx.stats.set("records", static_cast<double>(cache.size()));
-    ctx.stats.set("records_loaded", static_cast<double>(result.records_loaded));
-    ctx.stats.set("records_new", static_cast<double>(result.records_new));
-    // After the shading pass: refined fragments' gathers may have baked sides too.
-    if (radiosity.textures) finish_radiosity(ctx, plan, *radiosity.textures, baked_before);
-    if ((plan.refine || cache.fragment_record_count() > 0) && !shaded.refined.empty())  // empty: a rank that writes no image
-        add_mask_layer(result.image, shaded.refined, "refined");
-}
-
-/// Brute force, direct light only, or a cache file read for its records layer.
-void run_direct_or_brute(const FrameContext& ctx, const FramePlan& plan, const VisibilityResult& deep, const FrameState& previous,
-                         RadiosityResult& radiosity, RenderResult& result) {
-    std::vector<Indirect> light;
-    SpecularSitesResult specular = specular_sites_pass(ctx, plan, deep.shaded());
-    const bool radiosity_sites = ctx.scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity;
-    if (specular.mirrors && radiosity_sites && !radiosity.textures && ctx.scene.render.indirect.any())
-        radiosity = radiosity_pass(ctx, plan, previous);
-    if (plan.gather == GatherStep::Brute) {
-        if (!radiosity.textures) radiosity = radiosity_pass(ctx, plan, previous);
-        const size_t baked_before = radiosity.textures ? radiosity.textures->baked_sides() : 0;
-        PhaseTimer t(ctx.stats, "gather");
-        const uint64_t rays_before = ctx.stats.total().gather_rays;
-        light = brute_gather_pass(ctx, deep.shaded(), radiosity.textures.get(), specular);
-        const double secs = t.stop();
-        const uint64_t rays = ctx.stats.total().gather_rays - rays_before;
-        ctx.stats.set("gather_rays_per_s", secs > 0 ? static_cast<double>(rays) / secs : 0.0);
-        result.gathered = true;
-        if (radiosity.textures) finish_radiosity(ctx, plan, *radiosity.textures, baked_before);
-    }
-    ShadeResult shaded =
-        shading_pass(ctx, deep.shaded(), nullptr, plan.gather == GatherStep::Brute ? &light : nullptr, specular, radiosity.textures.get());
-    result.image = std::move(shaded.image);
-    result.deep_colour = std::move(shaded.colours);
-    if (result.cache) {
-        ctx.stats.set("records", static_cast<double>(result.cache->size()));
-        ctx.stats.set("records_loaded", static_cast<double>(result.records_loaded));
-    }
-}
-
 /// The temporal counts of a frame of a shot, in stats.
 void report_temporal(const RenderResult& r, Stats& stats) {
     const TemporalCounts& t = r.temporal;
@@ -280,22 +192,6 @@ FrameState RenderResult::release_state() {
 }
 
 namespace {
-
-/// The shaded window's fragment colours at the gathered window's fragments (0 in its margin):
-/// what write_deep takes. Empty when there are none (an MPI rank that shades no image).
-std::vector<Color> colours_of_window(const VisibilityResult& deep, const std::vector<Color>& shaded) {
-    const DeepBuffer &g = deep.gathered, &s = deep.shaded();
-    if (shaded.size() != s.fragments.size()) return {};
-    if (window_of(g) == window_of(s)) return shaded;
-    std::vector<Color> out(g.fragments.size(), Color(0));
-    for (int wy = 0; wy < s.height; ++wy)
-        for (int wx = 0; wx < s.width; ++wx) {
-            const size_t from = s.offsets[static_cast<size_t>(wy) * s.width + wx], n = s.pixel(wx, wy).size();
-            const size_t to = g.offsets[static_cast<size_t>(wy + s.y0 - g.y0) * g.width + (wx + s.x0 - g.x0)];
-            std::copy_n(shaded.begin() + static_cast<std::ptrdiff_t>(from), n, out.begin() + static_cast<std::ptrdiff_t>(to));
-        }
-    return out;
-}
 
 /// A frame spread over an MPI job: what every rank traced and what the exchanges cost, in
 /// the stats of each (rank 0's are written). `sent0`, `wait0`: the communicator's totals
@@ -338,61 +234,13 @@ RenderResult run_frame(const Scene& scene, const FramePlan& plan, const FrameSta
     CancellableSink sink(progress, request.cancel);
     ProgressSink* const ps = progress || request.cancel ? &sink : nullptr;
     RenderResult result;
-    result.plan = plan;
     arena.execute([&] {
-        if (plan.accel == AccelStep::Keep) {
-            result.accel = previous.accel;
-        } else {
-            PhaseTimer t(stats, "build BVH");
-            result.accel = std::make_shared<const SceneAccel>(scene, plan.accel == AccelStep::Update ? previous.accel.get() : nullptr);
-        }
-        const SceneAccel& accel = *result.accel;
-        if (const BvhReuse r = accel.reuse(); r.kept + r.refit + r.built > 0)
-            stats.set("bvh_parts", nlohmann::json{{"kept", r.kept}, {"refit", r.refit}, {"built", r.built}});
-        stats.set("ray_offset", accel.ray_offset());
-        Materials materials(scene);
-        DirectLighting lighting(scene, accel);
-        SingleProcess alone;
-        const FrameContext ctx{scene, accel, materials, lighting, stats, ps, request.cancel, request.comm ? *request.comm : alone};
-        VisibilityResult deep = visibility_pass(ctx, plan, previous);
-        // A carried radiosity says what light changed, which the records' judgement needs first.
-        RadiosityResult radiosity;
-        if (plan.radiosity == RadiosityStep::Carry) radiosity = radiosity_pass(ctx, plan, previous);
-        CacheStartResult start = cache_start_pass(ctx, plan, previous, radiosity);
-        result.records_loaded = start.records_loaded;
-        result.cache_differences = start.differences;
-        result.cache_other_lighting = start.other_lighting;
-        if (start.other_lighting) stats.set("cache_bounce_light_stale", 1);
-        const TemporalJudgement& j = start.judged;
-        result.temporal = {j.kept, j.moved, j.view, j.light, j.dropped, 0, 0, j.anchored, j.anchors_kept};
-        if (!start.differences.empty()) stats.set("cache_reused_with_other_settings", nlohmann::json(start.differences));
-        result.cache_info = cache_file_info(scene, plan.frame);
-        if (plan.gather == GatherStep::Cache || plan.gather == GatherStep::WhereMissing) {
-            run_cache_passes(ctx, plan, deep, previous, radiosity, start, request, result);
-        } else {
-            result.cache = std::move(start.cache);
-            run_direct_or_brute(ctx, plan, deep, previous, radiosity, result);
-        }
-        if (!result.cache) result.cache = std::move(start.cache);
-        if (result.cache) {
-            std::vector<Vec3> positions;
-            for (size_t i = 0; i < result.cache->size(); ++i) positions.push_back(result.cache->record(i).p);
-            add_records_layer(result.image, scene.camera, positions);
-        }
-        // Sources of a lazy bake point at this frame's materials and lights: only a shot's next
-        // frame takes the textures (RadiosityTextures::carry points them at its own).
-        result.radiosity = std::move(radiosity.textures);
-        if (!plan.deep_out.empty()) {
-            result.deep_colour = scene.render.shading.deep_colour ? colours_of_window(deep, result.deep_colour) : std::vector<Color>();
-            result.gathered_deep = std::make_shared<const DeepBuffer>(deep.crop ? std::move(deep.gathered) : deep.gathered);
-        } else {
-            result.deep_colour.clear();
-        }
-        // The passes are done with the fragments: moved, not copied (a Sponza frame's are 100 MB).
-        result.deep = deep.crop ? std::move(*deep.crop) : std::move(deep.gathered);
+        FrameRun run(scene, plan, previous, request, stats, ps);
+        for (const PlannedStep& step : plan.steps) run.run(step);
+        result = run.finish();
     });
     if (request.comm && request.comm->size() > 1) report_ranks(*request.comm, stats, sent0, wait0);
-    if (plan.cache == CacheStart::Temporal) report_temporal(result, stats);
+    if (plan.cache_start() == CacheStart::Temporal) report_temporal(result, stats);
     stats.set("pixels", static_cast<double>(result.deep.pixel_count()));
     if (result.deep.pixel_count() > 0)
         stats.set("gather_rays_per_pixel", static_cast<double>(stats.total().gather_rays) / static_cast<double>(result.deep.pixel_count()));

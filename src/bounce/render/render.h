@@ -60,7 +60,7 @@ struct RenderResult {
     std::vector<Record> waiting;  ///< stale records no fragment needed
     std::vector<Record> gathers;  ///< refinement's gathers that still serve
     /// True when the cache differs from the one the frame started from.
-    bool cache_changed() const { return records_new > 0 || fragment_records_new > 0 || plan.cache == CacheStart::Empty; }
+    bool cache_changed() const { return records_new > 0 || fragment_records_new > 0 || plan.cache_start() == CacheStart::Empty; }
     /// What the next frame's plan may start from: moves the deep buffer and the cache out of
     /// this result into shared, immutable state.
     FrameState release_state();

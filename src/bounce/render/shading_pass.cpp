@@ -44,26 +44,26 @@ void fill_blocks(Image& img, int step) {
     }
 }
 
-ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache, const std::vector<Indirect>* brute,
-                         const SpecularSitesResult& specular, const RadiosityTextures* radiosity, ProgressSink* progress) {
+ShadeResult shade_window(const FrameContext& ctx, const ShadeStep& step, const DeepBuffer& deep, const IrradianceCache* cache,
+                         const std::vector<Indirect>* brute, const SpecularSitesResult& specular, const RadiosityTextures* radiosity,
+                         ProgressSink* progress) {
     const Scene& scene = ctx.scene;
     ShadeResult out;
-    const SiteLightResult sites = site_light_for(ctx, specular, window_of(deep), cache, radiosity);
+    const SiteLightResult sites = site_light_for(ctx, step.sites, specular, window_of(deep), cache, radiosity);
     std::vector<Indirect> interpolated;
     LightShares shares;
-    if (cache && scene.render.indirect.gi == GiMode::Cache) {
+    if (step.indirect == IndirectFrom::Cache) {
         auto t0 = std::chrono::steady_clock::now();
         // Per-light indirect layers: each light's share of the records' light parts.
-        const bool per_light = scene.render.shading.layers == LayerSet::Components && !scene.render.indirect.ao && !scene.lights.empty() &&
-                               cache->has_light_parts(scene.lights.size());
+        const bool per_light = step.per_light && cache->has_light_parts(scene.lights.size());
         InterpolatedLight light = interpolation_pass(scene, deep, *cache, ctx.stats, progress, true, per_light);
         ctx.stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         interpolated = std::move(light.light);
         shares = std::move(light.shares);
-        if (scene.render.cache.correction_rays > 0) {  // records as a control variate (FramePlan::correct)
+        if (step.correction_rays > 0) {  // records as a control variate
             PhaseTimer timer(ctx.stats, "correction");
             GatherSettings gs = frame_gather_settings(ctx, false);
-            gs.rays = scene.render.cache.correction_rays;
+            gs.rays = step.correction_rays;
             const Gatherer gatherer(scene, ctx.accel, ctx.materials, ctx.lighting, radiosity, gs);
             correction_pass(scene, deep, *cache, gatherer, interpolated, ctx.stats, progress);
         }
@@ -72,19 +72,19 @@ ShadeResult shade_window(const FrameContext& ctx, const DeepBuffer& deep, const 
         if (specular.any()) ctx.stats.set("shading_misses", static_cast<double>(out.shading_misses));
         brute = &interpolated;
     }
-    out.image = shade(scene, deep, ctx.materials, ctx.lighting, scene.render.indirect.any() ? brute : nullptr, ctx.stats, progress, nullptr,
-                      sites.view(), scene.render.shading.deep_colour ? &out.colours : nullptr, shares.lights > 0 ? &shares : nullptr);
+    out.image = shade(scene, deep, ctx.materials, ctx.lighting, step.indirect != IndirectFrom::None ? brute : nullptr, ctx.stats, progress,
+                      nullptr, sites.view(), step.deep_colour ? &out.colours : nullptr, shares.lights > 0 ? &shares : nullptr);
     return out;
 }
 
 /// Each process shades its tiles; rank 0 takes the whole image (the others' stays empty).
-ShadeResult shade_in_tiles(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache,
+ShadeResult shade_in_tiles(const FrameContext& ctx, const ShadeStep& step, const DeepBuffer& deep, const IrradianceCache* cache,
                            const std::vector<Indirect>* brute, const SpecularSitesResult& specular, const RadiosityTextures* radiosity) {
     const auto tiles =
         in_tiles(ctx.comm, window_of(deep), ctx.scene.render.parallel.tile_size, TilesTo::First, [&](const std::array<int, 4>& w) {
             const DeepBuffer sub = sub_window(deep, w);
             const std::vector<Indirect> light = brute ? window_slice(deep, *brute, w) : std::vector<Indirect>();
-            ShadeResult r = shade_window(ctx, sub, cache, brute ? &light : nullptr, specular, radiosity, nullptr);
+            ShadeResult r = shade_window(ctx, step, sub, cache, brute ? &light : nullptr, specular, radiosity, nullptr);
             // The refined mask travels as a layer of the tile's image.
             if (!r.refined.empty()) add_mask_layer(r.image, r.refined, "refined");
             const uint64_t misses = r.shading_misses;
@@ -110,12 +110,12 @@ ShadeResult shade_in_tiles(const FrameContext& ctx, const DeepBuffer& deep, cons
 
 }  // namespace
 
-ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache* cache, const std::vector<Indirect>* brute,
-                         const SpecularSitesResult& specular, const RadiosityTextures* radiosity,
+ShadeResult shading_pass(const FrameContext& ctx, const ShadeStep& step, const DeepBuffer& deep, const IrradianceCache* cache,
+                         const std::vector<Indirect>* brute, const SpecularSitesResult& specular, const RadiosityTextures* radiosity,
                          const std::function<void(const Image&)>& quick_look) {
     const Scene& scene = ctx.scene;
     PhaseTimer t(ctx.stats, "shading");
-    if (cache && quick_look) {
+    if (step.quick_look && quick_look) {
         // A re-shade's quick look first: one pixel in 16 shaded exactly as the final image
         // shades it, standing for its 4x4 block.
         const DeepBuffer coarse = lattice_of(deep, 4);
@@ -124,8 +124,8 @@ ShadeResult shading_pass(const FrameContext& ctx, const DeepBuffer& deep, const 
         fill_blocks(look, 4);
         quick_look(look);
     }
-    if (ctx.comm.size() > 1) return shade_in_tiles(ctx, deep, cache, brute, specular, radiosity);
-    return shade_window(ctx, deep, cache, brute, specular, radiosity, ctx.progress);
+    if (ctx.comm.size() > 1) return shade_in_tiles(ctx, step, deep, cache, brute, specular, radiosity);
+    return shade_window(ctx, step, deep, cache, brute, specular, radiosity, ctx.progress);
 }
 
 }  // namespace bounce

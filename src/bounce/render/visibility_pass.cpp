@@ -28,26 +28,26 @@ DeepBuffer window_of(const DeepBuffer& deep, const FramePlan& plan, const std::s
 
 }  // namespace
 
-VisibilityResult visibility_pass(const FrameContext& ctx, const FramePlan& plan, const FrameState& previous) {
+VisibilityResult visibility_pass(const FrameContext& ctx, const VisibilityStep& step, const FramePlan& plan, const FrameState& previous) {
     const Scene& scene = ctx.scene;
-    const bool cropped = scene.render.visibility.has_crop();
+    const bool cropped = step.crop;
     VisibilityResult out;
-    switch (plan.visibility) {
-        case VisibilityStep::Previous:
+    switch (step.source) {
+        case DeepSource::Previous:
             validate_deep_for_scene(*previous.deep, scene, "the session's deep buffer");
             out.gathered = window_of(*previous.deep, plan, "the session's deep buffer", cropped);
             break;
-        case VisibilityStep::ReadFile: {
+        case DeepSource::ReadFile: {
             DeepBuffer deep;
             {
                 PhaseTimer t(ctx.stats, "read deep");
-                deep = read_deep(plan.deep_in);
+                deep = read_deep(step.deep_in);
             }
-            validate_deep_for_scene(deep, scene, plan.deep_in);
-            out.gathered = window_of(deep, plan, plan.deep_in, cropped);
+            validate_deep_for_scene(deep, scene, step.deep_in);
+            out.gathered = window_of(deep, plan, step.deep_in, cropped);
             break;
         }
-        case VisibilityStep::Trace: {
+        case DeepSource::Trace: {
             check_camera_sees_geometry(scene, ctx.accel);
             PhaseTimer t(ctx.stats, "visibility");
             if (ctx.comm.size() == 1) {
@@ -56,8 +56,7 @@ VisibilityResult visibility_pass(const FrameContext& ctx, const FramePlan& plan,
             }
             // Each process keeps the fragments of its own tiles, unless a crop's tiles differ
             // from the gathered window's or rank 0 writes the deep file.
-            out.gathered =
-                visibility_in_tiles(ctx.comm, scene, ctx.accel, ctx.stats, plan.gather_window, cropped || !plan.deep_out.empty());
+            out.gathered = visibility_in_tiles(ctx.comm, scene, ctx.accel, ctx.stats, plan.gather_window, step.every_tile);
             break;
         }
     }

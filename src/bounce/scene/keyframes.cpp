@@ -170,6 +170,15 @@ bool has_keys(const json& doc) {
     return false;
 }
 
+bool keys_light(const json& keyed) {
+    if (!keyed.is_object()) return false;
+    if (keyed.contains("lights") && has_keys(keyed["lights"])) return true;
+    if (keyed.contains("materials") && keyed["materials"].is_object())
+        for (const auto& [name, m] : keyed["materials"].items())
+            if (m.is_object() && m.contains("emission") && has_keys(m["emission"])) return true;
+    return false;
+}
+
 ShotSettings read_shot(const json& doc, const JsonContext& ctx) {
     ShotSettings shot;
     if (!doc.contains("animation")) {

@@ -22,6 +22,8 @@ ShotSettings read_shot(const nlohmann::json& doc, const JsonContext& ctx);
 
 /// True when `doc` holds keyed values anywhere.
 bool has_keys(const nlohmann::json& doc);
+/// True when a scene's keyed values (Scene::keyed) key a light or a material's emission.
+bool keys_light(const nlohmann::json& keyed);
 
 /// `doc` with every keyed value replaced by its value at `frame`. InputError (with the pointer
 /// of the key) for keys out of order or repeated, values that are not finite numbers or change

@@ -100,13 +100,10 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
             }
             ++version_;
         };
-    FramePlan plan = plan_frame(scene, previous, req);
     // The session's deep file follows a new deep buffer (a shot's frame may keep the last one,
     // whose file is on disk: asking for it every frame would copy the buffer for nothing).
-    if (plan.visibility == VisibilityStep::Trace && req.deep_out.empty()) {
-        req.deep_out = deep_path_.string();
-        plan = plan_frame(scene, previous, req);
-    }
+    req.deep_out_if_traced = deep_path_.string();
+    const FramePlan plan = plan_frame(scene, previous, req);
     RenderResult r = run_frame(scene, plan, previous, req, stats, &sink);
     // Only a finished render replaces the deep file and the cache (atomically) and the image.
     FrameFiles files;
