@@ -302,5 +302,34 @@ TEST(MirrorGlassScene, TheGatheringPassCoversEverySiteAndTheCacheTracksBruteForc
     EXPECT_LT(mean(rad), mean(cache));
 }
 
+TEST(MirrorGlassScene, WithRadiosityAtSpecularHitsTheSitesAreLookedUpInTheTextures) {
+    // What mirrors and glass show is the textures' value at their sites: it follows the textures'
+    // lattice, while the fragments seen directly and their gathers stay close. (Until 2026-12-07
+    // the sites were shaded with shadow rays, the textures made for them unread.)
+    const auto layer_mean = [](const Image& img, const char* name) {
+        const Layer& l = *img.find(name);
+        double s = 0;
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x < img.width; ++x) s += img.at(l, x, y)[1];
+        return s / (img.width * img.height);
+    };
+    const std::vector<std::string> rad = {"render.gi=cache", "render.indirect_at_specular_hits=radiosity", "render.layers=components"};
+    std::vector<std::string> fine = rad, coarse = rad, direct = rad;  // fine: the default lattice, 1/128 of the diagonal
+    coarse.push_back("render.radiosity_texel=300");                   // the box is 555 wide: a side's lattice a point or two
+    direct.push_back("render.radiosity=false");                       // no textures: the sites get their direct light by shadow rays
+    const Image f = render_image(mirror_glass(fine)), c = render_image(mirror_glass(coarse)), d = render_image(mirror_glass(direct));
+    const double rf = layer_mean(f, "reflection"), rc = layer_mean(c, "reflection"), rd = layer_mean(d, "reflection");
+    // The fine lattice holds the sites' direct light: near the shadow rays' answer (8 % below it
+    // here: the lattice's bilinear lookup across the lit wall's falloff).
+    EXPECT_NEAR(rf / rd, 1.0, 0.15) << rf << " " << rd;
+    // The reflection changes with the lattice, far more than the noise between two renders.
+    const Layer &lf = *f.find("reflection"), &lc = *c.find("reflection");
+    size_t differ = 0, seen = 0;  // of the values a mirror or glass shows
+    for (size_t i = 0; i < lf.data.size(); ++i) seen += lf.data[i] > 0, differ += lf.data[i] != lc.data[i];
+    EXPECT_GT(seen, 100u);
+    EXPECT_GT(differ, seen / 2) << seen;
+    EXPECT_GT(std::abs(rc - rf) / rf, 0.04) << rf << " " << rc;
+}
+
 }  // namespace
 }  // namespace bounce

@@ -96,7 +96,8 @@ void FrameRun::step(const RefineStep& s) {
 }
 
 void FrameRun::step(const GatherSitesStep& s) {
-    timed_gather([&] { result_.records_new += site_gather_pass(ctx(), s, plan_, specular_.sites, radiosity_.textures.get(), *start_.cache); });
+    timed_gather(
+        [&] { result_.records_new += site_gather_pass(ctx(), s, plan_, specular_.sites, radiosity_.textures.get(), *start_.cache); });
 }
 
 void FrameRun::step(const BruteGatherStep& s) {

@@ -19,14 +19,17 @@ SpecularSitesResult specular_sites_pass(const FrameContext& ctx, const DeepBuffe
 SiteLightResult site_light_for(const FrameContext& ctx, SiteLightFrom from, const SpecularSitesResult& specular,
                                const std::array<int, 4>& window, const IrradianceCache* cache, const RadiosityTextures* radiosity) {
     SiteLightResult out;
+    // The shading pass traces the paths to these sites itself and looks them up in the textures.
+    if (from == SiteLightFrom::Radiosity) {
+        out.radiosity = radiosity;
+        return out;
+    }
     if (!specular.any()) return out;
     const bool whole = window_of(specular.sites) == window;
     out.sites = whole ? specular.sites : sub_window(specular.sites, window);
     switch (from) {
         case SiteLightFrom::None:  // direct light only (or AO): nothing to give
-            break;
         case SiteLightFrom::Radiosity:
-            out.radiosity = radiosity;
             break;
         case SiteLightFrom::Cache: {
             InterpolatedLight light = interpolation_pass(ctx.scene, out.sites, *cache, ctx.stats, nullptr, false);
