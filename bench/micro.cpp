@@ -70,7 +70,7 @@ void BM_RecordWeight(benchmark::State& state) {
     r.E = Color(1);
     r.grad_t = {Vec3(0.1f), Vec3(0.1f), Vec3(0.1f)};
     r.weber = 2;
-    CacheSettings s;
+    const RecordMetric s{CacheSettings{}};
     RandomStream rng(9, 10);
     uint64_t i = 0;
     for (auto _ : state) {

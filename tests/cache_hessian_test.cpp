@@ -24,7 +24,7 @@ TEST(Hessian, EllipseWeightReachesItsBoundAtBothRadii) {
     r.axis = {1, 0, 0};
     CacheSettings s;
     s.metric = Metric::Hessian;
-    auto w = [&](const Vec3& p) { return record_weight(r, p, {0, 0, 1}, s); };
+    auto w = [&](const Vec3& p) { return record_weight(r, p, {0, 0, 1}, RecordMetric(s)); };
     EXPECT_GT(w({2.97f, 0, 0}), 0.0f);
     EXPECT_EQ(w({3.03f, 0, 0}), 0.0f);
     EXPECT_GT(w({0, 0.99f, 0}), 0.0f);

@@ -99,12 +99,12 @@ TEST(CacheMetric, EachTermReachesOneExactlyAtItsBound) {
     s.max_angle = 10;
     Record r = plane_record({0, 0, 0}, 2.0f, Color(1));
     // Position: |p - p_i| = R.
-    EXPECT_FLOAT_EQ(metric_terms(r, {2, 0, 0}, {0, 1, 0}, s).position, 1.0f);
-    EXPECT_FLOAT_EQ(metric_terms(r, {0, 0, 1}, {0, 1, 0}, s).position, 0.5f);
+    EXPECT_FLOAT_EQ(metric_terms(r, {2, 0, 0}, {0, 1, 0}, RecordMetric(s)).position, 1.0f);
+    EXPECT_FLOAT_EQ(metric_terms(r, {0, 0, 1}, {0, 1, 0}, RecordMetric(s)).position, 0.5f);
     // Normal: deviation of max_angle.
     float a = 10 * kPi / 180;
-    EXPECT_NEAR(metric_terms(r, {0, 0, 0}, {std::sin(a), std::cos(a), 0}, s).normal, 1.0f, 1e-4f);
-    EXPECT_LT(metric_terms(r, {0, 0, 0}, {std::sin(0.9f * a), std::cos(0.9f * a), 0}, s).normal, 1.0f);
+    EXPECT_NEAR(metric_terms(r, {0, 0, 0}, {std::sin(a), std::cos(a), 0}, RecordMetric(s)).normal, 1.0f, 1e-4f);
+    EXPECT_LT(metric_terms(r, {0, 0, 0}, {std::sin(0.9f * a), std::cos(0.9f * a), 0}, RecordMetric(s)).normal, 1.0f);
     // Gradient (Weber): the extrapolated change |grad| d reaches tau E at d = tau E / |grad|.
     s.gradient_limit = 0.5f;
     IrradianceCache cache(unit_bounds(), s, false);
@@ -114,22 +114,22 @@ TEST(CacheMetric, EachTermReachesOneExactlyAtItsBound) {
     g.min_distance = 100;
     Record w = cache.make_record(g, {0, 0, 0}, {0, 1, 0}, 0.01f, 0);
     EXPECT_FLOAT_EQ(w.weber, 0.5f * 2 / 4);
-    EXPECT_NEAR(metric_terms(w, {0.25f, 0, 0}, {0, 1, 0}, s).gradient, 1.0f, 1e-6f);
+    EXPECT_NEAR(metric_terms(w, {0.25f, 0, 0}, {0, 1, 0}, RecordMetric(s)).gradient, 1.0f, 1e-6f);
     // ... floored at the minimum spacing so records never crowd closer than it.
     g.grad_trans = {Vec3(1e4f, 0, 0), Vec3(1e4f, 0, 0), Vec3(1e4f, 0, 0)};
     EXPECT_FLOAT_EQ(cache.make_record(g, {0, 0, 0}, {0, 1, 0}, 0.01f, 0).weber, s.min_spacing * 0.01f);
     // Combined: the weight is 1 - kappa max(terms) and 0 beyond any bound.
-    EXPECT_FLOAT_EQ(record_weight(r, {1, 0, 0}, {0, 1, 0}, s), 0.5f);
-    EXPECT_EQ(record_weight(r, {2.01f, 0, 0}, {0, 1, 0}, s), 0.0f);
+    EXPECT_FLOAT_EQ(record_weight(r, {1, 0, 0}, {0, 1, 0}, RecordMetric(s)), 0.5f);
+    EXPECT_EQ(record_weight(r, {2.01f, 0, 0}, {0, 1, 0}, RecordMetric(s)), 0.0f);
     // Behind: a point in front of the record's plane by more than 5% of R is rejected.
-    EXPECT_TRUE(metric_terms(r, {0.5f, -0.2f, 0}, {0, 1, 0}, s).behind);
-    EXPECT_FALSE(metric_terms(r, {0.5f, -0.05f, 0}, {0, 1, 0}, s).behind);
-    EXPECT_EQ(record_weight(r, {0.5f, -0.2f, 0}, {0, 1, 0}, s), 0.0f);
+    EXPECT_TRUE(metric_terms(r, {0.5f, -0.2f, 0}, {0, 1, 0}, RecordMetric(s)).behind);
+    EXPECT_FALSE(metric_terms(r, {0.5f, -0.05f, 0}, {0, 1, 0}, RecordMetric(s)).behind);
+    EXPECT_EQ(record_weight(r, {0.5f, -0.2f, 0}, {0, 1, 0}, RecordMetric(s)), 0.0f);
     // Ward: weight 1 / (d/R + sqrt(1 - n.n_i)) accepted above 1/a.
     s.metric = Metric::Ward;
     s.accuracy = 0.25f;
-    EXPECT_FLOAT_EQ(record_weight(r, {0.4f, 0, 0}, {0, 1, 0}, s), 5.0f);
-    EXPECT_EQ(record_weight(r, {0.51f, 0, 0}, {0, 1, 0}, s), 0.0f);
+    EXPECT_FLOAT_EQ(record_weight(r, {0.4f, 0, 0}, {0, 1, 0}, RecordMetric(s)), 5.0f);
+    EXPECT_EQ(record_weight(r, {0.51f, 0, 0}, {0, 1, 0}, RecordMetric(s)), 0.0f);
 }
 
 /// Floor y = 0 beside a wall at x = 1 (0 <= y <= 1.5, |z| <= 4) lit head-on by a distant light:

@@ -21,6 +21,8 @@ IrradianceCache::IrradianceCache(const Bounds& scene_bounds, CacheSettings setti
     : scene_bounds_(scene_bounds),
       settings_(std::move(settings)),
       shading_settings_(settings_.for_shading()),
+      metric_(settings_),
+      shading_metric_(shading_settings_),
       ao_only_(ao_only),
       octree_(scene_bounds) {}
 
@@ -28,6 +30,8 @@ IrradianceCache::IrradianceCache(const IrradianceCache& o)
     : scene_bounds_(o.scene_bounds_),
       settings_(o.settings_),
       shading_settings_(o.shading_settings_),
+      metric_(o.metric_),
+      shading_metric_(o.shading_metric_),
       ao_only_(o.ao_only_),
       records_(o.records_),
       fragment_records_(o.fragment_records_),
@@ -79,7 +83,7 @@ bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Recor
     // miss again on every re-render from the cache.
     float sum = 0, top = 0;
     auto add = [&](const Record& r) {
-        const float w = record_weight(r, p, n, settings_);
+        const float w = record_weight(r, p, n, metric_);
         sum += w, top = std::max(top, w);
     };
     octree_.visit(p, [&](uint32_t id) { add(records_[id]); });
@@ -125,6 +129,7 @@ void IrradianceCache::set_values(Record& r, const GatherResult& g, bool gradient
 
 Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading, const Vec3* at_p, const Vec3* at_n) const {
     const CacheSettings& s = shading ? shading_settings_ : settings_;
+    const RecordMetric& metric = shading ? shading_metric_ : metric_;
     Interpolated out;
     // Weighted mean of differences from the first contributing record's value: a constant
     // field comes back bit-exact, not rounded by sum(w E) / sum(w).
@@ -138,7 +143,7 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
     const std::span<const FilteredValue> filtered = shading ? filtered_values() : std::span<const FilteredValue>();
     octree_.visit(p, [&](uint32_t id) {
         const Record& r = records_[id];
-        float w = record_weight(r, p, n, s);
+        float w = record_weight(r, p, n, metric);
         if (w <= 0) return;
         const Color& E = filtered.empty() ? r.E : filtered[id].E;
         const float ao = filtered.empty() ? r.ao : filtered[id].ao;
@@ -198,11 +203,11 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
 
 void IrradianceCache::light_shares(const Vec3& p, const Vec3& n, bool shading, const Vec3* at_p, const Vec3* at_n,
                                    std::span<Color> out) const {
-    const CacheSettings& s = shading ? shading_settings_ : settings_;
+    const RecordMetric& m = shading ? shading_metric_ : metric_;
     std::fill(out.begin(), out.end(), Color(0));
     octree_.visit(p, [&](uint32_t id) {
         const Record& r = records_[id];
-        const float w = record_weight(r, p, n, s);
+        const float w = record_weight(r, p, n, m);
         if (w <= 0 || !r.parts || r.parts->light.size() != out.size()) return;
         const Vec3 dp = (at_p ? *at_p : p) - r.p, rot = cross(r.n, at_n ? *at_n : n);
         for (size_t i = 0; i < out.size(); ++i) {

@@ -69,8 +69,8 @@ class IrradianceCache {
     /// `shading`: the shading pass's weights (CacheSettings::shading_reach).
     template <typename F>
     void visit_weights(const Vec3& p, const Vec3& n, F&& f, bool shading = false) const {
-        const CacheSettings& s = shading ? shading_settings_ : settings_;
-        octree_.visit(p, [&](uint32_t id) { f(id, record_weight(records_[id], p, n, s)); });
+        const RecordMetric& m = shading ? shading_metric_ : metric_;
+        octree_.visit(p, [&](uint32_t id) { f(id, record_weight(records_[id], p, n, m)); });
     }
     /// The records' values as the shading pass reads them: filtered in record space
     /// (CacheSettings::record_filter, record_filter.h), made on the first call after the
@@ -146,6 +146,7 @@ class IrradianceCache {
     IrradianceCache(const IrradianceCache& other);  ///< clone()
     Bounds scene_bounds_;
     CacheSettings settings_, shading_settings_;
+    RecordMetric metric_, shading_metric_;  ///< what the weights read of the two
     bool ao_only_;
     std::deque<Record> records_;
     std::deque<Record> fragment_records_;

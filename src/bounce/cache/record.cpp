@@ -5,18 +5,8 @@
 
 namespace bounce {
 
-namespace {
-/// sqrt(1 - cos(max_angle)): the normal term's bound. Every lookup of a cache uses one
-/// max_angle, so the last one is remembered rather than taking a cosine per record and lookup.
-float normal_bound(float max_angle) {
-    thread_local float angle = NAN, bound = 0;
-    if (max_angle != angle) {
-        angle = max_angle;
-        bound = std::sqrt(1 - std::cos(max_angle * kPi / 180.0f));
-    }
-    return bound;
-}
-}  // namespace
+RecordMetric::RecordMetric(const CacheSettings& s)
+    : metric(s.metric), quality(s.quality), accuracy(s.accuracy), normal_bound(std::sqrt(1 - std::cos(s.max_angle * kPi / 180.0f))) {}
 
 void apply_light_scales(Record& r, std::span<const Color> scales) {
     if (!r.parts) return;
@@ -38,7 +28,7 @@ float extrapolated_ao(float ao, const Vec3& grad_t, const Vec3& grad_r, const Ve
     return std::clamp(ao + dot(dp, grad_t) + dot(rot, grad_r), 0.0f, 1.0f);
 }
 
-MetricTerms metric_terms(const Record& r, const Vec3& p, const Vec3& n, const CacheSettings& s) {
+MetricTerms metric_terms(const Record& r, const Vec3& p, const Vec3& n, const RecordMetric& s) {
     MetricTerms m;
     Vec3 d = p - r.p;
     float dist = length(d);
@@ -53,12 +43,12 @@ MetricTerms metric_terms(const Record& r, const Vec3& p, const Vec3& n, const Ca
     } else {
         m.position = dist / r.radius;
     }
-    m.normal = std::sqrt(std::max(0.0f, 1 - ndot)) / normal_bound(s.max_angle);
+    m.normal = std::sqrt(std::max(0.0f, 1 - ndot)) / s.normal_bound;
     m.gradient = std::isfinite(r.weber) ? dist / r.weber : 0.0f;
     return m;
 }
 
-float record_weight(const Record& r, const Vec3& p, const Vec3& n, const CacheSettings& s) {
+float record_weight(const Record& r, const Vec3& p, const Vec3& n, const RecordMetric& s) {
     if (s.metric == Metric::Ward) {
         float ndot = dot(n, r.n);
         Vec3 d = p - r.p;

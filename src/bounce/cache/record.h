@@ -103,11 +103,20 @@ struct MetricTerms {
     bool behind = false;  ///< p is in front of the record (sees what it did not) or faces away
 };
 
-MetricTerms metric_terms(const Record& r, const Vec3& p, const Vec3& n, const CacheSettings& s);
+/// What a record's weight reads of a cache's settings, with the normal term's bound worked out
+/// once (a cache keeps one per weighting: the gathering pass's and the shading pass's).
+struct RecordMetric {
+    Metric metric = Metric::TL04;
+    float quality = 1, accuracy = 0;
+    float normal_bound = 0;  ///< sqrt(1 - cos(max_angle))
+    explicit RecordMetric(const CacheSettings& s);
+};
+
+MetricTerms metric_terms(const Record& r, const Vec3& p, const Vec3& n, const RecordMetric& m);
 
 /// The record's weight at (p, n): TL04 1 - kappa max(terms) (0 when rejected), or Ward's
 /// 1 / (|dp|/R + sqrt(1 - n.n_i)) (0 below 1/a).
-float record_weight(const Record& r, const Vec3& p, const Vec3& n, const CacheSettings& s);
+float record_weight(const Record& r, const Vec3& p, const Vec3& n, const RecordMetric& m);
 
 /// Distance beyond which `record_weight` is 0 for any normal.
 float record_support(const Record& r, const CacheSettings& s);

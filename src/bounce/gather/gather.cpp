@@ -6,9 +6,8 @@
 #include "bounce/gather/guide.h"
 #include "bounce/gather/hessian.h"
 
+#include <mutex>
 #include <vector>
-
-#include <tbb/enumerable_thread_specific.h>
 
 #include "bounce/core/sampling.h"
 
@@ -75,10 +74,18 @@ Color Gatherer::escaped_radiance(const Vec3& d, std::span<Color> parts) const {
 }
 
 struct Gatherer::Scratch {
-    tbb::enumerable_thread_specific<detail::Cells> per_thread;
+    PerThread<detail::Cells> per_thread;
+    /// Reprojection's cells about each cell (detail::cell_margins): made once, on first use.
+    std::once_flag margins_once;
+    std::vector<std::vector<uint32_t>> margins;
 };
 
 detail::Cells& Gatherer::scratch() const { return scratch_->per_thread.local(); }
+
+const std::vector<std::vector<uint32_t>>& Gatherer::reprojection_margins() const {
+    std::call_once(scratch_->margins_once, [&] { scratch_->margins = detail::cell_margins(grid_, 1.5f / kReprojectNear); });
+    return scratch_->margins;
+}
 
 void Gatherer::cell_directions(detail::Cells& cells, const Vec3& n, const RandomStream& rng) const {
     const int M = grid_.m, N = grid_.n;
@@ -264,7 +271,7 @@ GatherResult Gatherer::finish(detail::Cells& cells, const Vec3& p, const Vec3& n
     }
     if (settings_.guided > 0) res.guide = std::make_shared<const DirectionGuide>(cells_guide(cells, n));
     if (settings_.hessian) {
-        const TangentHessian th = cells_hessian(grid_, p, n, far_, settings_.ao, L, U, R, D);
+        const TangentHessian th = cells_hessian(grid_, p, n, far_, settings_.ao, L, U, R, D, cells.scratch);
         res.hess_axis = th.axis, res.hess_slow = th.slow, res.hess_fast = th.fast;
     }
 

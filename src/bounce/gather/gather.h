@@ -178,6 +178,9 @@ class Gatherer {
     float far_;                           ///< where a ray that leaves the scene is taken to end, for the Hessian's mesh
     size_t lights_;                       ///< GatherSettings::light_parts: the scene's lights (0: no parts)
     std::vector<Color> unit_scales_;      ///< every light at scale 1 (the signal)
+    /// The cells reprojection traces again about each cell of the grid (made once per gatherer).
+    const std::vector<std::vector<uint32_t>>& reprojection_margins() const;
+
     struct Scratch;
     std::shared_ptr<Scratch> scratch_;  ///< per thread (copies of a gatherer share it)
 };

@@ -7,6 +7,7 @@
 
 #include "bounce/accel/accel.h"
 #include "bounce/core/math.h"
+#include "bounce/core/scratch.h"
 #include "bounce/gather/guide.h"
 
 namespace bounce::detail {
@@ -18,7 +19,8 @@ struct Cells {
     std::vector<Vec3> NH;  ///< hits' geometric normals, set by Gatherer::finish (0: escaped or fur; ao_cutoff.h)
     std::vector<Hit> hits, packet_hits;
     std::vector<Vec3> packet_dirs;
-    GuidedRays guided;  ///< a guided gather's rays and their shares (Gatherer::gather_guided)
+    GuidedRays guided;      ///< a guided gather's rays and their shares (Gatherer::gather_guided)
+    ScratchBuffer scratch;  ///< what the gather's steps take for themselves (hessian.h, reprojection), handed down
     void resize(size_t s) {
         L.assign(s, Color(0));
         R.assign(s, INFINITY);
@@ -26,5 +28,9 @@ struct Cells {
         D.resize(s), NH.resize(s), cos_theta.resize(s), hits.resize(s), packet_dirs.resize(s), packet_hits.resize(s);
     }
 };
+
+/// Per cell of `grid`, the cells within `margin` radians of it (any of their directions, from
+/// the cells' centres and widths), itself included (reproject.cpp).
+std::vector<std::vector<uint32_t>> cell_margins(const GatherGrid& grid, float margin);
 
 }  // namespace bounce::detail

@@ -25,13 +25,10 @@ float relative_stderr(const GatherGrid& grid, bool ao, const std::vector<Color>&
 /// The gather's Hessian (hessian.h) from its cells' hits: the radiance `L` (AO mode: the
 /// unoccluded fractions `U`) at distances `R` along `D`, escaped rays ending at `far`.
 TangentHessian cells_hessian(const GatherGrid& grid, const Vec3& p, const Vec3& n, float far, bool ao, const std::vector<Color>& L,
-                             const std::vector<float>& U, const std::vector<float>& R, const std::vector<Vec3>& D) {
+                             const std::vector<float>& U, const std::vector<float>& R, const std::vector<Vec3>& D, ScratchBuffer& scratch) {
     const int M = grid.m, N = grid.n, S = M * N;
     // Relative values (Radiance's normalisation: 0.99 of the mean plus 0.01, so that a dark
     // hemisphere still has a geometric Hessian).
-    thread_local std::vector<Vec3> pts;
-    thread_local std::vector<double> vals;
-    thread_local std::vector<float> dist;
     double total = 0;
     for (size_t c = 0; c < static_cast<size_t>(S); ++c) total += ao ? U[c] : luminance(L[c]);
     const double scale = total > 1e-20 ? 0.99 * S / total : 0.0, floor = total > 1e-20 ? 0.01 : 1.0;
@@ -40,7 +37,11 @@ TangentHessian cells_hessian(const GatherGrid& grid, const Vec3& p, const Vec3& 
     // Sponza 9 % fewer records and 3.68 % error instead of 3.03 %).
     const int stride = std::max(1, static_cast<int>(std::sqrt(S / 2048.0) + 0.999));
     const int hm = (M + stride - 1) / stride, hn = N / stride;
-    pts.resize(static_cast<size_t>(hm * hn)), vals.resize(pts.size()), dist.resize(pts.size());
+    const auto scope = scratch.scope();
+    const auto H = static_cast<size_t>(hm * hn);
+    const std::span<Vec3> pts = scratch.take<Vec3>(H);
+    const std::span<double> vals = scratch.take<double>(H);
+    const std::span<float> dist = scratch.take<float>(H);
     for (int j = 0; j < hm; ++j)
         for (int k = 0; k < hn; ++k) {
             const auto c = static_cast<size_t>(j * stride * N + k * stride), h = static_cast<size_t>(j * hn + k);
@@ -48,7 +49,7 @@ TangentHessian cells_hessian(const GatherGrid& grid, const Vec3& p, const Vec3& 
             pts[h] = p + D[c] * dist[h];
             vals[h] = (ao ? U[c] : luminance(L[c])) * scale + floor;
         }
-    return gather_hessian(p, n, hm, hn, pts, vals, dist);
+    return gather_hessian(p, n, hm, hn, pts, vals, dist, scratch);
 }
 
 /// GatherResult::bins: each bin's mean over the cells whose directions fall in it.

@@ -9,6 +9,7 @@
 #include <span>
 #include <vector>
 
+#include "bounce/core/scratch.h"
 #include "bounce/gather/gather.h"
 #include "bounce/gather/hessian.h"
 
@@ -69,7 +70,7 @@ float relative_stderr(const GatherGrid& grid, bool ao, const std::vector<Color>&
 /// The gather's Hessian (hessian.h) from its cells' hits: the radiance `L` (AO mode: the
 /// unoccluded fractions `U`) at distances `R` along `D`, escaped rays ending at `far`.
 TangentHessian cells_hessian(const GatherGrid& grid, const Vec3& p, const Vec3& n, float far, bool ao, const std::vector<Color>& L,
-                             const std::vector<float>& U, const std::vector<float>& R, const std::vector<Vec3>& D);
+                             const std::vector<float>& U, const std::vector<float>& R, const std::vector<Vec3>& D, ScratchBuffer& scratch);
 /// GatherResult::bins: each bin's mean over the cells whose directions fall in it.
 void set_bins(GatherResult& res, const Frame& frame, std::span<const float> ao, const std::vector<Color>& L, const std::vector<Vec3>& D);
 

@@ -59,8 +59,8 @@ bool add_edge(Mat3& h, const DVec& a, const DVec& b, const DVec& n, double value
 
 }  // namespace
 
-TangentHessian gather_hessian(const Vec3& p, const Vec3& n, int M, int N, const std::vector<Vec3>& points,
-                              const std::vector<double>& values, const std::vector<float>& dist) {
+TangentHessian gather_hessian(const Vec3& p, const Vec3& n, int M, int N, std::span<const Vec3> points, std::span<const double> values,
+                              std::span<const float> dist, ScratchBuffer& scratch) {
     Mat3 h{};
     const DVec o(p), nn(n);
     auto cell = [&](int j, int k) { return static_cast<size_t>(j * N + ((k % N) + N) % N); };
@@ -74,9 +74,9 @@ TangentHessian gather_hessian(const Vec3& p, const Vec3& n, int M, int N, const 
             if (dist[c] > dist[f]) f = c;
         return values[f];
     };
-    thread_local std::vector<double> va, vb;  // per (j, k), j < M - 1
-    va.assign(static_cast<size_t>(std::max(0, M - 1) * N), 0.0);
-    vb.assign(va.size(), 0.0);
+    const auto scope = scratch.scope();
+    const std::span<double> va = scratch.take<double>(static_cast<size_t>(std::max(0, M - 1) * N), 0.0);  // per (j, k), j < M - 1
+    const std::span<double> vb = scratch.take<double>(va.size(), 0.0);
     for (int j = 0; j + 1 < M; ++j)
         for (int k = 0; k < N; ++k) {
             va[cell(j, k)] = farthest({cell(j, k), cell(j, k + 1), cell(j + 1, k)});

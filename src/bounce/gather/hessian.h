@@ -8,9 +8,11 @@
 // formulas.
 #pragma once
 
+#include <span>
 #include <vector>
 
 #include "bounce/core/math.h"
+#include "bounce/core/scratch.h"
 
 namespace bounce {
 
@@ -25,7 +27,7 @@ struct TangentHessian {
 /// `values`: their radiance (any positive scale); `dist`: their distances from `p`.
 /// Rows run outwards from the normal, columns around it; the cells inside the first row close
 /// the mesh as one polygon.
-TangentHessian gather_hessian(const Vec3& p, const Vec3& n, int M, int N, const std::vector<Vec3>& points,
-                              const std::vector<double>& values, const std::vector<float>& dist);
+TangentHessian gather_hessian(const Vec3& p, const Vec3& n, int M, int N, std::span<const Vec3> points, std::span<const double> values,
+                              std::span<const float> dist, ScratchBuffer& scratch);
 
 }  // namespace bounce

@@ -12,9 +12,6 @@
 //    hold the silhouettes of what is near, where that could fail.
 #include "bounce/gather/gather.h"
 
-#include <map>
-#include <mutex>
-
 #include "bounce/gather/gather_cells.h"
 
 namespace bounce {
@@ -25,14 +22,13 @@ namespace {
 /// variance one cell can add, at the cost of a little of that hit's light.
 constexpr float kMaxWeight = 8;
 
+}  // namespace
+
+namespace detail {
+
 /// Per cell, the cells within `margin` radians of it (any of their directions, from the
 /// cells' centres and widths), itself included. Local to the grid, so shared by all gathers.
-const std::vector<std::vector<uint32_t>>& margins(const GatherGrid& grid, float margin) {
-    static std::mutex lock;
-    static std::map<std::pair<int, int>, std::vector<std::vector<uint32_t>>> cache;
-    const std::scoped_lock hold(lock);
-    auto [it, fresh] = cache.try_emplace({grid.m, grid.n});
-    if (!fresh) return it->second;
+std::vector<std::vector<uint32_t>> cell_margins(const GatherGrid& grid, float margin) {
     const auto S = static_cast<size_t>(grid.rays());
     std::vector<Vec3> centre(S);
     std::vector<float> width(S);  // from the centre to the farthest corner, radians
@@ -46,14 +42,17 @@ const std::vector<std::vector<uint32_t>>& margins(const GatherGrid& grid, float 
                     width[c] = std::max(width[c], std::acos(cosine));
                 }
         }
-    std::vector<std::vector<uint32_t>>& out = it->second;
-    out.resize(S);
+    std::vector<std::vector<uint32_t>> out(S);
     for (size_t a = 0; a < S; ++a)
         for (size_t b = 0; b < S; ++b)
             if (std::acos(std::clamp(dot(centre[a], centre[b]), -1.0f, 1.0f)) <= margin + width[a] + width[b])
                 out[a].push_back(static_cast<uint32_t>(b));
     return out;
 }
+
+}  // namespace detail
+
+namespace {
 
 /// The cell of `grid` that local direction `d` (z: the normal; above the horizon) falls in
 /// (gather_cell_direction's inverse).
@@ -98,15 +97,15 @@ GatherResult Gatherer::reproject(const Vec3& p, const Vec3& n, const RandomStrea
     };
     Sums sums;
     // Cells of p's gather traced again: those about the earlier gather's near hits, widened.
-    thread_local std::vector<uint8_t> again;
-    again.assign(S, 0);
-    const auto& around = margins(grid_, 1.5f / kReprojectNear);
+    detail::Cells& cells = scratch();
+    const auto scope = cells.scratch.scope();
+    const std::span<uint8_t> again = cells.scratch.take<uint8_t>(S, 0);
+    const auto& around = reprojection_margins();
     for (size_t c = 0; c < S; ++c)
         if (kept.object[c] != kNoHit && ((kept.object[c] & GatherHits::kHairBit) || kept.t[c] < near))
             for (uint32_t b : around[c]) again[b] = 1;
     // The other directions from the earlier gather's far hits (its directions about its own
     // normal), each where p sees it, if that is not a cell traced again.
-    detail::Cells& cells = scratch();
     cell_directions(cells, from.n, from.rng);
     const Frame frame(n);
     const auto traced_again = [&](const Vec3& d) { return again[cell_of(grid_, frame.to_local(d))] != 0; };
@@ -135,13 +134,13 @@ GatherResult Gatherer::reproject(const Vec3& p, const Vec3& n, const RandomStrea
     }
     // The cells traced again, from p: all they meet counts.
     cell_directions(cells, n, rng);
-    thread_local std::vector<uint32_t> ids;
-    thread_local std::vector<Vec3> dirs;
-    thread_local std::vector<Hit> traced;
-    ids.clear(), dirs.clear();
-    for (size_t c = 0; c < S; ++c)
-        if (again[c]) ids.push_back(static_cast<uint32_t>(c)), dirs.push_back(cells.D[c]);
-    traced.resize(dirs.size());
+    size_t count = 0;
+    for (size_t c = 0; c < S; ++c) count += again[c];
+    const std::span<uint32_t> ids = cells.scratch.take<uint32_t>(count);
+    const std::span<Vec3> dirs = cells.scratch.take<Vec3>(count);
+    const std::span<Hit> traced = cells.scratch.take<Hit>(count);
+    for (size_t c = 0, i = 0; c < S; ++c)
+        if (again[c]) ids[i] = static_cast<uint32_t>(c), dirs[i++] = cells.D[c];
     accel_.trace_many(p, dirs, traced);
     counters.gather_rays += dirs.size();
     for (size_t i = 0; i < ids.size(); ++i) {

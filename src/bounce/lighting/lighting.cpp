@@ -28,7 +28,8 @@ Color spot_filter(const Light& l, const Vec3& d) {
 
 }  // namespace
 
-DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel) : scene_(scene), accel_(accel), emitters_(scene.lights.size()) {
+DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel)
+    : scene_(scene), accel_(accel), emitters_(scene.lights.size()), scratch_(std::make_unique<PerThread<ScratchBuffer>>()) {
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const Light& l = scene.lights[i];
         if (l.type != LightType::Mesh) continue;
@@ -49,23 +50,32 @@ DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel) : sc
 Color DirectLighting::irradiance(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng, int samples, Counters& counters,
                                  bool include_sky, const LightSampleFn* each, float hair_start) const {
     Color e(0);
-    const int pick = scene_.render.lighting.light_pick;
-    thread_local std::vector<size_t> pool;
-    pool.clear();
+    const auto pick = static_cast<size_t>(std::max(0, scene_.render.lighting.light_pick));
+    const auto takes = [&](const Light& l) { return (include_sky || l.type != LightType::Sky) && l.lights(object); };
+    const auto pickable = [&](const Light& l) {
+        return pick > 0 && (l.type == LightType::Point || l.type == LightType::Spot || l.type == LightType::Quad);
+    };
+    size_t pickables = 0;
     for (size_t i = 0; i < scene_.lights.size(); ++i) {
         const Light& l = scene_.lights[i];
-        if (!(include_sky || l.type != LightType::Sky) || !l.lights(object)) continue;
-        const bool pickable = l.type == LightType::Point || l.type == LightType::Spot || l.type == LightType::Quad;
-        if (pick > 0 && pickable)
-            pool.push_back(i);
+        if (!takes(l)) continue;
+        if (pickable(l))
+            ++pickables;
         else
             e += sample_light(i, p, n, rng, samples, counters, each, hair_start);
     }
-    if (pool.size() <= static_cast<size_t>(pick)) {  // few enough: every one, as always
-        for (size_t i : pool) e += sample_light(i, p, n, rng, samples, counters, each, hair_start);
+    if (pickables <= pick) {  // few enough: every one, as always (in the order a pool would hold them)
+        for (size_t i = 0; i < scene_.lights.size() && pickables > 0; ++i)
+            if (takes(scene_.lights[i]) && pickable(scene_.lights[i])) e += sample_light(i, p, n, rng, samples, counters, each, hair_start);
         return e;
     }
-    return e + picked_irradiance(pool, p, n, rng, samples, counters, each, hair_start);
+    // Many lights: the pool to pick from, in this thread's scratch.
+    ScratchBuffer& scratch = scratch_->local();
+    const auto scope = scratch.scope();
+    const std::span<size_t> pool = scratch.take<size_t>(pickables);
+    for (size_t i = 0, k = 0; i < scene_.lights.size(); ++i)
+        if (takes(scene_.lights[i]) && pickable(scene_.lights[i])) pool[k++] = i;
+    return e + picked_irradiance(pool, p, n, rng, samples, counters, each, hair_start, scratch);
 }
 
 namespace {
@@ -88,10 +98,9 @@ float unshadowed_estimate(const Light& l, const Vec3& p, const Vec3& n) {
 
 }  // namespace
 
-Color DirectLighting::picked_irradiance(const std::vector<size_t>& pool, const Vec3& p, const Vec3& n, const RandomStream& rng, int samples,
-                                        Counters& counters, const LightSampleFn* each, float hair_start) const {
-    thread_local std::vector<double> cdf;
-    cdf.resize(pool.size());
+Color DirectLighting::picked_irradiance(std::span<const size_t> pool, const Vec3& p, const Vec3& n, const RandomStream& rng, int samples,
+                                        Counters& counters, const LightSampleFn* each, float hair_start, ScratchBuffer& scratch) const {
+    const std::span<double> cdf = scratch.take<double>(pool.size());
     double total = 0;
     for (size_t k = 0; k < pool.size(); ++k) cdf[k] = total += unshadowed_estimate(scene_.lights[pool[k]], p, n);
     const double even = 1.0 / static_cast<double>(pool.size());

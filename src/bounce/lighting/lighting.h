@@ -11,6 +11,7 @@
 #include "bounce/accel/accel.h"
 #include "bounce/core/random.h"
 #include "bounce/core/sampling.h"
+#include "bounce/core/scratch.h"
 #include "bounce/core/stats.h"
 #include "bounce/lighting/materials.h"
 #include "bounce/scene/scene.h"
@@ -79,15 +80,16 @@ class DirectLighting {
     /// irradiance() over more pickable lights than LightingSettings::light_pick: that many
     /// picks among `pool`, each by its unshadowed contribution with a tenth spread evenly (so
     /// every light that may light p can be chosen), weighed by one over its chance.
-    Color picked_irradiance(const std::vector<size_t>& pool, const Vec3& p, const Vec3& n, const RandomStream& rng, int samples,
-                            Counters& counters, const LightSampleFn* each, float hair_start) const;
+    Color picked_irradiance(std::span<const size_t> pool, const Vec3& p, const Vec3& n, const RandomStream& rng, int samples,
+                            Counters& counters, const LightSampleFn* each, float hair_start, ScratchBuffer& scratch) const;
     /// `unit`: with the light's scale (light_scales) factored out.
     Color sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng, int samples, Counters& counters,
                        const LightSampleFn* each, float hair_start, bool unit = false) const;
 
     const Scene& scene_;
     const SceneAccel& accel_;
-    std::vector<Emitter> emitters_;  ///< parallel to scene.lights (empty for non-mesh lights)
+    std::vector<Emitter> emitters_;                      ///< parallel to scene.lights (empty for non-mesh lights)
+    std::unique_ptr<PerThread<ScratchBuffer>> scratch_;  ///< many lights' pick pools, per thread
 };
 
 }  // namespace bounce

@@ -1,6 +1,7 @@
 #include "bounce/shade/shade.h"
 
 #include "bounce/core/parallel.h"
+#include "bounce/core/scratch.h"
 #include "bounce/shade/brdf.h"
 #include "bounce/shade/components.h"
 #include "bounce/specular/specular.h"
@@ -254,12 +255,13 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
         p[0] = v.x, p[1] = v.y, p[2] = v.z;
     };
 
+    PerThread<PixelPaths> paths_per_thread;  // a pixel's specular paths, reused by the thread's next pixel
     for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "shading", [&](int wx, int wy, size_t first) {
         Counters& counters = stats.local();
         int x = wx + deep.x0, y = wy + deep.y0;
         PixelSum sum;
         auto frags = deep.pixel(wx, wy);
-        thread_local PixelPaths paths;
+        PixelPaths& paths = paths_per_thread.local();
         if (specular) tracer.trace(frags, camera.origin(), paths, counters);
         for (uint32_t k = 0; k < frags.size(); ++k) {
             const Color before = sum.beauty;
