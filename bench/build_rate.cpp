@@ -123,10 +123,10 @@ std::pair<double, double> read_rate(const Scene& scene, int repeat) {
 /// (scene/mesh_cache.h; a fresh folder, filled by one load first).
 std::pair<double, double> load_rates(const std::string& path, int repeat, Scene& scene) {
     LoadOptions options = load_options_from_environment();
-    options.folders.mesh_cache.clear();
+    options.resources.mesh_cache.reset();
     const double parsed = best_of(repeat, [&] { scene = load_scene(path, {}, options); });
     const auto folder = std::filesystem::temp_directory_path() / fmt::format("bounce-build-rate-{}", getpid());
-    options.folders.mesh_cache = folder.string();
+    options.resources.mesh_cache = std::make_shared<MeshCache>(folder.string(), options.resources.hashes);
     scene = load_scene(path, {}, options);
     const double cached = best_of(repeat, [&] { scene = load_scene(path, {}, options); });
     std::filesystem::remove_all(folder);

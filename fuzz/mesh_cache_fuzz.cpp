@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 
 #include "bounce/scene/mesh_cache.h"
@@ -23,14 +24,16 @@ namespace fs = std::filesystem;
 struct Folder {
     std::string dir, entry;
     bounce::MeshCacheKey key;
+    std::unique_ptr<bounce::MeshCache> cache;
     std::string prefix;  ///< an entry's header and key, as written for an empty load
     Folder() {
         dir = (fs::temp_directory_path() / ("bounce-mesh-cache-fuzz-" + std::to_string(getpid()))).string();
         fs::create_directories(dir);
         std::ofstream(dir + "/m.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
         key = {dir + "/m.obj", "m", false, false, true};
-        bounce::write_mesh_cache(dir, key, {});
-        entry = bounce::mesh_cache_entry(dir, key);
+        cache = std::make_unique<bounce::MeshCache>(dir, nullptr);
+        cache->write(key, {});
+        entry = cache->entry(key);
         std::ifstream in(entry, std::ios::binary);
         const std::string bytes((std::istreambuf_iterator<char>(in)), {});
         prefix = bytes.substr(0, bytes.size() - 52);  // an empty load's body after its key: 52 bytes
@@ -48,7 +51,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     std::memcpy(bytes.data() + 16, &body, 8);
     std::memcpy(bytes.data() + 24, &hash, 8);
     std::ofstream(folder.entry, std::ios::binary | std::ios::trunc) << bytes;
-    if (const auto hit = bounce::read_mesh_cache(folder.dir, folder.key)) {
+    if (const auto hit = folder.cache->read(folder.key)) {
         const bounce::TriangleMesh& m = hit->parts.once;
         for (uint32_t i : m.indices)
             if (i >= m.positions.size()) std::abort();

@@ -27,7 +27,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(data + 2), static_cast<std::streamsize>(size - 2));
     // Embedded images go to a folder of the working directory, not the user's cache.
     bounce::MeshInputs read;
-    read.folders.images = "images";
+    read.resources.images = "images";
     std::vector<bounce::Material> materials;
     bounce::MeshPose pose;
     if (data[0] % 3 == 1 && data[1] & 1) pose.clip = "0", pose.seconds = (data[1] >> 1) / 64.0;

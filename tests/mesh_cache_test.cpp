@@ -71,7 +71,7 @@ class MeshCache : public ::testing::Test {
         l.materials[0].name = "white";
         l.materials[1].name = "lamp", l.materials[1].emission = Color(4);
         MeshInputs read;
-        read.folders = load_folders_from_environment();
+        read.resources = load_resources_from_environment();
         l.parts = load_mesh_parts(obj, "box", l.materials, override_material, &read);
         l.files = read.files;
         return l;
@@ -83,7 +83,8 @@ class MeshCache : public ::testing::Test {
         return l;
     }
     std::string entry(bool overridden = false, bool emits = false) const {
-        return mesh_cache_entry(cache.path().string(), {fs::absolute(obj).lexically_normal().string(), "box", overridden, emits, true});
+        return bounce::MeshCache(cache.path().string(), nullptr)
+            .entry({fs::absolute(obj).lexically_normal().string(), "box", overridden, emits, true});
     }
     static void expect_same(const Loaded& a, const Loaded& b) {
         expect_same_mesh(a.parts.once, b.parts.once);
@@ -109,7 +110,7 @@ TEST_F(MeshCache, AHitLoadsWhatParsingLoads) {
     const std::vector<Material> scene_materials(reference.materials.begin(), reference.materials.begin() + 2);
     std::vector<Material> first = scene_materials, second = scene_materials;
     MeshInputs read;
-    read.folders = load_folders_from_environment();
+    read.resources = load_resources_from_environment();
     const TriangleMesh flat = load_mesh_file(obj, "box", first, -1, &read);
     const TriangleMesh again = load_mesh_file(obj, "box", second, -1, &read);
     expect_same_materials(second, reference.materials);
@@ -269,15 +270,16 @@ TEST_F(MeshCache, AnEntrysTexturesAreCheckedAsAParseChecksThem) {
     const Loaded reference = parsed();
     load();
     const MeshCacheKey key{fs::absolute(obj).lexically_normal().string(), "box", false, false, true};
-    const std::optional<LoadedMeshFile> good = read_mesh_cache(cache.path().string(), key);
+    bounce::MeshCache direct(cache.path().string(), nullptr);
+    const std::optional<LoadedMeshFile> good = direct.read(key);
     ASSERT_TRUE(good);
     for (const std::string& texture : {std::string("/etc/passwd"), dir.file("nosuch.png")}) {
         for (const bool listed : {false, true}) {
             LoadedMeshFile bad = *good;
             bad.materials.back().color_texture = texture;
             if (listed) bad.inputs.emplace_back(texture, file_content_hash(texture));
-            write_mesh_cache(cache.path().string(), key, bad);
-            EXPECT_FALSE(read_mesh_cache(cache.path().string(), key)) << texture << (listed ? " (listed)" : "");
+            direct.write(key, bad);
+            EXPECT_FALSE(direct.read(key)) << texture << (listed ? " (listed)" : "");
         }
     }
     // The load parses again and is the parse's.

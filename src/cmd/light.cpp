@@ -33,7 +33,7 @@ int run_light(const LightArgs& a) {
     SessionOptions so;
     so.scene = a.scene, so.out_dir = a.out_dir, so.deep_in = a.deep_in, so.cache_in = a.cache_in, so.threads = a.threads, so.sets = a.sets;
     so.display = std::make_shared<const DisplayTransform>(a.display, std::getenv("OCIO"));
-    so.folders = load_folders_from_environment();
+    so.resources = load_resources_from_environment();
     ServerOptions opts;
     opts.host = a.bind, opts.port = a.port;
     std::tie(opts.web_dir, opts.three_dir) = page_folders();

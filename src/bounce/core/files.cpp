@@ -89,23 +89,10 @@ void check_output_file(const std::string& path, const std::vector<std::string>& 
     check_output_folder(path, p.has_parent_path() ? p.parent_path() : fs::path("."));
 }
 
-uint64_t file_content_hash(const std::string& path) {
-    struct Seen {
-        uintmax_t size;
-        int64_t mtime;
-        uint64_t hash;
-    };
-    static std::mutex mutex;
-    static std::map<std::string, Seen> seen;
-    std::error_code ec;
-    const uintmax_t size = fs::file_size(path, ec);
-    if (ec) return 0;  // the loader reports a missing file itself
-    const int64_t mtime = fs::last_write_time(path, ec).time_since_epoch().count();
-    {
-        std::lock_guard lock(mutex);
-        auto it = seen.find(path);
-        if (it != seen.end() && it->second.size == size && it->second.mtime == mtime) return it->second.hash;
-    }
+namespace {
+
+/// The file's content hash as read now, with the size and mtime it was read at.
+uint64_t hash_of_file(const std::string& path, uintmax_t size) {
     std::ifstream in(path, std::ios::binary);
     std::vector<char> chunk(1 << 20);
     uint64_t h = hash_combine(0x6a09e667f3bcc909ULL, size);
@@ -115,9 +102,32 @@ uint64_t file_content_hash(const std::string& path) {
         if (n == 0) break;
         h = hash_combine(h, OIIO::xxhash::XXH64(chunk.data(), n, 0));
     }
-    std::lock_guard lock(mutex);
-    seen[path] = {size, mtime, h};
     return h;
+}
+
+}  // namespace
+
+uint64_t FileHashes::hash(const std::string& path) {
+    std::error_code ec;
+    const uintmax_t size = fs::file_size(path, ec);
+    if (ec) return 0;  // the loader reports a missing file itself
+    const int64_t mtime = fs::last_write_time(path, ec).time_since_epoch().count();
+    {
+        std::lock_guard lock(mutex_);
+        auto it = seen_.find(path);
+        if (it != seen_.end() && it->second.size == size && it->second.mtime == mtime) return it->second.hash;
+    }
+    const uint64_t h = hash_of_file(path, size);
+    std::lock_guard lock(mutex_);
+    seen_[path] = {size, mtime, h};
+    return h;
+}
+
+uint64_t file_content_hash(const std::string& path, FileHashes* remembered) {
+    if (remembered) return remembered->hash(path);
+    std::error_code ec;
+    const uintmax_t size = fs::file_size(path, ec);
+    return ec ? 0 : hash_of_file(path, size);
 }
 
 void remove_stale_temporaries(const std::string& path) {

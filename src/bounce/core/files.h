@@ -4,6 +4,8 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -25,9 +27,25 @@ std::string lower_extension(const std::string& path);
 std::string ascii_lower(std::string s);
 /// True when `path` is `folder` or lies under it, symlinks that exist resolved.
 bool inside(const std::filesystem::path& path, const std::filesystem::path& folder);
-/// A 64-bit hash of the file's whole content (xxHash), remembered per (path, size, mtime) for
-/// the process: identities cover what a file holds, not only its name.
-uint64_t file_content_hash(const std::string& path);
+/// Files' content hashes remembered per (path, size, mtime), so a file unchanged since it was
+/// last hashed is not read again (the lighting tool reloads its scene at every edit). Its owner
+/// (a front end, for all its loads) hands it down; safe to use from many threads.
+class FileHashes {
+  public:
+    uint64_t hash(const std::string& path);
+
+  private:
+    struct Seen {
+        uintmax_t size;
+        int64_t mtime;
+        uint64_t hash;
+    };
+    std::mutex mutex_;
+    std::map<std::string, Seen> seen_;
+};
+/// A 64-bit hash of the file's whole content (xxHash; 0 when it cannot be read): identities
+/// cover what a file holds, not only its name. With `remembered`, taken from there.
+uint64_t file_content_hash(const std::string& path, FileHashes* remembered = nullptr);
 /// Removes temporary files of dead processes that write_atomically left beside `path`
 /// (a SIGKILL cannot be caught).
 void remove_stale_temporaries(const std::string& path);

@@ -31,7 +31,7 @@ std::string embedded_image_file(const aiTexture& texture, const std::string& ima
     const size_t size = texture.mWidth;
     if (images.empty())
         throw InputError(path, where,
-                         "it embeds an image and no folder was given to write it to (LoadFolders::images; BOUNCE_IMAGE_CACHE)");
+                         "it embeds an image and no folder was given to write it to (LoadResources::images; BOUNCE_IMAGE_CACHE)");
     const fs::path folder = images;
     const fs::path file = folder / fmt::format("{:016x}.{}", OIIO::xxhash::XXH64(bytes, size, 61), ext);
     std::error_code ec;

@@ -9,7 +9,7 @@ struct aiTexture;
 
 namespace bounce {
 
-/// Whether `file` is one embedded_image_file wrote into `folder` (LoadFolders::images).
+/// Whether `file` is one embedded_image_file wrote into `folder` (LoadResources::images).
 bool is_embedded_image(const std::string& file, const std::string& folder);
 
 /// The file of `folder` holding `texture`'s bytes (written there atomically unless it is already

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "bounce/core/math.h"
-#include "bounce/scene/load_folders.h"
+#include "bounce/scene/load_resources.h"
 #include "bounce/scene/scene.h"
 
 namespace bounce {
@@ -41,7 +41,7 @@ struct JsonContext {
     std::vector<SceneInput>* inputs = nullptr;
     /// LoadOptions::check_path: sees every file and folder path before it is used.
     std::function<void(const std::string& path, const std::string& pointer)> check_path;
-    LoadFolders folders;  ///< LoadOptions::folders: handed to every mesh file's load
+    LoadResources resources;  ///< LoadOptions::resources: handed to every mesh file's load
 
     /// Pointers whose value came from keys, and the frame they were taken at: an error there
     /// names the frame (a keyed fov that leaves its range at frame 3).

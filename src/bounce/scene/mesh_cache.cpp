@@ -40,8 +40,6 @@ constexpr size_t kMaxString = 1 << 16;
 void say_once(std::atomic<bool>& said, const std::string& message) {
     if (!said.exchange(true)) std::fprintf(stderr, "bounce: %s\n", message.c_str());
 }
-std::atomic<bool> said_damaged{false}, said_unwritable{false}, said_folder{false};
-std::atomic<uint64_t> hits{0}, writes{0};
 
 /// Bytes appended in the machine's own layout (a cache is the machine's, not an exchange format).
 struct Out {
@@ -262,26 +260,23 @@ uint64_t body_hash(const std::string& bytes, size_t from) {
 
 }  // namespace
 
-std::string usable_mesh_cache(const std::string& folder) {
-    if (folder.empty()) return "";
+MeshCache::MeshCache(std::string folder, std::shared_ptr<FileHashes> hashes) : folder_(std::move(folder)), hashes_(std::move(hashes)) {
     std::error_code ec;
-    fs::create_directories(folder, ec);
-    if (!fs::is_directory(folder, ec)) {
-        say_once(said_folder,
-                 fmt::format("the mesh cache {} is not a folder bounce can make (BOUNCE_MESH_CACHE); meshes are parsed", folder));
-        return "";
-    }
-    return folder;
+    fs::create_directories(folder_, ec);
+    usable_ = !folder_.empty() && fs::is_directory(folder_, ec);
+    if (!usable_ && !folder_.empty())
+        std::fprintf(stderr, "bounce: the mesh cache %s is not a folder bounce can make (BOUNCE_MESH_CACHE); meshes are parsed\n",
+                     folder_.c_str());
 }
 
-std::string mesh_cache_entry(const std::string& folder, const MeshCacheKey& key) {
+std::string MeshCache::entry(const MeshCacheKey& key) const {
     Out k;
-    write_key(k, key, file_content_hash(key.path));
-    return (fs::path(folder) / fmt::format("{:016x}.bmc", OIIO::xxhash::XXH64(k.bytes.data(), k.bytes.size(), kVersion))).string();
+    write_key(k, key, hash(key.path));
+    return (fs::path(folder_) / fmt::format("{:016x}.bmc", OIIO::xxhash::XXH64(k.bytes.data(), k.bytes.size(), kVersion))).string();
 }
 
-std::optional<LoadedMeshFile> read_mesh_cache(const std::string& folder, const MeshCacheKey& key) {
-    const std::string entry = mesh_cache_entry(folder, key);
+std::optional<LoadedMeshFile> MeshCache::read(const MeshCacheKey& key) {
+    const std::string entry = this->entry(key);
     std::error_code ec;
     if (!fs::exists(fs::symlink_status(entry, ec))) return std::nullopt;
     try {
@@ -299,29 +294,29 @@ std::optional<LoadedMeshFile> read_mesh_cache(const std::string& folder, const M
         const auto body = in.pod<uint64_t>(), hash = in.pod<uint64_t>();
         if (body != in.left() || hash != body_hash(bytes, kHeaderBytes)) throw Damaged{"its checksum does not match"};
         Out k;
-        write_key(k, key, file_content_hash(key.path));
+        write_key(k, key, this->hash(key.path));
         if (in.left() < k.bytes.size() || std::memcmp(in.p, k.bytes.data(), k.bytes.size()) != 0) return std::nullopt;
         in.p += k.bytes.size();
         LoadedMeshFile loaded = read_entry(in, key.overridden);
         for (const auto& [path, hash_then] : loaded.inputs)
-            if (file_content_hash(path) != hash_then) return std::nullopt;  // an MTL or texture changed
+            if (this->hash(path) != hash_then) return std::nullopt;  // an MTL or texture changed
         check_textures(loaded);
-        ++hits;
+        ++hits_;
         return loaded;
     } catch (const Damaged& d) {
-        say_once(said_damaged, fmt::format("mesh cache entry {} is damaged ({}); {} is parsed again", entry, d.why, key.path));
+        say_once(said_damaged_, fmt::format("mesh cache entry {} is damaged ({}); {} is parsed again", entry, d.why, key.path));
         return std::nullopt;
     }
 }
 
-void write_mesh_cache(const std::string& folder, const MeshCacheKey& key, const LoadedMeshFile& loaded) {
-    const std::string entry = mesh_cache_entry(folder, key);
+void MeshCache::write(const MeshCacheKey& key, const LoadedMeshFile& loaded) {
+    const std::string entry = this->entry(key);
     Out out;
     out.bytes.append(kMagic, 8);
     out.pod(kVersion);
     out.pod(uint32_t{0});
     out.pod(uint64_t{0}), out.pod(uint64_t{0});  // body bytes and hash, filled below
-    write_key(out, key, file_content_hash(key.path));
+    write_key(out, key, hash(key.path));
     write_entry(out, loaded);
     const uint64_t size = out.bytes.size() - kHeaderBytes, hash = body_hash(out.bytes, kHeaderBytes);
     std::memcpy(out.bytes.data() + 16, &size, 8);
@@ -333,12 +328,11 @@ void write_mesh_cache(const std::string& folder, const MeshCacheKey& key, const 
             f.write(out.bytes.data(), static_cast<std::streamsize>(out.bytes.size()));
             if (!f.flush()) throw std::runtime_error("cannot write " + tmp);
         });
-        ++writes;
+        ++writes_;
     } catch (const std::exception& e) {
-        say_once(said_unwritable, fmt::format("mesh cache folder {} cannot take an entry ({}); loads go on without it", folder, e.what()));
+        say_once(said_unwritable_,
+                 fmt::format("mesh cache folder {} cannot take an entry ({}); loads go on without it", folder_, e.what()));
     }
 }
-
-MeshCacheCounts mesh_cache_counts() { return {hits.load(), writes.load()}; }
 
 }  // namespace bounce

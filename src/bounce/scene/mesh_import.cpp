@@ -340,20 +340,20 @@ void for_each_face_material(MeshFileParts& parts, Fn&& fn) {
         for (uint32_t& f : s.mesh.face_materials) f = fn(f);
 }
 
-/// A load through the mesh cache (mesh_cache.h) when BOUNCE_MESH_CACHE names one: `import` runs
+/// A load through the mesh cache (mesh_cache.h) when the front end gave one: `import` runs
 /// only on a miss, and a hit replays what it did (the files it read through `files_read`'s
 /// check, the file's materials appended to `materials`).
 MeshFileParts through_cache(const std::string& path, const std::string& prefix, bool parts, std::vector<Material>& materials,
                             int override_material, MeshInputs* files_read, const std::function<MeshFileParts(MeshInputs*)>& import) {
-    const std::string folder = usable_mesh_cache(files_read ? files_read->folders.mesh_cache : std::string());
-    if (folder.empty()) return import(files_read);
+    MeshCache* const cache = files_read ? files_read->resources.mesh_cache.get() : nullptr;
+    if (!cache || !cache->usable()) return import(files_read);
     const MeshCacheKey key{fs::absolute(path).lexically_normal().string(), prefix, override_material >= 0,
                            override_material >= 0 && materials[static_cast<size_t>(override_material)].is_emissive(), parts};
     const auto base = static_cast<uint32_t>(materials.size());
     auto to_scene = [&](uint32_t f) { return override_material >= 0 ? static_cast<uint32_t>(override_material) : base + f; };
-    if (std::optional<LoadedMeshFile> hit = read_mesh_cache(folder, key)) {
+    if (std::optional<LoadedMeshFile> hit = cache->read(key)) {
         for (const auto& input : hit->inputs)
-            if (files_read && is_embedded_image(input.first, files_read->folders.images))
+            if (files_read && is_embedded_image(input.first, files_read->resources.images))
                 files_read->files.push_back(input.first);  // bounce's own, as on a parse
             else if (files_read)
                 files_read->add(input.first);
@@ -361,17 +361,17 @@ MeshFileParts through_cache(const std::string& path, const std::string& prefix, 
         for_each_face_material(hit->parts, to_scene);
         return std::move(hit->parts);
     }
-    MeshInputs read{files_read->check, {}, files_read->folders};  // (a cache folder came from files_read)
+    MeshInputs read{files_read->check, {}, files_read->resources};  // (a cache folder came from files_read)
     LoadedMeshFile entry{import(&read), {materials.begin() + base, materials.end()}, {}};
     if (files_read) files_read->files.insert(files_read->files.end(), read.files.begin(), read.files.end());
     // By absolute path: a later run from another working directory reads the same files.
     const auto absolute = [](const std::string& f) { return fs::absolute(f).lexically_normal().string(); };
-    for (const std::string& f : read.files) entry.inputs.emplace_back(absolute(f), file_content_hash(f));
+    for (const std::string& f : read.files) entry.inputs.emplace_back(absolute(f), cache->hash(f));
     for (Material& m : entry.materials)
         for (std::string* t : m.texture_files())
             if (!t->empty()) *t = absolute(*t);
     for_each_face_material(entry.parts, [&](uint32_t f) { return override_material >= 0 ? 0 : f - base; });
-    write_mesh_cache(folder, key, entry);
+    cache->write(key, entry);
     for_each_face_material(entry.parts, to_scene);
     return std::move(entry.parts);
 }

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "bounce/dice/subdivision.h"
-#include "bounce/scene/load_folders.h"
+#include "bounce/scene/load_resources.h"
 #include "bounce/scene/scene.h"
 
 namespace bounce {
@@ -20,7 +20,7 @@ namespace bounce {
 struct MeshInputs {
     std::function<void(const std::string& path)> check;
     std::vector<std::string> files;
-    LoadFolders folders;  ///< where the parse is kept (mesh cache) and embedded images written
+    LoadResources resources;  ///< where the parse is kept (mesh cache) and embedded images written
     void add(const std::string& path) {
         if (check) check(path);
         files.push_back(path);

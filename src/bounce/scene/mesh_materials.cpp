@@ -76,7 +76,7 @@ std::string file_texture(const aiScene& s, const aiMaterial& am, std::initialize
         if (am.GetTexture(type, 0, &tex) != AI_SUCCESS) continue;
         std::string t;
         if (const aiTexture* embedded = s.GetEmbeddedTexture(tex.C_Str())) {
-            t = embedded_image_file(*embedded, files_read ? files_read->folders.images : std::string(), path, where);
+            t = embedded_image_file(*embedded, files_read ? files_read->resources.images : std::string(), path, where);
             if (files_read) files_read->files.push_back(t);
         } else {
             t = (fs::path(path).parent_path() / tex.C_Str()).lexically_normal().string();

@@ -8,7 +8,7 @@ namespace bounce {
 
 MeshInputs mesh_inputs(const JsonReader& r, const std::string& key) {
     MeshInputs in;
-    in.folders = r.ctx().folders;
+    in.resources = r.ctx().resources;
     if (r.ctx().check_path) in.check = [check = r.ctx().check_path, at = r.at(key)](const std::string& f) { check(f, at); };
     return in;
 }

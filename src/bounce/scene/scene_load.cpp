@@ -230,7 +230,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     ctx.file = path;
     ctx.dir = fs::path(path).parent_path();
     ctx.check_path = options.check_path;
-    ctx.folders = options.folders;
+    ctx.resources = options.resources;
     if (!doc.is_object()) ctx.fail("", fmt::format("expected an object at the top of the scene, got {}", json_type_name(doc)));
     check_overridden_values(doc, overrides, ctx);
     for (const auto& o : overrides) ctx.overridden.insert_or_assign(apply_override(doc, o), o);
@@ -275,7 +275,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     if (scene.camera.has_motion_blur()) add_shutter_positions(scene, ctx);
     // What every file holds goes into the identities (deep and cache files).
     ctx.inputs = nullptr;
-    for (SceneInput& in : scene.inputs) in.hash = file_content_hash(in.path);
+    for (SceneInput& in : scene.inputs) in.hash = file_content_hash(in.path, ctx.resources.hashes.get());
     return scene;
 }
 

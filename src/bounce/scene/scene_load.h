@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "bounce/scene/json_reader.h"
-#include "bounce/scene/load_folders.h"
+#include "bounce/scene/load_resources.h"
 #include "bounce/scene/scene.h"
 
 namespace bounce {
@@ -23,7 +23,7 @@ struct LoadOptions {
     /// Called with every file and folder the scene names (resolved path, JSON pointer) before
     /// it is read or used; throws to refuse it (the lighting tool confines its edits). Null: none.
     std::function<void(const std::string& path, const std::string& pointer)> check_path;
-    LoadFolders folders;  ///< where parsed meshes and embedded images are kept
+    LoadResources resources;  ///< where parsed meshes and embedded images are kept
 };
 
 /// Loads `path` (.json, or .gltf/.glb/.obj/.ply rendered with defaults and the file's own

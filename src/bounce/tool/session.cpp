@@ -123,7 +123,7 @@ void add_scene_rows(const json& description, json& rows) {
 
 LightingSession::LightingSession(SessionOptions options) : options_(std::move(options)) {
     LoadOptions first;
-    first.folders = options_.folders;
+    first.resources = options_.resources;
     scene_ = load_scene(options_.scene, {}, first);
     frame_ = scene_.frame;
     scene_dir_ = fs::weakly_canonical(fs::absolute(options_.scene)).parent_path();
@@ -217,7 +217,7 @@ json LightingSession::edit(const std::string& key, const json& value, const std:
     o.push_back(cli_origin.empty() ? edit_override(key, value) : Override(key + "=" + value.dump(), cli_origin));
     LoadOptions at;
     at.frame = frame_;
-    at.folders = options_.folders;
+    at.resources = options_.resources;
     if (cli_origin.empty()) at.check_path = edit_path_check(key);
     Scene s = load_scene(options_.scene, o, at);  // throws with the file and place on a bad value
     const Param* p = find_param(scene_params(), key);

@@ -25,7 +25,7 @@
 #include "bounce/render/frame_plan.h"
 #include "bounce/render/render.h"
 #include "bounce/scene/json_reader.h"
-#include "bounce/scene/load_folders.h"
+#include "bounce/scene/load_resources.h"
 #include "bounce/scene/scene.h"
 
 namespace bounce {
@@ -59,7 +59,7 @@ struct SessionOptions {
     bool default_to_light_parts = true;
     /// How the view's colours are encoded (an OpenColorIO display and view, or the built-in sRGB).
     std::shared_ptr<const DisplayTransform> display = srgb_display();
-    LoadFolders folders;  ///< where the scene's loads keep parsed meshes and embedded images
+    LoadResources resources;  ///< where the scene's loads keep parsed meshes and embedded images
 };
 
 /// What a render request does, least work first.

@@ -199,7 +199,7 @@ std::optional<SessionAction> LightingSession::next_replay_frame() {
     if (replay_.next > replay_.target) return std::nullopt;
     LoadOptions at;
     at.frame = replay_.next;
-    at.folders = options_.folders;
+    at.resources = options_.resources;
     scene_ = load_scene(options_.scene, overrides_locked(), at);
     frame_ = replay_.next;
     // A replay from the sequence's start makes its first frame anew, as --frames does.
