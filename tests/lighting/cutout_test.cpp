@@ -13,7 +13,7 @@
 #include "bounce/tool/session.h"
 #include "material_scenes.h"
 #include "test_util.h"
-#include "tool_util.h"
+#include "tool/tool_util.h"
 
 namespace bounce {
 namespace {
