@@ -1,40 +1,71 @@
-// Issue 29, what a render may destroy and when it says no: outputs that would overwrite a file
-// the scene reads, a kill mid-render, checks that came after the work, identities that missed
-// an edited file, merges and comparisons that passed wrong data, memory limits and messages.
-#include <fmt/format.h>
+// The command line attacked: flags out of range, outputs that would overwrite an input (the
+// OpenColorIO config and its LUTs included), FIFOs, killed runs, address-space limits, messages.
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <chrono>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
-#include <thread>
-
-#include "bounce/cache/cache_file.h"
-#include "bounce/core/image.h"
-#include "test_util.h"
+#include "hostile/hostile_util.h"
 
 namespace bounce {
 namespace {
 
-namespace fs = std::filesystem;
 using nlohmann::json;
+namespace fs = std::filesystem;
+using test::expect_refused;
+using test::write_constant_image;
+using namespace hostile;
 
-/// A scene of the OBJ + MTL Cornell box, copied into `d` (so tests may edit its files).
-std::string cornell_copy(const test::TempDir& d) {
-    for (const auto& e : fs::directory_iterator(test::source_dir() + "/tests/data/cornell_box"))
-        fs::copy_file(e.path(), d.path() / e.path().filename(), fs::copy_options::overwrite_existing);
-    const json j = {{"camera", {{"position", {0, 1, 3.5}}, {"look_at", {0, 1, 0}}, {"fov", 40}}},
-                    {"objects", {{{"type", "mesh"}, {"file", "CornellBox-Original.obj"}}}},
-                    {"lights", {{{"type", "point"}, {"position", {0, 1.5, 0}}}}}};
-    return d.write("cornell.json", j.dump());
+TEST(HostileColour, OutputsMayNotOverwriteTheConfigOrItsLuts) {
+    test::TempDir d;
+    write_lut_config(d);
+    const std::string config = test::bytes_of(d.file("lut.ocio")), lut = test::bytes_of(d.file("luts/thelut.cube"));
+    const std::string base = small_render(d) + " --ocio-config " + d.file("lut.ocio") + " --view lut";
+    ASSERT_EQ(test::run_bounce(base), 0);  // the config works
+    test::expect_refused(base + " --stats-json " + d.file("lut.ocio"), {"lut.ocio", "output names an input"});
+    test::expect_refused(base + " --deep-out " + d.file("lut.ocio"), {"lut.ocio", "output names an input"});
+    test::expect_refused(base + " --gi cache --cache-out " + d.file("lut.ocio"), {"lut.ocio", "output names an input"});
+    test::expect_refused(base + " --stats-json " + d.file("luts/thelut.cube"), {"thelut.cube", "output names an input"});
+    // Through $OCIO as well.
+    std::string err;
+    EXPECT_EQ(test::run_bounce_shell("OCIO=" + d.file("lut.ocio") + " " + std::string(BOUNCE_BINARY) + " " + small_render(d) +
+                                         " --stats-json " + d.file("lut.ocio"),
+                                     &err),
+              2)
+        << err;
+    EXPECT_NE(err.find("output names an input"), std::string::npos) << err;
+    EXPECT_EQ(test::bytes_of(d.file("lut.ocio")), config);
+    EXPECT_EQ(test::bytes_of(d.file("luts/thelut.cube")), lut);
 }
 
-std::string quick(const std::string& scene, const std::string& out) {
-    return "render " + scene + " -o " + out + " -q --res 16x16 --spp 1 --light-samples 1";
+TEST(HostileColour, ALutThatIsAFifoIsRefusedBeforeOpenColorIoOpensIt) {
+    test::TempDir d;
+    write_lut_config(d);
+    fs::remove(d.file("luts/thelut.cube"));
+    ASSERT_EQ(mkfifo(d.file("luts/thelut.cube").c_str(), 0600), 0);
+    // Refused at once (OpenColorIO would block in open() for good: the test would time out).
+    test::expect_refused(small_render(d) + " --ocio-config " + d.file("lut.ocio") + " --view lut",
+                         {"lut.ocio", "thelut.cube", "not a regular file"});
+}
+
+TEST(HostileColour, AnEmptyConfigNameIsRefused) {
+    test::TempDir d;
+    test::expect_refused(small_render(d) + " --ocio-config ''", {"--ocio-config", "empty file name"});
+}
+
+TEST(HostileCli, MessagesSayWhatIsWrong) {
+    test::TempDir d;
+    json j = test::base_scene();
+    j["animation"] = {{"fps", 24}, {"frames", {1, 6}}};
+    d.write("sh.json", j.dump());
+    const std::string shot = "render " + d.file("sh.json") + " -q -o " + d.file("f.####.exr");
+    test::expect_refused(shot + " --frames 1-1000000000", {"--frames", "1000000000", "past the largest frame"});
+    test::expect_refused(shot + " --frames 5-2", {"--frames", "first frame 5 is after the last 2"});
+    const std::string still = small_render(d).substr(0, small_render(d).find(" --threads 1")) + " -o " + d.file("o.exr");
+    test::expect_refused(still + " --threads -1", {"--threads", "-1"});
+    test::expect_refused(still + " --threads 1 --threads -1", {"--threads", "given more than once"});
+    // A folder where an output goes: the reason, not "Success".
+    fs::create_directories(d.path() / "o.exr");
+    std::string err;
+    EXPECT_EQ(test::run_bounce(small_render(d), &err), 2);
+    EXPECT_EQ(err.find("Success"), std::string::npos) << err;
 }
 
 TEST(HostileOutputs, NoOutputMayOverwriteAFileTheSceneReads) {
@@ -110,33 +141,6 @@ TEST(HostileOutputs, FlagsThatCannotWorkAreRefusedBeforeTheRender) {
     // --show of a one-channel layer writes its PNG (it used to end in "internal error").
     for (const char* layer : {"ao", "depth", "refined", "N"})
         EXPECT_EQ(test::run_bounce(quick(test::cornell_scene(), out) + " --gi cache --show " + layer), 0) << layer;
-}
-
-TEST(HostileOutputs, EditingAFileTheSceneReadsInvalidatesItsDeepFileAndCache) {
-    test::TempDir d;
-    const std::string scene = cornell_copy(d);
-    const std::string keep = " --gi cache --deep-out " + d.file("f.deep.exr") + " --cache-out " + d.file("f.bic");
-    ASSERT_EQ(test::run_bounce(quick(scene, d.file("a.exr")) + keep), 0);
-    // Move one vertex of the mesh: same JSON, other geometry.
-    std::string obj = test::bytes_of(d.file("CornellBox-Original.obj"));
-    const auto at = obj.find("\nv ");
-    obj.insert(at + 3, "0.01");
-    obj.erase(at + 7, 1);  // keep the line well-formed: "v 0.01..." replaces the first digit run's start
-    std::ofstream(d.file("CornellBox-Original.obj"), std::ios::binary) << obj;
-    test::expect_refused(quick(scene, d.file("b.exr")) + " --deep-in " + d.file("f.deep.exr"), {"f.deep.exr", "has changed"});
-    test::expect_refused(quick(scene, d.file("b.exr")) + " --gi cache --cache-in " + d.file("f.bic"), {"f.bic", "has changed"});
-}
-
-TEST(HostileOutputs, MergingCachesOfOtherSettingsIsRefusedNamingEachKey) {
-    test::TempDir d;
-    ASSERT_EQ(test::run_bounce(quick(test::cornell_scene(), d.file("a.exr")) + " --gi cache --rays 16 --cache-out " + d.file("a.bic")), 0);
-    ASSERT_EQ(test::run_bounce(quick(test::cornell_scene(), d.file("b.exr")) + " --gi cache --rays 32 --min-spacing 3 --cache-out " +
-                               d.file("b.bic")),
-              0);
-    test::expect_refused("cache merge " + d.file("a.bic") + " " + d.file("b.bic") + " -o " + d.file("m.bic"),
-                         {"b.bic", "render.rays: 16 -> 32", "render.min_spacing"});
-    EXPECT_FALSE(fs::exists(d.file("m.bic")));
-    EXPECT_EQ(test::run_bounce("cache merge --force " + d.file("a.bic") + " " + d.file("b.bic") + " -o " + d.file("m.bic")), 0);
 }
 
 TEST(HostileOutputs, CompareBaseAndBakeAoRefuseWhatWouldMislead) {
@@ -229,6 +233,97 @@ TEST(HostileOutputs, MessagesNameWhatTheUserWrote) {
     const std::string bad = test::with_cache_header(bytes, [](json& h) { h["record_count"] = -1; });
     d.write("neg.bic", bad);
     test::expect_refused("cache info " + d.file("neg.bic"), {"neg.bic", "header/record_count", "-1 is not a record count"});
+}
+
+TEST(HostileOutputs, ResumeRendersAgainAFrameWhoseFilesAreCutShort) {
+    test::TempDir d;
+    const std::string scene = test::source_dir() + "/scenes/shots/cornell-rolling.json";
+    const std::string args = "render " + scene + " --res 16x16 --gi cache --rays 16 --frames 1-3 -o " + d.file("s.####.exr") +
+                             " --cache-out " + d.file("s.####.bic");
+    ASSERT_EQ(test::run_bounce(args + " -q"), 0);
+    std::filesystem::resize_file(d.file("s.0002.exr"), 1000);
+    std::filesystem::resize_file(d.file("s.0003.bic"), 500);
+    std::string err;
+    ASSERT_EQ(test::run_bounce(args + " --resume", &err), 0) << err;
+    EXPECT_NE(err.find("frame 1: outputs complete, skipped"), std::string::npos) << err;
+    EXPECT_EQ(err.find("frame 2: outputs complete"), std::string::npos) << err;
+    EXPECT_EQ(err.find("frame 3: outputs complete"), std::string::npos) << err;
+    EXPECT_GT(std::filesystem::file_size(d.file("s.0002.exr")), 1000u);
+    EXPECT_GT(std::filesystem::file_size(d.file("s.0003.bic")), 500u);
+}
+
+TEST(BadInput, FifosAndDirectoriesAreNamedNotOpened) {
+    test::TempDir d;
+    ASSERT_EQ(mkfifo(d.file("scene.json").c_str(), 0600), 0);
+    refused(render_cmd(d.file("scene.json"), d.file("x.exr")), {"scene.json", "not a regular file"});
+    std::filesystem::create_directory(d.file("adir.json"));
+    refused(render_cmd(d.file("adir.json"), d.file("x.exr")), {"adir.json", "is a directory"});
+    refused(render_cmd(test::cornell_scene(), d.file("y.exr")) + " --deep-in " + d.file("scene.json"),
+            {"scene.json", "not a regular file"});
+}
+
+TEST(BadInput, NegativeAndNanFlagsExitTwo) {
+    test::TempDir d;
+    const std::string cmd = render_cmd(test::cornell_scene(), d.file("x.exr"));
+    refused(cmd + " --rays -1", {"--rays -1", "out of range"});
+    refused(cmd + " --threads -1", {"--threads -1", "out of range"});
+    refused(cmd + " --spp -1", {"--spp -1", "out of range"});
+    refused(cmd + " --seed -1", {"--seed -1", "non-negative"});
+    refused(cmd + " --min-spacing -1", {"--min-spacing -1", "out of range"});
+    refused(cmd + " --min-spacing nan", {"--min-spacing nan", "expected a number"});
+    refused(cmd + " --set objects.-1.name=x", {"\"-1\" is not an array index"});
+    refused(cmd + " --cache-out " + d.file("c.bic"), {"--cache-out", "--gi cache"});
+    refused(cmd + " --cache-in " + d.file("c.bic"), {"--cache-in", "--gi cache"});
+    refused("rendr x", {"unknown command", "did you mean \"render\""});
+    // A frame that cannot fit is refused up front with the estimate, not with std::bad_alloc.
+    refused("render " + test::cornell_scene() + " -o " + d.file("big.exr") + " -q --res 60000x60000",
+            {"camera.resolution", "needs about", "GiB"});
+}
+
+TEST(BadInput, TheLightingToolRefusesBeforeServing) {
+    test::TempDir d;
+    const std::string scene = test::cornell_scene(), out = " --out " + d.file("out");
+    refused("light " + d.file("nope.json") + out, {"nope.json", "not found"});
+    refused("light " + scene + out + " --bind 0.0.0.0", {"--bind", "loopback"});
+    refused("light " + scene + out + " --port 70000", {"--port"});
+    refused("light " + scene + " --out /dev/null", {"/dev/null", "output folder"});
+    refused("light " + scene + out + " --set render.rays=-1", {"--set render.rays=-1", "out of range"});
+    refused("light " + scene + out + " --set nonsense", {"--set nonsense", "key=value"});
+    // A bad cache or deep file is named and never replaces the session's own.
+    std::filesystem::create_directories(d.file("out"));
+    d.write("out/session.bic", "the session's cache");
+    refused("light " + scene + out + " --cache-in " + scene, {scene, "bad magic"});
+    refused("light " + scene + out + " --deep-in " + scene, {scene});
+    std::ifstream in(d.file("out/session.bic"));
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "the session's cache");
+}
+
+TEST(BadInput, OutputsThatWouldDestroySomethingAreRefusedBeforeRendering) {
+    test::TempDir d;
+    d.write("scene.json", test::base_scene().dump());
+    const std::string scene = d.file("scene.json");
+    const std::string before = test::base_scene().dump();
+    refused(render_cmd(scene, scene), {"-o", ".exr"});
+    refused(render_cmd(scene, d.file("x.png")), {"-o", ".exr"});
+    refused(render_cmd(scene, "/dev/null.exr") + " --deep-out /dev/null", {"/dev/null", "not a regular file"});
+    std::filesystem::create_directory(d.file("adir.exr"));
+    refused(render_cmd(scene, d.file("adir.exr")), {"adir.exr", "is a directory"});
+    std::filesystem::create_directory(d.file("sdir"));
+    refused(render_cmd(scene, d.file("y.exr")) + " --stats-json " + d.file("sdir"), {"sdir", "is a directory"});
+    EXPECT_FALSE(std::filesystem::exists(d.file("y.exr")));  // checked before rendering
+    refused(render_cmd(scene, d.file("z.exr")) + " --deep-out " + d.file("z.exr"), {"--deep-out", "same file"});
+    std::ifstream in(scene);
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), before);
+}
+
+TEST(BadInput, StaleTemporariesOfDeadRendersAreRemoved) {
+    test::TempDir d;
+    d.write("scene.json", test::base_scene().dump());
+    // PID 2^22 + 1 is above Linux's pid_max limit: no such process.
+    d.write("x.tmp4194305.exr", "half-written");
+    ASSERT_EQ(test::run_bounce(render_cmd(d.file("scene.json"), d.file("x.exr"))), 0);
+    EXPECT_FALSE(std::filesystem::exists(d.file("x.tmp4194305.exr")));
+    EXPECT_TRUE(std::filesystem::exists(d.file("x.exr")));
 }
 
 }  // namespace
