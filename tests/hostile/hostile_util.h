@@ -84,7 +84,9 @@ inline json shared_mesh_gltf() {
             {"buffers", {{{"byteLength", 36}, {"uri", "data:application/octet-stream;base64," + b64}}}}};
 }
 
-inline std::string render_cmd(const std::string& scene, const std::string& out) { return "render " + scene + " -o " + out + " -q --res 16x16"; }
+inline std::string render_cmd(const std::string& scene, const std::string& out) {
+    return "render " + scene + " -o " + out + " -q --res 16x16";
+}
 
 /// A glTF (JSON only, embedded buffer) of one triangle under a chain of `depth` nodes.
 inline json gltf_chain(int depth) {
