@@ -379,6 +379,27 @@ void read_parts(Cursor& c, const std::string& name, size_t lights, std::vector<R
     }
 }
 
+/// `count` records in checksummed blocks from `c` into `out`, each checked.
+void read_record_blocks(Cursor& c, const std::string& name, uint64_t count, std::vector<Record>& out) {
+    out.reserve(count);
+    while (out.size() < count) {
+        size_t block_at = c.pos();
+        auto n = c.get<uint32_t>("block size");
+        if (n == 0 || n > kBlockRecords || n > count - out.size())
+            throw InputError(name, fmt::format("byte {}", block_at), fmt::format("bad block size {}", n));
+        auto sum = c.get<uint64_t>("block checksum");
+        std::string payload = c.bytes(static_cast<size_t>(n) * kRecordBytes, "records");
+        if (sum != fnv1a(payload.data(), payload.size()))
+            throw InputError(name, fmt::format("block at byte {}", block_at), "checksum mismatch (file is corrupt)");
+        Cursor rc(payload, name);
+        for (uint32_t i = 0; i < n; ++i) {
+            Record r = read_record(rc);
+            if (const char* why = record_problem(r)) throw InputError(name, fmt::format("record {}", out.size()), why);
+            out.push_back(r);
+        }
+    }
+}
+
 }  // namespace
 
 CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
@@ -441,23 +462,7 @@ CacheFile parse_cache_file(const std::string& bytes, const std::string& name) {
         if (!frame.is_number_integer() || std::abs(frame.get<double>()) > kMaxFrame)
             throw InputError(name, "header/frame", fmt::format("{} is not a whole frame number within +-{}", frame.dump(), kMaxFrame));
         f.info.frame = frame.get<int>();
-        f.records.reserve(count);
-        while (f.records.size() < count) {
-            size_t block_at = c.pos();
-            auto n = c.get<uint32_t>("block size");
-            if (n == 0 || n > kBlockRecords || n > count - f.records.size())
-                throw InputError(name, fmt::format("byte {}", block_at), fmt::format("bad block size {}", n));
-            auto sum = c.get<uint64_t>("block checksum");
-            std::string payload = c.bytes(static_cast<size_t>(n) * kRecordBytes, "records");
-            if (sum != fnv1a(payload.data(), payload.size()))
-                throw InputError(name, fmt::format("block at byte {}", block_at), "checksum mismatch (file is corrupt)");
-            Cursor rc(payload, name);
-            for (uint32_t i = 0; i < n; ++i) {
-                Record r = read_record(rc);
-                if (const char* why = record_problem(r)) throw InputError(name, fmt::format("record {}", f.records.size()), why);
-                f.records.push_back(r);
-            }
-        }
+        read_record_blocks(c, name, count, f.records);
         if (lights > 0) read_parts(c, name, static_cast<size_t>(lights), f.records);
         if (c.remaining() != 0) c.fail(fmt::format("{} unexpected bytes after the last block", c.remaining()));
         f.fragment_records.assign(f.records.begin() + static_cast<std::ptrdiff_t>(shared), f.records.end());
