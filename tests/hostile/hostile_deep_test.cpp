@@ -7,11 +7,7 @@
 namespace bounce {
 namespace {
 
-using nlohmann::json;
-namespace fs = std::filesystem;
-using test::expect_refused;
-using test::write_constant_image;
-using namespace hostile;
+using namespace hostile;  // json, fs, expect_refused and the shared scenes
 
 TEST(HostileDeep, EveryFieldOfACraftedDeepFileIsCheckedBeforeShading) {
     test::TempDir d;

@@ -34,6 +34,8 @@ namespace bounce::hostile {
 
 using nlohmann::json;
 namespace fs = std::filesystem;
+using test::expect_refused;
+using test::write_constant_image;
 
 /// A config whose view reads a 1D LUT (`thelut.cube` beside it, in luts/).
 inline void write_lut_config(const test::TempDir& d) {
