@@ -141,8 +141,8 @@ void DirectLighting::irradiance_parts(const Vec3& p, const Vec3& n, uint32_t obj
         out[i] = scene_.lights[i].lights(object) ? sample_light(i, p, n, rng, samples, counters, nullptr, hair_start, true) : Color(0);
 }
 
-Color DirectLighting::diffuse_radiance(const Vec3& p, const Vec3& n, uint32_t object, const Color& reflect, const Color& transmit,
-                                       const RandomStream& rng, int samples, Counters& counters, std::span<Color> parts) const {
+Color DirectLighting::thin_or_parted_radiance(const Vec3& p, const Vec3& n, uint32_t object, const Color& reflect, const Color& transmit,
+                                              const RandomStream& rng, int samples, Counters& counters, std::span<Color> parts) const {
     const bool through = transmit != Color(0);
     if (parts.empty()) {
         const Color front = reflect * irradiance(p, n, object, rng, samples, counters);

@@ -62,7 +62,11 @@ class DirectLighting {
     /// back_side_stream(rng), and only where `transmit` is not 0. With `parts` (one per light):
     /// per light, scales factored out (irradiance_parts), and their sum is returned.
     Color diffuse_radiance(const Vec3& p, const Vec3& n, uint32_t object, const Color& reflect, const Color& transmit,
-                           const RandomStream& rng, int samples, Counters& counters, std::span<Color> parts = {}) const;
+                           const RandomStream& rng, int samples, Counters& counters, std::span<Color> parts = {}) const {
+        // An opaque side without light parts, the common case, in line: reflect E(n).
+        if (parts.empty() && transmit == Color(0)) return reflect * irradiance(p, n, object, rng, samples, counters);
+        return thin_or_parted_radiance(p, n, object, reflect, transmit, rng, samples, counters, parts);
+    }
 
     /// Radiance a strand sends back along a ray of direction `d` that hit it (`h`, a hair hit) at
     /// `at`: its albedo x the direct light on the strand's side facing the ray / pi, as gathers
@@ -77,6 +81,9 @@ class DirectLighting {
     const SceneAccel& accel() const { return accel_; }
 
   private:
+    /// diffuse_radiance() of a translucent side, or with light parts.
+    Color thin_or_parted_radiance(const Vec3& p, const Vec3& n, uint32_t object, const Color& reflect, const Color& transmit,
+                                  const RandomStream& rng, int samples, Counters& counters, std::span<Color> parts) const;
     /// irradiance() over more pickable lights than LightingSettings::light_pick: that many
     /// picks among `pool`, each by its unshadowed contribution with a tenth spread evenly (so
     /// every light that may light p can be chosen), weighed by one over its chance.

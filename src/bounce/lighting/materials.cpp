@@ -73,8 +73,11 @@ float Materials::metalness(uint32_t material, const Vec2& st, float du, float dv
 Color Materials::albedo(uint32_t material, const Vec2& uv) const {
     const Material& m = scene_.materials[material];
     const Vec2 st = m.uv_transform.apply(uv);
+    const Color base = base_colour(material, st, 0, 0);
+    // Without a metallic texture the factor is 1 x (1 - t): the base colour itself when opaque.
+    if (m.metallic_roughness_texture.empty() || !textures_) return m.diffuse_transmission == 0 ? base : base * (1 - m.diffuse_transmission);
     const float metal = metalness(material, st, 0, 0);
-    return base_colour(material, st, 0, 0) * ((metal > 0 ? 1 - metal : 1.0f) * (1 - m.diffuse_transmission));
+    return base * ((metal > 0 ? 1 - metal : 1.0f) * (1 - m.diffuse_transmission));
 }
 
 Color Materials::translucency(uint32_t material, const Vec2& uv) const {
@@ -120,9 +123,8 @@ Color Materials::secondary_albedo(const SurfacePoint& sp) const {
     return albedo(sp.material, sp.uv) * sp.color * base_share(scene_.materials[sp.material]);
 }
 
-Color Materials::secondary_translucency(const SurfacePoint& sp) const {
-    const Material& m = scene_.materials[sp.material];
-    return m.is_translucent() ? translucency(sp.material, sp.uv) * base_share(m) : Color(0);
+Color Materials::translucent_share(const SurfacePoint& sp) const {
+    return translucency(sp.material, sp.uv) * base_share(scene_.materials[sp.material]);
 }
 
 Color Materials::vertex_color(uint32_t object, uint32_t prim, const Vec3& p) const {

@@ -44,7 +44,9 @@ class Materials {
     /// its vertex colour x base_share (a mirror or glass surface reflects little diffusely).
     Color secondary_albedo(const SurfacePoint& sp) const;
     /// The diffuse transmittance secondary rays see there (0 on an opaque material).
-    Color secondary_translucency(const SurfacePoint& sp) const;
+    Color secondary_translucency(const SurfacePoint& sp) const {
+        return scene_.materials[sp.material].is_translucent() ? translucent_share(sp) : Color(0);
+    }
     /// The vertex colour (glTF's COLOR_0) of object `object`'s visible triangle `prim` at `p`.
     Color vertex_color(uint32_t object, uint32_t prim, const Vec3& p) const;
     /// Emitted radiance at uv (its emission texture read whole at load: Material::emission_at).
@@ -58,6 +60,8 @@ class Materials {
                            float footprint) const;
 
   private:
+    /// secondary_translucency() of a translucent material.
+    Color translucent_share(const SurfacePoint& sp) const;
     /// Texture file names as OpenImageIO unique strings (ustring::c_str()), made once here:
     /// making them per lookup would take the global string table's lock every time.
     struct TextureNames {

@@ -83,7 +83,8 @@ struct UvTransform {
     bool identity() const { return offset == Vec2{0, 0} && rotation == 0 && scale == Vec2{1, 1}; }
     bool operator==(const UvTransform&) const = default;
     /// A mesh uv moved to the uv its textures are read at.
-    Vec2 apply(const Vec2& uv) const;
+    Vec2 apply(const Vec2& uv) const { return identity() ? uv : transformed(uv); }
+    Vec2 transformed(const Vec2& uv) const;  ///< apply() of a transform that is not the identity
 };
 
 /// How a material's opacity cuts its surface (glTF's alphaMode). Opaque: it is not read. Mask:

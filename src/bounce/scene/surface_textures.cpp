@@ -19,8 +19,7 @@ Color EmissionMap::at(const Vec2& uv) const {
     });
 }
 
-Vec2 UvTransform::apply(const Vec2& uv) const {
-    if (identity()) return uv;
+Vec2 UvTransform::transformed(const Vec2& uv) const {
     const float s = uv.x * scale.x, t = (1 - uv.y) * scale.y;
     const float c = std::cos(rotation), n = std::sin(rotation);
     // KHR_texture_transform's matrix: rows (cos, sin) and (-sin, cos) in image space.
