@@ -84,10 +84,14 @@ TEST(FramePlan, ACropGathersAMarginAndARegatherFlushesOnlyInsideIt) {
     EXPECT_FALSE(plan_frame(cornell(), {}, req).find<CacheStartStep>()->flush_crop);
 }
 
-TEST(FramePlan, AReshadeStartsFromWhatThePreviousFrameLeftAndGathersOnlyWhereMissing) {
+/// What a still of the test's Cornell box leaves for the next plan.
+FrameState first_frame_state() {
     Stats s;
-    RenderResult first = render(cornell(), {}, s, nullptr);
-    const FrameState state = first.release_state();
+    return render(cornell(), {}, s, nullptr).release_state();
+}
+
+TEST(FramePlan, AReshadeStartsFromWhatThePreviousFrameLeftAndGathersOnlyWhereMissing) {
+    const FrameState state = first_frame_state();
     RenderRequest req;
     req.kind = FrameKind::Reshade;
     const FramePlan p = plan_frame(cornell(), state, req);
@@ -136,8 +140,7 @@ TEST(FramePlan, AReshadeOfAnIncompleteCacheGathersWhereItMissesAndMissesNothing)
 
 TEST(FramePlan, AReshadeWithAStaleDeepBufferSaysSo) {
     Stats s;
-    RenderResult first = render(cornell(), {}, s, nullptr);
-    const FrameState state = first.release_state();
+    const FrameState state = first_frame_state();
     RenderRequest req;
     req.kind = FrameKind::Reshade;
     const Scene moved = cornell({"camera.fov=30"});
@@ -217,9 +220,7 @@ TEST(FramePlan, TheToolPlansOnceAndWritesItsDeepFileOnlyWhenItTraces) {
     req.deep_out_if_traced = "session.exr";
     EXPECT_EQ(plan_frame(cornell(), {}, req).deep_out, "session.exr");
     EXPECT_TRUE(plan_frame(cornell(), {}, req).find<VisibilityStep>()->every_tile);  // rank 0 writes it whole
-    Stats s;
-    RenderResult first = render(cornell(), {}, s, nullptr);
-    const FrameState state = first.release_state();
+    const FrameState state = first_frame_state();
     req.kind = FrameKind::Reshade;
     const FramePlan again = plan_frame(cornell(), state, req);
     EXPECT_EQ(again.find<VisibilityStep>()->source, DeepSource::Previous);

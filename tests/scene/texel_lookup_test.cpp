@@ -18,9 +18,9 @@ float look(float u, float v) {
 
 TEST(TexelLookup, CentresMidpointsWrapAndNonFiniteUvs) {
     // Texel (x, y)'s centre: u = (x + 0.5) / 4, v = 1 - (y + 0.5) / 2.
-    EXPECT_FLOAT_EQ(look(0.125f, 0.75f), 0);   // (0, 0), top row
-    EXPECT_FLOAT_EQ(look(0.625f, 0.75f), 2);   // (2, 0)
-    EXPECT_FLOAT_EQ(look(0.375f, 0.25f), 11);  // (1, 1), bottom row
+    EXPECT_FLOAT_EQ(look(0.125f, 0.75f), 0);    // (0, 0), top row
+    EXPECT_FLOAT_EQ(look(0.625f, 0.75f), 2);    // (2, 0)
+    EXPECT_FLOAT_EQ(look(0.375f, 0.25f), 11);   // (1, 1), bottom row
     EXPECT_FLOAT_EQ(look(0.25f, 0.75f), 0.5f);  // between (0, 0) and (1, 0)
     EXPECT_FLOAT_EQ(look(0.375f, 0.5f), 6);     // between (1, 0) and (1, 1)
     // Past the right edge: between (3, 0) and (0, 0) wrapped.

@@ -249,12 +249,14 @@ ShadeStep shade_step(const Inputs& in, Gathering g, bool specular) {
     const Scene& scene = in.scene;
     ShadeStep s;
     s.indirect = g == Gathering::None ? IndirectFrom::None : g == Gathering::Brute ? IndirectFrom::Brute : IndirectFrom::Cache;
-    if (!specular || (!sites_lit_by_gathers(scene) && scene.render.shading.indirect_at_specular_hits != SpecularHitLight::Radiosity))
+    if (!specular)
         s.sites = SiteLightFrom::None;
     else if (scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity)
         s.sites = SiteLightFrom::Radiosity;
-    else
+    else if (sites_lit_by_gathers(scene))
         s.sites = s.indirect == IndirectFrom::Cache ? SiteLightFrom::Cache : SiteLightFrom::Brute;
+    else
+        s.sites = SiteLightFrom::None;  // direct light only, or AO
     if (s.indirect == IndirectFrom::Cache) {
         s.correction_rays = scene.render.cache.correction_rays;
         s.per_light = scene.render.shading.layers == LayerSet::Components && !scene.render.indirect.ao && !scene.lights.empty();

@@ -239,7 +239,10 @@ struct FramePlan {
         return nullptr;
     }
     /// Where the cache starts (None without a cache step).
-    CacheStart cache_start() const { return find<CacheStartStep>() ? find<CacheStartStep>()->start : CacheStart::None; }
+    CacheStart cache_start() const {
+        const CacheStartStep* s = find<CacheStartStep>();
+        return s ? s->start : CacheStart::None;
+    }
     /// The plan as JSON (in --stats-json and the tool's status): the frame, its windows and one
     /// entry per step, in order.
     nlohmann::json describe() const;
