@@ -143,7 +143,7 @@ void measure(const std::string& path, int repeat) {
         placed += static_cast<double>(o.coarse_mesh().triangle_count());
         if (unique.insert(&o.coarse_mesh()).second) triangles += static_cast<double>(o.coarse_mesh().triangle_count());
     }
-    const double accel = best_of(repeat, [&] { SceneAccel a(scene); });
+    const double accel = best_of(repeat, [&] { SceneAccel a(scene, scene.render.lighting); });
     RTCDevice device = rtcNewDevice("threads=0");
     double raw[3];
     const RTCBuildQuality qualities[3] = {RTC_BUILD_QUALITY_LOW, RTC_BUILD_QUALITY_MEDIUM, RTC_BUILD_QUALITY_HIGH};
@@ -170,7 +170,7 @@ void measure_once(const std::string& path) {
     const Scene scene = load_scene(path, {}, load_options_from_environment());
     const double load = seconds_since(t0);
     const auto t1 = Clock::now();
-    { SceneAccel a(scene); }
+    { SceneAccel a(scene, scene.render.lighting); }
     const double accel = seconds_since(t1);
     bool fine = false;
     for (const Object& o : scene.objects) fine = fine || (o.placed() && o.has_fine());

@@ -100,13 +100,13 @@ struct RayRig {
         const char* env = std::getenv("BOUNCE_BENCH_SCENE");
         std::string path = env ? env : std::string(BOUNCE_SOURCE_DIR) + "/scenes/cornell/cornell.json";
         scene = load_scene(path, {"camera.resolution=[64,36]", "render.spp=1"});
-        accel = std::make_unique<SceneAccel>(scene);
+        accel = std::make_unique<SceneAccel>(scene, scene.render.lighting);
         materials = std::make_unique<Materials>(scene);
-        lighting = std::make_unique<DirectLighting>(scene, *accel);
+        lighting = std::make_unique<DirectLighting>(scene, *accel, scene.render.lighting);
         Stats stats;
         radiosity = std::make_unique<RadiosityTextures>(
             RadiosityTextures::bake(scene, *materials, *lighting, scene.render.radiosity, stats, nullptr));
-        DeepBuffer deep = render_visibility(scene, *accel, stats, nullptr);
+        DeepBuffer deep = render_visibility(scene, *accel, scene.render.visibility, stats, nullptr);
         points = deep.fragments;
     }
 };
@@ -183,7 +183,7 @@ BENCHMARK(BM_RaysOffsetTrace)->Unit(benchmark::kMicrosecond);
 
 void BM_HemisphereGather(benchmark::State& state) {
     RayRig& rig = RayRig::get();
-    GatherSettings gs = gather_settings(rig.scene);
+    GatherSettings gs = plan_frame(rig.scene, FrameState{}, RenderRequest{}).gather;
     gs.rays = static_cast<int>(state.range(0));
     Gatherer g(rig.scene, *rig.accel, *rig.materials, *rig.lighting, rig.radiosity.get(), gs);
     Counters c;
@@ -202,7 +202,7 @@ void BM_DeepRead(benchmark::State& state) {
     const std::string path = (std::filesystem::temp_directory_path() / "bounce-bench-deep.exr").string();
     Stats stats;
     Scene s = load_scene(rig.scene.path, {"camera.resolution=[256,256]", "render.spp=4"});
-    DeepBuffer deep = render_visibility(s, *rig.accel, stats, nullptr);
+    DeepBuffer deep = render_visibility(s, *rig.accel, s.render.visibility, stats, nullptr);
     write_deep(path, deep);
     for (auto _ : state) benchmark::DoNotOptimize(read_deep(path));
     const double pixels = static_cast<double>(deep.pixel_count());

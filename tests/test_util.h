@@ -17,6 +17,7 @@
 #include "frontend/environment.h"
 #include "bounce/core/error.h"
 #include "bounce/core/image.h"
+#include "bounce/render/frame_plan.h"
 #include "bounce/scene/scene_load.h"
 
 namespace bounce::test {
@@ -46,6 +47,10 @@ class TempDir {
 };
 
 inline std::string source_dir() { return BOUNCE_SOURCE_DIR; }
+
+/// The plan of a still of `s`: the settings it resolves for each stage (tests that call a
+/// stage directly take them from here, as a frame's passes do).
+inline FramePlan still_plan(const Scene& s) { return plan_frame(s, FrameState{}, RenderRequest{}); }
 inline std::string cornell_scene() { return source_dir() + "/scenes/cornell/cornell.json"; }
 
 /// Runs the bounce binary with `args`; returns the exit status, stderr in `err`.

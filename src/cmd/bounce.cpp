@@ -15,7 +15,7 @@
 #include "bounce/core/error.h"
 #include "bounce/core/progress.h"
 #include "bounce/dist/mpi.h"
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 #include "bounce/core/version.h"
 #include "light.h"
 #include "render_cmd.h"

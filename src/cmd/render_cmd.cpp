@@ -20,7 +20,7 @@
 #include "bounce/cache/cache_file.h"
 #include "bounce/render/render.h"
 #include "bounce/render/shot.h"
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 #include "bounce/scene/params_cli.h"
 #include "bounce/scene/scene_load.h"
 #include "bounce/core/version.h"
@@ -36,12 +36,13 @@ Scene load_render_scene(const RenderArgs& a, std::optional<double> frame) {
     options.frame = frame;
     if (frame) options.frame_origin = a.frames.empty() ? fmt::format("--frame {:g}", *frame) : "--frames " + a.frames;
     Scene scene = load_scene(a.files.scene, o, options);
-    const bool cache = scene.render.indirect.gi == GiMode::Cache;
+    const bool cache = param_value(scene, "render.gi") == "cache";
     if (!cache && !a.files.cache_out.empty())
         throw InputError("command line", "--cache-out " + a.files.cache_out, "only a --gi cache render makes a cache");
     if (!cache && !a.files.cache_in.empty() && a.show != "records")
         throw InputError("command line", "--cache-in " + a.files.cache_in, "only a --gi cache render (or --show records) uses a cache");
-    if (!a.files.base.empty() && !scene.render.visibility.has_crop())
+    const auto crop = param_value(scene, "render.crop").get<std::array<int, 4>>();
+    if (!a.files.base.empty() && !(crop[1] > crop[0] || crop[3] > crop[2]))
         throw InputError("command line", "--base " + a.files.base, "--base fills the pixels outside --crop; give a crop");
     if (a.reuse_any && a.regather) throw InputError("command line", "--cache-reuse-any", "cannot be combined with --regather");
     if (a.regather && !a.frames.empty())
@@ -89,16 +90,16 @@ void check_ranks(const RenderArgs& a, const Scene& scene) {
     check_same_job(*a.comm, identity);
 }
 
-void print_stats(const Stats& stats, const Scene& scene) {
+void print_stats(const Stats& stats, const FramePlan& plan) {
     std::printf("%s", stats.to_text().c_str());
-    if (scene.render.indirect.any()) std::printf("\n%s", seed_table(stats.to_json()).c_str());
+    if (plan.indirect() != IndirectFrom::None) std::printf("\n%s", seed_table(stats.to_json()).c_str());
 }
 
 /// Everything that can be refused is refused before any work: outputs against every file the
 /// scene reads, the layer --show names, the base a crop is pasted over.
-void check_frame(const RenderArgs& a, const FrameFiles& files, const Scene& scene) {
+void check_frame(const RenderArgs& a, const FrameFiles& files, const Scene& scene, const FramePlan& plan) {
     files.check(scene);
-    check_show_layer(a.show, scene, !files.cache_in.empty());
+    check_show_layer(a.show, plan);
     if (!files.base.empty()) check_base(files.base, scene);
     // Nothing dropped in silence: what the mesh files carry that is not read, once a run (a
     // sequence's frames read the same files), once the frame is sure to render.
@@ -107,7 +108,7 @@ void check_frame(const RenderArgs& a, const FrameFiles& files, const Scene& scen
     noted = true;
 }
 
-void report(const RenderArgs& a, const RenderResult& r, const FrameFiles& files, const Stats& stats, const Scene& scene) {
+void report(const RenderArgs& a, const RenderResult& r, const FrameFiles& files, const Stats& stats) {
     if (!r.cache_differences.empty() && !a.quiet)
         std::fprintf(stderr, "bounce: %s: records reused although gathered with other settings (--cache-reuse-any)\n",
                      files.cache_in.c_str());
@@ -115,30 +116,31 @@ void report(const RenderArgs& a, const RenderResult& r, const FrameFiles& files,
         std::fprintf(stderr,
                      "bounce: %s: lights or materials differ from the cache's: its bounce light is theirs (--regather gathers it anew)\n",
                      files.cache_in.c_str());
-    if (a.stats) print_stats(stats, scene);
+    if (a.stats) print_stats(stats, r.plan);
     if (!a.quiet) std::fprintf(stderr, "wrote %s\n", files.output.c_str());
 }
 
 int render_frame(const RenderArgs& a, const FrameFiles& files) {
     const Scene scene = load_render_scene(a, a.frame);
     check_ranks(a, scene);
-    if (writes(a.comm)) check_frame(a, files, scene);
-    std::unique_ptr<ProgressSink> sink = make_progress(a.quiet || !writes(a.comm));
-    Stats stats;
-    add_load_phases(stats, scene);
     RenderRequest request = request_of(a, files, static_cast<int>(std::lround(scene.frame)));
     request.comm = a.comm;
-    if (scene.render.parallel.preview && (!a.comm || a.comm->size() == 1))  // a preview needs every band
+    // The plan calls it where render.preview asks for one; a preview needs every band.
+    if (!a.comm || a.comm->size() == 1)
         request.preview = [&](const Image& img) {
             write_exr(files.output, img);
             write_png(files.png(), img, "beauty", *files.display);
         };
     const FrameState none;  // a still, or a frame of a sequence that starts from cache files
     const FramePlan plan = plan_frame(scene, none, request);
+    if (writes(a.comm)) check_frame(a, files, scene, plan);
+    std::unique_ptr<ProgressSink> sink = make_progress(a.quiet || !writes(a.comm));
+    Stats stats;
+    add_load_phases(stats, scene);
     RenderResult r = run_frame(scene, plan, none, request, stats, sink.get());
     if (!writes(a.comm)) return 0;
     write_frame_outputs(r, files, a.show, stats);
-    report(a, r, files, stats, scene);
+    report(a, r, files, stats);
     return 0;
 }
 
@@ -199,7 +201,7 @@ int render_sequence(const RenderArgs& a, int first, int last, int shot_first, Co
         auto scene = std::make_shared<const Scene>(load_render_scene(a, f));
         if (f == first && comm) check_ranks(a, *scene);
         check_range_in_shot(a, *scene, last);
-        if (writes(comm)) check_frame(a, files, *scene);
+        if (writes(comm)) check_frame(a, files, *scene, plan_frame(*scene, {}, request_of(a, files, f)));
         // A resumed shot starts from the cache the frame before left, when there is one.
         const std::string before = f > shot_first && !a.files.cache_out.empty() ? expand_frame_pattern(a.files.cache_out, f - 1) : "";
         if (!shot.has_previous() && !before.empty() && (f > first || before_ok) &&
@@ -213,7 +215,7 @@ int render_sequence(const RenderArgs& a, int first, int last, int shot_first, Co
         RenderResult r = shot.render(scene, request, stats, sink.get());
         if (writes(comm)) {
             write_frame_outputs(r, files, a.show, stats);
-            report(a, r, files, stats, *scene);
+            report(a, r, files, stats);
         }
         shot.keep(r, scene);
     }

@@ -62,7 +62,7 @@ RayStats shoot(const Scene& s, float gap, bool inside, Trace trace) {
 
 TEST(RayOffset, FineAndCoarseSpheresDifferMeasurably) {
     Scene s = sphere_scene();
-    SceneAccel accel(s);
+    SceneAccel accel(s, s.render.lighting);
     // A level-2 icosphere (edges ~0.27 rad) sags at most 1 - cos(~0.19) ~ 1.8% below its sphere.
     EXPECT_GT(accel.fine_coarse_gap(), 0.01f);
     EXPECT_LT(accel.fine_coarse_gap(), 0.02f);
@@ -71,7 +71,7 @@ TEST(RayOffset, FineAndCoarseSpheresDifferMeasurably) {
 
 TEST(RayOffset, NoSelfHitsFromInsideTheSphere) {
     Scene s = sphere_scene();
-    SceneAccel accel(s);
+    SceneAccel accel(s, s.render.lighting);
     RayStats st = shoot(s, accel.fine_coarse_gap(), true, [&](const Vec3& p, const Vec3& d) { return accel.trace(p, d); });
     ASSERT_GT(st.rays, 1000);
     EXPECT_EQ(st.self_hits, 0);
@@ -83,7 +83,7 @@ TEST(RayOffset, NaiveTracingSelfHitsWhereOffsettingDoesNot) {
     // The same rays traced from the fine point without offsetting hit the coarse chord they
     // start above: this is the artefact offsetting removes (and shows this test can fail).
     Scene s = sphere_scene();
-    SceneAccel accel(s);
+    SceneAccel accel(s, s.render.lighting);
     RayStats st = shoot(s, accel.fine_coarse_gap(), true,
                         [&](const Vec3& p, const Vec3& d) { return accel.coarse().intersect(p, d, 1e-5f, INFINITY); });
     EXPECT_GT(st.self_hits, st.rays / 2);
@@ -91,7 +91,7 @@ TEST(RayOffset, NaiveTracingSelfHitsWhereOffsettingDoesNot) {
 
 TEST(RayOffset, NoSelfHitsLeavingTheConvexSphere) {
     Scene s = sphere_scene();
-    SceneAccel accel(s);
+    SceneAccel accel(s, s.render.lighting);
     RayStats st = shoot(s, accel.fine_coarse_gap(), false, [&](const Vec3& p, const Vec3& d) { return accel.trace(p, d); });
     ASSERT_GT(st.rays, 1000);
     EXPECT_EQ(st.self_hits, 0);
@@ -100,14 +100,14 @@ TEST(RayOffset, NoSelfHitsLeavingTheConvexSphere) {
 TEST(RayOffset, TooSmallOffsetSelfHits) {
     // A user distance below the tessellation gap cannot hide the coarse surface.
     Scene s = sphere_scene(1e-5f);
-    SceneAccel accel(s);
+    SceneAccel accel(s, s.render.lighting);
     RayStats st = shoot(s, accel.fine_coarse_gap(), true, [&](const Vec3& p, const Vec3& d) { return accel.trace(p, d); });
     EXPECT_GT(st.self_hits, 0);
 }
 
 TEST(RayOffset, ShadowRaysSeeTheFarSideOnly) {
     Scene s = sphere_scene();
-    SceneAccel accel(s);
+    SceneAccel accel(s, s.render.lighting);
     const TriangleMesh& fine = s.objects[0].fine;
     int blocked_short = 0, blocked_long = 0;
     for (uint32_t t = 0; t < fine.triangle_count(); t += 11) {
@@ -125,7 +125,7 @@ TEST(RayOffset, PacketTraceMatchesOneRayAtATime) {
     // same surface at the same distance as trace() finds for it alone, including the rays that
     // need the offset probe (from inside the sphere, where the coarse chords lie within delta).
     Scene s = sphere_scene();
-    SceneAccel accel(s);
+    SceneAccel accel(s, s.render.lighting);
     const TriangleMesh& fine = s.objects[0].fine;
     int rays = 0, mismatches = 0;
     for (uint32_t t = 0; t < fine.triangle_count(); t += 13) {

@@ -84,12 +84,12 @@ TEST(BvhParts, AShotsNextFrameTakesOverTheStaticSetPlacesRigidMoversRefitsSkinsA
         SCOPED_TRACE(shutter);
         const Shot shot(shutter);
         const Scene first = shot.at(1), next = shot.at(1.5);
-        const SceneAccel a(first);
+        const SceneAccel a(first, first.render.lighting);
         // Parts: the static floor (coarse and camera alike); each ball's shape before its
         // placement (the ball's finer one for the camera too); the strip (and its shutter poses).
         const int strip_parts = shutter > 0 ? 2 : 1;
         EXPECT_EQ(a.reuse().built, 1 + 2 + 1 + strip_parts);
-        const SceneAccel b(next, &a), fresh(next);
+        const SceneAccel b(next, next.render.lighting, &a), fresh(next, next.render.lighting);
         EXPECT_EQ(b.reuse().kept, 1 + 2 + 1);
         EXPECT_EQ(b.reuse().refit, strip_parts);
         EXPECT_EQ(b.reuse().built, 0);
@@ -99,7 +99,8 @@ TEST(BvhParts, AShotsNextFrameTakesOverTheStaticSetPlacesRigidMoversRefitsSkinsA
         // placement: the same at every frame, to the bit (measured where it is, rounding moved it).
         EXPECT_GT(a.ray_offset(), 1e-4f * first.size());
         EXPECT_EQ(a.ray_offset(), b.ray_offset());
-        EXPECT_EQ(a.ray_offset(), SceneAccel(shot.at(1.9)).ray_offset());
+        const Scene later = shot.at(1.9);
+        EXPECT_EQ(a.ray_offset(), SceneAccel(later, later.render.lighting).ray_offset());
         const std::vector<int> hits = expect_same_hits(b, fresh, next.objects.size());
         EXPECT_GT(hits[0], 1000);
         EXPECT_GT(hits[1], 20);
@@ -127,15 +128,16 @@ TEST(BvhParts, AStillHasOneBvhOfEverythingAndAFrameWhoseSkinWasRefitLaterIsNotKe
     still.erase("animation");
     for (json& o : still["objects"]) o.erase("animation"), o["transform"] = {{"translate", {0, 0, 0}}};
     shot.dir.write("still.json", still.dump());
-    const SceneAccel flat(load_scene(shot.dir.file("still.json")));
+    const Scene flat_scene = load_scene(shot.dir.file("still.json"));
+    const SceneAccel flat(flat_scene, flat_scene.render.lighting);
     EXPECT_EQ(flat.reuse().built, 0);  // no parts
     EXPECT_TRUE(flat.current());
     // Frames 1, 2, then 1 again from frame 1's BVHs (the tool going back): frame 1's strip part
     // was refit to frame 2, so nothing of frame 1's is taken over as it was.
     const Scene one = shot.at(1), two = shot.at(2);
-    const SceneAccel a(one), b(two, &a);
+    const SceneAccel a(one, one.render.lighting), b(two, two.render.lighting, &a);
     EXPECT_FALSE(a.current());
-    const SceneAccel again(one, &a), fresh(one);
+    const SceneAccel again(one, one.render.lighting, &a), fresh(one, one.render.lighting);
     EXPECT_EQ(again.reuse().refit, 0);
     expect_same_hits(again, fresh, one.objects.size());
 }
@@ -160,7 +162,7 @@ TEST(BvhParts, FurPartsAreNotTakenOverByAScenesWithOtherObjects) {
     j["objects"].push_back({{"name", "wall"}, {"type", "quad"}, {"vertices", {{-3, 0, -3}, {3, 0, -3}, {3, 2, -3}, {-3, 2, -3}}}});
     dir.write("three.json", j.dump());
     const Scene two = load_scene(dir.file("two.json")), three = load_scene(dir.file("three.json"));
-    const SceneAccel a(two), b(three, &a);
+    const SceneAccel a(two, two.render.lighting), b(three, three.render.lighting, &a);
     int hair = 0, wrong = 0;
     for (uint32_t k = 0; k < 200; ++k) {
         // Across the lawn, low: through a metre of strands.
@@ -190,7 +192,7 @@ TEST(BvhParts, FurOnARigidMoverIsBlurredWithIt) {
     LoadOptions o;
     o.frame = 1.5;
     const Scene scene = load_scene(dir.file("s.json"), {}, o);
-    const SceneAccel accel(scene);
+    const SceneAccel accel(scene, scene.render.lighting);
     const Fur& fur = *scene.objects[0].fur;
     const Vec3 x(1, 0, 0);
     // Per strand, a ray across its middle (perpendicular to it and to the motion), 1 unit long,

@@ -44,9 +44,9 @@ TEST(Hessian, AoNearAWallMatchesTheAnalyticSecondDerivative) {
     j["objects"].push_back({{"type", "quad"}, {"vertices", {{0, 0, -big}, {0, h, -big}, {0, h, big}, {0, 0, big}}}});
     j["lights"] = {{{"type", "sky"}, {"color", 1.0}}};
     Scene scene = test::scene_from(j);
-    SceneAccel accel(scene);
+    SceneAccel accel(scene, scene.render.lighting);
     Materials materials(scene);
-    DirectLighting lighting(scene, accel);
+    DirectLighting lighting(scene, accel, scene.render.lighting);
     GatherSettings gs;
     gs.rays = 4096;
     gs.ao = true;

@@ -165,9 +165,9 @@ Slope slope_towards_wall(const Gather& gather, const Vec3& p, Value value, Gradi
 /// wall_scene() ready to gather in.
 struct Wall {
     Scene s = wall_scene();
-    SceneAccel accel{s};
+    SceneAccel accel{s, s.render.lighting};
     Materials materials{s};
-    DirectLighting lighting{s, accel};
+    DirectLighting lighting{s, accel, s.render.lighting};
 };
 
 TEST(CacheGradients, MatchFiniteDifferencesOfGathers) {
@@ -243,14 +243,14 @@ std::vector<float> neighbour_spacing(const IrradianceCache& cache) {
 }
 
 IrradianceCache build_cache(const Scene& s, Stats& stats, DeepBuffer* deep_out = nullptr) {
-    SceneAccel accel(s);
-    DeepBuffer deep = render_visibility(s, accel, stats, nullptr);
+    SceneAccel accel(s, s.render.lighting);
+    DeepBuffer deep = render_visibility(s, accel, s.render.visibility, stats, nullptr);
     Materials materials(s);
-    DirectLighting lighting(s, accel);
-    Gatherer gatherer(s, accel, materials, lighting, nullptr, gather_settings(s));
+    DirectLighting lighting(s, accel, s.render.lighting);
+    Gatherer gatherer(s, accel, materials, lighting, nullptr, test::still_plan(s).gather);
     IrradianceCache cache(s.bounds(), s.render.cache, false);
     gathering_pass(s, deep, gatherer, cache, stats, nullptr);
-    interpolation_pass(s, deep, cache, stats, nullptr);
+    interpolation_pass(s, deep, cache, test::still_plan(s).tiling, stats, nullptr);
     if (deep_out) *deep_out = std::move(deep);
     return cache;
 }

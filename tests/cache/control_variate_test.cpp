@@ -28,18 +28,18 @@ std::vector<Override> cornell_settings(const std::string& prediction) {
 
 struct Cornell {
     explicit Cornell(const std::string& prediction = "cells") : scene(load_scene(test::cornell_scene(), cornell_settings(prediction))) {
-        const Gatherer g(scene, accel, materials, lighting, nullptr, gather_settings(scene));
+        const Gatherer g(scene, accel, materials, lighting, nullptr, test::still_plan(scene).gather);
         gathering_pass(scene, deep, g, cache, stats, nullptr);
     }
     Scene scene;
     Stats stats;
-    SceneAccel accel{scene};
-    DeepBuffer deep = render_visibility(scene, accel, stats, nullptr);
+    SceneAccel accel{scene, scene.render.lighting};
+    DeepBuffer deep = render_visibility(scene, accel, scene.render.visibility, stats, nullptr);
     Materials materials{scene};
-    DirectLighting lighting{scene, accel};
+    DirectLighting lighting{scene, accel, scene.render.lighting};
     IrradianceCache cache{scene.bounds(), scene.render.cache, false};
     Gatherer gatherer(int rays) const {
-        GatherSettings gs = gather_settings(scene);
+        GatherSettings gs = test::still_plan(scene).gather;
         gs.rays = rays, gs.record_terms = false;
         return Gatherer(scene, accel, materials, lighting, nullptr, gs);
     }

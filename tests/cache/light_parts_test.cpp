@@ -137,11 +137,14 @@ TEST(LightParts, TheRadiosityBakeKeepsEachLightsUnitPart) {
     j["lights"] = json::array({{{"type", "distant"}, {"direction", {0, -1, 0}}, {"color", 2}}, {{"type", "sky"}, {"color", 0.5}}});
     j["objects"].erase(1), j["objects"].erase(1);  // the floor alone: no shadows
     const Scene s = test::scene_from(j);
-    SceneAccel accel(s);
+    SceneAccel accel(s, s.render.lighting);
     Materials materials(s);
-    DirectLighting lighting(s, accel);
+    DirectLighting lighting(s, accel, s.render.lighting);
     Stats stats;
-    const RadiosityTextures rt = RadiosityTextures::bake(s, materials, lighting, {}, stats, nullptr);
+    RadiositySettings with_parts;
+    with_parts.light_parts = true;  // as the plan hands it over with render.light_parts
+    EXPECT_EQ(test::still_plan(s).find<RadiosityStep>()->settings.light_parts, true);
+    const RadiosityTextures rt = RadiosityTextures::bake(s, materials, lighting, with_parts, stats, nullptr);
     ASSERT_TRUE(rt.has_parts());
     Color parts[2];
     Counters c;

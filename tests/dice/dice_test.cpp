@@ -300,7 +300,7 @@ TEST(BakeAo, UnderAParallelCeilingTheOpenFractionIsTheAnalyticOne) {
     j["objects"].push_back({{"type", "quad"}, {"vertices", {{-20, -20, 0.5}, {20, -20, 0.5}, {20, 20, 0.5}, {-20, 20, 0.5}}}});
     dir.write("ceiling.json", j.dump());
     Scene s = load_scene(dir.file("ceiling.json"));
-    SceneAccel accel(s);
+    SceneAccel accel(s, s.render.lighting);
     Stats stats;
     AoBakeSettings bs;
     bs.resolution = 32;

@@ -23,7 +23,7 @@ struct Rig {
     std::unique_ptr<RadiosityTextures> radiosity;
     Stats stats;
     explicit Rig(Scene s, bool with_radiosity = false, RadiositySettings rs = {})
-        : scene(std::move(s)), accel(scene), materials(scene), lighting(scene, accel) {
+        : scene(std::move(s)), accel(scene, scene.render.lighting), materials(scene), lighting(scene, accel, scene.render.lighting) {
         if (with_radiosity)
             radiosity = std::make_unique<RadiosityTextures>(RadiosityTextures::bake(scene, materials, lighting, rs, stats, nullptr));
     }

@@ -76,9 +76,9 @@ TEST(Guide, AConstantEnvironmentStaysConstantUnderAnyGuide) {
     j["objects"] = {{{"type", "sphere"}, {"radius", 1.0}, {"subdivisions", 5}, {"fine_subdivisions", 0}, {"material", "m"}}};
     j["lights"] = {{{"type", "point"}, {"position", {0, 0, 0}}, {"color", I}}};
     const Scene scene = test::scene_from(j);
-    const SceneAccel accel(scene);
+    const SceneAccel accel(scene, scene.render.lighting);
     const Materials materials(scene);
-    const DirectLighting lighting(scene, accel);
+    const DirectLighting lighting(scene, accel, scene.render.lighting);
     Stats stats;
     RadiositySettings rs;
     rs.texel = 0.02f;
@@ -100,12 +100,12 @@ struct Cornell {
         : scene(load_scene(test::cornell_scene(), {resolution, "render.spp=1", "render.gi=\"brute\""})) {}
     Scene scene;
     Stats stats;
-    SceneAccel accel{scene};
-    DeepBuffer deep = render_visibility(scene, accel, stats, nullptr);
+    SceneAccel accel{scene, scene.render.lighting};
+    DeepBuffer deep = render_visibility(scene, accel, scene.render.visibility, stats, nullptr);
     Materials materials{scene};
-    DirectLighting lighting{scene, accel};
+    DirectLighting lighting{scene, accel, scene.render.lighting};
     Gatherer gatherer(int rays, float guided) const {
-        GatherSettings gs = gather_settings(scene);
+        GatherSettings gs = test::still_plan(scene).gather;
         gs.rays = rays, gs.record_terms = false, gs.guided = guided;
         return Gatherer(scene, accel, materials, lighting, nullptr, gs);
     }
@@ -184,7 +184,7 @@ TEST(Guide, RecordsKeepTheirGuideAndRefinementGathersFollowIt) {
     // refined, with other (guided) values.
     Cornell c;
     c.scene.render.indirect.gi = GiMode::Cache;
-    GatherSettings gs = gather_settings(c.scene);
+    GatherSettings gs = test::still_plan(c.scene).gather;
     gs.guided = 0.5f;
     std::array<IrradianceCache, 2> caches{IrradianceCache(c.scene.bounds(), c.scene.render.cache, false),
                                           IrradianceCache(c.scene.bounds(), c.scene.render.cache, false)};

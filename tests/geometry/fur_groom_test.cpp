@@ -147,7 +147,7 @@ TEST(FurGroom, ASkinsFurIsBlurredAsItsStrandsAreAtShutterOpenAndClose) {
     // Per strand on the turning triangle, a ray across its middle (perpendicular to it and to its
     // motion about the elbow), at shutter open and close: hair where the strand was then, none
     // where it was at the other end.
-    const SceneAccel accel(s);
+    const SceneAccel accel(s, s.render.lighting);
     const Scene at_open = load_at(sharp.dir, 1.25), at_close = load_at(sharp.dir, 1.75);
     const Fur& open = *at_open.objects[0].fur;
     const Fur& close = *at_close.objects[0].fur;

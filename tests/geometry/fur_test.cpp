@@ -136,8 +136,8 @@ TEST(Fur, KajiyaKayAndTheIndirectModelAreNormalisedAsDocumented) {
 TEST(Fur, HairFragmentsCarryTheirRootAndRoundTripThroughTheDeepFile) {
     Scene scene = test::scene_from(fur_scene(plain_fur()));
     Stats stats;
-    SceneAccel accel(scene);
-    DeepBuffer deep = render_visibility(scene, accel, stats, nullptr);
+    SceneAccel accel(scene, scene.render.lighting);
+    DeepBuffer deep = render_visibility(scene, accel, scene.render.visibility, stats, nullptr);
     const Fur& fur = *scene.objects[0].fur;
     size_t hair = 0;
     for (const Fragment& f : deep.fragments) {
@@ -184,7 +184,7 @@ HairRender render_hair(const json& fur) {
     Scene scene = test::scene_from(fur_scene(fur, 0.5f), {"render.gi=\"cache\""});
     Stats stats;
     HairRender h{render(scene, {}, stats, nullptr), {}, 0};
-    InterpolatedLight light = interpolation_pass(scene, h.result.deep, *h.result.cache, stats, nullptr);
+    InterpolatedLight light = interpolation_pass(scene, h.result.deep, *h.result.cache, test::still_plan(scene).tiling, stats, nullptr);
     h.indirect = std::move(light.light);
     h.misses = static_cast<double>(light.misses);
     return h;

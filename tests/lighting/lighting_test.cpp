@@ -15,8 +15,8 @@ using test::base_scene;
 using test::scene_from;
 
 Color irradiance_at(const Scene& scene, const Vec3& p, const Vec3& n, int samples, uint64_t key = 1, uint32_t object = 0) {
-    SceneAccel accel(scene);
-    DirectLighting lighting(scene, accel);
+    SceneAccel accel(scene, scene.render.lighting);
+    DirectLighting lighting(scene, accel, scene.render.lighting);
     Counters c;
     return lighting.irradiance(p, n, object, RandomStream(scene.render.visibility.seed, key), samples, c);
 }

@@ -26,8 +26,8 @@ TEST(ManyLights, PickingSomeOfThemStaysUnbiasedAndFewerAreAllTaken) {
     j["lights"] = lights;
     const Scene all = test::scene_from(j, {"render.light_pick=0"});
     const Scene picked = test::scene_from(j, {"render.light_pick=16"});
-    SceneAccel accel(all);
-    const DirectLighting full(all, accel), some(picked, accel);
+    SceneAccel accel(all, all.render.lighting);
+    const DirectLighting full(all, accel, all.render.lighting), some(picked, accel, picked.render.lighting);
     Counters counters;
     for (const Vec3 p : {Vec3{0, 0, 0}, Vec3{3, 0, -2}, Vec3{-5, 0, 4}}) {
         const double truth = luminance(full.irradiance(p, {0, 1, 0}, 0, RandomStream(1, 2), 1, counters));
@@ -42,7 +42,7 @@ TEST(ManyLights, PickingSomeOfThemStaysUnbiasedAndFewerAreAllTaken) {
         EXPECT_GT(sd, 0);  // it did pick
     }
     const Scene as_many = test::scene_from(j, {"render.light_pick=400"});
-    const DirectLighting every(as_many, accel);
+    const DirectLighting every(as_many, accel, as_many.render.lighting);
     const Color a = every.irradiance({1, 0, 1}, {0, 1, 0}, 0, RandomStream(3, 4), 1, counters);
     const Color b = full.irradiance({1, 0, 1}, {0, 1, 0}, 0, RandomStream(3, 4), 1, counters);
     EXPECT_EQ(std::memcmp(&a, &b, sizeof(Color)), 0);

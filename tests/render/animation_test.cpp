@@ -125,11 +125,11 @@ struct Frames {
 /// A gatherer of a frame's scene as a fresh render would build it.
 struct FreshGatherer {
     explicit FreshGatherer(const Scene& scene)
-        : accel(scene),
+        : accel(scene, scene.render.lighting),
           materials(scene),
-          lighting(scene, accel),
-          rt(RadiosityTextures::lazy(scene, materials, lighting, scene.render.radiosity)),
-          gatherer(scene, accel, materials, lighting, &rt, gather_settings(scene)) {}
+          lighting(scene, accel, scene.render.lighting),
+          rt(RadiosityTextures::lazy(scene, materials, lighting, test::still_plan(scene).find<RadiosityStep>()->settings)),
+          gatherer(scene, accel, materials, lighting, &rt, test::still_plan(scene).gather) {}
     SceneAccel accel;
     Materials materials;
     DirectLighting lighting;
@@ -242,7 +242,7 @@ TEST(TemporalCache, RefinementReprojectsEarlierGathersAndKeepsOnlyGathersForLate
     const IrradianceCache& cache2 = *copy;
     const SceneChanges changes = scene_changes(*f.scenes[1], *f.scenes[2]);
     ASSERT_TRUE(changes.camera);
-    const TemporalJudgement judged = judge_records(cache2, {}, {}, *f.scenes[1], *f.scenes[2], changes, {}, 0);
+    const TemporalJudgement judged = judge_records(cache2, {}, {}, *f.scenes[1], *f.scenes[2], changes, {}, 0, f.scenes[2]->render.visibility.seed);
     size_t of_two = 0, of_one = 0;
     for (size_t i = 0; i < cache2.fragment_record_count(); ++i) {
         of_two += cache2.fragment_record_at(i).gathered == 2;
@@ -505,7 +505,7 @@ TEST(TemporalCache, AutomaticDistancesDoNotChangeAsAnObjectMovesOutOfTheSet) {
     ASSERT_NE(length(a.bounds().diagonal()), length(b.bounds().diagonal()));
     EXPECT_FLOAT_EQ(a.size(), std::sqrt(12.0f * 12 + 4 * 4 + 12 * 12));  // the floor and the wall
     EXPECT_EQ(a.size(), b.size());
-    EXPECT_EQ(SceneAccel(a).ray_offset(), SceneAccel(b).ray_offset());
+    EXPECT_EQ(SceneAccel(a, a.render.lighting).ray_offset(), SceneAccel(b, b.render.lighting).ray_offset());
     // When everything moves there is nothing else to measure: the bounds at the frame.
     j["objects"] = {j["objects"][2]};
     EXPECT_EQ(at(j, 3).size(), length(at(j, 3).bounds().diagonal()));

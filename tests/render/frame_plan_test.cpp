@@ -73,7 +73,7 @@ TEST(FramePlan, ACropGathersAMarginAndARegatherFlushesOnlyInsideIt) {
     RenderRequest req;
     req.cache_in = "f.bic", req.kind = FrameKind::Regather;
     const FramePlan p = plan_frame(cornell({"render.crop=[10,20,12,30]"}), {}, req);
-    const int m = crop_margin(cornell());
+    const int m = crop_margin(cornell().render.cache);
     EXPECT_EQ(p.gather_window, (std::array<int, 4>{0, std::min(40, 20 + m), 0, std::min(40, 30 + m)}));
     EXPECT_EQ(p.cache_start(), CacheStart::File);
     EXPECT_EQ(p.find<CacheStartStep>()->cache_in, "f.bic");

@@ -216,7 +216,7 @@ TEST(Instances, ShareOnePrototypesTrianglesAndReportTheirOwnObjectInHits) {
     EXPECT_EQ(s.objects[3].name, "row/0");
     EXPECT_EQ(s.objects[52].name, "row/49");
     // Down onto ball k's top: its own object, at the sphere's top (an icosphere's vertex).
-    const SceneAccel accel(s);
+    const SceneAccel accel(s, s.render.lighting);
     for (int k : {0, 1, 17, 49}) {
         const Hit h = accel.fine().intersect({2.5f + 3.0f * static_cast<float>(k), 10, 0.5f}, {0, -1, 0}, 0, INFINITY);
         ASSERT_TRUE(h.valid()) << k;
@@ -237,9 +237,9 @@ TEST(Instances, PlacementsOfEqualScaleShareTheirRadiosityLayoutAndBakeOnlyWhatIs
                                          {{"translate", {3, 0, 0}}},
                                          {{"translate", {0, 0, 2}}, {"scale", 3}}});
     const Scene s = test::scene_from(room(json::array({{{"name", "balls"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}})));
-    const SceneAccel accel(s);
+    const SceneAccel accel(s, s.render.lighting);
     const Materials materials(s);
-    const DirectLighting lighting(s, accel);
+    const DirectLighting lighting(s, accel, s.render.lighting);
     RadiosityTextures rt = RadiosityTextures::lazy(s, materials, lighting, s.render.radiosity);
     // Placements 0-2 (objects 3, 4, 5) have the same edge lengths: one layout; the scaled one its own.
     EXPECT_EQ(rt.object(3).level.shared(), rt.object(4).level.shared());
@@ -449,9 +449,9 @@ TEST(Instances, GltfGpuInstancesAreLaidOutInTheRadiosityLatticeAsTheSameNodes) {
         json j = cubes_scene(d, how, {{"material", "white"}});
         j["render"]["radiosity_texel"] = std::sqrt(2.0f) / 4;  // a face's diagonal: 4 texels
         const Scene s = test::scene_from(j);
-        const SceneAccel accel(s);
+        const SceneAccel accel(s, s.render.lighting);
         const Materials materials(s);
-        const DirectLighting lighting(s, accel);
+        const DirectLighting lighting(s, accel, s.render.lighting);
         const RadiosityTextures rt = RadiosityTextures::lazy(s, materials, lighting, s.render.radiosity);
         std::vector<std::vector<uint8_t>> out;
         for (uint32_t id = 0; id < s.objects.size(); ++id) out.push_back(rt.object(id).level.vec());

@@ -33,8 +33,8 @@ json card_scene(const json& light_extra = json::object(), const json& card_extra
 
 /// Irradiance at `p` (facing up) on object `object`.
 float sun_at(const Scene& s, const Vec3& p, uint32_t object) {
-    SceneAccel accel(s);
-    DirectLighting lighting(s, accel);
+    SceneAccel accel(s, s.render.lighting);
+    DirectLighting lighting(s, accel, s.render.lighting);
     Counters c;
     return lighting.irradiance(p, {0, 1, 0}, object, RandomStream(1, 1), 1, c).x;
 }
@@ -69,9 +69,9 @@ TEST(LightLinking, AnUnlinkedObjectGetsNoDirectLightFromTheLightAndTheOthersAllO
 
 TEST(LightLinking, TheRadiosityBakeUsesTheSameLinks) {
     const Scene s = test::scene_from(card_scene({{"light_link", {{"exclude", {"card"}}}}}));
-    SceneAccel accel(s);
+    SceneAccel accel(s, s.render.lighting);
     Materials materials(s);
-    DirectLighting lighting(s, accel);
+    DirectLighting lighting(s, accel, s.render.lighting);
     Stats stats;
     const RadiosityTextures rt = RadiosityTextures::bake(s, materials, lighting, {}, stats, nullptr);
     // The card's top (its front faces down: vertices wind clockwise seen from above) and the floor's.

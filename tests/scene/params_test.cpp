@@ -1,6 +1,6 @@
 // The parameter table: one declaration drives the scene keys, CLI flags, listing, docs table,
 // cache identity and metadata.
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 
 #include <gtest/gtest.h>
 

@@ -135,10 +135,10 @@ TEST(Glass, ASlabShiftsTheRayByTheAnalyticDistance) {
                  {"material", "wall"},
                  {"vertices", {{-50, -50, -5}, {50, -50, -5}, {50, 50, -5}, {-50, 50, -5}}}}}}};
     const Scene s = test::scene_from(j);
-    SceneAccel accel(s);
-    DirectLighting lighting(s, accel);
+    SceneAccel accel(s, s.render.lighting);
+    DirectLighting lighting(s, accel, s.render.lighting);
     const Materials materials(s);
-    const SpecularTracer tracer(s, accel, lighting, materials);
+    const SpecularTracer tracer(s, accel, lighting, materials, s.render.shading.specular_depth);
     ASSERT_TRUE(tracer.active());
     Fragment f;
     f.p = f.p_base = {0, 0, 0}, f.n = f.ng = f.n_base = {0, 0, 1};
@@ -190,10 +190,10 @@ TEST(Glass, ASphereReflectsTheFresnelShareAtNormalAndGrazingIncidence) {
     // Fragments at chosen angles on the ball (one pixel of the image averages a range of them
     // near the rim): what their paths see is F(angle) of the sky, within the tessellated
     // surface's normal error (the coarse sphere's interpolated normals).
-    SceneAccel accel(s);
-    DirectLighting lighting(s, accel);
+    SceneAccel accel(s, s.render.lighting);
+    DirectLighting lighting(s, accel, s.render.lighting);
     const Materials materials(s);
-    const SpecularTracer tracer(s, accel, lighting, materials);
+    const SpecularTracer tracer(s, accel, lighting, materials, s.render.shading.specular_depth);
     for (float angle_deg : {0.0f, 30.0f, 60.0f, 75.0f, 85.0f}) {
         // The point of the unit ball seen at that angle of incidence from the camera at (0, 0, 10).
         float phi = 0;

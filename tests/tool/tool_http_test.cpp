@@ -9,7 +9,7 @@
 
 #include "bounce/cache/cache_file.h"
 #include "bounce/core/error.h"
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 #include "bounce/tool/server.h"
 #include "tool_util.h"
 

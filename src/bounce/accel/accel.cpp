@@ -37,7 +37,7 @@ unsigned fur_ray_mask(const Scene& scene, size_t index) {
     return o.fur ? ray_mask(scene, index, o.fur->params.visible_to) : 0u;
 }
 
-SceneAccel::SceneAccel(const Scene& scene, const SceneAccel* previous) {
+SceneAccel::SceneAccel(const Scene& scene, const LightingSettings& settings, const SceneAccel* previous) {
     // Refused before Embree allocates: about 100 bytes per triangle and 80 per fur segment
     // and BVH (measured on the ogre and the furry ball), the fine tessellation twice over.
     // A prototype's triangles count once, each placement about 200 bytes of Embree instance.
@@ -71,7 +71,7 @@ SceneAccel::SceneAccel(const Scene& scene, const SceneAccel* previous) {
     } else {
         build_flat(scene);
     }
-    measure_offsets(scene);
+    measure_offsets(scene, settings.ray_offset);
 }
 
 BvhReuse SceneAccel::reuse() const { return parts_ ? parts_->reuse() : BvhReuse{}; }
@@ -140,7 +140,7 @@ float stretch_of(const Transform& t) {
 }
 }  // namespace
 
-void SceneAccel::measure_offsets(const Scene& scene) {
+void SceneAccel::measure_offsets(const Scene& scene, float ray_offset) {
     // Measure how far the fine surface strays from the coarse one, per object.
     const float diag = scene.size();
     std::vector<float> gaps;
@@ -171,7 +171,7 @@ void SceneAccel::measure_offsets(const Scene& scene) {
         gap_ = *at;
     }
     // Default distance: cover the measured gap for rays up to ~75 degrees off the normal.
-    ray_offset_ = scene.render.lighting.ray_offset >= 0 ? scene.render.lighting.ray_offset : std::max(1e-4f * diag, 4.0f * gap_);
+    ray_offset_ = ray_offset >= 0 ? ray_offset : std::max(1e-4f * diag, 4.0f * gap_);
     min_epsilon_ = 1e-7f * diag;
 }
 

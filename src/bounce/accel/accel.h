@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "bounce/accel/bvh.h"
+#include "bounce/config/settings.h"
 #include "bounce/core/math.h"
 #include "bounce/scene/scene.h"
 
@@ -33,8 +34,9 @@ class BvhParts;
 /// alone builds the same parts, so both trace alike, bit for bit.
 class SceneAccel {
   public:
-    /// `previous`: the shot's frame before (null: none) whose parts may be taken over.
-    explicit SceneAccel(const Scene& scene, const SceneAccel* previous = nullptr);
+    /// `settings`: the ray offset's (LightingSettings::ray_offset, < 0 = measured from the two
+    /// tessellations). `previous`: the shot's frame before (null: none) whose parts may be taken over.
+    SceneAccel(const Scene& scene, const LightingSettings& settings, const SceneAccel* previous = nullptr);
     ~SceneAccel();
     SceneAccel(const SceneAccel&) = delete;
     SceneAccel& operator=(const SceneAccel&) = delete;
@@ -82,7 +84,8 @@ class SceneAccel {
     /// One BVH of each kind over every object.
     void build_flat(const Scene& scene);
     /// Measures the fine/coarse gap and sets the offset distances.
-    void measure_offsets(const Scene& scene);
+    /// `ray_offset` < 0: measured from the gap between the two tessellations.
+    void measure_offsets(const Scene& scene, float ray_offset);
 
     std::shared_ptr<RTCDeviceTy> device_;  ///< shared with the shot's later frames, whose parts it made
     std::unique_ptr<Bvh> coarse_, fine_;

@@ -4,7 +4,7 @@
 
 #include "bounce/core/error.h"
 #include "bounce/lighting/lighting.h"
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 
 namespace bounce {
 
@@ -46,7 +46,7 @@ LoadedCache load_cache(const std::string& path, const Scene& scene, bool force, 
     const std::string ao_key = "render.ao";
     if (f.info.parameters.contains(ao_key) && f.info.parameters[ao_key] != want.parameters[ao_key])
         throw InputError(path, "parameters/" + ao_key,
-                         scene.render.indirect.ao ? "cache holds irradiance, not AO" : "cache holds AO, not irradiance");
+                         want.parameters[ao_key] == true ? "cache holds irradiance, not AO" : "cache holds AO, not irradiance");
     LoadedCache out;
     // Records that keep a part per light (scales factored out) take this scene's colours and
     // intensities exactly when nothing else about the lights and materials differs.

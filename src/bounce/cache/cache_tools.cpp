@@ -12,7 +12,7 @@
 #include "bounce/cache/irradiance_cache.h"
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 #include "bounce/core/image.h"
 
 namespace bounce {
@@ -92,15 +92,16 @@ namespace {
 /// The cache settings a file's parameters name (through the parameter table); the defaults
 /// for parameters it does not record or records with values out of range.
 CacheSettings settings_from(const nlohmann::json& parameters) {
-    Scene scene;
+    Camera camera;
+    RenderSettings render;
     for (const Param& p : scene_params()) {
         if (!parameters.contains(p.key)) continue;
         try {
-            p.set(scene,
+            p.set(ParamsOut(camera, render),
                   check_param(p, parameters[p.key], [](const std::string&, const std::string& msg) { throw std::invalid_argument(msg); }));
         } catch (const std::invalid_argument&) {}
     }
-    return scene.render.cache;
+    return render.cache;
 }
 
 std::string record_bytes(const Record& r) {

@@ -144,11 +144,11 @@ Color hits_correction(const IrradianceCache& cache, const Vec3& p, const Vec3& n
 
 void correction_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache, const Gatherer& gatherer,
                      std::vector<Indirect>& light, Stats& stats, ProgressSink* progress) {
-    const bool ao = scene.render.indirect.ao;
-    const bool hits = scene.render.cache.correction_prediction == CorrectionPrediction::Hits;
+    const bool ao = gatherer.settings().ao;
+    const bool hits = gatherer.settings().prediction_hits;
     tbb::enumerable_thread_specific<std::vector<Vec3>> directions;
     tbb::enumerable_thread_specific<uint64_t> fragments(0), predicted(0);
-    for_each_bounce_fragment(scene, deep, progress, "correct", [&](const BounceFragment& b) {
+    for_each_bounce_fragment(scene, deep, gatherer.settings().tiling, progress, "correct", [&](const BounceFragment& b) {
         Counters& counters = stats.local();
         std::vector<Vec3>& local = directions.local();
         // The gather brute force makes here (the same point, normal and stream) ...

@@ -40,8 +40,8 @@ class Gathering {
           cache_(cache),
           stats_(stats),
           o_(o),
-          per_tile_(scene.render.parallel.cache_sharing == CacheSharing::PerThread),
-          tiles_(make_tiles(deep.width, deep.height, scene.render.parallel.tile_size, scene.render.parallel.tile_order)),
+          per_tile_(o.sharing == CacheSharing::PerThread),
+          tiles_(make_tiles(deep.width, deep.height, gatherer.settings().tiling.tile_size, gatherer.settings().tiling.tile_order)),
           mine_(owned(tiles_, o.comm)),
           work_(tiles_.size()) {}
 
@@ -66,7 +66,7 @@ class Gathering {
     }
     /// The process that owns the tile of window pixel (wx, wy).
     size_t owner_of(const Candidate& c) const {
-        return static_cast<size_t>(tile_index_of(c.wx, c.wy, deep_.width, scene_.render.parallel.tile_size)) %
+        return static_cast<size_t>(tile_index_of(c.wx, c.wy, deep_.width, gatherer_.settings().tiling.tile_size)) %
                static_cast<size_t>(o_.comm->size());
     }
 
@@ -85,7 +85,7 @@ class Gathering {
 Record Gathering::gather_at(const Candidate& c, Counters& counters) {
     const Fragment& f = deep_.pixel(c.wx, c.wy)[c.k];
     const Site site = record_site(scene_, f, cache_.settings(), c.side);
-    const RandomStream front = fragment_stream(scene_.render.visibility.seed, c.wx + deep_.x0, c.wy + deep_.y0, c.k);
+    const RandomStream front = fragment_stream(gatherer_.settings().tiling.seed, c.wx + deep_.x0, c.wy + deep_.y0, c.k);
     const RandomStream rng = c.side == Side::Back ? back_side_stream(front) : front;
     auto hits = o_.keep_hits ? std::make_shared<GatherHits>() : nullptr;
     GatherResult g = o_.first ? o_.first->gather(site.origin, site.n, rng, counters, site.near, hits.get()) : GatherResult{};
@@ -116,7 +116,7 @@ void Gathering::judge_tile(const SubPass& sp, const Tile& t) {
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 if (!needs_bounce_light(scene_, frags[k])) continue;
                 judge({wx, wy, k, Side::Front}, w, covering, counters);
-                if (takes_back_light(scene_, frags[k])) judge({wx, wy, k, Side::Back}, w, covering, counters);
+                if (takes_back_light(scene_, frags[k], cache_.ao_only())) judge({wx, wy, k, Side::Back}, w, covering, counters);
             }
         }
 }

@@ -99,7 +99,7 @@ Indirect front_indirect_at(const Scene& scene, const IrradianceCache& cache, con
 Indirect indirect_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffer& deep, int wx, int wy, uint32_t k, Origin& from) {
     Indirect out = front_indirect_at(scene, cache, deep, wx, wy, k, from);
     const Fragment& f = deep.pixel(wx, wy)[k];
-    if (!takes_back_light(scene, f)) return out;
+    if (!takes_back_light(scene, f, cache.ao_only())) return out;
     const Interpolated back = interpolate_at(cache, f, record_site(scene, f, cache.settings(), Side::Back), Side::Back);
     out.back = back.E;
     from.back_missed = back.weight <= 0;
@@ -131,7 +131,7 @@ void shares_at(const Scene& scene, const IrradianceCache& cache, const DeepBuffe
                const Origin& from, std::span<Color> out) {
     front_shares_at(scene, cache, deep, wx, wy, k, from, out);
     const Fragment& f = deep.pixel(wx, wy)[k];
-    if (!takes_back_light(scene, f) || from.back_missed) return;
+    if (!takes_back_light(scene, f, cache.ao_only()) || from.back_missed) return;
     std::vector<Color> back(out.size(), Color(0));
     light_shares_at(cache, f, record_site(scene, f, cache.settings(), Side::Back), back, Side::Back);
     const float t = scene.materials[f.material].diffuse_transmission;
@@ -150,12 +150,6 @@ void place_fragment_record(Record& r, const Fragment& f, uint64_t key, int frame
 
 }  // namespace
 
-bool refinement_runs(const Scene& scene) {
-    const CacheSettings& cs = scene.render.cache;
-    if (cs.refine > 0) return true;
-    if (cs.refine_tilt <= 0 || cs.displaced_records != RecordSurface::Undisplaced) return false;
-    return std::any_of(scene.objects.begin(), scene.objects.end(), [](const Object& o) { return o.displacement_bound > 0; });
-}
 
 namespace {
 /// The guide of fragment f's refinement gather from the records about its record site.
@@ -169,6 +163,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                        ProgressSink* sink, const RefinementOptions& options) {
     const int frame = options.frame;
     const CacheSettings& cs = cache.settings();
+    const FrameTiling& tiling = refiner.settings().tiling;
     const float threshold = cs.refine;
     tbb::enumerable_thread_specific<std::vector<Record>> made;
     tbb::enumerable_thread_specific<size_t> reused(0);
@@ -177,7 +172,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
         // finished cache whatever the thread count.
         auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache, stats.local());
         for_each_pixel_in_tiles(
-            deep, scene.render.parallel.tile_size, sink, "refining",
+            deep, tiling.tile_size, sink, "refining",
             [&](int wx, int wy, size_t) {
                 auto frags = deep.pixel(wx, wy);
                 for (uint32_t k = 0; k < frags.size(); ++k) {
@@ -209,7 +204,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                     // Gathered about the fragment's own (displaced) point and normal, as brute force
                     // does; with an earlier gather near it on its surface, mostly from that one's rays
                     // (then it keeps no hits: never reused itself).
-                    const RandomStream rng = fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k);
+                    const RandomStream rng = fragment_stream(tiling.seed, wx + deep.x0, wy + deep.y0, k);
                     const Record* near = options.earlier ? options.earlier->nearest(f.p, f.n, f.footprint) : nullptr;
                     auto hits = options.keep_hits && !near ? std::make_shared<GatherHits>() : nullptr;
                     // Guided by the records that cover it where they kept a guide (render.guided),
@@ -219,7 +214,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                     const GatherResult g =
                         near    ? refiner.reproject(f.p, f.n, rng,
                                                     {near->origin, near->n,
-                                                     record_stream(*near, scene.render.visibility.seed, scene.camera.width), *near->hits},
+                                                     record_stream(*near, tiling.seed, scene.camera.width), *near->hits},
                                                     stats.local())
                         : guide ? refiner.gather_guided(f.p, f.n, rng, *guide, stats.local())
                                 : refiner.gather(f.p, f.n, rng, stats.local(), 0, hits.get());
@@ -233,7 +228,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                     made.local().push_back(r);
                 }
             },
-            scene.render.parallel.tile_order, options.comm);
+            tiling.tile_order, options.comm);
     }
     std::vector<Record> records;
     for (auto& v : made) records.insert(records.end(), v.begin(), v.end());
@@ -262,8 +257,8 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
     return records.size() - taken;
 }
 
-InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache, Stats& stats,
-                                     ProgressSink* sink, bool report, bool per_light) {
+InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache, const FrameTiling& tiling,
+                                     Stats& stats, ProgressSink* sink, bool report, bool per_light) {
     InterpolatedLight out;
     out.light.resize(deep.fragments.size());
     out.refined.assign(deep.fragments.size(), 0);
@@ -276,7 +271,7 @@ InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep,
     // The pass holds the shared lock for its workers: no writer can interleave.
     auto lock = lock_cache<std::shared_lock<std::shared_mutex>>(cache, stats.local());
     for_each_pixel_in_tiles(
-        deep, scene.render.parallel.tile_size, sink, "interpolate",
+        deep, tiling.tile_size, sink, "interpolate",
         [&](int wx, int wy, size_t first) {
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
@@ -291,7 +286,7 @@ InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep,
                 misses.local() += from.src == Source::Missed || from.back_missed;
             }
         },
-        scene.render.parallel.tile_order);
+        tiling.tile_order);
     uint64_t m = 0, l = 0, o = 0;
     for (auto v : misses) m += v;
     for (auto v : lookups) l += v;

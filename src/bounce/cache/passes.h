@@ -55,6 +55,9 @@ struct GatheringOptions {
     /// record is as well served as the record's own.
     float own_weight = 0.99f;
     float min_weight = -1;  ///< > 0: the weight sum a point needs (IrradianceCache::misses), else the settings'
+    /// PerThread: each tile judges against the cache as the sub-pass began plus its own new
+    /// records only (ParallelSettings::cache_sharing).
+    CacheSharing sharing = CacheSharing::Shared;
     /// The processes of an MPI job (core/communicator.h): each judges its own tiles of a
     /// sub-pass and the tiles' work is exchanged before it is merged (null: this process alone).
     Communicator* comm = nullptr;
@@ -64,11 +67,12 @@ struct GatheringOptions {
 /// Within a sub-pass every lookup sees the cache as it was when the sub-pass began; new
 /// records are inserted in pixel order (redone stale records first, in their order), dropping
 /// those the earlier ones already cover, so the cache does not depend on thread count or
-/// scheduling. Records on an object that moves in the shot carry their anchor on it.
+/// scheduling. Records on an object that moves in the shot carry their anchor on it. The
+/// gatherer's tiling (GatherSettings::tiling) lays out the tiles and streams.
 void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, IrradianceCache& cache, Stats& stats,
                     ProgressSink* progress, const GatheringOptions& options = {});
 
-/// Per-fragment refinement (when refinement_runs), after the gathering pass: a fragment
+/// Per-fragment refinement (when the plan lists a RefineStep), after the gathering pass: a fragment
 /// whose covering records disagree (the spread of their extrapolated values at the fragment
 /// exceeds `refine`), that no record covers, or whose displaced normal tilts from the
 /// un-displaced one by more than `refine_tilt` (records on the un-displaced surface) gets a
@@ -76,10 +80,8 @@ void gathering_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& 
 /// as a fragment record (IrradianceCache::insert_fragment_record) that no other fragment
 /// uses. Fragments that already have one (a loaded cache) are skipped. Every fragment is
 /// judged against the finished cache and the records are inserted in key order afterwards:
-/// deterministic at any thread count. Returns how many were made.
-/// Whether the refinement pass has anything to judge: `refine` > 0, or `refine_tilt` > 0 with
-/// records on the un-displaced surface of a displaced object.
-bool refinement_runs(const Scene& scene);
+/// deterministic at any thread count. Returns how many were made. The refiner's tiling
+/// (GatherSettings::tiling) lays out its tiles and streams.
 
 /// What a refinement pass does besides gathering fragments' own records.
 struct RefinementOptions {
@@ -114,8 +116,8 @@ struct InterpolatedLight {
 /// bug shows.
 /// `report`: sets the stats (shading_misses, lookups, fragment_records_used).
 /// `per_light` (the records must keep light parts): also each light's share of every fragment's light.
-InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache, Stats& stats,
-                                     ProgressSink* progress, bool report = true, bool per_light = false);
+InterpolatedLight interpolation_pass(const Scene& scene, const DeepBuffer& deep, const IrradianceCache& cache, const FrameTiling& tiling,
+                                     Stats& stats, ProgressSink* progress, bool report = true, bool per_light = false);
 
 /// Progressive preview after a sub-pass of step `step`: each fragment takes the interpolated
 /// light at the nearest pixel (on that step's lattice, then coarser ones) a finished sub-pass

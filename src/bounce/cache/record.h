@@ -12,7 +12,7 @@
 
 #include "bounce/core/math.h"
 #include "bounce/gather/gather.h"
-#include "bounce/scene/settings.h"
+#include "bounce/config/settings.h"
 
 namespace bounce {
 

@@ -125,7 +125,7 @@ bool sees_sky(const Record& r) {
 /// A record with its hits: does anything its rays found change this frame? None of its rays
 /// passes through a moving object's swept bounds, no hit is on a changed side, no escaped ray
 /// sees a changed sky.
-bool hits_unchanged(const Record& r, const Scene& now, const SceneChanges& changes, const std::vector<Bounds>& boxes,
+bool hits_unchanged(const Record& r, const Scene& now, uint64_t seed, const SceneChanges& changes, const std::vector<Bounds>& boxes,
                     const std::vector<uint64_t>& changed_sides) {
     const GatherHits& h = *r.hits;
     for (size_t c = 0; c < h.t.size(); ++c) {
@@ -138,7 +138,7 @@ bool hits_unchanged(const Record& r, const Scene& now, const SceneChanges& chang
     }
     if (boxes.empty()) return true;
     std::vector<uint32_t> cells;
-    cells_through(GatherGrid{h.m, h.n}, r.origin, r.n, record_stream(r, now.render.visibility.seed, now.camera.width), h, boxes, cells);
+    cells_through(GatherGrid{h.m, h.n}, r.origin, r.n, record_stream(r, seed, now.camera.width), h, boxes, cells);
     return cells.empty();
 }
 
@@ -212,6 +212,7 @@ enum class Verdict : uint8_t { Keep, Update, View, Light };
 /// What decides it: the moving objects' swept bounds and the changed radiosity sides.
 struct FrameChange {
     const Scene& now;
+    uint64_t seed;
     const SceneChanges& changes;
     std::span<const LightChange> light;
     float brightest, floor, tolerance;
@@ -219,9 +220,10 @@ struct FrameChange {
     std::vector<Bounds> boxes;
     std::vector<uint64_t> changed_sides;  ///< (object << 32 | triangle), sorted
 
-    FrameChange(const Scene& now_, const SceneChanges& c, std::span<const LightChange> l, float bright, float floor_,
+    FrameChange(const Scene& now_, uint64_t seed_, const SceneChanges& c, std::span<const LightChange> l, float bright, float floor_,
                 const CacheSettings& s, bool ao)
         : now(now_),
+          seed(seed_),
           changes(c),
           light(l),
           brightest(bright),
@@ -237,7 +239,7 @@ struct FrameChange {
     /// (grown here) stays within the tolerance, else gathered again (View: something moved in
     /// its view; Light: only light changed).
     Verdict verdict(Record& r) const {
-        if (r.hits) return hits_unchanged(r, now, changes, boxes, changed_sides) ? Verdict::Keep : Verdict::Update;
+        if (r.hits) return hits_unchanged(r, now, seed, changes, boxes, changed_sides) ? Verdict::Keep : Verdict::Update;
         r.drift += drift_bound(r, changes, light, brightest, floor, ao_only);
         bool geometry = false;
         for (size_t o = 0; o < changes.objects.size() && !geometry; ++o)
@@ -252,7 +254,7 @@ struct FrameChange {
 
 TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, std::span<const Record> gathers,
                                 const Scene& before, const Scene& now, const SceneChanges& changes, std::span<const LightChange> light,
-                                float brightest) {
+                                float brightest, uint64_t seed) {
     TemporalJudgement out;
     if (!changes.comparable) {
         out.dropped = previous.size() + waiting.size();
@@ -260,7 +262,7 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
     }
     const CacheSettings& s = previous.settings();
     const CameraRays camera(now.camera);
-    const FrameChange change(now, changes, light, brightest, std::max(previous.luminance_floor(), 1e-12f), s, previous.ao_only());
+    const FrameChange change(now, seed, changes, light, brightest, std::max(previous.luminance_floor(), 1e-12f), s, previous.ao_only());
     // Moves a record with its object; false when it cannot follow (dropped).
     const auto follow = [&](Record& r, ObjectMotion::Kind own) {
         if (own == ObjectMotion::Kind::Static) return true;

@@ -52,7 +52,7 @@ struct TemporalJudgement {
 /// (turned with it).
 TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, std::span<const Record> gathers,
                                 const Scene& before, const Scene& now, const SceneChanges& changes, std::span<const LightChange> light,
-                                float brightest);
+                                float brightest, uint64_t seed);
 
 /// Anchors a new record on object `object` (which moves in the shot): in its own space for a
 /// rigid one, at its barycentrics on triangle `prim` of its visible mesh for a deforming one.

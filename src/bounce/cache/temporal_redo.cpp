@@ -22,7 +22,7 @@ void blend_with_previous(Record& r, const Record& old, float f) {
 /// light changed and it kept them, else gathered again in place with its own random stream;
 /// its reach and gradients as a new record's, its anchor and creation frame kept.
 StaleRecords::Redo redo_function(const TemporalFrame& now, const IrradianceCache& cache, const Gatherer& gatherer) {
-    const uint64_t seed = now.scene.render.visibility.seed;
+    const uint64_t seed = now.seed;
     const int width = now.scene.camera.width;
     std::vector<Bounds> boxes = now.changes ? moving_bounds(*now.changes) : std::vector<Bounds>();
     return [&cache, &gatherer, seed, width, frame = now.frame, keep = now.keep_hits, boxes = std::move(boxes)](
@@ -62,8 +62,8 @@ StaleRecords::Redo redo_function(const TemporalFrame& now, const IrradianceCache
 std::function<Record(const Record&, Counters&)> fragment_update_function(const TemporalFrame& now, const Gatherer& refiner,
                                                                          const IrradianceCache& cache) {
     std::vector<Bounds> boxes = now.changes ? moving_bounds(*now.changes) : std::vector<Bounds>();
-    return [&refiner, &cache, seed = now.scene.render.visibility.seed, width = now.scene.camera.width, frame = now.frame,
-            boxes = std::move(boxes), filter = now.scene.render.cache.temporal_filter](const Record& old, Counters& counters) {
+    return [&refiner, &cache, seed = now.seed, width = now.scene.camera.width, frame = now.frame, boxes = std::move(boxes),
+            filter = now.settings.temporal_filter](const Record& old, Counters& counters) {
         const RandomStream rng = record_stream(old, seed, width);
         auto hits = std::make_shared<GatherHits>(*old.hits);
         std::vector<uint32_t> cells;
@@ -93,8 +93,7 @@ std::vector<Record> gathers_to_keep(const EarlierGathers& earlier, const Irradia
 /// never land on those points): this frame's fragment near one keeps CacheSettings::refine_hold.
 /// Null when there is no hold.
 std::unique_ptr<EarlierGathers> refined_the_frame_before(const IrradianceCache& cache, const TemporalJudgement& judged, const Scene& scene,
-                                                         int frame) {
-    const CacheSettings& cs = scene.render.cache;
+                                                         const CacheSettings& cs, int frame) {
     if (cs.refine_hold_reach <= 0 || cs.refine_hold >= 1) return nullptr;
     std::vector<Record> last;
     for (size_t i = 0; i < cache.fragment_record_count(); ++i)

@@ -17,12 +17,15 @@
 namespace bounce {
 
 /// What redoing earlier records needs to know of the frame: its scene, what changed since the
-/// frame before (null for none), its number, and whether records keep their hits.
+/// frame before (null for none), its number, whether records keep their hits, its seed (records'
+/// streams) and its cache settings (the temporal filter).
 struct TemporalFrame {
     const Scene& scene;
     const SceneChanges* changes;
     int frame;
     bool keep_hits;
+    uint64_t seed;
+    const CacheSettings& settings;
 };
 
 /// Temporal filtering (render.temporal_filter): a redone record keeps share `f` of its previous values.
@@ -36,6 +39,6 @@ std::function<Record(const Record&, Counters&)> fragment_update_function(const T
 std::vector<Record> gathers_to_keep(const EarlierGathers& earlier, const IrradianceCache& cache, int frame);
 /// Where refinement gathered in the frame before, for a moving camera's hold; null when there is none.
 std::unique_ptr<EarlierGathers> refined_the_frame_before(const IrradianceCache& cache, const TemporalJudgement& judged, const Scene& scene,
-                                                         int frame);
+                                                         const CacheSettings& settings, int frame);
 
 }  // namespace bounce

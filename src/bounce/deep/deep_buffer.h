@@ -130,14 +130,15 @@ class CameraRays {
 
 /// Traces `spp` jittered subsamples per pixel against the fine tessellation and merges those
 /// that hit the same surface into fragments. Deterministic for a given seed, whatever the
-/// thread count or crop.
-DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* progress);
+/// thread count or crop. `settings`: the samples, the seed and the crop.
+DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, const VisibilitySettings& settings, Stats& stats,
+                             ProgressSink* progress);
 /// Same, for window {x0, x1, y0, y1} (full-image pixels, ends exclusive).
-DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* progress,
-                             const std::array<int, 4>& window);
+DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, const VisibilitySettings& settings, Stats& stats,
+                             ProgressSink* progress, const std::array<int, 4>& window);
 
-/// The window a scene renders: its crop, or the full frame ({x0, x1, y0, y1}).
-std::array<int, 4> frame_window(const Scene& scene);
+/// The window a camera renders: the crop, or the full frame ({x0, x1, y0, y1}).
+std::array<int, 4> frame_window(const Camera& camera, const VisibilitySettings& settings);
 /// The fragments of window `w` of `deep`, which must contain it.
 DeepBuffer sub_window(const DeepBuffer& deep, const std::array<int, 4>& w);
 
@@ -146,9 +147,10 @@ std::string serialize_window(const DeepBuffer& deep);
 DeepBuffer parse_window(const std::string& bytes);
 /// One window `w` ({x0, x1, y0, y1}) of `scene` from the fragments of some of its tiles
 /// (each a DeepBuffer of its own window inside `w`); pixels no tile covers are empty.
-DeepBuffer assemble_tiles(const Scene& scene, const std::array<int, 4>& w, const std::vector<DeepBuffer>& tiles);
-/// A window of `scene`'s image with no fragments.
-DeepBuffer empty_window(const Scene& scene, const std::array<int, 4>& window);
+DeepBuffer assemble_tiles(const Scene& scene, const VisibilitySettings& settings, const std::array<int, 4>& w,
+                          const std::vector<DeepBuffer>& tiles);
+/// A window of `scene`'s image with no fragments (stamped with the settings' samples and seed).
+DeepBuffer empty_window(const Scene& scene, const VisibilitySettings& settings, const std::array<int, 4>& window);
 
 /// Throws InputError (naming the camera) if no camera ray hits any geometry.
 void check_camera_sees_geometry(const Scene& scene, const SceneAccel& accel);

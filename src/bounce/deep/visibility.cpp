@@ -47,13 +47,13 @@ SurfacePoint hair_point(const Fur& fur, const Hit& h, const Vec3& o, const Vec3&
 
 }  // namespace
 
-DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* sink) {
-    return render_visibility(scene, accel, stats, sink, frame_window(scene));
+DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, const VisibilitySettings& settings, Stats& stats,
+                             ProgressSink* sink) {
+    return render_visibility(scene, accel, settings, stats, sink, frame_window(scene.camera, settings));
 }
 
-std::array<int, 4> frame_window(const Scene& scene) {
-    const VisibilitySettings& v = scene.render.visibility;
-    return v.has_crop() ? v.crop : std::array<int, 4>{0, scene.camera.width, 0, scene.camera.height};
+std::array<int, 4> frame_window(const Camera& camera, const VisibilitySettings& settings) {
+    return settings.has_crop() ? settings.crop : std::array<int, 4>{0, camera.width, 0, camera.height};
 }
 
 DeepBuffer sub_window(const DeepBuffer& deep, const std::array<int, 4>& w) {
@@ -73,14 +73,14 @@ DeepBuffer sub_window(const DeepBuffer& deep, const std::array<int, 4>& w) {
     return out;
 }
 
-DeepBuffer empty_window(const Scene& scene, const std::array<int, 4>& window) {
+DeepBuffer empty_window(const Scene& scene, const VisibilitySettings& settings, const std::array<int, 4>& window) {
     DeepBuffer deep;
     deep.full_width = scene.camera.width;
     deep.full_height = scene.camera.height;
     deep.x0 = window[0], deep.y0 = window[2];
     deep.width = window[1] - window[0], deep.height = window[3] - window[2];
-    deep.spp = scene.render.visibility.spp;
-    deep.seed = scene.render.visibility.seed;
+    deep.spp = settings.spp;
+    deep.seed = settings.seed;
     deep.scene_fingerprint = scene.visibility_fingerprint();
     deep.offsets.assign(deep.pixel_count() + 1, 0);
     return deep;
@@ -225,11 +225,10 @@ void PixelFragments::emit(int spp, std::vector<Fragment>& out) const {
 
 }  // namespace
 
-DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, Stats& stats, ProgressSink* sink,
-                             const std::array<int, 4>& window) {
+DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, const VisibilitySettings& rs, Stats& stats,
+                             ProgressSink* sink, const std::array<int, 4>& window) {
     const Camera& cam = scene.camera;
-    const VisibilitySettings& rs = scene.render.visibility;
-    DeepBuffer deep = empty_window(scene, window);
+    DeepBuffer deep = empty_window(scene, rs, window);
 
     CameraRays camera(cam);
     const int spp = rs.spp;
@@ -323,8 +322,9 @@ DeepBuffer parse_window(const std::string& bytes) {
     return d;
 }
 
-DeepBuffer assemble_tiles(const Scene& scene, const std::array<int, 4>& w, const std::vector<DeepBuffer>& tiles) {
-    DeepBuffer out = empty_window(scene, w);
+DeepBuffer assemble_tiles(const Scene& scene, const VisibilitySettings& settings, const std::array<int, 4>& w,
+                          const std::vector<DeepBuffer>& tiles) {
+    DeepBuffer out = empty_window(scene, settings, w);
     std::vector<uint32_t> count(out.pixel_count(), 0);
     const auto at = [&](const DeepBuffer& t, int x, int y) {
         return static_cast<size_t>(t.y0 + y - out.y0) * out.width + static_cast<size_t>(t.x0 + x - out.x0);

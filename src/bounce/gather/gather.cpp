@@ -310,19 +310,8 @@ bool needs_bounce_light(const Scene& scene, const Fragment& f) {
     return false;
 }
 
-bool takes_back_light(const Scene& scene, const Fragment& f) {
-    return !f.is_hair() && !scene.render.indirect.ao && scene.materials[f.material].is_translucent() && needs_bounce_light(scene, f);
-}
-
-GatherSettings gather_settings(const Scene& scene) {
-    const IndirectSettings& r = scene.render.indirect;
-    GatherSettings g;
-    static_cast<IndirectSettings&>(g) = r;
-    g.ao_distance = r.ao_distance >= 0 ? r.ao_distance : 0.1f * scene.size();
-    g.light_parts = scene.render.cache.light_parts && r.gi == GiMode::Cache;
-    g.prediction = scene.render.cache.correction_rays > 0 && r.gi == GiMode::Cache;
-    g.prediction_hits = g.prediction && scene.render.cache.correction_prediction == CorrectionPrediction::Hits;
-    return g;
+bool takes_back_light(const Scene& scene, const Fragment& f, bool ao) {
+    return !f.is_hair() && !ao && scene.materials[f.material].is_translucent() && needs_bounce_light(scene, f);
 }
 
 }  // namespace bounce

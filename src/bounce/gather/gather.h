@@ -24,6 +24,7 @@ namespace bounce {
 /// The scene's gather parameters (scene/settings.h) with `ao_distance` resolved (<= 0 =
 /// unlimited), plus what the caller decides per pass.
 struct GatherSettings : IndirectSettings {
+    FrameTiling tiling;                   ///< the frame's seed (every gather's stream) and tiles
     bool record_terms = true;             ///< distances and gradients (what a cache record needs); brute
                                           ///< force turns them off and gathers only E, AO and directions
     const CancelToken* cancel = nullptr;  ///< checked once per gather
@@ -228,8 +229,8 @@ inline HairSite gather_site(const Scene& scene, const Fragment& f) { return f.is
 bool needs_bounce_light(const Scene& scene, const Fragment& f);
 /// Whether fragment f also takes bounce light through its back hemisphere (Indirect::back): a
 /// thin translucent surface's (Material::diffuse_transmission) in a render of light (AO looks
-/// at one side).
-bool takes_back_light(const Scene& scene, const Fragment& f);
+/// at one side: not with `ao`).
+bool takes_back_light(const Scene& scene, const Fragment& f, bool ao);
 
 /// A fragment that takes bounce light, as the per-fragment passes (brute force, the control
 /// variate's correction) gather it: its index in deep.fragments, its window pixel, the site of
@@ -244,20 +245,18 @@ struct BounceFragment {
 /// fn(const BounceFragment&) for every fragment of `deep` that needs_bounce_light, tiles in
 /// parallel under progress `name`.
 template <class Fn>
-void for_each_bounce_fragment(const Scene& scene, const DeepBuffer& deep, ProgressSink* sink, const char* name, Fn&& fn) {
-    for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, name, [&](int wx, int wy, size_t first) {
+void for_each_bounce_fragment(const Scene& scene, const DeepBuffer& deep, const FrameTiling& tiling, ProgressSink* sink, const char* name,
+                              Fn&& fn) {
+    for_each_pixel_in_tiles(deep, tiling.tile_size, sink, name, [&](int wx, int wy, size_t first) {
         auto frags = deep.pixel(wx, wy);
         for (uint32_t k = 0; k < frags.size(); ++k) {
             const Fragment& f = frags[k];
             if (!needs_bounce_light(scene, f)) continue;
             fn(BounceFragment{first + k, wx, wy, f, gather_site(scene, f),
-                              fragment_stream(scene.render.visibility.seed, wx + deep.x0, wy + deep.y0, k)});
+                              fragment_stream(tiling.seed, wx + deep.x0, wy + deep.y0, k)});
         }
     });
 }
-
-/// The gather settings a scene's render settings ask for (resolves the automatic AO distance).
-GatherSettings gather_settings(const Scene& scene);
 
 /// Brute force: gathers at every fragment of `deep` (tiles in parallel; guided by pilot gathers
 /// with GatherSettings::guided, guide.h); the result is parallel to deep.fragments and

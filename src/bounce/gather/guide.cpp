@@ -148,7 +148,7 @@ class Pilots {
     Pilots(const Scene& scene, const DeepBuffer& deep, const Gatherer& gatherer, Stats& stats)
         : bx0_(deep.x0 / kGuideBlock), by0_(deep.y0 / kGuideBlock), bw_(blocks(deep.x0, deep.width)) {
         guides_.resize(static_cast<size_t>(bw_) * static_cast<size_t>(blocks(deep.y0, deep.height)));
-        const uint64_t seed = hash_combine(scene.render.visibility.seed, 0x9170e5ULL);  // the pilots' own streams
+        const uint64_t seed = hash_combine(gatherer.settings().tiling.seed, 0x9170e5ULL);  // the pilots' own streams
         // At least kPilotRays, so that each bin's spread rests on a few dozen cells.
         const Gatherer pilot = gatherer.with_rays(std::max(gatherer.grid().rays(), kPilotRays));
         parallel_for_each_index(size_t{0}, guides_.size(), [&](size_t i) {
@@ -183,14 +183,14 @@ std::vector<Indirect> gather_every_fragment(const Scene& scene, const DeepBuffer
     std::vector<Indirect> out(deep.fragments.size());
     // The true surface: the displaced point and normal (the cache's un-displaced hemisphere is
     // its approximation, measured against this). Hair: its site.
-    for_each_bounce_fragment(scene, deep, sink, "gather", [&](const BounceFragment& b) {
+    for_each_bounce_fragment(scene, deep, gatherer.settings().tiling, sink, "gather", [&](const BounceFragment& b) {
         Counters& counters = stats.local();
         const DirectionGuide* guide = pilots ? pilots->at(deep.x0 + b.wx, deep.y0 + b.wy) : nullptr;
         const GatherResult g = guide && dot(guide->n, b.site.n) >= kGuideCos
                                    ? gatherer.gather_guided(b.site.p, b.site.n, b.rng, *guide, counters)
                                    : gatherer.gather(b.site.p, b.site.n, b.rng, counters);
         out[b.index] = {g.irradiance, g.ao, g.bent_normal, g.light_dir};
-        if (takes_back_light(scene, b.f))  // a plain gather: the pilots guide the front side's
+        if (takes_back_light(scene, b.f, gatherer.settings().ao))  // a plain gather: the pilots guide the front side's
             out[b.index].back = gatherer.gather(b.site.p, -b.site.n, back_side_stream(b.rng), counters).irradiance;
     });
     return out;

@@ -28,8 +28,8 @@ Color spot_filter(const Light& l, const Vec3& d) {
 
 }  // namespace
 
-DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel)
-    : scene_(scene), accel_(accel), emitters_(scene.lights.size()), scratch_(std::make_unique<PerThread<ScratchBuffer>>()) {
+DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel, const LightingSettings& settings)
+    : scene_(scene), accel_(accel), settings_(settings), emitters_(scene.lights.size()), scratch_(std::make_unique<PerThread<ScratchBuffer>>()) {
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const Light& l = scene.lights[i];
         if (l.type != LightType::Mesh) continue;
@@ -50,7 +50,7 @@ DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel)
 Color DirectLighting::irradiance(const Vec3& p, const Vec3& n, uint32_t object, const RandomStream& rng, int samples, Counters& counters,
                                  bool include_sky, const LightSampleFn* each, float hair_start) const {
     Color e(0);
-    const auto pick = static_cast<size_t>(std::max(0, scene_.render.lighting.light_pick));
+    const auto pick = static_cast<size_t>(std::max(0, settings_.light_pick));
     const auto takes = [&](const Light& l) { return (include_sky || l.type != LightType::Sky) && l.lights(object); };
     const auto pickable = [&](const Light& l) {
         return pick > 0 && (l.type == LightType::Point || l.type == LightType::Spot || l.type == LightType::Quad);
@@ -108,7 +108,7 @@ Color DirectLighting::picked_irradiance(std::span<const size_t> pool, const Vec3
         const double own = total > 0 ? (cdf[k] - (k ? cdf[k - 1] : 0)) / total : even;
         return 0.9 * own + 0.1 * even;
     };
-    const int picks = scene_.render.lighting.light_pick;
+    const int picks = settings_.light_pick;
     Color e(0);
     for (int j = 0; j < picks; ++j) {
         // A tenth of the picks' chance is spread evenly, the rest follows the estimates.

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "bounce/accel/accel.h"
+#include "bounce/config/settings.h"
 #include "bounce/core/random.h"
 #include "bounce/core/sampling.h"
 #include "bounce/core/scratch.h"
@@ -39,7 +40,9 @@ std::vector<Color> light_scales(const Scene& scene);
 /// Direct lighting over all of a scene's lights.
 class DirectLighting {
   public:
-    DirectLighting(const Scene& scene, const SceneAccel& accel);
+    /// `settings`: samples per light and how many lights a point picks (LightingSettings).
+    DirectLighting(const Scene& scene, const SceneAccel& accel, const LightingSettings& settings);
+    const LightingSettings& settings() const { return settings_; }
 
     /// Irradiance E arriving at `p` (on the fine surface of object `object`) through the
     /// hemisphere of unit normal `n`, from the lights linked to that object, with the shadows
@@ -95,6 +98,7 @@ class DirectLighting {
 
     const Scene& scene_;
     const SceneAccel& accel_;
+    LightingSettings settings_;
     std::vector<Emitter> emitters_;                      ///< parallel to scene.lights (empty for non-mesh lights)
     std::unique_ptr<PerThread<ScratchBuffer>> scratch_;  ///< many lights' pick pools, per thread
 };

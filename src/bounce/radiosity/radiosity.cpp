@@ -28,9 +28,7 @@ inline uint32_t lattice_index(int i, int j, int n) { return static_cast<uint32_t
 
 float effective_texel(const Scene& scene, const RadiositySettings& s) { return s.texel > 0 ? s.texel : scene.size() / 128.0f; }
 
-int effective_light_samples(const Scene& scene, const RadiositySettings& s) {
-    return s.light_samples > 0 ? s.light_samples : scene.render.lighting.light_samples;
-}
+int effective_light_samples(const RadiositySettings& s, int lighting_samples) { return s.light_samples > 0 ? s.light_samples : lighting_samples; }
 
 std::string file_name(size_t id, const std::string& name) {
     std::string safe;
@@ -105,11 +103,11 @@ void RadiosityMap::lookup_parts(uint32_t prim, float u, float v, bool front_side
 /// 2, its lattice levels off ceil's step; 3, a glTF file's diffuse transmission read.
 constexpr uint64_t kBakeVersion = 3;
 
-uint64_t RadiosityTextures::fingerprint(const Scene& scene, const RadiositySettings& s) {
+uint64_t RadiosityTextures::fingerprint(const Scene& scene, const RadiositySettings& s, int light_samples) {
     uint64_t h =
         hash_combine(scene.fingerprint({"objects", "materials", "lights"}, true), kBakeVersion);  // gloss, bumps, baked AO: not in the bake
     h = hash_combine(h, std::bit_cast<uint32_t>(effective_texel(scene, s)));
-    h = hash_combine(h, static_cast<uint64_t>(effective_light_samples(scene, s)));
+    h = hash_combine(h, static_cast<uint64_t>(effective_light_samples(s, light_samples)));
     return hash_combine(h, static_cast<uint64_t>(s.max_level));
 }
 
@@ -163,9 +161,10 @@ RadiosityTextures RadiosityTextures::lazy(const Scene& scene, const Materials& m
                                           const RadiositySettings& settings) {
     RadiosityTextures rt;
     rt.texel_size_ = effective_texel(scene, settings);
-    rt.fingerprint_ = fingerprint(scene, settings);
-    rt.sources_ = std::make_unique<Sources>(Sources{&scene, &materials, &lighting, effective_light_samples(scene, settings), {}});
-    if (scene.render.cache.light_parts) rt.sources_->scales = light_scales(scene);
+    const int samples = lighting.settings().light_samples;
+    rt.fingerprint_ = fingerprint(scene, settings, samples);
+    rt.sources_ = std::make_unique<Sources>(Sources{&scene, &materials, &lighting, effective_light_samples(settings, samples), {}});
+    if (settings.light_parts) rt.sources_->scales = light_scales(scene);
     for (size_t id = 0; id < scene.objects.size(); ++id) {
         rt.maps_.push_back(rt.laid_out(scene, id, settings.max_level));
         const size_t n = 2 * rt.maps_.back().level.size();

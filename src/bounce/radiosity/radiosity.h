@@ -109,8 +109,8 @@ class RadiosityTextures {
     /// swept bounds come between it and a light. Sides never baked stay lazy. `changed` receives
     /// the re-baked sides whose values moved, with by how much. `previous` is left as it was.
     static RadiosityTextures carry(const RadiosityTextures& previous, const Scene& scene, const Materials& materials,
-                                   const DirectLighting& lighting, const SceneChanges& changes, std::vector<LightChange>& changed,
-                                   Stats& stats);
+                                   const DirectLighting& lighting, const RadiositySettings& settings, const SceneChanges& changes,
+                                   std::vector<LightChange>& changed, Stats& stats);
     /// The sides baked here, with their values, as bytes for the other processes of an MPI job
     /// (docs/parallel.md), and taking theirs: sides are baked lazily by each process's own
     /// gathers, and a shot's next frame (which sides changed, the brightest texel) and a saved
@@ -120,8 +120,9 @@ class RadiosityTextures {
     /// The largest radiance (luminance) any baked side holds.
     float brightest() const;
 
-    /// Hash of what the bake depends on: geometry, materials, lights, settings.
-    static uint64_t fingerprint(const Scene& scene, const RadiositySettings& settings);
+    /// Hash of what the bake depends on: geometry, materials, lights, settings (`light_samples`:
+    /// the lighting's, which a bake takes where its own are 0).
+    static uint64_t fingerprint(const Scene& scene, const RadiositySettings& settings, int light_samples);
 
     /// Radiosity of object `id` at barycentrics (u, v) of triangle `prim`, on side `front`;
     /// bakes that side first if needed (its shadow rays count in `counters`).

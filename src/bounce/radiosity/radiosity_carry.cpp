@@ -66,11 +66,11 @@ float RadiosityTextures::brightest() const {
 }
 
 RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, const Scene& scene, const Materials& materials,
-                                           const DirectLighting& lighting, const SceneChanges& changes, std::vector<LightChange>& changed,
-                                           Stats& stats) {
+                                           const DirectLighting& lighting, const RadiositySettings& settings, const SceneChanges& changes,
+                                           std::vector<LightChange>& changed, Stats& stats) {
     RadiosityTextures rt;
     rt.texel_size_ = previous.texel_size_;
-    rt.fingerprint_ = fingerprint(scene, scene.render.radiosity);
+    rt.fingerprint_ = fingerprint(scene, settings, lighting.settings().light_samples);
     rt.sources_ = std::make_unique<Sources>(*previous.sources_);
     rt.sources_->scene = &scene, rt.sources_->materials = &materials, rt.sources_->lighting = &lighting;
     if (rt.has_parts()) rt.sources_->scales = light_scales(scene);  // the plan carries parts only between alike lights
@@ -86,7 +86,7 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
         const bool moved = changes.objects[id].kind != ObjectMotion::Kind::Static;
         if (changes.objects[id].kind == ObjectMotion::Kind::Deforming) {
             // Its triangles changed size: lay it out as this frame alone would, every side lazy.
-            rt.maps_[id] = rt.laid_out(scene, id, scene.render.radiosity.max_level);
+            rt.maps_[id] = rt.laid_out(scene, id, settings.max_level);
             for (size_t s = 0; s < n; ++s) rt.state_.back().store(s, 0, std::memory_order_relaxed);
             continue;
         }

@@ -22,12 +22,12 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const CacheStartStep&
     const Scene& scene = ctx.scene;
     CacheStartResult out;
     PhaseTimer t(ctx.stats, "cache read");
-    out.cache = std::make_unique<IrradianceCache>(scene.bounds(), scene.render.cache, scene.render.indirect.ao);
+    out.cache = std::make_unique<IrradianceCache>(scene.bounds(), plan.cache, step.ao);
     if (step.light_parts) out.cache->set_light_scales(light_scales(scene));
     if (step.start == CacheStart::Temporal) {
         // The previous frame's records and those still waiting from before, judged for this frame.
         out.judged = judge_records(*previous.cache, previous.waiting_records(), previous.kept_gathers(), *previous.scene, scene,
-                                   *plan.changes, radiosity.changed, radiosity.brightest);
+                                   *plan.changes, radiosity.changed, radiosity.brightest, plan.tiling.seed);
         out.cache->set_luminance_floor(previous.cache->luminance_floor());
         for (const Record& r : out.judged.valid) out.cache->insert_loaded(r);
         for (const Record& r : out.judged.fragment_valid) out.cache->insert_fragment_record(r);
@@ -42,7 +42,7 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const CacheStartStep&
         // Records that keep their light parts show today's light colours and intensities: the
         // bounce light of a light edit, exactly (docs/lighting-tool.md).
         std::vector<Color> scales = out.cache->light_scales();
-        if (!keep && from.made_like(scene.bounds(), scene.render.cache, scene.render.indirect.ao)) {
+        if (!keep && from.made_like(scene.bounds(), plan.cache, step.ao)) {
             out.cache = from.clone();  // the index inserting every record again would build
         } else {
             out.cache->set_luminance_floor(from.luminance_floor());

@@ -32,8 +32,8 @@ std::array<int, 4> window_of(const DeepBuffer& deep);
 
 /// Visibility of `window` over the processes: each traces its tiles; with `everyone`, every
 /// process gets every tile's fragments, else only its own (the other pixels empty).
-DeepBuffer visibility_in_tiles(Communicator& comm, const Scene& scene, const SceneAccel& accel, Stats& stats,
-                               const std::array<int, 4>& window, bool everyone);
+DeepBuffer visibility_in_tiles(Communicator& comm, const Scene& scene, const SceneAccel& accel, const VisibilitySettings& settings,
+                               int tile_size, Stats& stats, const std::array<int, 4>& window, bool everyone);
 
 /// The light of the fragments of this process's tiles of `deep` (the others' left zero), each
 /// tile's made by `light(sub_window)`.

@@ -85,18 +85,19 @@ FrameFiles sequence_frame(const FrameFiles& patterns, int first, int frame) {
     return f;
 }
 
-std::vector<std::string> frame_layers(const Scene& scene, bool with_cache) {
+std::vector<std::string> frame_layers(const FramePlan& plan) {
     std::vector<std::string> layers{"beauty", "albedo", "N", "depth"};
-    const IndirectSettings& ind = scene.render.indirect;
-    if (!ind.ao) layers.push_back("direct");
-    if (ind.any()) layers.insert(layers.end(), {"indirect", "ao", "bentnormal"});
-    if (ind.gi == GiMode::Cache || with_cache) layers.push_back("records");
-    if (ind.gi == GiMode::Cache && refinement_runs(scene)) layers.push_back("refined");
+    const IndirectFrom indirect = plan.indirect();
+    if (!(plan.shade.ao && indirect != IndirectFrom::None)) layers.push_back("direct");
+    if (indirect != IndirectFrom::None) layers.insert(layers.end(), {"indirect", "ao", "bentnormal"});
+    if (plan.cache_start() != CacheStart::None) layers.push_back("records");
+    const ShadeStep* shade = plan.find<ShadeStep>();
+    if (indirect == IndirectFrom::Cache && shade && shade->refined_layer) layers.push_back("refined");
     return layers;
 }
 
-void check_show_layer(const std::string& show, const Scene& scene, bool with_cache) {
-    const std::vector<std::string> layers = frame_layers(scene, with_cache);
+void check_show_layer(const std::string& show, const FramePlan& plan) {
+    const std::vector<std::string> layers = frame_layers(plan);
     if (std::find(layers.begin(), layers.end(), show) != layers.end()) return;
     if (show == "records")
         throw InputError("command line", "--show " + show, "no records to show (render with --gi cache or give --cache-in)");

@@ -45,10 +45,10 @@ std::pair<int, int> parse_frame_range(const std::string& text, const std::string
 /// comes from the previous frame's cache output (records are reused, new ones added).
 FrameFiles sequence_frame(const FrameFiles& patterns, int first, int frame);
 
-/// The layers a render of `scene` writes (with_cache: a cache file is read for its records).
-std::vector<std::string> frame_layers(const Scene& scene, bool with_cache);
-/// InputError("command line", "--show ...") unless the render of `scene` writes layer `show`.
-void check_show_layer(const std::string& show, const Scene& scene, bool with_cache);
+/// The layers a frame of `plan` writes (records: a cache, or a cache file read for them).
+std::vector<std::string> frame_layers(const FramePlan& plan);
+/// InputError("command line", "--show ...") unless a frame of `plan` writes layer `show`.
+void check_show_layer(const std::string& show, const FramePlan& plan);
 /// InputError(base) unless `base` is a full-frame EXR rendered from this scene's camera and
 /// objects (its lights and materials may differ: that is what a lighter's crop changes).
 void check_base(const std::string& base, const Scene& scene);

@@ -29,6 +29,7 @@ namespace bounce {
 /// What every pass of a frame receives.
 struct FrameContext {
     const Scene& scene;
+    const FramePlan& plan;  ///< the settings each pass takes (never the scene's)
     const SceneAccel& accel;
     const Materials& materials;
     const DirectLighting& lighting;
@@ -83,7 +84,7 @@ struct SpecularSitesResult {
     std::vector<Indirect> brute;
     bool any() const { return !sites.fragments.empty(); }
 };
-SpecularSitesResult specular_sites_pass(const FrameContext& ctx, const DeepBuffer& shaded);
+SpecularSitesResult specular_sites_pass(const FrameContext& ctx, const SpecularSitesStep& step, const DeepBuffer& shaded);
 /// The light the shading pass gives a window's sites: the cache's interpolation (its misses
 /// counted), brute force's gathers, or the radiosity textures, as `from` says.
 struct SiteLightResult {
@@ -139,7 +140,7 @@ ShadeResult shading_pass(const FrameContext& ctx, const ShadeStep& step, const D
                          const std::vector<Indirect>* brute, const SpecularSitesResult& specular, const RadiosityTextures* radiosity,
                          const std::function<void(const Image&)>& quick_look);
 
-/// The scene's gather settings for this frame's gathers: with gradients (`record_terms`, and
+/// The plan's gather settings for this frame's gathers: with gradients (`record_terms`, and
 /// the Hessian's terms with `hessian`) for records, without for brute force, refinement and the
 /// correction; the frame's cancel token.
 GatherSettings frame_gather_settings(const FrameContext& ctx, bool record_terms, bool hessian = false);

@@ -18,10 +18,7 @@
 
 namespace bounce {
 
-int crop_margin(const Scene& scene) {
-    const CacheSettings& c = scene.render.cache;
-    return static_cast<int>(std::ceil(c.max_spacing * c.shading_reach)) + 1;
-}
+int crop_margin(const CacheSettings& c) { return static_cast<int>(std::ceil(c.max_spacing * c.shading_reach)) + 1; }
 
 namespace {
 
@@ -185,6 +182,30 @@ std::optional<RadiositySource> radiosity_source(const Inputs& in, Gathering g) {
     return s;
 }
 
+/// Whether the refinement pass has anything to judge: `refine` > 0, or `refine_tilt` > 0 with
+/// records on the un-displaced surface of a displaced object.
+bool refinement_runs(const Scene& scene) {
+    const CacheSettings& cs = scene.render.cache;
+    if (cs.refine > 0) return true;
+    if (cs.refine_tilt <= 0 || cs.displaced_records != RecordSurface::Undisplaced) return false;
+    return std::any_of(scene.objects.begin(), scene.objects.end(), [](const Object& o) { return o.displacement_bound > 0; });
+}
+
+/// Every gather's settings: the automatic AO distance resolved; light parts and what records
+/// predict for the control variate only where the cache keeps them.
+GatherSettings gather_settings(const Scene& scene, const FrameTiling& tiling) {
+    const IndirectSettings& r = scene.render.indirect;
+    const CacheSettings& c = scene.render.cache;
+    GatherSettings g;
+    static_cast<IndirectSettings&>(g) = r;
+    g.tiling = tiling;
+    g.ao_distance = r.ao_distance >= 0 ? r.ao_distance : 0.1f * scene.size();
+    g.light_parts = c.light_parts && r.gi == GiMode::Cache;
+    g.prediction = c.correction_rays > 0 && r.gi == GiMode::Cache;
+    g.prediction_hits = g.prediction && c.correction_prediction == CorrectionPrediction::Hits;
+    return g;
+}
+
 /// Whether gathers light the sites of mirrors and glass (indirect_at_specular_hits = cache).
 bool sites_lit_by_gathers(const Scene& scene) {
     return scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Cache && scene.render.indirect.any() &&
@@ -194,7 +215,7 @@ bool sites_lit_by_gathers(const Scene& scene) {
 /// What the frame cannot do, refused before any work: a frame larger than memory allows, and
 /// what an MPI job's ranks cannot make together yet.
 void refuse_what_cannot_run(const Scene& scene, const FramePlan& plan, const RenderRequest& request) {
-    if (double need = estimate_render_bytes(scene), have = available_memory_bytes(); need > 0.8 * have)
+    if (double need = estimate_render_bytes(plan.window), have = available_memory_bytes(); need > 0.8 * have)
         throw InputError(
             scene.path, "camera.resolution",
             fmt::format("a {}x{} frame needs about {:.2f} GiB; it may use {:.2f} GiB (80 % of the {:.2f} GiB available; "
@@ -230,6 +251,7 @@ void add_record_gathers(FramePlan& plan, const Inputs& in, std::optional<Radiosi
     // moving object may meet traced again, every hit re-shaded) rather than gathered again.
     g.keep_hits = in.shot && (keys_light(scene.keyed) || scene.objects_move());
     g.preview = scene.render.parallel.preview && in.request.preview != nullptr;
+    g.sharing = scene.render.parallel.cache_sharing;
     plan.steps.push_back({g, when});
     if (refinement_runs(scene)) {
         RefineStep r;
@@ -240,6 +262,7 @@ void add_record_gathers(FramePlan& plan, const Inputs& in, std::optional<Radiosi
         r.keep_gathers = in.shot && c.temporal_refine_reuse > 0 && !in.parts;
         r.keep_rays = g.keep_hits || r.keep_gathers;
         r.refined_before = start == CacheStart::Temporal && plan.changes && plan.changes->camera;
+        r.reuse = c.temporal_refine_reuse;
         plan.steps.push_back({r, when});
     }
     if (sites) plan.steps.push_back({GatherSitesStep{g.hessian, g.keep_hits}, when});
@@ -271,7 +294,7 @@ void add_light_steps(FramePlan& plan, const Inputs& in, Gathering g, std::option
     const Scene& scene = in.scene;
     const bool specular = std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) { return m.is_specular(); });
     const bool sites = specular && sites_lit_by_gathers(scene);
-    if (sites) plan.steps.push_back({SpecularSitesStep{}});
+    if (sites) plan.steps.push_back({SpecularSitesStep{scene.render.shading.specular_depth}});
     // Paths to mirrors and glass look their sites up in the textures: made before any shading.
     if (radiosity && specular && scene.render.shading.indirect_at_specular_hits == SpecularHitLight::Radiosity) {
         plan.steps.push_back({*radiosity});
@@ -305,12 +328,17 @@ void add_light_steps(FramePlan& plan, const Inputs& in, Gathering g, std::option
 FramePlan plan_frame(const Scene& scene, const FrameState& previous, const RenderRequest& request) {
     FramePlan plan;
     plan.frame = request.frame;
-    plan.window = frame_window(scene);
+    const RenderSettings& rs = scene.render;
+    plan.window = frame_window(scene.camera, rs.visibility);
+    plan.tiling = {rs.visibility.seed, rs.parallel.tile_size, rs.parallel.tile_order};
+    plan.gather = gather_settings(scene, plan.tiling);
+    plan.cache = rs.cache;
+    plan.shade = {plan.tiling, rs.shading, rs.indirect.ao};
     plan.gather_window = plan.window;
     const bool crop = scene.render.visibility.has_crop();
     const bool cached = scene.render.indirect.gi == GiMode::Cache;
     if (crop && cached) {
-        const int m = crop_margin(scene);
+        const int m = crop_margin(rs.cache);
         const auto& w = plan.window;
         plan.gather_window = {std::max(0, w[0] - m), std::min(scene.camera.width, w[1] + m), std::max(0, w[2] - m),
                               std::min(scene.camera.height, w[3] + m)};
@@ -320,21 +348,26 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
     plan.threads = scene.render.parallel.threads > 0 ? scene.render.parallel.threads : tbb::this_task_arena::max_concurrency();
     const Inputs in{scene, previous, request, shot, plan.changes && plan.changes->comparable, cached, scene.render.cache.light_parts};
 
-    plan.steps.push_back({AccelStep{accel_source(in, plan.changes.get())}});
+    plan.steps.push_back({AccelStep{accel_source(in, plan.changes.get()), rs.lighting}});
     const DeepSource deep = deep_source(in);
     plan.deep_out = !request.deep_out.empty() ? request.deep_out : deep == DeepSource::Trace ? request.deep_out_if_traced : "";
-    plan.steps.push_back({VisibilityStep{deep, deep == DeepSource::ReadFile ? request.deep_in : "", crop, crop || !plan.deep_out.empty()}});
+    plan.steps.push_back(
+        {VisibilityStep{deep, rs.visibility, deep == DeepSource::ReadFile ? request.deep_in : "", crop, crop || !plan.deep_out.empty()}});
 
     const CacheStart start = cache_start(in);
     const Gathering g = gathering(in, start);
     std::optional<RadiosityStep> radiosity;
-    if (const auto source = radiosity_source(in, g)) radiosity = RadiosityStep{*source, scene.render.radiosity.folder};
+    if (const auto source = radiosity_source(in, g)) {
+        radiosity = RadiosityStep{*source, rs.radiosity, rs.radiosity.folder};
+        radiosity->settings.light_parts = in.parts;
+    }
     // A carried radiosity says what light changed, which the records' judgement needs first.
     const bool carried = radiosity && radiosity->source == RadiositySource::Carry;
     if (carried) plan.steps.push_back({*radiosity});
     if (start != CacheStart::None) {
         CacheStartStep c;
         c.start = start;
+        c.ao = rs.indirect.ao;
         if (start == CacheStart::File) c.cache_in = request.cache_in;
         c.flush_crop = request.kind == FrameKind::Regather && crop && start != CacheStart::Empty;
         c.force = request.force;

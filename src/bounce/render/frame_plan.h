@@ -15,11 +15,14 @@
 #include <vector>
 
 #include "bounce/cache/cache_identity.h"
+#include "bounce/config/settings.h"
 #include "bounce/core/image.h"
 #include "bounce/core/progress.h"
 #include "bounce/deep/deep_buffer.h"
+#include "bounce/gather/gather.h"
 #include "bounce/scene/changes.h"
 #include "bounce/scene/scene.h"
+#include "bounce/shade/shade.h"
 
 namespace bounce {
 
@@ -105,6 +108,7 @@ enum class AccelSource : uint8_t {
 };
 struct AccelStep {
     AccelSource source = AccelSource::Build;
+    LightingSettings lighting;  ///< the ray offset, and the frame's direct lighting built with the BVHs
 };
 
 /// Where the frame's deep buffer comes from.
@@ -115,6 +119,7 @@ enum class DeepSource : uint8_t {
 };
 struct VisibilityStep {
     DeepSource source = DeepSource::Trace;
+    VisibilitySettings settings;  ///< samples, seed and crop of a traced deep buffer
     std::string deep_in;
     bool crop = false;  ///< the shaded window is a crop of the gathered one
     /// Under MPI every rank keeps every tile's fragments (a crop's tiles differ from the gathered
@@ -132,7 +137,8 @@ enum class RadiositySource : uint8_t {
 /// Radiosity textures for the gathers' hits (without this step, hits are shaded with shadow rays).
 struct RadiosityStep {
     RadiositySource source = RadiositySource::Bake;
-    std::string folder;  ///< render.radiosity_textures (Load)
+    RadiositySettings settings;  ///< with light_parts as the records keep them
+    std::string folder;          ///< render.radiosity_textures (Load)
 };
 /// After the last pass that may bake sides: MPI ranks exchange the sides each baked (textures
 /// saved by rank 0, or carried to a shot's next frame, whose list of changed sides must be the
@@ -152,6 +158,7 @@ enum class CacheStart : uint8_t {
 };
 struct CacheStartStep {
     CacheStart start = CacheStart::Empty;
+    bool ao = false;  ///< records of AO, not of irradiance
     std::string cache_in;
     bool flush_crop = false;  ///< leave out the starting cache's records seen inside the crop
     bool force = false;
@@ -161,7 +168,9 @@ struct CacheStartStep {
 
 /// Mirror and glass paths traced from the visible fragments to the sites where gathers light
 /// them (a scene with specular materials whose bounce light comes from gathers).
-struct SpecularSitesStep {};
+struct SpecularSitesStep {
+    int depth = 0;  ///< bounces a path follows (render.specular_depth)
+};
 
 /// The gathering pass: records where fragments need them, earlier frames' stale records redone
 /// where they are needed.
@@ -171,6 +180,7 @@ struct GatherRecordsStep {
     float own_weight = 0;    ///< the weight at which one record covers a point alone (0: the settings')
     bool keep_hits = false;  ///< records keep their gather's hits: the shot's lights change, re-shading is cheaper
     bool preview = false;    ///< progressive images through the request's callback
+    CacheSharing sharing = CacheSharing::Shared;
 };
 /// Per-fragment refinement where the records disagree.
 struct RefineStep {
@@ -179,6 +189,7 @@ struct RefineStep {
     bool keep_gathers = false;    ///< refinement's gathers kept for the next frames to reuse (EarlierGathers)
     bool refined_before = false;  ///< a moving camera's frame: the fragments refined the frame before keep their gathers (hysteresis)
     bool preview = false;
+    float reuse = 0;  ///< keep_gathers: how far (pixels) an earlier gather lends its rays (render.temporal_refine_reuse)
 };
 /// Records where the cache does not cover the sites of mirrors and glass.
 struct GatherSitesStep {
@@ -222,6 +233,11 @@ struct PlannedStep {
 
 struct FramePlan {
     int frame = 0;
+    /// The settings the plan resolved for its passes, frame-wide; each step carries its own.
+    FrameTiling tiling;     ///< every per-pixel pass's seed and tiles
+    GatherSettings gather;  ///< every gather's (steps set record_terms and hessian; AO distance resolved)
+    CacheSettings cache;    ///< the cache's: records, refinement, the temporal rules
+    ShadeOptions shade;     ///< the shading pass's and the previews'
     std::array<int, 4> window{};         ///< pixels shaded: the crop or the frame (x0, x1, y0, y1)
     std::array<int, 4> gather_window{};  ///< pixels gathered in: the window and its margin
     std::string deep_out;                ///< where the front end writes the gathered window's deep buffer
@@ -237,6 +253,13 @@ struct FramePlan {
         for (const PlannedStep& s : steps)
             if (const S* p = std::get_if<S>(&s.step)) return p;
         return nullptr;
+    }
+    /// The light the (last) shading step gives the fragments.
+    IndirectFrom indirect() const {
+        IndirectFrom out = IndirectFrom::None;
+        for (const PlannedStep& s : steps)
+            if (const ShadeStep* p = std::get_if<ShadeStep>(&s.step)) out = p->indirect;
+        return out;
     }
     /// Where the cache starts (None without a cache step).
     CacheStart cache_start() const {
@@ -254,6 +277,6 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
 
 /// Pixels outside the crop a margin gathers in: records reach at most max_spacing pixels
 /// (times shading_reach in the shading pass).
-int crop_margin(const Scene& scene);
+int crop_margin(const CacheSettings& settings);
 
 }  // namespace bounce

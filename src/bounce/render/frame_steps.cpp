@@ -44,15 +44,15 @@ void FrameRun::step(const AccelStep& s) {
         result_.accel = previous_.accel;
     } else {
         PhaseTimer t(stats_, "build BVH");
-        result_.accel = std::make_shared<const SceneAccel>(scene_, s.source == AccelSource::Update ? previous_.accel.get() : nullptr);
+        result_.accel =
+            std::make_shared<const SceneAccel>(scene_, s.lighting, s.source == AccelSource::Update ? previous_.accel.get() : nullptr);
     }
     const SceneAccel& accel = *result_.accel;
     if (const BvhReuse r = accel.reuse(); r.kept + r.refit + r.built > 0)
         stats_.set("bvh_parts", nlohmann::json{{"kept", r.kept}, {"refit", r.refit}, {"built", r.built}});
     stats_.set("ray_offset", accel.ray_offset());
-    lighting_.emplace(scene_, accel);
-    ctx_.emplace(
-        FrameContext{scene_, accel, materials_, *lighting_, stats_, progress_, request_.cancel, request_.comm ? *request_.comm : alone_});
+    lighting_.emplace(scene_, accel, s.lighting);
+    ctx_.emplace(FrameContext{scene_, plan_, accel, materials_, *lighting_, stats_, progress_, request_.cancel, request_.comm ? *request_.comm : alone_});
 }
 
 void FrameRun::step(const VisibilityStep& s) { deep_ = visibility_pass(ctx(), s, plan_, previous_); }
@@ -70,7 +70,7 @@ void FrameRun::step(const CacheStartStep& s) {
     if (!start_.differences.empty()) stats_.set("cache_reused_with_other_settings", nlohmann::json(start_.differences));
 }
 
-void FrameRun::step(const SpecularSitesStep&) { specular_ = specular_sites_pass(ctx(), deep_.shaded()); }
+void FrameRun::step(const SpecularSitesStep& s) { specular_ = specular_sites_pass(ctx(), s, deep_.shaded()); }
 
 template <class F>
 void FrameRun::timed_gather(F&& gather) {

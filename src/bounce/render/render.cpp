@@ -23,7 +23,7 @@
 #include "bounce/gather/gather.h"
 #include "bounce/lighting/lighting.h"
 #include "bounce/radiosity/radiosity.h"
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 #include "bounce/shade/layers.h"
 #include "bounce/shade/shade.h"
 
@@ -56,8 +56,7 @@ void validate_deep_for_scene(const DeepBuffer& deep, const Scene& scene, const s
     }
 }
 
-double estimate_render_bytes(const Scene& scene) {
-    auto w = frame_window(scene);
+double estimate_render_bytes(const std::array<int, 4>& w) {
     const double pixels = static_cast<double>(w[1] - w[0]) * (w[3] - w[2]);
     // About 1.3 fragments per pixel (edges), the deep buffer's offsets, ~24 float channels of
     // image layers, and per-fragment indirect light and direct radiance.

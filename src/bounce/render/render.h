@@ -83,8 +83,8 @@ Image paste_over(const Image& base, const Image& window, const std::string& base
 /// Checks that a deep buffer belongs to `scene` and that its ids are in range.
 void validate_deep_for_scene(const DeepBuffer& deep, const Scene& scene, const std::string& path);
 
-/// Rough bytes a render of `scene` holds at once (deep buffer, image layers, per-fragment
-/// light); render() refuses a frame whose estimate exceeds the memory available.
-double estimate_render_bytes(const Scene& scene);
+/// Rough bytes a render of window `w` ({x0, x1, y0, y1}) holds at once (deep buffer, image
+/// layers, per-fragment light); the plan refuses a frame whose estimate exceeds the memory available.
+double estimate_render_bytes(const std::array<int, 4>& w);
 
 }  // namespace bounce

@@ -16,8 +16,13 @@ void Shot::keep(RenderResult& result, const std::shared_ptr<const Scene>& scene)
 }
 
 void Shot::start_from(const std::shared_ptr<const Scene>& before, const std::string& cache_file) {
-    auto cache = std::make_shared<IrradianceCache>(before->bounds(), before->render.cache, before->render.indirect.ao);
-    if (before->render.cache.light_parts) cache->set_light_scales(light_scales(*before));
+    // The cache the frame before would have left: made as its plan makes one.
+    RenderRequest request;
+    request.kind = FrameKind::ShotFrame;
+    const FramePlan plan = plan_frame(*before, {}, request);
+    const CacheStartStep* start = plan.find<CacheStartStep>();
+    auto cache = std::make_shared<IrradianceCache>(before->bounds(), plan.cache, start && start->ao);
+    if (start && start->light_parts) cache->set_light_scales(light_scales(*before));
     // Its own frame's scene and settings: only other settings are refused.
     load_cache(cache_file, *before, true, CacheReuse::Strict, *cache);
     state_ = {};

@@ -51,12 +51,13 @@ VisibilityResult visibility_pass(const FrameContext& ctx, const VisibilityStep& 
             check_camera_sees_geometry(scene, ctx.accel);
             PhaseTimer t(ctx.stats, "visibility");
             if (ctx.comm.size() == 1) {
-                out.gathered = render_visibility(scene, ctx.accel, ctx.stats, ctx.progress, plan.gather_window);
+                out.gathered = render_visibility(scene, ctx.accel, step.settings, ctx.stats, ctx.progress, plan.gather_window);
                 break;
             }
             // Each process keeps the fragments of its own tiles, unless a crop's tiles differ
             // from the gathered window's or rank 0 writes the deep file.
-            out.gathered = visibility_in_tiles(ctx.comm, scene, ctx.accel, ctx.stats, plan.gather_window, step.every_tile);
+            out.gathered =
+                visibility_in_tiles(ctx.comm, scene, ctx.accel, step.settings, plan.tiling.tile_size, ctx.stats, plan.gather_window, step.every_tile);
             break;
         }
     }

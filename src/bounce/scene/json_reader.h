@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "bounce/core/json_values.h"
 #include "bounce/core/math.h"
 #include "bounce/scene/load_resources.h"
 #include "bounce/scene/scene.h"
@@ -63,14 +64,6 @@ std::string read_text_file(const std::string& path);
 nlohmann::json parse_json_text(const std::string& text, const std::string& path);
 /// Applies an override to `doc`; returns the JSON pointer it set.
 std::string apply_override(nlohmann::json& doc, const Override& o);
-
-const char* json_type_name(const nlohmann::json& j);
-
-/// `v` as the float it becomes: a finite number that fits a float, inside [lo, hi] (compared
-/// before rounding); otherwise calls `fail(message)`, which must throw.
-float json_float(const nlohmann::json& v, double lo, double hi, const std::function<void(const std::string&)>& fail);
-/// `v` as an integer inside [lo, hi]; otherwise calls `fail(message)`, which must throw.
-int64_t json_integer(const nlohmann::json& v, double lo, double hi, const std::function<void(const std::string&)>& fail);
 
 /// A JSON object whose keys must be among `allowed` (unknown keys fail with a suggestion).
 class JsonReader {

@@ -6,7 +6,7 @@
 #include <numbers>
 
 #include "bounce/core/math.h"
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 
 namespace bounce {
 

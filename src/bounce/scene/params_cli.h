@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "bounce/scene/json_reader.h"
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 
 namespace bounce {
 

@@ -21,7 +21,7 @@
 #include "bounce/scene/mesh_import.h"
 #include "bounce/scene/instance_reader.h"
 #include "bounce/scene/object_reader.h"
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 
 namespace bounce {
 

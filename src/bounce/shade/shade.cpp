@@ -12,7 +12,7 @@ namespace {
 
 /// Emission plus direct light reflected by the fragment's bumped, glossy surface towards wo;
 /// with `parts`, also its components (per light as well when they are sized).
-Color fragment_direct(const Scene& scene, const Materials& materials, const DirectLighting& lighting, const Fragment& f,
+Color fragment_direct(const Materials& materials, const DirectLighting& lighting, uint64_t seed, const Fragment& f,
                       const SurfaceShading& surf, const Vec3& wo, int x, int y, uint32_t k, bool include_sky, Counters& counters,
                       ShadedParts* parts) {
     // Glossy surfaces reflect the same light samples the diffuse estimate draws.
@@ -23,8 +23,9 @@ Color fragment_direct(const Scene& scene, const Materials& materials, const Dire
         gloss += g;
         if (per_light) parts->light_diffuse[light] += surf.albedo * e * kInvPi, parts->light_specular[light] += g;
     };
-    const RandomStream rng = fragment_stream(scene.render.visibility.seed, x, y, k);
-    Color e = lighting.irradiance(f.p, surf.normal, f.object, rng, scene.render.lighting.light_samples, counters, include_sky,
+    const RandomStream rng = fragment_stream(seed, x, y, k);
+    const int samples = lighting.settings().light_samples;
+    Color e = lighting.irradiance(f.p, surf.normal, f.object, rng, samples, counters, include_sky,
                                   glossy || per_light ? &each : nullptr);
     const Color emission = materials.emission(f.material, f.uv);
     Color diffuse = surf.albedo * e * kInvPi;
@@ -34,7 +35,7 @@ Color fragment_direct(const Scene& scene, const Materials& materials, const Dire
             parts->light_diffuse[light] += surf.translucency * eb * kInvPi;
         };
         diffuse += surf.translucency *
-                   lighting.irradiance(f.p, -surf.normal, f.object, back_side_stream(rng), scene.render.lighting.light_samples, counters,
+                   lighting.irradiance(f.p, -surf.normal, f.object, back_side_stream(rng), samples, counters,
                                        include_sky, per_light ? &through : nullptr) *
                    kInvPi;
     }
@@ -45,8 +46,8 @@ Color fragment_direct(const Scene& scene, const Materials& materials, const Dire
 /// Emission-free direct light reflected by a strand towards wo: Kajiya-Kay over light samples
 /// from both sides of the strand (light reaches a fibre from the whole sphere), with shadow
 /// rays that skip the strand itself.
-Color hair_direct(const Scene& scene, const DirectLighting& lighting, const Fragment& f, const Vec3& wo, int x, int y, uint32_t k,
-                  bool include_sky, Counters& counters, ShadedParts* parts) {
+Color hair_direct(const Scene& scene, const DirectLighting& lighting, uint64_t seed, const Fragment& f, const Vec3& wo, int x, int y,
+                  uint32_t k, bool include_sky, Counters& counters, ShadedParts* parts) {
     const Fur& fur = *scene.objects[f.object].fur;
     const Color albedo = fur.params.albedo(f.strand_v);
     Color out(0);
@@ -60,8 +61,8 @@ Color hair_direct(const Scene& scene, const DirectLighting& lighting, const Frag
             out += kk;
             if (parts && !parts->light_diffuse.empty()) parts->light_diffuse[light] += kk;
         };
-        lighting.irradiance(f.p, n, f.object, fragment_stream(scene.render.visibility.seed, x, y, side ? k | 0x80000000u : k),
-                            scene.render.lighting.light_samples, counters, include_sky, &each, fur.max_width());
+        lighting.irradiance(f.p, n, f.object, fragment_stream(seed, x, y, side ? k | 0x80000000u : k), lighting.settings().light_samples,
+                            counters, include_sky, &each, fur.max_width());
     }
     if (parts) parts->diffuse_direct = out;  // a strand's lobes are one (Kajiya-Kay): all in diffuse
     return out;
@@ -73,11 +74,11 @@ SurfaceShading fragment_surface(const Materials& materials, const Fragment& f) {
 }
 
 /// Direct light (and emission) leaving fragment k of pixel (x, y) towards wo: a strand's or a surface's.
-Color direct_at(const Scene& scene, const Materials& materials, const DirectLighting& lighting, const Fragment& f,
+Color direct_at(const Scene& scene, const Materials& materials, const DirectLighting& lighting, uint64_t seed, const Fragment& f,
                 const SurfaceShading& surf, const Vec3& wo, int x, int y, uint32_t k, bool include_sky, Counters& counters,
                 ShadedParts* parts = nullptr) {
-    return f.is_hair() ? hair_direct(scene, lighting, f, wo, x, y, k, include_sky, counters, parts)
-                       : fragment_direct(scene, materials, lighting, f, surf, wo, x, y, k, include_sky, counters, parts);
+    return f.is_hair() ? hair_direct(scene, lighting, seed, f, wo, x, y, k, include_sky, counters, parts)
+                       : fragment_direct(materials, lighting, seed, f, surf, wo, x, y, k, include_sky, counters, parts);
 }
 
 /// The light direction of cached indirect light (luminance-weighted mean), or `fallback`.
@@ -106,6 +107,7 @@ struct PixelSum {
 /// The shading pass's fixed inputs.
 struct ShadeContext {
     const Scene& scene;
+    const ShadeOptions& options;
     const Materials& materials;
     const DirectLighting& lighting;
     const std::vector<Indirect>* indirect;
@@ -136,8 +138,9 @@ Color site_radiance(const ShadeContext& c, const PathSite& s, int x, int y, uint
     surf.translucency = c.materials.translucency(f.material, f.uv);
     surf.specular = m.specular, surf.roughness = m.roughness, surf.normal = f.n;
     Color out =
-        fragment_direct(c.scene, c.materials, c.lighting, f, surf, s.wo, x, y, kSiteStream + j, c.indirect == nullptr, counters, nullptr);
-    if (in) out += indirect_radiance(*in, f.n, surf, s.wo, c.scene.render.shading.light_per_channel) + transmitted_indirect(surf, *in);
+        fragment_direct(c.materials, c.lighting, c.options.tiling.seed, f, surf, s.wo, x, y, kSiteStream + j, c.indirect == nullptr, counters,
+                        nullptr);
+    if (in) out += indirect_radiance(*in, f.n, surf, s.wo, c.options.shading.light_per_channel) + transmitted_indirect(surf, *in);
     return out;
 }
 
@@ -198,7 +201,7 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
             lobes.diffuse = hair_indirect(f.tangent, indirect_direction(in, f.n_base), f.n_base, wo, in.irradiance, alb,
                                           fur->params.specular, fur->params.specular_exponent);
         else
-            lobes = indirect_lobes(in, f.n, surf, wo, c.scene.render.shading.light_per_channel);
+            lobes = indirect_lobes(in, f.n, surf, wo, c.options.shading.light_per_channel);
         lobes.diffuse += transmitted_indirect(surf, in);
         lobes.diffuse *= base, lobes.specular *= base;
         sum.beauty += (lobes.diffuse + lobes.specular) * w;
@@ -209,7 +212,7 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
         ShadedParts parts = comps.on() ? comps.parts() : ShadedParts{};
         const Color radiance =
             base * (c.direct_radiance && !comps.on() ? (*c.direct_radiance)[at]
-                                                     : direct_at(c.scene, c.materials, c.lighting, f, surf, wo, x, y, k,
+                                                     : direct_at(c.scene, c.materials, c.lighting, c.options.tiling.seed, f, surf, wo, x, y, k,
                                                                  c.indirect == nullptr, counters, comps.on() ? &parts : nullptr));
         parts.scale(base);
         sum.direct += radiance * f.weight;
@@ -227,10 +230,10 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
 }  // namespace
 
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials, const DirectLighting& lighting,
-            const std::vector<Indirect>* indirect, Stats& stats, ProgressSink* sink, const std::vector<Color>* direct_radiance,
+            const ShadeOptions& options, const std::vector<Indirect>* indirect, Stats& stats, ProgressSink* sink, const std::vector<Color>* direct_radiance,
             const SiteLight& sites, std::vector<Color>* colours, const LightShares* shares) {
     if (colours) colours->assign(deep.fragments.size(), Color(0));
-    const bool ao_only = scene.render.indirect.ao && indirect;
+    const bool ao_only = options.ao && indirect;
     Image img;
     img.full_width = deep.full_width, img.full_height = deep.full_height;
     img.x0 = deep.x0, img.y0 = deep.y0, img.width = deep.width, img.height = deep.height;
@@ -243,12 +246,12 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
     Layer& normal = img.add_layer("N", {"N.X", "N.Y", "N.Z"});
     Layer& depth = img.add_layer("depth", {"Z"});
     // AO-only renders have no components to split.
-    ComponentLayers comps(img, scene, scene.render.shading.layers == LayerSet::Components && !ao_only, shares != nullptr);
+    ComponentLayers comps(img, scene, options.shading.layers == LayerSet::Components && !ao_only, shares != nullptr);
 
     CameraRays camera(scene.camera);
-    const SpecularTracer tracer(scene, lighting.accel(), lighting, materials);
+    const SpecularTracer tracer(scene, lighting.accel(), lighting, materials, options.shading.specular_depth);
     const bool specular = tracer.active() && !ao_only;  // AO-only renders show no reflections
-    const ShadeContext ctx{scene, materials, lighting, indirect, direct_radiance, camera, ao_only, tracer, sites, shares};
+    const ShadeContext ctx{scene, options, materials, lighting, indirect, direct_radiance, camera, ao_only, tracer, sites, shares};
     auto put3 = [&](Layer* l, int x, int y, const Vec3& v) {
         if (!l) return;
         float* p = img.at(*l, x, y);
@@ -256,7 +259,7 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
     };
 
     PerThread<PixelPaths> paths_per_thread;  // a pixel's specular paths, reused by the thread's next pixel
-    for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, sink, "shading", [&](int wx, int wy, size_t first) {
+    for_each_pixel_in_tiles(deep, options.tiling.tile_size, sink, "shading", [&](int wx, int wy, size_t first) {
         Counters& counters = stats.local();
         int x = wx + deep.x0, y = wy + deep.y0;
         PixelSum sum;
@@ -292,7 +295,7 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
 }
 
 std::vector<Color> fragment_direct_radiance(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
-                                            const DirectLighting& lighting, bool include_sky, Stats& stats) {
+                                            const DirectLighting& lighting, uint64_t seed, bool include_sky, Stats& stats) {
     std::vector<Color> out(deep.fragments.size());
     CameraRays camera(scene.camera);
     parallel_for_each_index(0, deep.height, [&](int wy) {
@@ -302,7 +305,7 @@ std::vector<Color> fragment_direct_radiance(const Scene& scene, const DeepBuffer
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = frags[k];
-                out[first + k] = direct_at(scene, materials, lighting, f, fragment_surface(materials, f), normalize(camera.origin() - f.p),
+                out[first + k] = direct_at(scene, materials, lighting, seed, f, fragment_surface(materials, f), normalize(camera.origin() - f.p),
                                            wx + deep.x0, wy + deep.y0, k, include_sky, counters);
             }
         }

@@ -18,7 +18,7 @@ namespace bounce {
 /// indirect light through the surface's BRDF with its bumped normal (brdf.h; for an un-bumped
 /// diffuse surface exactly albedo E_indirect / pi). Direct light is diffuse only, at the
 /// bumped normal;
-/// in AO-only mode (scene.render.indirect.ao) beauty is the AO. Sky lights are left out of the direct
+/// in AO-only mode (ShadeOptions::ao) beauty is the AO. Sky lights are left out of the direct
 /// term when indirect light is given (the gather brings the sky). Tiles run in parallel; the
 /// result is independent of thread count and tile order.
 ///
@@ -31,8 +31,15 @@ struct SiteLight {
     const std::vector<Indirect>* light = nullptr;  ///< per site: its bounce light (null: none)
     const RadiosityTextures* radiosity = nullptr;  ///< indirect_at_specular_hits = radiosity: sites are looked up here
 };
+/// What the shading pass takes from the frame's plan: the seed and tiles, how light reaches the
+/// BRDF and which layers it writes, and whether the render is of AO alone.
+struct ShadeOptions {
+    FrameTiling tiling;
+    ShadingSettings shading;
+    bool ao = false;
+};
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials, const DirectLighting& lighting,
-            const std::vector<Indirect>* indirect, Stats& stats, ProgressSink* progress,
+            const ShadeOptions& options, const std::vector<Indirect>* indirect, Stats& stats, ProgressSink* progress,
             const std::vector<Color>* direct_radiance = nullptr, const SiteLight& sites = {}, std::vector<Color>* colours = nullptr,
             const LightShares* shares = nullptr);
 /// `colours` (if given) receives, parallel to deep.fragments, what each fragment adds to the
@@ -45,6 +52,6 @@ Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materia
 /// `shade` computes it (bumped normal, glossy lobe, same random numbers): the progressive
 /// preview re-shades after each sub-pass with it and so lights like the final image.
 std::vector<Color> fragment_direct_radiance(const Scene& scene, const DeepBuffer& deep, const Materials& materials,
-                                            const DirectLighting& lighting, bool include_sky, Stats& stats);
+                                            const DirectLighting& lighting, uint64_t seed, bool include_sky, Stats& stats);
 
 }  // namespace bounce

@@ -30,8 +30,9 @@ struct SpecularTracer::Branch {
     uint32_t fragment = 0;
 };
 
-SpecularTracer::SpecularTracer(const Scene& scene, const SceneAccel& accel, const DirectLighting& lighting, const Materials& materials)
-    : scene_(scene), accel_(accel), lighting_(lighting), materials_(materials) {
+SpecularTracer::SpecularTracer(const Scene& scene, const SceneAccel& accel, const DirectLighting& lighting, const Materials& materials,
+                               int depth)
+    : scene_(scene), accel_(accel), lighting_(lighting), materials_(materials), depth_(depth) {
     active_ = std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) { return m.is_specular(); });
 }
 
@@ -104,7 +105,7 @@ void SpecularTracer::trace(std::span<const Fragment> frags, const Vec3& eye, Pix
         const SpecularSplit s = specular_split(m, std::max(-dot(d, n), 0.0f), entering);
         out.base[k] = s.base;
         Branch b;
-        b.o = at.p, b.d = d, b.weight = Color(1), b.bounces_left = scene_.render.shading.specular_depth;
+        b.o = at.p, b.d = d, b.weight = Color(1), b.bounces_left = depth_;
         b.spread = f.footprint / std::max(f.depth, 1e-20f), b.footprint0 = f.footprint, b.fragment = k;
         split(b, at.p, n, entering, m, 0, out, counters);
     }
@@ -114,7 +115,7 @@ void SpecularTracer::split(const Branch& b, const Vec3& p, const Vec3& n, bool e
                            PixelPaths& out, Counters& counters) const {
     if (b.bounces_left <= 0) return;
     const SpecularSplit s = specular_split(m, std::max(-dot(b.d, n), 0.0f), entering);
-    const bool first = b.bounces_left == scene_.render.shading.specular_depth;
+    const bool first = b.bounces_left == depth_;
     Branch r = b;
     r.o = p, r.travelled = travelled, r.bounces_left = b.bounces_left - 1;
     r.d = reflect(b.d, n), r.weight = b.weight * s.reflect;
@@ -145,7 +146,7 @@ void SpecularTracer::follow(const Branch& b, PixelPaths& out, Counters& counters
         // A strand (fur seen by reflections) shows the direct light on its side facing the ray,
         // as a gather's hit on it does; no bounce light, no further path.
         const RandomStream rng(kDimLight, out.rays, h.prim);
-        seen += weight * lighting_.strand_radiance(h, b.o + b.d * h.t, b.d, rng, scene_.render.lighting.light_samples, counters);
+        seen += weight * lighting_.strand_radiance(h, b.o + b.d * h.t, b.d, rng, lighting_.settings().light_samples, counters);
         return;
     }
     const Object& obj = scene_.objects[h.object];
@@ -203,20 +204,21 @@ void measure_footprints(std::vector<std::vector<Fragment>>& per_pixel, int width
 
 }  // namespace
 
-DeepBuffer specular_sites(const Scene& scene, const DeepBuffer& deep, const SpecularTracer& tracer, Stats& stats, ProgressSink* progress) {
+DeepBuffer specular_sites(const Scene& scene, const DeepBuffer& deep, const SpecularTracer& tracer, int tile_size, Stats& stats,
+                          ProgressSink* progress) {
     DeepBuffer sites;
     sites.full_width = deep.full_width, sites.full_height = deep.full_height;
     sites.x0 = deep.x0, sites.y0 = deep.y0, sites.width = deep.width, sites.height = deep.height;
     sites.spp = deep.spp, sites.seed = deep.seed, sites.scene_fingerprint = deep.scene_fingerprint;
     std::vector<std::vector<Fragment>> per_pixel(deep.pixel_count());
     const Vec3 eye = CameraRays(scene.camera).origin();
-    for_each_pixel_in_tiles(deep, scene.render.parallel.tile_size, progress, "specular paths", [&](int wx, int wy, size_t) {
+    for_each_pixel_in_tiles(deep, tile_size, progress, "specular paths", [&](int wx, int wy, size_t) {
         PixelPaths paths;
         tracer.trace(deep.pixel(wx, wy), eye, paths, stats.local());
         auto& mine = per_pixel[static_cast<size_t>(wy) * deep.width + wx];
         for (const PathSite& s : paths.sites) mine.push_back(s.at);
     });
-    measure_footprints(per_pixel, deep.width, deep.height, std::max(1, scene.render.parallel.tile_size));
+    measure_footprints(per_pixel, deep.width, deep.height, std::max(1, tile_size));
     sites.offsets.assign(deep.pixel_count() + 1, 0);
     for (size_t i = 0; i < per_pixel.size(); ++i) sites.offsets[i + 1] = sites.offsets[i] + static_cast<uint32_t>(per_pixel[i].size());
     sites.fragments.reserve(sites.offsets.back());

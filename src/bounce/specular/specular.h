@@ -52,8 +52,9 @@ inline constexpr uint32_t kMaxRaysPerPixel = 4096;
 
 class SpecularTracer {
   public:
-    /// `materials` tilt a fragment's mirror normal by its bump or normal map.
-    SpecularTracer(const Scene& scene, const SceneAccel& accel, const DirectLighting& lighting, const Materials& materials);
+    /// `materials` tilt a fragment's mirror normal by its bump or normal map; `depth`: the
+    /// bounces a path follows (ShadingSettings::specular_depth).
+    SpecularTracer(const Scene& scene, const SceneAccel& accel, const DirectLighting& lighting, const Materials& materials, int depth);
     /// Whether any material is a mirror or glass (with render.specular_depth 0 their base shares still apply).
     bool active() const { return active_; }
     /// The paths leaving the fragments of one pixel, seen from `eye`. Branches whose weight
@@ -81,11 +82,13 @@ class SpecularTracer {
     const SceneAccel& accel_;
     const DirectLighting& lighting_;
     const Materials& materials_;
+    int depth_ = 0;
     bool active_ = false;
 };
 
 /// Every pixel's sites, as the fragments of a deep buffer over `deep`'s window (per pixel in
-/// trace order): what the gathering pass covers with records.
-DeepBuffer specular_sites(const Scene& scene, const DeepBuffer& deep, const SpecularTracer& tracer, Stats& stats, ProgressSink* progress);
+/// trace order): what the gathering pass covers with records, traced in tiles of `tile_size`.
+DeepBuffer specular_sites(const Scene& scene, const DeepBuffer& deep, const SpecularTracer& tracer, int tile_size, Stats& stats,
+                          ProgressSink* progress);
 
 }  // namespace bounce

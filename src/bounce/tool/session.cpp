@@ -18,7 +18,7 @@
 #include "bounce/render/frame.h"
 #include "bounce/render/render.h"
 #include "bounce/scene/item_readers.h"
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 #include "bounce/scene/scene_load.h"
 
 namespace bounce {
@@ -149,14 +149,15 @@ LightingSession::LightingSession(SessionOptions options) : options_(std::move(op
         json v = json::parse(text, nullptr, false);
         edit(s.substr(0, eq), v.is_discarded() ? json(text) : v, "--set " + s);
     }
-    if (options_.default_to_cache && scene_.render.indirect.gi == GiMode::None && !scene_.render.indirect.ao) edit("render.gi", "cache");
+    if (options_.default_to_cache && param_value(scene_, "render.gi") == "none" && param_value(scene_, "render.ao") == false)
+        edit("render.gi", "cache");
     const json& render_keys = scene_.description.contains("render") ? scene_.description["render"] : json();
     if (options_.default_to_light_parts && !(render_keys.is_object() && render_keys.contains("light_parts")))
         edit("render.light_parts", true);
     copy_in(options_.deep_in, deep_path_, [&](const std::string& f) { validate_deep_for_scene(read_deep(f), scene_, f); });
     copy_in(options_.cache_in, cache_path_locked(), [&](const std::string& f) { adopt_cache_locked(read_cache_file(f), f); });
     // Nothing rendered yet: the first render makes what the session has no file of.
-    const bool cached = scene_.render.indirect.gi == GiMode::Cache;
+    const bool cached = param_value(scene_, "render.gi") == "cache";
     pending_ = static_cast<int>(!fs::exists(deep_path_)                      ? SessionAction::Rasterize
                                 : cached && !fs::exists(cache_path_locked()) ? SessionAction::Regather
                                                                              : SessionAction::Reshade);
@@ -237,7 +238,7 @@ json LightingSession::edit(const std::string& key, const json& value, const std:
     // (a mesh light's is its material's emission: not a light key).
     const size_t lights = scene_.lights.size();
     const bool parts = last_.cache ? last_.cache->has_light_parts(lights) : file_parts_lights_ == lights;
-    const bool rescaled = light_scale_key(key) && scene_.render.cache.light_parts && parts;
+    const bool rescaled = light_scale_key(key) && param_value(scene_, "render.light_parts") == true && parts;
     if (changes_bounce_light(key) && !rescaled) bounce_stale_ = true;
     return {{"key", key}, {"value", value}, {"needs", session_action_name(needs)}};
 }

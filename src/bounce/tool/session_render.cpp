@@ -7,6 +7,7 @@
 
 #include "bounce/core/error.h"
 #include "bounce/core/stats.h"
+#include "bounce/config/params.h"
 #include "bounce/render/frame.h"
 #include "bounce/render/render.h"
 #include "bounce/scene/scene_load.h"
@@ -79,27 +80,27 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
         std::lock_guard lock(mutex_);
         scene = scene_;
         edits_seen = edit_count_;
-        if (crop) scene.render.visibility.crop = *crop;
-        if (options_.threads > 0) scene.render.parallel.threads = options_.threads;
+        if (crop) set_param_value(scene, "render.crop", *crop);
+        if (options_.threads > 0) set_param_value(scene, "render.threads", options_.threads);
         // Renders stream their previews unless the lighter turned them off.
-        if (!edits_.count("render.preview")) scene.render.parallel.preview = true;
-        req = request_locked(action, scene.render.indirect.gi == GiMode::Cache, crop.has_value(), previous);
+        if (!edits_.count("render.preview")) set_param_value(scene, "render.preview", true);
+        req = request_locked(action, param_value(scene, "render.gi") == "cache", crop.has_value(), previous);
         cache_file = cache_path_locked();
     }
-    if (scene.render.indirect.gi == GiMode::Cache && scene.render.parallel.preview)
-        req.preview = [&](const Image& img) {
-            std::lock_guard lock(mutex_);
-            // Over the last full frame when there is one: layers a preview lacks stay shown.
-            // (A frame with other layers, e.g. rendered before GI was on, is replaced instead.)
-            const bool over = crop || (image_.width == img.full_width && image_.height == img.full_height);
-            try {
-                image_ = over ? paste_over(image_, img, "session image") : img;
-            } catch (const InputError&) {
-                if (crop) return;  // the final paste says why
-                image_ = img;
-            }
-            ++version_;
-        };
+    // Called only where the plan previews (render.preview, a cache render).
+    req.preview = [&](const Image& img) {
+        std::lock_guard lock(mutex_);
+        // Over the last full frame when there is one: layers a preview lacks stay shown.
+        // (A frame with other layers, e.g. rendered before GI was on, is replaced instead.)
+        const bool over = crop || (image_.width == img.full_width && image_.height == img.full_height);
+        try {
+            image_ = over ? paste_over(image_, img, "session image") : img;
+        } catch (const InputError&) {
+            if (crop) return;  // the final paste says why
+            image_ = img;
+        }
+        ++version_;
+    };
     // The session's deep file follows a new deep buffer (a shot's frame may keep the last one,
     // whose file is on disk: asking for it every frame would copy the buffer for nothing).
     req.deep_out_if_traced = deep_path_.string();
@@ -108,7 +109,7 @@ void LightingSession::render_once(SessionAction action, std::optional<std::array
     // Only a finished render replaces the deep file and the cache (atomically) and the image.
     FrameFiles files;
     files.deep_out = plan.deep_out;
-    if (scene.render.indirect.gi == GiMode::Cache && (r.cache_changed() || action != SessionAction::Reshade || !fs::exists(cache_file)))
+    if (plan.indirect() == IndirectFrom::Cache && (r.cache_changed() || action != SessionAction::Reshade || !fs::exists(cache_file)))
         files.cache_out = cache_file.string();
     write_frame_outputs(r, files, "", stats);
     std::lock_guard lock(mutex_);

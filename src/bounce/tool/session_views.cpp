@@ -13,7 +13,7 @@
 #include "bounce/core/error.h"
 #include "bounce/core/files.h"
 #include "bounce/core/json_limits.h"
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 #include "bounce/scene/scene_load.h"
 #include "bounce/tool/session.h"
 

@@ -1,9 +1,11 @@
 // The parameter table: every camera and render setting, declared once with its name, type,
 // range, unit, one-line doc and the identity it belongs to. From this table (and nothing else)
 // come the scene file's keys and their validation, `--set` overrides, the CLI flags
-// (params_cli.h), the deep-file and cache identities, the EXR metadata, `bounce params` and
-// the parameter table of docs/scene-format.md. Defaults are the settings structs' own
-// (settings.h): a row reads them from a default-constructed scene.
+// (scene/params_cli.h), the deep-file and cache identities, the EXR metadata, `bounce params`,
+// the Python module's `scene["render.rays"]` and the parameter table of docs/scene-format.md.
+// Defaults are the settings structs' own (settings.h): a row reads them from a default camera
+// and default settings. Rows read and write a camera and the render settings, not a Scene:
+// the table sits below the world that holds them.
 #pragma once
 
 #include <functional>
@@ -11,7 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "bounce/scene/scene.h"
+#include "bounce/config/settings.h"
+#include "bounce/geometry/camera.h"
 
 namespace bounce {
 
@@ -21,6 +24,23 @@ enum ParamIdentity : unsigned {
     kDeepIdentity = 1,       ///< primary visibility: needs a new deep file
     kRadiosityIdentity = 2,  ///< baked radiosity textures
     kCacheIdentity = 4,      ///< irradiance-cache records: needs a re-gather
+};
+
+/// What a row reads: the camera and the render settings (a Scene's: it converts).
+struct ParamsIn {
+    const Camera& camera;
+    const RenderSettings& render;
+    ParamsIn(const Camera& c, const RenderSettings& r) : camera(c), render(r) {}
+    template <class S>
+    ParamsIn(const S& s) : ParamsIn(s.camera, s.render) {}  // NOLINT: implicit, so a Scene is passed as it is
+};
+/// What a row writes.
+struct ParamsOut {
+    Camera& camera;
+    RenderSettings& render;
+    ParamsOut(Camera& c, RenderSettings& r) : camera(c), render(r) {}
+    template <class S>
+    ParamsOut(S& s) : ParamsOut(s.camera, s.render) {}  // NOLINT: implicit, so a Scene is passed as it is
 };
 
 enum class ParamType { Int, UInt64, Float, FloatAuto, Bool, Enum, Path, Vec3, IntList, FloatList };
@@ -37,8 +57,8 @@ struct Param {
     std::string flag;  ///< CLI flag ("--min-spacing"); empty = only --set
     bool required = false;
     bool animatable = false;  ///< may be keyed in a shot (keyframes.h)
-    std::function<nlohmann::json(const Scene&)> get;
-    std::function<void(Scene&, const nlohmann::json&)> set;  ///< takes a validated value
+    std::function<nlohmann::json(ParamsIn)> get;
+    std::function<void(ParamsOut, const nlohmann::json&)> set;  ///< takes a validated value
 
     nlohmann::json default_value() const;
     /// The JSON key inside its section ("min_spacing") and the section ("render").
@@ -59,8 +79,15 @@ const Param* find_param(const ParamTable& table, const std::string& key);
 using ParamFail = std::function<void(const std::string&, const std::string&)>;
 nlohmann::json check_param(const Param& p, const nlohmann::json& v, const ParamFail& fail);
 
+/// The value of row `key` ("render.gi" -> "cache"), as the scene file writes it: how a front end
+/// (the CLI, the lighting tool, Python) reads a setting. std::out_of_range for a key not in the table.
+nlohmann::json param_value(ParamsIn s, const std::string& key);
+/// Sets row `key` to `v`, checked as a scene file's value is; std::invalid_argument with the
+/// table's message when it is not a value of the row, std::out_of_range for a key not in the table.
+void set_param_value(ParamsOut s, const std::string& key, const nlohmann::json& v);
+
 /// {key: value} of the rows whose identity has any bit of `mask` (all rows for ~0u).
-nlohmann::json param_values(const Scene& scene, unsigned mask, const ParamTable& table = scene_params());
+nlohmann::json param_values(ParamsIn scene, unsigned mask, const ParamTable& table = scene_params());
 
 /// The differences between two param_values() objects, one "key: a -> b" string each.
 std::vector<std::string> param_differences(const nlohmann::json& was, const nlohmann::json& now);

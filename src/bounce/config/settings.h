@@ -1,7 +1,9 @@
 // The settings of every pipeline stage, as plain data. Each struct belongs to one stage and its
 // defaults are written here and nowhere else; the parameter table (params.h) names each field
 // once and derives from it the JSON keys, CLI flags, identities, metadata and the docs table.
-// They live beside the scene because the scene file carries them and every stage can see it.
+// They live in a room of their own (config/), below the world (scene/): the scene file carries
+// them, but a stage receives its own struct from the frame's plan (render/frame_plan.h) and
+// never reads another's.
 #pragma once
 
 #include <array>
@@ -57,6 +59,9 @@ struct RadiositySettings {
     float texel = 0;        ///< lattice spacing, world units; 0 = diagonal / 128
     int light_samples = 0;  ///< light samples per lattice point; 0 = LightingSettings's
     int max_level = 32;     ///< cap on the per-triangle lattice level (not a parameter)
+    /// Every lattice point keeps its light per light, each light's scale factored out (not a
+    /// parameter: the plan sets it from CacheSettings::light_parts).
+    bool light_parts = false;
 };
 
 /// The hemisphere gather and which indirect light the render computes.
@@ -140,6 +145,15 @@ struct ParallelSettings {
     TileOrder tile_order = TileOrder::Rows;  ///< the order threads take tiles in
     CacheSharing cache_sharing = CacheSharing::Shared;
     bool preview = false;  ///< progressive gather-and-shade
+};
+
+/// How a frame's per-pixel passes lay out their work: the seed every random stream hashes
+/// (VisibilitySettings::seed) and the tiles threads take (ParallelSettings). Not a stage's
+/// settings: the plan resolves it once and hands it to every pass that works per pixel.
+struct FrameTiling {
+    uint64_t seed = 0;
+    int tile_size = 32;
+    TileOrder tile_order = TileOrder::Rows;
 };
 
 /// Everything under the scene file's "render" object, one struct per stage.

@@ -1,6 +1,6 @@
 // The camera's rows of the parameter table and those of the stages before and after the cache
 // (params.h; the cache's are in params_cache.cpp).
-#include "bounce/scene/param_rows.h"
+#include "bounce/config/param_rows.h"
 
 namespace bounce::param_rows {
 
@@ -11,8 +11,8 @@ constexpr unsigned deep = kDeepIdentity, rad = kRadiosityIdentity, cache = kCach
 
 /// A camera row of `type` read and written by `get` and `set`; the camera's rows all change
 /// primary visibility (caches check the camera's fingerprint).
-Row camera_row(const char* key, ParamType type, size_t count, std::function<json(const Scene&)> get,
-               std::function<void(Scene&, const json&)> set) {
+Row camera_row(const char* key, ParamType type, size_t count, std::function<json(ParamsIn)> get,
+               std::function<void(ParamsOut, const json&)> set) {
     Row r;
     r.p.key = std::string("camera.") + key;
     r.p.stage = "camera";
@@ -26,18 +26,18 @@ Row camera_row(const char* key, ParamType type, size_t count, std::function<json
 
 Row camera_float(const char* key, float Camera::*member) {
     return camera_row(
-        key, ParamType::Float, 0, [member](const Scene& s) -> json { return s.camera.*member; },
-        [member](Scene& s, const json& v) { s.camera.*member = v.get<float>(); });
+        key, ParamType::Float, 0, [member](ParamsIn s) -> json { return s.camera.*member; },
+        [member](ParamsOut s, const json& v) { s.camera.*member = v.get<float>(); });
 }
 
 Row camera_vec3(const char* key, Vec3 Camera::*member, const char* doc, bool required) {
     Row r = camera_row(
         key, ParamType::Vec3, 0,
-        [member](const Scene& s) -> json {
+        [member](ParamsIn s) -> json {
             const Vec3& v = s.camera.*member;
             return json::array({v.x, v.y, v.z});
         },
-        [member](Scene& s, const json& v) {
+        [member](ParamsOut s, const json& v) {
             s.camera.*member = {v[0].get<float>(), v[1].get<float>(), v[2].get<float>()};
         });
     r.p.required = required;
@@ -53,10 +53,10 @@ void add_camera_rows(std::vector<Row>& rows) {
     rows.push_back(camera_float("fov", &Camera::fov).range(0.001, 179.999).unit("degrees").doc("vertical field of view").animate());
     Row shutter = camera_row(
         "shutter", ParamType::FloatList, 2,
-        [](const Scene& s) -> json {
+        [](ParamsIn s) -> json {
             return json::array({s.camera.shutter[0], s.camera.shutter[1]});
         },
-        [](Scene& s, const json& v) {
+        [](ParamsOut s, const json& v) {
             s.camera.shutter = {v[0].get<float>(), v[1].get<float>()};
         });
     rows.push_back(
@@ -79,10 +79,10 @@ void add_camera_rows(std::vector<Row>& rows) {
                        .animate());
     Row resolution = camera_row(
         "resolution", ParamType::IntList, 2,
-        [](const Scene& s) -> json {
+        [](ParamsIn s) -> json {
             return json::array({s.camera.width, s.camera.height});
         },
-        [](Scene& s, const json& v) { s.camera.width = v[0].get<int>(), s.camera.height = v[1].get<int>(); });
+        [](ParamsOut s, const json& v) { s.camera.width = v[0].get<int>(), s.camera.height = v[1].get<int>(); });
     rows.push_back(resolution.range(1, 65536).unit("pixels").doc("[width, height]; on the CLI WIDTHxHEIGHT").flag("--res"));
 }
 

@@ -1,11 +1,11 @@
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 
 #include <fmt/format.h>
 
 #include <cmath>
 
-#include "bounce/scene/json_reader.h"
-#include "bounce/scene/param_rows.h"
+#include "bounce/core/json_values.h"
+#include "bounce/config/param_rows.h"
 
 namespace bounce {
 
@@ -65,7 +65,7 @@ int64_t check_int(const json& v, double lo, double hi, const std::string& sub, c
 
 }  // namespace
 
-json Param::default_value() const { return get(Scene{}); }
+json Param::default_value() const { return get(ParamsIn(Camera{}, RenderSettings{})); }
 
 const ParamTable& scene_params() {
     static const ParamTable table = make_table();
@@ -124,7 +124,22 @@ json check_param(const Param& p, const json& v, const ParamFail& fail) {
     return v;
 }
 
-json param_values(const Scene& scene, unsigned mask, const ParamTable& table) {
+namespace {
+const Param& row_of(const std::string& key) {
+    const Param* p = find_param(scene_params(), key);
+    if (!p) throw std::out_of_range("no parameter named " + key);
+    return *p;
+}
+}  // namespace
+
+json param_value(ParamsIn s, const std::string& key) { return row_of(key).get(s); }
+
+void set_param_value(ParamsOut s, const std::string& key, const json& v) {
+    const Param& p = row_of(key);
+    p.set(s, check_param(p, v, [](const std::string&, const std::string& msg) { throw std::invalid_argument(msg); }));
+}
+
+json param_values(ParamsIn scene, unsigned mask, const ParamTable& table) {
     json out = json::object();
     for (const Param& p : table)
         if (mask == ~0u || (p.identity & mask)) out[p.key] = p.get(scene);

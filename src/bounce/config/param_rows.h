@@ -8,7 +8,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "bounce/scene/params.h"
+#include "bounce/config/params.h"
 
 namespace bounce::param_rows {
 
@@ -36,14 +36,14 @@ Param field(const char* key, const char* stage, Group RenderSettings::*group, T 
         p.type = ParamType::IntList;
         p.count = std::tuple_size_v<T>;
     }
-    p.get = [group, member](const Scene& s) -> json {
+    p.get = [group, member](ParamsIn s) -> json {
         const T& v = s.render.*group.*member;
         if constexpr (std::is_enum_v<T>)
             return static_cast<int>(v);  // named by Row::choices
         else
             return v;
     };
-    p.set = [group, member](Scene& s, const json& v) {
+    p.set = [group, member](ParamsOut s, const json& v) {
         T& dst = s.render.*group.*member;
         if constexpr (std::is_enum_v<T>)
             dst = static_cast<T>(v.get<int>());
@@ -89,19 +89,19 @@ struct Row {
         p.type = ParamType::FloatAuto;
         auto get = p.get;
         auto set = p.set;
-        p.get = [get, sentinel](const Scene& s) -> json {
+        p.get = [get, sentinel](ParamsIn s) -> json {
             json v = get(s);
             return v.get<float>() == sentinel ? json("auto") : v;
         };
-        p.set = [set, sentinel](Scene& s, const json& v) { set(s, v.is_string() ? json(sentinel) : v); };
+        p.set = [set, sentinel](ParamsOut s, const json& v) { set(s, v.is_string() ? json(sentinel) : v); };
         return *this;
     }
     Row& choices(std::vector<std::string> names) {
         p.choices = names;
         auto get = p.get;
         auto set = p.set;
-        p.get = [get, names](const Scene& s) -> json { return names.at(get(s).get<size_t>()); };
-        p.set = [set, names](Scene& s, const json& v) {
+        p.get = [get, names](ParamsIn s) -> json { return names.at(get(s).get<size_t>()); };
+        p.set = [set, names](ParamsOut s, const json& v) {
             auto it = std::find(names.begin(), names.end(), v.get<std::string>());
             set(s, static_cast<int>(it - names.begin()));
         };

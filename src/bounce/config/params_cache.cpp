@@ -1,5 +1,5 @@
 // The irradiance cache's rows of the parameter table (params.h).
-#include "bounce/scene/param_rows.h"
+#include "bounce/config/param_rows.h"
 
 namespace bounce::param_rows {
 
