@@ -242,7 +242,8 @@ TEST(TemporalCache, RefinementReprojectsEarlierGathersAndKeepsOnlyGathersForLate
     const IrradianceCache& cache2 = *copy;
     const SceneChanges changes = scene_changes(*f.scenes[1], *f.scenes[2]);
     ASSERT_TRUE(changes.camera);
-    const TemporalJudgement judged = judge_records(cache2, {}, {}, *f.scenes[1], *f.scenes[2], changes, {}, 0, f.scenes[2]->render.visibility.seed);
+    const TemporalJudgement judged =
+        judge_records(cache2, {}, {}, *f.scenes[1], *f.scenes[2], changes, {}, 0, f.scenes[2]->render.visibility.seed);
     size_t of_two = 0, of_one = 0;
     for (size_t i = 0; i < cache2.fragment_record_count(); ++i) {
         of_two += cache2.fragment_record_at(i).gathered == 2;

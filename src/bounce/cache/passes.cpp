@@ -150,7 +150,6 @@ void place_fragment_record(Record& r, const Fragment& f, uint64_t key, int frame
 
 }  // namespace
 
-
 namespace {
 /// The guide of fragment f's refinement gather from the records about its record site.
 std::optional<DirectionGuide> records_guide(const IrradianceCache& cache, const Scene& scene, const Fragment& f) {
@@ -212,10 +211,10 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                     const std::optional<DirectionGuide> guide =
                         !near && !hits && refiner.settings().guided > 0 ? records_guide(cache, scene, f) : std::nullopt;
                     const GatherResult g =
-                        near    ? refiner.reproject(f.p, f.n, rng,
-                                                    {near->origin, near->n,
-                                                     record_stream(*near, tiling.seed, scene.camera.width), *near->hits},
-                                                    stats.local())
+                        near
+                            ? refiner.reproject(f.p, f.n, rng,
+                                                {near->origin, near->n, record_stream(*near, tiling.seed, scene.camera.width), *near->hits},
+                                                stats.local())
                         : guide ? refiner.gather_guided(f.p, f.n, rng, *guide, stats.local())
                                 : refiner.gather(f.p, f.n, rng, stats.local(), 0, hits.get());
                     reused.local() += near != nullptr;

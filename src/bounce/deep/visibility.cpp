@@ -225,8 +225,8 @@ void PixelFragments::emit(int spp, std::vector<Fragment>& out) const {
 
 }  // namespace
 
-DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, const VisibilitySettings& rs, Stats& stats,
-                             ProgressSink* sink, const std::array<int, 4>& window) {
+DeepBuffer render_visibility(const Scene& scene, const SceneAccel& accel, const VisibilitySettings& rs, Stats& stats, ProgressSink* sink,
+                             const std::array<int, 4>& window) {
     const Camera& cam = scene.camera;
     DeepBuffer deep = empty_window(scene, rs, window);
 

@@ -252,8 +252,7 @@ void for_each_bounce_fragment(const Scene& scene, const DeepBuffer& deep, const 
         for (uint32_t k = 0; k < frags.size(); ++k) {
             const Fragment& f = frags[k];
             if (!needs_bounce_light(scene, f)) continue;
-            fn(BounceFragment{first + k, wx, wy, f, gather_site(scene, f),
-                              fragment_stream(tiling.seed, wx + deep.x0, wy + deep.y0, k)});
+            fn(BounceFragment{first + k, wx, wy, f, gather_site(scene, f), fragment_stream(tiling.seed, wx + deep.x0, wy + deep.y0, k)});
         }
     });
 }

@@ -29,7 +29,11 @@ Color spot_filter(const Light& l, const Vec3& d) {
 }  // namespace
 
 DirectLighting::DirectLighting(const Scene& scene, const SceneAccel& accel, const LightingSettings& settings)
-    : scene_(scene), accel_(accel), settings_(settings), emitters_(scene.lights.size()), scratch_(std::make_unique<PerThread<ScratchBuffer>>()) {
+    : scene_(scene),
+      accel_(accel),
+      settings_(settings),
+      emitters_(scene.lights.size()),
+      scratch_(std::make_unique<PerThread<ScratchBuffer>>()) {
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const Light& l = scene.lights[i];
         if (l.type != LightType::Mesh) continue;

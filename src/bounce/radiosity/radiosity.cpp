@@ -28,7 +28,9 @@ inline uint32_t lattice_index(int i, int j, int n) { return static_cast<uint32_t
 
 float effective_texel(const Scene& scene, const RadiositySettings& s) { return s.texel > 0 ? s.texel : scene.size() / 128.0f; }
 
-int effective_light_samples(const RadiositySettings& s, int lighting_samples) { return s.light_samples > 0 ? s.light_samples : lighting_samples; }
+int effective_light_samples(const RadiositySettings& s, int lighting_samples) {
+    return s.light_samples > 0 ? s.light_samples : lighting_samples;
+}
 
 std::string file_name(size_t id, const std::string& name) {
     std::string safe;

@@ -39,10 +39,10 @@ std::vector<std::string> in_tiles(Communicator& comm, const std::array<int, 4>& 
 DeepBuffer visibility_in_tiles(Communicator& comm, const Scene& scene, const SceneAccel& accel, const VisibilitySettings& settings,
                                int tile_size, Stats& stats, const std::array<int, 4>& window, bool everyone) {
     std::vector<DeepBuffer> parts;
-    for (const std::string& b : in_tiles(comm, window, tile_size, everyone ? TilesTo::Everyone : TilesTo::Mine,
-                                         [&](const std::array<int, 4>& tile) {
-                                             return serialize_window(render_visibility(scene, accel, settings, stats, nullptr, tile));
-                                         }))
+    for (const std::string& b :
+         in_tiles(comm, window, tile_size, everyone ? TilesTo::Everyone : TilesTo::Mine, [&](const std::array<int, 4>& tile) {
+             return serialize_window(render_visibility(scene, accel, settings, stats, nullptr, tile));
+         }))
         if (!b.empty()) parts.push_back(parse_window(b));
     return assemble_tiles(scene, settings, window, parts);
 }

@@ -234,10 +234,10 @@ struct PlannedStep {
 struct FramePlan {
     int frame = 0;
     /// The settings the plan resolved for its passes, frame-wide; each step carries its own.
-    FrameTiling tiling;     ///< every per-pixel pass's seed and tiles
-    GatherSettings gather;  ///< every gather's (steps set record_terms and hessian; AO distance resolved)
-    CacheSettings cache;    ///< the cache's: records, refinement, the temporal rules
-    ShadeOptions shade;     ///< the shading pass's and the previews'
+    FrameTiling tiling;                  ///< every per-pixel pass's seed and tiles
+    GatherSettings gather;               ///< every gather's (steps set record_terms and hessian; AO distance resolved)
+    CacheSettings cache;                 ///< the cache's: records, refinement, the temporal rules
+    ShadeOptions shade;                  ///< the shading pass's and the previews'
     std::array<int, 4> window{};         ///< pixels shaded: the crop or the frame (x0, x1, y0, y1)
     std::array<int, 4> gather_window{};  ///< pixels gathered in: the window and its margin
     std::string deep_out;                ///< where the front end writes the gathered window's deep buffer

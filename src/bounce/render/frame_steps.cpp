@@ -52,7 +52,8 @@ void FrameRun::step(const AccelStep& s) {
         stats_.set("bvh_parts", nlohmann::json{{"kept", r.kept}, {"refit", r.refit}, {"built", r.built}});
     stats_.set("ray_offset", accel.ray_offset());
     lighting_.emplace(scene_, accel, s.lighting);
-    ctx_.emplace(FrameContext{scene_, plan_, accel, materials_, *lighting_, stats_, progress_, request_.cancel, request_.comm ? *request_.comm : alone_});
+    ctx_.emplace(FrameContext{scene_, plan_, accel, materials_, *lighting_, stats_, progress_, request_.cancel,
+                              request_.comm ? *request_.comm : alone_});
 }
 
 void FrameRun::step(const VisibilityStep& s) { deep_ = visibility_pass(ctx(), s, plan_, previous_); }

@@ -22,8 +22,8 @@ TemporalFrame temporal_frame(const FrameContext& ctx, const FramePlan& plan, boo
 /// visited pixel's interpolation standing for the pixels around it.
 SubPassCallback preview_after_subpass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache& cache,
                                       const std::function<void(const Image&)>& preview) {
-    auto direct =
-        std::make_shared<std::vector<Color>>(fragment_direct_radiance(ctx.scene, deep, ctx.materials, ctx.lighting, ctx.plan.tiling.seed, false, ctx.stats));
+    auto direct = std::make_shared<std::vector<Color>>(
+        fragment_direct_radiance(ctx.scene, deep, ctx.materials, ctx.lighting, ctx.plan.tiling.seed, false, ctx.stats));
     auto visited = std::make_shared<std::vector<uint8_t>>(deep.pixel_count(), 0);
     return [&ctx, &deep, &cache, preview, direct, visited](const SubPass& sp, size_t, size_t) {
         for (int wy = 0; wy < deep.height; ++wy)
@@ -100,8 +100,7 @@ void refine_pass(const FrameContext& ctx, const RefineStep& step, const FramePla
     }
     std::unique_ptr<EarlierGathers> earlier;
     if (step.keep_gathers) {
-        earlier =
-            std::make_unique<EarlierGathers>(std::move(judged.earlier_gathers), scene.bounds(), step.reuse);
+        earlier = std::make_unique<EarlierGathers>(std::move(judged.earlier_gathers), scene.bounds(), step.reuse);
         ro.earlier = earlier.get();
     }
     std::unique_ptr<EarlierGathers> refined_before;

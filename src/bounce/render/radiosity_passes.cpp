@@ -42,9 +42,8 @@ RadiosityResult radiosity_pass(const FrameContext& ctx, const RadiosityStep& ste
     out.textures = std::make_unique<RadiosityTextures>();
     if (step.source == RadiositySource::Carry) {
         PhaseTimer t(ctx.stats, "radiosity carry");
-        *out.textures =
-            RadiosityTextures::carry(*previous.radiosity, ctx.scene, ctx.materials, ctx.lighting, settings, *plan.changes, out.changed,
-                                     ctx.stats);
+        *out.textures = RadiosityTextures::carry(*previous.radiosity, ctx.scene, ctx.materials, ctx.lighting, settings, *plan.changes,
+                                                 out.changed, ctx.stats);
         // What a moving object can show or hide: the brightest texel, emission or sky.
         out.brightest = out.textures->brightest();
         for (const Material& m : ctx.scene.materials) out.brightest = std::max(out.brightest, luminance(m.peak_emission()));

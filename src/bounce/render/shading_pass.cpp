@@ -72,24 +72,24 @@ ShadeResult shade_window(const FrameContext& ctx, const ShadeStep& step, const D
         if (specular.any()) ctx.stats.set("shading_misses", static_cast<double>(out.shading_misses));
         brute = &interpolated;
     }
-    out.image = shade(scene, deep, ctx.materials, ctx.lighting, ctx.plan.shade, step.indirect != IndirectFrom::None ? brute : nullptr,
-                      ctx.stats, progress, nullptr, sites.view(), step.deep_colour ? &out.colours : nullptr, shares.lights > 0 ? &shares : nullptr);
+    out.image =
+        shade(scene, deep, ctx.materials, ctx.lighting, ctx.plan.shade, step.indirect != IndirectFrom::None ? brute : nullptr, ctx.stats,
+              progress, nullptr, sites.view(), step.deep_colour ? &out.colours : nullptr, shares.lights > 0 ? &shares : nullptr);
     return out;
 }
 
 /// Each process shades its tiles; rank 0 takes the whole image (the others' stays empty).
 ShadeResult shade_in_tiles(const FrameContext& ctx, const ShadeStep& step, const DeepBuffer& deep, const IrradianceCache* cache,
                            const std::vector<Indirect>* brute, const SpecularSitesResult& specular, const RadiosityTextures* radiosity) {
-    const auto tiles =
-        in_tiles(ctx.comm, window_of(deep), ctx.plan.tiling.tile_size, TilesTo::First, [&](const std::array<int, 4>& w) {
-            const DeepBuffer sub = sub_window(deep, w);
-            const std::vector<Indirect> light = brute ? window_slice(deep, *brute, w) : std::vector<Indirect>();
-            ShadeResult r = shade_window(ctx, step, sub, cache, brute ? &light : nullptr, specular, radiosity, nullptr);
-            // The refined mask travels as a layer of the tile's image.
-            if (!r.refined.empty()) add_mask_layer(r.image, r.refined, "refined");
-            const uint64_t misses = r.shading_misses;
-            return std::string(reinterpret_cast<const char*>(&misses), sizeof(misses)) + serialize_image(r.image);
-        });
+    const auto tiles = in_tiles(ctx.comm, window_of(deep), ctx.plan.tiling.tile_size, TilesTo::First, [&](const std::array<int, 4>& w) {
+        const DeepBuffer sub = sub_window(deep, w);
+        const std::vector<Indirect> light = brute ? window_slice(deep, *brute, w) : std::vector<Indirect>();
+        ShadeResult r = shade_window(ctx, step, sub, cache, brute ? &light : nullptr, specular, radiosity, nullptr);
+        // The refined mask travels as a layer of the tile's image.
+        if (!r.refined.empty()) add_mask_layer(r.image, r.refined, "refined");
+        const uint64_t misses = r.shading_misses;
+        return std::string(reinterpret_cast<const char*>(&misses), sizeof(misses)) + serialize_image(r.image);
+    });
     ShadeResult out;
     if (ctx.comm.rank() != 0) return out;  // rank 0 writes the image
     std::vector<Image> images;

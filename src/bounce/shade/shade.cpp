@@ -25,8 +25,7 @@ Color fragment_direct(const Materials& materials, const DirectLighting& lighting
     };
     const RandomStream rng = fragment_stream(seed, x, y, k);
     const int samples = lighting.settings().light_samples;
-    Color e = lighting.irradiance(f.p, surf.normal, f.object, rng, samples, counters, include_sky,
-                                  glossy || per_light ? &each : nullptr);
+    Color e = lighting.irradiance(f.p, surf.normal, f.object, rng, samples, counters, include_sky, glossy || per_light ? &each : nullptr);
     const Color emission = materials.emission(f.material, f.uv);
     Color diffuse = surf.albedo * e * kInvPi;
     if (surf.translucency != Color(0)) {
@@ -35,8 +34,8 @@ Color fragment_direct(const Materials& materials, const DirectLighting& lighting
             parts->light_diffuse[light] += surf.translucency * eb * kInvPi;
         };
         diffuse += surf.translucency *
-                   lighting.irradiance(f.p, -surf.normal, f.object, back_side_stream(rng), samples, counters,
-                                       include_sky, per_light ? &through : nullptr) *
+                   lighting.irradiance(f.p, -surf.normal, f.object, back_side_stream(rng), samples, counters, include_sky,
+                                       per_light ? &through : nullptr) *
                    kInvPi;
     }
     if (parts) parts->emission = emission, parts->diffuse_direct = diffuse, parts->specular_direct = gloss;
@@ -137,9 +136,8 @@ Color site_radiance(const ShadeContext& c, const PathSite& s, int x, int y, uint
     surf.albedo = c.materials.albedo(f.material, f.uv) * c.materials.vertex_color(f.object, f.prim, f.p);
     surf.translucency = c.materials.translucency(f.material, f.uv);
     surf.specular = m.specular, surf.roughness = m.roughness, surf.normal = f.n;
-    Color out =
-        fragment_direct(c.materials, c.lighting, c.options.tiling.seed, f, surf, s.wo, x, y, kSiteStream + j, c.indirect == nullptr, counters,
-                        nullptr);
+    Color out = fragment_direct(c.materials, c.lighting, c.options.tiling.seed, f, surf, s.wo, x, y, kSiteStream + j, c.indirect == nullptr,
+                                counters, nullptr);
     if (in) out += indirect_radiance(*in, f.n, surf, s.wo, c.options.shading.light_per_channel) + transmitted_indirect(surf, *in);
     return out;
 }
@@ -212,8 +210,8 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
         ShadedParts parts = comps.on() ? comps.parts() : ShadedParts{};
         const Color radiance =
             base * (c.direct_radiance && !comps.on() ? (*c.direct_radiance)[at]
-                                                     : direct_at(c.scene, c.materials, c.lighting, c.options.tiling.seed, f, surf, wo, x, y, k,
-                                                                 c.indirect == nullptr, counters, comps.on() ? &parts : nullptr));
+                                                     : direct_at(c.scene, c.materials, c.lighting, c.options.tiling.seed, f, surf, wo, x, y,
+                                                                 k, c.indirect == nullptr, counters, comps.on() ? &parts : nullptr));
         parts.scale(base);
         sum.direct += radiance * f.weight;
         sum.beauty += radiance * f.weight;
@@ -230,8 +228,8 @@ void shade_fragment(const ShadeContext& c, const Fragment& f, int x, int y, uint
 }  // namespace
 
 Image shade(const Scene& scene, const DeepBuffer& deep, const Materials& materials, const DirectLighting& lighting,
-            const ShadeOptions& options, const std::vector<Indirect>* indirect, Stats& stats, ProgressSink* sink, const std::vector<Color>* direct_radiance,
-            const SiteLight& sites, std::vector<Color>* colours, const LightShares* shares) {
+            const ShadeOptions& options, const std::vector<Indirect>* indirect, Stats& stats, ProgressSink* sink,
+            const std::vector<Color>* direct_radiance, const SiteLight& sites, std::vector<Color>* colours, const LightShares* shares) {
     if (colours) colours->assign(deep.fragments.size(), Color(0));
     const bool ao_only = options.ao && indirect;
     Image img;
@@ -305,8 +303,8 @@ std::vector<Color> fragment_direct_radiance(const Scene& scene, const DeepBuffer
             auto frags = deep.pixel(wx, wy);
             for (uint32_t k = 0; k < frags.size(); ++k) {
                 const Fragment& f = frags[k];
-                out[first + k] = direct_at(scene, materials, lighting, seed, f, fragment_surface(materials, f), normalize(camera.origin() - f.p),
-                                           wx + deep.x0, wy + deep.y0, k, include_sky, counters);
+                out[first + k] = direct_at(scene, materials, lighting, seed, f, fragment_surface(materials, f),
+                                           normalize(camera.origin() - f.p), wx + deep.x0, wy + deep.y0, k, include_sky, counters);
             }
         }
     });
