@@ -21,7 +21,7 @@
 
 namespace bounce {
 
-/// The scene's gather parameters (scene/settings.h) with `ao_distance` resolved (<= 0 =
+/// The gather parameters (config/settings.h) as plan_frame resolves them (`ao_distance` <= 0 =
 /// unlimited), plus what the caller decides per pass.
 struct GatherSettings : IndirectSettings {
     FrameTiling tiling;                   ///< the frame's seed (every gather's stream) and tiles
