@@ -41,8 +41,9 @@ Scene load_render_scene(const RenderArgs& a, std::optional<double> frame) {
         throw InputError("command line", "--cache-out " + a.files.cache_out, "only a --gi cache render makes a cache");
     if (!cache && !a.files.cache_in.empty() && a.show != "records")
         throw InputError("command line", "--cache-in " + a.files.cache_in, "only a --gi cache render (or --show records) uses a cache");
-    const auto crop = param_value(scene, "render.crop").get<std::array<int, 4>>();
-    if (!a.files.base.empty() && !(crop[1] > crop[0] || crop[3] > crop[2]))
+    VisibilitySettings visibility;  // for has_crop(): what a crop is is the settings' to say
+    visibility.crop = param_value(scene, "render.crop").get<std::array<int, 4>>();
+    if (!a.files.base.empty() && !visibility.has_crop())
         throw InputError("command line", "--base " + a.files.base, "--base fills the pixels outside --crop; give a crop");
     if (a.reuse_any && a.regather) throw InputError("command line", "--cache-reuse-any", "cannot be combined with --regather");
     if (a.regather && !a.frames.empty())

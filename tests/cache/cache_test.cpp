@@ -250,7 +250,7 @@ IrradianceCache build_cache(const Scene& s, Stats& stats, DeepBuffer* deep_out =
     Gatherer gatherer(s, accel, materials, lighting, nullptr, test::still_plan(s).gather);
     IrradianceCache cache(s.bounds(), s.render.cache, false);
     gathering_pass(s, deep, gatherer, cache, stats, nullptr);
-    interpolation_pass(s, deep, cache, test::still_plan(s).tiling, stats, nullptr);
+    interpolation_pass(s, deep, cache, test::still_plan(s).tiling(), stats, nullptr);
     if (deep_out) *deep_out = std::move(deep);
     return cache;
 }

@@ -184,7 +184,7 @@ HairRender render_hair(const json& fur) {
     Scene scene = test::scene_from(fur_scene(fur, 0.5f), {"render.gi=\"cache\""});
     Stats stats;
     HairRender h{render(scene, {}, stats, nullptr), {}, 0};
-    InterpolatedLight light = interpolation_pass(scene, h.result.deep, *h.result.cache, test::still_plan(scene).tiling, stats, nullptr);
+    InterpolatedLight light = interpolation_pass(scene, h.result.deep, *h.result.cache, test::still_plan(scene).tiling(), stats, nullptr);
     h.indirect = std::move(light.light);
     h.misses = static_cast<double>(light.misses);
     return h;

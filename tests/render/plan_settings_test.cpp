@@ -21,11 +21,11 @@ TEST(PlanSettings, ThePlanResolvesWhatEachPassTakes) {
                              "render.correction_rays=4", "render.correction_prediction=\"hits\"", "render.cache_sharing=\"per-thread\""});
     const FramePlan p = plan_frame(s, {}, {});
     // Frame-wide: the seed and tiles every per-pixel pass lays its work out by.
-    EXPECT_EQ(p.tiling.seed, 77u);
-    EXPECT_EQ(p.tiling.tile_size, 8);
-    EXPECT_EQ(p.tiling.tile_order, TileOrder::Spiral);
+    EXPECT_EQ(p.tiling().seed, 77u);
+    EXPECT_EQ(p.tiling().tile_size, 8);
+    EXPECT_EQ(p.tiling().tile_order, TileOrder::Spiral);
     EXPECT_EQ(p.gather.tiling.seed, 77u);
-    EXPECT_EQ(p.shade.tiling.tile_size, 8);
+    EXPECT_EQ(p.shade().tiling.tile_size, 8);
     // The automatic AO distance is 10 % of the scene's size, resolved once.
     EXPECT_FLOAT_EQ(p.gather.ao_distance, 0.1f * s.size());
     // Light parts and the records' predictions only where a cache keeps them.
@@ -38,7 +38,7 @@ TEST(PlanSettings, ThePlanResolvesWhatEachPassTakes) {
     EXPECT_EQ(p.find<AccelStep>()->lighting.light_pick, 5);
     EXPECT_EQ(p.find<VisibilityStep>()->settings.seed, 77u);
     EXPECT_EQ(p.find<GatherRecordsStep>()->sharing, CacheSharing::PerThread);
-    EXPECT_EQ(p.shade.shading.specular_depth, 3);
+    EXPECT_EQ(p.shade().shading.specular_depth, 3);
     EXPECT_EQ(p.indirect(), IndirectFrom::Cache);
 
     // Brute force keeps no parts and predicts nothing, whatever the cache settings say.
@@ -59,7 +59,7 @@ TEST(PlanSettings, APassUsesThePlansSettingsNotTheScenes) {
     FramePlan p = plan_frame(s, {}, {});
     const RenderResult same = run_frame(s, p, {}, {}, b_stats, nullptr);
     EXPECT_EQ(test::differing_values(a.image, same.image), 0u);
-    p.tiling.seed = p.gather.tiling.seed = p.shade.tiling.seed = 12345;
+    p.gather.tiling.seed = 12345;  // the plan's one copy of the seed
     const RenderResult other = run_frame(s, p, {}, {}, c_stats, nullptr);
     EXPECT_GT(test::differing_values(a.image, other.image), 0u);
 }

@@ -97,8 +97,7 @@ CacheSettings settings_from(const nlohmann::json& parameters) {
     for (const Param& p : scene_params()) {
         if (!parameters.contains(p.key)) continue;
         try {
-            p.set(ParamsOut(camera, render),
-                  check_param(p, parameters[p.key], [](const std::string&, const std::string& msg) { throw std::invalid_argument(msg); }));
+            set_param_value(ParamsOut(camera, render), p.key, parameters[p.key]);
         } catch (const std::invalid_argument&) {}
     }
     return render.cache;

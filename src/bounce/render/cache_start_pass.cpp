@@ -27,7 +27,7 @@ CacheStartResult cache_start_pass(const FrameContext& ctx, const CacheStartStep&
     if (step.start == CacheStart::Temporal) {
         // The previous frame's records and those still waiting from before, judged for this frame.
         out.judged = judge_records(*previous.cache, previous.waiting_records(), previous.kept_gathers(), *previous.scene, scene,
-                                   *plan.changes, radiosity.changed, radiosity.brightest, plan.tiling.seed);
+                                   *plan.changes, radiosity.changed, radiosity.brightest, plan.tiling().seed);
         out.cache->set_luminance_floor(previous.cache->luminance_floor());
         for (const Record& r : out.judged.valid) out.cache->insert_loaded(r);
         for (const Record& r : out.judged.fragment_valid) out.cache->insert_fragment_record(r);

@@ -88,7 +88,7 @@ FrameFiles sequence_frame(const FrameFiles& patterns, int first, int frame) {
 std::vector<std::string> frame_layers(const FramePlan& plan) {
     std::vector<std::string> layers{"beauty", "albedo", "N", "depth"};
     const IndirectFrom indirect = plan.indirect();
-    if (!(plan.shade.ao && indirect != IndirectFrom::None)) layers.push_back("direct");
+    if (!(plan.gather.ao && indirect != IndirectFrom::None)) layers.push_back("direct");
     if (indirect != IndirectFrom::None) layers.insert(layers.end(), {"indirect", "ao", "bentnormal"});
     if (plan.cache_start() != CacheStart::None) layers.push_back("records");
     const ShadeStep* shade = plan.find<ShadeStep>();

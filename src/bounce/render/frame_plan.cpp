@@ -330,10 +330,9 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
     plan.frame = request.frame;
     const RenderSettings& rs = scene.render;
     plan.window = frame_window(scene.camera, rs.visibility);
-    plan.tiling = {rs.visibility.seed, rs.parallel.tile_size, rs.parallel.tile_order};
-    plan.gather = gather_settings(scene, plan.tiling);
+    plan.gather = gather_settings(scene, {rs.visibility.seed, rs.parallel.tile_size, rs.parallel.tile_order});
     plan.cache = rs.cache;
-    plan.shade = {plan.tiling, rs.shading, rs.indirect.ao};
+    plan.shading = rs.shading;
     plan.gather_window = plan.window;
     const bool crop = scene.render.visibility.has_crop();
     const bool cached = scene.render.indirect.gi == GiMode::Cache;

@@ -234,10 +234,11 @@ struct PlannedStep {
 struct FramePlan {
     int frame = 0;
     /// The settings the plan resolved for its passes, frame-wide; each step carries its own.
-    FrameTiling tiling;                  ///< every per-pixel pass's seed and tiles
-    GatherSettings gather;               ///< every gather's (steps set record_terms and hessian; AO distance resolved)
+    /// Every gather's (steps set record_terms and hessian; AO distance resolved), and the one
+    /// copy of the frame's seed and tiles (`gather.tiling`, which tiling() and shade() read).
+    GatherSettings gather;
     CacheSettings cache;                 ///< the cache's: records, refinement, the temporal rules
-    ShadeOptions shade;                  ///< the shading pass's and the previews'
+    ShadingSettings shading;             ///< how light reaches the BRDF, which layers
     std::array<int, 4> window{};         ///< pixels shaded: the crop or the frame (x0, x1, y0, y1)
     std::array<int, 4> gather_window{};  ///< pixels gathered in: the window and its margin
     std::string deep_out;                ///< where the front end writes the gathered window's deep buffer
@@ -254,6 +255,10 @@ struct FramePlan {
             if (const S* p = std::get_if<S>(&s.step)) return p;
         return nullptr;
     }
+    /// Every per-pixel pass's seed and tiles.
+    const FrameTiling& tiling() const { return gather.tiling; }
+    /// The shading pass's options (and the previews').
+    ShadeOptions shade() const { return {gather.tiling, shading, gather.ao}; }
     /// The light the (last) shading step gives the fragments.
     IndirectFrom indirect() const {
         IndirectFrom out = IndirectFrom::None;

@@ -15,7 +15,7 @@ namespace {
 
 /// What the redoing of a shot's earlier records needs to know of this frame.
 TemporalFrame temporal_frame(const FrameContext& ctx, const FramePlan& plan, bool keep_hits) {
-    return {ctx.scene, plan.changes.get(), plan.frame, keep_hits, plan.tiling.seed, plan.cache};
+    return {ctx.scene, plan.changes.get(), plan.frame, keep_hits, plan.tiling().seed, plan.cache};
 }
 
 /// The preview callback of the gathering pass: after each sub-pass, the image with every
@@ -23,14 +23,14 @@ TemporalFrame temporal_frame(const FrameContext& ctx, const FramePlan& plan, boo
 SubPassCallback preview_after_subpass(const FrameContext& ctx, const DeepBuffer& deep, const IrradianceCache& cache,
                                       const std::function<void(const Image&)>& preview) {
     auto direct = std::make_shared<std::vector<Color>>(
-        fragment_direct_radiance(ctx.scene, deep, ctx.materials, ctx.lighting, ctx.plan.tiling.seed, false, ctx.stats));
+        fragment_direct_radiance(ctx.scene, deep, ctx.materials, ctx.lighting, ctx.plan.tiling().seed, false, ctx.stats));
     auto visited = std::make_shared<std::vector<uint8_t>>(deep.pixel_count(), 0);
     return [&ctx, &deep, &cache, preview, direct, visited](const SubPass& sp, size_t, size_t) {
         for (int wy = 0; wy < deep.height; ++wy)
             for (int wx = 0; wx < deep.width; ++wx)
                 if (sp.contains(wx + deep.x0, wy + deep.y0)) (*visited)[static_cast<size_t>(wy) * deep.width + wx] = 1;
         std::vector<Indirect> pre = preview_indirect(ctx.scene, deep, cache, *visited, sp.step);
-        preview(shade(ctx.scene, deep, ctx.materials, ctx.lighting, ctx.plan.shade, &pre, ctx.stats, nullptr, direct.get()));
+        preview(shade(ctx.scene, deep, ctx.materials, ctx.lighting, ctx.plan.shade(), &pre, ctx.stats, nullptr, direct.get()));
     };
 }
 
@@ -137,7 +137,7 @@ std::vector<Indirect> brute_gather_pass(const FrameContext& ctx, const BruteGath
     Gatherer gatherer(ctx.scene, ctx.accel, ctx.materials, ctx.lighting, radiosity, frame_gather_settings(ctx, false));
     const auto every_fragment = [&](const DeepBuffer& of) {
         return ctx.comm.size() == 1 ? gather_every_fragment(ctx.scene, of, gatherer, ctx.stats, ctx.progress)
-                                    : indirect_in_tiles(ctx.comm, of, ctx.plan.tiling.tile_size, [&](const DeepBuffer& tile) {
+                                    : indirect_in_tiles(ctx.comm, of, ctx.plan.tiling().tile_size, [&](const DeepBuffer& tile) {
                                           return gather_every_fragment(ctx.scene, tile, gatherer, ctx.stats, nullptr);
                                       });
     };

@@ -56,7 +56,7 @@ ShadeResult shade_window(const FrameContext& ctx, const ShadeStep& step, const D
         auto t0 = std::chrono::steady_clock::now();
         // Per-light indirect layers: each light's share of the records' light parts.
         const bool per_light = step.per_light && cache->has_light_parts(scene.lights.size());
-        InterpolatedLight light = interpolation_pass(scene, deep, *cache, ctx.plan.tiling, ctx.stats, progress, true, per_light);
+        InterpolatedLight light = interpolation_pass(scene, deep, *cache, ctx.plan.tiling(), ctx.stats, progress, true, per_light);
         ctx.stats.set("interpolation_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         interpolated = std::move(light.light);
         shares = std::move(light.shares);
@@ -73,7 +73,7 @@ ShadeResult shade_window(const FrameContext& ctx, const ShadeStep& step, const D
         brute = &interpolated;
     }
     out.image =
-        shade(scene, deep, ctx.materials, ctx.lighting, ctx.plan.shade, step.indirect != IndirectFrom::None ? brute : nullptr, ctx.stats,
+        shade(scene, deep, ctx.materials, ctx.lighting, ctx.plan.shade(), step.indirect != IndirectFrom::None ? brute : nullptr, ctx.stats,
               progress, nullptr, sites.view(), step.deep_colour ? &out.colours : nullptr, shares.lights > 0 ? &shares : nullptr);
     return out;
 }
@@ -81,7 +81,7 @@ ShadeResult shade_window(const FrameContext& ctx, const ShadeStep& step, const D
 /// Each process shades its tiles; rank 0 takes the whole image (the others' stays empty).
 ShadeResult shade_in_tiles(const FrameContext& ctx, const ShadeStep& step, const DeepBuffer& deep, const IrradianceCache* cache,
                            const std::vector<Indirect>* brute, const SpecularSitesResult& specular, const RadiosityTextures* radiosity) {
-    const auto tiles = in_tiles(ctx.comm, window_of(deep), ctx.plan.tiling.tile_size, TilesTo::First, [&](const std::array<int, 4>& w) {
+    const auto tiles = in_tiles(ctx.comm, window_of(deep), ctx.plan.tiling().tile_size, TilesTo::First, [&](const std::array<int, 4>& w) {
         const DeepBuffer sub = sub_window(deep, w);
         const std::vector<Indirect> light = brute ? window_slice(deep, *brute, w) : std::vector<Indirect>();
         ShadeResult r = shade_window(ctx, step, sub, cache, brute ? &light : nullptr, specular, radiosity, nullptr);
@@ -119,8 +119,8 @@ ShadeResult shading_pass(const FrameContext& ctx, const ShadeStep& step, const D
         // A re-shade's quick look first: one pixel in 16 shaded exactly as the final image
         // shades it, standing for its 4x4 block.
         const DeepBuffer coarse = lattice_of(deep, 4);
-        const InterpolatedLight light = interpolation_pass(scene, coarse, *cache, ctx.plan.tiling, ctx.stats, nullptr);
-        Image look = shade(scene, coarse, ctx.materials, ctx.lighting, ctx.plan.shade, &light.light, ctx.stats, nullptr);
+        const InterpolatedLight light = interpolation_pass(scene, coarse, *cache, ctx.plan.tiling(), ctx.stats, nullptr);
+        Image look = shade(scene, coarse, ctx.materials, ctx.lighting, ctx.plan.shade(), &light.light, ctx.stats, nullptr);
         fill_blocks(look, 4);
         quick_look(look);
     }

@@ -11,7 +11,7 @@ SpecularSitesResult specular_sites_pass(const FrameContext& ctx, const SpecularS
     SpecularSitesResult out;
     const SpecularTracer tracer(ctx.scene, ctx.accel, ctx.lighting, ctx.materials, step.depth);
     PhaseTimer t(ctx.stats, "specular paths");
-    out.sites = specular_sites(ctx.scene, shaded, tracer, ctx.plan.tiling.tile_size, ctx.stats, ctx.progress);
+    out.sites = specular_sites(ctx.scene, shaded, tracer, ctx.plan.tiling().tile_size, ctx.stats, ctx.progress);
     ctx.stats.set("specular_sites", static_cast<double>(out.sites.fragments.size()));
     return out;
 }
@@ -32,7 +32,7 @@ SiteLightResult site_light_for(const FrameContext& ctx, SiteLightFrom from, cons
         case SiteLightFrom::Radiosity:
             break;
         case SiteLightFrom::Cache: {
-            InterpolatedLight light = interpolation_pass(ctx.scene, out.sites, *cache, ctx.plan.tiling, ctx.stats, nullptr, false);
+            InterpolatedLight light = interpolation_pass(ctx.scene, out.sites, *cache, ctx.plan.tiling(), ctx.stats, nullptr, false);
             out.light = std::move(light.light);
             out.misses = light.misses;
             out.has_light = true;

@@ -56,7 +56,7 @@ VisibilityResult visibility_pass(const FrameContext& ctx, const VisibilityStep& 
             }
             // Each process keeps the fragments of its own tiles, unless a crop's tiles differ
             // from the gathered window's or rank 0 writes the deep file.
-            out.gathered = visibility_in_tiles(ctx.comm, scene, ctx.accel, step.settings, plan.tiling.tile_size, ctx.stats,
+            out.gathered = visibility_in_tiles(ctx.comm, scene, ctx.accel, step.settings, plan.tiling().tile_size, ctx.stats,
                                                plan.gather_window, step.every_tile);
             break;
         }
