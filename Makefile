@@ -1,6 +1,7 @@
 # The two commands of the README: `make render` and `make test`.
 # Both install the Debian dependencies (scripts/install-deps.sh) and configure; `make render`
-# builds only the renderer, `make test` everything (the test suite, benchmarks).
+# builds only the renderer and the Python module (`import bounce` then works for the system
+# Python and Blender), `make test` everything (the test suite, benchmarks).
 BUILD ?= build
 JOBS ?= $(shell nproc)
 SCENE ?= scenes/cornell/cornell.json
@@ -17,9 +18,11 @@ configure: deps
 
 build: configure
 	cmake --build $(BUILD) -j $(JOBS)
+	./scripts/install-python.sh $(BUILD)
 
 renderer: configure
-	cmake --build $(BUILD) -j $(JOBS) --target bounce
+	cmake --build $(BUILD) -j $(JOBS) --target bounce bounce_python
+	./scripts/install-python.sh $(BUILD)
 
 render: renderer
 	mkdir -p $(dir $(OUT))

@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-30}
-cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBOUNCE_BUILD_PYTHON=OFF -DCMAKE_C_COMPILER=clang \
   -DCMAKE_CXX_COMPILER=clang++ -DBOUNCE_FUZZ=ON -DBOUNCE_BUILD_TESTS=OFF -DBOUNCE_BUILD_BENCH=OFF >/dev/null
 cmake --build build-fuzz --target cache_reader_fuzz scene_parser_fuzz render_fuzz deep_file_fuzz mesh_file_fuzz mesh_cache_fuzz -j "$(nproc)"
 for target in cache_reader_fuzz:cache scene_parser_fuzz:scene render_fuzz:render deep_file_fuzz:deep mesh_file_fuzz:mesh mesh_cache_fuzz:meshcache; do

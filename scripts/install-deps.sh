@@ -10,6 +10,8 @@ packages=(
   clang libclang-rt-dev clang-format python3-matplotlib
   libopenmpi-dev openmpi-bin
   libopencolorio-dev
+  python3-dev python3-pybind11 python3-numpy python3-pytest
+  blender
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -35,39 +35,9 @@ Scene load_render_scene(const RenderArgs& a, std::optional<double> frame) {
     LoadOptions options = load_options_from_environment();
     options.frame = frame;
     if (frame) options.frame_origin = a.frames.empty() ? fmt::format("--frame {:g}", *frame) : "--frames " + a.frames;
-    Scene scene = load_scene(a.files.scene, o, options);
-    const bool cache = param_value(scene, "render.gi") == "cache";
-    if (!cache && !a.files.cache_out.empty())
-        throw InputError("command line", "--cache-out " + a.files.cache_out, "only a --gi cache render makes a cache");
-    if (!cache && !a.files.cache_in.empty() && a.show != "records")
-        throw InputError("command line", "--cache-in " + a.files.cache_in, "only a --gi cache render (or --show records) uses a cache");
-    VisibilitySettings visibility;  // for has_crop(): what a crop is is the settings' to say
-    visibility.crop = param_value(scene, "render.crop").get<std::array<int, 4>>();
-    if (!a.files.base.empty() && !visibility.has_crop())
-        throw InputError("command line", "--base " + a.files.base, "--base fills the pixels outside --crop; give a crop");
-    if (a.reuse_any && a.regather) throw InputError("command line", "--cache-reuse-any", "cannot be combined with --regather");
-    if (a.regather && !a.frames.empty())
-        throw InputError("command line", "--regather",
-                         "a sequence's frames start from the frame before; render a frame alone (--frame) to gather it anew");
+    Scene scene = load_scene(a.job.files.scene, o, options);
+    check_job(a.job, scene, !a.frames.empty());
     return scene;
-}
-
-/// The scene's load as the first phases of its frame's statistics (mesh files apart).
-void add_load_phases(Stats& stats, const Scene& scene) {
-    stats.add_phase("scene load", scene.load_times.seconds - scene.load_times.mesh_parse_seconds);
-    stats.add_phase("mesh parse", scene.load_times.mesh_parse_seconds);
-}
-
-RenderRequest request_of(const RenderArgs& a, const FrameFiles& files, int frame) {
-    RenderRequest request;
-    request.deep_in = files.deep_in;
-    request.deep_out = files.deep_out;
-    request.cache_in = files.cache_in;
-    request.kind = a.regather ? FrameKind::Regather : FrameKind::Still;
-    request.force = a.force;
-    request.cache_reuse = a.reuse_any ? CacheReuse::Any : CacheReuse::Strict;
-    request.frame = frame;
-    return request;
 }
 
 /// Rank 0 writes a frame's outputs and talks to the user; every rank renders.
@@ -86,8 +56,8 @@ void check_ranks(const RenderArgs& a, const Scene& scene) {
     std::string command;
     for (const auto& o : a.sets) command += " --set " + o;
     const std::string identity =
-        fmt::format("bounce {} ({}), {} {}{} (scene {:016x})", bounce_version(), bounce_revision(), a.files.scene, a.files.output, command,
-                    scene.fingerprint({"objects", "materials", "lights", "camera", "render"}));
+        fmt::format("bounce {} ({}), {} {}{} (scene {:016x})", bounce_version(), bounce_revision(), a.job.files.scene, a.job.files.output,
+                    command, scene.fingerprint({"objects", "materials", "lights", "camera", "render"}));
     check_same_job(*a.comm, identity);
 }
 
@@ -99,9 +69,7 @@ void print_stats(const Stats& stats, const FramePlan& plan) {
 /// Everything that can be refused is refused before any work: outputs against every file the
 /// scene reads, the layer --show names, the base a crop is pasted over.
 void check_frame(const RenderArgs& a, const FrameFiles& files, const Scene& scene, const FramePlan& plan) {
-    files.check(scene);
-    check_show_layer(a.show, plan);
-    if (!files.base.empty()) check_base(files.base, scene);
+    check_job_frame(a.job, files, scene, plan);
     // Nothing dropped in silence: what the mesh files carry that is not read, once a run (a
     // sequence's frames read the same files), once the frame is sure to render.
     static bool noted = false;
@@ -124,7 +92,7 @@ void report(const RenderArgs& a, const RenderResult& r, const FrameFiles& files,
 int render_frame(const RenderArgs& a, const FrameFiles& files) {
     const Scene scene = load_render_scene(a, a.frame);
     check_ranks(a, scene);
-    RenderRequest request = request_of(a, files, static_cast<int>(std::lround(scene.frame)));
+    RenderRequest request = job_request(a.job, files, static_cast<int>(std::lround(scene.frame)));
     request.comm = a.comm;
     // The plan calls it where render.preview asks for one; a preview needs every band.
     if (!a.comm || a.comm->size() == 1)
@@ -140,7 +108,7 @@ int render_frame(const RenderArgs& a, const FrameFiles& files) {
     add_load_phases(stats, scene);
     RenderResult r = run_frame(scene, plan, none, request, stats, sink.get());
     if (!writes(a.comm)) return 0;
-    write_frame_outputs(r, files, a.show, stats);
+    write_frame_outputs(r, files, a.job.show, stats);
     report(a, r, files, stats);
     return 0;
 }
@@ -193,7 +161,7 @@ int render_sequence(const RenderArgs& a, int first, int last, int shot_first, Co
     Shot shot;
     std::unique_ptr<ProgressSink> sink = make_progress(a.quiet || !writes(comm));
     for (int f = first; f <= last; ++f) {
-        const FrameFiles files = expand_frame(a.files, f);
+        const FrameFiles files = expand_frame(a.job.files, f);
         if (a.resume && rank0_says(comm, outputs_complete(files))) {
             shot.forget();
             if (!a.quiet && writes(comm)) std::fprintf(stderr, "frame %d: outputs complete, skipped\n", f);
@@ -202,20 +170,21 @@ int render_sequence(const RenderArgs& a, int first, int last, int shot_first, Co
         auto scene = std::make_shared<const Scene>(load_render_scene(a, f));
         if (f == first && comm) check_ranks(a, *scene);
         check_range_in_shot(a, *scene, last);
-        if (writes(comm)) check_frame(a, files, *scene, plan_frame(*scene, {}, request_of(a, files, f)));
+        if (writes(comm)) check_frame(a, files, *scene, plan_frame(*scene, {}, job_request(a.job, files, f)));
         // A resumed shot starts from the cache the frame before left, when there is one.
-        const std::string before = f > shot_first && !a.files.cache_out.empty() ? expand_frame_pattern(a.files.cache_out, f - 1) : "";
+        const std::string before =
+            f > shot_first && !a.job.files.cache_out.empty() ? expand_frame_pattern(a.job.files.cache_out, f - 1) : "";
         if (!shot.has_previous() && !before.empty() && (f > first || before_ok) &&
             rank0_says(comm, std::filesystem::is_regular_file(before)))
             shot.start_from(std::make_shared<const Scene>(load_render_scene(a, f - 1)), before);
         Stats stats;
         add_load_phases(stats, *scene);
-        RenderRequest request = request_of(a, files, f);
+        RenderRequest request = job_request(a.job, files, f);
         request.comm = comm;
         if (f > shot_first || shot.has_previous()) request.cache_in.clear();  // the shot carries its own cache
         RenderResult r = shot.render(scene, request, stats, sink.get());
         if (writes(comm)) {
-            write_frame_outputs(r, files, a.show, stats);
+            write_frame_outputs(r, files, a.job.show, stats);
             report(a, r, files, stats);
         }
         shot.keep(r, scene);
@@ -233,8 +202,8 @@ int render_frame_chunks(const RenderArgs& a, int first, int last) {
     const int ranks = a.comm->size(), r = a.comm->rank(), n = last - first + 1;
     const int lo = first + static_cast<int>(static_cast<int64_t>(n) * r / ranks);
     const int hi = first + static_cast<int>(static_cast<int64_t>(n) * (r + 1) / ranks) - 1;
-    const bool before_ok =
-        lo > first && !a.files.cache_out.empty() && std::filesystem::is_regular_file(expand_frame_pattern(a.files.cache_out, lo - 1));
+    const bool before_ok = lo > first && !a.job.files.cache_out.empty() &&
+                           std::filesystem::is_regular_file(expand_frame_pattern(a.job.files.cache_out, lo - 1));
     a.comm->allgather("");  // every rank has looked before any renders
     if (lo > hi) return 0;  // more ranks than frames
     return render_sequence(a, lo, hi, first, nullptr, before_ok);
@@ -264,7 +233,7 @@ Distribute parse_distribute(const std::string& name) {
 
 int run_render(const RenderArgs& given) {
     RenderArgs a = given;
-    a.files.display = std::make_shared<const DisplayTransform>(a.display, std::getenv("OCIO"));
+    a.job.files.display = std::make_shared<const DisplayTransform>(a.display, std::getenv("OCIO"));
     const bool chunks = parse_distribute(a.distribute) == Distribute::Frames;
     if (a.frames.empty()) {
         if (a.resume) throw InputError("command line", "--resume", "goes with --frames");
@@ -275,15 +244,15 @@ int run_render(const RenderArgs& given) {
                              fmt::format("a frame must be a finite number within +-{:g}", kMaxFrame));
         const int whole = a.frame ? static_cast<int>(std::lround(*a.frame)) : 0;
         // A subframe's #### would be a neighbouring frame's name, and overwrite its files.
-        if (a.frame && *a.frame != whole && a.files.patterned())
+        if (a.frame && *a.frame != whole && a.job.files.patterned())
             throw InputError("command line", fmt::format("--frame {:g}", *a.frame), "a #### file name needs a whole frame number");
-        return render_frame(a, expand_frame(a.files, whole));
+        return render_frame(a, expand_frame(a.job.files, whole));
     }
     if (a.frame) throw InputError("command line", "--frame", "give --frame or --frames, not both");
     auto [first, last] = parse_frame_range(a.frames, "--frames " + a.frames);
-    std::vector<std::pair<const char*, std::string>> patterns{{"-o", a.files.output}};
-    for (auto [flag, path] : {std::pair{"--cache-out", a.files.cache_out}, std::pair{"--deep-out", a.files.deep_out},
-                              std::pair{"--stats-json", a.files.stats_json}})
+    std::vector<std::pair<const char*, std::string>> patterns{{"-o", a.job.files.output}};
+    for (auto [flag, path] : {std::pair{"--cache-out", a.job.files.cache_out}, std::pair{"--deep-out", a.job.files.deep_out},
+                              std::pair{"--stats-json", a.job.files.stats_json}})
         if (!path.empty()) patterns.emplace_back(flag, path);
     for (const auto& [flag, pattern] : patterns)
         if (pattern.find('#') == std::string::npos)
@@ -293,16 +262,16 @@ int run_render(const RenderArgs& given) {
 }
 
 void add_render_options(CLI::App& render, RenderArgs& ra) {
-    render.add_option("scene", ra.files.scene, "scene file (.json, or a glTF/OBJ/PLY with a camera)")->required();
-    render.add_option("-o,--output", ra.files.output, "output EXR (a PNG is written beside it; #### = frame)")->required();
+    render.add_option("scene", ra.job.files.scene, "scene file (.json, or a glTF/OBJ/PLY with a camera)")->required();
+    render.add_option("-o,--output", ra.job.files.output, "output EXR (a PNG is written beside it; #### = frame)")->required();
     add_param_flags(render, scene_params(), ra.flags);
-    render.add_option("--cache-in", ra.files.cache_in, "start from this irradiance cache file (#### = frame)");
-    render.add_option("--cache-out", ra.files.cache_out, "write the irradiance cache (#### = frame)");
-    render.add_flag("--regather", ra.regather, "flush the cache before gathering (with --crop: only the crop's records)");
-    render.add_flag("--cache-reuse-any", ra.reuse_any,
+    render.add_option("--cache-in", ra.job.files.cache_in, "start from this irradiance cache file (#### = frame)");
+    render.add_option("--cache-out", ra.job.files.cache_out, "write the irradiance cache (#### = frame)");
+    render.add_flag("--regather", ra.job.regather, "flush the cache before gathering (with --crop: only the crop's records)");
+    render.add_flag("--cache-reuse-any", ra.job.reuse_any,
                     "keep a --cache-in gathered with other settings, gather only where it misses (the stats say so)");
-    render.add_flag("--force", ra.force, "use a cache made for another scene or camera");
-    render.add_option("--base", ra.files.base, "with --crop: an earlier full-frame EXR to paste the crop over");
+    render.add_flag("--force", ra.job.force, "use a cache made for another scene or camera");
+    render.add_option("--base", ra.job.files.base, "with --crop: an earlier full-frame EXR to paste the crop over");
     // A decimal number only: strtod also reads "0x2" as 2, and an empty value left frame 1.
     render.add_option("--frame", ra.frame, "render this frame of the shot (keyed values taken then; expands #### in file names)")
         ->check(CLI::Validator(
@@ -315,12 +284,12 @@ void add_render_options(CLI::App& render, RenderArgs& ra) {
     render.add_flag("--resume", ra.resume, "with --frames: skip frames whose outputs are all there");
     render.add_option("--distribute", ra.distribute,
                       "under mpirun with --frames: tiles (every rank on every frame) or frames (a chunk of frames per rank)");
-    render.add_option("--show", ra.show, "layer written to the PNG: beauty (default), records, indirect, ao ...");
+    render.add_option("--show", ra.job.show, "layer written to the PNG: beauty (default), records, indirect, ao ...");
     render.add_option("--set", ra.sets, "override any scene value: key.path=value")->take_all();
-    render.add_option("--deep-out", ra.files.deep_out, "write the deep buffer (OpenEXR deep)");
-    render.add_option("--deep-in", ra.files.deep_in, "shade from a deep buffer instead of tracing visibility");
+    render.add_option("--deep-out", ra.job.files.deep_out, "write the deep buffer (OpenEXR deep)");
+    render.add_option("--deep-in", ra.job.files.deep_in, "shade from a deep buffer instead of tracing visibility");
     render.add_flag("--stats", ra.stats, "print statistics");
-    render.add_option("--stats-json", ra.files.stats_json, "write statistics as JSON");
+    render.add_option("--stats-json", ra.job.files.stats_json, "write statistics as JSON");
     render.add_flag("-q,--quiet", ra.quiet, "no progress output");
     add_display_options(render, ra.display);
 }

@@ -11,6 +11,7 @@
 #include "bounce/core/communicator.h"
 #include "bounce/core/progress.h"
 #include "bounce/render/frame.h"
+#include "frontend/frame_job.h"
 #include "bounce/scene/json_reader.h"
 
 namespace bounce {
@@ -24,11 +25,10 @@ enum class Distribute : uint8_t {
 Distribute parse_distribute(const std::string& name);
 
 struct RenderArgs {
-    FrameFiles files;
+    FrameJob job;  ///< the files and how the cache is treated
     std::vector<std::string> sets;
     std::vector<Override> flags;  ///< from the parameter table's flags
-    bool regather = false, force = false, reuse_any = false;
-    std::string show = "beauty", frames;
+    std::string frames;
     std::optional<double> frame;  ///< default: the shot's first frame
     bool stats = false, quiet = false, resume = false;
     /// Under mpirun: the job's ranks (null: this process alone), and how a --frames range is

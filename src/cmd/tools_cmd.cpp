@@ -240,12 +240,7 @@ int run_compare(const CompareArgs& a) {
     if (ref.find(diff_layer) && ref.find(diff_layer)->channels.size() >= 1)
         write_png_rgb8(diff, ref.width, ref.height, error_false_colour(test, ref, diff_layer, range));
     if (a.json) {
-        nlohmann::json j = nlohmann::json::object();
-        for (const auto& e : errors)
-            j[e.layer] = {{"rmse", e.rmse},       {"rel_rmse", std::isnan(e.rel_rmse) ? nlohmann::json() : nlohmann::json(e.rel_rmse)},
-                          {"relmse", e.relmse},   {"mean_abs", e.mean_abs},
-                          {"max_abs", e.max_abs}, {"mean_ref", e.mean_ref}};
-        std::printf("%s\n", j.dump(2).c_str());
+        std::printf("%s\n", layer_errors_json(errors).dump(2).c_str());
     } else {
         std::printf("%-18s %12s %10s %12s %12s %12s %12s\n", "layer", "rmse", "rel_rmse", "relmse", "mean_abs", "max_abs", "mean_ref");
         for (const auto& e : errors)
@@ -282,27 +277,16 @@ int run_cache_info(const CacheArgs& a) {
 }
 
 namespace {
-/// A tool's output of the kind it writes: a scene or an image named by mistake is never overwritten.
-void check_output_kind(const std::string& path, const char* extension, const char* what) {
-    if (lower_extension(path) != extension)
-        throw InputError("command line", "-o " + path, fmt::format("{} is written as a {} file", what, extension));
-}
+ToolCall cli_call(const CacheArgs& a, const char* command) { return {"command line", "-o " + a.output, command}; }
 }  // namespace
 
 int run_cache_merge(const CacheArgs& a) {
-    check_output_kind(a.output, ".bic", "the merged cache");
-    check_output_file(a.output, a.inputs);
-    if (a.inputs.size() < 2) throw InputError("command line", "cache merge", "give at least two caches to merge");
-    CacheFile out = read_cache_file(a.inputs[0]);
-    for (size_t i = 1; i < a.inputs.size(); ++i) out = merge_caches(out, read_cache_file(a.inputs[i]), a.inputs[0], a.inputs[i], a.force);
-    write_cache_file(a.output, out);
+    const CacheFile out = merge_cache_files(cli_call(a, "cache merge"), a.inputs, a.output, a.force);
     std::fprintf(stderr, "%s: %zu records, %zu fragment records\n", a.output.c_str(), out.records.size(), out.fragment_records.size());
     return 0;
 }
 
 int run_cache_filter(const CacheArgs& a) {
-    check_output_kind(a.output, ".bic", "the filtered cache");
-    check_output_file(a.output, a.inputs);
     RecordFilter filter;
     if (!a.box.empty()) {
         auto v = parse_floats(a.box, 6, "--box");
@@ -318,19 +302,14 @@ int run_cache_filter(const CacheArgs& a) {
         if (!(filter.radius > 0)) throw InputError("command line", "--sphere " + a.sphere, "the radius must be > 0");
     }
     for (const auto& w : a.where) filter.where.push_back(WhereTerm::parse(w));
-    if (!filter.has_box && !filter.has_sphere && filter.where.empty())
-        throw InputError("command line", "cache filter", "give --box, --sphere or --where");
-    CacheFile in = read_cache_file(a.inputs.at(0));
-    CacheFile out = filter_cache(in, filter, a.remove);
-    write_cache_file(a.output, out);
+    const auto [in, out] = filter_cache_file(cli_call(a, "cache filter"), a.inputs.at(0), a.output, filter, a.remove);
     std::fprintf(stderr, "%s: kept %zu of %zu records, %zu of %zu fragment records\n", a.output.c_str(), out.records.size(),
                  in.records.size(), out.fragment_records.size(), in.fragment_records.size());
     return 0;
 }
 
 int run_cache_export(const CacheArgs& a) {
-    check_output_kind(a.output, ".ply", "the exported point cloud");
-    check_output_file(a.output, a.inputs);
+    check_tool_output(cli_call(a, "cache export"), a.output, ".ply", "the exported point cloud", a.inputs);
     CacheFile f = read_cache_file(a.inputs.at(0));
     export_ply(f, a.output);
     std::fprintf(stderr, "%s: %zu points\n", a.output.c_str(), f.records.size());

@@ -12,6 +12,7 @@
 #include "bounce/cache/irradiance_cache.h"
 #include "bounce/core/atomic_file.h"
 #include "bounce/core/error.h"
+#include "bounce/core/files.h"
 #include "bounce/config/params.h"
 #include "bounce/core/image.h"
 
@@ -308,6 +309,33 @@ void export_ply(const CacheFile& f, const std::string& path) {
         out << header << body;
         if (!out) throw InputError(path, "", "cannot write PLY file");
     });
+}
+
+void check_tool_output(const ToolCall& call, const std::string& output, const char* extension, const char* what,
+                       const std::vector<std::string>& inputs) {
+    if (lower_extension(output) != extension)
+        throw InputError(call.source, call.output_place, fmt::format("{} is written as a {} file", what, extension));
+    check_output_file(output, inputs);
+}
+
+CacheFile merge_cache_files(const ToolCall& call, const std::vector<std::string>& inputs, const std::string& output, bool force) {
+    check_tool_output(call, output, ".bic", "the merged cache", inputs);
+    if (inputs.size() < 2) throw InputError(call.source, call.command, "give at least two caches to merge");
+    CacheFile out = read_cache_file(inputs[0]);
+    for (size_t i = 1; i < inputs.size(); ++i) out = merge_caches(out, read_cache_file(inputs[i]), inputs[0], inputs[i], force);
+    write_cache_file(output, out);
+    return out;
+}
+
+std::pair<CacheFile, CacheFile> filter_cache_file(const ToolCall& call, const std::string& input, const std::string& output,
+                                                  const RecordFilter& filter, bool remove) {
+    check_tool_output(call, output, ".bic", "the filtered cache", {input});
+    if (!filter.has_box && !filter.has_sphere && filter.where.empty())
+        throw InputError(call.source, call.command, "give a box, a sphere or a where term");
+    CacheFile in = read_cache_file(input);
+    CacheFile out = filter_cache(in, filter, remove);
+    write_cache_file(output, out);
+    return {std::move(in), std::move(out)};
 }
 
 }  // namespace bounce

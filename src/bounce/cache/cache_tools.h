@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bounce/cache/cache_file.h"
@@ -46,6 +47,22 @@ struct RecordFilter {
 
 /// Keeps the records matching `filter` (or removes them when `remove`).
 CacheFile filter_cache(const CacheFile& in, const RecordFilter& filter, bool remove);
+
+/// Who asks a tool to write a file, for its refusals: the CLI ("command line", "-o PATH",
+/// "cache merge") or Python ("python", "merge(output='PATH')", "merge()").
+struct ToolCall {
+    std::string source, output_place, command;
+};
+/// InputError(call) unless `output` ends in `extension` (a scene or an image named by mistake
+/// is never overwritten) and names none of `inputs` (check_output_file).
+void check_tool_output(const ToolCall& call, const std::string& output, const char* extension, const char* what,
+                       const std::vector<std::string>& inputs);
+/// `bounce cache merge`: the cache files `inputs` (two or more) merged into `output`.
+CacheFile merge_cache_files(const ToolCall& call, const std::vector<std::string>& inputs, const std::string& output, bool force);
+/// `bounce cache filter`: the records of `input` that `filter` keeps (or removes), into `output`.
+/// `filter` must say something (a box, a sphere or a where term); returns the input and output.
+std::pair<CacheFile, CacheFile> filter_cache_file(const ToolCall& call, const std::string& input, const std::string& output,
+                                                  const RecordFilter& filter, bool remove);
 
 /// Writes a binary PLY point cloud: position, normal, tone-mapped irradiance colour, and the
 /// raw irradiance, AO and radius as extra properties (MeshLab, CloudCompare, Blender).

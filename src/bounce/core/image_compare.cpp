@@ -116,4 +116,13 @@ std::vector<uint8_t> error_false_colour(const Image& test, const Image& ref, con
     return rgb;
 }
 
+nlohmann::json layer_errors_json(const std::vector<LayerError>& errors) {
+    nlohmann::json j = nlohmann::json::object();
+    for (const auto& e : errors)
+        j[e.layer] = {{"rmse", e.rmse},       {"rel_rmse", std::isnan(e.rel_rmse) ? nlohmann::json() : nlohmann::json(e.rel_rmse)},
+                      {"relmse", e.relmse},   {"mean_abs", e.mean_abs},
+                      {"max_abs", e.max_abs}, {"mean_ref", e.mean_ref}};
+    return j;
+}
+
 }  // namespace bounce

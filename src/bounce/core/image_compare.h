@@ -1,6 +1,7 @@
 // Error between two renders, per layer: what `bounce compare` prints and the benchmarks use.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,10 @@ inline constexpr const char* kBeautyRefDirect = "beauty_ref_direct";
 /// background aside).
 std::vector<LayerError> compare_images(const Image& test, const Image& reference, const std::string& layer, const std::string& test_path,
                                        const std::string& ref_path = "reference");
+
+/// {layer: {rmse, rel_rmse (null where the reference's mean is 0), relmse, mean_abs, max_abs,
+/// mean_ref}}: what `bounce compare --json` prints.
+nlohmann::json layer_errors_json(const std::vector<LayerError>& errors);
 
 /// False-colour map of the per-pixel error of `layer` (mean over channels of |a - b|), black
 /// at 0 through blue, red and yellow to white at `range`.

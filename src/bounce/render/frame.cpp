@@ -25,12 +25,14 @@ namespace fs = std::filesystem;
 std::string FrameFiles::png() const { return fs::path(output).replace_extension(".png").string(); }
 
 void FrameFiles::check(const Scene& loaded) const {
-    if (lower_extension(output) != ".exr")
+    // No output: a front end that keeps the image in memory (Python, the lighting tool).
+    if (!output.empty() && lower_extension(output) != ".exr")
         throw InputError("command line", "-o " + output, "the output is an OpenEXR file (.exr); its PNG is written beside it");
     std::vector<std::string> inputs = loaded.input_paths();
     inputs.insert(inputs.end(), {scene, deep_in, cache_in, base});
     inputs.insert(inputs.end(), display->files().begin(), display->files().end());  // the OpenColorIO config and its LUTs
-    std::vector<std::pair<std::string, std::string>> outputs{{"-o", output}, {"-o", png()}};
+    std::vector<std::pair<std::string, std::string>> outputs;
+    if (!output.empty()) outputs = {{"-o", output}, {"-o", png()}};
     if (!deep_out.empty()) outputs.emplace_back("--deep-out", deep_out);
     if (!cache_out.empty()) outputs.emplace_back("--cache-out", cache_out);
     if (!stats_json.empty()) outputs.emplace_back("--stats-json", stats_json);
