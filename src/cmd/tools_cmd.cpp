@@ -166,7 +166,8 @@ int run_bake_ao(const BakeAoArgs& a) {
     bs.distance = a.distance ? static_cast<float>(*a.distance) : 4 * scene.objects[id].displacement_bound;
     if (!(bs.distance > 0))
         throw InputError("command line", "--distance", "object " + a.object + " is not displaced: give the occlusion distance");
-    SceneAccel accel(scene, scene.render.lighting);
+    // The BVHs and ray offset a still of the scene would build (its plan says how).
+    SceneAccel accel(scene, plan_frame(scene, FrameState{}, RenderRequest{}).find<AccelStep>()->lighting);
     Stats stats;
     const std::unique_ptr<ProgressSink> progress = make_progress(false);
     const std::vector<float> ao = bake_ao(scene, accel, id, bs, stats, progress.get());

@@ -82,7 +82,7 @@ std::shared_ptr<const UvMap> load_uv_map(const JsonReader& r, const std::string&
 
 }  // namespace
 
-std::shared_ptr<Fur> read_fur(const JsonReader& r, const TriangleMesh& surface, const Scene& scene) {
+std::shared_ptr<Fur> read_fur(const JsonReader& r, const TriangleMesh& surface, const DicingSettings& dicing) {
     FurParams p;
     constexpr int kMaxStrands = 2'000'000'000;
     if (r.has("count") == r.has("density")) r.fail("", "fur needs one of \"count\" (strands) or \"density\" (strands per unit area)");
@@ -129,12 +129,12 @@ std::shared_ptr<Fur> read_fur(const JsonReader& r, const TriangleMesh& surface, 
     p.length_map = load_uv_map(r, "length_texture");
     if ((p.density_map || p.length_map) && surface.uvs.empty())
         r.fail(p.density_map ? "density_texture" : "length_texture", "the growing surface has no uvs to look the map up with");
-    const double budget = static_cast<double>(scene.render.dicing.memory_budget) * 1073741824.0;
+    const double budget = static_cast<double>(dicing.memory_budget) * 1073741824.0;
     const auto bytes = static_cast<double>(p.memory_bytes(p.count));
     const std::string key = r.has("count") ? "count" : "density";
     if (bytes > budget)
         r.fail(key, fmt::format("{} strands would take {:.1f} GiB, over render.memory_budget ({:g} GiB)", p.count, bytes / 1073741824.0,
-                                scene.render.dicing.memory_budget));
+                                dicing.memory_budget));
     if (std::string why = memory_shortfall(bytes, fmt::format("growing {} strands", p.count)); !why.empty()) r.fail(key, why);
     return std::make_shared<Fur>(grow_fur(surface, p));
 }

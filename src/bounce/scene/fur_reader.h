@@ -18,6 +18,6 @@ const std::vector<std::string>& fur_keys();
 const std::vector<std::string>& fur_lighting_keys();
 
 /// Reads `r` (the object's "fur" block) and grows the fur on `surface`.
-std::shared_ptr<Fur> read_fur(const JsonReader& r, const TriangleMesh& surface, const Scene& scene);
+std::shared_ptr<Fur> read_fur(const JsonReader& r, const TriangleMesh& surface, const DicingSettings& dicing);
 
 }  // namespace bounce

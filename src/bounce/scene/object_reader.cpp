@@ -143,13 +143,14 @@ TriangleMesh groom_surface(const JsonReader& r, const Scene& scene, size_t index
 
 /// An object's fur: grown on its surface, or for a mover grown on its groom and carried to the
 /// frame's pose, so that a shot's frames show the same strands moving with the surface.
-void read_object_fur(const JsonReader& fur, const JsonReader& r, const Scene& scene, size_t index, Object& obj) {
+void read_object_fur(const JsonReader& fur, const JsonReader& r, const Scene& scene, const DicingSettings& dicing, size_t index,
+                     Object& obj) {
     if (!obj.moves) {
-        obj.fur = read_fur(fur, obj.visible(), scene);
+        obj.fur = read_fur(fur, obj.visible(), dicing);
         return;
     }
     const TriangleMesh groom = groom_surface(r, scene, index, obj);
-    std::shared_ptr<Fur> grown = read_fur(fur, groom, scene);
+    std::shared_ptr<Fur> grown = read_fur(fur, groom, dicing);
     carry_fur(*grown, groom, obj.visible());
     obj.fur = std::move(grown);
 }
@@ -199,7 +200,7 @@ void make_prototype(const JsonReader& r, const Scene& scene, Object& obj) {
 }
 }  // namespace
 
-void check_generated_geometry(const JsonReader& root, const nlohmann::json& objects, const Scene& scene) {
+void check_generated_geometry(const JsonReader& root, const nlohmann::json& objects, const DicingSettings& dicing) {
     // An icosphere of level L has 20 x 4^L triangles; with its vertices, normals and its share of
     // a BVH, about 100 bytes each.
     constexpr double kBytesPerTriangle = 100;
@@ -216,11 +217,11 @@ void check_generated_geometry(const JsonReader& root, const nlohmann::json& obje
         triangles += 20 * std::pow(4.0, coarse) + (fine > 0 ? 20 * std::pow(4.0, std::min(8, coarse + fine)) : 0);
         ++spheres;
     }
-    const double bytes = triangles * kBytesPerTriangle, budget = static_cast<double>(scene.render.dicing.memory_budget) * 1073741824.0;
+    const double bytes = triangles * kBytesPerTriangle, budget = static_cast<double>(dicing.memory_budget) * 1073741824.0;
     if (bytes > budget)
         root.fail("objects", fmt::format("{} spheres would be tessellated into {:.3g} triangles, about {:.1f} GiB, over "
                                          "render.memory_budget ({:g} GiB); lower their subdivisions or fine_subdivisions",
-                                         spheres, triangles, bytes / 1073741824.0, scene.render.dicing.memory_budget));
+                                         spheres, triangles, bytes / 1073741824.0, dicing.memory_budget));
     if (std::string why = memory_shortfall(bytes, fmt::format("tessellating {} spheres", spheres)); !why.empty()) root.fail("objects", why);
 }
 
@@ -320,7 +321,7 @@ int read_sphere_object(const JsonReader& r, Scene& scene, int mat, Object& obj) 
 
 }  // namespace
 
-void read_object(const JsonReader& r, Scene& scene, size_t index, std::vector<Object>& later) {
+void read_object(const JsonReader& r, Scene& scene, const DicingSettings& dicing, size_t index, std::vector<Object>& later) {
     Object obj;
     obj.name = r.string("name", fmt::format("object{}", index));
     obj.moves = placement_keyed(scene, index);  // or, below, it plays an animation of its file
@@ -335,7 +336,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index, std::vector<Ob
     std::vector<MeshFileParts::Shared> shared;  // a mesh file's meshes that several of its nodes place
     const std::string subdivision = r.choice("subdivision", "none", {"none", "catmull-clark", "loop"});
     if (type == "mesh" && subdivision != "none") {
-        read_subdivision_object(r, scene, mat, obj, subdivision == "loop" ? SubdivScheme::Loop : SubdivScheme::CatmullClark);
+        read_subdivision_object(r, scene, mat, obj, subdivision == "loop" ? SubdivScheme::Loop : SubdivScheme::CatmullClark, dicing);
     } else if (type == "mesh") {
         fine = read_mesh_object(r, scene, mat, obj, shared);
     } else if (type == "quad") {
@@ -363,7 +364,7 @@ void read_object(const JsonReader& r, Scene& scene, size_t index, std::vector<Ob
     for (const auto& p : obj.coarse.positions)
         if (!within(p, kMaxCoordinate))
             r.fail("", fmt::format("mesh has vertex positions that are not finite or beyond +-{:g} (after the transform)", kMaxCoordinate));
-    if (r.has("fur")) read_object_fur(JsonReader(r.raw("fur"), r.at("fur"), r.ctx(), fur_keys()), r, scene, index, obj);
+    if (r.has("fur")) read_object_fur(JsonReader(r.raw("fur"), r.at("fur"), r.ctx(), fur_keys()), r, scene, dicing, index, obj);
     if (obj.prototype) make_prototype(r, scene, obj);
     scene.objects.push_back(std::move(obj));
 }

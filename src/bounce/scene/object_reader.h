@@ -20,12 +20,12 @@ const std::vector<std::string>& object_keys();
 /// nodes share meshes (glTF) places them as instances: those go to `later` (appended after the
 /// scene file's entries, which keep their indices), unless the file has nothing else, when the
 /// first takes the object's place.
-void read_object(const JsonReader& r, Scene& scene, size_t index, std::vector<Object>& later);
+void read_object(const JsonReader& r, Scene& scene, const DicingSettings& dicing, size_t index, std::vector<Object>& later);
 
 /// Before any object is read: the triangles the scene's spheres will be tessellated into (both
 /// levels), against render.memory_budget and free memory, with the estimate (100 000 spheres
 /// ran for minutes into 14 GB before the camera was found to see none of them).
-void check_generated_geometry(const JsonReader& root, const nlohmann::json& objects, const Scene& scene);
+void check_generated_geometry(const JsonReader& root, const nlohmann::json& objects, const DicingSettings& dicing);
 
 /// The visible mesh of mesh object `r` (one that plays its file's animation) posed at `frame`
 /// and placed by `r`'s transform: a deforming mesh at shutter open and close (motion blur), and

@@ -32,7 +32,8 @@ namespace {
 
 /// Reads one section's rows of the parameter table ("camera", "render"): keys not in the table
 /// are errors with a suggestion, every value is checked as the type it is used in.
-void read_params(const json& j, const std::string& section, Scene& scene, const JsonContext& ctx) {
+void read_params(const json& j, const std::string& section, ParamsOut out, std::vector<std::string>& input_folders,
+                 const JsonContext& ctx) {
     const ParamTable& table = scene_params();
     std::vector<std::string> allowed;
     for (const Param& p : table)
@@ -55,9 +56,9 @@ void read_params(const json& j, const std::string& section, Scene& scene, const 
             const auto st = fs::status(v.get<std::string>(), ec);
             if (!ec && st.type() != fs::file_type::not_found && st.type() != fs::file_type::directory)
                 ctx.fail(ptr, "\"" + v.get<std::string>() + "\" is not a folder");
-            scene.input_folders.push_back(v.get<std::string>());
+            input_folders.push_back(v.get<std::string>());
         }
-        p.set(scene, v);
+        p.set(out, v);
     }
 }
 
@@ -87,7 +88,7 @@ void add_shutter_positions(Scene& scene, const JsonContext& ctx) {
     for (size_t k = 0; k < 2; ++k) {
         docs[k] = scene.keyed.is_object() ? evaluate_keys(scene.keyed, scene.frame + scene.camera.shutter[k], ctx) : scene.description;
         Scene then;  // the camera section alone, checked as the frame's is
-        read_params(docs[k]["camera"], "camera", then, ctx);
+        read_params(docs[k]["camera"], "camera", then, then.input_folders, ctx);
         check_camera(then.camera, ctx,
                      fmt::format(" at shutter {} (frame {:g})", k ? "close" : "open", scene.frame + scene.camera.shutter[k]));
         scene.camera.shutter_pose[k] = then.camera.pose();
@@ -158,11 +159,10 @@ void check_overridden_values(const json& doc, const std::vector<Override>& overr
 }
 
 /// render.max_spacing against min_spacing, and a crop inside the image.
-void check_frame_settings(const Scene& scene, const JsonContext& ctx) {
-    const Camera& cam = scene.camera;
-    const CacheSettings& cs = scene.render.cache;
+void check_frame_settings(const Camera& cam, const RenderSettings& render, const JsonContext& ctx) {
+    const CacheSettings& cs = render.cache;
     if (cs.max_spacing < cs.min_spacing) ctx.fail("/render/max_spacing", "max_spacing is below min_spacing");
-    const auto& crop = scene.render.visibility.crop;
+    const auto& crop = render.visibility.crop;
     // Only all zeros means the full frame: [4, 4, 4, 4] is an empty window, not no crop.
     const bool crop_given = crop[0] != 0 || crop[1] != 0 || crop[2] != 0 || crop[3] != 0;
     if (crop_given && (crop[0] >= crop[1] || crop[2] >= crop[3] || crop[1] > cam.width || crop[3] > cam.height))
@@ -172,18 +172,18 @@ void check_frame_settings(const Scene& scene, const JsonContext& ctx) {
 
 /// Every object: instancers last (their prototypes may come after them), each holding its index
 /// meanwhile; then the meshes a mesh file's nodes share.
-void read_objects(const JsonReader& root, Scene& scene, const JsonContext& ctx) {
+void read_objects(const JsonReader& root, Scene& scene, const DicingSettings& dicing, const JsonContext& ctx) {
     if (!root.has("objects")) root.fail("", "missing required key \"objects\"");
     const json& objs = root.raw("objects");
     if (!objs.is_array() || objs.empty()) root.fail("objects", "expected a non-empty array of objects");
-    check_generated_geometry(root, objs, scene);
+    check_generated_geometry(root, objs, dicing);
     // Instancers last (their prototypes may come after them), each holding its index meanwhile.
     std::vector<Object> file_instances;  // meshes shared by a mesh file's nodes, after every entry
     for (size_t i = 0; i < objs.size(); ++i) {
         if (places_instances(objs[i]))
             scene.objects.emplace_back().instance = true;
         else
-            read_object(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), scene, i, file_instances);
+            read_object(JsonReader(objs[i], fmt::format("/objects/{}", i), ctx, object_keys()), scene, dicing, i, file_instances);
     }
     // Room for every placement at once: a vector of Objects that grew as they came would move
     // them all at each doubling (most of a 14 400-placement scene's load).
@@ -253,11 +253,15 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
     ctx.inputs = &scene.inputs;
     JsonReader root(scene.description, "", ctx, {"camera", "render", "materials", "lights", "objects", "description", "animation"});
 
-    if (root.has("render")) read_params(root.raw("render"), "render", scene, ctx);
+    // The file's render section: the loader hands each reader its part (the dicing), and the
+    // scene keeps the whole for the plan.
+    RenderSettings render;
+    if (root.has("render")) read_params(root.raw("render"), "render", ParamsOut{scene.camera, render}, scene.input_folders, ctx);
     if (!root.has("camera")) root.fail("", "missing required key \"camera\"");
-    read_params(root.raw("camera"), "camera", scene, ctx);
+    read_params(root.raw("camera"), "camera", ParamsOut{scene.camera, render}, scene.input_folders, ctx);
     check_camera(scene.camera, ctx);
-    check_frame_settings(scene, ctx);
+    check_frame_settings(scene.camera, render, ctx);
+    scene.render = render;
 
     // Materials.
     if (root.has("materials")) {
@@ -269,7 +273,7 @@ Scene build_scene(json doc, const std::string& path, const std::vector<Override>
         }
     }
 
-    read_objects(root, scene, ctx);
+    read_objects(root, scene, render.dicing, ctx);
 
     read_lights(root, scene, ctx);
     if (scene.camera.has_motion_blur()) add_shutter_positions(scene, ctx);

@@ -42,7 +42,7 @@ float projected_pixels(const Camera& cam, const Vec3& a, const Vec3& b) {
 
 }  // namespace
 
-void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object& obj, SubdivScheme scheme) {
+void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object& obj, SubdivScheme scheme, const DicingSettings& dicing) {
     SubdivSurface surf;
     surf.scheme = scheme;
     surf.boundary = r.choice("boundary", "edge-and-corner", {"edge-only", "edge-and-corner"}) == "edge-only"
@@ -76,15 +76,14 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
         }
         if (surf.control.face_uvs.empty()) d.fail("map", "the control mesh has no uvs to look the map up with");
     }
-    const DicingSettings& ds = scene.render.dicing;
-    const int ray_level = std::min(ds.ray_level, ds.max_level);
+    const int ray_level = std::min(dicing.ray_level, dicing.max_level);
     const int level = dicing_level(
-        surf.control, [&](const Vec3& p) { return pixels_per_unit(scene.camera, p); }, ds.shading_rate, ray_level, ds.max_level);
+        surf.control, [&](const Vec3& p) { return pixels_per_unit(scene.camera, p); }, dicing.shading_rate, ray_level, dicing.max_level);
     // The fine tessellation per control edge: about shading_rate pixels per diced edge from the
     // camera, never coarser than the ray tessellation (docs/displacement.md).
     const auto rate = [&](const Vec3& a, const Vec3& b) {
-        const float px = projected_pixels(scene.camera, a, b) / ds.shading_rate;
-        return static_cast<int>(std::clamp(std::round(px), static_cast<float>(1 << ray_level), static_cast<float>(1 << ds.max_level)));
+        const float px = projected_pixels(scene.camera, a, b) / dicing.shading_rate;
+        return static_cast<int>(std::clamp(std::round(px), static_cast<float>(1 << ray_level), static_cast<float>(1 << dicing.max_level)));
     };
     // Refuse a dicing that cannot fit before allocating it: per face its largest edge rate
     // squared (twice for quads, half per corner for n-gons), and the ray tessellation.

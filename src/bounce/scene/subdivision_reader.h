@@ -11,6 +11,6 @@
 namespace bounce {
 
 /// Object `obj` (read from `r`, its material `mat`, -1 = the file's own) diced with `scheme`.
-void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object& obj, SubdivScheme scheme);
+void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object& obj, SubdivScheme scheme, const DicingSettings& dicing);
 
 }  // namespace bounce
