@@ -96,3 +96,29 @@ def checker_alpha_image(path, n=64, cells=4):
     img.file_format = "PNG"
     img.save()
     return img
+
+
+def scattered():
+    """A pebble scattered by a hair particle system (50) and by geometry nodes (5 x 4 grid)."""
+    scene = empty_scene(32, 32)
+    stone = material("stone", (0.5, 0.5, 0.5))
+    hidden = bpy.data.collections.new("hidden")  # the pebble itself is in no scene collection
+    pebble = mesh_object("pebble", CUBE, CUBE_FACES, stone, scale=(0.05, 0.05, 0.05), collection=hidden)
+    ground = mesh_object("ground", [(-2, -2, 0), (2, -2, 0), (2, 2, 0), (-2, 2, 0)], [(0, 1, 2, 3)], stone)
+    particles = ground.modifiers.new("scatter", "PARTICLE_SYSTEM").particle_system.settings
+    particles.type, particles.count, particles.render_type, particles.instance_object = "HAIR", 50, "OBJECT", pebble
+    holder = mesh_object("grid", [(0, 0, 0)], [], stone, location=(0, 0, 1))
+    tree = bpy.data.node_groups.new("scatter", "GeometryNodeTree")
+    holder.modifiers.new("grid", "NODES").node_group = tree
+    tree.outputs.new("NodeSocketGeometry", "Geometry")
+    out, points = tree.nodes.new("NodeGroupOutput"), tree.nodes.new("GeometryNodeMeshGrid")
+    points.inputs["Vertices X"].default_value, points.inputs["Vertices Y"].default_value = 5, 4
+    on_points, info = tree.nodes.new("GeometryNodeInstanceOnPoints"), tree.nodes.new("GeometryNodeObjectInfo")
+    info.inputs["Object"].default_value = pebble
+    tree.links.new(points.outputs["Mesh"], on_points.inputs["Points"])
+    tree.links.new(info.outputs["Geometry"], on_points.inputs["Instance"])
+    tree.links.new(on_points.outputs["Instances"], out.inputs["Geometry"])
+    camera((0, -6, 4), (55, 0, 0))
+    scene.world = bpy.data.worlds.new("sky")
+    scene.world.color = (0.5, 0.5, 0.5)
+    return scene

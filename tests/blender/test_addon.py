@@ -92,6 +92,42 @@ def test_a_collection_instanced_1000_times_is_1000_placements_of_one_prototype(t
     assert blender_layer(img, "Combined")[..., 3].mean() > 0.05  # pebbles seen
 
 
+def test_particle_and_geometry_node_instances_are_placements(tmp_path):
+    scene = scenes.scattered()
+    scene.bounce.gi = "none"
+    render(scene, tmp_path)
+    doc = json.loads((tmp_path / "scene.json").read_text())
+    placements = sorted(len(o["instances"]["transforms"]) for o in doc["objects"] if "instances" in o)
+    assert placements == [20, 50]  # the grid's 5 x 4 and the particle system's 50
+    assert sum(1 for o in doc["objects"] if o.get("prototype")) == 2
+    assert [o["name"] for o in doc["objects"] if "file" in o and not o.get("prototype")] == ["ground"]
+
+
+def test_the_camera_lens_depth_of_field_and_an_environment_export(tmp_path):
+    scene = scenes.cornell_box()
+    scene.render.resolution_x = 96  # wider than tall: the sensor's width spans the image's
+    cam = scene.camera.data
+    cam.dof.use_dof, cam.dof.aperture_fstop, cam.dof.focus_distance = True, 2.8, 3.5
+    image = bpy.data.images.new("env", 16, 8, float_buffer=True)
+    image.pixels.foreach_set(np.full(16 * 8 * 4, 0.25, np.float32))
+    image.filepath_raw, image.file_format = str(tmp_path / "env.exr"), "OPEN_EXR"
+    image.save()
+    scene.world = bpy.data.worlds.new("env")
+    scene.world.use_nodes = True
+    env = scene.world.node_tree.nodes.new("ShaderNodeTexEnvironment")
+    env.image = image
+    scene.world.node_tree.links.new(env.outputs["Color"], scene.world.node_tree.nodes["Background"].inputs["Color"])
+    scene.bounce.gi = "none"
+    render(scene, tmp_path)
+    doc = json.loads((tmp_path / "scene.json").read_text())
+    hfov = 2 * math.atan(36 / (2 * 35))
+    assert doc["camera"]["fov"] == pytest.approx(math.degrees(2 * math.atan(math.tan(hfov / 2) * 64 / 96)))
+    assert doc["camera"]["resolution"] == [96, 64]
+    assert doc["camera"]["aperture"] == pytest.approx(0.035 / 2.8) and doc["camera"]["focus_distance"] == pytest.approx(3.5)
+    sky = [light for light in doc["lights"] if light["type"] == "sky"]
+    assert sky and sky[0]["texture"] == str(tmp_path / "env.exr") and sky[0]["rotation"] == 90.0
+
+
 def test_a_cutout_leaf_renders_with_holes(tmp_path):
     scene = scenes.empty_scene(64, 64)
     image = scenes.checker_alpha_image(str(tmp_path / "cutout.png"))
