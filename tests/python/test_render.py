@@ -85,3 +85,19 @@ def test_a_shot_equals_the_cli_frames(tmp_path, cli):
         for key in ("records", "records_new", "records_reshaded", "records_kept", "records_moved"):
             assert img.stats[key] == cli_stats[key], key
     assert bounce.cache.info(tmp_path / "py.0003.bic")["records"] == bounce.cache.info(tmp_path / "cli.0003.bic")["records"]
+
+
+def test_previews_reach_the_callback_and_the_frame_is_the_clis(tmp_path, cli):
+    scene = bounce.Scene.load(CORNELL)
+    seen = []
+
+    def preview(p):
+        seen.append((p.width, p.height, float(p["beauty"].mean())))
+
+    scene.render(gi="cache", preview=preview, **SMALL)
+    assert seen == []  # render.preview off: the plan calls for no preview
+    img = scene.render(gi="cache", preview=preview, output=tmp_path / "py.exr", **{"render.preview": True}, **SMALL)
+    assert seen and all(w == 48 and h == 48 for w, h, _ in seen) and seen[-1][2] > 0
+    cli("render", CORNELL, "-o", tmp_path / "cli.exr", "--gi", "cache", "--preview", "--res", "48x48", "--spp", 4,
+        "--light-samples", 4, "--rays", 64, "-q")
+    assert_same_layers(img, bounce.read_exr(tmp_path / "cli.exr"))
