@@ -156,14 +156,72 @@ std::optional<DirectionGuide> records_guide(const IrradianceCache& cache, const 
     const Site site = record_site(scene, f, cache.settings());
     return guide_from_records(cache, site.p, site.n, f.n);
 }
+
+/// Whether fragment f's records disagree enough for a gather of its own (render.refine).
+/// Hysteresis: refined in an earlier frame, a fragment keeps its own gather until its records
+/// agree within refine_hold x refine, so that a spread hovering about the threshold does not
+/// switch it on and off frame by frame. (Not within a frame: the lighting tool re-rendering it
+/// shows what a render of that frame gives.)
+bool wants_refinement(const Scene& scene, const IrradianceCache& cache, const Fragment& f, const Record* before,
+                      const RefinementOptions& options) {
+    const CacheSettings& cs = cache.settings();
+    if (tilted_off_records(cs, f)) return true;
+    const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cs));
+    const bool held =
+        before ? before->gathered < options.frame : options.refined_before && options.refined_before->nearest(f.p, f.n, f.footprint);
+    const float at = held ? cs.refine * cs.refine_hold : cs.refine;
+    return !(in.weight > 0 && (cs.refine <= 0 || in.spread <= at));
+}
+
+/// Fragment k of pixel (wx, wy)'s own record, gathered about its own (displaced) point and
+/// normal as brute force does; with an earlier gather near it on its surface, mostly from that
+/// one's rays (then it keeps no hits: never reused itself, and `reused` is set).
+Record gather_fragment_record(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, const IrradianceCache& cache,
+                              const RefinementOptions& options, int wx, int wy, uint32_t k, Counters& stats, bool& reused) {
+    const Fragment& f = deep.pixel(wx, wy)[k];
+    const FrameTiling& tiling = refiner.settings().tiling;
+    const RandomStream rng = fragment_stream(tiling.seed, wx + deep.x0, wy + deep.y0, k);
+    const Record* near = options.earlier ? options.earlier->nearest(f.p, f.n, f.footprint) : nullptr;
+    auto hits = options.keep_hits && !near ? std::make_shared<GatherHits>() : nullptr;
+    // Guided by the records that cover it where they kept a guide (render.guided), unless its
+    // hits are to be kept (a guided gather has no grid to re-shade).
+    const std::optional<DirectionGuide> guide =
+        !near && !hits && refiner.settings().guided > 0 ? records_guide(cache, scene, f) : std::nullopt;
+    const GatherResult g =
+        near ? refiner.reproject(f.p, f.n, rng, {near->origin, near->n, record_stream(*near, tiling.seed, scene.camera.width), *near->hits},
+                                 stats)
+        : guide ? refiner.gather_guided(f.p, f.n, rng, *guide, stats)
+                : refiner.gather(f.p, f.n, rng, stats, 0, hits.get());
+    reused = near != nullptr;
+    Record r;
+    r.hits = std::move(hits);
+    place_fragment_record(r, f, candidate_key(deep, wx, wy, k), options.frame);
+    cache.set_values(r, g, false);  // a fragment's own value: no gradients
+    r.harmonic = g.harmonic_distance, r.dmin = g.min_distance;
+    r.rays = static_cast<uint32_t>(g.rays);
+    return r;
+}
+
+/// Each process refined its own tiles: all take every process's records, and the count of
+/// those made from earlier gathers.
+void exchange_refined(Communicator& comm, std::vector<Record>& records, size_t& taken) {
+    std::string mine = serialize_records(records);
+    mine.append(reinterpret_cast<const char*>(&taken), sizeof(taken));
+    const std::vector<std::string> all = comm.allgather(mine);
+    records.clear(), taken = 0;
+    for (const std::string& b : all) {
+        size_t theirs = 0;
+        std::memcpy(&theirs, b.data() + b.size() - sizeof(theirs), sizeof(theirs));
+        taken += theirs;
+        std::vector<Record> r = parse_records(b.substr(0, b.size() - sizeof(theirs)));
+        records.insert(records.end(), std::make_move_iterator(r.begin()), std::make_move_iterator(r.end()));
+    }
+}
 }  // namespace
 
 size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gatherer& refiner, IrradianceCache& cache, Stats& stats,
                        ProgressSink* sink, const RefinementOptions& options) {
-    const int frame = options.frame;
-    const CacheSettings& cs = cache.settings();
     const FrameTiling& tiling = refiner.settings().tiling;
-    const float threshold = cs.refine;
     tbb::enumerable_thread_specific<std::vector<Record>> made;
     tbb::enumerable_thread_specific<size_t> reused(0);
     {
@@ -184,47 +242,15 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
                     const Record* before = nullptr;
                     if (options.stale)
                         if (auto it = options.stale->find(key); it != options.stale->end() && it->second.p == f.p) before = &it->second;
-                    if (!tilted_off_records(cs, f)) {
-                        const Interpolated in = interpolate_at(cache, f, record_site(scene, f, cs));
-                        // Hysteresis: refined in an earlier frame, a fragment keeps its own gather
-                        // until its records agree within refine_hold x refine, so that a spread
-                        // hovering about the threshold does not switch it on and off frame by frame.
-                        // (Not within a frame: the lighting tool re-rendering it shows what a
-                        // render of that frame gives.)
-                        const bool held = before ? before->gathered < frame
-                                                 : options.refined_before && options.refined_before->nearest(f.p, f.n, f.footprint);
-                        const float at = held ? threshold * cs.refine_hold : threshold;
-                        if (in.weight > 0 && (threshold <= 0 || in.spread <= at)) continue;
-                    }
+                    if (!wants_refinement(scene, cache, f, before, options)) continue;
                     if (before) {  // updated rather than gathered anew
                         made.local().push_back(options.update(*before, stats.local()));
                         continue;
                     }
-                    // Gathered about the fragment's own (displaced) point and normal, as brute force
-                    // does; with an earlier gather near it on its surface, mostly from that one's rays
-                    // (then it keeps no hits: never reused itself).
-                    const RandomStream rng = fragment_stream(tiling.seed, wx + deep.x0, wy + deep.y0, k);
-                    const Record* near = options.earlier ? options.earlier->nearest(f.p, f.n, f.footprint) : nullptr;
-                    auto hits = options.keep_hits && !near ? std::make_shared<GatherHits>() : nullptr;
-                    // Guided by the records that cover it where they kept a guide (render.guided),
-                    // unless its hits are to be kept (a guided gather has no grid to re-shade).
-                    const std::optional<DirectionGuide> guide =
-                        !near && !hits && refiner.settings().guided > 0 ? records_guide(cache, scene, f) : std::nullopt;
-                    const GatherResult g =
-                        near
-                            ? refiner.reproject(f.p, f.n, rng,
-                                                {near->origin, near->n, record_stream(*near, tiling.seed, scene.camera.width), *near->hits},
-                                                stats.local())
-                        : guide ? refiner.gather_guided(f.p, f.n, rng, *guide, stats.local())
-                                : refiner.gather(f.p, f.n, rng, stats.local(), 0, hits.get());
-                    reused.local() += near != nullptr;
-                    Record r;
-                    r.hits = std::move(hits);
-                    place_fragment_record(r, f, key, frame);
-                    cache.set_values(r, g, false);  // a fragment's own value: no gradients
-                    r.harmonic = g.harmonic_distance, r.dmin = g.min_distance;
-                    r.rays = static_cast<uint32_t>(g.rays);
-                    made.local().push_back(r);
+                    bool from_earlier = false;
+                    made.local().push_back(
+                        gather_fragment_record(scene, deep, refiner, cache, options, wx, wy, k, stats.local(), from_earlier));
+                    reused.local() += from_earlier;
                 }
             },
             tiling.tile_order, options.comm);
@@ -233,20 +259,7 @@ size_t refinement_pass(const Scene& scene, const DeepBuffer& deep, const Gathere
     for (auto& v : made) records.insert(records.end(), v.begin(), v.end());
     size_t taken = 0;
     for (size_t n : reused) taken += n;
-    if (options.comm && options.comm->size() > 1) {
-        // Each process refined its own tiles: all take every process's records (sorted below).
-        std::string mine = serialize_records(records);
-        mine.append(reinterpret_cast<const char*>(&taken), sizeof(taken));
-        const std::vector<std::string> all = options.comm->allgather(mine);
-        records.clear(), taken = 0;
-        for (const std::string& b : all) {
-            size_t theirs = 0;
-            std::memcpy(&theirs, b.data() + b.size() - sizeof(theirs), sizeof(theirs));
-            taken += theirs;
-            std::vector<Record> r = parse_records(b.substr(0, b.size() - sizeof(theirs)));
-            records.insert(records.end(), std::make_move_iterator(r.begin()), std::make_move_iterator(r.end()));
-        }
-    }
+    if (options.comm && options.comm->size() > 1) exchange_refined(*options.comm, records, taken);
     std::sort(records.begin(), records.end(), [](const Record& a, const Record& b) { return a.key < b.key; });
     auto lock = lock_cache<std::unique_lock<std::shared_mutex>>(cache, stats.local());
     for (const Record& r : records) cache.replace_fragment_record(r);

@@ -250,21 +250,21 @@ struct FrameChange {
     }
 };
 
-}  // namespace
+/// What a judged record is: one of the cache's, a fragment record of refinement (by key), or
+/// an earlier refinement gather whose rays refinement may reuse (EarlierGathers).
+enum class Role : uint8_t { Record, Fragment, Gather };
 
-TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, std::span<const Record> gathers,
-                                const Scene& before, const Scene& now, const SceneChanges& changes, std::span<const LightChange> light,
-                                float brightest, uint64_t seed) {
-    TemporalJudgement out;
-    if (!changes.comparable) {
-        out.dropped = previous.size() + waiting.size();
-        return out;
-    }
-    const CacheSettings& s = previous.settings();
-    const CameraRays camera(now.camera);
-    const FrameChange change(now, seed, changes, light, brightest, std::max(previous.luminance_floor(), 1e-12f), s, previous.ao_only());
-    // Moves a record with its object; false when it cannot follow (dropped).
-    const auto follow = [&](Record& r, ObjectMotion::Kind own) {
+/// Sorts the previous frame's records into `out`: kept, moved, stale (and why) or dropped.
+struct Judge {
+    TemporalJudgement& out;
+    const Scene &before, &now;
+    const SceneChanges& changes;
+    const CacheSettings& s;
+    const CameraRays camera;
+    const FrameChange& change;
+
+    /// Moves a record with its object; false when it cannot follow (dropped).
+    bool follow(Record& r, ObjectMotion::Kind own) const {
         if (own == ObjectMotion::Kind::Static) return true;
         ++out.anchored;
         bool ok = true;
@@ -273,15 +273,12 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
             ok = move_on_surface(r, before.objects[r.anchor].visible(), now.objects[r.anchor].visible());
         out.anchors_kept += ok;
         return ok;
-    };
-    const auto own_motion = [&](const Record& r) {
+    }
+    ObjectMotion::Kind own_motion(const Record& r) const {
         const bool anchored = r.anchor != kNoAnchor && r.anchor < changes.objects.size();
         return anchored ? changes.objects[r.anchor].kind : ObjectMotion::Kind::Static;
-    };
-    // What a judged record is: one of the cache's, a fragment record of refinement (by key), or
-    // an earlier refinement gather whose rays refinement may reuse (EarlierGathers).
-    enum class Role : uint8_t { Record, Fragment, Gather };
-    const auto judge = [&](Record r, Role role) {
+    }
+    void judge(Record r, Role role) const {
         // A moving camera's fragments never land on an earlier frame's points again: its
         // fragment records serve only refinement's hold in the next frame, by where they are.
         if (role == Role::Fragment && changes.camera && r.gathered + 1 < now.frame) {
@@ -302,7 +299,10 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
         // A still camera leaves a still record's reach as it was: its footprint for this view is
         // the one it was made with (the fragment's), which the camera's own estimate only nears.
         if (role == Role::Record && changes.camera) respace(r, camera, s);
-        const Verdict v = change.verdict(r);
+        sort_still(r, role, change.verdict(r));
+    }
+    /// A record on a still object, by its verdict.
+    void sort_still(Record& r, Role role, Verdict v) const {
         if (v == Verdict::Keep) {
             if (role == Role::Gather) return out.earlier_gathers.push_back(r);
             ++out.kept;
@@ -322,19 +322,35 @@ TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const
         } else {
             out.dropped += role == Role::Fragment;  // refinement gathers its fragments again where it still needs them
         }
-    };
-    for (size_t i = 0; i < previous.size(); ++i) judge(previous.record(i), Role::Record);
-    for (size_t i = 0; i < previous.fragment_record_count(); ++i) judge(previous.fragment_record_at(i), Role::Fragment);
-    for (const Record& r : gathers) judge(r, Role::Gather);
-    for (Record r : waiting) {
-        const ObjectMotion::Kind own = own_motion(r);
-        if (!follow(r, own)) {
+    }
+    /// Stale records no fragment needed last frame: they follow their objects, then wait.
+    void carry_waiting(Record r) const {
+        if (!follow(r, own_motion(r))) {
             ++out.dropped;
-            continue;
+            return;
         }
         respace(r, camera, s);
         out.stale.push_back(r), out.why.push_back(StaleReason::View);
     }
+};
+
+}  // namespace
+
+TemporalJudgement judge_records(const IrradianceCache& previous, std::span<const Record> waiting, std::span<const Record> gathers,
+                                const Scene& before, const Scene& now, const SceneChanges& changes, std::span<const LightChange> light,
+                                float brightest, uint64_t seed) {
+    TemporalJudgement out;
+    if (!changes.comparable) {
+        out.dropped = previous.size() + waiting.size();
+        return out;
+    }
+    const CacheSettings& s = previous.settings();
+    const FrameChange change(now, seed, changes, light, brightest, std::max(previous.luminance_floor(), 1e-12f), s, previous.ao_only());
+    const Judge judge{out, before, now, changes, s, CameraRays(now.camera), change};
+    for (size_t i = 0; i < previous.size(); ++i) judge.judge(previous.record(i), Role::Record);
+    for (size_t i = 0; i < previous.fragment_record_count(); ++i) judge.judge(previous.fragment_record_at(i), Role::Fragment);
+    for (const Record& r : gathers) judge.judge(r, Role::Gather);
+    for (const Record& r : waiting) judge.carry_waiting(r);
     return out;
 }
 

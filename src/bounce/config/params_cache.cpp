@@ -77,7 +77,7 @@ void add_placement_rows(std::vector<Row>& rows) {
                        .flag());
 }
 
-/// How records gather, are refined between and live across the frames of a shot.
+/// How records gather and are refined between.
 void add_refinement_rows(std::vector<Row>& rows) {
     rows.push_back(row("min_rays", "cache", &R::cache, &CacheSettings::min_rays)
                        .range(0, 1 << 20)
@@ -132,6 +132,10 @@ void add_refinement_rows(std::vector<Row>& rows) {
                        .unit("rays")
                        .doc("rays of a refined fragment's own gather; 0 = render.rays")
                        .flag());
+}
+
+/// The correction rays, displaced records, and how records live across the frames of a shot.
+void add_record_life_rows(std::vector<Row>& rows) {
     rows.push_back(row("correction_rays", "cache", &R::cache, &CacheSettings::correction_rays)
                        .range(0, 1 << 16)
                        .unit("rays")
@@ -204,6 +208,7 @@ void add_refinement_rows(std::vector<Row>& rows) {
 void add_cache_rows(std::vector<Row>& rows) {
     add_placement_rows(rows);
     add_refinement_rows(rows);
+    add_record_life_rows(rows);
 }
 
 }  // namespace bounce::param_rows

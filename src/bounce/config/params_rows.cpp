@@ -86,7 +86,9 @@ void add_camera_rows(std::vector<Row>& rows) {
     rows.push_back(resolution.range(1, 65536).unit("pixels").doc("[width, height]; on the CLI WIDTHxHEIGHT").flag("--res"));
 }
 
-void add_pipeline_rows(std::vector<Row>& rows) {
+namespace {
+
+void add_visibility_rows(std::vector<Row>& rows) {
     // Primary visibility and the deep file.
     rows.push_back(row("spp", "visibility", &R::visibility, &VisibilitySettings::spp)
                        .range(1, 4096)
@@ -124,6 +126,9 @@ void add_pipeline_rows(std::vector<Row>& rows) {
                        .doc("cap on the fine tessellation: at most 2^max_level segments per control edge")
                        .id(deep | cache)
                        .flag());
+}
+
+void add_lighting_rows(std::vector<Row>& rows) {
     // Lighting.
     rows.push_back(row("memory_budget", "dicing", &R::dicing, &DicingSettings::memory_budget)
                        .range(0.001, 1e6)
@@ -173,6 +178,9 @@ void add_pipeline_rows(std::vector<Row>& rows) {
                        .doc("light samples per lattice point when baking; auto = render.light_samples")
                        .id(rad | cache)
                        .flag());
+}
+
+void add_gather_rows(std::vector<Row>& rows) {
     // The gather.
     rows.push_back(row("gi", "gather", &R::indirect, &IndirectSettings::gi)
                        .choices({"none", "brute", "cache"})
@@ -215,6 +223,14 @@ void add_pipeline_rows(std::vector<Row>& rows) {
                        .doc("per-fragment gathers (brute force, cache refinement): share of their rays spread over 32 direction bins "
                             "by a guide (brute force: a pilot gather per 8x8 pixels; refinement: the covering records); 0 = even")
                        .flag());
+}
+
+}  // namespace
+
+void add_pipeline_rows(std::vector<Row>& rows) {
+    add_visibility_rows(rows);
+    add_lighting_rows(rows);
+    add_gather_rows(rows);
 }
 
 void add_output_rows(std::vector<Row>& rows) {

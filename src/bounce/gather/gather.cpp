@@ -196,6 +196,56 @@ Color Gatherer::cell_radiance(detail::Cells& cells, const Vec3& p, size_t c, con
     return settings_.ao ? Color(0) : hit_radiance(h, sp, d, rng, c, counters, parts);
 }
 
+namespace {
+/// What a record keeps beyond its value: the view summary (per direction bin, the farthest the
+/// rays went; INFINITY: one escaped), the prediction's bins and cells, the Hessian.
+void add_record_terms(const GatherSettings& settings, const GatherGrid& grid, float far, detail::Cells& cells, const Vec3& p, const Vec3& n,
+                      const Frame& frame, GatherResult& res) {
+    const int M = grid.m, N = grid.n, S = M * N;
+    const std::vector<Color>& L = cells.L;
+    const std::vector<float>&R = cells.R, &U = cells.U;
+    const std::vector<Vec3>& D = cells.D;
+    for (int j = 0; j < M; ++j)
+        for (int k = 0; k < N; ++k) {
+            const size_t bin = static_cast<size_t>((j * kReachBands / M) * kReachSectors + k * kReachSectors / N);
+            res.reach[bin] = std::max(res.reach[bin], R[static_cast<size_t>(j * N + k)]);
+        }
+    if (settings.prediction) {
+        set_bins(res, frame, settings.ao ? std::span<const float>(U) : std::span<const float>(), L, D);
+        auto all = std::make_shared<std::vector<Color>>(L);
+        if (settings.ao)
+            for (size_t c = 0; c < all->size(); ++c) (*all)[c] = Color(U[c]);
+        res.cells = std::move(all), res.grid = grid;
+        if (settings.prediction_hits) {
+            auto at = std::make_shared<std::vector<Vec3>>(static_cast<size_t>(S));
+            for (size_t c = 0; c < at->size(); ++c) (*at)[c] = p + D[c] * std::min(R[c], kEscapedHit);
+            res.cell_hits = std::move(at);
+        }
+    }
+    if (settings.hessian) {
+        const TangentHessian th = cells_hessian(grid, p, n, far, settings.ao, L, U, R, D, cells.scratch);
+        res.hess_axis = th.axis, res.hess_slow = th.slow, res.hess_fast = th.fast;
+    }
+}
+
+/// AO's gradients: a mean (1/S), not pi/S times a sum; where the cutoff distance cuts a
+/// surface, the boundary moves with its distance (ao_cutoff.h).
+void add_ao_gradients(const GatherGrid& grid, const Frame& frame, float near, const detail::Cells& cells, float ao_distance,
+                      GatherResult& res) {
+    std::array<Vec3, 1> agr{}, agt{};
+    if (ao_distance > 0) {
+        const detail::CutoffCells cut{cells.D, cells.R, cells.U, cells.NH};
+        const detail::SurfacePairs pairs(grid, cut);
+        gradient_sums(grid, frame, near, cells.R.data(), cells.U.data(), 1, agr, agt, pairs);
+        res.ao_grad_trans = agt[0] * kInvPi + pairs.gradient();
+    } else {
+        gradient_sums(grid, frame, near, cells.R.data(), cells.U.data(), 1, agr, agt);
+        res.ao_grad_trans = agt[0] * kInvPi;
+    }
+    res.ao_grad_rot = agr[0] / static_cast<float>(grid.m * grid.n);
+}
+}  // namespace
+
 GatherResult Gatherer::finish(detail::Cells& cells, const Vec3& p, const Vec3& n, const RandomStream& rng, Counters& counters,
                               float near) const {
     const int M = grid_.m, N = grid_.n, S = M * N;
@@ -251,44 +301,10 @@ GatherResult Gatherer::finish(detail::Cells& cells, const Vec3& p, const Vec3& n
     if (settings_.record_terms)
         res.rel_stderr = relative_stderr(grid_, settings_.ao, L, U, settings_.ao ? res.ao : luminance(res.irradiance));
     if (!settings_.record_terms) return res;
-    // The view summary: per direction bin, the farthest the rays went (INFINITY: one escaped).
-    for (int j = 0; j < M; ++j)
-        for (int k = 0; k < N; ++k) {
-            const size_t bin = static_cast<size_t>((j * kReachBands / M) * kReachSectors + k * kReachSectors / N);
-            res.reach[bin] = std::max(res.reach[bin], R[static_cast<size_t>(j * N + k)]);
-        }
-    if (settings_.prediction) {
-        set_bins(res, frame, settings_.ao ? std::span<const float>(U) : std::span<const float>(), L, D);
-        auto all = std::make_shared<std::vector<Color>>(L);
-        if (settings_.ao)
-            for (size_t c = 0; c < all->size(); ++c) (*all)[c] = Color(U[c]);
-        res.cells = std::move(all), res.grid = grid_;
-        if (settings_.prediction_hits) {
-            auto at = std::make_shared<std::vector<Vec3>>(static_cast<size_t>(S));
-            for (size_t c = 0; c < at->size(); ++c) (*at)[c] = p + D[c] * std::min(R[c], kEscapedHit);
-            res.cell_hits = std::move(at);
-        }
-    }
+    add_record_terms(settings_, grid_, far_, cells, p, n, frame, res);
     if (settings_.guided > 0) res.guide = std::make_shared<const DirectionGuide>(cells_guide(cells, n));
-    if (settings_.hessian) {
-        const TangentHessian th = cells_hessian(grid_, p, n, far_, settings_.ao, L, U, R, D, cells.scratch);
-        res.hess_axis = th.axis, res.hess_slow = th.slow, res.hess_fast = th.fast;
-    }
-
     res.grad_rot = sums.grad_r, res.grad_trans = sums.grad_t;
-    std::array<Vec3, 1> agr{}, agt{};
-    // AO is a mean (1/S), not pi/S times a sum.
-    if (settings_.ao_distance > 0) {
-        // Where the cutoff cuts a surface, the boundary moves with its distance (ao_cutoff.h).
-        const detail::CutoffCells cut{D, R, U, cells.NH};
-        const detail::SurfacePairs pairs(grid_, cut);
-        gradient_sums(grid_, frame, near, R.data(), U.data(), 1, agr, agt, pairs);
-        res.ao_grad_trans = agt[0] * kInvPi + pairs.gradient();
-    } else {
-        gradient_sums(grid_, frame, near, R.data(), U.data(), 1, agr, agt);
-        res.ao_grad_trans = agt[0] * kInvPi;
-    }
-    res.ao_grad_rot = agr[0] / static_cast<float>(S);
+    add_ao_gradients(grid_, frame, near, cells, settings_.ao_distance, res);
     return res;
 }
 

@@ -189,113 +189,152 @@ Color DirectLighting::background(const Vec3& dir) const {
     return c;
 }
 
+namespace {
+
+/// What every light's sampling of one point shares: where, which way, the shadow rays' test
+/// and counts, and the per-direction callback.
+struct LightQuery {
+    const SceneAccel& accel;
+    const Light& light;
+    size_t index;
+    Vec3 p, n;
+    const RandomStream& rng;
+    int samples;
+    Counters& counters;
+    const LightSampleFn* each;
+    float hair_start;
+    Color colour;  ///< the light's colour, or 1 for its unit contribution
+    unsigned mask;
+    uint32_t dim(uint32_t d) const { return static_cast<uint32_t>(kDimLight + 16 * index + d); }
+    Vec2 stratum(int s) const {
+        return stratified_2d(s, samples, rng.get(static_cast<uint64_t>(s), dim(1)), rng.get(static_cast<uint64_t>(s), dim(2)));
+    }
+    /// Whether the shadow ray towards `w` (up to `r`) is blocked, counting it.
+    bool blocked(const Vec3& w, float r) const {
+        ++counters.shadow_rays;
+        return accel.occluded(p, w, r, hair_start, mask);
+    }
+};
+
+Color sample_point_or_spot(const LightQuery& q) {
+    const Light& l = q.light;
+    Vec3 to = l.position - q.p;
+    float r2 = dot(to, to), r = std::sqrt(r2);
+    Vec3 w = to / r;
+    float cos_x = dot(q.n, w);
+    if (cos_x <= 0 || r2 == 0) return Color(0);
+    float cone = 1;
+    Color filter(1);
+    if (l.type == LightType::Spot) {
+        filter = spot_filter(l, -w);
+        if (filter == Color(0)) return Color(0);
+        float angle = std::acos(std::clamp(dot(-w, l.direction), -1.0f, 1.0f)) * 180.0f / kPi;
+        if (angle >= l.cone_angle + l.cone_falloff) return Color(0);
+        if (angle > l.cone_angle) {
+            float s = 1 - (angle - l.cone_angle) / l.cone_falloff;
+            cone = s * s * (3 - 2 * s);  // smoothstep edge
+        }
+    }
+    if (q.blocked(w, r)) return Color(0);
+    Color e = q.colour * filter * (cone * cos_x / r2);
+    if (q.each) (*q.each)(q.index, w, e);
+    return e;
+}
+
+Color sample_distant(const LightQuery& q) {
+    Vec3 w = -q.light.direction;
+    float cos_x = dot(q.n, w);
+    if (cos_x <= 0) return Color(0);
+    if (q.blocked(w, INFINITY)) return Color(0);
+    if (q.each) (*q.each)(q.index, w, q.colour * cos_x);
+    return q.colour * cos_x;
+}
+
+Color sample_quad(const LightQuery& q) {
+    const Light& l = q.light;
+    Vec3 ln = cross(l.edge_u, l.edge_v);
+    float area = length(ln);
+    ln = ln / area;
+    Color e(0);
+    for (int s = 0; s < q.samples; ++s) {
+        Vec2 uv = q.stratum(s);
+        Vec3 to = l.corner + l.edge_u * uv.x + l.edge_v * uv.y - q.p;
+        float r2 = dot(to, to), r = std::sqrt(r2);
+        Vec3 w = to / r;
+        float cos_x = dot(q.n, w), cos_l = -dot(ln, w);
+        if (cos_x <= 0 || cos_l <= 0) continue;
+        if (q.blocked(w, r)) continue;
+        const Color L = l.texture ? q.colour * l.texture->at_uv(uv.x, uv.y) : q.colour;
+        e += L * (cos_x * cos_l / r2);
+        if (q.each) (*q.each)(q.index, w, L * (cos_x * cos_l / r2 * area / static_cast<float>(q.samples)));
+    }
+    return e * (area / static_cast<float>(q.samples));
+}
+
+Color sample_sky(const LightQuery& q) {
+    const Light& l = q.light;
+    Frame f(q.n);
+    Color e(0);
+    for (int s = 0; s < q.samples; ++s) {
+        Vec2 uv = q.stratum(s);
+        Vec3 w = f.to_world(cosine_hemisphere(uv.x, uv.y));
+        if (q.blocked(w, INFINITY)) continue;
+        Color L = l.sky_map ? q.colour * l.sky_map->lookup(w, l.sky_rotation) : q.colour;
+        e += L;
+        if (q.each) (*q.each)(q.index, w, L * (kPi / static_cast<float>(q.samples)));
+    }
+    // Cosine-weighted estimator of the integral of L cos: pi * mean(L).
+    return e * (kPi / static_cast<float>(q.samples));
+}
+
+Color sample_mesh(const LightQuery& q, const Emitter& em, const Scene& scene) {
+    if (em.area <= 0) return Color(0);
+    const TriangleMesh& m = scene.objects[em.object].coarse;
+    Color e(0);
+    for (int s = 0; s < q.samples; ++s) {
+        Vec2 uv = q.stratum(s);
+        // First coordinate picks a triangle by area and is reused inside it, which keeps
+        // the stratification across the whole emitter.
+        float a = uv.x * em.area;
+        size_t k = static_cast<size_t>(std::upper_bound(em.cdf.begin(), em.cdf.end(), a) - em.cdf.begin());
+        k = std::min(k, em.prims.size() - 1);
+        float lo = k ? em.cdf[k - 1] : 0, hi = em.cdf[k];
+        float u1 = std::clamp((a - lo) / (hi - lo), 0.0f, 1.0f), u2 = uv.y;
+        float su = std::sqrt(u1), bu = 1 - su, bv = u2 * su;  // uniform on the triangle
+        SurfacePoint pt = surface_point(m, em.prims[k], bu, bv);
+        Vec3 to = pt.p - q.p;
+        float r2 = dot(to, to), r = std::sqrt(r2);
+        Vec3 w = to / r;
+        // Emits from the front (counter-clockwise) side only, like a real panel: a
+        // two-sided emitter against a ceiling would light the ceiling behind it.
+        float cos_x = dot(q.n, w), cos_l = -dot(pt.ng, w);
+        if (cos_x <= 0 || cos_l <= 0) continue;
+        if (q.blocked(w, r)) continue;
+        const Color L = scene.materials[pt.material].emission_at(pt.uv);
+        e += L * (cos_x * cos_l / r2);
+        if (q.each) (*q.each)(q.index, w, L * (cos_x * cos_l / r2 * em.area / static_cast<float>(q.samples)));
+    }
+    return e * (em.area / static_cast<float>(q.samples));
+}
+
+}  // namespace
+
 Color DirectLighting::sample_light(size_t index, const Vec3& p, const Vec3& n, const RandomStream& rng, int samples, Counters& counters,
                                    const LightSampleFn* each, float hair_start, bool unit) const {
     const Light& l = scene_.lights[index];
-    const Color colour = unit ? Color(1) : l.color;
-    const auto dim = [&](uint32_t d) { return static_cast<uint32_t>(kDimLight + 16 * index + d); };
-    const unsigned mask = shadow_ray_mask(l);
+    const LightQuery q{accel_, l, index, p, n, rng, samples, counters, each, hair_start, unit ? Color(1) : l.color, shadow_ray_mask(l)};
     switch (l.type) {
         case LightType::Point:
-        case LightType::Spot: {
-            Vec3 to = l.position - p;
-            float r2 = dot(to, to), r = std::sqrt(r2);
-            Vec3 w = to / r;
-            float cos_x = dot(n, w);
-            if (cos_x <= 0 || r2 == 0) return Color(0);
-            float cone = 1;
-            Color filter(1);
-            if (l.type == LightType::Spot) {
-                filter = spot_filter(l, -w);
-                if (filter == Color(0)) return Color(0);
-                float angle = std::acos(std::clamp(dot(-w, l.direction), -1.0f, 1.0f)) * 180.0f / kPi;
-                if (angle >= l.cone_angle + l.cone_falloff) return Color(0);
-                if (angle > l.cone_angle) {
-                    float s = 1 - (angle - l.cone_angle) / l.cone_falloff;
-                    cone = s * s * (3 - 2 * s);  // smoothstep edge
-                }
-            }
-            ++counters.shadow_rays;
-            if (accel_.occluded(p, w, r, hair_start, mask)) return Color(0);
-            Color e = colour * filter * (cone * cos_x / r2);
-            if (each) (*each)(index, w, e);
-            return e;
-        }
-        case LightType::Distant: {
-            Vec3 w = -l.direction;
-            float cos_x = dot(n, w);
-            if (cos_x <= 0) return Color(0);
-            ++counters.shadow_rays;
-            if (accel_.occluded(p, w, INFINITY, hair_start, mask)) return Color(0);
-            if (each) (*each)(index, w, colour * cos_x);
-            return colour * cos_x;
-        }
-        case LightType::Quad: {
-            Vec3 ln = cross(l.edge_u, l.edge_v);
-            float area = length(ln);
-            ln = ln / area;
-            Color e(0);
-            for (int s = 0; s < samples; ++s) {
-                Vec2 uv = stratified_2d(s, samples, rng.get(static_cast<uint64_t>(s), dim(1)), rng.get(static_cast<uint64_t>(s), dim(2)));
-                Vec3 to = l.corner + l.edge_u * uv.x + l.edge_v * uv.y - p;
-                float r2 = dot(to, to), r = std::sqrt(r2);
-                Vec3 w = to / r;
-                float cos_x = dot(n, w), cos_l = -dot(ln, w);
-                if (cos_x <= 0 || cos_l <= 0) continue;
-                ++counters.shadow_rays;
-                if (accel_.occluded(p, w, r, hair_start, mask)) continue;
-                const Color L = l.texture ? colour * l.texture->at_uv(uv.x, uv.y) : colour;
-                e += L * (cos_x * cos_l / r2);
-                if (each) (*each)(index, w, L * (cos_x * cos_l / r2 * area / static_cast<float>(samples)));
-            }
-            return e * (area / static_cast<float>(samples));
-        }
-        case LightType::Sky: {
-            Frame f(n);
-            Color e(0);
-            for (int s = 0; s < samples; ++s) {
-                Vec2 uv = stratified_2d(s, samples, rng.get(static_cast<uint64_t>(s), dim(1)), rng.get(static_cast<uint64_t>(s), dim(2)));
-                Vec3 w = f.to_world(cosine_hemisphere(uv.x, uv.y));
-                ++counters.shadow_rays;
-                if (accel_.occluded(p, w, INFINITY, hair_start, mask)) continue;
-                Color L = l.sky_map ? colour * l.sky_map->lookup(w, l.sky_rotation) : colour;
-                e += L;
-                if (each) (*each)(index, w, L * (kPi / static_cast<float>(samples)));
-            }
-            // Cosine-weighted estimator of the integral of L cos: pi * mean(L).
-            return e * (kPi / static_cast<float>(samples));
-        }
-        case LightType::Mesh: {
-            const Emitter& em = emitters_[index];
-            if (em.area <= 0) return Color(0);
-            const TriangleMesh& m = scene_.objects[em.object].coarse;
-            Color e(0);
-            for (int s = 0; s < samples; ++s) {
-                Vec2 uv = stratified_2d(s, samples, rng.get(static_cast<uint64_t>(s), dim(1)), rng.get(static_cast<uint64_t>(s), dim(2)));
-                // First coordinate picks a triangle by area and is reused inside it, which keeps
-                // the stratification across the whole emitter.
-                float a = uv.x * em.area;
-                size_t k = static_cast<size_t>(std::upper_bound(em.cdf.begin(), em.cdf.end(), a) - em.cdf.begin());
-                k = std::min(k, em.prims.size() - 1);
-                float lo = k ? em.cdf[k - 1] : 0, hi = em.cdf[k];
-                float u1 = std::clamp((a - lo) / (hi - lo), 0.0f, 1.0f), u2 = uv.y;
-                float su = std::sqrt(u1), bu = 1 - su, bv = u2 * su;  // uniform on the triangle
-                SurfacePoint q = surface_point(m, em.prims[k], bu, bv);
-                Vec3 to = q.p - p;
-                float r2 = dot(to, to), r = std::sqrt(r2);
-                Vec3 w = to / r;
-                // Emits from the front (counter-clockwise) side only, like a real panel: a
-                // two-sided emitter against a ceiling would light the ceiling behind it.
-                float cos_x = dot(n, w), cos_l = -dot(q.ng, w);
-                if (cos_x <= 0 || cos_l <= 0) continue;
-                ++counters.shadow_rays;
-                if (accel_.occluded(p, w, r, hair_start, mask)) continue;
-                const Color L = scene_.materials[q.material].emission_at(q.uv);
-                e += L * (cos_x * cos_l / r2);
-                if (each) (*each)(index, w, L * (cos_x * cos_l / r2 * em.area / static_cast<float>(samples)));
-            }
-            return e * (em.area / static_cast<float>(samples));
-        }
+        case LightType::Spot:
+            return sample_point_or_spot(q);
+        case LightType::Distant:
+            return sample_distant(q);
+        case LightType::Quad:
+            return sample_quad(q);
+        case LightType::Sky:
+            return sample_sky(q);
+        case LightType::Mesh:
+            return sample_mesh(q, emitters_[index], scene_);
     }
     return Color(0);
 }

@@ -40,6 +40,21 @@ float projected_pixels(const Camera& cam, const Vec3& a, const Vec3& b) {
     return std::sqrt(dx * dx + dy * dy) * scale;
 }
 
+/// The object's "displacement" block into `surf` (which has its control mesh).
+void read_displacement(const JsonReader& r, SubdivSurface& surf) {
+    JsonReader d(r.raw("displacement"), r.at("displacement"), r.ctx(), {"map", "scale", "midpoint"});
+    if (!d.has("map")) d.fail("", "a displacement needs a \"map\"");
+    const std::string map = d.file("map", true);
+    surf.displacement.scale = d.number("scale", 0, -kMaxCoordinate, kMaxCoordinate, true);
+    surf.displacement.midpoint = d.number("midpoint", 0.5f, -1e3, 1e3);
+    try {
+        surf.displacement.map = std::make_shared<DisplacementMap>(map);
+    } catch (const InputError& e) {
+        d.fail("map", e.what());
+    }
+    if (surf.control.face_uvs.empty()) d.fail("map", "the control mesh has no uvs to look the map up with");
+}
+
 }  // namespace
 
 void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object& obj, SubdivScheme scheme, const DicingSettings& dicing) {
@@ -63,19 +78,7 @@ void read_subdivision_object(const JsonReader& r, Scene& scene, int mat, Object&
     }
     record_inputs(r, "file", read);
     note_unread(scene, file, mat, obj.name);
-    if (r.has("displacement")) {
-        JsonReader d(r.raw("displacement"), r.at("displacement"), r.ctx(), {"map", "scale", "midpoint"});
-        if (!d.has("map")) d.fail("", "a displacement needs a \"map\"");
-        const std::string map = d.file("map", true);
-        surf.displacement.scale = d.number("scale", 0, -kMaxCoordinate, kMaxCoordinate, true);
-        surf.displacement.midpoint = d.number("midpoint", 0.5f, -1e3, 1e3);
-        try {
-            surf.displacement.map = std::make_shared<DisplacementMap>(map);
-        } catch (const InputError& e) {
-            d.fail("map", e.what());
-        }
-        if (surf.control.face_uvs.empty()) d.fail("map", "the control mesh has no uvs to look the map up with");
-    }
+    if (r.has("displacement")) read_displacement(r, surf);
     const int ray_level = std::min(dicing.ray_level, dicing.max_level);
     const int level = dicing_level(
         surf.control, [&](const Vec3& p) { return pixels_per_unit(scene.camera, p); }, dicing.shading_rate, ray_level, dicing.max_level);
