@@ -77,7 +77,7 @@ class BounceRenderEngine(bpy.types.RenderEngine):
         except EscPressed:
             self.report({"INFO"}, "bounce: cancelled")
             return
-        except (bounce.Error, ValueError) as e:
+        except (bounce.Error, ValueError, OSError) as e:  # one line in Blender's report, never a traceback
             self.report({"ERROR"}, f"bounce: {e}")
             return
         if image is not None:

@@ -221,6 +221,10 @@ def test_what_cannot_be_exported_is_reported_and_bad_scenes_raise_one_line(tmp_p
     scenes.camera((0, -4, 0), (90, 0, 0))
     with pytest.raises(RuntimeError, match="bounce: nothing to render: the scene has no mesh"):
         bpy.ops.render.render()
+    # An export folder that cannot be made: one line, no traceback.
+    scenes.cornell_box().bounce_export_dir = "/proc/bounce-cannot-be-here"
+    with pytest.raises(RuntimeError, match="bounce: .*/proc/bounce-cannot-be-here"):
+        bpy.ops.render.render()
     # A setting the table refuses never reaches a render: Blender's property keeps it in range.
     scene = bpy.context.scene
     scene.bounce.rays = -5
