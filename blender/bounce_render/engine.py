@@ -11,11 +11,14 @@ import numpy as np
 
 import bounce
 
-from . import export, settings, shot
+from . import export, settings, shot, viewport
 
 # bounce's layers under Blender's own pass names where Blender has one (the compositor's
 # Defocus and Vector nodes find them); the others keep bounce's names.
 PASS_NAMES = {"depth": ("Depth", "Z"), "N": ("Normal", "XYZ")}
+
+
+VIEWPORT_SCALE = 0.5  # the rendered viewport's pixels per region pixel
 
 
 class EscPressed(Exception):
@@ -117,6 +120,45 @@ class BounceRenderEngine(bpy.types.RenderEngine):
             pixels = np.flipud(image[layer]).reshape(image.width * image.height, -1)  # Blender's rows go up
             target.rect = pixels[:, : target.channels] if pixels.shape[1] >= target.channels else np.pad(pixels, ((0, 0), (0, target.channels - pixels.shape[1])))
         self.end_result(result)
+
+    # The rendered viewport (viewport.py): a session kept while only lights and the view change.
+
+    def viewport_camera(self, context, depsgraph):
+        """The viewport's view at VIEWPORT_SCALE of its pixels (the scene camera in camera view)."""
+        region, view = context.region, context.region_data
+        w, h = max(16, round(region.width * VIEWPORT_SCALE)), max(16, round(region.height * VIEWPORT_SCALE))
+        if view.view_perspective == "CAMERA":
+            camera = export.camera_entry(depsgraph.scene, depsgraph, viewport.Report())
+            camera["resolution"] = [w, h]  # the camera's view, drawn over the whole region
+            return camera
+        return viewport.view_camera(view, context.space_data.lens, w, h)
+
+    def view_sync(self, context, depsgraph, only_lights):
+        scene = depsgraph.scene
+        if getattr(self, "_viewport", None) is None:
+            self._viewport = viewport.Viewport(os.path.join(export_folder(scene), "viewport"))
+        try:
+            action = self._viewport.sync(depsgraph, settings.changed_settings(scene.bounce, scene), self.viewport_camera(context, depsgraph),
+                                         only_lights)
+        except (bounce.Error, ValueError, OSError) as e:
+            self.report({"ERROR"}, f"bounce: {e}")
+            return
+        if action is not None:
+            self.update_stats("", f"bounce: {action}")
+
+    def view_update(self, context, depsgraph):
+        lights_only = all(isinstance(u.id, bpy.types.Light) or (isinstance(u.id, bpy.types.Object) and u.id.type == "LIGHT")
+                          for u in depsgraph.updates)
+        self.view_sync(context, depsgraph, lights_only)
+
+    def view_draw(self, context, depsgraph):
+        # Navigating the view calls only this: a new view is a new deep buffer (rasterize).
+        vp = getattr(self, "_viewport", None)
+        if vp is None or vp.doc is None or vp.doc["camera"] != self.viewport_camera(context, depsgraph):
+            self.view_sync(context, depsgraph, True)
+            vp = getattr(self, "_viewport", None)
+        if vp is not None:
+            vp.draw(self, context)
 
     def update_render_passes(self, scene=None, renderlayer=None):
         """The passes the compositor offers: bounce's layers as the settings will make them."""

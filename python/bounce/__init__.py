@@ -18,6 +18,7 @@ from ._bounce import (
     Frames,
     Image,
     Scene,
+    Session,
     __version__,
     params,
     read_exr,
@@ -25,7 +26,7 @@ from ._bounce import (
 from ._bounce import compare as _compare
 from . import cache
 
-__all__ = ["Scene", "Image", "Frames", "CancelToken", "Error", "Cancelled", "compare", "params", "read_exr", "cache", "__version__"]
+__all__ = ["Scene", "Session", "Image", "Frames", "CancelToken", "Error", "Cancelled", "compare", "params", "read_exr", "cache", "__version__"]
 
 
 def compare(test, reference, layer=None):

@@ -7,9 +7,17 @@ namespace py = pybind11;
 
 namespace bounce::python {
 
+namespace {
+py::handle error;  // bounce.Error, held for the interpreter's life (the translator raises it)
+}  // namespace
+
+void raise_error(const std::string& line) {
+    PyErr_SetString(error.ptr(), line.c_str());
+    throw py::error_already_set();
+}
+
 void add_errors(py::module_& m) {
-    // Held for the interpreter's life: the translator below raises them.
-    static py::handle error =
+    error =
         PyErr_NewExceptionWithDoc("bounce.Error",
                                   "Bad input: a scene, mesh, cache, deep file, parameter or argument. str() is the one line the CLI prints "
                                   "(file: place: error: message); .file and .place name them.",

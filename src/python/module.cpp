@@ -14,6 +14,7 @@
 #include "render.h"
 #include "runner.h"
 #include "scene.h"
+#include "session.h"
 #include "tools.h"
 
 namespace py = pybind11;
@@ -141,4 +142,5 @@ PYBIND11_MODULE(_bounce, m) {
     add_image(m);
     add_scene_class(m);
     add_tools(m);
+    add_session(m);
 }

@@ -55,7 +55,9 @@ void Monitor::poll() {
     if (user_cancel_ && user_cancel_->token.cancelled()) cancel_.cancel();
 }
 
-void Monitor::run(const std::function<void()>& work) {
+void Monitor::run(const std::function<void()>& work) { run(work, {}); }
+
+void Monitor::run(const std::function<void()>& work, const std::function<void()>& tick) {
     std::exception_ptr failure;
     {
         py::gil_scoped_release release;
@@ -67,6 +69,7 @@ void Monitor::run(const std::function<void()>& work) {
             }
         });
         while (done.wait_for(std::chrono::milliseconds(50)) != std::future_status::ready) {
+            if (tick) tick();
             py::gil_scoped_acquire acquire;
             poll();
         }

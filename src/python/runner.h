@@ -38,6 +38,10 @@ class Monitor : public ProgressSink {
     /// work's exception, or the Python exception that cancelled it (KeyboardInterrupt, a
     /// callback's), or bounce.Cancelled for the user's token.
     void run(const std::function<void()>& work);
+    /// Same, calling `tick` (without the GIL) before each poll: a render that reports through
+    /// something else than this sink (the lighting session) updates it there, and stops when
+    /// token() is set.
+    void run(const std::function<void()>& work, const std::function<void()>& tick);
 
   private:
     void poll();  ///< with the GIL: signals, the user's token, callbacks
