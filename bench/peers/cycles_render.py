@@ -104,7 +104,10 @@ def add_object(o, mats, folder):
         else:
             bpy.ops.import_mesh.ply(filepath=path)
         objs = [x for x in bpy.data.objects if x not in before and x.type == "MESH"]
-        m = TO_BLENDER @ transform_of(o) @ TO_BLENDER.inverted()
+        # OBJ and glTF importers turn Y-up into Z-up themselves; the PLY importer reads the
+        # coordinates as they are (bounce's Y-up).
+        turned = path.lower().endswith((".obj", ".gltf", ".glb"))
+        m = TO_BLENDER @ transform_of(o) @ (TO_BLENDER.inverted() if turned else Matrix.Identity(4))
         for x in objs:
             x.matrix_world = m @ x.matrix_world
     else:
@@ -136,6 +139,7 @@ def add_light(l, folder):
     data = bpy.data.lights.new(l.get("name", kind), types[kind])
     data.color = c
     obj = bpy.data.objects.new(data.name, data)
+    obj.visible_camera = False  # bounce's lights are not seen by camera rays
     bpy.context.scene.collection.objects.link(obj)
     if kind in ("point", "spot"):
         data.energy, data.shadow_soft_size = k * 4 * math.pi, 0.0
@@ -154,7 +158,7 @@ def add_light(l, folder):
         n = direction(list(u.cross(v)))
         obj.location = vec([a + 0.5 * (b + e) for a, b, e in zip(l["corner"], l["edge_u"], l["edge_v"])])
         obj.rotation_euler = n.to_track_quat("-Z", "Y").to_euler()
-        data.energy = k * math.pi * u.cross(v).length * max(c)
+        data.energy = k * 4 * u.cross(v).length * max(c)  # Cycles: radiance = power / (4 area), measured
         data.color = tuple(x / max(c) for x in c)
 
 
