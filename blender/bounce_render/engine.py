@@ -4,7 +4,6 @@ result as passes for the compositor. Render Animation renders the frame range as
 records kept across frames (shot.py)."""
 
 import os
-import tempfile
 
 import bpy
 import numpy as np
@@ -23,14 +22,6 @@ VIEWPORT_SCALE = 0.5  # the rendered viewport's pixels per region pixel
 
 class EscPressed(Exception):
     """Raised from the progress callback when Blender asks the render to stop."""
-
-
-def export_folder(scene):
-    """Where a render's scene file, meshes and images go: the settings' folder, else a
-    temporary one per Blender session and scene."""
-    if scene.bounce_export_dir:
-        return bpy.path.abspath(scene.bounce_export_dir)
-    return os.path.join(bpy.app.tempdir or tempfile.gettempdir(), "bounce", bpy.path.clean_name(scene.name))
 
 
 def pass_of(layer, channels):
@@ -74,7 +65,6 @@ class BounceRenderEngine(bpy.types.RenderEngine):
     bl_use_postprocess = True
 
     def render(self, depsgraph):
-        scene = depsgraph.scene
         try:
             image = shot.render_frame(self, depsgraph) if self.is_animation else self.render_still(depsgraph)
         except EscPressed:
@@ -84,31 +74,28 @@ class BounceRenderEngine(bpy.types.RenderEngine):
             self.report({"ERROR"}, f"bounce: {e}")
             return
         if image is not None:
-            self.write_result(image, scene)
+            self.write_result(image)
 
     def render_still(self, depsgraph):
-        path, report = export.export_scene(depsgraph, export_folder(depsgraph.scene),
+        path, report = export.export_scene(depsgraph, export.export_folder(depsgraph.scene),
                                            settings.changed_settings(depsgraph.scene.bounce, depsgraph.scene))
         report.send(self)
-        return bounce.Scene.load(path).render(**self.callbacks(depsgraph.scene))
+        return bounce.Scene.load(path).render(**self.callbacks())
 
-    def export_folder_of(self, scene):
-        return export_folder(scene)
-
-    def callbacks(self, scene):
+    def callbacks(self):
         """The progress, preview and cancel of a still, as Blender shows and asks them."""
         return callbacks_of(lambda: self)
 
-    def shot_callbacks(self, scene):
+    def shot_callbacks(self):
         """The same for a shot, whose frames Blender may hand to a new engine each."""
         return callbacks_of(shot.current_engine)
 
-    def write_result(self, image, scene):
+    def write_result(self, image):
         """Every layer of `image` into the render result: beauty as Combined, the rest as passes."""
         for layer in image.layers:
             if layer != "beauty":
                 name, ids = pass_of(layer, image.channels(layer))
-                if name not in ("Depth", "Normal"):
+                if layer not in PASS_NAMES:  # Blender's own passes are there already
                     self.add_pass(name, len(ids), ids)
         result = self.begin_result(0, 0, image.width, image.height)
         passes = result.layers[0].passes
@@ -136,7 +123,7 @@ class BounceRenderEngine(bpy.types.RenderEngine):
     def view_sync(self, context, depsgraph, only_lights):
         scene = depsgraph.scene
         if getattr(self, "_viewport", None) is None:
-            self._viewport = viewport.Viewport(os.path.join(export_folder(scene), "viewport"))
+            self._viewport = viewport.Viewport(os.path.join(export.export_folder(scene), "viewport"))
         try:
             action = self._viewport.sync(depsgraph, settings.changed_settings(scene.bounce, scene), self.viewport_camera(context, depsgraph),
                                          only_lights)

@@ -7,6 +7,7 @@ Y-up (x, y, z) -> (x, z, -y), as glTF does."""
 import json
 import math
 import os
+import tempfile
 
 import bpy
 from mathutils import Matrix
@@ -16,6 +17,14 @@ from .report import Report
 
 TO_BOUNCE = Matrix(((1, 0, 0, 0), (0, 0, 1, 0), (0, -1, 0, 0), (0, 0, 0, 1)))
 GEOMETRY = {"MESH", "CURVE", "SURFACE", "FONT", "META"}
+
+
+def export_folder(scene):
+    """Where a render's scene file, meshes and images go: the settings' folder, else a
+    temporary one per Blender session and scene."""
+    if scene.bounce_export_dir:
+        return bpy.path.abspath(scene.bounce_export_dir)
+    return os.path.join(bpy.app.tempdir or tempfile.gettempdir(), "bounce", bpy.path.clean_name(scene.name))
 
 
 def _name(text):
@@ -107,16 +116,28 @@ class SceneExport:
             self.files[key] = files
         return self.files[key]
 
+    def add_light(self, inst):
+        """A light of the depsgraph (an instanced one named apart by its place in the list)."""
+        obj = inst.object
+        name = _name(obj.name if not inst.is_instance else f"{obj.name}_{len(self.lights)}")
+        entry = lights.light_entry(name, obj.data, TO_BOUNCE @ inst.matrix_world, self.report)
+        if entry is not None:
+            self.lights.append(entry)
+            if not inst.is_instance:
+                self.light_names[obj.name_full] = entry
+
+    def light_list(self):
+        """The scene file's lights alone (no mesh written): the depsgraph's lights and the sky."""
+        for inst in self.depsgraph.object_instances:
+            if inst.object.type == "LIGHT":
+                self.add_light(inst)
+        sky = lights.world_light(self.scene.world, self.materials, self.report)
+        return self.lights + ([sky] if sky is not None else [])
+
     def add_instance(self, inst):
+        """A geometry instance of the depsgraph (lights are light_list's)."""
         obj = inst.object
         m = TO_BOUNCE @ inst.matrix_world
-        if obj.type == "LIGHT":
-            entry = lights.light_entry(_name(obj.name if not inst.is_instance else f"{obj.name}_{len(self.lights)}"), obj.data, m, self.report)
-            if entry is not None:
-                self.lights.append(entry)
-                if not inst.is_instance:
-                    self.light_names[obj.name_full] = entry
-            return
         if obj.type not in GEOMETRY:
             if obj.type not in ("CAMERA", "EMPTY", "ARMATURE", "LIGHT_PROBE"):
                 self.report.add(f"object {obj.name}: a {obj.type.lower()} is not exported")
@@ -150,11 +171,10 @@ class SceneExport:
 
     def run(self, render_settings):
         for inst in self.depsgraph.object_instances:
-            self.add_instance(inst)
+            if inst.object.type != "LIGHT":
+                self.add_instance(inst)
+        self.lights = self.light_list()
         self.add_placements()
-        sky = lights.world_light(self.scene.world, self.materials, self.report)
-        if sky is not None:
-            self.lights.append(sky)
         if not self.objects:
             raise ValueError("nothing to render: the scene has no mesh")
         doc = {"description": f"Exported from Blender {bpy.app.version_string} by the bounce add-on: scene {self.scene.name}, frame {self.scene.frame_current}",

@@ -6,8 +6,6 @@ is the sky's radiance, an Environment Texture its lat-long image."""
 
 import math
 
-import bpy
-
 
 def _vec(v):
     return [round(float(x), 7) for x in v]

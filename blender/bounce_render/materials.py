@@ -49,7 +49,7 @@ class MaterialExport:
             return None
         if image.name_full in self.images:
             return self.images[image.name_full]
-        if image.packed_file is not None and self.folder is not None:
+        if image.packed_file is not None:
             ext = os.path.splitext(image.filepath)[1] or ".png"
             path = os.path.join(self.folder, f"image{len(self.images)}{ext}")
             with open(path, "wb") as f:

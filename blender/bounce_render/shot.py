@@ -48,16 +48,14 @@ class ShotExport:
 
     def pose(self):
         """This frame's placements (bounce space), geometry fingerprints, lights and camera."""
-        out = {"objects": {}, "shapes": {}, "instances": [], "lights": {}}
+        lights = export.SceneExport(self.depsgraph, self.folder, Report())
+        lights.light_list()
+        out = {"objects": {}, "shapes": {}, "instances": [], "lights": lights.light_names}
         for inst in self.depsgraph.object_instances:
             obj = inst.object
             m = export.TO_BOUNCE @ inst.matrix_world
             if inst.is_instance:
                 out["instances"].append([round(x, 6) for x in export._matrix(m)])
-            elif obj.type == "LIGHT":
-                entry = export.lights.light_entry(export._name(obj.name), obj.data, m, Report())
-                if entry is not None:
-                    out["lights"][obj.name_full] = entry
             elif obj.type in export.GEOMETRY:
                 out["objects"][obj.name_full] = m.copy()
                 out["shapes"][obj.name_full] = _shape(obj)
@@ -116,12 +114,12 @@ def render_frame(engine, depsgraph):
         if scene.frame_step != 1:
             engine.report({"WARNING"}, "bounce: a frame step other than 1 renders each frame alone (records are not kept)")
             return engine.render_still(depsgraph)
-        folder = os.path.join(engine.export_folder_of(scene), "shot")
+        folder = os.path.join(export.export_folder(scene), "shot")
         os.makedirs(folder, exist_ok=True)
         exporter = ShotExport(engine, depsgraph, f, scene.frame_end, folder)
         path = exporter.run(settings.changed_settings(scene.bounce, scene))
         exporter.report.send(engine)
-        shot = _shots[scene.name] = Shot(path, f, scene.frame_end, engine.shot_callbacks(scene))
+        shot = _shots[scene.name] = Shot(path, f, scene.frame_end, engine.shot_callbacks())
     _current[0] = engine
     try:
         image = next(shot.frames)

@@ -12,7 +12,7 @@ import numpy as np
 
 import bounce
 
-from . import export, lights
+from . import export
 from .report import Report
 
 # Light values the lighting tool edits in place (a re-shade); anything else makes a new session.
@@ -26,19 +26,6 @@ def view_camera(region_data, lens, width, height):
     half = math.atan(36 / (2 * lens))
     vfov = 2 * math.atan(math.tan(half) * height / width) if width >= height else 2 * half
     return {"position": list(pos), "look_at": list(pos + forward), "up": list(up), "fov": math.degrees(vfov), "resolution": [width, height]}
-
-
-def light_list(depsgraph, report):
-    """The scene's lights and sky as the export writes them (no mesh is written)."""
-    out = []
-    materials = export.materials.MaterialExport(None, report)
-    for inst in depsgraph.object_instances:
-        if inst.object.type == "LIGHT":
-            entry = lights.light_entry(export._name(inst.object.name), inst.object.data, export.TO_BOUNCE @ inst.matrix_world, report)
-            if entry is not None:
-                out.append(entry)
-    sky = lights.world_light(depsgraph.scene.world, materials, report)
-    return out + ([sky] if sky is not None else [])
 
 
 class Viewport:
@@ -57,7 +44,7 @@ class Viewport:
         ("rasterize" for a new session or view, "reshade", ...) or None when nothing did."""
         report = Report()
         if only_lights and self.doc is not None:
-            doc = dict(self.doc, lights=light_list(depsgraph, report))
+            doc = dict(self.doc, lights=export.SceneExport(depsgraph, self.folder, report).light_list())
         else:
             doc = export.SceneExport(depsgraph, self.folder, report).run(render_settings)
         if camera is not None:

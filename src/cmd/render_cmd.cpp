@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <regex>
 
@@ -239,24 +240,16 @@ int run_render(const RenderArgs& given) {
         if (a.resume) throw InputError("command line", "--resume", "goes with --frames");
         if (chunks) throw InputError("command line", "--distribute frames", "goes with --frames");
         // The range a key's frame may have (a still has no shot to refuse the frame otherwise).
-        if (a.frame && !is_frame_number(*a.frame))
-            throw InputError("command line", fmt::format("--frame {:g}", *a.frame),
-                             fmt::format("a frame must be a finite number within +-{:g}", kMaxFrame));
-        const int whole = a.frame ? static_cast<int>(std::lround(*a.frame)) : 0;
-        // A subframe's #### would be a neighbouring frame's name, and overwrite its files.
-        if (a.frame && *a.frame != whole && a.job.files.patterned())
-            throw InputError("command line", fmt::format("--frame {:g}", *a.frame), "a #### file name needs a whole frame number");
+        const int whole = a.frame ? still_frame_number(*a.frame, a.job.files, "command line", fmt::format("--frame {:g}", *a.frame)) : 0;
         return render_frame(a, expand_frame(a.job.files, whole));
     }
     if (a.frame) throw InputError("command line", "--frame", "give --frame or --frames, not both");
     auto [first, last] = parse_frame_range(a.frames, "--frames " + a.frames);
-    std::vector<std::pair<const char*, std::string>> patterns{{"-o", a.job.files.output}};
-    for (auto [flag, path] : {std::pair{"--cache-out", a.job.files.cache_out}, std::pair{"--deep-out", a.job.files.deep_out},
-                              std::pair{"--stats-json", a.job.files.stats_json}})
-        if (!path.empty()) patterns.emplace_back(flag, path);
-    for (const auto& [flag, pattern] : patterns)
-        if (pattern.find('#') == std::string::npos)
-            throw InputError("command line", std::string(flag) + " " + pattern, "a sequence needs a #### frame pattern in it");
+    check_sequence_names(a.job.files, "command line", [](const std::string& field, const std::string& path) {
+        static const std::map<std::string, std::string> flags{
+            {"output", "-o"}, {"cache_out", "--cache-out"}, {"deep_out", "--deep-out"}, {"stats_json", "--stats-json"}};
+        return flags.at(field) + " " + path;
+    });
     if (chunks && a.comm && a.comm->size() > 1) return render_frame_chunks(a, first, last);
     return render_sequence(a, first, last, first, a.comm, false);
 }

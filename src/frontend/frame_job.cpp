@@ -1,5 +1,9 @@
 #include "frontend/frame_job.h"
 
+#include <fmt/format.h>
+
+#include <cmath>
+
 #include "bounce/config/params.h"
 #include "bounce/core/error.h"
 
@@ -38,6 +42,23 @@ RenderRequest job_request(const FrameJob& job, const FrameFiles& files, int fram
     request.cache_reuse = job.reuse_any ? CacheReuse::Any : CacheReuse::Strict;
     request.frame = frame;
     return request;
+}
+
+int still_frame_number(double frame, const FrameFiles& files, const std::string& source, const std::string& origin) {
+    if (!is_frame_number(frame)) throw InputError(source, origin, fmt::format("a frame must be a finite number within +-{:g}", kMaxFrame));
+    const int whole = static_cast<int>(std::lround(frame));
+    if (frame != whole && files.patterned()) throw InputError(source, origin, "a #### file name needs a whole frame number");
+    return whole;
+}
+
+void check_sequence_names(const FrameFiles& files, const std::string& source,
+                          const std::function<std::string(const std::string& field, const std::string& path)>& origin) {
+    for (const auto& [field, path] : {std::pair<const char*, const std::string&>{"output", files.output},
+                                      {"cache_out", files.cache_out},
+                                      {"deep_out", files.deep_out},
+                                      {"stats_json", files.stats_json}})
+        if (!path.empty() && path.find('#') == std::string::npos)
+            throw InputError(source, origin(field, path), "a sequence needs a #### frame pattern in it");
 }
 
 void add_load_phases(Stats& stats, const Scene& scene) {

@@ -4,6 +4,7 @@
 // same things with the same words and asks the driver the same way.
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include "bounce/core/stats.h"
@@ -29,6 +30,15 @@ void check_job(const FrameJob& job, const Scene& scene, bool sequence);
 void check_job_frame(const FrameJob& job, const FrameFiles& files, const Scene& scene, const FramePlan& plan);
 /// The driver's request for frame `frame` of the job, whose files are `files`.
 RenderRequest job_request(const FrameJob& job, const FrameFiles& files, int frame);
+/// The whole frame number a still at `frame` expands #### with. InputError(source, origin) for
+/// a frame beyond the shot's range of frame numbers, and for a subframe with #### file names
+/// (it would write, and overwrite, a neighbouring frame's files).
+int still_frame_number(double frame, const FrameFiles& files, const std::string& source, const std::string& origin);
+/// InputError(source, origin(field, path)) for the first output a sequence writes without a ####
+/// pattern (fields "output", "cache_out", "deep_out", "stats_json", in that order; an empty
+/// name is not written).
+void check_sequence_names(const FrameFiles& files, const std::string& source,
+                          const std::function<std::string(const std::string& field, const std::string& path)>& origin);
 /// The scene's load as the first phases of its frame's statistics (mesh files apart).
 void add_load_phases(Stats& stats, const Scene& scene);
 

@@ -29,11 +29,7 @@ py::object Arguments::take(const char* name) {
 std::string Arguments::path(const char* name) {
     py::object v = take(name);
     if (v.is_none()) return "";
-    if (!py::isinstance<py::str>(v) && !py::hasattr(v, "__fspath__"))
-        fail(name, v, fmt::format("a path is a str or an os.PathLike, not a {}", type_name(v)));
-    py::object p = py::module_::import("os").attr("fspath")(v);
-    if (!py::isinstance<py::str>(p)) fail(name, v, "a path is text, not bytes");
-    const std::string s = p.cast<std::string>();
+    const std::string s = fspath(v, fmt::format("{}({}={})", call_, name, py::repr(v).cast<std::string>()));
     if (s.empty()) fail(name, v, "an empty path (leave the argument out instead)");
     if (s.find('\0') != std::string::npos) fail(name, v, "a path holds no NUL character");
     return s;

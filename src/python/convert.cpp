@@ -17,6 +17,14 @@ std::string type_name(py::handle value) {
     return module == "builtins" ? name : module + "." + name;
 }
 
+std::string fspath(py::handle value, const std::string& origin) {
+    if (!py::isinstance<py::str>(value) && !py::hasattr(value, "__fspath__"))
+        throw InputError("python", origin, fmt::format("a path is a str or an os.PathLike, not a {}", type_name(value)));
+    py::object p = py::module_::import("os").attr("fspath")(value);
+    if (!py::isinstance<py::str>(p)) throw InputError("python", origin, "a path is text, not bytes");
+    return p.cast<std::string>();
+}
+
 namespace {
 
 nlohmann::json number(py::handle value, const std::string& origin, const std::string& place) {

@@ -20,4 +20,8 @@ pybind11::object from_json(const nlohmann::json& j);
 /// The Python type's name, for messages ("numpy.ndarray").
 std::string type_name(pybind11::handle value);
 
+/// A path argument (a str or an os.PathLike) as text; InputError("python", origin) for anything
+/// else (bytes included).
+std::string fspath(pybind11::handle value, const std::string& origin);
+
 }  // namespace bounce::python

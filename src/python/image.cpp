@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "bounce/core/error.h"
+#include "convert.h"
 
 namespace py = pybind11;
 
@@ -94,12 +95,7 @@ void add_image(py::module_& m) {
             return fmt::format("<bounce.Image {}x{} layers: {}>", i.image->width, i.image->height, fmt::join(names, ", "));
         });
     m.def(
-        "read_exr",
-        [](py::handle path) {
-            if (!py::isinstance<py::str>(path) && !py::hasattr(path, "__fspath__"))
-                throw InputError("python", "read_exr()", "a path is a str or an os.PathLike");
-            return wrap_image(std::make_shared<Image>(read_exr(py::str(py::module_::import("os").attr("fspath")(path)))), py::dict());
-        },
+        "read_exr", [](py::handle path) { return wrap_image(std::make_shared<Image>(read_exr(fspath(path, "read_exr()"))), py::dict()); },
         py::arg("path"), "An EXR (a bounce render, or any: channels grouped by their prefix) as a bounce.Image.");
 }
 

@@ -23,12 +23,6 @@ using namespace bounce::python;
 
 namespace {
 
-std::string fspath(py::handle p, const char* call) {
-    if (!py::isinstance<py::str>(p) && !py::hasattr(p, "__fspath__"))
-        throw InputError("python", call, "a path is a str or an os.PathLike, not a " + type_name(p));
-    return py::str(py::module_::import("os").attr("fspath")(p));
-}
-
 std::optional<double> frame_arg(py::handle f, const char* call) {
     if (f.is_none()) return std::nullopt;
     if (PyBool_Check(f.ptr()) || !(PyFloat_Check(f.ptr()) || PyIndex_Check(f.ptr()))) throw InputError("python", call, "frame is a number");

@@ -71,9 +71,9 @@ py::object run_one(const std::shared_ptr<const Scene>& scene, const RenderCall& 
     RenderResult r;
     monitor.run(
         [&] { r = shot ? shot->render(scene, request, stats, &monitor) : run_frame(*scene, plan, none, request, stats, &monitor); });
-    write_frame_outputs(r, files, call.job.show, stats);
     // What the EXR holds: with a base, the full frame with the crop pasted over it.
-    auto image = std::make_shared<Image>(files.base.empty() ? std::move(r.image) : paste_over(read_exr(files.base), r.image, files.base));
+    std::optional<Image> pasted = write_frame_outputs(r, files, call.job.show, stats);
+    auto image = std::make_shared<Image>(pasted ? std::move(*pasted) : std::move(r.image));
     if (shot) shot->keep(r, scene);
     return wrap_image(std::move(image), py::reinterpret_steal<py::dict>(from_json(stats.to_json()).release()));
 }
@@ -87,13 +87,12 @@ void warn_unread(const Scene& scene) {
 }  // namespace
 
 py::object render_still(PyScene& scene, const RenderCall& call) {
-    if (call.frame && !is_frame_number(*call.frame))
-        throw InputError("python", fmt::format("render(frame={:g})", *call.frame),
-                         fmt::format("a frame must be a finite number within +-{:g}", kMaxFrame));
+    const std::optional<int> asked =
+        call.frame
+            ? std::optional(still_frame_number(*call.frame, call.job.files, "python", fmt::format("render(frame={:g})", *call.frame)))
+            : std::nullopt;
     const std::shared_ptr<const Scene> s = scene.at(call.params, call.frame ? call.frame : scene.frame());
-    const int whole = static_cast<int>(std::lround(s->frame));
-    if (call.frame && *call.frame != whole && call.job.files.patterned())
-        throw InputError("python", fmt::format("render(frame={:g})", *call.frame), "a #### file name needs a whole frame number");
+    const int whole = asked ? *asked : static_cast<int>(std::lround(s->frame));
     warn_unread(*s);
     return run_one(s, call, expand_frame(call.job.files, whole), whole, nullptr, true);
 }
@@ -106,11 +105,9 @@ PyFrames::PyFrames(std::shared_ptr<PyScene> scene, std::vector<int> frames, Rend
         if (frames_[i] != frames_[i - 1] + 1)
             throw InputError("python", fmt::format("render_frames(frames=[..., {}, {}, ...])", frames_[i - 1], frames_[i]),
                              "a shot's frames run in order, one after the other (each starts from the one before)");
-    const FrameFiles& f = call_.job.files;
-    for (const auto& [name, path] :
-         {std::pair{"output", f.output}, {"cache_out", f.cache_out}, {"deep_out", f.deep_out}, {"stats_json", f.stats_json}})
-        if (!path.empty() && path.find('#') == std::string::npos)
-            throw InputError("python", fmt::format("render_frames({}=\"{}\")", name, path), "a sequence needs a #### frame pattern in it");
+    check_sequence_names(call_.job.files, "python", [](const std::string& field, const std::string& path) {
+        return fmt::format("render_frames({}=\"{}\")", field, path);
+    });
     const std::shared_ptr<const Scene> first = scene_->at(call_.params, frames_.front());
     check_job(call_.job, *first, true);
     if (first->shot.animated && !first->shot.contains(frames_.back()))

@@ -4,7 +4,6 @@
 #include <exception>
 #include <future>
 
-#include "errors.h"
 #include "image.h"
 
 namespace py = pybind11;

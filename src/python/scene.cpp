@@ -84,10 +84,10 @@ void PyScene::set(const std::string& key, py::handle value) {
     const nlohmann::json v = to_json(value, "python", origin);
     Override o(key + "=" + v.dump(), origin, "python");
     if (const Param* p = find_param(scene_params(), key)) {
-        // A parameter is checked by the table now; the scene loads with it at the next render.
-        const std::shared_ptr<const Scene> s = current();
-        Camera camera = s->camera;
-        RenderSettings render = s->render;
+        // A parameter is checked by the table now (its check is of the value alone: scratch
+        // settings serve, and no load is made); the scene loads with it when next needed.
+        Camera camera;
+        RenderSettings render;
         try {
             set_param_value(ParamsOut{camera, render}, key, v);
         } catch (const std::invalid_argument& e) {

@@ -35,7 +35,7 @@ std::shared_ptr<const Image> image_arg(Arguments& a, const char* name, std::stri
     py::object v = a.take(name);
     if (v.is_none()) throw InputError("python", a.call() + "()", fmt::format("give {}", name));
     if (py::isinstance<py::str>(v) || py::hasattr(v, "__fspath__")) {
-        label = py::str(py::module_::import("os").attr("fspath")(v));
+        label = fspath(v, fmt::format("{}({}=...)", a.call(), name));
         return std::make_shared<const Image>(read_exr(label));
     }
     label = name;
@@ -126,8 +126,7 @@ void add_tools(py::module_& m) {
                        std::vector<std::string> paths;
                        if (!py::isinstance<py::sequence>(inputs) || py::isinstance<py::str>(inputs))
                            a.fail("inputs", inputs, "expects a list of cache files");
-                       for (py::handle p : py::reinterpret_borrow<py::sequence>(inputs))
-                           paths.push_back(py::str(py::module_::import("os").attr("fspath")(p)));
+                       for (py::handle p : py::reinterpret_borrow<py::sequence>(inputs)) paths.push_back(fspath(p, "merge(inputs=[...])"));
                        const std::string output = a.path("output");
                        const bool force = a.flag("force");
                        return counts(merge_cache_files(python_call("merge", output), paths, output, force));

@@ -126,14 +126,11 @@ void check_base(const std::string& base, const Scene& scene) {
                                       : "base was rendered from another scene or camera: paste the crop over a render of this one");
 }
 
-void write_frame_outputs(const RenderResult& result, const FrameFiles& files, const std::string& show, Stats& stats) {
+std::optional<Image> write_frame_outputs(const RenderResult& result, const FrameFiles& files, const std::string& show, Stats& stats) {
     PhaseTimer t(stats, "write outputs");
-    const Image* image = &result.image;
-    Image pasted;
-    if (!files.base.empty()) {
-        pasted = paste_over(read_exr(files.base), result.image, files.base);
-        image = &pasted;
-    }
+    std::optional<Image> pasted;
+    if (!files.base.empty()) pasted = paste_over(read_exr(files.base), result.image, files.base);
+    const Image* image = pasted ? &*pasted : &result.image;
     if (!files.output.empty()) {  // the lighting tool keeps its image in memory
         write_exr(files.output, *image);
         write_png(files.png(), *image, show, *files.display);
@@ -142,13 +139,14 @@ void write_frame_outputs(const RenderResult& result, const FrameFiles& files, co
         write_deep(files.deep_out, *result.gathered_deep, result.deep_colour.empty() ? nullptr : &result.deep_colour);
     if (result.cache && !files.cache_out.empty()) write_cache_file(files.cache_out, result.cache->to_file(result.cache_info));
     t.stop();
-    if (files.stats_json.empty()) return;
+    if (files.stats_json.empty()) return pasted;
     const std::string text = stats.to_json().dump(2) + "\n";
     write_atomically(files.stats_json, [&](const std::string& tmp) {
         std::ofstream out(tmp);
         out << text;
         if (!out) throw InputError(files.stats_json, "", "cannot write stats file");
     });
+    return pasted;
 }
 
 }  // namespace bounce

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -59,7 +60,8 @@ void check_base(const std::string& base, const Scene& scene);
 /// and those after it old — so a cache or stats file newer than the EXR never exists (each is
 /// written to a temporary name and renamed). With `files.base` the image is the base frame with
 /// the render's window pasted over it. Every front end writes a frame's files here (the CLI, a
-/// rank 0, render(), the lighting tool); a file with no name is not written.
-void write_frame_outputs(const RenderResult& result, const FrameFiles& files, const std::string& show, Stats& stats);
+/// rank 0, render(), the lighting tool); a file with no name is not written. Returns the pasted
+/// full frame when there is a base (the image the EXR holds), none otherwise.
+std::optional<Image> write_frame_outputs(const RenderResult& result, const FrameFiles& files, const std::string& show, Stats& stats);
 
 }  // namespace bounce
