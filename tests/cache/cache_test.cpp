@@ -297,6 +297,29 @@ TEST(CachePasses, NoMissesInTheShadingPassAndDeterministicRecords) {
     }
 }
 
+TEST(CachePasses, SubPassLatticesAreTheirPixelsAndCoverEachPixelOnce) {
+    // The gathering pass walks each sub-pass's lattice (period, offset) instead of testing
+    // every pixel: the two must name the same pixels, each pixel in exactly one sub-pass.
+    for (int first_step : {1, 2, 16}) {
+        std::vector<int> seen(40 * 40, 0);
+        for (const SubPass& sp : subpass_schedule(first_step)) {
+            const auto on = [&](int v, int axis) { return (v - sp.offset(axis)) % sp.period() == 0; };
+            for (int y = 0; y < 40; ++y)
+                for (int x = 0; x < 40; ++x) {
+                    ASSERT_EQ(on(x, 0) && on(y, 1), sp.contains(x, y)) << first_step << " step " << sp.step << " at " << x << "," << y;
+                    seen[static_cast<size_t>(y * 40 + x)] += sp.contains(x, y);
+                }
+            for (int from = 0; from < 40; ++from)
+                for (int axis : {0, 1}) {
+                    int want = from;
+                    while (!on(want, axis)) ++want;
+                    EXPECT_EQ(sp.first(from, axis), want);
+                }
+        }
+        EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), 40 * 40) << first_step;
+    }
+}
+
 TEST(CachePasses, PreviewShowsEverySubPassAndEndsAtTheFinalImage) {
     Scene s = load_scene(test::cornell_scene(),
                          {"camera.resolution=[48,48]", "render.spp=1", "render.gi=\"cache\"", "render.rays=64", "render.preview=true"});

@@ -34,6 +34,7 @@ IrradianceCache::IrradianceCache(const IrradianceCache& o)
       shading_metric_(o.shading_metric_),
       ao_only_(o.ao_only_),
       records_(o.records_),
+      shapes_(o.shapes_),
       fragment_records_(o.fragment_records_),
       fragment_index_(o.fragment_index_),
       octree_(o.octree_),
@@ -82,12 +83,9 @@ bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Recor
     // min_weight says: above 1 no single record could, and a fragment that made a record would
     // miss again on every re-render from the cache.
     float sum = 0, top = 0;
-    auto add = [&](const Record& r) {
-        const float w = record_weight(r, p, n, metric_);
-        sum += w, top = std::max(top, w);
-    };
-    octree_.visit(p, [&](uint32_t id) { add(records_[id]); });
-    for (const Record& r : extra) add(r);
+    auto add = [&](const float w) { sum += w, top = std::max(top, w); };
+    octree_.visit(p, [&](uint32_t id) { add(record_weight(shapes_[id], p, n, metric_)); });
+    for (const Record& r : extra) add(record_weight(r, p, n, metric_));
     return sum < (min_weight > 0 ? min_weight : settings_.min_weight) && top < own;
 }
 
@@ -142,9 +140,9 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
     // The shading pass reads the records' filtered values (record_filter.h) when there are.
     const std::span<const FilteredValue> filtered = shading ? filtered_values() : std::span<const FilteredValue>();
     octree_.visit(p, [&](uint32_t id) {
-        const Record& r = records_[id];
-        float w = record_weight(r, p, n, metric);
+        float w = record_weight(shapes_[id], p, n, metric);
         if (w <= 0) return;
+        const Record& r = records_[id];
         const Color& E = filtered.empty() ? r.E : filtered[id].E;
         const float ao = filtered.empty() ? r.ao : filtered[id].ao;
         Color ei = E;
@@ -206,9 +204,10 @@ void IrradianceCache::light_shares(const Vec3& p, const Vec3& n, bool shading, c
     const RecordMetric& m = shading ? shading_metric_ : metric_;
     std::fill(out.begin(), out.end(), Color(0));
     octree_.visit(p, [&](uint32_t id) {
+        const float w = record_weight(shapes_[id], p, n, m);
+        if (w <= 0) return;
         const Record& r = records_[id];
-        const float w = record_weight(r, p, n, m);
-        if (w <= 0 || !r.parts || r.parts->light.size() != out.size()) return;
+        if (!r.parts || r.parts->light.size() != out.size()) return;
         const Vec3 dp = (at_p ? *at_p : p) - r.p, rot = cross(r.n, at_n ? *at_n : n);
         for (size_t i = 0; i < out.size(); ++i) {
             const LightPart& part = r.parts->light[i];
@@ -326,6 +325,7 @@ uint32_t IrradianceCache::insert_loaded(const Record& r) {
     copy.support = support(copy);
     auto id = static_cast<uint32_t>(records_.size());
     records_.push_back(copy);
+    shapes_.emplace_back(copy);
     octree_.insert(id, copy.p, copy.support);
     return id;
 }
@@ -362,7 +362,8 @@ size_t IrradianceCache::memory_bytes() const {
     size_t parts = 0;  // light parts: per record (copies share them only across caches)
     for (const auto* list : {&records_, &fragment_records_})
         for (const Record& r : *list) parts += r.parts ? r.parts->bytes() : 0;
-    return parts + (records_.size() + fragment_records_.size()) * sizeof(Record) + octree_.memory_bytes() +
+    return parts + (records_.size() + fragment_records_.size()) * sizeof(Record) + shapes_.size() * sizeof(RecordShape) +
+           octree_.memory_bytes() +
            fragment_index_.size() * (sizeof(uint64_t) + sizeof(uint32_t) + 2 * sizeof(void*));
 }
 

@@ -70,7 +70,7 @@ class IrradianceCache {
     template <typename F>
     void visit_weights(const Vec3& p, const Vec3& n, F&& f, bool shading = false) const {
         const RecordMetric& m = shading ? shading_metric_ : metric_;
-        octree_.visit(p, [&](uint32_t id) { f(id, record_weight(records_[id], p, n, m)); });
+        octree_.visit(p, [&](uint32_t id) { f(id, record_weight(shapes_[id], p, n, m)); });
     }
     /// The records' values as the shading pass reads them: filtered in record space
     /// (CacheSettings::record_filter, record_filter.h), made on the first call after the
@@ -149,6 +149,7 @@ class IrradianceCache {
     RecordMetric metric_, shading_metric_;  ///< what the weights read of the two
     bool ao_only_;
     std::deque<Record> records_;
+    std::vector<RecordShape> shapes_;  ///< records_[i]'s shape, packed for the lookups' weights
     std::deque<Record> fragment_records_;
     std::unordered_map<uint64_t, uint32_t> fragment_index_;  ///< key -> fragment_records_ index
     RecordOctree octree_;

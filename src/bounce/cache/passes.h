@@ -26,6 +26,14 @@ struct SubPass {
     bool all = false;  ///< first level: every parity
     int quarter = 0;   ///< bit 0: x/(2 step) odd, bit 1: y/(2 step) odd (x/step, y/step at the first level)
     bool contains(int x, int y) const;
+    /// Its pixels form a lattice: x = offset(0) and y = offset(1), modulo period().
+    int period() const { return all ? 2 * step : 4 * step; }
+    int offset(int axis) const {
+        const int q = (quarter >> axis) & 1;
+        return all ? q * step : step * (((parity >> axis) & 1) + 2 * q);
+    }
+    /// The first coordinate of the lattice along `axis` (0: x, 1: y) at or after `from`.
+    int first(int from, int axis) const { return from + ((offset(axis) - from) % period() + period()) % period(); }
 };
 
 /// The sub-passes of a gathering pass: every `first_step` pixels, then the pixels between,
