@@ -197,6 +197,30 @@ void BM_HemisphereGather(benchmark::State& state) {
 }
 BENCHMARK(BM_HemisphereGather)->Arg(512)->Arg(2048)->Unit(benchmark::kMicrosecond);
 
+/// Whole gather phases (issue 64): the cache's record gathers (its gathering pass and
+/// refinement) at 64 rays per record against brute force at 64 rays per pixel, with the same
+/// scene, deep buffer and thread, GI and AO, at 256x256. Timed over the gather phase alone
+/// (visibility and the radiosity bake left out); items are gather rays, so items_per_second
+/// is each method's gather rays/s and the cache's per-record work shows as their ratio.
+void BM_GatherPhase(benchmark::State& state) {
+    const bool cache = state.range(0) == 1, ao = state.range(1) == 1;
+    RayRig& rig = RayRig::get();
+    const Scene s =
+        load_scene(rig.scene.path, {"camera.resolution=[256,256]", "render.spp=4", "render.rays=64", "render.threads=1",
+                                    cache ? "render.gi=\"cache\"" : "render.gi=\"brute\"", ao ? "render.ao=true" : "render.ao=false"});
+    double rays = 0;
+    for (auto _ : state) {
+        Stats stats;
+        benchmark::DoNotOptimize(render(s, {}, stats, nullptr));
+        const auto j = stats.to_json();
+        state.SetIterationTime(j["phases_s"]["gather"].get<double>());
+        rays += static_cast<double>(j["rays"]["gather"].get<uint64_t>());
+    }
+    state.SetItemsProcessed(static_cast<int64_t>(rays));
+    state.SetLabel(std::string(cache ? "cache, 64 rays per record" : "brute force, 64 rays") + (ao ? ", ao" : ", gi"));
+}
+BENCHMARK(BM_GatherPhase)->ArgNames({"cache", "ao"})->ArgsProduct({{0, 1}, {0, 1}})->UseManualTime()->Unit(benchmark::kMillisecond);
+
 void BM_DeepRead(benchmark::State& state) {
     RayRig& rig = RayRig::get();
     const std::string path = (std::filesystem::temp_directory_path() / "bounce-bench-deep.exr").string();

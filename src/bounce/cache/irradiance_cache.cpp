@@ -82,11 +82,19 @@ bool IrradianceCache::misses(const Vec3& p, const Vec3& n, std::span<const Recor
     // A record at p itself (weight 1 there, 0.99 for float rounding) covers p whatever
     // min_weight says: above 1 no single record could, and a fragment that made a record would
     // miss again on every re-render from the cache.
+    // Once the weights reach min_weight the answer is known (no miss): the walk ends there,
+    // which is where most fragments of the later sub-passes stand.
+    const float enough = min_weight > 0 ? min_weight : settings_.min_weight;
     float sum = 0, top = 0;
-    auto add = [&](const float w) { sum += w, top = std::max(top, w); };
-    octree_.visit(p, [&](uint32_t id) { add(record_weight(shapes_[id], p, n, metric_)); });
-    for (const Record& r : extra) add(record_weight(r, p, n, metric_));
-    return sum < (min_weight > 0 ? min_weight : settings_.min_weight) && top < own;
+    auto add = [&](const float w) {
+        sum += w, top = std::max(top, w);
+        return sum >= enough;
+    };
+    octree_.visit_until(p, [&](uint32_t id) { return add(record_weight(shapes_[id], p, n, metric_)); });
+    if (sum >= enough) return false;
+    for (const Record& r : extra)
+        if (add(record_weight(r, p, n, metric_))) return false;
+    return top < own;
 }
 
 bool IrradianceCache::has_light_parts(size_t lights) const {
@@ -153,12 +161,14 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
         Color si = signal ? signal->E : Color(0);
         if (settings_.gradients) {
             const Vec3 dp = (at_p ? *at_p : p) - r.p, rot = cross(r.n, at_n ? *at_n : n);
-            ei = extrapolated(E, r.grad_t, r.grad_r, dp, rot);
+            // AO records hold no light (E, its directions and gradients are 0): nothing to extrapolate.
+            if (!ao_only_) ei = extrapolated(E, r.grad_t, r.grad_r, dp, rot);
             if (signal) si = extrapolated(signal->E, signal->grad_t, signal->grad_r, dp, rot);
             ai = extrapolated_ao(ao, r.ao_grad_t, r.ao_grad_r, dp, rot);
         }
         if (first) base = ei, base_ao = ai, first = false;
-        for (int c = 0; c < 3; ++c) de[c] += static_cast<double>(w) * (ei[c] - base[c]);
+        if (!ao_only_)
+            for (int c = 0; c < 3; ++c) de[c] += static_cast<double>(w) * (ei[c] - base[c]);
         dao += static_cast<double>(w) * (ai - base_ao);
         const double l = ao_only_ ? ai : luminance(signal ? si : ei);
         lsum += w * l;
@@ -170,7 +180,8 @@ Interpolated IrradianceCache::lookup(const Vec3& p, const Vec3& n, bool shading,
         const double own_rays = s.refine_rays > 0 ? s.refine_rays : std::max<double>(r.rays, 1);
         own += w * (r.noise * l) * (r.noise * l) * std::max<double>(r.rays, 1) / own_rays;
         bent += r.bent * w;
-        for (size_t c = 0; c < 3; ++c) dir[c] += r.dir[c] * w;
+        if (!ao_only_)
+            for (size_t c = 0; c < 3; ++c) dir[c] += r.dir[c] * w;
         ++out.records;
     });
     out.weight = static_cast<float>(wsum);
@@ -316,17 +327,16 @@ void IrradianceCache::set_long_radius(Record& r, float wanted, const Vec3& axis)
 
 uint32_t IrradianceCache::insert(Record r) {
     clamp_to_neighbours(r);
-    return insert_loaded(r);
+    return insert_loaded(std::move(r));
 }
 
-uint32_t IrradianceCache::insert_loaded(const Record& r) {
+uint32_t IrradianceCache::insert_loaded(Record r) {
     records_changed();
-    Record copy = r;
-    copy.support = support(copy);
+    r.support = support(r);
     auto id = static_cast<uint32_t>(records_.size());
-    records_.push_back(copy);
-    shapes_.emplace_back(copy);
-    octree_.insert(id, copy.p, copy.support);
+    shapes_.emplace_back(r);
+    octree_.insert(id, r.p, r.support);
+    records_.push_back(std::move(r));
     return id;
 }
 
@@ -363,8 +373,7 @@ size_t IrradianceCache::memory_bytes() const {
     for (const auto* list : {&records_, &fragment_records_})
         for (const Record& r : *list) parts += r.parts ? r.parts->bytes() : 0;
     return parts + (records_.size() + fragment_records_.size()) * sizeof(Record) + shapes_.size() * sizeof(RecordShape) +
-           octree_.memory_bytes() +
-           fragment_index_.size() * (sizeof(uint64_t) + sizeof(uint32_t) + 2 * sizeof(void*));
+           octree_.memory_bytes() + fragment_index_.size() * (sizeof(uint64_t) + sizeof(uint32_t) + 2 * sizeof(void*));
 }
 
 }  // namespace bounce

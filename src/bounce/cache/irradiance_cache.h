@@ -116,7 +116,7 @@ class IrradianceCache {
     uint32_t insert(Record r);
 
     /// Inserts a record read from a file as it is (no clamping: its radius is final).
-    uint32_t insert_loaded(const Record& r);
+    uint32_t insert_loaded(Record r);
 
     /// Per-fragment refinement's records: one fragment's own gather (Record::key names the
     /// fragment, Record::p is its point), outside the spatial index, so no lookup uses it.

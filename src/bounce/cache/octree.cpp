@@ -42,10 +42,17 @@ void RecordOctree::insert(Node& node, const Vec3& lo, const Vec3& hi, const Entr
         nodes_ += 8;
     }
     Vec3 mid = (lo + hi) * 0.5f;
+    // Per axis, whether the box reaches the lower and the upper half (closed intervals, as
+    // the children's own bounds): the children it overlaps are their products.
+    bool low[3], high[3];
+    for (int a = 0; a < 3; ++a) {
+        low[a] = bhi[a] >= lo[a] && blo[a] <= mid[a];
+        high[a] = bhi[a] >= mid[a] && blo[a] <= hi[a];
+    }
     for (int c = 0; c < 8; ++c) {
+        if (!(c & 1 ? high[0] : low[0]) || !(c & 2 ? high[1] : low[1]) || !(c & 4 ? high[2] : low[2])) continue;
         Vec3 clo{c & 1 ? mid.x : lo.x, c & 2 ? mid.y : lo.y, c & 4 ? mid.z : lo.z};
         Vec3 chi{c & 1 ? hi.x : mid.x, c & 2 ? hi.y : mid.y, c & 4 ? hi.z : mid.z};
-        if (bhi.x < clo.x || blo.x > chi.x || bhi.y < clo.y || blo.y > chi.y || bhi.z < clo.z || blo.z > chi.z) continue;
         insert((*node.children)[static_cast<size_t>(c)], clo, chi, e, blo, bhi, diag2, depth + 1);
     }
 }

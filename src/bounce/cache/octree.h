@@ -26,12 +26,20 @@ class RecordOctree {
     /// with nonzero weight at p).
     template <typename F>
     void visit(const Vec3& p, F&& f) const {
+        visit_until(p, [&f](uint32_t id) {
+            f(id);
+            return false;
+        });
+    }
+    /// The same walk, ended as soon as f(id) returns true (a lookup that has its answer).
+    template <typename F>
+    void visit_until(const Vec3& p, F&& f) const {
         const Node* node = &root_;
         Vec3 lo = bounds_.lo, hi = bounds_.hi;
         while (node) {
             for (const Entry& e : node->entries) {
                 const Vec3 d = p - e.p;
-                if (dot(d, d) <= e.reach2) f(e.id);
+                if (dot(d, d) <= e.reach2 && f(e.id)) return;
             }
             Vec3 mid = (lo + hi) * 0.5f;
             int c = (p.x > mid.x ? 1 : 0) | (p.y > mid.y ? 2 : 0) | (p.z > mid.z ? 4 : 0);

@@ -124,8 +124,7 @@ struct RecordShape {
     float radius_long = 0;
     Vec3 axis;
     float weber = INFINITY;
-    explicit RecordShape(const Record& r)
-        : p(r.p), radius(r.radius), n(r.n), radius_long(r.radius_long), axis(r.axis), weber(r.weber) {}
+    explicit RecordShape(const Record& r) : p(r.p), radius(r.radius), n(r.n), radius_long(r.radius_long), axis(r.axis), weber(r.weber) {}
 };
 
 /// Inline: every lookup calls it once per candidate record.

@@ -290,8 +290,10 @@ GatherResult Gatherer::finish(detail::Cells& cells, const Vec3& p, const Vec3& n
             parts->light.push_back(light_part(cells, cells.P.data() + i, lights_, frame, near, settings_.record_terms));
         parts->signal = combine_parts(*parts, unit_scales_);
     }
-    // AO mode's radiance is all 0: no gradients to sum.
-    const LightPart sums = parts ? parts->signal : light_part(cells, L.data(), 1, frame, near, settings_.record_terms && !settings_.ao);
+    // AO mode's radiance is all 0: nothing to sum.
+    const LightPart sums = parts          ? parts->signal
+                           : settings_.ao ? LightPart{}
+                                          : light_part(cells, L.data(), 1, frame, near, settings_.record_terms);
     res.irradiance = sums.E, res.light_dir = sums.dir;
     res.parts = std::move(parts);
     res.ao = sum_u / static_cast<float>(S);
