@@ -238,6 +238,38 @@ TEST(Radiosity, TexturesConvergeToShadowRayShading) {
     EXPECT_LT(prev, 2e-4);
 }
 
+TEST(Radiosity, DefaultLatticesFollowTheTexelOnLargeTriangles) {
+    // A 4 x 4 floor is most of the scene: its triangles are ~128 auto texels long. Their
+    // lattices must be that fine (a cap of 32 left them 4x coarser, and the light they bake
+    // 10x further from shadow-ray shading).
+    json j = test::base_scene();
+    j["objects"] = test::floor_objects(2.0f);
+    j["materials"] = {{"m", {{"color", 0.5}}}};
+    j["objects"][0]["material"] = "m";
+    j["lights"] = {{{"type", "point"}, {"position", {0.3, 0.8, -0.2}}, {"color", 1}}};
+    Rig rig(test::scene_from(j), true);
+    const TriangleMesh& m = rig.scene.objects[0].coarse;
+    const float texel = rig.scene.size() / 128.0f;
+    double err = 0;
+    int count = 0;
+    for (uint32_t t = 0; t < m.triangle_count(); ++t) {
+        const auto [a, b, c] = triangle_vertices(m, nullptr, t);
+        const float longest = std::max({length(b - a), length(c - b), length(a - c)});
+        EXPECT_EQ(rig.radiosity->object(0).level[t], radiosity_level(longest, texel, 255));
+        EXPECT_GT(rig.radiosity->object(0).level[t], 100);
+        for (int i = 1; i < 20; ++i)
+            for (int k = 1; i + k < 20; ++k) {
+                const float u = static_cast<float>(i) / 20, v = static_cast<float>(k) / 20;
+                const SurfacePoint sp = surface_point(m, t, u, v);
+                Counters cn;
+                const Color exact = Color(0.5f) * rig.lighting.irradiance(sp.p, {0, 1, 0}, 0, RandomStream(0, 0), 1, cn) * kInvPi;
+                err += std::abs(rig.radiosity->object(0).lookup(t, u, v, sp.ng.y > 0).x - exact.x);
+                ++count;
+            }
+    }
+    EXPECT_LT(err / count, 2e-4);  // the convergence test's finest lattice (h = 0.05) reaches this
+}
+
 TEST(Radiosity, SaveAndLoadRoundTripAndRefuseOtherLights) {
     test::TempDir d;
     Scene s = load_scene(test::cornell_scene());
