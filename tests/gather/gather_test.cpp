@@ -199,37 +199,44 @@ TEST(Gather, ErrorFallsAtLeastLikeOneOverSqrtN) {
     EXPECT_LT(e1024 / exact.y, 0.05);
 }
 
-TEST(Radiosity, TexturesConvergeToShadowRayShading) {
-    // A 4 x 4 floor under a point light: the baked radiosity, interpolated linearly on the
-    // lattice, approaches albedo E / pi like h^2 as the lattice spacing h halves.
+/// A 4 x 4 floor of albedo 0.5 under a point light: the radiosity tests' scene.
+json floor_under_a_point_light() {
     json j = test::base_scene();
     j["objects"] = test::floor_objects(2.0f);
     j["materials"] = {{"m", {{"color", 0.5}}}};
     j["objects"][0]["material"] = "m";
     j["lights"] = {{{"type", "point"}, {"position", {0.3, 0.8, -0.2}}, {"color", 1}}};
-    Scene scene = test::scene_from(j);
+    return j;
+}
+
+/// The floor's baked radiosity against shadow-ray shading (albedo E / pi), mean absolute
+/// difference over points inside every triangle.
+double lattice_error(const Rig& rig) {
+    const TriangleMesh& m = rig.scene.objects[0].coarse;
+    double err = 0;
+    int count = 0;
+    for (uint32_t t = 0; t < m.triangle_count(); ++t)
+        for (int i = 1; i < 20; ++i)
+            for (int k = 1; i + k < 20; ++k) {
+                const float u = static_cast<float>(i) / 20, v = static_cast<float>(k) / 20;
+                const SurfacePoint sp = surface_point(m, t, u, v);
+                Counters c;
+                const Color exact = Color(0.5f) * rig.lighting.irradiance(sp.p, {0, 1, 0}, 0, RandomStream(0, 0), 1, c) * kInvPi;
+                err += std::abs(rig.radiosity->object(0).lookup(t, u, v, sp.ng.y > 0).x - exact.x);
+                ++count;
+            }
+    return err / count;
+}
+
+TEST(Radiosity, TexturesConvergeToShadowRayShading) {
+    // The baked radiosity, interpolated linearly on the lattice, approaches albedo E / pi like
+    // h^2 as the lattice spacing h halves.
+    const json j = floor_under_a_point_light();
     double prev = 0;
     for (float h : {0.4f, 0.2f, 0.1f, 0.05f}) {
         RadiositySettings rs;
         rs.texel = h;
-        rs.max_level = 255;
-        Rig rig(test::scene_from(j), true, rs);
-        const TriangleMesh& m = rig.scene.objects[0].coarse;
-        double err = 0;
-        int count = 0;
-        for (uint32_t t = 0; t < m.triangle_count(); ++t)
-            for (int i = 1; i < 20; ++i)
-                for (int k = 1; i + k < 20; ++k) {
-                    float u = static_cast<float>(i) / 20, v = static_cast<float>(k) / 20;
-                    SurfacePoint sp = surface_point(m, t, u, v);
-                    Counters c;
-                    Color exact = Color(0.5f) * rig.lighting.irradiance(sp.p, {0, 1, 0}, 0, RandomStream(0, 0), 1, c) * kInvPi;
-                    bool front = sp.ng.y > 0;
-                    Color got = rig.radiosity->object(0).lookup(t, u, v, front);
-                    err += std::abs(got.x - exact.x);
-                    ++count;
-                }
-        err /= count;
+        const double err = lattice_error(Rig(test::scene_from(j), true, rs));
         if (prev > 0) {
             EXPECT_LT(err, prev / 2.5) << "h = " << h;  // second order: ~4x per halving
         }
@@ -239,35 +246,19 @@ TEST(Radiosity, TexturesConvergeToShadowRayShading) {
 }
 
 TEST(Radiosity, DefaultLatticesFollowTheTexelOnLargeTriangles) {
-    // A 4 x 4 floor is most of the scene: its triangles are ~128 auto texels long. Their
-    // lattices must be that fine (a cap of 32 left them 4x coarser, and the light they bake
-    // 10x further from shadow-ray shading).
-    json j = test::base_scene();
-    j["objects"] = test::floor_objects(2.0f);
-    j["materials"] = {{"m", {{"color", 0.5}}}};
-    j["objects"][0]["material"] = "m";
-    j["lights"] = {{{"type", "point"}, {"position", {0.3, 0.8, -0.2}}, {"color", 1}}};
-    Rig rig(test::scene_from(j), true);
+    // The floor is most of the scene: its triangles are ~128 auto texels long. Their lattices
+    // must be that fine (a cap of 32 left them 4x coarser, and the light they bake 10x further
+    // from shadow-ray shading).
+    const Rig rig(test::scene_from(floor_under_a_point_light()), true);
     const TriangleMesh& m = rig.scene.objects[0].coarse;
     const float texel = rig.scene.size() / 128.0f;
-    double err = 0;
-    int count = 0;
     for (uint32_t t = 0; t < m.triangle_count(); ++t) {
         const auto [a, b, c] = triangle_vertices(m, nullptr, t);
         const float longest = std::max({length(b - a), length(c - b), length(a - c)});
         EXPECT_EQ(rig.radiosity->object(0).level[t], radiosity_level(longest, texel, 255));
         EXPECT_GT(rig.radiosity->object(0).level[t], 100);
-        for (int i = 1; i < 20; ++i)
-            for (int k = 1; i + k < 20; ++k) {
-                const float u = static_cast<float>(i) / 20, v = static_cast<float>(k) / 20;
-                const SurfacePoint sp = surface_point(m, t, u, v);
-                Counters cn;
-                const Color exact = Color(0.5f) * rig.lighting.irradiance(sp.p, {0, 1, 0}, 0, RandomStream(0, 0), 1, cn) * kInvPi;
-                err += std::abs(rig.radiosity->object(0).lookup(t, u, v, sp.ng.y > 0).x - exact.x);
-                ++count;
-            }
     }
-    EXPECT_LT(err / count, 2e-4);  // the convergence test's finest lattice (h = 0.05) reaches this
+    EXPECT_LT(lattice_error(rig), 2e-4);  // the convergence test's finest lattice (h = 0.05) reaches this
 }
 
 TEST(Radiosity, SaveAndLoadRoundTripAndRefuseOtherLights) {
