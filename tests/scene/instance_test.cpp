@@ -130,6 +130,32 @@ TEST(Instances, AnEdgeOneUlpLongerKeepsItsRadiosityLevel) {
         }
 }
 
+TEST(Instances, EveryPlacementsLatticeLevelsAreItsTrianglesOwnWhateverItsScale) {
+    // A placement that cannot stretch an edge to a texel is laid out at level 1 without
+    // measuring each triangle; every level must still be the one its triangle gives.
+    const json transforms = json::array(
+        {{{"scale", 0.05}}, {{"scale", 0.4}}, {{"scale", 2}}, {{"matrix", {0.02, 0.05, 0, 0, 0, 0.1, 0, 0, 0, 0, 0.03, 0, 0, 0, 0, 1}}}});
+    const Scene s = test::scene_from(room(json::array({{{"name", "balls"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}})));
+    const SceneAccel accel(s, s.render.lighting);
+    const Materials materials(s);
+    const DirectLighting lighting(s, accel, s.render.lighting);
+    const RadiosityTextures rt = RadiosityTextures::lazy(s, materials, lighting, s.render.radiosity);
+    const float texel = s.size() / 128.0f;
+    size_t ones = 0, finer = 0;
+    for (uint32_t id = 3; id < 7; ++id) {
+        const Object& o = s.objects[id];
+        ASSERT_EQ(rt.object(id).level.size(), o.coarse_mesh().triangle_count());
+        for (uint32_t t = 0; t < o.coarse_mesh().triangle_count(); ++t) {
+            const auto [a, b, c] = triangle_vertices(o.coarse_mesh(), o.to_world(), t);
+            const int want = radiosity_level(std::max({length(b - a), length(c - b), length(a - c)}), texel, 255);
+            ASSERT_EQ(rt.object(id).level[t], want) << "placement " << id - 3 << ", triangle " << t;
+            (want == 1 ? ones : finer) += 1;
+        }
+    }
+    EXPECT_GT(ones, 2 * s.objects[3].coarse_mesh().triangle_count());  // the small placements
+    EXPECT_GT(finer, 0u);                                              // and the large one
+}
+
 TEST(Instances, UnderAnyPlacementEqualTheFlatGeometryToFloatRounding) {
     // Rays meet a placed prototype in its own space: rotations and translations round there.
     const json moved = json::array({{{"rotate", {30, 0, 1, 0}}, {"translate", {-3, 0, 1}}},

@@ -38,13 +38,31 @@ std::string file_name(size_t id, const std::string& name) {
     return fmt::format("radiosity.{:04}.{}.exr", id, safe);
 }
 
+/// An upper bound on how much `t` lengthens any vector: its linear part's Frobenius norm (at
+/// least its largest singular value); 1 for no transform.
+float stretch_bound(const Transform* t) {
+    if (!t) return 1;
+    float sum = 0;
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) sum += t->m[static_cast<size_t>(4 * r + c)] * t->m[static_cast<size_t>(4 * r + c)];
+    return std::sqrt(sum);
+}
+
 /// Object `o`'s lattice levels (an instance's each its own: texels follow its placement's
-/// scale; a prototype, never placed, has none).
-std::vector<uint8_t> lattice_levels(const Object& o, float texel, int max_level) {
+/// scale; a prototype, never placed, has none). `longest`: the longest edge of its mesh in the
+/// mesh's own space.
+std::vector<uint8_t> lattice_levels(const Object& o, float texel, int max_level, float longest) {
     std::vector<uint8_t> level;
     if (!o.placed()) return level;
     const TriangleMesh& m = o.coarse_mesh();
     level.resize(m.triangle_count());
+    // A placement that cannot stretch any edge to a texel is level 1 throughout, as each
+    // triangle would compute (the 1 % margin is far beyond rounding): most of an instanced
+    // forest's triangles, whose levels took 17.6 s of the big scene's layout one by one.
+    if (longest * stretch_bound(o.to_world()) < 0.99f * texel) {
+        std::fill(level.begin(), level.end(), uint8_t{1});
+        return level;
+    }
     for (uint32_t t = 0; t < m.triangle_count(); ++t) {
         const auto [a, b, c] = triangle_vertices(m, o.to_world(), t);
         level[t] = static_cast<uint8_t>(radiosity_level(std::max({length(b - a), length(c - b), length(a - c)}), texel, max_level));
@@ -132,7 +150,14 @@ RadiosityTextures::RadiosityTextures(RadiosityTextures&&) noexcept = default;
 RadiosityTextures& RadiosityTextures::operator=(RadiosityTextures&&) noexcept = default;
 
 RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, int max_level) {
-    std::vector<uint8_t> level = lattice_levels(scene.objects[id], texel_size_, max_level);
+    const TriangleMesh& mesh = scene.objects[id].coarse_mesh();
+    auto [known, added] = longest_edges_.emplace(&mesh, 0.0f);
+    if (added)
+        for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+            const auto [a, b, c] = triangle_vertices(mesh, nullptr, t);
+            known->second = std::max({known->second, length(b - a), length(c - b), length(a - c)});
+        }
+    std::vector<uint8_t> level = lattice_levels(scene.objects[id], texel_size_, max_level, known->second);
     RadiosityMap m;
     auto& alike = layouts_[OIIO::xxhash::XXH64(level.data(), level.size(), level.size())];
     for (const auto& [l, o] : alike)

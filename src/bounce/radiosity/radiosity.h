@@ -157,6 +157,9 @@ class RadiosityTextures {
     mutable std::vector<RadiosityMap> maps_;  ///< values written once per side, under its state flag
     mutable std::vector<SideStates> state_;   ///< per object, 2 per triangle: 0 new, 1 baking, 2 baked (lattice.h)
     std::vector<std::string> names_;
+    /// Per mesh laid out so far, its longest edge in its own space (placements share their
+    /// prototype's): a bound on their levels.
+    std::unordered_map<const TriangleMesh*, float> longest_edges_;
     /// Layouts laid out so far, by a hash of their levels (placements share theirs).
     std::unordered_map<uint64_t, std::vector<std::pair<SharedArray<uint8_t>, SharedArray<uint32_t>>>> layouts_;
     std::unique_ptr<Sources> sources_;
