@@ -28,6 +28,10 @@ def light_entry(name, light, m, report):
             report.add(f"{what}: radius {light.shadow_soft_size:g} rendered as a point (hard shadows)")
         if light.type == "SPOT":
             half = light.spot_size / 2
+            # Measured (bench/peers/light_units.py): Cycles 3.4 dims a spot by cos(angle from
+            # its axis); bounce's is even across its cone.
+            report.add(f"{what}: Cycles dims a spot by the cosine of the angle from its axis; bounce's is even "
+                       f"(up to {100 * (1 / math.cos(min(half, math.radians(89))) - 1):.0f} % brighter at the cone's edge)")
             # Cycles smooths the edge over the blend's share of the cone's cosine.
             inner = math.acos(min(1.0, math.cos(half) + (1 - math.cos(half)) * light.spot_blend))
             entry.update({"direction": _vec(forward.normalized()), "cone_angle": math.degrees(inner),

@@ -205,9 +205,16 @@ def test_what_cannot_be_exported_is_reported_and_bad_scenes_raise_one_line(tmp_p
     bsdf.inputs["Subsurface"].default_value = 0.5
     bpy.data.objects["short"].visible_camera = False
     bpy.data.objects["tall"].is_holdout = True
+    spot = bpy.data.lights.new("Spot", "SPOT")
+    spot.energy, spot.spot_size, spot.shadow_soft_size = 10.0, math.radians(60), 0.0
+    spot_object = bpy.data.objects.new("Spot", spot)
+    spot_object.location = (0, 0, 1.5)
+    scene.collection.objects.link(spot_object)
     render(scene, tmp_path)
     out = capfd.readouterr().out
     assert "light Ceiling: a disk rendered as a rectangle of the same area" in out
+    # Cycles 3.4's spot falls off as cos of the angle from its axis (bench/peers/light_units.py).
+    assert "light Spot: Cycles dims a spot by the cosine of the angle from its axis; bounce's is even (up to 15 %" in out
     assert "material red: Subsurface is not read" in out
     doc = json.loads((tmp_path / "scene.json").read_text())
     objects = {o["name"]: o for o in doc["objects"]}
