@@ -1,5 +1,5 @@
 """Blender's lights and world as bounce lights (docs/blender.md has the units): a point or spot
-of power P watts has intensity P / 4pi W/sr; a sun's strength is irradiance in W/m2; an area
+of power P watts has intensity P / 4pi W/sr, a spot times cos of the angle from its axis; a sun's strength is irradiance in W/m2; an area
 light of power P over area A has radiance P / (4 A), as Cycles 3.4 renders it (measured by
 bench/peers/cycles on the bunny: direct light equal to 0.04 %); the world's Background colour x strength
 is the sky's radiance, an Environment Texture its lat-long image."""
@@ -28,10 +28,8 @@ def light_entry(name, light, m, report):
             report.add(f"{what}: radius {light.shadow_soft_size:g} rendered as a point (hard shadows)")
         if light.type == "SPOT":
             half = light.spot_size / 2
-            # Measured (bench/peers/light_units.py): Cycles 3.4 dims a spot by cos(angle from
-            # its axis); bounce's is even across its cone.
-            report.add(f"{what}: Cycles dims a spot by the cosine of the angle from its axis; bounce's is even "
-                       f"(up to {100 * (1 / math.cos(min(half, math.radians(89))) - 1):.0f} % brighter at the cone's edge)")
+            # Cycles 3.4 dims a spot by cos(angle from its axis) (bench/peers/light_units.py).
+            entry["cosine_power"] = 1
             # Cycles smooths the edge over the blend's share of the cone's cosine.
             inner = math.acos(min(1.0, math.cos(half) + (1 - math.cos(half)) * light.spot_blend))
             entry.update({"direction": _vec(forward.normalized()), "cone_angle": math.degrees(inner),

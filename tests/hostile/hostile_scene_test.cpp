@@ -179,6 +179,12 @@ TEST(BadInput, CoordinatesThatOverflowFloatAreRefusedAtLoad) {
     j["lights"] = {{{"type", "point"}, {"position", {0, 5, 0}}, {"color", 1e20}, {"intensity", 1e20}}};
     d.write("bright.json", j.dump());
     refused(render_cmd(d.file("bright.json"), out), {"bright.json", "/lights/0/intensity", "exceeds"});
+    for (const double power : {-1.0, 1e39, 2000.0}) {  // a spot's cosine_power: 0 .. 1000
+        j = test::base_scene();
+        j["lights"] = {{{"type", "spot"}, {"position", {0, 5, 0}}, {"cosine_power", power}}};
+        d.write("spot.json", j.dump());
+        refused(render_cmd(d.file("spot.json"), out), {"spot.json", "/lights/0/cosine_power"});
+    }
 }
 
 // Found by render_fuzz's 30-minute run (issue 65): an object whose type is a number aborted the

@@ -63,6 +63,29 @@ TEST(DirectLighting, SpotLightConeAndFalloff) {
     EXPECT_NEAR(mid, 0.5f * full, 1e-4f);  // smoothstep at the middle of the edge is 1/2
 }
 
+TEST(DirectLighting, SpotCosinePowerDimsOffItsAxis) {
+    // cosine_power p: intensity x cos^p of the angle from the axis (Cycles 3.4's spot is p = 1,
+    // measured by bench/peers/light_units.py); the cone and its edge are as without it.
+    for (const float p : {1.0f, 4.0f}) {
+        json j = base_scene();
+        j["lights"] = {{{"type", "spot"},
+                        {"position", {0, 1, 0}},
+                        {"direction", {0, -1, 0}},
+                        {"color", 1},
+                        {"cone_angle", 30},
+                        {"cone_falloff", 10},
+                        {"cosine_power", p}}};
+        const Scene s = scene_from(j);
+        const auto at_angle = [&](float deg) { return irradiance_at(s, {std::tan(deg * kPi / 180), 0, 0}, {0, 1, 0}, 1).x; };
+        const float c20 = std::cos(20 * kPi / 180);
+        EXPECT_NEAR(at_angle(20), c20 * c20 * c20 * std::pow(c20, p), 1e-5f) << p;
+        EXPECT_NEAR(at_angle(0), 1.0f, 1e-6f) << p;  // on the axis: as without it
+        EXPECT_EQ(at_angle(41), 0.0f) << p;
+        const float c35 = std::cos(35 * kPi / 180);
+        EXPECT_NEAR(at_angle(35), 0.5f * std::pow(c35, 3.0f + p), 1e-4f) << p;
+    }
+}
+
 TEST(DirectLighting, DistantLightIsIrradianceTimesCosine) {
     json j = base_scene();
     Vec3 d = normalize(Vec3(1, -2, 0.5f));

@@ -58,6 +58,7 @@ TEST(LightingTool, EveryFieldALightOrMaterialReadsHasARowEvenAtItsDefault) {
     EXPECT_EQ(rows["lights.0.cone_angle"]["value"], Light{}.cone_angle);
     EXPECT_EQ(rows["lights.0.cone_angle"]["default"], Light{}.cone_angle);
     EXPECT_EQ(rows["lights.0.cone_falloff"]["value"], Light{}.cone_falloff);
+    EXPECT_EQ(rows["lights.0.cosine_power"]["value"], Light{}.cosine_power);
     EXPECT_EQ(rows["lights.0.direction"]["value"], json({0, -1, 0}));
     EXPECT_EQ(rows["lights.0.intensity"]["value"], 5);
     EXPECT_EQ(rows["lights.0.intensity"]["default"], 1);

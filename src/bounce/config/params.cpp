@@ -206,10 +206,11 @@ std::string params_markdown(const ParamTable& table) {
 }
 
 const json& animatable_item_keys() {
-    static const json keys = {
-        {"lights", {"color", "intensity", "position", "direction", "cone_angle", "cone_falloff", "corner", "edge_u", "edge_v", "rotation"}},
-        {"materials", {"color", "emission", "specular", "roughness", "bump_strength"}},
-        {"objects.transform", {"translate", "rotate", "scale"}}};
+    static const json keys = {{"lights",
+                               {"color", "intensity", "position", "direction", "cone_angle", "cone_falloff", "cosine_power", "corner",
+                                "edge_u", "edge_v", "rotation"}},
+                              {"materials", {"color", "emission", "specular", "roughness", "bump_strength"}},
+                              {"objects.transform", {"translate", "rotate", "scale"}}};
     return keys;
 }
 

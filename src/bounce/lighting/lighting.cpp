@@ -228,12 +228,14 @@ Color sample_point_or_spot(const LightQuery& q) {
     if (l.type == LightType::Spot) {
         filter = spot_filter(l, -w);
         if (filter == Color(0)) return Color(0);
-        float angle = std::acos(std::clamp(dot(-w, l.direction), -1.0f, 1.0f)) * 180.0f / kPi;
+        const float along = std::clamp(dot(-w, l.direction), -1.0f, 1.0f);
+        float angle = std::acos(along) * 180.0f / kPi;
         if (angle >= l.cone_angle + l.cone_falloff) return Color(0);
         if (angle > l.cone_angle) {
             float s = 1 - (angle - l.cone_angle) / l.cone_falloff;
             cone = s * s * (3 - 2 * s);  // smoothstep edge
         }
+        if (l.cosine_power > 0) cone *= std::pow(std::max(along, 0.0f), l.cosine_power);
     }
     if (q.blocked(w, r)) return Color(0);
     Color e = q.colour * filter * (cone * cos_x / r2);

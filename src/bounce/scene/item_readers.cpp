@@ -71,9 +71,9 @@ const std::vector<std::string>& surface_shading_keys() {
 }
 
 const std::vector<std::string>& light_keys() {
-    static const std::vector<std::string> keys = {"type",         "color",      "intensity",   "position",  "direction", "cone_angle",
-                                                  "cone_falloff", "corner",     "edge_u",      "edge_v",    "texture",   "rotation",
-                                                  "name",         "light_link", "shadow_link", "barn_doors"};
+    static const std::vector<std::string> keys = {"type",         "color",      "intensity",   "position",   "direction",   "cone_angle",
+                                                  "cone_falloff", "corner",     "edge_u",      "edge_v",     "texture",     "rotation",
+                                                  "name",         "light_link", "shadow_link", "barn_doors", "cosine_power"};
     return keys;
 }
 
@@ -130,11 +130,12 @@ void read_barn_doors(const JsonReader& r, Light& l) {
 /// color, intensity, name and the links).
 using LightTypeKeys = std::vector<std::pair<std::string, std::vector<std::string>>>;
 const LightTypeKeys& light_types() {
-    static const LightTypeKeys types = {{"point", {"position"}},
-                                        {"spot", {"position", "direction", "cone_angle", "cone_falloff", "texture", "barn_doors"}},
-                                        {"distant", {"direction"}},
-                                        {"quad", {"corner", "edge_u", "edge_v", "texture"}},
-                                        {"sky", {"texture", "rotation"}}};
+    static const LightTypeKeys types = {
+        {"point", {"position"}},
+        {"spot", {"position", "direction", "cone_angle", "cone_falloff", "cosine_power", "texture", "barn_doors"}},
+        {"distant", {"direction"}},
+        {"quad", {"corner", "edge_u", "edge_v", "texture"}},
+        {"sky", {"texture", "rotation"}}};
     return types;
 }
 
@@ -156,7 +157,9 @@ json light_defaults(const std::string& type) {
     json d = json::object();
     if (!keys_by_light_type().count(type)) return d;
     d["color"] = to_json(l.color), d["intensity"] = kDefaultIntensity;
-    if (type == "spot") d["direction"] = to_json(l.direction), d["cone_angle"] = l.cone_angle, d["cone_falloff"] = l.cone_falloff;
+    if (type == "spot")
+        d["direction"] = to_json(l.direction), d["cone_angle"] = l.cone_angle, d["cone_falloff"] = l.cone_falloff,
+        d["cosine_power"] = l.cosine_power;
     if (type == "sky") d["rotation"] = l.sky_rotation;
     return d;
 }
@@ -328,6 +331,7 @@ Light read_light(const JsonReader& r) {
             l.direction = normalize(l.direction);
             l.cone_angle = static_cast<float>(r.number("cone_angle", l.cone_angle, 0, 90));
             l.cone_falloff = static_cast<float>(r.number("cone_falloff", l.cone_falloff, 0, 90));
+            l.cosine_power = static_cast<float>(r.number("cosine_power", l.cosine_power, 0, 1000));
             read_barn_doors(r, l);
             if (std::string tex = r.file("texture", false); !tex.empty()) l.texture = load_latlong(tex, r, "texture");
         }

@@ -73,12 +73,13 @@ enum class LightType { Point, Spot, Distant, Quad, Sky, Mesh };
 
 struct Light {
     LightType type = LightType::Point;
-    std::string name;                                  ///< "name" in the scene file, else "lightN"; a mesh light's is its object's
-    Color color{1};                                    ///< point/spot: intensity (W/sr); distant: irradiance; quad/sky: radiance
-    Vec3 position{0};                                  ///< point, spot
-    Vec3 direction{0, -1, 0};                          ///< spot: where it points; distant: direction light travels
-    float cone_angle = 30;                             ///< spot: half-angle of full intensity, degrees
-    float cone_falloff = 5;                            ///< spot: width of the smooth edge beyond cone_angle, degrees
+    std::string name;          ///< "name" in the scene file, else "lightN"; a mesh light's is its object's
+    Color color{1};            ///< point/spot: intensity (W/sr); distant: irradiance; quad/sky: radiance
+    Vec3 position{0};          ///< point, spot
+    Vec3 direction{0, -1, 0};  ///< spot: where it points; distant: direction light travels
+    float cone_angle = 30;     ///< spot: half-angle of full intensity, degrees
+    float cone_falloff = 5;    ///< spot: width of the smooth edge beyond cone_angle, degrees
+    float cosine_power = 0;    ///< spot: intensity x cos(angle from the axis)^cosine_power; 0 = even across the cone (Cycles 3.4's spot: 1)
     Vec3 corner{0}, edge_u{1, 0, 0}, edge_v{0, 0, 1};  ///< quad; emits towards edge_u x edge_v
     std::shared_ptr<const LatLongMap> sky_map;         ///< sky: optional texture (times color)
     /// quad: radiance texture over the quad (u along edge_u, v along edge_v, times color);
