@@ -28,12 +28,11 @@ def light_entry(name, light, m, report):
             report.add(f"{what}: radius {light.shadow_soft_size:g} rendered as a point (hard shadows)")
         if light.type == "SPOT":
             half = light.spot_size / 2
-            # Cycles 3.4 dims a spot by cos(angle from its axis) (bench/peers/light_units.py).
-            entry["cosine_power"] = 1
-            # Cycles smooths the edge over the blend's share of the cone's cosine.
+            # Cycles smooths the edge over the blend's share of the cone's cosine, and dims a spot
+            # by cos(angle from its axis) (bench/peers/light_units.py).
             inner = math.acos(min(1.0, math.cos(half) + (1 - math.cos(half)) * light.spot_blend))
             entry.update({"direction": _vec(forward.normalized()), "cone_angle": math.degrees(inner),
-                          "cone_falloff": max(0.0, math.degrees(half - inner))})
+                          "cone_falloff": max(0.0, math.degrees(half - inner)), "cosine_power": 1})
         return entry
     if light.type == "SUN":
         if light.angle > 0:

@@ -39,13 +39,18 @@ std::string file_name(size_t id, const std::string& name) {
 }
 
 /// An upper bound on how much `t` lengthens any vector: its linear part's Frobenius norm (at
-/// least its largest singular value); 1 for no transform.
+/// least its largest singular value; Transform::largest_scale, the longest image of an axis,
+/// is not a bound under shear); 1 for no transform.
 float stretch_bound(const Transform* t) {
     if (!t) return 1;
-    float sum = 0;
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) sum += t->m[static_cast<size_t>(4 * r + c)] * t->m[static_cast<size_t>(4 * r + c)];
-    return std::sqrt(sum);
+    const Vec3 x = t->vector({1, 0, 0}), y = t->vector({0, 1, 0}), z = t->vector({0, 0, 1});
+    return std::sqrt(dot(x, x) + dot(y, y) + dot(z, z));
+}
+
+/// Triangle t's longest edge, placed by `to_world` (null: in the mesh's own space).
+float longest_edge(const TriangleMesh& m, const Transform* to_world, uint32_t t) {
+    const auto [a, b, c] = triangle_vertices(m, to_world, t);
+    return std::max({length(b - a), length(c - b), length(a - c)});
 }
 
 /// Object `o`'s lattice levels (an instance's each its own: texels follow its placement's
@@ -63,10 +68,8 @@ std::vector<uint8_t> lattice_levels(const Object& o, float texel, int max_level,
         std::fill(level.begin(), level.end(), uint8_t{1});
         return level;
     }
-    for (uint32_t t = 0; t < m.triangle_count(); ++t) {
-        const auto [a, b, c] = triangle_vertices(m, o.to_world(), t);
-        level[t] = static_cast<uint8_t>(radiosity_level(std::max({length(b - a), length(c - b), length(a - c)}), texel, max_level));
-    }
+    for (uint32_t t = 0; t < m.triangle_count(); ++t)
+        level[t] = static_cast<uint8_t>(radiosity_level(longest_edge(m, o.to_world(), t), texel, max_level));
     return level;
 }
 
@@ -153,10 +156,7 @@ RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, int max_
     const TriangleMesh& mesh = scene.objects[id].coarse_mesh();
     auto [known, added] = longest_edges_.emplace(&mesh, 0.0f);
     if (added)
-        for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
-            const auto [a, b, c] = triangle_vertices(mesh, nullptr, t);
-            known->second = std::max({known->second, length(b - a), length(c - b), length(a - c)});
-        }
+        for (uint32_t t = 0; t < mesh.triangle_count(); ++t) known->second = std::max(known->second, longest_edge(mesh, nullptr, t));
     std::vector<uint8_t> level = lattice_levels(scene.objects[id], texel_size_, max_level, known->second);
     RadiosityMap m;
     auto& alike = layouts_[OIIO::xxhash::XXH64(level.data(), level.size(), level.size())];
