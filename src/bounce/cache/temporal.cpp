@@ -109,11 +109,11 @@ float drift_bound(const Record& r, const SceneChanges& changes, std::span<const 
         if (m.kind == ObjectMotion::Kind::Static || o == r.anchor || !record_sees(r, m.swept)) continue;
         // An object moving through the view can show or hide at most the brightest radiance
         // over its swept solid angle (AO: that fraction of the cosine-weighted hemisphere).
-        bound += (ao_only ? kInvPi : brightest) * solid_angle_bound(r.origin, m.swept);
+        bound += static_cast<double>(ao_only ? kInvPi : brightest) * solid_angle_bound(r.origin, m.swept);
     }
     if (!ao_only)
         for (const LightChange& c : light)
-            if (record_sees(r, c.bounds)) bound += c.delta * solid_angle_bound(r.origin, c.bounds);
+            if (record_sees(r, c.bounds)) bound += static_cast<double>(c.delta) * solid_angle_bound(r.origin, c.bounds);
     const double value = ao_only ? std::max(r.ao, 0.01f) : std::max(luminance(r.E), floor);
     return static_cast<float>(bound / value);
 }
@@ -133,8 +133,10 @@ bool hits_unchanged(const Record& r, const Scene& now, uint64_t seed, const Scen
             if (changes.sky) return false;
             continue;
         }
-        const uint64_t side = (static_cast<uint64_t>(h.object[c] & ~GatherHits::kHairBit) << 32) | h.prim[c];
-        if (std::binary_search(changed_sides.begin(), changed_sides.end(), side)) return false;
+        const uint64_t object = static_cast<uint64_t>(h.object[c] & ~GatherHits::kHairBit) << 32;
+        if (std::binary_search(changed_sides.begin(), changed_sides.end(), object | h.prim[c]) ||
+            std::binary_search(changed_sides.begin(), changed_sides.end(), object | LightChange::kEveryTriangle))
+            return false;
     }
     if (boxes.empty()) return true;
     std::vector<uint32_t> cells;

@@ -178,6 +178,12 @@ void add_lighting_rows(std::vector<Row>& rows) {
                        .doc("light samples per lattice point when baking; auto = render.light_samples")
                        .id(rad | cache)
                        .flag());
+    rows.push_back(row("radiosity_small_instances", "radiosity", &R::radiosity, &RadiositySettings::small_instances)
+                       .choices({"hit", "lattice"})
+                       .doc("direct light at gather hits on placements none of whose triangles reaches a texel: hit = one shadow "
+                            "ray per light where the ray lands (never baked); lattice = the placement's baked lattice")
+                       .id(rad | cache)
+                       .flag());
 }
 
 void add_gather_rows(std::vector<Row>& rows) {

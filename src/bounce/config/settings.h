@@ -26,6 +26,9 @@ enum class LayerSet : uint8_t { Standard, Components };
 /// The bounce light at the surfaces mirrors and glass show: from the cache (records the
 /// gathering pass makes for them; brute force gathers there), or from the radiosity textures.
 enum class SpecularHitLight : uint8_t { Cache, Radiosity };
+/// Where a gather hit on a small instance (a placement none of whose triangles reaches a
+/// radiosity texel) takes its direct light: shadow rays at the hit, or the placement's lattice.
+enum class SmallInstanceLight : uint8_t { Hit, Lattice };
 
 /// Primary visibility and the deep file.
 struct VisibilitySettings {
@@ -64,6 +67,10 @@ struct RadiositySettings {
     /// saw it (issue 64: 2.7 -> 1.6 % from Cycles' answer on the Cornell box, 8.9 -> 3.6 % on
     /// the bunny's ground).
     int max_level = 255;
+    /// Small instances' sides are hit by a few gather rays each (a far forest: 3.7 rays per
+    /// baked side), fewer than the lattice's 3 points x light samples: lit at the hit, one
+    /// light sample per light, they are never baked (issue 64, docs/gather.md).
+    SmallInstanceLight small_instances = SmallInstanceLight::Lattice;
     /// Every lattice point keeps its light per light, each light's scale factored out (not a
     /// parameter: the plan sets it from CacheSettings::light_parts).
     bool light_parts = false;

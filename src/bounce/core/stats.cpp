@@ -15,6 +15,8 @@ Counters& Counters::operator+=(const Counters& o) {
     fragments_shaded += o.fragments_shaded;
     lock_wait_ns += o.lock_wait_ns;
     radiosity_bake_ns += o.radiosity_bake_ns;
+    hits_lit += o.hits_lit;
+    hits_lit_ns += o.hits_lit_ns;
     return *this;
 }
 
@@ -51,6 +53,8 @@ nlohmann::json Stats::to_json() const {
     j["fragments_shaded"] = t.fragments_shaded;
     j["lock_wait_s"] = static_cast<double>(t.lock_wait_ns) * 1e-9;
     j["radiosity_bake_cpu_s"] = static_cast<double>(t.radiosity_bake_ns) * 1e-9;
+    j["hits_lit"] = t.hits_lit;
+    j["hits_lit_cpu_s"] = static_cast<double>(t.hits_lit_ns) * 1e-9;
     j["peak_rss_bytes"] = peak_rss_bytes();
     for (auto it = extra_.begin(); it != extra_.end(); ++it) j[it.key()] = it.value();
     return j;
@@ -67,6 +71,9 @@ std::string Stats::to_text() const {
     s += fmt::format("  {:<24} {:>10.3f} M/s\n", "rays/s", j["rays_per_s"].get<double>() * 1e-6);
     s += fmt::format("  {:<24} {:>10.6f} s\n", "cache lock wait", j["lock_wait_s"].get<double>());
     s += fmt::format("  {:<24} {:>10.6f} s (CPU, inside gathering)\n", "radiosity bake", j["radiosity_bake_cpu_s"].get<double>());
+    if (const auto lit = j["hits_lit"].get<uint64_t>())
+        s += fmt::format("  {:<24} {:>10.6f} s (CPU, {} hits on small instances)\n", "light at gather hits",
+                         j["hits_lit_cpu_s"].get<double>(), lit);
     for (auto it = extra_.begin(); it != extra_.end(); ++it) s += fmt::format("  {:<24} {:>10}\n", it.key(), it.value().dump());
     s += fmt::format("  {:<24} {:>10.1f} MiB\n", "peak memory", static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0));
     return s;

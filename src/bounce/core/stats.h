@@ -21,6 +21,8 @@ struct Counters {
     uint64_t fragments_shaded = 0;
     uint64_t lock_wait_ns = 0;       ///< time spent waiting for the cache's reader-writer lock
     uint64_t radiosity_bake_ns = 0;  ///< time spent baking radiosity texture sides (lazily, inside gathers)
+    uint64_t hits_lit = 0;           ///< gather hits on small instances lit where they landed (RadiositySettings::small_instances)
+    uint64_t hits_lit_ns = 0;        ///< time spent lighting them
     Counters& operator+=(const Counters& o);
 };
 

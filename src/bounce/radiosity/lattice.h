@@ -103,8 +103,10 @@ class SideStates {
     explicit SideStates(size_t sides = 0) : pages_((sides + kSides - 1) / kSides), sides_(sides) {}
 
     size_t size() const { return sides_; }
-    /// Side `i`'s state (0 while its page is not allocated).
+    /// Side `i`'s state (0 while its page is not allocated, and past size(): a map lit at the
+    /// hit keeps no states).
     uint8_t load(size_t i, std::memory_order order) const {
+        if (i >= sides_) return 0;
         const std::atomic<uint8_t>* page = pages_.get(i / kSides);
         return page ? page[i % kSides].load(order) : 0;
     }

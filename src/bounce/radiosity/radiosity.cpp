@@ -54,20 +54,12 @@ float longest_edge(const TriangleMesh& m, const Transform* to_world, uint32_t t)
 }
 
 /// Object `o`'s lattice levels (an instance's each its own: texels follow its placement's
-/// scale; a prototype, never placed, has none). `longest`: the longest edge of its mesh in the
-/// mesh's own space.
-std::vector<uint8_t> lattice_levels(const Object& o, float texel, int max_level, float longest) {
+/// scale; a prototype, never placed, has none), triangle by triangle.
+std::vector<uint8_t> lattice_levels(const Object& o, float texel, int max_level) {
     std::vector<uint8_t> level;
     if (!o.placed()) return level;
     const TriangleMesh& m = o.coarse_mesh();
     level.resize(m.triangle_count());
-    // A placement that cannot stretch any edge to a texel is level 1 throughout, as each
-    // triangle would compute (the 1 % margin is far beyond rounding): most of an instanced
-    // forest's triangles, whose levels took 17.6 s of the big scene's layout one by one.
-    if (longest * stretch_bound(o.to_world()) < 0.99f * texel) {
-        std::fill(level.begin(), level.end(), uint8_t{1});
-        return level;
-    }
     for (uint32_t t = 0; t < m.triangle_count(); ++t)
         level[t] = static_cast<uint8_t>(radiosity_level(longest_edge(m, o.to_world(), t), texel, max_level));
     return level;
@@ -131,6 +123,7 @@ uint64_t RadiosityTextures::fingerprint(const Scene& scene, const RadiositySetti
         hash_combine(scene.fingerprint({"objects", "materials", "lights"}, true), kBakeVersion);  // gloss, bumps, baked AO: not in the bake
     h = hash_combine(h, std::bit_cast<uint32_t>(effective_texel(scene, s)));
     h = hash_combine(h, static_cast<uint64_t>(effective_light_samples(s, light_samples)));
+    h = hash_combine(h, static_cast<uint64_t>(s.small_instances));  // their files hold no points when lit at the hit
     return hash_combine(h, static_cast<uint64_t>(s.max_level));
 }
 
@@ -152,27 +145,42 @@ RadiosityTextures::~RadiosityTextures() = default;
 RadiosityTextures::RadiosityTextures(RadiosityTextures&&) noexcept = default;
 RadiosityTextures& RadiosityTextures::operator=(RadiosityTextures&&) noexcept = default;
 
-RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, int max_level) {
-    const TriangleMesh& mesh = scene.objects[id].coarse_mesh();
+RadiosityTextures::Layout RadiosityTextures::shared_layout(std::vector<uint8_t> level) {
+    auto& alike = layouts_[OIIO::xxhash::XXH64(level.data(), level.size(), level.size())];
+    for (const Layout& known : alike)
+        if (known.first.vec() == level) return known;
+    std::vector<uint32_t> offset(level.size());
+    uint32_t off = 0;
+    for (size_t t = 0; t < level.size(); ++t) offset[t] = off, off += lattice_count(level[t]);
+    alike.emplace_back(SharedArray<uint8_t>(std::make_shared<const std::vector<uint8_t>>(std::move(level))),
+                       SharedArray<uint32_t>(std::make_shared<const std::vector<uint32_t>>(std::move(offset))));
+    return alike.back();
+}
+
+RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, const RadiositySettings& settings) {
+    const Object& o = scene.objects[id];
+    const TriangleMesh& mesh = o.coarse_mesh();
     auto [known, added] = longest_edges_.emplace(&mesh, 0.0f);
     if (added)
         for (uint32_t t = 0; t < mesh.triangle_count(); ++t) known->second = std::max(known->second, longest_edge(mesh, nullptr, t));
-    std::vector<uint8_t> level = lattice_levels(scene.objects[id], texel_size_, max_level, known->second);
     RadiosityMap m;
-    auto& alike = layouts_[OIIO::xxhash::XXH64(level.data(), level.size(), level.size())];
-    for (const auto& [l, o] : alike)
-        if (l.vec() == level) {
-            m.level = l, m.offset = o;
-            break;
-        }
-    if (m.level.size() != level.size()) {  // a new layout (an empty one is the default)
-        std::vector<uint32_t> offset(level.size());
-        uint32_t off = 0;
-        for (size_t t = 0; t < level.size(); ++t) offset[t] = off, off += lattice_count(level[t]);
-        m.level = SharedArray<uint8_t>(std::make_shared<const std::vector<uint8_t>>(std::move(level)));
-        m.offset = SharedArray<uint32_t>(std::make_shared<const std::vector<uint32_t>>(std::move(offset)));
-        alike.emplace_back(m.level, m.offset);
+    bool ones = false;  // level 1 throughout
+    if (o.placed() && known->second * stretch_bound(o.to_world()) < 0.99f * texel_size_) {
+        // A placement that cannot stretch any edge to a texel is level 1 throughout, as each
+        // triangle would compute (the 1 % margin is far beyond rounding), and shares the one
+        // such layout of its triangle count: most of an instanced forest, whose levels took
+        // 17.6 s of the big scene's layout one by one, and 3.7 s as arrays filled and compared.
+        ones = true;
+        Layout& one = ones_[mesh.triangle_count()];
+        if (one.first.size() != mesh.triangle_count()) one = shared_layout(std::vector<uint8_t>(mesh.triangle_count(), 1));
+        std::tie(m.level, m.offset) = one;
+    } else {
+        std::vector<uint8_t> level = lattice_levels(o, texel_size_, settings.max_level);
+        ones = !level.empty() && std::all_of(level.begin(), level.end(), [](uint8_t l) { return l == 1; });
+        std::tie(m.level, m.offset) = shared_layout(std::move(level));
     }
+    m.lit_at_hit = settings.small_instances == SmallInstanceLight::Hit && o.instance && ones;
+    if (m.lit_at_hit) return m;  // no values, not even a pointer per page
     const uint32_t points = m.level.size() ? m.offset[m.level.size() - 1] + lattice_count(m.level[m.level.size() - 1]) : 0;
     m.front.lay_out(m.offset.shared(), points, 1);
     m.back.lay_out(m.offset.shared(), points, 1);
@@ -193,9 +201,8 @@ RadiosityTextures RadiosityTextures::lazy(const Scene& scene, const Materials& m
     rt.sources_ = std::make_unique<Sources>(Sources{&scene, &materials, &lighting, effective_light_samples(settings, samples), {}});
     if (settings.light_parts) rt.sources_->scales = light_scales(scene);
     for (size_t id = 0; id < scene.objects.size(); ++id) {
-        rt.maps_.push_back(rt.laid_out(scene, id, settings.max_level));
-        const size_t n = 2 * rt.maps_.back().level.size();
-        rt.state_.emplace_back(n);
+        rt.maps_.push_back(rt.laid_out(scene, id, settings));
+        rt.state_.emplace_back(rt.maps_.back().sides_baked_apart());
         rt.names_.push_back(scene.objects[id].name);
     }
     return rt;
@@ -249,13 +256,45 @@ void RadiosityTextures::ensure_baked(uint32_t id, uint32_t tri, bool front, Coun
     while (st.load(std::memory_order_acquire) != 2) std::this_thread::yield();  // another thread bakes it
 }
 
+Color RadiosityTextures::light_at_hit(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters,
+                                      std::span<Color> parts) const {
+    const auto t0 = std::chrono::steady_clock::now();
+    const Sources& src = *sources_;
+    const SurfacePoint sp = src.scene->objects[id].coarse_point(prim, u, v);
+    const Color albedo = src.materials->secondary_albedo(sp) * kInvPi, through = src.materials->secondary_translucency(sp) * kInvPi;
+    // Keyed by the hit (object, triangle, side, where on it), as the bake keys its points: a
+    // re-shade of kept hits, another process or the lighting tool finds the same value.
+    const RandomStream rng(front ? 2 : 3, (static_cast<uint64_t>(id) << 32) | prim,
+                           (static_cast<uint64_t>(std::bit_cast<uint32_t>(u)) << 32) | std::bit_cast<uint32_t>(v));
+    const Vec3 ng = front ? sp.ng : -sp.ng;
+    Color value;
+    if (!parts.empty() || src.scales.empty()) {
+        value = src.lighting->diffuse_radiance(sp.p, ng, id, albedo, through, rng, 1, counters, parts);
+    } else {  // textures with parts, read whole: their scaled sum, as a baked point's
+        thread_local std::vector<Color> own;
+        own.assign(src.scales.size(), Color(0));
+        src.lighting->diffuse_radiance(sp.p, ng, id, albedo, through, rng, 1, counters, own);
+        value = Color(0);
+        for (size_t l = 0; l < own.size(); ++l) value += own[l] * src.scales[l];
+    }
+    counters.hits_lit += 1;
+    counters.hits_lit_ns +=
+        static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
+    return value;
+}
+
 Color RadiosityTextures::lookup(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters) const {
+    if (maps_[id].lit_at_hit) return light_at_hit(id, prim, u, v, front, counters, {});
     ensure_baked(id, prim, front, counters);
     return maps_[id].lookup(prim, u, v, front);
 }
 
 void RadiosityTextures::lookup_parts(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters,
                                      std::span<Color> out) const {
+    if (maps_[id].lit_at_hit) {
+        light_at_hit(id, prim, u, v, front, counters, out);
+        return;
+    }
     ensure_baked(id, prim, front, counters);
     maps_[id].lookup_parts(prim, u, v, front, out);
 }
@@ -283,7 +322,7 @@ void RadiosityTextures::bake_all(Stats& stats, ProgressSink* sink, int share, in
         parallel_ranges(size_t{0}, maps_[id].level.size(), size_t{64}, [&](size_t lo, size_t hi) {
             Counters& counters = stats.local();
             for (size_t t = lo; t < hi; ++t) {
-                if ((first + t) % count != static_cast<size_t>(share)) continue;
+                if ((first + t) % count != static_cast<size_t>(share) || maps_[id].lit_at_hit) continue;
                 ensure_baked(static_cast<uint32_t>(id), static_cast<uint32_t>(t), true, counters);
                 ensure_baked(static_cast<uint32_t>(id), static_cast<uint32_t>(t), false, counters);
             }
@@ -321,7 +360,7 @@ void RadiosityTextures::save(const std::string& dir) const {
         spec.attribute("bounce:points", static_cast<int>(count));
         spec.attribute("bounce:texel_size", texel_size_);
         std::vector<float> px(static_cast<size_t>(width) * std::max(1, height) * 8, 0.0f);
-        for (size_t t = 0; t < m.level.size(); ++t) {
+        for (size_t t = 0; t < m.level.size() && !m.lit_at_hit; ++t) {
             const bool f = state_[id].load(2 * t, std::memory_order_acquire) == 2;
             const bool b = state_[id].load(2 * t + 1, std::memory_order_acquire) == 2;
             const uint32_t first = m.offset[t];
@@ -383,7 +422,7 @@ bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const R
                 if (!std::isfinite(px[8 * k + static_cast<size_t>(ch[c])]))
                     throw InputError(path, fmt::format("texel {}", k), "non-finite radiosity value");
         // A side is baked when its first point says so; only baked sides take values (and pages).
-        for (uint32_t t = 0; t < map.level.size(); ++t)
+        for (uint32_t t = 0; t < map.level.size() && !map.lit_at_hit; ++t)
             for (int side = 0; side < 2; ++side) {
                 const uint32_t first = map.offset[t];
                 if (px[8 * first + static_cast<size_t>(ch[6 + side])] != 1) continue;

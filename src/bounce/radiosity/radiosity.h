@@ -54,6 +54,11 @@ struct RadiosityMap {
     /// out) whose scaled sum is front / back.
     LatticeSide front_parts, back_parts;
     uint32_t lights = 0;
+    /// A small instance lit where gather rays land (RadiositySettings::small_instances): never
+    /// baked, its lookups trace shadow rays.
+    bool lit_at_hit = false;
+    /// Sides whose bake states it keeps (none when lit at the hit).
+    size_t sides_baked_apart() const { return lit_at_hit ? 0 : 2 * level.size(); }
 
     /// Radiosity at barycentrics (u, v) of triangle `prim`, on the side `front_side`.
     Color lookup(uint32_t prim, float u, float v, bool front_side) const;
@@ -64,6 +69,9 @@ struct RadiosityMap {
 /// Radiosity that changed from one frame to the next in a region of space: a re-baked side
 /// whose lattice values moved by up to `delta` (luminance of radiance) inside `bounds`.
 struct LightChange {
+    /// `triangle` of a small instance lit at the hit (never baked): all its triangles may have
+    /// changed, by an unknown amount (`delta` the largest float).
+    static constexpr uint32_t kEveryTriangle = 0xffffffffu;
     Bounds bounds;
     float delta = 0;
     uint32_t object = 0, triangle = 0;  ///< the re-baked side's triangle
@@ -117,7 +125,8 @@ class RadiosityTextures {
     /// texture must not depend on which process baked what. Values are the same wherever baked.
     std::string baked_bytes() const;
     void take_baked(const std::string& bytes);
-    /// The largest radiance (luminance) any baked side holds.
+    /// The largest radiance (luminance) any baked side holds (the largest float with a small
+    /// instance lit at the hit: its light is not known in advance).
     float brightest() const;
 
     /// Hash of what the bake depends on: geometry, materials, lights, settings (`light_samples`:
@@ -125,7 +134,9 @@ class RadiosityTextures {
     static uint64_t fingerprint(const Scene& scene, const RadiositySettings& settings, int light_samples);
 
     /// Radiosity of object `id` at barycentrics (u, v) of triangle `prim`, on side `front`;
-    /// bakes that side first if needed (its shadow rays count in `counters`).
+    /// bakes that side first if needed (its shadow rays count in `counters`). A small instance
+    /// lit at the hit (RadiosityMap::lit_at_hit) gets one light sample per light there, with
+    /// random numbers keyed by the hit itself: the same hit has the same value however reached.
     Color lookup(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters) const;
     /// The same per light, each light's scale factored out (textures of a scene with light_parts).
     void lookup_parts(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters, std::span<Color> out) const;
@@ -150,7 +161,10 @@ class RadiosityTextures {
     };
     /// Object `id`'s map laid out for its shape in `scene`, nothing baked (with room for light
     /// parts); its level and offset arrays shared with an earlier map's when equal.
-    RadiosityMap laid_out(const Scene& scene, size_t id, int max_level);
+    RadiosityMap laid_out(const Scene& scene, size_t id, const RadiositySettings& settings);
+    /// Direct light leaving a small instance's side at the hit (RadiosityMap::lit_at_hit); with
+    /// `parts`, per light as lookup_parts.
+    Color light_at_hit(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters, std::span<Color> parts) const;
     void bake_side(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
     void ensure_baked(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
 
@@ -160,8 +174,14 @@ class RadiosityTextures {
     /// Per mesh laid out so far, its longest edge in its own space (placements share their
     /// prototype's): a bound on their levels.
     std::unordered_map<const TriangleMesh*, float> longest_edges_;
+    /// A lattice layout: levels and offsets.
+    using Layout = std::pair<SharedArray<uint8_t>, SharedArray<uint32_t>>;
     /// Layouts laid out so far, by a hash of their levels (placements share theirs).
-    std::unordered_map<uint64_t, std::vector<std::pair<SharedArray<uint8_t>, SharedArray<uint32_t>>>> layouts_;
+    std::unordered_map<uint64_t, std::vector<Layout>> layouts_;
+    /// Per triangle count, the layout at level 1 throughout (laid out once for a forest).
+    std::unordered_map<size_t, Layout> ones_;
+    /// The layout of `level`, an earlier one's arrays when equal.
+    Layout shared_layout(std::vector<uint8_t> level);
     std::unique_ptr<Sources> sources_;
     uint64_t fingerprint_ = 0;
     float texel_size_ = 0;

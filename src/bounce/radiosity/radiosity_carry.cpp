@@ -2,6 +2,7 @@
 // direct light may have changed (docs/animation.md).
 #include <algorithm>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 
 #include "bounce/core/parallel.h"
@@ -49,9 +50,53 @@ bool may_shadow(const Light& light, const Vec3& a, const Vec3& b, const Vec3& c,
     return boxes_overlap(hull, box);
 }
 
+/// The same for a whole object's bounds `object`, facing every way.
+bool may_shadow(const Light& light, const Bounds& object, const Bounds& box, float far) {
+    Bounds hull = object;
+    switch (light.type) {
+        case LightType::Point:
+        case LightType::Spot:
+            hull.extend(light.position);
+            break;
+        case LightType::Quad:
+            for (const Vec3& q :
+                 {light.corner, light.corner + light.edge_u, light.corner + light.edge_v, light.corner + light.edge_u + light.edge_v})
+                hull.extend(q);
+            break;
+        case LightType::Distant:
+            hull.extend(object.lo - light.direction * far), hull.extend(object.hi - light.direction * far);
+            break;
+        case LightType::Sky:
+        case LightType::Mesh:
+            hull.extend(object.lo - Vec3{far, far, far}), hull.extend(object.hi + Vec3{far, far, far});
+            break;
+    }
+    return boxes_overlap(hull, box);
+}
+
+/// Does anything this frame change the direct light at `obj`'s surface (its placement, a
+/// material of its, any light, or a mover that may come between it and a light)?
+bool light_may_change(const Scene& scene, const SceneChanges& changes, size_t id, float far) {
+    const Object& obj = scene.objects[id];
+    if (changes.lights || changes.objects[id].kind != ObjectMotion::Kind::Static) return true;
+    const TriangleMesh& m = obj.coarse_mesh();
+    if (obj.material_override >= 0
+            ? changes.materials[static_cast<size_t>(obj.material_override)]
+            : std::any_of(m.face_materials.begin(), m.face_materials.end(), [&](uint32_t f) { return changes.materials[f]; }))
+        return true;
+    for (size_t o = 0; o < changes.objects.size(); ++o)
+        if (o != id && changes.objects[o].kind != ObjectMotion::Kind::Static)
+            for (const Light& l : scene.lights)
+                if (may_shadow(l, obj.coarse_bounds(), changes.objects[o].swept, far)) return true;
+    return false;
+}
+
 }  // namespace
 
 float RadiosityTextures::brightest() const {
+    // A small instance lit at the hit holds no values to bound its light by: anything.
+    if (std::any_of(maps_.begin(), maps_.end(), [](const RadiosityMap& m) { return m.lit_at_hit; }))
+        return std::numeric_limits<float>::max();
     float top = 0;
     for (size_t id = 0; id < maps_.size(); ++id)
         for (size_t t = 0; t < maps_[id].level.size(); ++t)
@@ -80,14 +125,20 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
     // Which baked sides to bake again, then bake them (in parallel) and compare.
     std::vector<std::pair<uint32_t, uint32_t>> redo;  // (object, 2 * triangle + side)
     for (size_t id = 0; id < previous.state_.size(); ++id) {
-        const size_t n = 2 * previous.maps_[id].level.size();
+        const size_t n = previous.maps_[id].sides_baked_apart();
         rt.state_.emplace_back(n);
         const Object& obj = scene.objects[id];
         const bool moved = changes.objects[id].kind != ObjectMotion::Kind::Static;
         if (changes.objects[id].kind == ObjectMotion::Kind::Deforming) {
             // Its triangles changed size: lay it out as this frame alone would, every side lazy.
-            rt.maps_[id] = rt.laid_out(scene, id, settings.max_level);
-            for (size_t s = 0; s < n; ++s) rt.state_.back().store(s, 0, std::memory_order_relaxed);
+            rt.maps_[id] = rt.laid_out(scene, id, settings);
+            rt.state_.back() = SideStates(rt.maps_[id].sides_baked_apart());
+            continue;
+        }
+        if (rt.maps_[id].lit_at_hit) {  // never baked: every hit on it changes with its light
+            if (light_may_change(scene, changes, id, far))
+                changed.push_back(
+                    {obj.coarse_bounds(), std::numeric_limits<float>::max(), static_cast<uint32_t>(id), LightChange::kEveryTriangle});
             continue;
         }
         for (size_t s = 0; s < n; ++s) {
