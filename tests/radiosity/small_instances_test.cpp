@@ -8,6 +8,7 @@
 
 #include "bounce/accel/accel.h"
 #include "bounce/lighting/materials.h"
+#include "bounce/radiosity/hit_rates.h"
 #include "bounce/radiosity/radiosity.h"
 #include "bounce/render/render.h"
 #include "bounce/scene/changes.h"
@@ -23,24 +24,26 @@ using nlohmann::json;
 json forest(const std::string& mode, bool sky, const std::string& small_material = "") {
     json transforms = json::array({{{"scale", 2}, {"translate", {0, 0, 3}}}});
     for (int k = 0; k < 24; ++k) {
-        transforms.push_back({{"scale", 0.2}, {"rotate", {15.0 * k, 0, 1, 0}}, {"translate", {0.5 * (k % 6) - 1.25, 0, 0.5 * (k / 6) - 1}}});
+        transforms.push_back(
+            {{"scale", 0.2}, {"rotate", {15.0 * k, 0, 1, 0}}, {"translate", {0.5 * (k % 6) - 1.25, 0, 0.5 * (k / 6) - 1}}});
         if (!small_material.empty()) transforms.back()["material"] = small_material;
     }
-    json j = {{"camera", {{"position", {0, 1.2, -2.6}}, {"look_at", {0, 0.1, 0}}, {"fov", 40}, {"resolution", {48, 32}}}},
-              {"render", {{"spp", 2}, {"light_samples", 1}, {"seed", 5}, {"rays", 64}, {"radiosity_small_instances", mode}}},
-              {"materials", {{"white", {{"color", 0.7}}}, {"red", {{"color", {0.8, 0.2, 0.1}}}}, {"black", {{"color", 0}}}}},
-              {"lights", {{{"type", "point"}, {"position", {1, 6, -2}}, {"color", 60}}}},
-              {"objects",
-               {{{"name", "floor"}, {"type", "quad"}, {"material", "white"}, {"vertices", {{-6, 0, -6}, {-6, 0, 6}, {6, 0, 6}, {6, 0, -6}}}},
-                {{"name", "ball"},
-                 {"type", "sphere"},
-                 {"center", {0, 1, 0}},
-                 {"radius", 1},
-                 {"subdivisions", 2},
-                 {"fine_subdivisions", 0},
-                 {"material", "red"},
-                 {"prototype", true}},
-                {{"name", "balls"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}}}};
+    json j = {
+        {"camera", {{"position", {0, 1.2, -2.6}}, {"look_at", {0, 0.1, 0}}, {"fov", 40}, {"resolution", {48, 32}}}},
+        {"render", {{"spp", 2}, {"light_samples", 1}, {"seed", 5}, {"rays", 64}, {"radiosity_small_instances", mode}}},
+        {"materials", {{"white", {{"color", 0.7}}}, {"red", {{"color", {0.8, 0.2, 0.1}}}}, {"black", {{"color", 0}}}}},
+        {"lights", {{{"type", "point"}, {"position", {1, 6, -2}}, {"color", 60}}}},
+        {"objects",
+         {{{"name", "floor"}, {"type", "quad"}, {"material", "white"}, {"vertices", {{-6, 0, -6}, {-6, 0, 6}, {6, 0, 6}, {6, 0, -6}}}},
+          {{"name", "ball"},
+           {"type", "sphere"},
+           {"center", {0, 1, 0}},
+           {"radius", 1},
+           {"subdivisions", 2},
+           {"fine_subdivisions", 0},
+           {"material", "red"},
+           {"prototype", true}},
+          {{"name", "balls"}, {"instances", {{"of", "ball"}, {"transforms", transforms}}}}}}};
     if (sky)
         j["lights"] = {{{"type", "distant"}, {"direction", {-0.3, -1, 0.4}}, {"color", 2}}, {{"type", "sky"}, {"color", {0.3, 0.4, 0.6}}}};
     return j;
@@ -95,7 +98,7 @@ TEST(SmallInstances, AreNeverBakedAndEqualTheirLatticeAtItsPoints) {
     EXPECT_LT(l.rt.brightest(), 10.0f);
 }
 
-TEST(SmallInstances, SavedTexturesLoadBackAndTheOtherModeBakesAfresh) {
+TEST(SmallInstances, SavedTexturesLoadBackAndARenderKeepingTheirLatticeBakesIt) {
     const Scene hit = test::scene_from(forest("hit", false)), lattice = test::scene_from(forest("lattice", false));
     const Textures h{hit};
     Counters counters;
@@ -110,11 +113,65 @@ TEST(SmallInstances, SavedTexturesLoadBackAndTheOtherModeBakesAfresh) {
     EXPECT_EQ(back.baked_sides(), 40u);
     EXPECT_TRUE(back.object(3).lit_at_hit);
     EXPECT_EQ(back.object(2).front, h.rt.object(2).front);
-    // Files written with small instances lit at the hit hold none of their points: another mode's
-    // render bakes its own instead of reading them.
+    // Files written with small instances lit at the hit hold none of their points: a render that
+    // keeps their lattices reads the rest and bakes theirs as its gathers need them.
     const Textures l{lattice};
-    EXPECT_FALSE(RadiosityTextures::load(dir.path(), lattice, lattice.render.radiosity, l.materials, l.lighting, back, why));
-    EXPECT_NE(why.find("other"), std::string::npos) << why;
+    ASSERT_TRUE(RadiosityTextures::load(dir.path(), lattice, lattice.render.radiosity, l.materials, l.lighting, back, why)) << why;
+    EXPECT_EQ(back.baked_sides(), 40u);
+    EXPECT_FALSE(back.object(3).lit_at_hit);
+    EXPECT_EQ(back.lookup(3, 0, 0.0f, 0.0f, true, counters), l.rt.lookup(3, 0, 0.0f, 0.0f, true, counters));
+    EXPECT_EQ(back.baked_sides(), 41u);
+}
+
+TEST(SmallInstances, TheProbeCountsTheHitsAGatherWouldMake) {
+    // Under a ceiling 1 above a floor, both 400 wide, a floor point's rays leave through the
+    // gap (100 or more away) with a chance under 1e-4: every gather ray of the floor hits the
+    // ceiling; none hits the floor; the upper half of the frame, looking at the sky, gathers nothing.
+    json j = {{"camera", {{"position", {0, 0.5, 0}}, {"look_at", {0, 0.5, 5}}, {"fov", 40}, {"resolution", {64, 64}}}},
+              {"lights", {{{"type", "sky"}, {"color", 1}}}},
+              {"objects",
+               {{{"name", "floor"}, {"type", "quad"}, {"vertices", {{-200, 0, -200}, {-200, 0, 200}, {200, 0, 200}, {200, 0, -200}}}},
+                {{"name", "ceiling"}, {"type", "quad"}, {"vertices", {{-200, 1, -200}, {200, 1, -200}, {200, 1, 200}, {-200, 1, 200}}}}}}};
+    const Scene s = test::scene_from(j);
+    const SceneAccel accel(s, s.render.lighting);
+    const HitProbe p = probe_gather_hits(s, accel, 64, 32);
+    ASSERT_EQ(p.hits.size(), 2u);
+    EXPECT_EQ(p.slots, 64.0 * 64 * 32);
+    // The floor fills the lower half of the frame (the ceiling the upper): half the pixels
+    // gather from the floor, all into the ceiling; the ceiling's own gathers go to the floor.
+    EXPECT_NEAR(p.hits[1] / p.slots, 0.5, 0.01);
+    EXPECT_NEAR(p.hits[0] / p.slots, 0.5, 0.01);
+    EXPECT_NEAR((p.hits[0] + p.hits[1]) / p.slots, 1.0, 1e-3);
+    EXPECT_DOUBLE_EQ(p.hits_at_most(0, p.slots), p.hits[0] + 3);
+    j["objects"][1]["vertices"] = {{-200, 1, 100}, {200, 1, 100}, {200, 1, 200}, {-200, 1, 200}};  // only far ahead
+    j["camera"]["look_at"] = {0, -5, 1};                                                           // down: the floor fills the frame
+    const Scene open = test::scene_from(j);
+    const SceneAccel open_accel(open, open.render.lighting);
+    const HitProbe q = probe_gather_hits(open, open_accel, 64, 32);
+    EXPECT_EQ(q.hits[0], 0.0);
+    EXPECT_LT(q.hits[1] / q.slots, 1e-3);  // a sliver of sky 100 away
+}
+
+TEST(SmallInstances, AutoLightsAtTheHitWhatFewGathersReachAndKeepsTheLatticeOfWhatManyDo) {
+    const Scene s = test::scene_from(forest("auto", false));
+    const SceneAccel accel(s, s.render.lighting);
+    const Materials materials(s);
+    const DirectLighting lighting(s, accel, s.render.lighting);
+    const HitProbe p = probe_gather_hits(s, accel);
+    const uint32_t big = 2, small = 3;
+    ASSERT_GT(p.hits[small], 0);
+    // The bed's first ball: 320 triangles, one light sample: the hit wins below 3 x 1 x 320
+    // hits at most, at a frame's pixel_gather_rays under 960 slots / (its hits + 3).
+    const double crossing = 3.0 * 1 * static_cast<double>(s.objects[small].coarse_mesh().triangle_count()) * p.slots / (p.hits[small] + 3);
+    for (const double factor : {0.5, 2.0}) {
+        RadiositySettings settings = s.render.radiosity;
+        settings.pixel_gather_rays = crossing * factor;
+        const RadiosityTextures rt = RadiosityTextures::lazy(s, materials, lighting, settings);
+        EXPECT_EQ(rt.object(small).lit_at_hit, factor < 1) << "at " << factor << " x the crossing";
+        EXPECT_FALSE(rt.object(big).lit_at_hit);  // not small: it reaches texels
+    }
+    RadiositySettings none = s.render.radiosity;  // no gathers to weigh: lattices
+    EXPECT_FALSE(RadiosityTextures::lazy(s, materials, lighting, none).object(small).lit_at_hit);
 }
 
 Image render_of(json j, int threads, Stats& stats) {

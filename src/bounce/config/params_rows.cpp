@@ -179,9 +179,10 @@ void add_lighting_rows(std::vector<Row>& rows) {
                        .id(rad | cache)
                        .flag());
     rows.push_back(row("radiosity_small_instances", "radiosity", &R::radiosity, &RadiositySettings::small_instances)
-                       .choices({"hit", "lattice"})
+                       .choices({"auto", "hit", "lattice"})
                        .doc("direct light at gather hits on placements none of whose triangles reaches a texel: hit = one shadow "
-                            "ray per light where the ray lands (never baked); lattice = the placement's baked lattice")
+                            "ray per light where the ray lands (never baked); lattice = the placement's baked lattice; auto = hit "
+                            "where a probe of the frame's gathers expects fewer hits than 3 x radiosity_light_samples per triangle")
                        .id(rad | cache)
                        .flag());
 }

@@ -27,8 +27,9 @@ enum class LayerSet : uint8_t { Standard, Components };
 /// gathering pass makes for them; brute force gathers there), or from the radiosity textures.
 enum class SpecularHitLight : uint8_t { Cache, Radiosity };
 /// Where a gather hit on a small instance (a placement none of whose triangles reaches a
-/// radiosity texel) takes its direct light: shadow rays at the hit, or the placement's lattice.
-enum class SmallInstanceLight : uint8_t { Hit, Lattice };
+/// radiosity texel) takes its direct light: whichever costs less by a probe of the frame's
+/// gathers (Auto), shadow rays at the hit, or the placement's lattice.
+enum class SmallInstanceLight : uint8_t { Auto, Hit, Lattice };
 
 /// Primary visibility and the deep file.
 struct VisibilitySettings {
@@ -67,10 +68,14 @@ struct RadiositySettings {
     /// saw it (issue 64: 2.7 -> 1.6 % from Cycles' answer on the Cornell box, 8.9 -> 3.6 % on
     /// the bunny's ground).
     int max_level = 255;
-    /// Small instances' sides are hit by a few gather rays each (a far forest: 3.7 rays per
-    /// baked side), fewer than the lattice's 3 points x light samples: lit at the hit, one
-    /// light sample per light, they are never baked (issue 64, docs/gather.md).
-    SmallInstanceLight small_instances = SmallInstanceLight::Lattice;
+    /// A far forest's sides are hit by a few gather rays each, fewer than a level-1 lattice's
+    /// 3 points x light samples: lit at the hit, one light sample per light, they are never
+    /// baked; an orchard's near trees are hit tens of times per side and keep their lattice
+    /// (issue 64, docs/gather.md).
+    SmallInstanceLight small_instances = SmallInstanceLight::Auto;
+    /// Not a parameter: the plan's count of the frame's gather rays if every pixel gathered
+    /// once (pixels x rays), against which Auto weighs a probe's hits (0: no gathers).
+    double pixel_gather_rays = 0;
     /// Every lattice point keeps its light per light, each light's scale factored out (not a
     /// parameter: the plan sets it from CacheSettings::light_parts).
     bool light_parts = false;

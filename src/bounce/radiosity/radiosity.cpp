@@ -7,6 +7,7 @@
 #include <bit>
 #include <chrono>
 #include <filesystem>
+#include <optional>
 #include <thread>
 
 #include "bounce/core/atomic_file.h"
@@ -123,7 +124,6 @@ uint64_t RadiosityTextures::fingerprint(const Scene& scene, const RadiositySetti
         hash_combine(scene.fingerprint({"objects", "materials", "lights"}, true), kBakeVersion);  // gloss, bumps, baked AO: not in the bake
     h = hash_combine(h, std::bit_cast<uint32_t>(effective_texel(scene, s)));
     h = hash_combine(h, static_cast<uint64_t>(effective_light_samples(s, light_samples)));
-    h = hash_combine(h, static_cast<uint64_t>(s.small_instances));  // their files hold no points when lit at the hit
     return hash_combine(h, static_cast<uint64_t>(s.max_level));
 }
 
@@ -157,7 +157,24 @@ RadiosityTextures::Layout RadiosityTextures::shared_layout(std::vector<uint8_t> 
     return alike.back();
 }
 
-RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, const RadiositySettings& settings) {
+bool RadiosityTextures::lit_at_hit(const Scene& scene, size_t id, const RadiositySettings& settings, const HitProbe* probe) const {
+    switch (settings.small_instances) {
+        case SmallInstanceLight::Hit:
+            return true;
+        case SmallInstanceLight::Lattice:
+            return false;
+        case SmallInstanceLight::Auto:
+            break;
+    }
+    if (!probe) return false;  // no gathers to weigh
+    // A lattice costs its 3 points' light samples on every side a gather hits, the hit one
+    // sample: the hit wins below 3 x samples hits per side. Counted per triangle (a closed
+    // mesh shows a ray one side of it), so a near, often hit placement keeps its lattice.
+    const double expected = probe->hits_at_most(id, settings.pixel_gather_rays);
+    return expected < 3.0 * sources_->light_samples * static_cast<double>(scene.objects[id].coarse_mesh().triangle_count());
+}
+
+RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, const RadiositySettings& settings, const HitProbe* probe) {
     const Object& o = scene.objects[id];
     const TriangleMesh& mesh = o.coarse_mesh();
     auto [known, added] = longest_edges_.emplace(&mesh, 0.0f);
@@ -179,7 +196,7 @@ RadiosityMap RadiosityTextures::laid_out(const Scene& scene, size_t id, const Ra
         ones = !level.empty() && std::all_of(level.begin(), level.end(), [](uint8_t l) { return l == 1; });
         std::tie(m.level, m.offset) = shared_layout(std::move(level));
     }
-    m.lit_at_hit = settings.small_instances == SmallInstanceLight::Hit && o.instance && ones;
+    m.lit_at_hit = o.instance && ones && lit_at_hit(scene, id, settings, probe);
     if (m.lit_at_hit) return m;  // no values, not even a pointer per page
     const uint32_t points = m.level.size() ? m.offset[m.level.size() - 1] + lattice_count(m.level[m.level.size() - 1]) : 0;
     m.front.lay_out(m.offset.shared(), points, 1);
@@ -200,8 +217,13 @@ RadiosityTextures RadiosityTextures::lazy(const Scene& scene, const Materials& m
     rt.fingerprint_ = fingerprint(scene, settings, samples);
     rt.sources_ = std::make_unique<Sources>(Sources{&scene, &materials, &lighting, effective_light_samples(settings, samples), {}});
     if (settings.light_parts) rt.sources_->scales = light_scales(scene);
+    // Small instances in auto weigh a probe of the frame's gathers (only where there are any).
+    std::optional<HitProbe> probe;
+    if (settings.small_instances == SmallInstanceLight::Auto && settings.pixel_gather_rays > 0 &&
+        std::any_of(scene.objects.begin(), scene.objects.end(), [](const Object& o) { return o.instance; }))
+        probe = probe_gather_hits(scene, lighting.accel());
     for (size_t id = 0; id < scene.objects.size(); ++id) {
-        rt.maps_.push_back(rt.laid_out(scene, id, settings));
+        rt.maps_.push_back(rt.laid_out(scene, id, settings, probe ? &*probe : nullptr));
         rt.state_.emplace_back(rt.maps_.back().sides_baked_apart());
         rt.names_.push_back(scene.objects[id].name);
     }
@@ -306,6 +328,10 @@ size_t RadiosityTextures::baked_sides() const {
     return n;
 }
 
+size_t RadiosityTextures::objects_lit_at_hit() const {
+    return static_cast<size_t>(std::count_if(maps_.begin(), maps_.end(), [](const RadiosityMap& m) { return m.lit_at_hit; }));
+}
+
 size_t RadiosityTextures::sides() const {
     size_t n = 0;
     for (const auto& m : maps_) n += 2 * m.level.size();
@@ -359,6 +385,7 @@ void RadiosityTextures::save(const std::string& dir) const {
         spec.attribute("bounce:triangles", static_cast<int>(m.level.size()));
         spec.attribute("bounce:points", static_cast<int>(count));
         spec.attribute("bounce:texel_size", texel_size_);
+        spec.attribute("bounce:lit_at_hit", m.lit_at_hit ? 1 : 0);  // no points: another render may bake them
         std::vector<float> px(static_cast<size_t>(width) * std::max(1, height) * 8, 0.0f);
         for (size_t t = 0; t < m.level.size() && !m.lit_at_hit; ++t) {
             const bool f = state_[id].load(2 * t, std::memory_order_acquire) == 2;
@@ -403,6 +430,14 @@ bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const R
             return false;
         }
         RadiosityMap& map = rt.maps_[id];
+        // A small instance lit at the hit here reads nothing; one lit at the hit when saved
+        // (another camera's probe) holds nothing, and its sides bake here as gathers need them.
+        if (map.lit_at_hit) continue;
+        if (spec.get_int_attribute("bounce:lit_at_hit", 0) == 1) {
+            if (spec.get_int_attribute("bounce:points", -1) != 0)
+                throw InputError(path, "bounce:points", "a small instance lit at the hit holds no points");
+            continue;
+        }
         const auto off = static_cast<uint32_t>(map.front.points());
         if (spec.nchannels != 8 || spec.get_int_attribute("bounce:points", -1) != static_cast<int>(off) ||
             static_cast<size_t>(spec.width) * spec.height < off)

@@ -22,6 +22,7 @@
 #include "bounce/core/progress.h"
 #include "bounce/core/stats.h"
 #include "bounce/lighting/lighting.h"
+#include "bounce/radiosity/hit_rates.h"
 #include "bounce/radiosity/lattice.h"
 #include "bounce/scene/changes.h"
 #include "bounce/scene/scene.h"
@@ -146,6 +147,8 @@ class RadiosityTextures {
     size_t lattice_points() const;
     /// Bytes of lattice values allocated so far (pages of baked sides, lattice.h).
     size_t allocated_bytes() const;
+    /// Objects lit at the hit (RadiosityMap::lit_at_hit).
+    size_t objects_lit_at_hit() const;
     /// Triangle sides baked so far, and in all.
     size_t baked_sides() const;
     size_t sides() const;
@@ -161,7 +164,10 @@ class RadiosityTextures {
     };
     /// Object `id`'s map laid out for its shape in `scene`, nothing baked (with room for light
     /// parts); its level and offset arrays shared with an earlier map's when equal.
-    RadiosityMap laid_out(const Scene& scene, size_t id, const RadiositySettings& settings);
+    RadiosityMap laid_out(const Scene& scene, size_t id, const RadiositySettings& settings, const HitProbe* probe = nullptr);
+    /// Whether small instance `id` (level 1 throughout) is lit at the hit: as the settings say,
+    /// or in auto by `probe` (null: keep the lattice).
+    bool lit_at_hit(const Scene& scene, size_t id, const RadiositySettings& settings, const HitProbe* probe) const;
     /// Direct light leaving a small instance's side at the hit (RadiosityMap::lit_at_hit); with
     /// `parts`, per light as lookup_parts.
     Color light_at_hit(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters, std::span<Color> parts) const;

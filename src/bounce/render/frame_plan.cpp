@@ -359,6 +359,8 @@ FramePlan plan_frame(const Scene& scene, const FrameState& previous, const Rende
     if (const auto source = radiosity_source(in, g)) {
         radiosity = RadiosityStep{*source, rs.radiosity, rs.radiosity.folder};
         radiosity->settings.light_parts = in.parts;
+        // The full frame's, whatever the crop: a crop must light what it sees as the frame does.
+        radiosity->settings.pixel_gather_rays = static_cast<double>(scene.camera.width) * scene.camera.height * rs.indirect.rays;
     }
     // A carried radiosity says what light changed, which the records' judgement needs first.
     const bool carried = radiosity && radiosity->source == RadiositySource::Carry;

@@ -64,6 +64,7 @@ RadiosityResult radiosity_pass(const FrameContext& ctx, const RadiosityStep& ste
         PhaseTimer t(ctx.stats, "radiosity layout");  // every side's lattice laid out (pages come as they are baked)
         *out.textures = RadiosityTextures::lazy(ctx.scene, ctx.materials, ctx.lighting, settings);
     }
+    ctx.stats.set("small_instances_lit_at_hit", static_cast<double>(out.textures->objects_lit_at_hit()));
     ctx.stats.set("radiosity_reused", 0);
     if (step.source == RadiositySource::BakeSplit) {
         PhaseTimer t(ctx.stats, "radiosity");
