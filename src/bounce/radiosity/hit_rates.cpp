@@ -11,7 +11,8 @@ namespace bounce {
 
 HitProbe probe_gather_hits(const Scene& scene, const SceneAccel& accel, int grid, int rays) {
     const Camera& cam = scene.camera;
-    const int columns = std::max(1, grid), rows = std::max(1, static_cast<int>(std::lround(static_cast<double>(grid) * cam.height / cam.width)));
+    const int columns = std::max(1, grid),
+              rows = std::max(1, static_cast<int>(std::lround(static_cast<double>(grid) * cam.height / cam.width)));
     const CameraRays camera(cam);
     std::vector<uint64_t> hits(scene.objects.size(), 0);
     std::mutex merge;
@@ -28,7 +29,8 @@ HitProbe probe_gather_hits(const Scene& scene, const SceneAccel& accel, int grid
                 const Frame frame(dot(sp.ng, d) < 0 ? sp.ng : -sp.ng);
                 const RandomStream rng(0x9a7e, static_cast<uint64_t>(r) * 65536u + static_cast<uint64_t>(c));
                 for (int k = 0; k < rays; ++k) {
-                    const Hit h = accel.trace(sp.p, frame.to_world(cosine_hemisphere(rng.get(static_cast<uint64_t>(k), 0), rng.get(static_cast<uint64_t>(k), 1))));
+                    const Hit h = accel.trace(sp.p, frame.to_world(cosine_hemisphere(rng.get(static_cast<uint64_t>(k), 0),
+                                                                                     rng.get(static_cast<uint64_t>(k), 1))));
                     if (h.valid() && !h.hair) ++mine[h.object];
                 }
             }

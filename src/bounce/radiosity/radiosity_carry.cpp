@@ -2,6 +2,7 @@
 // direct light may have changed (docs/animation.md).
 #include <algorithm>
 #include <cstring>
+#include <initializer_list>
 #include <limits>
 #include <stdexcept>
 
@@ -17,12 +18,13 @@ bool boxes_overlap(const Bounds& a, const Bounds& b) {
            b.lo.z <= a.hi.z;
 }
 
-/// Conservatively, can `box` stand between triangle side (a, b, c; facing `n`) and `light`,
-/// i.e. shadow it or stop shadowing it? The box of the triangle and the light's extent (a point,
-/// a quad, or the triangle pushed far towards a distant light or the sky) must overlap it.
-bool may_shadow(const Light& light, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& n, const Bounds& box, float far) {
+/// Conservatively, can `box` stand between `points` (a triangle side facing `n`, or a box's
+/// corners facing every way: n = 0) and `light`, i.e. shadow them or stop shadowing them? Their
+/// box and the light's extent (a point, a quad, or the points pushed far towards a distant
+/// light or the sky) must overlap it.
+bool may_shadow(const Light& light, std::initializer_list<Vec3> points, const Vec3& n, const Bounds& box, float far) {
     Bounds hull;
-    for (const Vec3& p : {a, b, c}) hull.extend(p);
+    for (const Vec3& p : points) hull.extend(p);
     switch (light.type) {
         case LightType::Point:
         case LightType::Spot:
@@ -34,41 +36,17 @@ bool may_shadow(const Light& light, const Vec3& a, const Vec3& b, const Vec3& c,
                 hull.extend(p);
             break;
         case LightType::Distant:
-            for (const Vec3& p : {a, b, c}) hull.extend(p - light.direction * far);
+            for (const Vec3& p : points) hull.extend(p - light.direction * far);
             break;
         case LightType::Sky:
         case LightType::Mesh:
             // Anything above the side's plane may hide part of the sky (or an emissive mesh): the
             // hemisphere reaches along every axis but the one straight behind it (a floor's sky is
             // hidden by a wall beside it, not only by what is overhead).
-            for (const Vec3& p : {a, b, c})
+            for (const Vec3& p : points)
                 for (const Vec3& d :
                      {Vec3{far, 0, 0}, Vec3{-far, 0, 0}, Vec3{0, far, 0}, Vec3{0, -far, 0}, Vec3{0, 0, far}, Vec3{0, 0, -far}})
                     if (dot(d, n) > -0.9999f * far) hull.extend(p + d);
-            break;
-    }
-    return boxes_overlap(hull, box);
-}
-
-/// The same for a whole object's bounds `object`, facing every way.
-bool may_shadow(const Light& light, const Bounds& object, const Bounds& box, float far) {
-    Bounds hull = object;
-    switch (light.type) {
-        case LightType::Point:
-        case LightType::Spot:
-            hull.extend(light.position);
-            break;
-        case LightType::Quad:
-            for (const Vec3& q :
-                 {light.corner, light.corner + light.edge_u, light.corner + light.edge_v, light.corner + light.edge_u + light.edge_v})
-                hull.extend(q);
-            break;
-        case LightType::Distant:
-            hull.extend(object.lo - light.direction * far), hull.extend(object.hi - light.direction * far);
-            break;
-        case LightType::Sky:
-        case LightType::Mesh:
-            hull.extend(object.lo - Vec3{far, far, far}), hull.extend(object.hi + Vec3{far, far, far});
             break;
     }
     return boxes_overlap(hull, box);
@@ -87,7 +65,8 @@ bool light_may_change(const Scene& scene, const SceneChanges& changes, size_t id
     for (size_t o = 0; o < changes.objects.size(); ++o)
         if (o != id && changes.objects[o].kind != ObjectMotion::Kind::Static)
             for (const Light& l : scene.lights)
-                if (may_shadow(l, obj.coarse_bounds(), changes.objects[o].swept, far)) return true;
+                if (may_shadow(l, {obj.coarse_bounds().lo, obj.coarse_bounds().hi}, Vec3{0, 0, 0}, changes.objects[o].swept, far))
+                    return true;
     return false;
 }
 
@@ -152,7 +131,7 @@ RadiosityTextures RadiosityTextures::carry(const RadiosityTextures& previous, co
                 const Vec3 ng = normalize(cross(b - a, c - a)) * (s % 2 == 0 ? 1.0f : -1.0f);
                 for (size_t o = 0; o < changes.objects.size() && !again; ++o)
                     if (o != id && changes.objects[o].kind != ObjectMotion::Kind::Static)
-                        for (const Light& l : scene.lights) again = again || may_shadow(l, a, b, c, ng, changes.objects[o].swept, far);
+                        for (const Light& l : scene.lights) again = again || may_shadow(l, {a, b, c}, ng, changes.objects[o].swept, far);
             }
             if (again) redo.emplace_back(static_cast<uint32_t>(id), static_cast<uint32_t>(s));
         }
