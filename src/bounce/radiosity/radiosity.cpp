@@ -240,8 +240,6 @@ void RadiosityTextures::bake_side(uint32_t id, uint32_t t, bool front, Counters&
     for (int j = 0; j <= n; ++j)
         for (int i = 0; i + j <= n; ++i) {
             float u = static_cast<float>(i) / static_cast<float>(n), v = static_cast<float>(j) / static_cast<float>(n);
-            SurfacePoint sp = o.coarse_point(t, u, v);
-            const Color albedo = src.materials->secondary_albedo(sp) * kInvPi, through = src.materials->secondary_translucency(sp) * kInvPi;
             uint32_t k = map.offset[t] + lattice_index(i, j, n);
             // Random numbers keyed by (object, triangle, point): the textures depend on the
             // scene alone (renders with other seeds share them) and not on the bake order.
@@ -249,18 +247,23 @@ void RadiosityTextures::bake_side(uint32_t id, uint32_t t, bool front, Counters&
             // happens to use.
             const RandomStream rng = front ? RandomStream(0, (static_cast<uint64_t>(id) << 40) | (static_cast<uint64_t>(t) << 12), k)
                                            : RandomStream(1, (static_cast<uint64_t>(id) << 40) | t, k);
-            const Vec3 ng = front ? sp.ng : -sp.ng;
-            Color& value = values[k - map.offset[t]];
-            if (src.scales.empty()) {
-                value = src.lighting->diffuse_radiance(sp.p, ng, id, albedo, through, rng, src.light_samples, counters);
-                continue;
-            }
-            // Per light, scales factored out; the value is their scaled sum (as records' are).
-            const std::span<Color> parts(part_values + size_t{k - map.offset[t]} * map.lights, map.lights);
-            src.lighting->diffuse_radiance(sp.p, ng, id, albedo, through, rng, src.light_samples, counters, parts);
-            value = Color(0);
-            for (size_t l = 0; l < parts.size(); ++l) value += parts[l] * src.scales[l];
+            const std::span<Color> parts =
+                part_values ? std::span<Color>(part_values + size_t{k - map.offset[t]} * map.lights, map.lights) : std::span<Color>();
+            values[k - map.offset[t]] = side_radiance(id, o.coarse_point(t, u, v), front, rng, src.light_samples, counters, parts);
         }
+}
+
+Color RadiosityTextures::side_radiance(uint32_t id, const SurfacePoint& sp, bool front, const RandomStream& rng, int samples,
+                                       Counters& counters, std::span<Color> parts) const {
+    const Sources& src = *sources_;
+    const Color albedo = src.materials->secondary_albedo(sp) * kInvPi, through = src.materials->secondary_translucency(sp) * kInvPi;
+    const Vec3 ng = front ? sp.ng : -sp.ng;
+    if (src.scales.empty()) return src.lighting->diffuse_radiance(sp.p, ng, id, albedo, through, rng, samples, counters);
+    // Per light, scales factored out; the value is their scaled sum (as records' are).
+    src.lighting->diffuse_radiance(sp.p, ng, id, albedo, through, rng, samples, counters, parts);
+    Color value(0);
+    for (size_t l = 0; l < parts.size(); ++l) value += parts[l] * src.scales[l];
+    return value;
 }
 
 void RadiosityTextures::ensure_baked(uint32_t id, uint32_t tri, bool front, Counters& counters) const {
@@ -281,24 +284,13 @@ void RadiosityTextures::ensure_baked(uint32_t id, uint32_t tri, bool front, Coun
 Color RadiosityTextures::light_at_hit(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters,
                                       std::span<Color> parts) const {
     const auto t0 = std::chrono::steady_clock::now();
-    const Sources& src = *sources_;
-    const SurfacePoint sp = src.scene->objects[id].coarse_point(prim, u, v);
-    const Color albedo = src.materials->secondary_albedo(sp) * kInvPi, through = src.materials->secondary_translucency(sp) * kInvPi;
     // Keyed by the hit (object, triangle, side, where on it), as the bake keys its points: a
     // re-shade of kept hits, another process or the lighting tool finds the same value.
     const RandomStream rng(front ? 2 : 3, (static_cast<uint64_t>(id) << 32) | prim,
                            (static_cast<uint64_t>(std::bit_cast<uint32_t>(u)) << 32) | std::bit_cast<uint32_t>(v));
-    const Vec3 ng = front ? sp.ng : -sp.ng;
-    Color value;
-    if (!parts.empty() || src.scales.empty()) {
-        value = src.lighting->diffuse_radiance(sp.p, ng, id, albedo, through, rng, 1, counters, parts);
-    } else {  // textures with parts, read whole: their scaled sum, as a baked point's
-        thread_local std::vector<Color> own;
-        own.assign(src.scales.size(), Color(0));
-        src.lighting->diffuse_radiance(sp.p, ng, id, albedo, through, rng, 1, counters, own);
-        value = Color(0);
-        for (size_t l = 0; l < own.size(); ++l) value += own[l] * src.scales[l];
-    }
+    thread_local std::vector<Color> own;  // textures with parts read whole: the parts their sum is made of
+    if (parts.empty() && !sources_->scales.empty()) own.assign(sources_->scales.size(), Color(0)), parts = own;
+    const Color value = side_radiance(id, sources_->scene->objects[id].coarse_point(prim, u, v), front, rng, 1, counters, parts);
     counters.hits_lit += 1;
     counters.hits_lit_ns +=
         static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
@@ -457,7 +449,7 @@ bool RadiosityTextures::load(const std::string& dir, const Scene& scene, const R
                 if (!std::isfinite(px[8 * k + static_cast<size_t>(ch[c])]))
                     throw InputError(path, fmt::format("texel {}", k), "non-finite radiosity value");
         // A side is baked when its first point says so; only baked sides take values (and pages).
-        for (uint32_t t = 0; t < map.level.size() && !map.lit_at_hit; ++t)
+        for (uint32_t t = 0; t < map.level.size(); ++t)
             for (int side = 0; side < 2; ++side) {
                 const uint32_t first = map.offset[t];
                 if (px[8 * first + static_cast<size_t>(ch[6 + side])] != 1) continue;

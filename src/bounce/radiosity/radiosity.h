@@ -20,6 +20,7 @@
 
 #include "bounce/accel/accel.h"
 #include "bounce/core/progress.h"
+#include "bounce/core/random.h"
 #include "bounce/core/stats.h"
 #include "bounce/lighting/lighting.h"
 #include "bounce/radiosity/hit_rates.h"
@@ -172,6 +173,10 @@ class RadiosityTextures {
     /// `parts`, per light as lookup_parts.
     Color light_at_hit(uint32_t id, uint32_t prim, float u, float v, bool front, Counters& counters, std::span<Color> parts) const;
     void bake_side(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
+    /// Direct light leaving side `front` of object `id` at `sp`, as a lattice point or a hit
+    /// takes it; with light parts (the textures'), per light into `parts` and their scaled sum.
+    Color side_radiance(uint32_t id, const SurfacePoint& sp, bool front, const RandomStream& rng, int samples, Counters& counters,
+                        std::span<Color> parts) const;
     void ensure_baked(uint32_t id, uint32_t tri, bool front, Counters& counters) const;
 
     mutable std::vector<RadiosityMap> maps_;  ///< values written once per side, under its state flag

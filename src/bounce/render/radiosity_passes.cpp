@@ -64,7 +64,6 @@ RadiosityResult radiosity_pass(const FrameContext& ctx, const RadiosityStep& ste
         PhaseTimer t(ctx.stats, "radiosity layout");  // every side's lattice laid out (pages come as they are baked)
         *out.textures = RadiosityTextures::lazy(ctx.scene, ctx.materials, ctx.lighting, settings);
     }
-    ctx.stats.set("small_instances_lit_at_hit", static_cast<double>(out.textures->objects_lit_at_hit()));
     ctx.stats.set("radiosity_reused", 0);
     if (step.source == RadiositySource::BakeSplit) {
         PhaseTimer t(ctx.stats, "radiosity");
@@ -81,6 +80,7 @@ void finish_radiosity_pass(const FrameContext& ctx, const FinishRadiosityStep& s
     ctx.stats.set("radiosity_sides_baked", static_cast<double>(baked - baked_before));
     ctx.stats.set("radiosity_sides", static_cast<double>(rt.sides()));
     ctx.stats.set("radiosity_bytes", static_cast<double>(rt.allocated_bytes()));
+    ctx.stats.set("small_instances_lit_at_hit", static_cast<double>(rt.objects_lit_at_hit()));
     if (step.folder.empty() || baked == baked_before || ctx.comm.rank() != 0) return;  // rank 0 writes
     PhaseTimer t(ctx.stats, "radiosity save");
     rt.save(step.folder);
